@@ -1,0 +1,107 @@
+// Pinhole camera with OpenCV "radtan" (k1 k2 p1 p2 [k3 [k4 k5 k6]]) or Kannala-Brandt "fisheye"
+// (k1..k4, OpenCV fisheye) distortion. Same formulas as cv::projectPoints / cv::fisheye::projectPoints.
+// Pixel centres at integer coordinates (OpenCV's convention).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace mcmt {
+
+enum class DistortionModel { kNone, kRadTan, kFisheye };
+
+std::string DistortionModelName(DistortionModel model);          // "none", "radtan", "fisheye"
+DistortionModel DistortionModelFromName(const std::string& name);  // throws std::invalid_argument
+
+struct CameraModel {
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  DistortionModel model = DistortionModel::kNone;
+  std::vector<double> distortion;  // radtan: 4, 5 or 8 values; fisheye: 4; none: empty
+
+  // Throws std::invalid_argument naming the problem (non-positive focal length, wrong count...).
+  void Validate() const;
+
+  // Normalised image coordinates (x/z, y/z) -> distorted normalised coordinates.
+  // Templated so that Ceres' Jets go through it (automatic differentiation).
+  template <typename T>
+  void Distort(const T& x, const T& y, T* xd, T* yd) const;
+
+  // Camera-frame point -> pixel. Returns false when the point is behind the camera (z <= 0).
+  template <typename T>
+  bool Project(const T* p_cam, T* pixel) const {
+    if (!(p_cam[2] > T(0))) return false;
+    const T x = p_cam[0] / p_cam[2];
+    const T y = p_cam[1] / p_cam[2];
+    T xd, yd;
+    Distort(x, y, &xd, &yd);
+    pixel[0] = T(fx) * xd + T(cx);
+    pixel[1] = T(fy) * yd + T(cy);
+    return true;
+  }
+
+  // Pixel and, if jacobian is non-null, d pixel / d p_cam (2x3, row-major) analytically.
+  bool Project(const Eigen::Vector3d& p_cam, Eigen::Vector2d* pixel,
+               Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const;
+  Eigen::Vector2d Project(const Eigen::Vector3d& p_cam) const;  // NaNs when behind the camera
+
+  // Pixel -> undistorted normalised coordinates (x/z, y/z), by iteration (converges to 1e-12 inside
+  // the image for any calibration OpenCV would produce).
+  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const;
+  // Pixel -> pixel of the same ray in the ideal (undistorted) pinhole camera with the same K.
+  Eigen::Vector2d Undistort(const Eigen::Vector2d& pixel) const;
+
+  double HorizontalFovRad() const { return 2.0 * std::atan2(0.5 * width, fx); }
+  bool InImage(const Eigen::Vector2d& pixel, double margin = 0.0) const;
+
+  cv::Mat CameraMatrix() const;     // 3x3 CV_64F
+  cv::Mat DistortionCoeffs() const;  // 1xN CV_64F (empty for none)
+  bool operator==(const CameraModel& other) const;
+};
+
+template <typename T>
+void CameraModel::Distort(const T& x, const T& y, T* xd, T* yd) const {
+  const std::vector<double>& d = distortion;
+  switch (model) {
+    case DistortionModel::kNone:
+      *xd = x;
+      *yd = y;
+      return;
+    case DistortionModel::kRadTan: {
+      const T r2 = x * x + y * y;
+      const T r4 = r2 * r2, r6 = r4 * r2;
+      const double k1 = d.size() > 0 ? d[0] : 0, k2 = d.size() > 1 ? d[1] : 0;
+      const double p1 = d.size() > 2 ? d[2] : 0, p2 = d.size() > 3 ? d[3] : 0;
+      const double k3 = d.size() > 4 ? d[4] : 0;
+      T radial = T(1) + T(k1) * r2 + T(k2) * r4 + T(k3) * r6;
+      if (d.size() >= 8) radial = radial / (T(1) + T(d[5]) * r2 + T(d[6]) * r4 + T(d[7]) * r6);
+      *xd = x * radial + T(2 * p1) * x * y + T(p2) * (r2 + T(2) * x * x);
+      *yd = y * radial + T(p1) * (r2 + T(2) * y * y) + T(2 * p2) * x * y;
+      return;
+    }
+    case DistortionModel::kFisheye: {
+      using std::atan;
+      using std::sqrt;
+      const T r2 = x * x + y * y;
+      if (!(r2 > T(1e-30))) {  // on the axis: theta_d / r -> 1
+        *xd = x;
+        *yd = y;
+        return;
+      }
+      const T r = sqrt(r2);
+      const T theta = atan(r);
+      const T t2 = theta * theta, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
+      const T theta_d = theta * (T(1) + T(d[0]) * t2 + T(d[1]) * t4 + T(d[2]) * t6 + T(d[3]) * t8);
+      const T scale = theta_d / r;
+      *xd = x * scale;
+      *yd = y * scale;
+      return;
+    }
+  }
+}
+
+}  // namespace mcmt

@@ -1,0 +1,50 @@
+// A small command-line parser for the mcmt programs (--name value, --name=value, --flag, --help)
+// and RunMain, which turns exceptions into a one-line "program: error: ..." and exit code 1.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace mcmt {
+
+class ArgParser {
+ public:
+  ArgParser(std::string program, std::string summary);
+
+  // Options keep the value already in *out as their default (shown in --help).
+  void AddString(const std::string& name, std::string* out, const std::string& help, bool required = false);
+  void AddInt(const std::string& name, int* out, const std::string& help);
+  void AddInt64(const std::string& name, long long* out, const std::string& help);
+  void AddDouble(const std::string& name, double* out, const std::string& help);
+  void AddFlag(const std::string& name, bool* out, const std::string& help);
+  // Values of an option that may be repeated (--camera a --camera b).
+  void AddList(const std::string& name, std::vector<std::string>* out, const std::string& help);
+  // Free text appended to --help (examples, notes).
+  void AddEpilog(const std::string& text);
+
+  // Returns true to go on. Returns false when the program should exit with *exit_code:
+  // 0 after --help, 2 after a usage error (printed as one line on stderr, naming the option).
+  bool Parse(int argc, char** argv, int* exit_code);
+  // Was the option given on the command line?
+  bool Given(const std::string& name) const;
+  std::string Help() const;
+  const std::string& program() const { return program_; }
+
+ private:
+  struct Option {
+    std::string name, help, kind;
+    void* out;
+    bool required;
+    bool given = false;
+    std::string default_text;
+  };
+  std::string program_, summary_, epilog_;
+  std::vector<Option> options_;
+  Option* Find(const std::string& name);
+};
+
+// Runs body(); on an exception prints "<program>: error: <what>" on one line and returns 1.
+int RunMain(const std::string& program, const std::function<int()>& body);
+
+}  // namespace mcmt

@@ -1,0 +1,78 @@
+// map.yaml and trajectory.csv, written atomically (temporary file in the same folder, then rename).
+// Doubles are written with 17 significant digits so files round-trip exactly.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/se3.h"
+
+namespace mcmt {
+
+class FileFormatError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Writes `content` to `path` through `path.tmp.<pid>` + rename; never leaves a half-written file.
+void WriteFileAtomic(const std::string& path, const std::string& content);
+std::string ReadFile(const std::string& path);  // throws FileFormatError naming the file
+
+constexpr int kMapVersion = 1;
+
+struct MapCamera {
+  std::string name;
+  CameraModel model;
+  Rigid3 rig_from_cam = Rigid3::Identity();
+  int observations = 0;      // marker observations used
+  double rms_px = 0.0;       // RMS reprojection error of its corners
+  double max_px = 0.0;       // largest corner error
+};
+
+struct MapMarker {
+  int id = 0;
+  double size = 0.0;  // side, metres
+  Rigid3 object_from_marker = Rigid3::Identity();
+  int observations = 0;
+  double rms_px = 0.0;
+  double max_px = 0.0;
+};
+
+struct RigMap {
+  int version = kMapVersion;
+  std::string dictionary;
+  std::string reference_camera;
+  int reference_marker = 0;
+  std::vector<MapCamera> cameras;
+  std::vector<MapMarker> markers;
+  double rms_px = 0.0;
+  int num_frames = 0;
+  int num_observations = 0;
+
+  const MapCamera* FindCamera(const std::string& name) const;
+  const MapMarker* FindMarker(int id) const;
+};
+
+void WriteMap(const std::string& path, const RigMap& map);
+RigMap ReadMap(const std::string& path);  // throws FileFormatError naming file and key; checks version
+
+// trajectory.csv: header "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers", one row per frame
+// with a solution; the pose is rig_from_object.
+struct TrajectoryRow {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  Rigid3 rig_from_object = Rigid3::Identity();
+  double rms_px = 0.0;
+  int cameras = 0;
+  int markers = 0;
+};
+
+extern const char kTrajectoryHeader[];
+std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
+void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
+std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+
+}  // namespace mcmt

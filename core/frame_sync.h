@@ -1,0 +1,69 @@
+// Groups detections of the same capture time across cameras into frames.
+// Live use: a frame is complete as soon as every alive camera has reported it, or when its deadline
+// (first arrival + deadline) passes, so one slow or dead camera never stalls the others. A camera
+// is alive while it has reported within `camera_timeout_us` (in message utime).
+// Out-of-order messages (older than a frame already emitted) and duplicates (same camera, same
+// frame) are dropped and counted.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "mcmt/detections_t.hpp"
+
+namespace mcmt {
+
+struct FrameSyncOptions {
+  int64_t tolerance_us = 2000;          // detections within this of a frame's utime join it
+  int64_t deadline_us = 15000;          // wall-time wait after a frame's first arrival
+  int64_t camera_timeout_us = 1000000;  // a camera silent this long (message time) is not waited for
+};
+
+struct SyncedFrame {
+  int64_t utime = 0;  // of the first detection that opened the frame
+  int64_t seq = 0;    // of the first detection that opened the frame
+  std::vector<detections_t> views;  // one per camera, in order of arrival
+  int64_t last_arrival_us = 0;      // wall time the last view arrived
+  bool complete = false;            // every alive camera reported (false: emitted by deadline/flush)
+};
+
+struct FrameSyncStats {
+  int64_t frames_emitted = 0;
+  int64_t frames_incomplete = 0;
+  int64_t duplicates = 0;
+  int64_t out_of_order = 0;
+};
+
+class FrameSynchronizer {
+ public:
+  explicit FrameSynchronizer(FrameSyncOptions options = {});
+
+  // Adds one camera's detections (arrival: wall time in us). Returns the frames completed by it,
+  // oldest first.
+  std::vector<SyncedFrame> Add(const detections_t& detections, int64_t arrival_us);
+  // Frames whose deadline has passed at wall time now_us, oldest first.
+  std::vector<SyncedFrame> Poll(int64_t now_us);
+  // Everything pending, oldest first (end of a log).
+  std::vector<SyncedFrame> Flush();
+
+  // Cameras ever seen, and those not heard of for camera_timeout_us before the newest utime.
+  std::set<std::string> Cameras() const;
+  std::set<std::string> StaleCameras() const;
+  const FrameSyncStats& stats() const { return stats_; }
+
+ private:
+  FrameSyncOptions options_;
+  std::map<int64_t, SyncedFrame> pending_;       // by frame utime
+  std::map<std::string, int64_t> last_utime_;    // per camera, newest message utime
+  int64_t newest_utime_ = INT64_MIN;
+  int64_t emitted_until_utime_ = INT64_MIN;      // frames at or before this are closed
+  FrameSyncStats stats_;
+  std::map<int64_t, int64_t> first_arrival_;     // frame utime -> wall time of first view
+  std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
+  std::set<std::string> AliveCameras() const;
+};
+
+}  // namespace mcmt

@@ -1,0 +1,105 @@
+// LCM helpers: channel names, checked encode/decode, message <-> core conversions, loops.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/files.h"
+#include "core/se3.h"
+#include "mcmt/camera_model_t.hpp"
+#include "mcmt/detections_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/pose3d_t.hpp"
+#include "mcmt/rig_map_t.hpp"
+
+namespace mcmt {
+
+constexpr char kDetectionsChannelPrefix[] = "MCMT_DETECTIONS_";
+constexpr char kDetectionsChannelRegex[] = "MCMT_DETECTIONS_.*";
+constexpr char kImageChannelPrefix[] = "MCMT_IMAGE_";
+constexpr char kMapChannel[] = "MCMT_MAP";
+constexpr char kPoseChannel[] = "MCMT_POSE";
+constexpr char kMapperStatusChannel[] = "MCMT_MAPPER_STATUS";
+constexpr char kMapperCommandChannel[] = "MCMT_MAPPER_COMMAND";
+
+// "cam0" -> "MCMT_DETECTIONS_CAM0"; characters other than [A-Za-z0-9_] become '_'.
+std::string DetectionsChannel(const std::string& camera_name);
+std::string ImageChannel(const std::string& camera_name);
+
+class LcmDecodeError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+template <typename Msg>
+std::vector<uint8_t> Encode(const Msg& msg) {
+  std::vector<uint8_t> buffer(msg.getEncodedSize());
+  if (msg.encode(buffer.data(), 0, static_cast<int>(buffer.size())) != static_cast<int>(buffer.size()))
+    throw std::runtime_error(std::string("cannot encode ") + Msg::getTypeName());
+  return buffer;
+}
+
+// Decodes exactly `size` bytes. A truncated, over-long or foreign (fingerprint mismatch) buffer
+// returns false with a reason in *error (never crashes, never throws).
+template <typename Msg>
+bool Decode(const void* data, size_t size, Msg* msg, std::string* error = nullptr) {
+  if (size > static_cast<size_t>(INT32_MAX)) {
+    if (error) *error = "message too large";
+    return false;
+  }
+  int n = -1;
+  try {
+    n = msg->decode(data, 0, static_cast<int>(size));
+  } catch (const std::exception& e) {  // e.g. std::bad_alloc from a garbage array length
+    n = -1;
+  }
+  if (n < 0) {
+    if (error) *error = std::string("not a valid ") + Msg::getTypeName() + " (" + std::to_string(size) + " bytes)";
+    return false;
+  }
+  if (static_cast<size_t>(n) != size) {
+    if (error) *error = std::string("trailing bytes after ") + Msg::getTypeName();
+    return false;
+  }
+  return true;
+}
+
+template <typename Msg>
+Msg DecodeOrThrow(const void* data, size_t size) {
+  Msg msg;
+  std::string error;
+  if (!Decode(data, size, &msg, &error)) throw LcmDecodeError(error);
+  return msg;
+}
+
+// Conversions.
+pose3d_t ToPose3d(const Rigid3& a_from_b);
+Rigid3 FromPose3d(const pose3d_t& pose);
+camera_model_t ToCameraModelMsg(const CameraModel& model);
+CameraModel FromCameraModelMsg(const camera_model_t& msg);  // throws std::invalid_argument
+rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime);
+RigMap FromRigMapMsg(const rig_map_t& msg);
+MarkerCorners2d CornersOf(const marker_t& marker);
+
+// "file://<absolute path>?speed=0": reads a log as fast as possible through LCM's own provider.
+std::string LogReadUrl(const std::string& log_path);
+// Opens an LCM instance; throws std::runtime_error naming the URL when it is not good().
+std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url);
+
+// Handles messages until done() is true (checked after every message and timeout tick) or the
+// timeout passes. Returns true when done() became true. For file:// providers returns when the log
+// ends (handle() < 0).
+bool HandleUntil(lcm::LCM& lcm, const std::function<bool()>& done, std::chrono::milliseconds timeout,
+                 std::chrono::milliseconds tick = std::chrono::milliseconds(20));
+
+// Wall clock in microseconds since the epoch.
+int64_t NowUtime();
+
+}  // namespace mcmt
