@@ -1,0 +1,289 @@
+// mcmt_sim: synthetic rigs, objects, trajectories, an exact image renderer, ground-truth projections,
+// simulated detections and ground_truth.yaml ("COLMAP's synthetic dataset generator" for mcmt).
+//
+// Conventions (same as the rest of mcmt):
+// - Transforms are named a_from_b (p_a = a_from_b * p_b). The simulator's rig frame is a world frame:
+//   origin at the centre of the camera circle, z up; cameras look at the origin. The simulator's object
+//   frame is the object's body frame (its centre), not a marker frame. An estimator chooses its own
+//   reference camera / marker; mcmt-eval aligns rigidly before comparing.
+// - Pixel centres are at integer coordinates (OpenCV's convention): pixel (0, 0) covers [-0.5, 0.5]^2.
+// - Marker corners in the marker frame in ArUco order (core/marker.h); z points out of the face. The
+//   marker side s is the side of the black square including its one-cell black border (as ArUco);
+//   a white quiet zone of `quiet_zone_cells` cells surrounds it.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/marker.h"
+#include "core/se3.h"
+#include "mcmt/detections_t.hpp"
+
+namespace mcmt {
+namespace sim {
+
+// ---------------------------------------------------------------------------------------------
+// Rig
+
+struct SimCamera {
+  std::string name;  // "cam0", "cam1", ...
+  CameraModel model;
+  Rigid3 rig_from_cam = Rigid3::Identity();
+};
+
+struct RigOptions {
+  int num_cameras = 5;
+  double radius = 1.0;          // circle radius, metres
+  double camera_height = 0.5;   // height of the cameras above the circle's centre plane (z), metres
+  double look_at_height = 0.0;  // cameras look at (0, 0, look_at_height)
+  int width = 640;
+  int height = 480;
+  double hfov_deg = 60.0;       // horizontal field of view (of the pinhole part)
+  DistortionModel distortion = DistortionModel::kNone;  // radtan: k1 k2 p1 p2 k3; fisheye: k1..k4
+  // Per-camera differences: relative spread of focal length and principal point offset (px), and of
+  // the distortion coefficients, drawn with `seed`. 0: all cameras identical.
+  double intrinsics_spread = 0.0;
+  uint64_t seed = 1;
+};
+
+// Cameras evenly spaced on the circle (cam0 at angle 0, on +x), each looking at the look-at point,
+// image x axis horizontal. Throws std::invalid_argument on bad options (naming the option).
+std::vector<SimCamera> MakeRig(const RigOptions& options);
+// The default distortion coefficients used for a model (mild, like a typical webcam / fisheye lens).
+std::vector<double> DefaultDistortion(DistortionModel model);
+
+// ---------------------------------------------------------------------------------------------
+// Object: markers on an opaque body made of convex planar faces.
+
+struct SimMarker {
+  int id = 0;
+  double size = 0.04;  // side, metres
+  Rigid3 object_from_marker = Rigid3::Identity();
+};
+
+struct SimFace {  // one convex planar polygon of the opaque body, counter-clockwise seen from outside
+  std::vector<Eigen::Vector3d> vertices;  // object frame
+  double albedo = 0.55;                   // reflectance 0..1
+};
+
+struct SimObject {
+  std::string name;  // "four_sided", "box", ...
+  std::vector<SimMarker> markers;
+  std::vector<SimFace> faces;
+  double radius = 0.1;  // radius of a sphere around the object origin holding the whole body, metres
+  const SimMarker* FindMarker(int id) const;
+  MarkerSizes Sizes() const;  // default = the most common size, overrides for the others
+};
+
+enum class ObjectKind { kFourSided, kBox, kPentagon, kCube, kBoard };
+const std::vector<std::string>& ObjectKindNames();  // "four_sided", "box", "pentagon", "cube", "board"
+ObjectKind ObjectKindFromName(const std::string& name);  // throws std::invalid_argument listing names
+
+struct ObjectOptions {
+  ObjectKind kind = ObjectKind::kFourSided;
+  double marker_size = 0.04;  // metres (pentagon: default 0.025 when marker_size <= 0)
+  int first_id = 0;           // ids first_id, first_id + 1, ...
+  uint64_t seed = 1;          // box: random placement
+};
+// four_sided: a square prism (10 cm wide, 6 cm high) with one marker on each of its four sides, id 0..3.
+// box:        a 16x12x8 cm box with 8 markers at random places / in-plane rotations on its faces.
+// pentagon:   a pentagonal prism (radius 6 cm) with two small markers on each side (10 markers, 2.5 cm).
+// cube:       a cube (side = marker side + 2 cm) with one marker per face, 6 markers.
+// board:      a flat board with a 3x3 grid of markers on its front face (a two-sided thin slab).
+SimObject MakeObject(const ObjectOptions& options);
+
+// ---------------------------------------------------------------------------------------------
+// Trajectory
+
+struct SimFrame {
+  int64_t seq = 0;
+  int64_t utime = 0;
+  Rigid3 rig_from_object = Rigid3::Identity();
+};
+
+// The first frame's utime (1e12 us, i.e. 1'000'000'000'000) and frame k's: kStartUtime + round(k * 1e6 / fps).
+constexpr int64_t kStartUtime = 1000000000000LL;
+int64_t FrameUtime(int64_t frame, double fps);
+
+struct TrajectoryOptions {
+  int frames = 300;
+  double fps = 30.0;
+  uint64_t seed = 1;
+  // Extent of the motion around the look-at point: horizontal radius and vertical half-range, metres.
+  // <= 0: chosen from the rig (a fraction of the circle radius, so the object stays in every view).
+  double position_radius = -1.0;
+  double vertical_range = -1.0;
+  double look_at_height = 0.0;  // centre of the motion (z)
+  double max_tilt_deg = 35.0;   // tilt of the object's z axis from vertical
+  double turns = 1.5;           // full turns about the vertical over the sequence (every face is seen)
+  // Still segments: `still_segments` segments of `still_frames` frames each where the object does not move.
+  int still_frames = 0;
+  int still_segments = 2;
+};
+
+// A smooth random 6-DoF trajectory (sums of random sinusoids) inside the cameras' common view, turning
+// about the vertical so every side faces every camera. Deterministic for a seed.
+std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& options);
+
+// ---------------------------------------------------------------------------------------------
+// Ground-truth projections
+
+struct MarkerView {
+  int id = 0;
+  MarkerCorners2d corners;         // distorted pixels, ArUco order (valid when all corners are in front)
+  bool in_front = false;           // every corner has z > 0 in the camera frame
+  bool in_image = false;           // all 4 corners inside the image (pixel centres 0..w-1, 0..h-1)
+  bool front_facing = false;       // the face points towards the camera
+  bool occluded = false;           // part of the marker (corners, edges, centre) is hidden by the body or
+                                   // another marker
+  bool fully_visible = false;      // in_front && in_image && front_facing && !occluded
+  double view_angle_deg = 180.0;   // angle between the marker normal and the direction to the camera
+  double size_px = 0.0;            // apparent side: sqrt of the projected quadrilateral's area, pixels
+  double depth = 0.0;              // z of the marker centre in the camera frame, metres
+  Rigid3 cam_from_marker = Rigid3::Identity();
+};
+
+// Every marker of the object, seen by one camera, with the object at rig_from_object.
+std::vector<MarkerView> ProjectMarkers(const SimCamera& camera, const SimObject& object,
+                                       const Rigid3& rig_from_object);
+
+// ---------------------------------------------------------------------------------------------
+// Rendering
+
+struct RenderOptions {
+  int supersampling = 4;          // only for distortion-free "background" effects; marker and face
+                                  // edges use exact per-pixel coverage (see render.cc)
+  double noise_sigma = 2.0;       // Gaussian noise, gray levels
+  double blur_sigma = 0.0;        // Gaussian blur of the whole image (optics), pixels; 0: none
+  int motion_blur_samples = 0;    // > 1: average this many poses over the exposure (needs previous pose)
+  double exposure_fraction = 0.5; // exposure as a fraction of the frame interval (motion blur)
+  bool textured_background = true;
+  double lighting_gradient = 0.3; // relative brightness change across the image (0: uniform)
+  double shading = 0.3;           // relative brightness change between faces by their normal (0: flat)
+  double black_level = 25.0;      // gray level of the markers' black ink under full light
+  double white_level = 225.0;     // gray level of the white paper under full light
+  int quiet_zone_cells = 1;       // width of the white margin around each marker, in marker cells
+  bool bgr = false;               // 3-channel output (gray replicated with a slight tint)
+  bool inverted = false;          // white-on-black markers
+  uint64_t seed = 1;              // background texture and noise (noise also varies with frame and camera)
+};
+
+// Renders marker images of one dictionary. Thread-compatible (const methods are thread-safe).
+class Renderer {
+ public:
+  // dictionary: a name or file as core/dictionary.h LoadDictionary accepts. Throws on unknown names
+  // or marker ids out of the dictionary.
+  Renderer(const SimObject& object, const std::string& dictionary, const RenderOptions& options = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // One camera's 8-bit image (CV_8UC1, or CV_8UC3 when options.bgr) of the object at rig_from_object.
+  // camera_index and frame seed the noise. previous_rig_from_object (optional) is the pose one frame
+  // earlier, used for motion blur.
+  cv::Mat Render(const SimCamera& camera, int camera_index, int64_t frame, const Rigid3& rig_from_object,
+                 const Rigid3* previous_rig_from_object = nullptr) const;
+
+  // The noise-free, blur-free image as float gray levels (0..255), for tests of rendering exactness.
+  cv::Mat RenderIdeal(const SimCamera& camera, int camera_index, const Rigid3& rig_from_object) const;
+
+  const RenderOptions& options() const { return options_; }
+
+ private:
+  struct Impl;
+  RenderOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Low-level helper (exposed for tests): the exact area of the intersection of a convex polygon with
+// the axis-aligned rectangle [x0, x1] x [y0, y1].
+double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double x0, double y0, double x1,
+                             double y1);
+
+// ---------------------------------------------------------------------------------------------
+// Ground truth file (ground_truth.yaml)
+
+struct GroundTruth {
+  std::string object;  // object kind name
+  std::string dictionary = "DICT_6X6_250";
+  double marker_size = 0.04;          // default side
+  std::map<int, double> marker_sizes; // every id's side
+  double fps = 30.0;
+  std::vector<SimCamera> cameras;     // name, model, rig_from_cam
+  std::vector<SimMarker> markers;     // id, size, object_from_marker
+  std::vector<SimFrame> frames;       // seq, utime, rig_from_object
+  const SimCamera* FindCamera(const std::string& name) const;
+  const SimMarker* FindMarker(int id) const;
+};
+
+// Poses written as {translation: [x, y, z], rotation_wxyz: [w, x, y, z]} with %.17g, written atomically.
+// Layout:
+//   version: 1
+//   object: four_sided
+//   dictionary: DICT_6X6_250
+//   marker_size: 0.04
+//   fps: 30
+//   rig_frame: world
+//   cameras:   {cam0: {rig_from_cam: POSE, width: 640, height: 480, fx: .., fy: .., cx: .., cy: ..,
+//                      distortion_model: none, distortion: []}, ...}
+//   markers:   {0: {size: 0.04, object_from_marker: POSE}, ...}
+//   frames:    - {seq: 0, utime: 1000000000000, rig_from_object: POSE}
+void WriteGroundTruth(const std::string& path, const GroundTruth& truth);
+// Throws std::runtime_error naming the file and key.
+GroundTruth ReadGroundTruth(const std::string& path);
+
+// ---------------------------------------------------------------------------------------------
+// Simulated detections (detections-only mode)
+
+struct DetectionSimOptions {
+  double corner_noise_px = 0.1;    // Gaussian sigma per corner coordinate
+  double miss_rate = 0.0;          // probability that a visible marker is not reported
+  double false_rate = 0.0;         // expected false detections per camera frame (Poisson), ids not on object
+  double drop_rate = 0.0;          // probability that a whole camera frame is not published
+  double max_view_angle_deg = 80.0;  // markers seen more obliquely are not detected
+  double min_size_px = 8.0;        // smaller markers are not detected
+  std::string dictionary = "DICT_6X6_250";
+  int dictionary_size = 250;       // false ids are drawn from [0, dictionary_size) minus the object's ids
+};
+
+// One camera's detections_t for one frame (nullopt-like: returns false when the frame is dropped).
+// rng drives noise, misses and false detections (use one per camera for determinism independent of order).
+bool SimulateDetections(const SimCamera& camera, const SimObject& object, const SimFrame& frame,
+                        const DetectionSimOptions& options, std::mt19937_64& rng, detections_t* out);
+
+// ---------------------------------------------------------------------------------------------
+// A whole dataset (what mcmt-sim does), usable from tests and benchmarks without the process.
+
+struct DatasetOptions {
+  std::string out_dir;
+  ObjectOptions object;
+  RigOptions rig;
+  TrajectoryOptions trajectory;
+  RenderOptions render;
+  DetectionSimOptions detections;
+  std::string dictionary = "DICT_6X6_250";
+  bool detections_only = false;
+  bool video = false;  // per-camera MP4 instead of PNG folders
+  bool quiet = true;   // no progress on stderr
+};
+
+struct DatasetSummary {
+  GroundTruth truth;
+  int64_t images_written = 0;
+  int64_t messages_written = 0;  // detections-only
+  double seconds = 0.0;
+};
+
+// Writes out_dir/rig.yaml, out_dir/camK.yml, out_dir/ground_truth.yaml and either images
+// (out_dir/camK/000000.png ... or out_dir/camK.mp4) or out_dir/detections.lcmlog.
+DatasetSummary GenerateDataset(const DatasetOptions& options);
+
+}  // namespace sim
+}  // namespace mcmt
