@@ -1,17 +1,18 @@
 // LCM helpers: channel names, checked encode/decode, message <-> core conversions, loops.
 #pragma once
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/camera.h"
 #include "core/files.h"
+#include "core/marker.h"
 #include "core/se3.h"
 #include "mcmt/camera_model_t.hpp"
 #include "mcmt/detections_t.hpp"
@@ -61,7 +62,8 @@ bool Decode(const void* data, size_t size, Msg* msg, std::string* error = nullpt
     n = -1;
   }
   if (n < 0) {
-    if (error) *error = std::string("not a valid ") + Msg::getTypeName() + " (" + std::to_string(size) + " bytes)";
+    if (error)
+      *error = std::string("not a valid ") + Msg::getTypeName() + " (" + std::to_string(size) + " bytes)";
     return false;
   }
   if (static_cast<size_t>(n) != size) {

@@ -52,13 +52,18 @@ std::string ArgParser::Help() const {
   }
   s << " [options]\n" << summary_ << "\n\noptions:\n";
   for (const auto& o : options_) {
-    std::string left = "  --" + o.name + (o.kind == "flag" ? "" : " " + std::string(o.kind == "list" ? "VALUE..." : "VALUE"));
+    std::string left = "  --" + o.name +
+                       (o.kind == "flag" ? "" : " " + std::string(o.kind == "list" ? "VALUE..." : "VALUE"));
     s << left;
-    if (left.size() < 28) s << std::string(28 - left.size(), ' ');
-    else s << "\n" << std::string(28, ' ');
+    if (left.size() < 28)
+      s << std::string(28 - left.size(), ' ');
+    else
+      s << "\n" << std::string(28, ' ');
     s << o.help;
-    if (o.required) s << " (required)";
-    else if (!o.default_text.empty()) s << " (default: " << o.default_text << ")";
+    if (o.required)
+      s << " (required)";
+    else if (!o.default_text.empty())
+      s << " (default: " << o.default_text << ")";
     s << "\n";
   }
   s << "  --help                    print this help and exit\n";

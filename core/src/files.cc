@@ -1,0 +1,435 @@
+#include "core/files.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace mcmt {
+namespace {
+
+// 17 significant digits: parses back to the same double. YAML spellings for the non-finite values.
+std::string Num(double v) {
+  if (std::isnan(v)) return ".nan";
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+std::string CsvNum(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+std::string List(std::initializer_list<double> values) {
+  std::string out = "[";
+  bool first = true;
+  for (double v : values) {
+    out += (first ? "" : ", ") + Num(v);
+    first = false;
+  }
+  return out + "]";
+}
+
+std::string Quoted(const std::string& s) {
+  // Double-quoted YAML scalar with escapes, so that any name survives.
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\x%02x", static_cast<unsigned char>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+// The pose block: translation, quaternion (w, x, y, z) for people and other tools, and the rotation
+// matrix (row-major) so that the file round-trips bit-exactly.
+void WritePose(std::ostringstream& out, const std::string& indent, const std::string& name, const Rigid3& t) {
+  const auto q = QuaternionWxyz(t);
+  const Eigen::Vector3d p = t.translation();
+  const Eigen::Matrix3d r = t.linear();
+  out << indent << name << ":\n";
+  out << indent << "  translation: " << List({p.x(), p.y(), p.z()}) << "\n";
+  out << indent << "  rotation_wxyz: " << List({q[0], q[1], q[2], q[3]}) << "\n";
+  out << indent << "  rotation_matrix: "
+      << List({r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)}) << "\n";
+}
+
+class MapReader {
+ public:
+  explicit MapReader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void Fail(const std::string& key, const std::string& what) const {
+    throw FileFormatError(path_ + ": " + key + ": " + what);
+  }
+
+  YAML::Node Get(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const std::string full = parent_key.empty() ? key : parent_key + "." + key;
+    if (!parent.IsMap()) Fail(parent_key, "expected a mapping");
+    const YAML::Node n = parent[key];
+    if (!n.IsDefined() || n.IsNull()) Fail(full, "missing");
+    return n;
+  }
+
+  double Double(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = Get(parent, parent_key, key);
+    double v = 0;
+    if (!n.IsScalar() || !YAML::convert<double>::decode(n, v))
+      Fail(Key(parent_key, key), "expected a number, got '" + Text(n) + "'");
+    return v;
+  }
+
+  int Int(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = Get(parent, parent_key, key);
+    int v = 0;
+    if (!n.IsScalar() || !YAML::convert<int>::decode(n, v))
+      Fail(Key(parent_key, key), "expected an integer, got '" + Text(n) + "'");
+    return v;
+  }
+
+  std::string String(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = Get(parent, parent_key, key);
+    if (!n.IsScalar()) Fail(Key(parent_key, key), "expected a string");
+    return n.Scalar();
+  }
+
+  std::vector<double> Numbers(const YAML::Node& parent, const std::string& parent_key, const std::string& key,
+                              int expected) const {
+    const YAML::Node n = Get(parent, parent_key, key);
+    const std::string full = Key(parent_key, key);
+    if (!n.IsSequence()) Fail(full, "expected a list of numbers");
+    if (expected >= 0 && static_cast<int>(n.size()) != expected)
+      Fail(full, "expected " + std::to_string(expected) + " numbers, got " + std::to_string(n.size()));
+    std::vector<double> out;
+    for (size_t i = 0; i < n.size(); ++i) {
+      double v = 0;
+      if (!n[i].IsScalar() || !YAML::convert<double>::decode(n[i], v))
+        Fail(full, "item " + std::to_string(i) + ": expected a number, got '" + Text(n[i]) + "'");
+      out.push_back(v);
+    }
+    return out;
+  }
+
+  Rigid3 Pose(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = Get(parent, parent_key, key);
+    const std::string full = Key(parent_key, key);
+    const std::vector<double> t = Numbers(n, full, "translation", 3);
+    const std::vector<double> q = Numbers(n, full, "rotation_wxyz", 4);
+    Rigid3 pose;
+    try {
+      pose = RigidFromQuaternion({q[0], q[1], q[2], q[3]}, Eigen::Vector3d(t[0], t[1], t[2]));
+    } catch (const std::exception& e) {
+      Fail(full + ".rotation_wxyz", e.what());
+    }
+    const YAML::Node m = n["rotation_matrix"];
+    if (m.IsDefined() && !m.IsNull()) {
+      // The exact rotation; it must agree with the quaternion (someone may have edited only one).
+      const std::vector<double> r = Numbers(n, full, "rotation_matrix", 9);
+      Eigen::Matrix3d rot;
+      rot << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
+      if (!((rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm() < 1e-9) || !(rot.determinant() > 0))
+        Fail(full + ".rotation_matrix", "not a rotation matrix");
+      if (!(RotationAngle(rot, pose.linear()) < 1e-9))
+        Fail(full + ".rotation_matrix",
+             "disagrees with rotation_wxyz (edit both, or delete rotation_matrix)");
+      pose.linear() = rot;
+    }
+    return pose;
+  }
+
+  static std::string Key(const std::string& parent_key, const std::string& key) {
+    return parent_key.empty() ? key : parent_key + "." + key;
+  }
+  static std::string Text(const YAML::Node& n) {
+    return n.IsScalar() ? n.Scalar() : std::string("not a scalar");
+  }
+
+ private:
+  std::string path_;
+};
+
+bool ParseInt64(const std::string& s, int64_t* out) {
+  if (s.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(s.c_str(), &end, 10);
+  if (errno != 0 || end != s.c_str() + s.size()) return false;
+  *out = v;
+  return true;
+}
+
+bool ParseDouble(const std::string& s, double* out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size()) return false;
+  *out = v;
+  return true;
+}
+
+}  // namespace
+
+void WriteFileAtomic(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw FileFormatError(path + ": cannot write: " + std::strerror(errno));
+  size_t written = 0;
+  while (written < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const std::string reason = std::strerror(errno);
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      throw FileFormatError(path + ": cannot write: " + reason);
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw FileFormatError(path + ": cannot write: " + reason);
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw FileFormatError(path + ": cannot rename " + tmp + ": " + reason);
+  }
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileFormatError(path + ": cannot open file");
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (in.bad()) throw FileFormatError(path + ": read error");
+  return s.str();
+}
+
+const MapCamera* RigMap::FindCamera(const std::string& name) const {
+  for (const auto& c : cameras)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+const MapMarker* RigMap::FindMarker(int id) const {
+  for (const auto& m : markers)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+
+void WriteMap(const std::string& path, const RigMap& map) {
+  std::ostringstream out;
+  out << "# mcmt map: rig frame = reference camera, object frame = reference marker.\n";
+  out << "# rig_from_cam maps camera points into the rig frame; object_from_marker maps marker points into\n";
+  out << "# the object frame. Quaternions w, x, y, z; rotation_matrix row-major (exact copy of the "
+         "rotation).\n";
+  out << "version: " << map.version << "\n";
+  out << "dictionary: " << Quoted(map.dictionary) << "\n";
+  out << "reference_camera: " << Quoted(map.reference_camera) << "\n";
+  out << "reference_marker: " << map.reference_marker << "\n";
+  out << "rms_px: " << Num(map.rms_px) << "\n";
+  out << "num_frames: " << map.num_frames << "\n";
+  out << "num_observations: " << map.num_observations << "\n";
+  out << "cameras:" << (map.cameras.empty() ? " []" : "") << "\n";
+  for (const auto& c : map.cameras) {
+    const CameraModel& k = c.model;
+    out << "  - name: " << Quoted(c.name) << "\n";
+    out << "    intrinsics:\n";
+    out << "      width: " << k.width << "\n";
+    out << "      height: " << k.height << "\n";
+    out << "      fx: " << Num(k.fx) << "\n";
+    out << "      fy: " << Num(k.fy) << "\n";
+    out << "      cx: " << Num(k.cx) << "\n";
+    out << "      cy: " << Num(k.cy) << "\n";
+    out << "      distortion_model: " << DistortionModelName(k.model) << "\n";
+    out << "      distortion: [";
+    for (size_t i = 0; i < k.distortion.size(); ++i) out << (i ? ", " : "") << Num(k.distortion[i]);
+    out << "]\n";
+    WritePose(out, "    ", "rig_from_cam", c.rig_from_cam);
+    out << "    observations: " << c.observations << "\n";
+    out << "    rms_px: " << Num(c.rms_px) << "\n";
+    out << "    max_px: " << Num(c.max_px) << "\n";
+  }
+  out << "markers:" << (map.markers.empty() ? " []" : "") << "\n";
+  for (const auto& m : map.markers) {
+    out << "  - id: " << m.id << "\n";
+    out << "    size: " << Num(m.size) << "\n";
+    WritePose(out, "    ", "object_from_marker", m.object_from_marker);
+    out << "    observations: " << m.observations << "\n";
+    out << "    rms_px: " << Num(m.rms_px) << "\n";
+    out << "    max_px: " << Num(m.max_px) << "\n";
+  }
+  WriteFileAtomic(path, out.str());
+}
+
+RigMap ReadMap(const std::string& path) {
+  const std::string text = ReadFile(path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw FileFormatError(path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  MapReader r(path);
+  if (!root.IsMap()) throw FileFormatError(path + ": not a map file (expected a YAML mapping)");
+  RigMap map;
+  map.version = r.Int(root, "", "version");
+  if (map.version != kMapVersion)
+    r.Fail("version", "unsupported map version " + std::to_string(map.version) + " (this build reads " +
+                          std::to_string(kMapVersion) + ")");
+  map.dictionary = r.String(root, "", "dictionary");
+  map.reference_camera = r.String(root, "", "reference_camera");
+  map.reference_marker = r.Int(root, "", "reference_marker");
+  map.rms_px = r.Double(root, "", "rms_px");
+  map.num_frames = r.Int(root, "", "num_frames");
+  map.num_observations = r.Int(root, "", "num_observations");
+  const YAML::Node cams = r.Get(root, "", "cameras");
+  if (!cams.IsSequence()) r.Fail("cameras", "expected a list");
+  for (size_t i = 0; i < cams.size(); ++i) {
+    const std::string key = "cameras[" + std::to_string(i) + "]";
+    const YAML::Node c = cams[i];
+    if (!c.IsMap()) r.Fail(key, "expected a mapping");
+    MapCamera cam;
+    cam.name = r.String(c, key, "name");
+    const std::string ik = key + ".intrinsics";
+    const YAML::Node in = r.Get(c, key, "intrinsics");
+    CameraModel& k = cam.model;
+    k.width = r.Int(in, ik, "width");
+    k.height = r.Int(in, ik, "height");
+    k.fx = r.Double(in, ik, "fx");
+    k.fy = r.Double(in, ik, "fy");
+    k.cx = r.Double(in, ik, "cx");
+    k.cy = r.Double(in, ik, "cy");
+    try {
+      k.model = DistortionModelFromName(r.String(in, ik, "distortion_model"));
+    } catch (const std::invalid_argument& e) {
+      r.Fail(ik + ".distortion_model", e.what());
+    }
+    k.distortion = r.Numbers(in, ik, "distortion", -1);
+    try {
+      k.Validate();
+    } catch (const std::invalid_argument& e) {
+      r.Fail(ik, e.what());
+    }
+    cam.rig_from_cam = r.Pose(c, key, "rig_from_cam");
+    cam.observations = r.Int(c, key, "observations");
+    cam.rms_px = r.Double(c, key, "rms_px");
+    cam.max_px = r.Double(c, key, "max_px");
+    if (map.FindCamera(cam.name)) r.Fail(key + ".name", "duplicated camera '" + cam.name + "'");
+    map.cameras.push_back(cam);
+  }
+  const YAML::Node markers = r.Get(root, "", "markers");
+  if (!markers.IsSequence()) r.Fail("markers", "expected a list");
+  for (size_t i = 0; i < markers.size(); ++i) {
+    const std::string key = "markers[" + std::to_string(i) + "]";
+    const YAML::Node m = markers[i];
+    if (!m.IsMap()) r.Fail(key, "expected a mapping");
+    MapMarker marker;
+    marker.id = r.Int(m, key, "id");
+    marker.size = r.Double(m, key, "size");
+    if (!(marker.size > 0)) r.Fail(key + ".size", "must be positive");
+    marker.object_from_marker = r.Pose(m, key, "object_from_marker");
+    marker.observations = r.Int(m, key, "observations");
+    marker.rms_px = r.Double(m, key, "rms_px");
+    marker.max_px = r.Double(m, key, "max_px");
+    if (map.FindMarker(marker.id)) r.Fail(key + ".id", "duplicated marker id " + std::to_string(marker.id));
+    map.markers.push_back(marker);
+  }
+  if (!map.reference_camera.empty() && !map.cameras.empty() && !map.FindCamera(map.reference_camera))
+    r.Fail("reference_camera", "'" + map.reference_camera + "' is not among the cameras");
+  return map;
+}
+
+const char kTrajectoryHeader[] = "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers";
+
+std::string TrajectoryCsvLine(const TrajectoryRow& row) {
+  const auto q = QuaternionWxyz(row.rig_from_object);
+  const Eigen::Vector3d t = row.rig_from_object.translation();
+  std::string line = std::to_string(row.utime) + "," + std::to_string(row.seq);
+  for (double v : {t.x(), t.y(), t.z(), q[0], q[1], q[2], q[3], row.rms_px}) line += "," + CsvNum(v);
+  line += "," + std::to_string(row.cameras) + "," + std::to_string(row.markers);
+  return line;
+}
+
+void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows) {
+  std::string content = std::string(kTrajectoryHeader) + "\n";
+  for (const auto& row : rows) content += TrajectoryCsvLine(row) + "\n";
+  WriteFileAtomic(path, content);
+}
+
+std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
+  std::istringstream in(ReadFile(path));
+  std::vector<TrajectoryRow> rows;
+  std::string line;
+  int line_number = 0;
+  bool header_seen = false;
+  static const char* kNames[] = {"utime", "seq", "tx", "ty",     "tz",      "qw",
+                                 "qx",    "qy",  "qz", "rms_px", "cameras", "markers"};
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    const std::string where = path + ":" + std::to_string(line_number) + ": ";
+    if (!header_seen) {
+      if (line != kTrajectoryHeader)
+        throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) + "'");
+      header_seen = true;
+      continue;
+    }
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    std::string field;
+    while (std::getline(ss, field, ',')) fields.push_back(field);
+    if (!line.empty() && line.back() == ',') fields.push_back("");
+    if (fields.size() != 12)
+      throw FileFormatError(where + "expected 12 fields, got " + std::to_string(fields.size()));
+    TrajectoryRow row;
+    int64_t cams = 0, marks = 0;
+    double v[8];
+    if (!ParseInt64(fields[0], &row.utime))
+      throw FileFormatError(where + "utime: not an integer: '" + fields[0] + "'");
+    if (!ParseInt64(fields[1], &row.seq))
+      throw FileFormatError(where + "seq: not an integer: '" + fields[1] + "'");
+    for (int i = 0; i < 8; ++i)
+      if (!ParseDouble(fields[2 + i], &v[i]))
+        throw FileFormatError(where + kNames[2 + i] + ": not a number: '" + fields[2 + i] + "'");
+    if (!ParseInt64(fields[10], &cams))
+      throw FileFormatError(where + "cameras: not an integer: '" + fields[10] + "'");
+    if (!ParseInt64(fields[11], &marks))
+      throw FileFormatError(where + "markers: not an integer: '" + fields[11] + "'");
+    try {
+      row.rig_from_object = RigidFromQuaternion({v[3], v[4], v[5], v[6]}, Eigen::Vector3d(v[0], v[1], v[2]));
+    } catch (const std::exception& e) {
+      throw FileFormatError(where + "qw..qz: " + e.what());
+    }
+    row.rms_px = v[7];
+    row.cameras = static_cast<int>(cams);
+    row.markers = static_cast<int>(marks);
+    rows.push_back(row);
+  }
+  if (!header_seen)
+    throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +
+                          "')");
+  return rows;
+}
+
+}  // namespace mcmt
