@@ -1,0 +1,447 @@
+// PoseEstimator: rig_from_object of one frame from the markers seen by the mapped cameras.
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+
+#include "core/ippe.h"
+#include "tracker/tracker.h"
+
+namespace mcmt {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Added to the cost for every corner that falls behind its camera, so that a step leading there is
+// refused by Levenberg-Marquardt.
+constexpr double kBehindPenalty = 1e12;
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+Eigen::Matrix3d ExpRotation(const Eigen::Vector3d& w) {
+  const double angle = w.norm();
+  if (angle < 1e-12) return Eigen::Matrix3d::Identity() + Skew(w);
+  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+}
+
+// rig_from_object <- Exp(delta) * rig_from_object, delta = (rotation vector, translation) in the rig
+// frame: p_rig -> R(w) p_rig + v.
+Rigid3 ApplyLeft(const Rigid3& pose, const Vector6d& delta) {
+  const Eigen::Matrix3d dr = ExpRotation(delta.head<3>());
+  Rigid3 out = Rigid3::Identity();
+  Eigen::Matrix3d r = dr * pose.linear();
+  // Keep the rotation orthonormal over thousands of frames of incremental updates.
+  r = Eigen::Quaterniond(r).normalized().toRotationMatrix();
+  out.linear() = r;
+  out.translation() = dr * pose.translation() + delta.tail<3>();
+  return out;
+}
+
+double Huber(double squared, double k, double* weight) {
+  if (squared <= k * k) {
+    *weight = 1.0;
+    return squared;
+  }
+  const double d = std::sqrt(squared);
+  *weight = k / d;
+  return 2.0 * k * d - k * k;
+}
+
+}  // namespace
+
+const char* PoseStatusName(PoseStatus status) {
+  switch (status) {
+    case PoseStatus::kTracking:
+      return "tracking";
+    case PoseStatus::kLost:
+      return "lost";
+    case PoseStatus::kAmbiguous:
+      return "ambiguous";
+  }
+  return "?";
+}
+
+std::vector<MarkerObservation> ObservationsFromViews(const std::vector<detections_t>& views) {
+  std::vector<const detections_t*> sorted;
+  for (const auto& v : views) sorted.push_back(&v);
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const detections_t* a, const detections_t* b) { return a->camera < b->camera; });
+  std::vector<MarkerObservation> out;
+  for (const detections_t* v : sorted) {
+    for (const auto& m : v->markers) {
+      MarkerObservation o;
+      o.camera = v->camera;
+      o.id = m.id;
+      for (int k = 0; k < 4; ++k) o.corners[k] = Eigen::Vector2d(m.corners[k][0], m.corners[k][1]);
+      out.push_back(o);
+    }
+  }
+  return out;
+}
+
+PoseEstimator::PoseEstimator(const RigMap& map, const TrackerOptions& options)
+    : map_(map), options_(options) {
+  options_.Validate();
+  if (map.cameras.empty()) throw std::invalid_argument("the map has no camera");
+  if (map.markers.empty()) throw std::invalid_argument("the map has no marker");
+  for (const auto& c : map.cameras) {
+    try {
+      c.model.Validate();
+    } catch (const std::exception& e) {
+      throw std::invalid_argument("map camera '" + c.name + "': " + e.what());
+    }
+    if (camera_index_.count(c.name)) throw std::invalid_argument("map camera '" + c.name + "' appears twice");
+    Camera cam;
+    cam.name = c.name;
+    cam.model = c.model;
+    cam.rig_from_cam = c.rig_from_cam;
+    const Eigen::Matrix3d r = c.rig_from_cam.linear();
+    cam.cam_R_rig = r.transpose();
+    cam.cam_t_rig = -r.transpose() * c.rig_from_cam.translation();
+    camera_index_[c.name] = static_cast<int>(cameras_.size());
+    cameras_.push_back(cam);
+  }
+  for (const auto& m : map.markers) {
+    if (!(m.size > 0))
+      throw std::invalid_argument("map marker " + std::to_string(m.id) + ": size must be > 0");
+    if (marker_index_.count(m.id))
+      throw std::invalid_argument("map marker " + std::to_string(m.id) + " appears twice");
+    Marker mk;
+    mk.id = m.id;
+    mk.size = m.size;
+    mk.object_from_marker = m.object_from_marker;
+    const double h = 0.5 * m.size;
+    const Eigen::Vector3d local[4] = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
+    for (int k = 0; k < 4; ++k) mk.corners_object[k] = m.object_from_marker * local[k];
+    marker_index_[m.id] = static_cast<int>(markers_.size());
+    markers_.push_back(mk);
+  }
+}
+
+double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
+  const Camera& cam = cameras_[obs.camera];
+  const Marker& mk = markers_[obs.marker];
+  double sum = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d p_cam = cam.cam_R_rig * (pose * mk.corners_object[k]) + cam.cam_t_rig;
+    Eigen::Vector2d px;
+    if (!cam.model.Project(p_cam, &px, nullptr)) return kInf;
+    sum += (px - (*obs.pixels)[k]).squaredNorm();
+  }
+  return std::sqrt(sum / 4.0);
+}
+
+// Cost (Huber on each corner's pixel distance d, k = huber_px):
+//   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
+// with T = rig_from_object, perturbed on the left, T <- Exp(delta) * T, delta = (w, v):
+//   d p_rig / d delta = [-[p_rig]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig]x | I],
+//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig]x | I]   (analytic, 2x6 per corner).
+// Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
+double PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
+                               int* iterations, Matrix6d* hessian) const {
+  const double k = options_.huber_px;
+  auto evaluate = [&](const Rigid3& t, Matrix6d* h, Vector6d* g, double* plain) {
+    h->setZero();
+    g->setZero();
+    double cost = 0.0, plain_cost = 0.0;
+    const Eigen::Matrix3d r = t.linear();
+    const Eigen::Vector3d tr = t.translation();
+    for (size_t i = 0; i < obs.size(); ++i) {
+      if (!active[i]) continue;
+      const Camera& cam = cameras_[obs[i].camera];
+      const Marker& mk = markers_[obs[i].marker];
+      for (int c = 0; c < 4; ++c) {
+        const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
+        const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
+        Eigen::Vector2d px;
+        Eigen::Matrix<double, 2, 3> jp;
+        if (!cam.model.Project(p_cam, &px, &jp)) {
+          cost += kBehindPenalty;
+          plain_cost += kBehindPenalty;
+          continue;
+        }
+        const Eigen::Vector2d res = px - (*obs[i].pixels)[c];
+        const double sq = res.squaredNorm();
+        double w = 1.0;
+        cost += Huber(sq, k, &w);
+        plain_cost += sq;
+        const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
+        Eigen::Matrix<double, 2, 6> j;
+        j.leftCols<3>() = -a * Skew(p_rig);
+        j.rightCols<3>() = a;
+        h->noalias() += w * j.transpose() * j;
+        g->noalias() += w * j.transpose() * res;
+      }
+    }
+    if (plain) *plain = plain_cost;
+    return cost;
+  };
+
+  Matrix6d h;
+  Vector6d g;
+  double plain = 0.0;
+  double cost = evaluate(*pose, &h, &g, &plain);
+  double lambda = 1e-4;
+  int it = 0;
+  for (; it < options_.max_iterations && cost > 1e-24; ++it) {
+    Matrix6d a = h;
+    a.diagonal() += lambda * h.diagonal() + Vector6d::Constant(1e-12);
+    const Vector6d dx = a.ldlt().solve(-g);
+    if (!dx.allFinite()) break;
+    const Rigid3 candidate = ApplyLeft(*pose, dx);
+    Matrix6d h_new;
+    Vector6d g_new;
+    double plain_new = 0.0;
+    const double cost_new = evaluate(candidate, &h_new, &g_new, &plain_new);
+    if (cost_new < cost) {
+      const double decrease = cost - cost_new;
+      *pose = candidate;
+      h = h_new;
+      g = g_new;
+      cost = cost_new;
+      plain = plain_new;
+      lambda = std::max(lambda * 0.1, 1e-10);
+      if (dx.norm() < 1e-10 || decrease < 1e-12 * cost_new) {
+        ++it;
+        break;
+      }
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e10) break;
+    }
+  }
+  if (iterations) *iterations += it;
+  if (hessian) {
+    // The unweighted Gauss-Newton matrix J^T J at the result, for the covariance.
+    Matrix6d unweighted = Matrix6d::Zero();
+    // Recompute without robust weights: all inliers are within a few pixels, weights ~1 anyway, but the
+    // covariance must describe plain least squares.
+    const Eigen::Matrix3d r = pose->linear();
+    const Eigen::Vector3d tr = pose->translation();
+    for (size_t i = 0; i < obs.size(); ++i) {
+      if (!active[i]) continue;
+      const Camera& cam = cameras_[obs[i].camera];
+      const Marker& mk = markers_[obs[i].marker];
+      for (int c = 0; c < 4; ++c) {
+        const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
+        const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
+        Eigen::Vector2d px;
+        Eigen::Matrix<double, 2, 3> jp;
+        if (!cam.model.Project(p_cam, &px, &jp)) continue;
+        const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
+        Eigen::Matrix<double, 2, 6> j;
+        j.leftCols<3>() = -a * Skew(p_rig);
+        j.rightCols<3>() = a;
+        unweighted.noalias() += j.transpose() * j;
+      }
+    }
+    *hessian = unweighted;
+  }
+  return plain;
+}
+
+PoseEstimator::Refined PoseEstimator::RefineFrom(const std::vector<Obs>& obs, const Rigid3& start) const {
+  Refined out;
+  out.pose = start;
+  std::vector<char> active(obs.size(), 1);
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    Optimise(obs, active, &out.pose, &out.iterations, nullptr);
+    std::vector<char> next(obs.size(), 0);
+    int n = 0;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      next[i] = ObservationRms(obs[i], out.pose) <= options_.outlier_px;
+      n += next[i];
+    }
+    if (n == 0) {
+      out.valid = false;
+      out.inlier = next;
+      return out;
+    }
+    if (next == active) break;
+    if (round + 1 == kRounds) {
+      // Out of rounds: keep the set the pose was optimised on, minus what is now gross.
+      for (size_t i = 0; i < obs.size(); ++i) active[i] = active[i] && next[i];
+      if (std::find(active.begin(), active.end(), 1) == active.end()) active = next;
+      Optimise(obs, active, &out.pose, &out.iterations, nullptr);
+      break;
+    }
+    active = next;
+  }
+  out.inlier = active;
+  out.num_inliers = 0;
+  out.cost = 0.0;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    if (!active[i]) continue;
+    const double e = ObservationRms(obs[i], out.pose);
+    out.num_inliers++;
+    out.cost += 4.0 * e * e;
+  }
+  out.valid = out.num_inliers > 0 && std::isfinite(out.cost);
+  return out;
+}
+
+bool PoseEstimator::Better(const Refined& a, const Refined& b) {
+  if (a.valid != b.valid) return a.valid;
+  if (a.num_inliers != b.num_inliers) return a.num_inliers > b.num_inliers;
+  return a.cost < b.cost;
+}
+
+PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,
+                                  const Rigid3* prior) const {
+  PoseSolution sol;
+  std::vector<Obs> obs;
+  obs.reserve(observations.size());
+  for (const auto& o : observations) {
+    auto c = camera_index_.find(o.camera);
+    auto m = marker_index_.find(o.id);
+    if (c == camera_index_.end() || m == marker_index_.end()) {
+      sol.num_unmapped++;
+      continue;
+    }
+    bool finite = true;
+    for (const auto& p : o.corners) finite = finite && p.allFinite();
+    if (!finite) {
+      sol.num_unmapped++;
+      continue;
+    }
+    obs.push_back(Obs{c->second, m->second, &o.corners});
+  }
+  if (obs.empty()) return sol;
+
+  Refined best;
+  int iterations = 0;
+  bool from_prior = false;
+  if (prior) {
+    best = RefineFrom(obs, *prior);
+    iterations += best.iterations;
+    from_prior = best.valid;
+  }
+  const int n_obs = static_cast<int>(obs.size());
+  if (!best.valid || best.num_inliers < n_obs) {
+    // Lost (or the prediction left observations out): start from single-square hypotheses. Observations
+    // with the largest image footprint give the best single-square poses; among them the highest IPPE
+    // ratio first. Every hypothesis (both of an ambiguous square) is scored against all observations.
+    std::vector<int> order(obs.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::vector<double> area(obs.size());
+    for (size_t i = 0; i < obs.size(); ++i) {
+      const auto& p = *obs[i].pixels;
+      double a = 0.0;
+      for (int k = 0; k < 4; ++k) {
+        const auto& p0 = p[k];
+        const auto& p1 = p[(k + 1) % 4];
+        a += p0.x() * p1.y() - p1.x() * p0.y();
+      }
+      area[i] = std::abs(0.5 * a);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return area[a] > area[b]; });
+    if (static_cast<int>(order.size()) > options_.max_start_markers) order.resize(options_.max_start_markers);
+    struct Candidate {
+      Rigid3 pose;
+      double ratio;
+      int inliers;
+      double cost;
+    };
+    std::vector<Candidate> candidates;
+    const double score_px = 3.0 * options_.outlier_px;
+    for (int i : order) {
+      const Camera& cam = cameras_[obs[i].camera];
+      const Marker& mk = markers_[obs[i].marker];
+      const SquarePose sp = EstimateSquarePose(cam.model, *obs[i].pixels, mk.size);
+      if (!sp.ok) continue;
+      for (int h = 0; h < sp.num_hypotheses; ++h) {
+        Candidate c;
+        c.pose =
+            Normalized(cam.rig_from_cam * sp.hypotheses[h].cam_from_marker * Inverse(mk.object_from_marker));
+        c.ratio = sp.ratio;
+        c.inliers = 0;
+        c.cost = 0.0;
+        for (const Obs& o : obs) {
+          const double e = ObservationRms(o, c.pose);
+          if (e <= score_px) c.inliers++;
+          c.cost += std::min(e * e, score_px * score_px);
+        }
+        candidates.push_back(c);
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.inliers != b.inliers) return a.inliers > b.inliers;
+      if (a.cost != b.cost) return a.cost < b.cost;
+      return a.ratio > b.ratio;
+    });
+    constexpr int kMaxRefined = 3;
+    for (int i = 0; i < static_cast<int>(candidates.size()) && i < kMaxRefined; ++i) {
+      Refined r = RefineFrom(obs, candidates[i].pose);
+      iterations += r.iterations;
+      if (Better(r, best)) {
+        best = r;
+        from_prior = false;
+      }
+      if (best.valid && best.num_inliers == n_obs) break;
+    }
+  }
+  sol.iterations = iterations;
+  if (!best.valid) {
+    sol.num_rejected = n_obs;
+    return sol;
+  }
+
+  // Final covariance at the solution: sigma^2 (J^T J)^-1 over the inliers, sigma^2 = RSS / (N - 6).
+  Matrix6d h;
+  int unused_iterations = 0;
+  std::vector<char> active = best.inlier;
+  const double rss = Optimise(obs, active, &best.pose, &unused_iterations, &h);
+  const int n_inliers = static_cast<int>(std::count(active.begin(), active.end(), 1));
+  const int n_residuals = 8 * n_inliers;
+  double sigma2 = n_residuals > 6 ? rss / (n_residuals - 6) : rss;
+  sigma2 = std::max(sigma2, options_.min_sigma_px * options_.min_sigma_px);
+  Eigen::SelfAdjointEigenSolver<Matrix6d> eig(h);
+  Matrix6d cov_params;  // order (rx, ry, rz, tx, ty, tz)
+  if (eig.info() == Eigen::Success &&
+      eig.eigenvalues().minCoeff() > 1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff())) {
+    cov_params = sigma2 * eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+                 eig.eigenvectors().transpose();
+  } else {
+    cov_params = Matrix6d::Identity() * 1e6;  // unobservable: say so
+  }
+  Eigen::Matrix<int, 6, 1> perm;
+  perm << 3, 4, 5, 0, 1, 2;  // message order: x y z (translation) then rotation
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) sol.covariance(a, b) = cov_params(perm[a], perm[b]);
+
+  sol.rig_from_object = best.pose;
+  sol.rms_px = std::sqrt(rss / (4.0 * n_inliers));
+  sol.num_observations = n_inliers;
+  sol.num_rejected = n_obs - n_inliers;
+  sol.from_prior = from_prior;
+  std::set<std::string> cams;
+  std::set<int> ids;
+  const Obs* single = nullptr;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    if (!active[i]) continue;
+    cams.insert(cameras_[obs[i].camera].name);
+    ids.insert(markers_[obs[i].marker].id);
+    single = &obs[i];
+  }
+  sol.cameras.assign(cams.begin(), cams.end());
+  sol.markers.assign(ids.begin(), ids.end());
+  sol.status = PoseStatus::kTracking;
+  if (n_inliers == 1) {
+    const SquarePose sp =
+        EstimateSquarePose(cameras_[single->camera].model, *single->pixels, markers_[single->marker].size);
+    sol.ippe_ratio = sp.ok ? sp.ratio : 1.0;
+    if (!sp.ok || (sp.num_hypotheses >= 2 && sp.ratio < options_.ambiguity_ratio))
+      sol.status = PoseStatus::kAmbiguous;
+  }
+  return sol;
+}
+
+}  // namespace mcmt

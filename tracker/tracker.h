@@ -1,0 +1,269 @@
+// Real-time tracking of the object with a known map (the paper's section 6): per frame, the pose
+// rig_from_object minimising the reprojection error of every mapped marker seen by every mapped camera.
+//
+// PoseEstimator: the per-frame solver (no LCM). Levenberg-Marquardt over 6 parameters with an analytic
+// Jacobian, started from a prediction (constant velocity) or, when lost, from the single-marker IPPE
+// hypotheses (best ratio first, every candidate scored against all observations). Markers whose
+// residual stays gross are dropped and counted. One marker seen by one camera works and is flagged
+// ambiguous when both planar solutions are plausible.
+//
+// TrackerNode: the process around it. Subscribes MCMT_DETECTIONS_.* (and MCMT_MAP when no map file is
+// given), assembles frames with core's FrameSynchronizer, publishes object_pose_t, keeps the trajectory.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/files.h"
+#include "core/frame_sync.h"
+#include "core/marker.h"
+#include "core/se3.h"
+#include "mcmt/detections_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/rig_map_t.hpp"
+
+namespace mcmt {
+
+// Settings of the tracker, from the rig YAML's `tracker:` section (keys as the field names).
+struct TrackerOptions {
+  std::string channel = "MCMT_POSE";  // output channel
+  std::string object = "object";      // object name put in object_pose_t
+  // Frame assembly: a frame is solved when every alive camera reported it, or deadline_ms after its
+  // first detection (wall time live, message time with --log), so one slow camera never stalls the rest.
+  double deadline_ms = 15.0;
+  double sync_tolerance_ms = 2.0;  // detections within this of a frame's utime belong to it
+  double camera_timeout_s = 1.0;   // a camera silent this long (message time) is not waited for
+  // Solver.
+  int max_iterations = 20;       // Levenberg-Marquardt iterations per start
+  double huber_px = 1.0;         // Huber threshold of the robust loss, pixels (corner distance)
+  double outlier_px = 4.0;       // a marker observation whose RMS corner error exceeds this is dropped
+  double ambiguity_ratio = 2.0;  // tau_e: a single square with IPPE ratio below it is ambiguous
+  double max_gap_s = 0.5;        // no prediction across a gap longer than this (re-initialise)
+  double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
+  int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
+  double status_period_s = 5.0;  // status line period (wall time); 0: none
+
+  static TrackerOptions FromConfig(const RigConfig& rig);  // throws ConfigError naming file and key
+  void Validate() const;                                   // throws std::invalid_argument
+};
+
+// One marker seen by one camera in the frame being solved.
+struct MarkerObservation {
+  std::string camera;
+  int id = 0;
+  MarkerCorners2d corners;  // distorted pixels, ArUco order
+};
+
+// All markers of a frame's views (views sorted by camera name, so the result never depends on the
+// order in which the cameras' messages arrived).
+std::vector<MarkerObservation> ObservationsFromViews(const std::vector<detections_t>& views);
+
+enum class PoseStatus : int8_t { kTracking = 0, kLost = 1, kAmbiguous = 2 };
+const char* PoseStatusName(PoseStatus status);
+
+struct PoseSolution {
+  PoseStatus status = PoseStatus::kLost;
+  Rigid3 rig_from_object = Rigid3::Identity();
+  // Covariance in object_pose_t's order (tx, ty, tz, rx, ry, rz) for rig_from_object = Exp(delta) *
+  // estimate, scaled by the residual variance (floored at min_sigma_px^2).
+  Matrix6d covariance = Matrix6d::Zero();
+  double rms_px = 0.0;               // RMS corner error of the observations used
+  std::vector<std::string> cameras;  // cameras whose markers were used (sorted)
+  std::vector<int> markers;          // distinct marker ids used (sorted)
+  int num_observations = 0;          // marker observations used
+  int num_rejected = 0;              // mapped observations dropped as outliers
+  int num_unmapped = 0;              // observations of cameras or markers not in the map (ignored)
+  int iterations = 0;                // LM iterations, all starts together
+  bool from_prior = false;           // the prediction was the start that won
+  double ippe_ratio = 0.0;           // single observation: its IPPE ratio (else 0)
+  bool ok() const { return status != PoseStatus::kLost; }
+};
+
+class PoseEstimator {
+ public:
+  // Throws std::invalid_argument when the map has no camera or no marker or a bad camera model.
+  PoseEstimator(const RigMap& map, const TrackerOptions& options = {});
+
+  // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
+  PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
+
+  const RigMap& map() const { return map_; }
+
+ private:
+  struct Camera {
+    std::string name;
+    CameraModel model;
+    Rigid3 rig_from_cam;
+    Eigen::Matrix3d cam_R_rig;
+    Eigen::Vector3d cam_t_rig;
+  };
+  struct Marker {
+    int id = 0;
+    double size = 0.0;
+    Rigid3 object_from_marker;
+    std::array<Eigen::Vector3d, 4> corners_object;  // corners in the object frame
+  };
+  struct Obs {
+    int camera = 0;
+    int marker = 0;
+    const MarkerCorners2d* pixels = nullptr;
+  };
+  struct Refined {
+    Rigid3 pose;
+    std::vector<char> inlier;
+    int num_inliers = 0;
+    double cost = 0.0;  // sum of squared corner errors over the inliers
+    int iterations = 0;
+    bool valid = false;
+  };
+
+  // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
+  double ObservationRms(const Obs& obs, const Rigid3& pose) const;
+  // Levenberg-Marquardt on the active observations; returns the final unweighted cost.
+  double Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose, int* iterations,
+                  Matrix6d* hessian) const;
+  // LM with outlier rejection from one start.
+  Refined RefineFrom(const std::vector<Obs>& obs, const Rigid3& start) const;
+  static bool Better(const Refined& a, const Refined& b);
+
+  RigMap map_;
+  TrackerOptions options_;
+  std::vector<Camera> cameras_;
+  std::vector<Marker> markers_;
+  std::map<std::string, int> camera_index_;
+  std::map<int, int> marker_index_;
+};
+
+// Throws std::runtime_error (one line) when the map's cameras are not cameras of the rig config.
+void CheckMapMatchesRig(const RigMap& map, const RigConfig& rig, const std::string& map_name);
+
+// Constant-velocity prediction from the two last poses: pose at `utime`. With one pose: that pose.
+class MotionModel {
+ public:
+  explicit MotionModel(double max_gap_s = 0.5) : max_gap_us_(static_cast<int64_t>(max_gap_s * 1e6)) {}
+  void Update(int64_t utime, const Rigid3& rig_from_object);
+  void Reset() { count_ = 0; }
+  // False (no prediction) when nothing is known or the last pose is older than max_gap.
+  bool Predict(int64_t utime, Rigid3* predicted) const;
+
+ private:
+  int64_t max_gap_us_;
+  int count_ = 0;
+  int64_t utime_[2] = {0, 0};  // [0] newest
+  Rigid3 pose_[2];
+};
+
+// Frame assembly with the cameras known in advance (the map's): core's FrameSynchronizer learns the
+// cameras from the traffic, so right after start it would close the first frame on the first camera's
+// message. Here every expected camera is waited for from the start, until it has been silent for
+// camera_timeout_us (message time); otherwise the same rules (tolerance, deadline after the first
+// arrival, out-of-order and duplicate views dropped, a complete frame closes all older ones).
+class FrameAssembler {
+ public:
+  FrameAssembler(FrameSyncOptions options, std::set<std::string> expected_cameras);
+  std::vector<SyncedFrame> Add(const detections_t& detections, int64_t arrival_us);
+  std::vector<SyncedFrame> Poll(int64_t now_us);
+  std::vector<SyncedFrame> Flush();
+  std::set<std::string> StaleCameras() const;  // expected cameras not waited for any more
+  const FrameSyncStats& stats() const { return stats_; }
+
+ private:
+  bool IsAlive(const std::string& camera) const;
+  bool HasAllAlive(const SyncedFrame& frame) const;
+  std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
+
+  FrameSyncOptions options_;
+  std::set<std::string> expected_;
+  std::map<int64_t, SyncedFrame> pending_;     // by frame utime
+  std::map<int64_t, int64_t> first_arrival_;   // frame utime -> arrival of its first view
+  std::map<std::string, int64_t> last_utime_;  // per camera, newest message utime
+  int64_t first_utime_ = INT64_MIN;            // of the first message: never-heard cameras count from it
+  int64_t newest_utime_ = INT64_MIN;
+  int64_t emitted_until_ = INT64_MIN;
+  FrameSyncStats stats_;
+};
+
+struct TrackerStats {
+  int64_t frames = 0;   // frames solved (with a map)
+  int64_t tracked = 0;  // TRACKING or AMBIGUOUS
+  int64_t ambiguous = 0;
+  int64_t lost = 0;
+  int64_t rejected = 0;        // outlier observations
+  int64_t no_map = 0;          // frames dropped before a map was known
+  int64_t bad_messages = 0;    // undecodable detections
+  int64_t unknown_camera = 0;  // detections of cameras not in the map
+  int64_t map_switches = 0;
+};
+
+struct TrackerNodeOptions {
+  TrackerOptions tracker;
+  bool log_mode = false;         // reading a log: frame deadlines in message time
+  bool keep_trajectory = false;  // remember TRACKING/AMBIGUOUS poses for --out
+  bool quiet = false;            // no status lines (warnings are always printed)
+};
+
+class TrackerNode {
+ public:
+  // lcm: where detections (and MCMT_MAP) come from. map: the map file's content, or nullopt to wait
+  // for MCMT_MAP. output: where poses are published; nullptr: on `lcm`, except in log mode (nowhere).
+  // Throws when the map does not match the rig.
+  TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeOptions& options,
+              std::optional<RigMap> map, lcm::LCM* output = nullptr);
+  ~TrackerNode();
+  TrackerNode(const TrackerNode&) = delete;
+  TrackerNode& operator=(const TrackerNode&) = delete;
+
+  // Handles messages until *stop is set or (log mode) the log ends; then solves what is pending.
+  void Run(const volatile bool* stop);
+  // Solves and publishes every pending frame (end of a log, or shutdown).
+  void Flush();
+  // Solves frames whose deadline passed (live mode; called by Run).
+  void Poll();
+
+  // The raw handlers (public so that tests can feed bytes directly).
+  void OnDetections(const std::string& channel, const void* data, size_t size);
+  void OnMap(const void* data, size_t size);
+
+  bool has_map() const { return estimator_ != nullptr; }
+  const TrackerStats& stats() const { return stats_; }
+  const std::vector<TrajectoryRow>& trajectory() const { return trajectory_; }
+  std::string StatusLine() const;
+
+ private:
+  void HandleDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void HandleMap(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void SetMap(const RigMap& map, const std::string& origin);
+  void ProcessFrames(std::vector<SyncedFrame> frames, int64_t trigger_wall_us);
+  void ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wall_us);
+  void CheckStaleCameras();
+  void WarnOnce(const std::string& key, const std::string& text);
+  void MaybePrintStatus();
+
+  lcm::LCM& lcm_;
+  lcm::LCM* output_;
+  const RigConfig& rig_;
+  TrackerNodeOptions options_;
+  std::unique_ptr<PoseEstimator> estimator_;
+  int64_t map_utime_ = INT64_MIN;
+  std::unique_ptr<FrameAssembler> sync_;
+  MotionModel motion_;
+  int64_t last_published_utime_ = INT64_MIN;
+  std::vector<lcm::Subscription*> subscriptions_;
+  std::set<std::string> warned_;
+  std::set<std::string> reported_stale_;
+  TrackerStats stats_;
+  std::vector<TrajectoryRow> trajectory_;
+  std::vector<double> latencies_ms_;  // since the last status line
+  int64_t last_status_wall_us_ = 0;
+  int64_t status_frames_ = 0, status_tracked_ = 0;
+};
+
+}  // namespace mcmt

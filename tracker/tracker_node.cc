@@ -1,0 +1,292 @@
+// TrackerNode: detections in, object_pose_t out.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "core/lcm_util.h"
+#include "tracker/tracker.h"
+
+namespace mcmt {
+namespace {
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(q * (v.size() - 1) + 0.5)));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+std::string Join(const std::vector<std::string>& names) {
+  std::string out;
+  for (size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];
+  return out;
+}
+
+}  // namespace
+
+TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeOptions& options,
+                         std::optional<RigMap> map, lcm::LCM* output)
+    : lcm_(lcm),
+      output_(output ? output : (options.log_mode ? nullptr : &lcm)),
+      rig_(rig),
+      options_(options),
+      motion_(options.tracker.max_gap_s) {
+  options_.tracker.Validate();
+  if (map) {
+    CheckMapMatchesRig(*map, rig_, "map");
+    SetMap(*map, "map file");
+  }
+  subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &TrackerNode::HandleDetections, this));
+  if (!map) subscriptions_.push_back(lcm_.subscribe(kMapChannel, &TrackerNode::HandleMap, this));
+  last_status_wall_us_ = NowUtime();
+}
+
+TrackerNode::~TrackerNode() {
+  for (auto* s : subscriptions_) lcm_.unsubscribe(s);
+}
+
+void TrackerNode::WarnOnce(const std::string& key, const std::string& text) {
+  if (!warned_.insert(key).second) return;
+  std::cerr << "mcmt-tracker: warning: " << text << std::endl;
+}
+
+void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
+  auto estimator = std::make_unique<PoseEstimator>(map, options_.tracker);
+  const bool switching = estimator_ != nullptr;
+  estimator_ = std::move(estimator);
+  motion_.Reset();
+  // Frames are assembled over the map's cameras (pending frames of the old map are dropped).
+  FrameSyncOptions sync;
+  sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
+  sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
+  sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
+  std::set<std::string> cameras;
+  for (const auto& c : map.cameras) cameras.insert(c.name);
+  sync_ = std::make_unique<FrameAssembler>(sync, cameras);
+  reported_stale_.clear();
+  if (switching) stats_.map_switches++;
+  if (!rig_.markers.dictionary.empty() && !map.dictionary.empty() &&
+      map.dictionary != rig_.markers.dictionary)
+    WarnOnce("dict-map", "the map's dictionary '" + map.dictionary + "' differs from the rig's '" +
+                             rig_.markers.dictionary + "'");
+  if (!options_.quiet || switching) {
+    std::ostringstream s;
+    s << "mcmt-tracker: " << (switching ? "switched to a newer map" : "using map") << " from " << origin
+      << ": " << map.cameras.size() << " cameras, " << map.markers.size() << " markers, rms " << map.rms_px
+      << " px";
+    std::cerr << s.str() << std::endl;
+  }
+}
+
+void TrackerNode::HandleDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  OnDetections(channel, rbuf->data, rbuf->data_size);
+}
+
+void TrackerNode::HandleMap(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+  OnMap(rbuf->data, rbuf->data_size);
+}
+
+void TrackerNode::OnMap(const void* data, size_t size) {
+  rig_map_t msg;
+  std::string error;
+  if (!Decode(data, size, &msg, &error)) {
+    WarnOnce("bad-map", std::string("ignoring undecodable message on ") + kMapChannel + ": " + error);
+    return;
+  }
+  if (estimator_ && msg.utime <= map_utime_) return;  // the same map again, or an older one
+  try {
+    RigMap map = FromRigMapMsg(msg);
+    CheckMapMatchesRig(map, rig_, kMapChannel);
+    SetMap(map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
+    map_utime_ = msg.utime;
+  } catch (const std::exception& e) {
+    WarnOnce("map-" + std::to_string(msg.utime), std::string("ignoring map: ") + e.what());
+  }
+}
+
+void TrackerNode::OnDetections(const std::string& channel, const void* data, size_t size) {
+  const int64_t arrival_wall = NowUtime();
+  detections_t msg;
+  std::string error;
+  if (!Decode(data, size, &msg, &error)) {
+    stats_.bad_messages++;
+    WarnOnce("bad:" + channel, "ignoring undecodable message on " + channel + ": " + error);
+    return;
+  }
+  if (!estimator_) {
+    stats_.no_map++;
+    WarnOnce("no-map", "no map yet: detections are dropped until " + std::string(kMapChannel) + " arrives");
+    return;
+  }
+  if (!estimator_->map().FindCamera(msg.camera)) {
+    stats_.unknown_camera++;
+    std::vector<std::string> names;
+    for (const auto& c : estimator_->map().cameras) names.push_back(c.name);
+    WarnOnce("cam:" + msg.camera, "ignoring detections of camera '" + msg.camera + "' on " + channel +
+                                      ": not in the map (" + Join(names) + ")");
+    return;
+  }
+  if (!msg.dictionary.empty() && !rig_.markers.dictionary.empty() &&
+      msg.dictionary != rig_.markers.dictionary)
+    WarnOnce("dict:" + msg.camera, "camera '" + msg.camera + "' detects in '" + msg.dictionary +
+                                       "', the rig uses '" + rig_.markers.dictionary + "'");
+  std::vector<SyncedFrame> frames;
+  if (options_.log_mode) {
+    // Deadlines in message time: deterministic whatever the reading speed.
+    frames = sync_->Poll(msg.utime);
+    auto more = sync_->Add(msg, msg.utime);
+    frames.insert(frames.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
+  } else {
+    frames = sync_->Add(msg, arrival_wall);
+  }
+  ProcessFrames(std::move(frames), arrival_wall);
+}
+
+void TrackerNode::Poll() {
+  if (options_.log_mode || !sync_) return;  // log mode: deadlines advance with the messages
+  const int64_t now = NowUtime();
+  ProcessFrames(sync_->Poll(now), now);
+}
+
+void TrackerNode::Flush() {
+  if (sync_) ProcessFrames(sync_->Flush(), NowUtime());
+}
+
+void TrackerNode::ProcessFrames(std::vector<SyncedFrame> frames, int64_t trigger_wall_us) {
+  std::stable_sort(frames.begin(), frames.end(),
+                   [](const SyncedFrame& a, const SyncedFrame& b) { return a.utime < b.utime; });
+  for (const auto& f : frames) {
+    const int64_t last_arrival = options_.log_mode ? trigger_wall_us : f.last_arrival_us;
+    ProcessFrame(f, last_arrival);
+  }
+  if (!frames.empty()) CheckStaleCameras();
+  MaybePrintStatus();
+}
+
+void TrackerNode::CheckStaleCameras() {
+  const std::set<std::string> stale = sync_->StaleCameras();
+  for (const auto& c : stale) {
+    if (reported_stale_.insert(c).second)
+      std::cerr << "mcmt-tracker: camera '" << c << "' stopped reporting; tracking goes on with the others"
+                << std::endl;
+  }
+  for (auto it = reported_stale_.begin(); it != reported_stale_.end();) {
+    if (!stale.count(*it)) {
+      std::cerr << "mcmt-tracker: camera '" << *it << "' reports again" << std::endl;
+      it = reported_stale_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wall_us) {
+  if (!estimator_) return;
+  if (frame.utime <= last_published_utime_) return;  // never publish out of order
+  Rigid3 predicted;
+  const bool have_prior = motion_.Predict(frame.utime, &predicted);
+  const std::vector<MarkerObservation> obs = ObservationsFromViews(frame.views);
+  const PoseSolution sol = estimator_->Solve(obs, have_prior ? &predicted : nullptr);
+
+  stats_.frames++;
+  stats_.rejected += sol.num_rejected;
+  status_frames_++;
+  if (sol.ok()) {
+    stats_.tracked++;
+    status_tracked_++;
+    if (sol.status == PoseStatus::kAmbiguous) stats_.ambiguous++;
+    motion_.Update(frame.utime, sol.rig_from_object);
+  } else {
+    stats_.lost++;
+    motion_.Reset();
+  }
+
+  object_pose_t msg;
+  msg.utime = frame.utime;
+  msg.seq = frame.seq;
+  msg.object = options_.tracker.object;
+  msg.rig_from_object = ToPose3d(sol.ok() ? sol.rig_from_object : Rigid3::Identity());
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) msg.covariance[a][b] = sol.covariance(a, b);
+  msg.rms_px = sol.rms_px;
+  msg.cameras = sol.cameras;
+  msg.num_cameras = static_cast<int32_t>(msg.cameras.size());
+  msg.markers.assign(sol.markers.begin(), sol.markers.end());
+  msg.num_markers = static_cast<int32_t>(msg.markers.size());
+  msg.num_rejected = sol.num_rejected;
+  msg.status = static_cast<int8_t>(sol.status);
+  const int64_t now = NowUtime();
+  msg.latency_ms = std::max<int64_t>(0, now - last_arrival_wall_us) / 1000.0;
+  if (output_) output_->publish(options_.tracker.channel, &msg);
+  if (latencies_ms_.size() >= (1u << 20))
+    latencies_ms_.erase(latencies_ms_.begin(), latencies_ms_.begin() + (1u << 19));
+  latencies_ms_.push_back(msg.latency_ms);
+  last_published_utime_ = frame.utime;
+
+  if (options_.keep_trajectory && sol.ok()) {
+    TrajectoryRow row;
+    row.utime = frame.utime;
+    row.seq = frame.seq;
+    row.rig_from_object = sol.rig_from_object;
+    row.rms_px = sol.rms_px;
+    row.cameras = static_cast<int>(sol.cameras.size());
+    row.markers = static_cast<int>(sol.markers.size());
+    trajectory_.push_back(row);
+  }
+}
+
+std::string TrackerNode::StatusLine() const {
+  const int64_t now = NowUtime();
+  const double dt = std::max(1e-6, (now - last_status_wall_us_) * 1e-6);
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(1);
+  s << "mcmt-tracker: " << status_frames_ / dt << " frames/s";
+  s.precision(3);
+  s << ", latency p50 " << Percentile(latencies_ms_, 0.5) << " ms p99 " << Percentile(latencies_ms_, 0.99)
+    << " ms";
+  s.precision(1);
+  s << ", tracked " << (status_frames_ ? 100.0 * status_tracked_ / status_frames_ : 0.0) << "%";
+  s << " (total: " << stats_.frames << " frames, " << stats_.tracked << " tracked, " << stats_.ambiguous
+    << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected << " outliers rejected)";
+  if (!reported_stale_.empty()) {
+    s << ", stale cameras:";
+    for (const auto& c : reported_stale_) s << " " << c;
+  }
+  if (!estimator_) s << ", waiting for a map";
+  return s.str();
+}
+
+void TrackerNode::MaybePrintStatus() {
+  if (options_.quiet || options_.tracker.status_period_s <= 0) return;
+  const int64_t now = NowUtime();
+  if (now - last_status_wall_us_ < static_cast<int64_t>(options_.tracker.status_period_s * 1e6)) return;
+  std::cerr << StatusLine() << std::endl;
+  last_status_wall_us_ = now;
+  latencies_ms_.clear();
+  status_frames_ = status_tracked_ = 0;
+}
+
+void TrackerNode::Run(const volatile bool* stop) {
+  if (options_.log_mode) {
+    while (!*stop) {
+      if (lcm_.handle() < 0) break;  // end of the log
+    }
+  } else {
+    while (!*stop) {
+      const int r = lcm_.handleTimeout(2);
+      if (r < 0) {
+        if (*stop) break;
+        throw std::runtime_error("LCM receive failed");
+      }
+      Poll();
+      MaybePrintStatus();
+    }
+  }
+  Flush();
+  if (!options_.quiet) std::cerr << StatusLine() << std::endl;
+}
+
+}  // namespace mcmt
