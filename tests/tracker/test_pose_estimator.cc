@@ -1,0 +1,354 @@
+// PoseEstimator, MotionModel, TrackerOptions on the synthetic rig (exact map, noisy corners).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/ippe.h"
+#include "tests/tracker/synthetic_rig.h"
+#include "tracker/tracker.h"
+
+namespace mcmt {
+namespace {
+
+using tracker_test::MakeSession;
+using tracker_test::RotationError;
+using tracker_test::SyntheticOptions;
+using tracker_test::SyntheticSession;
+using tracker_test::TranslationError;
+
+constexpr double kDeg = M_PI / 180.0;
+
+bool AnyMarker(const std::vector<detections_t>& views) {
+  for (const auto& v : views)
+    if (!v.markers.empty()) return true;
+  return false;
+}
+
+// Tracks a whole session as the node does (prediction from the motion model), returns mean errors.
+struct RunResult {
+  double mean_t = 0, mean_r = 0, max_t = 0;
+  int posed = 0, with_markers = 0, rejected = 0;
+};
+RunResult Track(const SyntheticSession& s, const PoseEstimator& est, bool use_prior) {
+  RunResult r;
+  MotionModel motion(0.5);
+  for (size_t f = 0; f < s.views.size(); ++f) {
+    if (AnyMarker(s.views[f])) r.with_markers++;
+    Rigid3 prior;
+    const bool have = use_prior && motion.Predict(s.utimes[f], &prior);
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), have ? &prior : nullptr);
+    if (!sol.ok()) {
+      motion.Reset();
+      continue;
+    }
+    motion.Update(s.utimes[f], sol.rig_from_object);
+    r.posed++;
+    r.rejected += sol.num_rejected;
+    const double et = TranslationError(sol.rig_from_object, s.rig_from_object[f]);
+    r.mean_t += et;
+    r.max_t = std::max(r.max_t, et);
+    r.mean_r += RotationError(sol.rig_from_object, s.rig_from_object[f]);
+  }
+  if (r.posed) {
+    r.mean_t /= r.posed;
+    r.mean_r /= r.posed;
+  }
+  return r;
+}
+
+TEST(PoseEstimator, AccurateOnFiveCamerasWithPredictionAndFromScratch) {
+  SyntheticOptions o;
+  o.frames = 120;
+  const SyntheticSession s = MakeSession(o);
+  const PoseEstimator est(s.map);
+  for (bool prior : {true, false}) {
+    const RunResult r = Track(s, est, prior);
+    SCOPED_TRACE(prior ? "with prediction" : "from scratch every frame");
+    EXPECT_EQ(r.with_markers, static_cast<int>(s.views.size()));
+    EXPECT_EQ(r.posed, r.with_markers);  // a pose for every frame where a mapped marker is seen
+    EXPECT_EQ(r.rejected, 0);            // clean data: nothing dropped
+    EXPECT_LT(r.mean_t, 0.5e-3) << "mean translation error, m";
+    EXPECT_LT(r.mean_r, 0.3 * kDeg) << "mean rotation error, rad";
+  }
+}
+
+TEST(PoseEstimator, ExactDataGivesExactPose) {
+  SyntheticOptions o;
+  o.frames = 10;
+  o.noise_px = 0.0;
+  const SyntheticSession s = MakeSession(o);
+  const PoseEstimator est(s.map);
+  for (size_t f = 0; f < s.views.size(); ++f) {
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), nullptr);
+    ASSERT_TRUE(sol.ok());
+    EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[f]), 1e-9);
+    EXPECT_LT(RotationError(sol.rig_from_object, s.rig_from_object[f]), 1e-9);
+    EXPECT_LT(sol.rms_px, 1e-6);
+  }
+}
+
+TEST(PoseEstimator, SameResultFromPredictionAndFromHypotheses) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const PoseEstimator est(s.map);
+  for (size_t f = 1; f < s.views.size(); f += 7) {
+    const auto obs = ObservationsFromViews(s.views[f]);
+    // A prediction 2 cm and 3 degrees off.
+    Vector6d delta;
+    delta << 0.02, -0.03, 0.04, 0.01, -0.015, 0.01;
+    const Rigid3 prior = PerturbLeft(s.rig_from_object[f], delta * 0.7);
+    const PoseSolution a = est.Solve(obs, &prior);
+    const PoseSolution b = est.Solve(obs, nullptr);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_TRUE(a.from_prior);
+    EXPECT_FALSE(b.from_prior);
+    EXPECT_LT(TranslationError(a.rig_from_object, b.rig_from_object), 1e-8);
+    EXPECT_LT(RotationError(a.rig_from_object, b.rig_from_object), 1e-8);
+  }
+}
+
+TEST(PoseEstimator, RecoversFromAWrongPrediction) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const PoseEstimator est(s.map);
+  // The prediction is the object turned half around: the hypotheses must take over.
+  Vector6d delta;
+  delta << 0, 0, M_PI * 0.9, 0.05, 0, 0;
+  const Rigid3 prior = PerturbLeft(s.rig_from_object[5], delta);
+  const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[5]), &prior);
+  ASSERT_TRUE(sol.ok());
+  EXPECT_EQ(sol.num_rejected, 0);
+  EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[5]), 1e-3);
+}
+
+// A false marker: an id seen where that marker cannot be (its corners copied from another marker's
+// place in the image, or shifted). The pose must not move and the observation is counted as rejected.
+TEST(PoseEstimator, FalseMarkerIsRejectedAndPoseUnaffected) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const PoseEstimator est(s.map);
+  int checked = 0;
+  for (size_t f = 0; f < s.views.size(); f += 5) {
+    auto views = s.views[f];
+    const auto clean = ObservationsFromViews(views);
+    const PoseSolution ref = est.Solve(clean, nullptr);
+    ASSERT_TRUE(ref.ok());
+    // Camera with >= 2 markers: duplicate its first marker's corners under the id of a marker this
+    // camera does not see (an id placed elsewhere), and shift another marker by 25 px (wrong position).
+    for (auto& v : views) {
+      if (v.markers.size() < 2) continue;
+      std::set<int> seen;
+      for (const auto& m : v.markers) seen.insert(m.id);
+      int unseen = -1;
+      for (int id = 0; id < 6 && unseen < 0; ++id)
+        if (!seen.count(id)) unseen = id;
+      ASSERT_GE(unseen, 0);
+      marker_t fake = v.markers[0];
+      fake.id = unseen;
+      for (auto& c : fake.corners) c[0] += 3.0;
+      v.markers.push_back(fake);
+      v.num_markers++;
+      break;
+    }
+    const auto dirty = ObservationsFromViews(views);
+    ASSERT_EQ(dirty.size(), clean.size() + 1);
+    for (bool with_prior : {false, true}) {
+      const PoseSolution sol = est.Solve(dirty, with_prior ? &ref.rig_from_object : nullptr);
+      ASSERT_TRUE(sol.ok());
+      EXPECT_EQ(sol.num_rejected, 1);
+      EXPECT_EQ(sol.num_observations, static_cast<int>(clean.size()));
+      EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
+      EXPECT_LT(RotationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+}
+
+TEST(PoseEstimator, GrosslyShiftedMarkerIsRejected) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const PoseEstimator est(s.map);
+  auto obs = ObservationsFromViews(s.views[12]);
+  ASSERT_GE(obs.size(), 4u);
+  auto without = obs;
+  without.erase(without.begin() + 2);
+  const PoseSolution ref = est.Solve(without, nullptr);  // what the pose must be once the outlier is out
+  for (auto& c : obs[2].corners) c += Eigen::Vector2d(25.0, -10.0);
+  const PoseSolution sol = est.Solve(obs, nullptr);
+  ASSERT_TRUE(sol.ok());
+  EXPECT_EQ(sol.num_rejected, 1);
+  EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
+}
+
+TEST(PoseEstimator, SingleCameraSingleMarker) {
+  SyntheticOptions o;
+  o.noise_px = 0.0;
+  const SyntheticSession s = MakeSession(o);
+  const PoseEstimator est(s.map);
+  int ambiguous = 0, tracking = 0, n = 0;
+  for (size_t f = 0; f < s.views.size(); ++f) {
+    for (const auto& v : s.views[f]) {
+      for (const auto& m : v.markers) {
+        MarkerObservation ob;
+        ob.camera = v.camera;
+        ob.id = m.id;
+        for (int k = 0; k < 4; ++k) ob.corners[k] = Eigen::Vector2d(m.corners[k][0], m.corners[k][1]);
+        const PoseSolution sol = est.Solve({ob}, nullptr);
+        ASSERT_TRUE(sol.ok());
+        ASSERT_EQ(sol.num_observations, 1);
+        EXPECT_EQ(sol.cameras, std::vector<std::string>{v.camera});
+        EXPECT_EQ(sol.markers, std::vector<int>{m.id});
+        const auto& cam = *s.map.FindCamera(v.camera);
+        const SquarePose sp = EstimateSquarePose(cam.model, ob.corners, s.map.FindMarker(m.id)->size);
+        if (sp.ratio < 2.0) {
+          EXPECT_EQ(sol.status, PoseStatus::kAmbiguous);
+          ++ambiguous;
+        } else {
+          EXPECT_EQ(sol.status, PoseStatus::kTracking);
+          // Exact corners and a sure square: the pose is the truth.
+          EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[f]), 1e-6);
+          ++tracking;
+        }
+        ++n;
+      }
+    }
+  }
+  EXPECT_GT(n, 100);
+  EXPECT_GT(tracking, 0);
+}
+
+TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
+  SyntheticOptions o;
+  o.noise_px = 0.3;
+  o.cameras = 1;
+  const SyntheticSession s = MakeSession(o);
+  const PoseEstimator est(s.map);
+  // A marker facing the camera squarely: both IPPE solutions nearly equally good.
+  const auto& cam = s.map.cameras[0];
+  Rigid3 cam_from_marker = Rigid3::Identity();
+  cam_from_marker.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
+  const Rigid3 rig_from_object = cam.rig_from_cam * cam_from_marker;  // marker 0 = object frame
+  std::mt19937_64 rng(3);
+  const auto views = tracker_test::Detect(s.map, rig_from_object, 1, 1, 0.3, &rng);
+  auto obs = ObservationsFromViews(views);
+  ASSERT_EQ(obs.size(), 1u);
+  ASSERT_EQ(obs[0].id, 0);
+  const PoseSolution sol = est.Solve(obs, nullptr);
+  ASSERT_TRUE(sol.ok());
+  EXPECT_EQ(sol.status, PoseStatus::kAmbiguous);
+  EXPECT_LT(sol.ippe_ratio, 2.0);
+  // The same frame seen by five cameras is not ambiguous.
+  const SyntheticSession five = MakeSession(SyntheticOptions{});
+  const PoseEstimator est5(five.map);
+  const PoseSolution multi = est5.Solve(ObservationsFromViews(five.views[0]), nullptr);
+  ASSERT_TRUE(multi.ok());
+  EXPECT_EQ(multi.status, PoseStatus::kTracking);
+  EXPECT_GT(multi.cameras.size(), 1u);
+}
+
+TEST(PoseEstimator, UnmappedObservationsAreIgnoredAndNothingIsLost) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const PoseEstimator est(s.map);
+  EXPECT_EQ(est.Solve({}, nullptr).status, PoseStatus::kLost);
+  auto obs = ObservationsFromViews(s.views[3]);
+  const PoseSolution ref = est.Solve(obs, nullptr);
+  MarkerObservation stranger = obs[0];
+  stranger.camera = "cam_unknown";
+  MarkerObservation unknown_id = obs[0];
+  unknown_id.id = 77;
+  obs.push_back(stranger);
+  obs.push_back(unknown_id);
+  const PoseSolution sol = est.Solve(obs, nullptr);
+  ASSERT_TRUE(sol.ok());
+  EXPECT_EQ(sol.num_unmapped, 2);
+  EXPECT_EQ(sol.num_rejected, 0);
+  EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-12);
+  // Only unmapped observations: lost.
+  const PoseSolution lost = est.Solve({stranger, unknown_id}, nullptr);
+  EXPECT_EQ(lost.status, PoseStatus::kLost);
+  EXPECT_EQ(lost.num_unmapped, 2);
+}
+
+// The covariance must describe the actual error: over many noisy frames, the squared Mahalanobis
+// distance of the error averages ~6 (chi-square with 6 degrees of freedom).
+TEST(PoseEstimator, CovarianceMatchesTheActualError) {
+  SyntheticOptions o;
+  o.frames = 300;
+  o.noise_px = 0.3;
+  o.seed = 7;
+  const SyntheticSession s = MakeSession(o);
+  const PoseEstimator est(s.map);
+  double sum = 0;
+  int n = 0;
+  for (size_t f = 0; f < s.views.size(); ++f) {
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), nullptr);
+    ASSERT_TRUE(sol.ok());
+    // truth = Exp(delta) * estimate; delta in message order (translation, rotation).
+    const Eigen::Matrix3d dr = s.rig_from_object[f].linear() * sol.rig_from_object.linear().transpose();
+    const Eigen::AngleAxisd aa(dr);
+    Vector6d delta;
+    delta.tail<3>() = aa.angle() * aa.axis();
+    delta.head<3>() = s.rig_from_object[f].translation() - dr * sol.rig_from_object.translation();
+    EXPECT_TRUE(sol.covariance.isApprox(sol.covariance.transpose(), 1e-9));
+    sum += delta.dot(sol.covariance.ldlt().solve(delta));
+    ++n;
+  }
+  const double mean = sum / n;
+  EXPECT_GT(mean, 4.0);
+  EXPECT_LT(mean, 8.5);
+}
+
+TEST(MotionModel, PredictsConstantVelocity) {
+  MotionModel m(0.5);
+  Rigid3 p;
+  EXPECT_FALSE(m.Predict(0, &p));
+  auto pose_at = [](double t) {
+    Rigid3 r = Rigid3::Identity();
+    r.linear() = Eigen::AngleAxisd(0.3 * t, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    r.translation() = Eigen::Vector3d(0.2 * t, -0.1 * t, 1.0);
+    return r;
+  };
+  m.Update(0, pose_at(0));
+  ASSERT_TRUE(m.Predict(33333, &p));
+  EXPECT_LT(TranslationError(p, pose_at(0)), 1e-12);  // one pose: no velocity yet
+  m.Update(33333, pose_at(0.033333));
+  ASSERT_TRUE(m.Predict(66666, &p));
+  EXPECT_LT(RotationError(p, pose_at(0.066666)), 1e-9);
+  EXPECT_LT(TranslationError(p, pose_at(0.066666)), 2e-4);
+  EXPECT_FALSE(m.Predict(33333 + 600000, &p));  // too long a gap
+  m.Reset();
+  EXPECT_FALSE(m.Predict(66666, &p));
+}
+
+TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
+  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const std::string dir = tracker_test::MakeTempDir("options");
+  {
+    const std::string rig_path = tracker_test::WriteRigFiles(
+        dir, s.map, "tracker:\n  deadline_ms: 5\n  outlier_px: 3\n  channel: POSE_X\n");
+    const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+    EXPECT_EQ(o.deadline_ms, 5.0);
+    EXPECT_EQ(o.outlier_px, 3.0);
+    EXPECT_EQ(o.channel, "POSE_X");
+  }
+  {
+    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  outlier_pix: 3\n");
+    try {
+      TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+      FAIL() << "a typo must be caught";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("outlier_pix"), std::string::npos) << e.what();
+    }
+  }
+  {
+    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  max_iterations: 0\n");
+    try {
+      TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+      FAIL() << "a bad value must be caught";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("max_iterations"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mcmt

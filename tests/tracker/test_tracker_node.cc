@@ -1,0 +1,318 @@
+// TrackerNode fed with encoded messages (no network): frame assembly, a camera that stops, false
+// markers, garbage, unknown cameras, maps from MCMT_MAP, one pose per frame in order.
+#include <gtest/gtest.h>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "core/lcm_util.h"
+#include "tests/tracker/synthetic_rig.h"
+#include "tracker/tracker.h"
+
+namespace mcmt {
+namespace {
+
+using tracker_test::MakeSession;
+using tracker_test::RotationError;
+using tracker_test::SyntheticOptions;
+using tracker_test::SyntheticSession;
+using tracker_test::TranslationError;
+
+// Collects the poses a node publishes (memq: same process).
+class PoseSink {
+ public:
+  explicit PoseSink(lcm::LCM& lcm, const std::string& channel = kPoseChannel) : lcm_(lcm) {
+    lcm_.subscribe(channel, &PoseSink::Handle, this);
+  }
+  void Drain() {
+    while (lcm_.handleTimeout(0) > 0) {
+    }
+  }
+  std::vector<object_pose_t> poses;
+
+ private:
+  void Handle(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    poses.push_back(DecodeOrThrow<object_pose_t>(rbuf->data, rbuf->data_size));
+  }
+  lcm::LCM& lcm_;
+};
+
+struct Fixture {
+  SyntheticSession session;
+  std::string dir;
+  RigConfig rig;
+  explicit Fixture(const SyntheticOptions& o = SyntheticOptions{}) : session(MakeSession(o)) {
+    dir = tracker_test::MakeTempDir("node");
+    rig = LoadRigConfig(tracker_test::WriteRigFiles(dir, session.map));
+  }
+};
+
+TrackerNodeOptions LogModeOptions() {
+  TrackerNodeOptions o;
+  o.log_mode = true;
+  o.keep_trajectory = true;
+  o.quiet = true;
+  return o;
+}
+
+void Feed(TrackerNode& node, const detections_t& d) {
+  const auto bytes = Encode(d);
+  node.OnDetections(DetectionsChannel(d.camera), bytes.data(), bytes.size());
+}
+
+TEST(TrackerNode, OnePosePerFrameInOrderAndAccurate) {
+  Fixture fx;
+  lcm::LCM in("memq://"), out("memq://");
+  ASSERT_TRUE(in.good() && out.good());
+  PoseSink sink(out);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map, &out);
+  for (const auto& frame : fx.session.views)
+    for (const auto& d : frame) Feed(node, d);
+  node.Flush();
+  sink.Drain();
+  ASSERT_EQ(sink.poses.size(), fx.session.views.size());
+  for (size_t f = 0; f < sink.poses.size(); ++f) {
+    const object_pose_t& p = sink.poses[f];
+    EXPECT_EQ(p.seq, static_cast<int64_t>(f));
+    EXPECT_EQ(p.utime, fx.session.utimes[f]);
+    EXPECT_EQ(p.status, object_pose_t::STATUS_TRACKING);
+    EXPECT_EQ(p.object, "object");
+    EXPECT_EQ(p.num_rejected, 0);
+    EXPECT_GE(p.latency_ms, 0.0);
+    EXPECT_LT(TranslationError(FromPose3d(p.rig_from_object), fx.session.rig_from_object[f]), 2e-3);
+    for (int a = 0; a < 6; ++a) EXPECT_GT(p.covariance[a][a], 0.0);
+  }
+  // Every frame was complete: all five cameras used somewhere.
+  size_t max_cams = 0;
+  for (const auto& p : sink.poses) max_cams = std::max(max_cams, p.cameras.size());
+  EXPECT_EQ(max_cams, 5u);
+  EXPECT_EQ(node.trajectory().size(), fx.session.views.size());
+}
+
+TEST(TrackerNode, CameraKilledMidRunTheOthersCarryOn) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  const int killed = 2, kill_from = 40;
+  for (size_t f = 0; f < fx.session.views.size(); ++f)
+    for (const auto& d : fx.session.views[f])
+      if (!(d.camera == "cam2" && static_cast<int>(f) >= kill_from)) Feed(node, d);
+  node.Flush();
+  (void)killed;
+  const auto& traj = node.trajectory();
+  ASSERT_EQ(traj.size(), fx.session.views.size());  // no frame lost
+  double mean_t = 0;
+  for (size_t f = 0; f < traj.size(); ++f) {
+    EXPECT_EQ(traj[f].seq, static_cast<int64_t>(f));
+    mean_t += TranslationError(traj[f].rig_from_object, fx.session.rig_from_object[f]);
+    if (static_cast<int>(f) >= kill_from) {
+      EXPECT_LE(traj[f].cameras, 4);
+    }
+  }
+  EXPECT_LT(mean_t / traj.size(), 0.5e-3);
+  // 150 frames at 30 fps = 5 s; the camera is silent for 3.7 s > 1 s timeout: reported stale.
+  EXPECT_NE(node.StatusLine().find("stale cameras: cam2"), std::string::npos) << node.StatusLine();
+}
+
+TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  testing::internal::CaptureStderr();
+  const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13};
+  for (size_t f = 0; f < fx.session.views.size(); ++f) {
+    node.OnDetections("MCMT_DETECTIONS_CAM0", garbage.data(), garbage.size());
+    node.OnDetections("MCMT_DETECTIONS_CAM0", garbage.data(), 0);
+    for (const auto& d : fx.session.views[f]) {
+      Feed(node, d);
+      Feed(node, d);  // duplicate
+    }
+    detections_t stranger = fx.session.views[f][0];
+    stranger.camera = "cam9";
+    Feed(node, stranger);
+  }
+  node.Flush();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.trajectory().size(), fx.session.views.size());
+  EXPECT_EQ(node.stats().bad_messages, 2 * static_cast<int64_t>(fx.session.views.size()));
+  EXPECT_EQ(node.stats().unknown_camera, static_cast<int64_t>(fx.session.views.size()));
+  // Warned once per channel / camera, not once per message.
+  auto count = [&](const std::string& needle) {
+    size_t n = 0;
+    for (size_t p = err.find(needle); p != std::string::npos; p = err.find(needle, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("undecodable message on MCMT_DETECTIONS_CAM0"), 1u) << err;
+  EXPECT_EQ(count("camera 'cam9'"), 1u) << err;
+}
+
+TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
+  Fixture fx;
+  lcm::LCM in1("memq://"), in2("memq://");
+  TrackerNode clean(in1, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode dirty(in2, fx.rig, LogModeOptions(), fx.session.map);
+  for (size_t f = 0; f < fx.session.views.size(); ++f) {
+    for (const auto& d : fx.session.views[f]) {
+      Feed(clean, d);
+      detections_t bad = d;
+      if (d.camera == "cam1" && !d.markers.empty()) {
+        marker_t fake = d.markers[0];
+        fake.id = (fake.id + 3) % 6;  // the opposite face's id, placed where another marker is
+        for (auto& c : fake.corners) c[1] += 4.0;
+        bad.markers.push_back(fake);
+        bad.num_markers++;
+      }
+      Feed(dirty, bad);
+    }
+  }
+  clean.Flush();
+  dirty.Flush();
+  ASSERT_EQ(clean.trajectory().size(), dirty.trajectory().size());
+  for (size_t f = 0; f < clean.trajectory().size(); ++f) {
+    EXPECT_LT(TranslationError(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
+              1e-7);
+    EXPECT_LT(RotationError(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
+              1e-7);
+  }
+  EXPECT_GT(dirty.stats().rejected, 50);
+  EXPECT_EQ(clean.stats().rejected, 0);
+}
+
+TEST(TrackerNode, MapOfAnotherRigIsRefused) {
+  Fixture fx;
+  RigMap other = fx.session.map;
+  other.cameras[3].name = "left_camera";
+  lcm::LCM in("memq://");
+  try {
+    TrackerNode node(in, fx.rig, LogModeOptions(), other);
+    FAIL() << "must throw";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("left_camera"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+TEST(TrackerNode, WaitsForMapMessageAndSwitchesToNewerMaps) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNodeOptions o = LogModeOptions();
+  testing::internal::CaptureStderr();
+  TrackerNode node(in, fx.rig, o, std::nullopt);
+  EXPECT_FALSE(node.has_map());
+  const auto& views = fx.session.views;
+  for (int f = 0; f < 10; ++f)
+    for (const auto& d : views[f]) Feed(node, d);
+  EXPECT_EQ(node.trajectory().size(), 0u);
+  EXPECT_GT(node.stats().no_map, 0);
+  // A map of another rig on MCMT_MAP: ignored with a warning, still waiting.
+  RigMap foreign = fx.session.map;
+  foreign.cameras[0].name = "zzz";
+  auto foreign_bytes = Encode(ToRigMapMsg(foreign, 5));
+  node.OnMap(foreign_bytes.data(), foreign_bytes.size());
+  EXPECT_FALSE(node.has_map());
+  const std::vector<uint8_t> garbage(40, 0xab);
+  node.OnMap(garbage.data(), garbage.size());
+  EXPECT_FALSE(node.has_map());
+  // The right map.
+  auto bytes = Encode(ToRigMapMsg(fx.session.map, 10));
+  node.OnMap(bytes.data(), bytes.size());
+  ASSERT_TRUE(node.has_map());
+  for (int f = 10; f < 60; ++f)
+    for (const auto& d : views[f]) Feed(node, d);
+  // Same map again: no switch. Newer map: switch.
+  node.OnMap(bytes.data(), bytes.size());
+  EXPECT_EQ(node.stats().map_switches, 0);
+  auto newer = Encode(ToRigMapMsg(fx.session.map, 11));
+  node.OnMap(newer.data(), newer.size());
+  EXPECT_EQ(node.stats().map_switches, 1);
+  for (size_t f = 60; f < views.size(); ++f)
+    for (const auto& d : views[f]) Feed(node, d);
+  node.Flush();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("zzz"), std::string::npos) << err;
+  EXPECT_NE(err.find("switched to a newer map"), std::string::npos) << err;
+  // Every frame after the first map got a pose (frame 10 may have been assembled before it).
+  EXPECT_GE(node.trajectory().size(), views.size() - 11);
+  for (const auto& row : node.trajectory()) {
+    EXPECT_GE(row.seq, 10);
+    EXPECT_LT(TranslationError(row.rig_from_object, fx.session.rig_from_object[row.seq]), 2e-3);
+  }
+}
+
+TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
+  Fixture fx;
+  lcm::LCM in("memq://"), out("memq://");
+  PoseSink sink(out);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map, &out);
+  for (size_t f = 0; f < 40; ++f) {
+    for (auto d : fx.session.views[f]) {
+      if (f >= 10 && f < 20) {  // the object leaves every view
+        d.markers.clear();
+        d.num_markers = 0;
+      }
+      Feed(node, d);
+    }
+  }
+  node.Flush();
+  sink.Drain();
+  ASSERT_EQ(sink.poses.size(), 40u);
+  for (size_t f = 0; f < 40; ++f) {
+    const bool gone = f >= 10 && f < 20;
+    EXPECT_EQ(sink.poses[f].status, gone ? object_pose_t::STATUS_LOST : object_pose_t::STATUS_TRACKING) << f;
+    if (!gone) {
+      EXPECT_LT(TranslationError(FromPose3d(sink.poses[f].rig_from_object), fx.session.rig_from_object[f]),
+                2e-3);
+    }
+  }
+  EXPECT_EQ(node.stats().lost, 10);
+}
+
+TEST(FrameAssembler, WaitsForExpectedCamerasFromTheStartAndUsesTheDeadline) {
+  FrameSyncOptions o;
+  o.deadline_us = 10000;
+  o.camera_timeout_us = 100000;
+  o.tolerance_us = 500;
+  FrameAssembler a(o, {"a", "b", "c"});
+  auto msg = [](const std::string& cam, int64_t utime) {
+    detections_t d;
+    d.camera = cam;
+    d.utime = utime;
+    d.seq = utime / 1000;
+    return d;
+  };
+  EXPECT_TRUE(a.Add(msg("a", 1000), 0).empty());  // b and c are expected from the start
+  EXPECT_TRUE(a.Add(msg("b", 1000), 1).empty());
+  auto f = a.Add(msg("c", 1200), 2);  // within the tolerance
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_TRUE(f[0].complete);
+  EXPECT_EQ(f[0].views.size(), 3u);
+  // Late view of a closed frame, duplicate: dropped.
+  EXPECT_TRUE(a.Add(msg("a", 1000), 3).empty());
+  EXPECT_EQ(a.stats().out_of_order, 1);
+  EXPECT_TRUE(a.Add(msg("a", 2000), 4).empty());
+  EXPECT_TRUE(a.Add(msg("a", 2000), 5).empty());
+  EXPECT_EQ(a.stats().duplicates, 1);
+  // c is slow: the deadline closes the frame without it.
+  EXPECT_TRUE(a.Add(msg("b", 2000), 6).empty());
+  EXPECT_TRUE(a.Poll(4 + 9999).empty());
+  f = a.Poll(4 + 10000);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_FALSE(f[0].complete);
+  EXPECT_EQ(f[0].views.size(), 2u);
+  // c goes silent: while within the timeout (message time) it is waited for, then not any more.
+  EXPECT_TRUE(a.StaleCameras().empty());
+  EXPECT_TRUE(a.Add(msg("a", 50000), 7).empty());
+  EXPECT_TRUE(a.Add(msg("b", 50000), 8).empty());  // c still counts as alive
+  f = a.Add(msg("a", 150000), 9);                  // c silent for > 100 ms of message time
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].utime, 50000);
+  EXPECT_TRUE(f[0].complete);
+  EXPECT_EQ(a.StaleCameras(), std::set<std::string>{"c"});
+  f = a.Add(msg("b", 150000), 10);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].utime, 150000);
+  EXPECT_TRUE(a.Flush().empty());
+}
+
+}  // namespace
+}  // namespace mcmt
