@@ -77,6 +77,11 @@ int Main(int argc, char** argv) {
   }
   InstallSignalHandlers();
   mcmt::TrackerNode node(*input, rig, options, map, output.get());
+  if (!quiet)  // subscribed from here on (tests wait for this line)
+    std::cerr << "mcmt-tracker: ready, " << (map ? "" : "waiting for MCMT_MAP, ") << "poses on "
+              << options.tracker.channel
+              << (options.log_mode && !output ? " (not published: --log without --lcm-url)" : "")
+              << std::endl;
   node.Run(&g_stop);
   if (!out_path.empty()) {
     mcmt::WriteTrajectory(out_path, node.trajectory());

@@ -1,0 +1,242 @@
+// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7744), replay by the
+// real lcm-logplayer, bad command lines and inputs.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <lcm/lcm-cpp.hpp>
+#include <thread>
+
+#include "core/files.h"
+#include "core/lcm_util.h"
+#include "tests/tracker/process_util.h"
+#include "tests/tracker/synthetic_rig.h"
+#include "tracker/tracker.h"
+
+namespace mcmt {
+namespace {
+
+using namespace std::chrono_literals;
+using tracker_test::RunProgram;
+using tracker_test::Slurp;
+using tracker_test::Spawn;
+using tracker_test::WaitExit;
+using tracker_test::WaitForText;
+
+const std::string kTracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
+
+std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+
+// One session on disk: rig.yaml, map.yaml, detections.lcmlog, and the poses --log mode gives.
+struct Session {
+  tracker_test::SyntheticSession s;
+  std::string dir, rig, map, log;
+  static const Session& Get() {
+    static Session* session = [] {
+      auto* x = new Session;
+      tracker_test::SyntheticOptions o;
+      o.frames = 90;
+      x->s = tracker_test::MakeSession(o);
+      x->dir = tracker_test::MakeTempDir("process");
+      x->rig = tracker_test::WriteRigFiles(x->dir, x->s.map);
+      x->map = x->dir + "/map.yaml";
+      WriteMap(x->map, x->s.map);
+      x->log = x->dir + "/detections.lcmlog";
+      tracker_test::WriteLog(x->log, x->s);
+      return x;
+    }();
+    return *session;
+  }
+};
+
+class PoseCollector {
+ public:
+  explicit PoseCollector(lcm::LCM& lcm) { lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this); }
+  std::vector<object_pose_t> poses;
+
+ private:
+  void Handle(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    poses.push_back(DecodeOrThrow<object_pose_t>(rbuf->data, rbuf->data_size));
+  }
+};
+
+void Receive(lcm::LCM& lcm, const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
+}
+
+TEST(TrackerProcess, Help) {
+  std::string out;
+  EXPECT_EQ(RunProgram({kTracker, "--help"}, Session::Get().dir + "/help.txt", &out), 0);
+  EXPECT_NE(out.find("--map"), std::string::npos);
+  EXPECT_NE(out.find("--log"), std::string::npos);
+}
+
+TEST(TrackerProcess, LogModeIsAccurateAndDeterministic) {
+  const Session& x = Session::Get();
+  std::string out;
+  const std::string poses1 = x.dir + "/poses_log1.csv", poses2 = x.dir + "/poses_log2.csv";
+  ASSERT_EQ(RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", poses1},
+                       x.dir + "/o1.txt", &out),
+            0)
+      << out;
+  ASSERT_EQ(
+      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", poses2, "--quiet"},
+                 x.dir + "/o2.txt", &out),
+      0)
+      << out;
+  const auto rows = ReadTrajectory(poses1);
+  ASSERT_EQ(rows.size(), x.s.views.size());
+  double mean_t = 0, mean_r = 0;
+  for (size_t f = 0; f < rows.size(); ++f) {
+    EXPECT_EQ(rows[f].seq, static_cast<int64_t>(f));
+    EXPECT_EQ(rows[f].utime, x.s.utimes[f]);
+    mean_t += tracker_test::TranslationError(rows[f].rig_from_object, x.s.rig_from_object[f]);
+    mean_r += tracker_test::RotationError(rows[f].rig_from_object, x.s.rig_from_object[f]);
+  }
+  EXPECT_LT(mean_t / rows.size(), 0.5e-3);
+  EXPECT_LT(mean_r / rows.size(), 0.3 * M_PI / 180);
+  EXPECT_EQ(Slurp(poses1), Slurp(poses2));  // byte-equal
+}
+
+// Live: the real tracker over udpm, fed by a publisher (with garbage and a stranger camera mixed in); a
+// subscriber receives one object_pose_t per frame, in order, equal to --log mode's poses.
+TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
+  const Session& x = Session::Get();
+  const int port = 7741;
+  const std::string err = x.dir + "/live.txt", out_csv = x.dir + "/poses_live.csv";
+  const pid_t pid =
+      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  lcm::LCM lcm(Url(port));
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  const std::vector<uint8_t> garbage(33, 0x5a);
+  lcm.publish("MCMT_DETECTIONS_CAM0", garbage.data(), garbage.size());
+  for (size_t f = 0; f < x.s.views.size(); ++f) {
+    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    detections_t stranger = x.s.views[f][0];
+    stranger.camera = "stranger";
+    lcm.publish(DetectionsChannel(stranger.camera), &stranger);
+    lcm.handleTimeout(3);  // ~300 frames/s, and take the poses in
+  }
+  Receive(
+      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 10s);
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << Slurp(err);
+  for (size_t f = 0; f < collector.poses.size(); ++f) {
+    EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
+    EXPECT_EQ(collector.poses[f].status, object_pose_t::STATUS_TRACKING);
+    EXPECT_LT(tracker_test::TranslationError(FromPose3d(collector.poses[f].rig_from_object),
+                                             x.s.rig_from_object[f]),
+              2e-3);
+  }
+  const std::string log = Slurp(err);
+  auto count = [&](const std::string& needle) {
+    size_t n = 0;
+    for (size_t p = log.find(needle); p != std::string::npos; p = log.find(needle, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("undecodable message on MCMT_DETECTIONS_CAM0"), 1u) << log;
+  EXPECT_EQ(count("camera 'stranger'"), 1u) << log;
+  // SIGINT wrote the trajectory, the same as --log mode's.
+  const auto live = ReadTrajectory(out_csv);
+  ASSERT_EQ(live.size(), x.s.views.size());
+  std::string unused;
+  const std::string log_csv = x.dir + "/poses_log_for_live.csv";
+  ASSERT_EQ(
+      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
+                 x.dir + "/o3.txt", &unused),
+      0);
+  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
+}
+
+// The same log replayed by the real lcm-logplayer into a live tracker gives the same poses as --log.
+TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
+  const Session& x = Session::Get();
+  const int port = 7742;
+  const std::string err = x.dir + "/replay.txt", out_csv = x.dir + "/poses_replay.csv";
+  const pid_t pid =
+      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  lcm::LCM lcm(Url(port));
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  // Receive while the player plays (udpm delivers every message on the group to every socket: an idle
+  // receiver would overflow its buffer).
+  const pid_t player =
+      Spawn({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + Url(port), x.log}, x.dir + "/player.txt");
+  Receive(
+      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
+  EXPECT_EQ(WaitExit(player, 20s), 0) << Slurp(x.dir + "/player.txt");
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  EXPECT_EQ(collector.poses.size(), x.s.views.size());
+  std::string unused;
+  const std::string log_csv = x.dir + "/poses_log_for_replay.csv";
+  ASSERT_EQ(
+      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
+                 x.dir + "/o4.txt", &unused),
+      0);
+  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
+}
+
+TEST(TrackerProcess, BadInputGivesOneLineErrors) {
+  const Session& x = Session::Get();
+  std::string out;
+  // A map of another rig (camera names differ).
+  RigMap other = x.s.map;
+  other.cameras[1].name = "north";
+  const std::string other_map = x.dir + "/other_map.yaml";
+  WriteMap(other_map, other);
+  EXPECT_EQ(
+      RunProgram({kTracker, "--config", x.rig, "--map", other_map, "--log", x.log}, x.dir + "/b1.txt", &out),
+      1);
+  EXPECT_NE(out.find("mcmt-tracker: error:"), std::string::npos) << out;
+  EXPECT_NE(out.find("'north'"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  // Missing log, missing map file, missing --config.
+  EXPECT_EQ(RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.dir + "/nope.lcmlog"},
+                       x.dir + "/b2.txt", &out),
+            1);
+  EXPECT_NE(out.find("nope.lcmlog"), std::string::npos) << out;
+  EXPECT_EQ(RunProgram({kTracker, "--config", x.rig, "--map", x.dir + "/nomap.yaml", "--log", x.log},
+                       x.dir + "/b3.txt", &out),
+            1);
+  EXPECT_NE(out.find("nomap.yaml"), std::string::npos) << out;
+  EXPECT_EQ(RunProgram({kTracker, "--map", x.map}, x.dir + "/b4.txt", &out), 2);
+  EXPECT_NE(out.find("--config"), std::string::npos) << out;
+  // Nothing written on failure.
+  const std::string never = x.dir + "/never.csv";
+  EXPECT_EQ(RunProgram({kTracker, "--config", x.rig, "--map", other_map, "--log", x.log, "--out", never},
+                       x.dir + "/b5.txt", &out),
+            1);
+  EXPECT_FALSE(std::ifstream(never).good());
+}
+
+// No --map: the tracker waits for MCMT_MAP, then tracks.
+TEST(TrackerProcess, LiveWaitsForMapMessage) {
+  const Session& x = Session::Get();
+  const int port = 7743;
+  const std::string err = x.dir + "/waitmap.txt";
+  const pid_t pid = Spawn({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  lcm::LCM lcm(Url(port));
+  PoseCollector collector(lcm);
+  const rig_map_t map_msg = ToRigMapMsg(x.s.map, 42);
+  lcm.publish(kMapChannel, &map_msg);
+  ASSERT_TRUE(WaitForText(err, "using map from MCMT_MAP", 10s)) << Slurp(err);
+  for (size_t f = 0; f < 30; ++f) {
+    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    lcm.handleTimeout(3);
+  }
+  Receive(
+      lcm, [&] { return collector.poses.size() >= 30; }, 10s);
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  ASSERT_EQ(collector.poses.size(), 30u) << Slurp(err);
+  for (size_t f = 0; f < 30; ++f) EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
+}
+
+}  // namespace
+}  // namespace mcmt
