@@ -1,0 +1,757 @@
+#include "logger/export.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/lcm_util.h"
+#include "core/marker.h"
+#include "core/se3.h"
+#include "mcmt/camera_model_t.hpp"
+#include "mcmt/detections_t.hpp"
+#include "mcmt/mapper_command_t.hpp"
+#include "mcmt/mapper_status_t.hpp"
+#include "mcmt/marker_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/pose3d_t.hpp"
+#include "mcmt/rig_map_t.hpp"
+
+namespace mcmt {
+
+const char kDetectionsCsvHeader[] = "utime,seq,camera,id,x0,y0,x1,y1,x2,y2,x3,y3";
+
+namespace {
+
+std::string G17(double v) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.17g", v);
+  return text;
+}
+
+std::string EventWhere(const std::string& path, const LogEvent& e, int64_t index) {
+  std::ostringstream s;
+  s << path << ": event " << index << " (byte " << e.offset << ") on " << e.channel;
+  return s.str();
+}
+
+bool IsDetectionsChannel(const std::string& channel) {
+  return channel.rfind(kDetectionsChannelPrefix, 0) == 0;
+}
+
+uint64_t Fingerprint(const std::vector<uint8_t>& data) {
+  uint64_t v = 0;
+  for (size_t i = 0; i < 8 && i < data.size(); ++i) v = (v << 8) | data[i];
+  return v;
+}
+
+template <typename Msg>
+void AddKnownType(std::map<uint64_t, std::string>* types) {
+  (*types)[static_cast<uint64_t>(Msg::getHash())] = std::string("mcmt.") + Msg::getTypeName();
+}
+
+const std::map<uint64_t, std::string>& KnownTypes() {
+  static const std::map<uint64_t, std::string> types = [] {
+    std::map<uint64_t, std::string> t;
+    AddKnownType<detections_t>(&t);
+    AddKnownType<object_pose_t>(&t);
+    AddKnownType<rig_map_t>(&t);
+    AddKnownType<mapper_status_t>(&t);
+    AddKnownType<mapper_command_t>(&t);
+    AddKnownType<camera_model_t>(&t);
+    AddKnownType<marker_t>(&t);
+    AddKnownType<pose3d_t>(&t);
+    return t;
+  }();
+  return types;
+}
+
+std::string TypeOf(const std::vector<uint8_t>& data) {
+  if (data.size() < 8) return "unknown (" + std::to_string(data.size()) + " bytes, no fingerprint)";
+  const uint64_t fp = Fingerprint(data);
+  auto it = KnownTypes().find(fp);
+  if (it != KnownTypes().end()) {
+    // "mcmt.detections_t" may come back from getTypeName() already qualified; avoid "mcmt.mcmt.".
+    const std::string& name = it->second;
+    return name.rfind("mcmt.mcmt.", 0) == 0 ? name.substr(5) : name;
+  }
+  char text[64];
+  std::snprintf(text, sizeof(text), "unknown (fingerprint 0x%016" PRIx64 ")", fp);
+  return text;
+}
+
+std::string IsoTime(int64_t utime) {
+  std::time_t seconds = static_cast<std::time_t>(utime / 1000000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[64];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &tm);
+  char full[96];
+  std::snprintf(full, sizeof(full), "%s.%06lldZ", text,
+                static_cast<long long>(((utime % 1000000) + 1000000) % 1000000));
+  return full;
+}
+
+// Calls fn(event, index, part) for every event of every part, strictly.
+template <typename Fn>
+void ForEachEvent(const std::string& log, Fn fn) {
+  for (const std::string& part : LogParts(log)) {
+    EventLogReader reader(part);
+    LogEvent event;
+    int64_t index = 0;
+    while (reader.Next(&event)) fn(event, index++, part);
+  }
+}
+
+std::vector<std::string> SplitCsv(const std::string& line) {
+  std::vector<std::string> fields;
+  size_t start = 0;
+  for (;;) {
+    size_t comma = line.find(',', start);
+    fields.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+Eigen::Matrix4d Matrix(const Rigid3& t) { return t.matrix(); }
+
+cv::Mat ToCvMat(const Eigen::Matrix4d& m) {
+  cv::Mat out(4, 4, CV_64F);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) out.at<double>(r, c) = m(r, c);
+  return out;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------
+// Log -> CSV / TUM
+
+LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request) {
+  LogExportResult result;
+  std::string det_csv = std::string(kDetectionsCsvHeader) + "\n";
+  std::vector<TrajectoryRow> poses;
+  std::string tum = "# timestamp tx ty tz qx qy qz qw (rig_from_object, seconds, metres)\n";
+  const bool want_det = !request.detections_csv.empty();
+  const bool want_poses = !request.poses_csv.empty() || !request.tum.empty();
+  ForEachEvent(log, [&](const LogEvent& e, int64_t index, const std::string& part) {
+    if (want_det && IsDetectionsChannel(e.channel)) {
+      detections_t det;
+      std::string error;
+      if (!Decode(e.data.data(), e.data.size(), &det, &error))
+        throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
+      if (det.camera.find_first_of(",\"\n\r") != std::string::npos)
+        throw LogFormatError(EventWhere(part, e, index) + ": camera name '" + det.camera +
+                             "' cannot be written to CSV (contains a comma, quote or newline)");
+      ++result.detection_messages;
+      for (const marker_t& m : det.markers) {
+        det_csv += std::to_string(det.utime) + "," + std::to_string(det.seq) + "," + det.camera + "," +
+                   std::to_string(m.id);
+        for (int k = 0; k < 4; ++k) det_csv += "," + G17(m.corners[k][0]) + "," + G17(m.corners[k][1]);
+        det_csv += "\n";
+        ++result.detection_rows;
+      }
+    } else if (want_poses && e.channel == request.pose_channel) {
+      object_pose_t pose;
+      std::string error;
+      if (!Decode(e.data.data(), e.data.size(), &pose, &error))
+        throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
+      if (pose.status != object_pose_t::STATUS_TRACKING && pose.status != object_pose_t::STATUS_AMBIGUOUS) {
+        ++result.poses_skipped;
+        return;
+      }
+      TrajectoryRow row;
+      row.utime = pose.utime;
+      row.seq = pose.seq;
+      row.rig_from_object = FromPose3d(pose.rig_from_object);
+      row.rms_px = pose.rms_px;
+      row.cameras = pose.num_cameras;
+      row.markers = pose.num_markers;
+      poses.push_back(row);
+      const double* p = pose.rig_from_object.position;
+      const double* q = pose.rig_from_object.orientation;  // w x y z
+      char seconds[48];
+      std::snprintf(seconds, sizeof(seconds), "%lld.%06lld", static_cast<long long>(pose.utime / 1000000),
+                    static_cast<long long>(pose.utime % 1000000));
+      tum += std::string(seconds) + " " + G17(p[0]) + " " + G17(p[1]) + " " + G17(p[2]) + " " + G17(q[1]) +
+             " " + G17(q[2]) + " " + G17(q[3]) + " " + G17(q[0]) + "\n";
+      ++result.pose_rows;
+    }
+  });
+  if (want_det) WriteFileAtomic(request.detections_csv, det_csv);
+  if (!request.poses_csv.empty()) WriteTrajectory(request.poses_csv, poses);
+  if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Summary
+
+LogSummary SummarizeLog(const std::string& log) {
+  LogSummary s;
+  s.parts = LogParts(log);
+  for (const std::string& part : s.parts) {
+    EventLogReader reader(part, /*resync=*/true);
+    s.bytes += reader.file_size();
+    LogEvent e;
+    while (reader.Next(&e)) {
+      ++s.events;
+      if (s.first_timestamp == 0 || e.timestamp < s.first_timestamp) s.first_timestamp = e.timestamp;
+      if (e.timestamp > s.last_timestamp) s.last_timestamp = e.timestamp;
+      ChannelSummary& c = s.channels[e.channel];
+      if (c.messages == 0) {
+        c.type = TypeOf(e.data);
+        c.first_timestamp = e.timestamp;
+      }
+      ++c.messages;
+      c.bytes += static_cast<int64_t>(e.data.size());
+      c.last_timestamp = e.timestamp;
+      if (IsDetectionsChannel(e.channel)) {
+        detections_t det;
+        if (!Decode(e.data.data(), e.data.size(), &det)) {
+          ++c.undecodable;
+          continue;
+        }
+        CameraSummary& cam = s.cameras[det.camera];
+        cam.channels.insert(e.channel);
+        if (cam.frames == 0) {
+          cam.first_seq = det.seq;
+          cam.first_utime = det.utime;
+        } else if (det.seq > cam.last_seq + 1) {
+          cam.gaps.push_back({cam.last_seq + 1, det.seq - 1});
+          cam.missing += det.seq - cam.last_seq - 1;
+        } else if (det.seq <= cam.last_seq) {
+          ++cam.out_of_order;
+        }
+        ++cam.frames;
+        cam.last_seq = det.seq;
+        cam.last_utime = det.utime;
+        cam.markers += det.num_markers;
+        for (const marker_t& m : det.markers) {
+          cam.ids.insert(m.id);
+          s.marker_ids.insert(m.id);
+        }
+      } else if (e.channel == kPoseChannel) {
+        object_pose_t pose;
+        if (!Decode(e.data.data(), e.data.size(), &pose)) {
+          ++c.undecodable;
+          continue;
+        }
+        ++s.pose_status[pose.status];
+      } else if (e.channel == kMapChannel) {
+        rig_map_t map;
+        if (!Decode(e.data.data(), e.data.size(), &map)) {
+          ++c.undecodable;
+          continue;
+        }
+        ++s.maps;
+      } else if (e.channel == kMapperStatusChannel) {
+        mapper_status_t status;
+        if (!Decode(e.data.data(), e.data.size(), &status)) {
+          ++c.undecodable;
+          continue;
+        }
+        s.last_mapper_status = status.message;
+      }
+    }
+    for (const auto& [offset, length] : reader.skipped_regions())
+      s.damage.push_back(part + ": skipped " + std::to_string(length) + " bytes of garbage at byte " +
+                         std::to_string(offset));
+    s.skipped_bytes += reader.skipped_bytes();
+    if (reader.truncated_tail_bytes() > 0)
+      s.damage.push_back(part + ": last event cut short (" + std::to_string(reader.truncated_tail_bytes()) +
+                         " bytes ignored; the recorder was killed or the disk filled)");
+  }
+  return s;
+}
+
+static std::string IdList(const std::set<int>& ids) {
+  // Compact: 0-5 8 10-12
+  std::string out;
+  auto it = ids.begin();
+  while (it != ids.end()) {
+    int first = *it, last = *it;
+    auto next = std::next(it);
+    while (next != ids.end() && *next == last + 1) {
+      last = *next;
+      ++next;
+    }
+    if (!out.empty()) out += " ";
+    out += std::to_string(first);
+    if (last > first) out += (last == first + 1 ? " " : "-") + std::to_string(last);
+    it = next;
+  }
+  return out.empty() ? "none" : out;
+}
+
+std::string FormatSummary(const LogSummary& s) {
+  std::ostringstream o;
+  char line[512];
+  o << "log: ";
+  for (size_t i = 0; i < s.parts.size(); ++i) o << (i ? ", " : "") << s.parts[i];
+  o << "\n";
+  std::snprintf(line, sizeof(line), "size: %.3f MB, %lld events, %zu channels\n",
+                static_cast<double>(s.bytes) / 1e6, static_cast<long long>(s.events), s.channels.size());
+  o << line;
+  const double span = static_cast<double>(s.last_timestamp - s.first_timestamp) / 1e6;
+  if (s.events > 0) {
+    std::snprintf(line, sizeof(line), "time span: %s .. %s (%.3f s, event receive times)\n",
+                  IsoTime(s.first_timestamp).c_str(), IsoTime(s.last_timestamp).c_str(), span);
+    o << line;
+  }
+  o << "channels:\n";
+  std::snprintf(line, sizeof(line), "  %-28s %-36s %10s %10s %12s\n", "channel", "type", "messages", "rate/s",
+                "bytes");
+  o << line;
+  for (const auto& [name, c] : s.channels) {
+    const double cspan = static_cast<double>(c.last_timestamp - c.first_timestamp) / 1e6;
+    const double rate = c.messages > 1 && cspan > 0 ? static_cast<double>(c.messages - 1) / cspan : 0.0;
+    std::snprintf(line, sizeof(line), "  %-28s %-36s %10lld %10.2f %12lld\n", name.c_str(), c.type.c_str(),
+                  static_cast<long long>(c.messages), rate, static_cast<long long>(c.bytes));
+    o << line;
+    if (c.undecodable > 0)
+      o << "    warning: " << c.undecodable << " message(s) on " << name
+        << " do not decode as the mcmt type of "
+        << "that channel\n";
+  }
+  o << "cameras: " << s.cameras.size() << "\n";
+  for (const auto& [name, cam] : s.cameras) {
+    const double cspan = static_cast<double>(cam.last_utime - cam.first_utime) / 1e6;
+    std::snprintf(line, sizeof(line),
+                  "  %s: %lld frames, seq %lld..%lld, %.3f s, %.2f fps, %.2f markers/frame, ids %s\n",
+                  name.c_str(), static_cast<long long>(cam.frames), static_cast<long long>(cam.first_seq),
+                  static_cast<long long>(cam.last_seq), cspan,
+                  cam.frames > 1 && cspan > 0 ? static_cast<double>(cam.frames - 1) / cspan : 0.0,
+                  cam.frames ? static_cast<double>(cam.markers) / static_cast<double>(cam.frames) : 0.0,
+                  IdList(cam.ids).c_str());
+    o << line;
+    if (cam.gaps.empty()) {
+      o << "    seq gaps: none\n";
+    } else {
+      o << "    seq gaps: " << cam.gaps.size() << ", " << cam.missing << " frames missing:";
+      for (size_t i = 0; i < cam.gaps.size() && i < 20; ++i) {
+        const auto& g = cam.gaps[i];
+        o << " " << g.first;
+        if (g.second > g.first) o << ".." << g.second;
+      }
+      if (cam.gaps.size() > 20) o << " ...";
+      o << "\n";
+    }
+    if (cam.out_of_order > 0) o << "    out of order or repeated seq: " << cam.out_of_order << "\n";
+  }
+  o << "marker ids seen: " << IdList(s.marker_ids) << " (" << s.marker_ids.size() << ")\n";
+  if (!s.pose_status.empty()) {
+    int64_t total = 0;
+    for (const auto& [st, n] : s.pose_status) total += n;
+    o << "poses: " << total;
+    auto count = [&](int st) {
+      auto it = s.pose_status.find(st);
+      return it == s.pose_status.end() ? 0LL : static_cast<long long>(it->second);
+    };
+    o << " (tracking " << count(object_pose_t::STATUS_TRACKING) << ", ambiguous "
+      << count(object_pose_t::STATUS_AMBIGUOUS) << ", lost " << count(object_pose_t::STATUS_LOST) << ")\n";
+  }
+  if (s.maps > 0) o << "maps: " << s.maps << "\n";
+  if (!s.last_mapper_status.empty()) o << "last mapper status: " << s.last_mapper_status << "\n";
+  if (s.damage.empty()) {
+    o << "damage: none\n";
+  } else {
+    for (const std::string& d : s.damage) o << "damage: " << d << "\n";
+  }
+  return o.str();
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// CSV -> log
+
+CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& rig,
+                                  const std::string& out_log) {
+  if (Exists(out_log)) throw std::runtime_error(out_log + ": exists; refusing to overwrite a log");
+  std::ifstream in(csv_path);
+  if (!in) throw std::runtime_error(csv_path + ": cannot open: " + std::strerror(errno));
+  std::string line;
+  int line_number = 0;
+  if (!std::getline(in, line)) throw std::runtime_error(csv_path + ": empty file (expected the header line)");
+  ++line_number;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != kDetectionsCsvHeader)
+    throw std::runtime_error(csv_path + ":1: expected the header '" + std::string(kDetectionsCsvHeader) +
+                             "', got '" + line + "'");
+  static const char* kColumns[] = {"utime", "seq", "camera", "id", "x0", "y0",
+                                   "x1",    "y1",  "x2",     "y2", "x3", "y3"};
+
+  const std::string tmp = out_log + ".tmp." + std::to_string(::getpid());
+  CsvToLogResult result;
+  try {
+    EventLogWriter writer(tmp);
+    detections_t current;
+    bool have_current = false;
+    auto flush_current = [&]() {
+      if (!have_current) return;
+      current.num_markers = static_cast<int32_t>(current.markers.size());
+      std::vector<uint8_t> data = Encode(current);
+      writer.Write(current.utime, DetectionsChannel(current.camera), data.data(), data.size());
+      ++result.messages;
+      have_current = false;
+    };
+    while (std::getline(in, line)) {
+      ++line_number;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.empty()) continue;
+      const std::string where = csv_path + ":" + std::to_string(line_number);
+      std::vector<std::string> f = SplitCsv(line);
+      if (f.size() != 12)
+        throw std::runtime_error(where + ": expected 12 columns, got " + std::to_string(f.size()));
+      auto parse_int = [&](int col) -> long long {
+        char* end = nullptr;
+        errno = 0;
+        long long v = std::strtoll(f[col].c_str(), &end, 10);
+        if (f[col].empty() || *end != '\0' || errno)
+          throw std::runtime_error(where + ": " + kColumns[col] + ": expected an integer, got '" + f[col] +
+                                   "'");
+        return v;
+      };
+      auto parse_double = [&](int col) -> double {
+        char* end = nullptr;
+        errno = 0;
+        double v = std::strtod(f[col].c_str(), &end);
+        if (f[col].empty() || *end != '\0' || errno == ERANGE)
+          throw std::runtime_error(where + ": " + kColumns[col] + ": expected a number, got '" + f[col] +
+                                   "'");
+        return v;
+      };
+      const int64_t utime = parse_int(0);
+      const int64_t seq = parse_int(1);
+      const std::string& camera = f[2];
+      const long long id = parse_int(3);
+      if (id < 0 || id > INT32_MAX) throw std::runtime_error(where + ": id: out of range: " + f[3]);
+      if (!have_current || current.camera != camera || current.utime != utime || current.seq != seq) {
+        flush_current();
+        const CameraConfig* cam = rig.FindCamera(camera);
+        if (!cam) {
+          std::string names;
+          for (const auto& c : rig.cameras) names += (names.empty() ? "" : ", ") + c.name;
+          throw std::runtime_error(where + ": camera '" + camera + "' is not in " + rig.path +
+                                   " (cameras: " + names + ")");
+        }
+        current = detections_t();
+        current.utime = utime;
+        current.seq = seq;
+        current.camera = camera;
+        current.dictionary = rig.markers.dictionary;
+        current.camera_model = ToCameraModelMsg(cam->model);
+        current.detection_ms = 0.0;
+        have_current = true;
+      }
+      marker_t m;
+      m.id = static_cast<int32_t>(id);
+      for (int k = 0; k < 4; ++k) {
+        m.corners[k][0] = parse_double(4 + 2 * k);
+        m.corners[k][1] = parse_double(5 + 2 * k);
+      }
+      current.markers.push_back(m);
+      ++result.rows;
+    }
+    flush_current();
+    writer.Close();
+  } catch (...) {
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  // Never overwrite: link() fails if out_log appeared meanwhile.
+  if (::link(tmp.c_str(), out_log.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(out_log + ": cannot create: " + std::strerror(err));
+  }
+  ::unlink(tmp.c_str());
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Map exports
+
+namespace {
+
+void EmitMatrixRows(YAML::Emitter& y, const Eigen::Matrix4d& m) {
+  y << YAML::BeginSeq;
+  for (int r = 0; r < 4; ++r) {
+    y << YAML::Flow << YAML::BeginSeq;
+    for (int c = 0; c < 4; ++c) y << m(r, c);
+    y << YAML::EndSeq;
+  }
+  y << YAML::EndSeq;
+}
+
+void EmitFlowList(YAML::Emitter& y, const std::vector<double>& values) {
+  y << YAML::Flow << YAML::BeginSeq;
+  for (double v : values) y << v;
+  y << YAML::EndSeq;
+}
+
+// ROS camera_info distortion model name and coefficients.
+std::pair<std::string, std::vector<double>> RosDistortion(const CameraModel& m) {
+  switch (m.model) {
+    case DistortionModel::kNone:
+      return {"plumb_bob", std::vector<double>(5, 0.0)};
+    case DistortionModel::kFisheye:
+      return {"equidistant", m.distortion};
+    case DistortionModel::kRadTan:
+      break;
+  }
+  std::vector<double> d = m.distortion;
+  if (d.size() > 5) {
+    d.resize(8, 0.0);
+    return {"rational_polynomial", d};
+  }
+  d.resize(5, 0.0);
+  return {"plumb_bob", d};
+}
+
+std::string FinishYaml(const YAML::Emitter& y, const std::string& what) {
+  if (!y.good()) throw std::runtime_error(what + ": cannot emit YAML: " + y.GetLastError());
+  return std::string(y.c_str()) + "\n";
+}
+
+}  // namespace
+
+std::string KalibrCamchain(const RigMap& map) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::BeginMap;
+  for (size_t i = 0; i < map.cameras.size(); ++i) {
+    const MapCamera& cam = map.cameras[i];
+    const CameraModel& m = cam.model;
+    std::string model = "radtan";
+    std::vector<double> d(4, 0.0);
+    if (m.model == DistortionModel::kFisheye) {
+      model = "equidistant";
+      d = m.distortion;
+    } else if (m.model == DistortionModel::kRadTan) {
+      for (size_t k = 0; k < 4 && k < m.distortion.size(); ++k) d[k] = m.distortion[k];
+      for (size_t k = 4; k < m.distortion.size(); ++k)
+        if (m.distortion[k] != 0.0)
+          throw std::runtime_error("camera " + cam.name + ": radtan coefficient k" + std::to_string(k - 1) +
+                                   " = " + G17(m.distortion[k]) +
+                                   " cannot be written to a Kalibr camchain (radtan has k1 k2 p1 p2 only)");
+    }
+    y << YAML::Key << ("cam" + std::to_string(i)) << YAML::Value << YAML::BeginMap;
+    if (i > 0) {
+      const Rigid3 cn_from_cnm1 = Inverse(cam.rig_from_cam) * map.cameras[i - 1].rig_from_cam;
+      y << YAML::Key << "T_cn_cnm1" << YAML::Value;
+      EmitMatrixRows(y, Matrix(cn_from_cnm1));
+    }
+    y << YAML::Key << "camera_model" << YAML::Value << "pinhole";
+    y << YAML::Key << "intrinsics" << YAML::Value;
+    EmitFlowList(y, {m.fx, m.fy, m.cx, m.cy});
+    y << YAML::Key << "distortion_model" << YAML::Value << model;
+    y << YAML::Key << "distortion_coeffs" << YAML::Value;
+    EmitFlowList(y, d);
+    y << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << m.width << m.height
+      << YAML::EndSeq;
+    y << YAML::Key << "rostopic" << YAML::Value << ("/" + cam.name + "/image_raw");
+    y << YAML::EndMap;
+  }
+  y << YAML::EndMap;
+  return FinishYaml(y, "Kalibr camchain");
+}
+
+std::string RosCameraInfo(const MapCamera& camera) {
+  const CameraModel& m = camera.model;
+  auto [model, d] = RosDistortion(m);
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& data) {
+    y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "rows" << YAML::Value << rows;
+    y << YAML::Key << "cols" << YAML::Value << cols;
+    y << YAML::Key << "data" << YAML::Value;
+    EmitFlowList(y, data);
+    y << YAML::EndMap;
+  };
+  y << YAML::BeginMap;
+  y << YAML::Key << "image_width" << YAML::Value << m.width;
+  y << YAML::Key << "image_height" << YAML::Value << m.height;
+  y << YAML::Key << "camera_name" << YAML::Value << camera.name;
+  matrix("camera_matrix", 3, 3, {m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1});
+  y << YAML::Key << "distortion_model" << YAML::Value << model;
+  matrix("distortion_coefficients", 1, static_cast<int>(d.size()), d);
+  matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
+  matrix("projection_matrix", 3, 4, {m.fx, 0, m.cx, 0, 0, m.fy, m.cy, 0, 0, 0, 1, 0});
+  y << YAML::EndMap;
+  return FinishYaml(y, "camera_info " + camera.name);
+}
+
+namespace {
+struct NamedTransform {
+  std::string parent, child;
+  Rigid3 parent_from_child;
+};
+std::vector<NamedTransform> StaticTransforms(const RigMap& map, const std::string& rig_frame,
+                                             const std::string& object_frame) {
+  std::vector<NamedTransform> out;
+  for (const MapCamera& c : map.cameras)
+    out.push_back({rig_frame, c.name + "_optical_frame", c.rig_from_cam});
+  for (const MapMarker& m : map.markers)
+    out.push_back({object_frame, "marker_" + std::to_string(m.id), m.object_from_marker});
+  return out;
+}
+}  // namespace
+
+std::string RosStaticTransformsYaml(const RigMap& map, const std::string& rig_frame,
+                                    const std::string& object_frame) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::Comment(
+      "mcmt map as static transforms. Camera frames are optical frames (x right, y down, z forward); the rig "
+      "frame is the reference camera's optical frame; the object frame is the reference marker's frame. "
+      "rig -> object is dynamic (MCMT_POSE).");
+  y << YAML::BeginMap;
+  y << YAML::Key << "rig_frame" << YAML::Value << rig_frame;
+  y << YAML::Key << "object_frame" << YAML::Value << object_frame;
+  y << YAML::Key << "reference_camera" << YAML::Value << map.reference_camera;
+  y << YAML::Key << "reference_marker" << YAML::Value << map.reference_marker;
+  y << YAML::Key << "transforms" << YAML::Value << YAML::BeginSeq;
+  for (const NamedTransform& t : StaticTransforms(map, rig_frame, object_frame)) {
+    const auto q = QuaternionWxyz(t.parent_from_child);
+    const Eigen::Vector3d p = t.parent_from_child.translation();
+    y << YAML::BeginMap;
+    y << YAML::Key << "frame_id" << YAML::Value << t.parent;
+    y << YAML::Key << "child_frame_id" << YAML::Value << t.child;
+    y << YAML::Key << "translation" << YAML::Value;
+    EmitFlowList(y, {p.x(), p.y(), p.z()});
+    y << YAML::Key << "rotation_xyzw" << YAML::Value;
+    EmitFlowList(y, {q[1], q[2], q[3], q[0]});
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq << YAML::EndMap;
+  return FinishYaml(y, "static_transforms.yaml");
+}
+
+std::string RosStaticTransformsTxt(const RigMap& map, const std::string& rig_frame,
+                                   const std::string& object_frame) {
+  std::string out =
+      "# ROS 2 static_transform_publisher commands (one per transform) for the mcmt map; camera frames are\n"
+      "# optical frames. ROS 1: rosrun tf2_ros static_transform_publisher x y z qx qy qz qw frame_id "
+      "child_frame_id\n";
+  for (const NamedTransform& t : StaticTransforms(map, rig_frame, object_frame)) {
+    const auto q = QuaternionWxyz(t.parent_from_child);
+    const Eigen::Vector3d p = t.parent_from_child.translation();
+    out += "ros2 run tf2_ros static_transform_publisher --x " + G17(p.x()) + " --y " + G17(p.y()) + " --z " +
+           G17(p.z()) + " --qx " + G17(q[1]) + " --qy " + G17(q[2]) + " --qz " + G17(q[3]) + " --qw " +
+           G17(q[0]) + " --frame-id " + t.parent + " --child-frame-id " + t.child + "\n";
+  }
+  return out;
+}
+
+void WriteRosDir(const RigMap& map, const std::string& dir, const std::string& rig_frame,
+                 const std::string& object_frame) {
+  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
+    throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
+  for (const MapCamera& c : map.cameras) WriteFileAtomic(dir + "/" + c.name + ".yaml", RosCameraInfo(c));
+  WriteFileAtomic(dir + "/static_transforms.yaml", RosStaticTransformsYaml(map, rig_frame, object_frame));
+  WriteFileAtomic(dir + "/static_transforms.txt", RosStaticTransformsTxt(map, rig_frame, object_frame));
+}
+
+std::string OpenCvMapYaml(const RigMap& map) {
+  cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+  fs << "mcmt_map_version" << map.version;
+  fs << "dictionary" << map.dictionary;
+  fs << "reference_camera" << map.reference_camera;
+  fs << "reference_marker" << map.reference_marker;
+  fs << "rms_px" << map.rms_px;
+  fs << "cameras"
+     << "[";
+  for (const MapCamera& c : map.cameras) {
+    const CameraModel& m = c.model;
+    cv::Mat k = (cv::Mat_<double>(3, 3) << m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1);
+    std::string model = DistortionModelName(m.model);
+    std::vector<double> d = m.distortion;
+    if (m.model == DistortionModel::kNone) {  // same pixels, and a matrix every reader can load
+      model = "radtan";
+      d.assign(5, 0.0);
+    }
+    cv::Mat dist(1, static_cast<int>(d.size()), CV_64F);
+    for (size_t i = 0; i < d.size(); ++i) dist.at<double>(0, static_cast<int>(i)) = d[i];
+    fs << "{";
+    fs << "name" << c.name;
+    fs << "image_width" << m.width;
+    fs << "image_height" << m.height;
+    fs << "camera_matrix" << k;
+    fs << "distortion_model" << model;
+    fs << "distortion_coefficients" << dist;
+    fs << "rig_from_cam" << ToCvMat(Matrix(c.rig_from_cam));
+    fs << "}";
+  }
+  fs << "]";
+  fs << "markers"
+     << "[";
+  for (const MapMarker& mk : map.markers) {
+    fs << "{";
+    fs << "id" << mk.id;
+    fs << "size" << mk.size;
+    fs << "object_from_marker" << ToCvMat(Matrix(mk.object_from_marker));
+    fs << "}";
+  }
+  fs << "]";
+  return fs.releaseAndGetString();
+}
+
+namespace {
+// Corners in the object frame, wound counter-clockwise seen from the marker's +z: BL, BR, TR, TL.
+std::array<Eigen::Vector3d, 4> FaceCorners(const MapMarker& m) {
+  const MarkerCorners3d c = MarkerCornersInMarker(m.size);
+  return {m.object_from_marker * c[3], m.object_from_marker * c[2], m.object_from_marker * c[1],
+          m.object_from_marker * c[0]};
+}
+}  // namespace
+
+std::string MarkersPly(const RigMap& map) {
+  std::string out =
+      "ply\nformat ascii 1.0\ncomment mcmt object: marker squares in the object frame, metres\n";
+  out += "element vertex " + std::to_string(4 * map.markers.size()) + "\n";
+  out += "property double x\nproperty double y\nproperty double z\n";
+  out += "element face " + std::to_string(map.markers.size()) + "\n";
+  out += "property list uchar int vertex_indices\nproperty int marker_id\nend_header\n";
+  for (const MapMarker& m : map.markers)
+    for (const Eigen::Vector3d& p : FaceCorners(m))
+      out += G17(p.x()) + " " + G17(p.y()) + " " + G17(p.z()) + "\n";
+  for (size_t i = 0; i < map.markers.size(); ++i) {
+    const size_t b = 4 * i;
+    out += "4 " + std::to_string(b) + " " + std::to_string(b + 1) + " " + std::to_string(b + 2) + " " +
+           std::to_string(b + 3) + " " + std::to_string(map.markers[i].id) + "\n";
+  }
+  return out;
+}
+
+std::string MarkersObj(const RigMap& map) {
+  std::string out = "# mcmt object: marker squares in the object frame, metres\n";
+  for (size_t i = 0; i < map.markers.size(); ++i) {
+    const MapMarker& m = map.markers[i];
+    out += "o marker_" + std::to_string(m.id) + "\n";
+    for (const Eigen::Vector3d& p : FaceCorners(m))
+      out += "v " + G17(p.x()) + " " + G17(p.y()) + " " + G17(p.z()) + "\n";
+    const size_t b = 4 * i + 1;
+    out += "f " + std::to_string(b) + " " + std::to_string(b + 1) + " " + std::to_string(b + 2) + " " +
+           std::to_string(b + 3) + "\n";
+  }
+  return out;
+}
+
+}  // namespace mcmt

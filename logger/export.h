@@ -1,0 +1,118 @@
+// mcmt-export's engine: logs -> CSV / TUM / summary, detections CSV -> log, map -> Kalibr / ROS / OpenCV /
+// PLY / OBJ. Output files are written atomically (temporary name, then rename).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/files.h"
+#include "logger/event_log.h"
+
+namespace mcmt {
+
+// ---- from a log ----------------------------------------------------------------------------------------
+
+extern const char kDetectionsCsvHeader[];  // "utime,seq,camera,id,x0,y0,x1,y1,x2,y2,x3,y3"
+
+struct LogExportRequest {
+  std::string detections_csv;  // one row per marker of every detections_t on MCMT_DETECTIONS_*
+  std::string poses_csv;       // trajectory.csv format from object_pose_t on MCMT_POSE (TRACKING/AMBIGUOUS)
+  std::string tum;             // TUM: "timestamp tx ty tz qx qy qz qw", seconds, same poses
+  std::string pose_channel = "MCMT_POSE";
+};
+
+struct LogExportResult {
+  int64_t detection_messages = 0;
+  int64_t detection_rows = 0;
+  int64_t pose_rows = 0;
+  int64_t poses_skipped = 0;  // LOST (no valid pose)
+};
+
+// Reads the log strictly (LogParts: a split recording is read part after part). A message on a
+// channel an export needs that is not of the expected type throws LogFormatError naming the file,
+// event, byte offset and channel. Channels nobody asked for are ignored.
+LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request);
+
+// What --summary reports. Tolerant: garbage is skipped (and reported), foreign types are listed.
+struct ChannelSummary {
+  std::string type;  // "mcmt.detections_t", ... or "unknown (fingerprint 0x...)" / "empty"
+  int64_t messages = 0;
+  int64_t bytes = 0;
+  int64_t first_timestamp = 0, last_timestamp = 0;
+  int64_t undecodable = 0;  // messages on an mcmt channel that do not decode as its type
+};
+
+struct CameraSummary {
+  int64_t frames = 0;
+  int64_t first_seq = -1, last_seq = -1;
+  int64_t first_utime = 0, last_utime = 0;
+  int64_t markers = 0;  // marker observations
+  std::set<int> ids;
+  std::vector<std::pair<int64_t, int64_t>> gaps;  // missing seq ranges [first, last]
+  int64_t missing = 0;
+  int64_t out_of_order = 0;  // seq <= previous seq
+  std::set<std::string> channels;
+};
+
+struct LogSummary {
+  std::vector<std::string> parts;
+  uint64_t bytes = 0;
+  int64_t events = 0;
+  int64_t first_timestamp = 0, last_timestamp = 0;
+  std::map<std::string, ChannelSummary> channels;
+  std::map<std::string, CameraSummary> cameras;
+  std::set<int> marker_ids;
+  std::map<int, int64_t> pose_status;  // object_pose_t status -> count
+  int64_t maps = 0;
+  std::string last_mapper_status;
+  uint64_t skipped_bytes = 0;       // garbage between events
+  std::vector<std::string> damage;  // human-readable notes (garbage, truncated tail)
+};
+
+LogSummary SummarizeLog(const std::string& log);
+std::string FormatSummary(const LogSummary& summary);
+
+// ---- detections CSV -> log ------------------------------------------------------------------------------
+
+struct CsvToLogResult {
+  int64_t rows = 0;
+  int64_t messages = 0;
+};
+
+// Rows of one (camera, utime, seq) in a row become one detections_t with the camera model and dictionary
+// of the rig config, published on MCMT_DETECTIONS_<CAMERA> with the event timestamp = utime. Frames
+// without markers have no rows, so they do not come back. Refuses to overwrite `out_log`. Errors name
+// the CSV file, line and column.
+CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& rig,
+                                  const std::string& out_log);
+
+// ---- from a map -----------------------------------------------------------------------------------------
+
+// Kalibr camchain YAML: cam0..camN-1 in map order, pinhole-radtan or pinhole-equidistant, with
+// T_cn_cnm1 = cam_n_from_cam_(n-1) for n >= 1. Throws if a camera's model cannot be written exactly
+// (radtan with non-zero k3..k6).
+std::string KalibrCamchain(const RigMap& map);
+// ROS camera_info YAML of one camera (camera_calibration_parsers format).
+std::string RosCameraInfo(const MapCamera& camera);
+// static_transforms.yaml (and .txt: ROS 2 static_transform_publisher commands): rig -> <cam>_optical_frame
+// per camera, object -> marker_<id> per marker. Frame names given.
+std::string RosStaticTransformsYaml(const RigMap& map, const std::string& rig_frame,
+                                    const std::string& object_frame);
+std::string RosStaticTransformsTxt(const RigMap& map, const std::string& rig_frame,
+                                   const std::string& object_frame);
+// Writes DIR/<camera>.yaml per camera, DIR/static_transforms.yaml and .txt (creates DIR).
+void WriteRosDir(const RigMap& map, const std::string& dir, const std::string& rig_frame = "mcmt_rig",
+                 const std::string& object_frame = "mcmt_object");
+// OpenCV FileStorage YAML: cameras (name, camera_matrix, distortion_coefficients, distortion_model,
+// image_width, image_height, rig_from_cam 4x4), markers (id, size, object_from_marker 4x4).
+std::string OpenCvMapYaml(const RigMap& map);
+// The object's marker squares in the object frame; faces wound counter-clockwise seen from the marker's
+// +z (its printed face), so face normals point out of the markers.
+std::string MarkersPly(const RigMap& map);
+std::string MarkersObj(const RigMap& map);
+
+}  // namespace mcmt

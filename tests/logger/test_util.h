@@ -1,0 +1,214 @@
+// Helpers for the logger tests: temporary folders, child processes, deterministic messages.
+#pragma once
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "mcmt/detections_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+
+namespace mcmt_test {
+
+inline std::string MakeTempDir(const std::string& tag) {
+  std::string pattern = "/tmp/mcmt_logger_" + tag + "_XXXXXX";
+  std::vector<char> buf(pattern.begin(), pattern.end());
+  buf.push_back('\0');
+  if (!mkdtemp(buf.data())) std::abort();
+  return buf.data();
+}
+
+inline void RemoveTree(const std::string& dir) {
+  if (dir.rfind("/tmp/mcmt_logger_", 0) != 0) return;
+  std::string cmd = "rm -rf '" + dir + "'";
+  if (std::system(cmd.c_str()) != 0) {
+  }
+}
+
+inline bool FileExists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+inline long long FileSize(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 ? static_cast<long long>(st.st_size) : -1;
+}
+
+inline std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+inline std::string Bin(const std::string& name) { return std::string(MCMT_BIN_DIR) + "/" + name; }
+
+inline std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+
+// A child process with stdout and stderr redirected to files.
+class Child {
+ public:
+  Child() = default;
+  Child(const std::vector<std::string>& argv, const std::string& out_path, const std::string& err_path) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      int out = open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (out >= 0) dup2(out, 1);
+      if (err >= 0) dup2(err, 2);
+      std::vector<char*> args;
+      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      execv(args[0], args.data());
+      _exit(127);
+    }
+  }
+  ~Child() {
+    if (pid_ > 0 && !done_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+
+  bool Running() {
+    if (done_) return false;
+    int status = 0;
+    pid_t r = waitpid(pid_, &status, WNOHANG);
+    if (r == pid_) {
+      done_ = true;
+      status_ = status;
+      return false;
+    }
+    return true;
+  }
+  // Exit code, 128+signal when killed, or -1 on timeout (the child is then killed).
+  int Wait(double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (Running()) {
+      if (std::chrono::steady_clock::now() > end) {
+        kill(pid_, SIGKILL);
+        waitpid(pid_, nullptr, 0);
+        done_ = true;
+        return -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (WIFEXITED(status_)) return WEXITSTATUS(status_);
+    if (WIFSIGNALED(status_)) return 128 + WTERMSIG(status_);
+    return -2;
+  }
+  void Signal(int sig) {
+    if (pid_ > 0 && !done_) kill(pid_, sig);
+  }
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  bool done_ = false;
+  int status_ = 0;
+};
+
+// Runs a program to completion; returns its exit code (-1 on timeout).
+inline int RunProgram(const std::vector<std::string>& argv, std::string* out = nullptr,
+                      std::string* err = nullptr, double timeout_s = 60) {
+  char out_path[] = "/tmp/mcmt_logger_runout_XXXXXX";
+  char err_path[] = "/tmp/mcmt_logger_runerr_XXXXXX";
+  int fo = mkstemp(out_path), fe = mkstemp(err_path);
+  close(fo);
+  close(fe);
+  int code;
+  {
+    Child c(argv, out_path, err_path);
+    code = c.Wait(timeout_s);
+  }
+  if (out) *out = ReadText(out_path);
+  if (err) *err = ReadText(err_path);
+  unlink(out_path);
+  unlink(err_path);
+  return code;
+}
+
+inline bool WaitFor(const std::string& path, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!FileExists(path)) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+// Deterministic detections of one camera frame.
+inline mcmt::detections_t MakeDetections(const std::string& camera, int64_t seq, int num_markers) {
+  mcmt::detections_t d;
+  d.utime = 1700000000000000LL + seq * 16667;
+  d.seq = seq;
+  d.camera = camera;
+  d.dictionary = "DICT_6X6_250";
+  d.camera_model.width = 640;
+  d.camera_model.height = 480;
+  d.camera_model.fx = 500;
+  d.camera_model.fy = 501;
+  d.camera_model.cx = 319.5;
+  d.camera_model.cy = 239.5;
+  d.camera_model.distortion_model = "radtan";
+  d.camera_model.distortion = {0.01, -0.02, 0.001, 0.002, 0.003};
+  d.camera_model.num_distortion = 5;
+  for (int i = 0; i < num_markers; ++i) {
+    mcmt::marker_t m;
+    m.id = (i * 7 + static_cast<int>(seq)) % 50;
+    for (int k = 0; k < 4; ++k) {
+      m.corners[k][0] = 100.0 + i * 40 + k * 10.123456789012345 + seq * 0.1 / 3.0;
+      m.corners[k][1] = 200.0 - k * 9.87654321 + i * 1e-9 + seq / 7.0;
+    }
+    d.markers.push_back(m);
+  }
+  d.num_markers = num_markers;
+  d.detection_ms = 1.25 + seq * 0.001;
+  return d;
+}
+
+inline mcmt::object_pose_t MakePose(int64_t seq, int8_t status) {
+  mcmt::object_pose_t p;
+  p.utime = 1700000000000000LL + seq * 16667;
+  p.seq = seq;
+  p.object = "cube";
+  p.rig_from_object.position[0] = 0.1 * seq;
+  p.rig_from_object.position[1] = -0.2 + seq / 3.0;
+  p.rig_from_object.position[2] = 1.5;
+  const double a = 0.01 * seq;  // rotation about z
+  p.rig_from_object.orientation[0] = std::cos(a / 2);
+  p.rig_from_object.orientation[1] = 0;
+  p.rig_from_object.orientation[2] = 0;
+  p.rig_from_object.orientation[3] = std::sin(a / 2);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) p.covariance[r][c] = r == c ? 1e-6 : 0.0;
+  p.rms_px = 0.3 + seq * 0.01;
+  p.num_cameras = 2;
+  p.cameras = {"cam0", "cam1"};
+  p.num_markers = 3;
+  p.markers = {0, 1, 2};
+  p.num_rejected = 0;
+  p.status = status;
+  p.latency_ms = 2.0;
+  return p;
+}
+
+}  // namespace mcmt_test
