@@ -1,0 +1,231 @@
+#include "mapper/graph.h"
+
+#include <algorithm>
+#include <numeric>
+#include <queue>
+#include <tuple>
+
+namespace mcmt {
+
+void PairCandidates::AddEvent(const std::vector<Rigid3>& candidates) {
+  if (candidates.empty()) return;
+  for (const Rigid3& c : candidates) {
+    a_from_b.push_back(c);
+    event.push_back(num_events);
+  }
+  ++num_events;
+}
+
+bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& options) {
+  if (RotationAngle(x, y) > options.max_angle_rad) return false;
+  const double scale = 0.5 * (x.translation().norm() + y.translation().norm());
+  return TranslationDistance(x, y) <= options.max_distance_m + options.max_distance_rel * scale;
+}
+
+namespace {
+
+// Events (not candidates) with a candidate consistent with x: each co-observation votes once.
+int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyOptions& consistency) {
+  int support = 0, last_supported = -1;
+  for (size_t i = 0; i < pair.a_from_b.size(); ++i) {
+    if (pair.event[i] == last_supported) continue;
+    if (Consistent(pair.a_from_b[i], x, consistency)) {
+      last_supported = pair.event[i];
+      ++support;
+    }
+  }
+  return support;
+}
+
+double SummedProbeDistance(const std::vector<Rigid3>& candidates, const Rigid3& x, double scale) {
+  const Eigen::Vector3d u[3] = {Eigen::Vector3d(scale, 0, 0), Eigen::Vector3d(0, scale, 0),
+                                Eigen::Vector3d(0, 0, scale)};
+  Eigen::Vector3d px[3];
+  for (int k = 0; k < 3; ++k) px[k] = x * u[k];
+  double sum = 0.0;
+  for (const Rigid3& c : candidates)
+    for (int k = 0; k < 3; ++k) sum += (c * u[k] - px[k]).norm();
+  return sum;
+}
+
+}  // namespace
+
+GraphEdge EvaluateEdge(const PairCandidates& pair, const MedoidOptions& medoid_options, double tau_n,
+                       const ConsistencyOptions& consistency) {
+  GraphEdge edge;
+  edge.a = pair.a;
+  edge.b = pair.b;
+  const MedoidResult medoid = TransformMedoid(pair.a_from_b, medoid_options);
+  if (medoid.index < 0) {
+    edge.cost = std::numeric_limits<double>::infinity();
+    return edge;
+  }
+  const int64_t total = std::max<int64_t>(pair.total_candidates, pair.a_from_b.size());
+  const int n = static_cast<int>(pair.a_from_b.size());
+  // The paper's medoid counts every candidate, so when most events keep both hypotheses of both squares
+  // (3 wrong combinations for 1 right one) a tight cluster of wrong combinations can win. Other
+  // proposals -- the medoid of the best-hypothesis combinations (first candidate of each event), the
+  // medoid of the events with a single sure candidate -- compete by how many events they agree with;
+  // ties keep the paper's medoid.
+  std::vector<int> proposals = {medoid.index};
+  {
+    std::vector<Rigid3> firsts, sure;
+    std::vector<int> firsts_index, sure_index;
+    for (int i = 0; i < n; ++i) {
+      if (i > 0 && pair.event[i] == pair.event[i - 1]) continue;
+      firsts.push_back(pair.a_from_b[i]);
+      firsts_index.push_back(i);
+      if (i + 1 >= n || pair.event[i + 1] != pair.event[i]) {
+        sure.push_back(pair.a_from_b[i]);
+        sure_index.push_back(i);
+      }
+    }
+    if (firsts.size() != static_cast<size_t>(n)) {
+      const int f = TransformMedoid(firsts, medoid_options).index;
+      if (f >= 0) proposals.push_back(firsts_index[f]);
+      if (sure.size() >= 3) {
+        const int s = TransformMedoid(sure, medoid_options).index;
+        if (s >= 0) proposals.push_back(sure_index[s]);
+      }
+    }
+  }
+  int best = medoid.index, best_support = -1;
+  for (int p : proposals) {
+    const int support = EventSupport(pair, pair.a_from_b[p], consistency);
+    if (support > best_support) {
+      best_support = support;
+      best = p;
+    }
+  }
+  edge.a_from_b = pair.a_from_b[best];
+  edge.support = best_support;
+  // s counts every candidate, also those left out of a strided subset; d scales with it.
+  MedoidResult scaled = medoid;
+  scaled.index = best;
+  scaled.num_candidates = static_cast<int>(std::min<int64_t>(total, INT32_MAX));
+  if (n > 1) {
+    const double mean =
+        best == medoid.index
+            ? medoid.MeanDistance()
+            : SummedProbeDistance(pair.a_from_b, edge.a_from_b, medoid_options.point_scale) / (n - 1);
+    scaled.summed_distance = mean * static_cast<double>(total - 1);
+  }
+  edge.cost = MedoidEdgeCost(scaled, tau_n);
+  edge.candidates = total;
+  edge.events = std::max<int64_t>(pair.total_events, pair.num_events);
+  edge.stored_events = pair.num_events;
+  return edge;
+}
+
+namespace {
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int Find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  bool Join(int a, int b) {
+    a = Find(a);
+    b = Find(b);
+    if (a == b) return false;
+    parent[b] = a;
+    return true;
+  }
+};
+}  // namespace
+
+std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges) {
+  std::sort(edges.begin(), edges.end(), [](const GraphEdge& x, const GraphEdge& y) {
+    return std::tie(x.cost, x.a, x.b) < std::tie(y.cost, y.a, y.b);
+  });
+  UnionFind uf(n);
+  std::vector<GraphEdge> tree;
+  for (const GraphEdge& e : edges) {
+    if (e.a < 0 || e.b < 0 || e.a >= n || e.b >= n || !std::isfinite(e.cost)) continue;
+    if (uf.Join(e.a, e.b)) tree.push_back(e);
+  }
+  return tree;
+}
+
+int BestConnectedNode(int n, const std::vector<GraphEdge>& edges, const std::vector<bool>& eligible) {
+  std::vector<int64_t> weight(n, 0);
+  for (const GraphEdge& e : edges) {
+    if (e.a < 0 || e.b < 0 || e.a >= n || e.b >= n) continue;
+    weight[e.a] += e.candidates;
+    weight[e.b] += e.candidates;
+  }
+  int best = -1;
+  for (int i = 0; i < n; ++i) {
+    if (!eligible.empty() && !eligible[i]) continue;
+    if (weight[i] <= 0) continue;
+    if (best < 0 || weight[i] > weight[best]) best = i;
+  }
+  return best;
+}
+
+std::vector<bool> ComponentOf(int n, int root, const std::vector<GraphEdge>& edges) {
+  std::vector<bool> in(n, false);
+  if (root < 0 || root >= n) return in;
+  std::vector<std::vector<int>> adjacent(n);
+  for (const GraphEdge& e : edges) {
+    if (e.a < 0 || e.b < 0 || e.a >= n || e.b >= n) continue;
+    adjacent[e.a].push_back(e.b);
+    adjacent[e.b].push_back(e.a);
+  }
+  std::queue<int> todo;
+  todo.push(root);
+  in[root] = true;
+  while (!todo.empty()) {
+    const int x = todo.front();
+    todo.pop();
+    for (int y : adjacent[x])
+      if (!in[y]) {
+        in[y] = true;
+        todo.push(y);
+      }
+  }
+  return in;
+}
+
+TreePoses PosesFromTree(int n, int root, const std::vector<GraphEdge>& tree) {
+  TreePoses out;
+  out.root_from_node.assign(n, Rigid3::Identity());
+  out.placed.assign(n, false);
+  out.depth.assign(n, -1);
+  if (root < 0 || root >= n) return out;
+  // adjacency with the transform node_from_neighbour
+  struct Link {
+    int to;
+    Rigid3 from_to;  // this_from_to
+  };
+  std::vector<std::vector<Link>> adjacent(n);
+  for (const GraphEdge& e : tree) {
+    adjacent[e.a].push_back({e.b, e.a_from_b});
+    adjacent[e.b].push_back({e.a, Inverse(e.a_from_b)});
+  }
+  std::queue<int> todo;
+  todo.push(root);
+  out.placed[root] = true;
+  out.depth[root] = 0;
+  while (!todo.empty()) {
+    const int x = todo.front();
+    todo.pop();
+    for (const Link& link : adjacent[x]) {
+      if (out.placed[link.to]) continue;
+      out.placed[link.to] = true;
+      out.depth[link.to] = out.depth[x] + 1;
+      out.root_from_node[link.to] = Normalized(out.root_from_node[x] * link.from_to);
+      todo.push(link.to);
+    }
+  }
+  return out;
+}
+
+int MedoidIndex(const std::vector<Rigid3>& candidates, double point_scale) {
+  MedoidOptions options;
+  options.point_scale = point_scale;
+  return TransformMedoid(candidates, options).index;
+}
+
+}  // namespace mcmt

@@ -1,0 +1,72 @@
+// Building blocks of the paper's initialisation (steps 2-4), exposed for unit tests:
+// candidate sets per node pair -> medoid -> edge cost -> minimum spanning tree -> poses along tree paths.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/medoid.h"
+#include "core/se3.h"
+
+namespace mcmt {
+
+// Candidates of a_from_b for one pair of nodes (a < b), grouped by the co-observation event
+// (frame and camera, or frame) that produced them: one event yields one or more candidates
+// (one per combination of kept IPPE hypotheses).
+struct PairCandidates {
+  int a = -1, b = -1;
+  std::vector<Rigid3> a_from_b;
+  std::vector<int> event;        // event index of each candidate (0 .. num_events-1, non-decreasing)
+  int num_events = 0;            // events stored (a strided subset when there were many)
+  int64_t total_events = 0;      // events seen in all
+  int64_t total_candidates = 0;  // candidates seen in all (s in the paper)
+  void AddEvent(const std::vector<Rigid3>& candidates);
+};
+
+// When are two relative poses the same, up to noise.
+struct ConsistencyOptions {
+  double max_angle_rad = 15.0 * 3.14159265358979323846 / 180.0;
+  double max_distance_m = 0.02;
+  double max_distance_rel = 0.15;  // plus this fraction of the translation's length
+};
+bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& options);
+
+struct GraphEdge {
+  int a = -1, b = -1;
+  Rigid3 a_from_b = Rigid3::Identity();  // the medoid candidate
+  double cost = 0.0;                     // the paper's e = (d / s) * max(1, tau_n / s)
+  int64_t candidates = 0;                // s
+  int64_t events = 0;                    // co-observation events (all)
+  int support = 0;                       // stored events with a candidate consistent with the medoid
+  int stored_events = 0;
+  double SupportFraction() const { return stored_events > 0 ? double(support) / stored_events : 0.0; }
+};
+
+// Medoid of the pair's candidates and the paper's edge cost; support against `consistency`.
+GraphEdge EvaluateEdge(const PairCandidates& pair, const MedoidOptions& medoid_options, double tau_n,
+                       const ConsistencyOptions& consistency);
+
+// Kruskal's minimum spanning forest over nodes 0..n-1 (ties broken by (a, b)).
+std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges);
+
+// The node with the largest summed number of candidates over its edges (the paper's "best connected"),
+// -1 if there are no edges. `eligible` (optional, size n) restricts the choice.
+int BestConnectedNode(int n, const std::vector<GraphEdge>& edges, const std::vector<bool>& eligible = {});
+
+// Connected component (node flags) of `root` in the graph of `edges`.
+std::vector<bool> ComponentOf(int n, int root, const std::vector<GraphEdge>& edges);
+
+// root_from_node for every node reachable from root through the tree (product of the edge transforms
+// along the path); placed[i] false for the others.
+struct TreePoses {
+  std::vector<Rigid3> root_from_node;
+  std::vector<bool> placed;
+  std::vector<int> depth;
+};
+TreePoses PosesFromTree(int n, int root, const std::vector<GraphEdge>& tree);
+
+// Index of the medoid among candidates (core's TransformMedoid), -1 when empty.
+int MedoidIndex(const std::vector<Rigid3>& candidates, double point_scale);
+
+}  // namespace mcmt

@@ -1,0 +1,109 @@
+// mcmt-mapper: the paper's initialisation and bundle adjustment over detections from live LCM or a log.
+#include <csignal>
+#include <iostream>
+
+#include "core/cli.h"
+#include "core/config.h"
+#include "core/lcm_util.h"
+#include "mapper/mapper.h"
+#include "mapper/node.h"
+
+namespace {
+
+void OnSignal(int) { mcmt::MapperNode::StopFlag().store(true); }
+
+int Run(int argc, char** argv) {
+  std::string config, log, out, lcm_url, reference_camera;
+  int frames = 0;
+  double seconds = 0.0;
+  bool allow_partial = false, publish = false, no_refine = false;
+  int threads = -1;
+  mcmt::ArgParser args("mcmt-mapper",
+                       "Maps a rig from marker detections: camera poses, marker layout, object trajectory "
+                       "(graph initialisation + bundle adjustment).");
+  args.AddString("config", &config, "rig YAML", true);
+  args.AddString("log", &log, "read detections from this LCM log (at full speed) instead of live LCM");
+  args.AddString("out", &out,
+                 "output folder: map.yaml, trajectory.csv, report.json, map_initial.yaml, "
+                 "trajectory_initial.csv",
+                 true);
+  args.AddString("lcm-url", &lcm_url, "LCM URL (default: lcm.url of the rig YAML, else LCM's default)");
+  args.AddInt("frames", &frames, "stop collecting after this many frames (0: no limit)");
+  args.AddDouble("seconds", &seconds,
+                 "stop collecting after this many seconds (log: of message time; 0: no limit)");
+  args.AddFlag("allow-partial", &allow_partial,
+               "map the connected cameras and markers, leaving out the others");
+  args.AddFlag("publish", &publish,
+               "with --log: also publish status and the map on --lcm-url (live: always)");
+  args.AddString("reference-camera", &reference_camera,
+                 "reference camera (default: mapper.reference_camera, "
+                 "else the best connected)");
+  args.AddInt("threads", &threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)");
+  args.AddFlag("no-refine", &no_refine, "initialisation only (no bundle adjustment)");
+  args.AddEpilog(
+      "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
+      "mapper_command_t\n"
+      "\"solve\" on MCMT_MAPPER_COMMAND, or the --frames/--seconds limit; then solves, writes OUTDIR and "
+      "publishes\n"
+      "rig_map_t on MCMT_MAP (status on MCMT_MAPPER_STATUS).\n"
+      "examples:\n"
+      "  mcmt-mapper --config rig.yaml --log session.lcmlog --out map/\n"
+      "  mcmt-mapper --config rig.yaml --out map/ --seconds 60\n");
+  int code = 0;
+  if (!args.Parse(argc, argv, &code)) return code;
+
+  const mcmt::RigConfig rig = mcmt::LoadRigConfig(config);
+  mcmt::MapperOptions options = mcmt::MapperOptions::FromConfig(rig);
+  if (allow_partial) options.allow_partial = true;
+  if (!reference_camera.empty()) {
+    if (!rig.FindCamera(reference_camera))
+      throw std::runtime_error("--reference-camera: no camera named '" + reference_camera + "' in " + config);
+    options.reference_camera = reference_camera;
+  }
+  if (threads >= 0) options.threads = threads;
+  if (no_refine) options.refine = false;
+  if (frames < 0) throw std::runtime_error("--frames must be >= 0");
+  if (seconds < 0) throw std::runtime_error("--seconds must be >= 0");
+  if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
+
+  mcmt::Mapper mapper(options);
+  mcmt::MapperNodeOptions node_options;
+  node_options.outdir = out;
+  node_options.max_frames = frames;
+  node_options.max_seconds = seconds;
+  std::unique_ptr<lcm::LCM> input, output;
+  if (!log.empty()) {
+    if (access(log.c_str(), R_OK) != 0) throw std::runtime_error("cannot read log " + log);
+    input = mcmt::OpenLcm(mcmt::LogReadUrl(log));
+    node_options.from_log = true;
+    node_options.publish = publish;
+    if (publish) output = mcmt::OpenLcm(lcm_url);
+  } else {
+    input = mcmt::OpenLcm(lcm_url);
+  }
+  lcm::LCM* out_lcm = output ? output.get() : (node_options.from_log ? nullptr : input.get());
+  mcmt::MapperNode node(*input, out_lcm, mapper, node_options, std::cerr);
+
+  struct sigaction action = {};
+  action.sa_handler = OnSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGUSR1, &action, nullptr);
+  const std::string reason = node.Collect();
+  // A second Ctrl-C during the solve ends the process.
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+  std::cerr << "collected " << mapper.NumMessages() << " detections messages (" << reason << ")\n";
+  if (mapper.NumMessages() == 0)
+    throw std::runtime_error(log.empty() ? "no detections received on MCMT_DETECTIONS_*"
+                                         : "no detections_t messages on MCMT_DETECTIONS_* in " + log);
+  node.SolveWriteAndPublish();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return mcmt::RunMain("mcmt-mapper", [&] { return Run(argc, argv); });
+}

@@ -1,0 +1,191 @@
+// The mapper: from detections of a rigid marker object seen by fixed cameras, finds every camera's
+// pose (rig_from_cam), the marker layout (object_from_marker) and the object's pose in every frame
+// (rig_from_object): the paper's graph initialisation (steps 1-4) then a Ceres bundle adjustment (step 5)
+// with robust loss, gross-residual rejection and removal of marker ids that are not rigidly attached.
+//
+//   mcmt::Mapper mapper(mcmt::MapperOptions::FromConfig(rig));
+//   for (const auto& d : detections) mapper.Add(d);
+//   mcmt::MapResult result = mapper.Solve();       // throws MapperError with a one-line reason
+//   mcmt::WriteMapOutputs("out", result);          // map.yaml, trajectory.csv, report.json, *_initial
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/files.h"
+#include "core/marker.h"
+#include "core/se3.h"
+#include "mcmt/detections_t.hpp"
+
+namespace mcmt {
+
+class MapperError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct MapperOptions {
+  // Step 1: keep both IPPE hypotheses when e2 / e1 < tau_e.
+  double tau_e = 2.0;
+  // Graph edge cost e = (d / s) * max(1, tau_n / s).
+  double tau_n = 10.0;
+  // Robust loss: an observation's Huber threshold on its RMS corner error, pixels.
+  double huber_px = 1.0;
+  // After the first solve, observations whose RMS corner error exceeds this are rejected (gross), pixels.
+  double outlier_px = 5.0;
+  // Outlier rounds: solve, reject, re-solve at most this many times.
+  int max_rejection_rounds = 3;
+  int max_iterations = 100;
+  // The paper's stopping rule: stop when the RMS reprojection error improves by less than paper_stop_px.
+  bool paper_stop = true;
+  double paper_stop_px = 1e-4;
+  int threads = 0;  // 0: all cores
+  // "auto" (dense Schur for small reduced systems, sparse Schur otherwise), "sparse_schur",
+  // "dense_schur", "iterative_schur".
+  std::string linear_solver = "auto";
+  bool refine = true;  // false: initialisation only
+
+  // References: best connected unless named.
+  std::string reference_camera;
+  int reference_marker = -1;
+
+  // Frames: detections whose utime lies within this of a frame's first detection join it.
+  int64_t sync_tolerance_us = 2000;
+  // Map the connected part instead of failing on a camera or marker that cannot be connected.
+  bool allow_partial = false;
+
+  // Marker ids that do not belong to the rigid object: a marker must be seen together with another
+  // marker (same camera, same frame) in at least min_marker_support frames, in at least
+  // marker_inlier_fraction of which their relative pose agrees (within consistency_deg and
+  // consistency_m + consistency_rel * distance) with the chosen (medoid) relative pose.
+  int min_marker_support = 3;
+  double marker_inlier_fraction = 0.3;
+  double consistency_deg = 15.0;
+  double consistency_m = 0.02;
+  double consistency_rel = 0.15;
+  // After refinement, a marker with more than this fraction of its observations rejected is dropped.
+  double marker_reject_fraction = 0.5;
+  // At most this many co-observation events per camera or marker pair enter the medoid (strided subset).
+  int max_pair_events = 3000;
+
+  // From the rig: expected cameras (empty: whatever sends detections), marker id whitelist, sizes.
+  std::vector<std::string> cameras;
+  std::vector<int> marker_ids;
+  MarkerSizes sizes;
+  std::string dictionary;
+
+  // Reads the rig's `mapper:` section (keys as the fields above) and `sync: {tolerance_ms}`; throws
+  // ConfigError naming the file and key.
+  static MapperOptions FromConfig(const RigConfig& rig);
+  void Validate() const;  // throws ConfigError
+};
+
+// Progress for status messages and terminal bars.
+struct MapperProgress {
+  enum Stage { kInitialising = 1, kRefining = 2, kDone = 3 };
+  Stage stage = kInitialising;
+  std::string step;  // "frames", "hypotheses", "markers", "cameras", "object poses", "refine", ...
+  int iteration = 0;
+  int max_iterations = 0;
+  double cost = 0.0;
+  double rms_px = 0.0;
+  std::string message;
+};
+
+struct RejectedMarker {
+  int id = 0;
+  int observations = 0;
+  std::string reason;
+};
+
+struct RejectedObservation {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  std::string camera;
+  int id = 0;
+  double rms_px = 0.0;  // RMS corner error when rejected
+  std::string reason;
+};
+
+struct MapReport {
+  int detections_messages = 0;
+  int frames_assembled = 0;
+  int frames_used = 0;
+  int observations_total = 0;  // marker observations after the id whitelist
+  int observations_used = 0;
+  int ambiguous_observations = 0;  // both IPPE hypotheses kept
+  int ignored_ids = 0;             // detections of ids outside markers.ids
+  int duplicates = 0;              // same id twice in one camera frame (both dropped)
+  std::vector<std::string> duplicate_examples;
+  std::vector<RejectedMarker> rejected_markers;
+  std::vector<RejectedObservation> rejected_observations;
+  std::vector<std::string> dropped_cameras;  // --allow-partial: cameras that could not be placed
+  std::vector<std::string> warnings;
+  double initial_rms_px = 0.0;
+  double final_rms_px = 0.0;
+  int iterations = 0;
+  int solves = 0;
+  std::string termination;
+  std::string linear_solver;
+  int threads = 0;
+  std::vector<std::pair<std::string, double>> stage_seconds;  // in order
+  double total_seconds = 0.0;
+};
+
+struct MapResult {
+  RigMap map;                                     // refined
+  RigMap initial_map;                             // after the graph initialisation, before refinement
+  std::vector<TrajectoryRow> trajectory;          // refined rig_from_object per frame
+  std::vector<TrajectoryRow> initial_trajectory;  // initial
+  MapReport report;
+};
+
+// Per-camera counts while collecting (live progress).
+struct CameraCollectStats {
+  std::string name;
+  int frames = 0;        // detections messages
+  int observations = 0;  // marker observations
+  std::set<int> ids;
+  bool connected = false;  // shares a frame with marker observations with the best-connected group
+};
+
+class Mapper {
+ public:
+  explicit Mapper(MapperOptions options);
+  ~Mapper();
+
+  // Adds one camera's detections for one frame (any order, any camera).
+  void Add(const detections_t& detections);
+  void Reset();
+  int NumMessages() const;
+  // Frames as the max over cameras of messages received (cheap, for --frames).
+  int NumFramesApprox() const;
+  // Collect-time statistics; `connected` assembles frames (O(n log n)).
+  std::vector<CameraCollectStats> CollectStats() const;
+
+  void SetProgressCallback(std::function<void(const MapperProgress&)> callback);
+
+  // Runs the whole method. Throws MapperError with a one-line reason (disconnected camera, no data...).
+  MapResult Solve();
+
+  const MapperOptions& options() const { return options_; }
+
+ private:
+  struct Impl;
+  MapperOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+// OUTDIR/map.yaml, trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv (atomic each;
+// creates OUTDIR).
+void WriteMapOutputs(const std::string& outdir, const MapResult& result);
+std::string ReportJson(const MapResult& result);
+
+}  // namespace mcmt

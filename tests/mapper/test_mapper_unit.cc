@@ -1,0 +1,278 @@
+// Unit tests of the mapper's building blocks: graph steps, the Ceres residual and manifold, and each
+// initialisation step on synthetic data.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/ippe.h"
+#include "mapper/bundle.h"
+#include "mapper/graph.h"
+#include "mapper/mapper.h"
+#include "tests/mapper/synth.h"
+
+namespace mcmt {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Rigid3 Pose(double rx, double ry, double rz, double tx, double ty, double tz) {
+  Vector6d p;
+  p << rx, ry, rz, tx, ty, tz;
+  return RigidFromParams(p);
+}
+
+GraphEdge Edge(int a, int b, double cost, const Rigid3& a_from_b = Rigid3::Identity(),
+               int64_t candidates = 10) {
+  GraphEdge e;
+  e.a = a;
+  e.b = b;
+  e.cost = cost;
+  e.a_from_b = a_from_b;
+  e.candidates = candidates;
+  return e;
+}
+
+TEST(MapperGraph, MinimumSpanningTreeKeepsCheapestEdges) {
+  // 0-1 (1), 1-2 (1), 0-2 (5), 2-3 (2), 1-3 (3): the tree is {0-1, 1-2, 2-3}.
+  std::vector<GraphEdge> edges = {Edge(0, 1, 1), Edge(1, 2, 1), Edge(0, 2, 5), Edge(2, 3, 2), Edge(1, 3, 3)};
+  const std::vector<GraphEdge> tree = MinimumSpanningTree(4, edges);
+  ASSERT_EQ(tree.size(), 3u);
+  std::set<std::pair<int, int>> got;
+  for (const GraphEdge& e : tree) got.insert({e.a, e.b});
+  EXPECT_EQ(got, (std::set<std::pair<int, int>>{{0, 1}, {1, 2}, {2, 3}}));
+}
+
+TEST(MapperGraph, PosesAlongTreePathsCompose) {
+  std::mt19937_64 rng(3);
+  std::vector<Rigid3> truth(5);  // root_from_node
+  truth[0] = Rigid3::Identity();
+  for (int i = 1; i < 5; ++i) truth[i] = RandomRigid(rng, 1.0);
+  // Tree 0-1, 1-2, 0-3, 3-4 with edge transforms a_from_b = inv(root_from_a) * root_from_b; one edge
+  // given reversed (a > b) to check the inverse direction.
+  std::vector<GraphEdge> tree = {
+      Edge(0, 1, 1, Inverse(truth[0]) * truth[1]), Edge(1, 2, 1, Inverse(truth[1]) * truth[2]),
+      Edge(0, 3, 1, Inverse(truth[0]) * truth[3]), Edge(4, 3, 1, Inverse(truth[4]) * truth[3])};
+  const TreePoses poses = PosesFromTree(5, 0, tree);
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(poses.placed[i]);
+    EXPECT_LT(TranslationDistance(poses.root_from_node[i], truth[i]), 1e-12) << i;
+    EXPECT_LT(RotationAngle(poses.root_from_node[i], truth[i]), 1e-12) << i;
+  }
+  EXPECT_EQ(poses.depth[4], 2);
+  // A node outside the tree is not placed.
+  const TreePoses partial = PosesFromTree(6, 0, tree);
+  EXPECT_FALSE(partial.placed[5]);
+}
+
+TEST(MapperGraph, BestConnectedNodeAndComponents) {
+  std::vector<GraphEdge> edges = {Edge(0, 1, 1, Rigid3::Identity(), 5), Edge(1, 2, 1, Rigid3::Identity(), 50),
+                                  Edge(3, 4, 1, Rigid3::Identity(), 100)};
+  EXPECT_EQ(BestConnectedNode(5, edges), 3);  // 100 (ties by index: 3 before 4)
+  EXPECT_EQ(BestConnectedNode(5, edges, {true, true, true, false, false}), 1);  // 5 + 50
+  const std::vector<bool> c = ComponentOf(5, 0, edges);
+  EXPECT_EQ(c, (std::vector<bool>{true, true, true, false, false}));
+}
+
+TEST(MapperGraph, EdgeMedoidIsRobustToWrongHypotheses) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Rigid3 truth = Pose(0.3, -0.2, 0.1, 0.1, 0.05, -0.02);
+  PairCandidates pair;
+  pair.a = 0;
+  pair.b = 1;
+  for (int e = 0; e < 60; ++e) {
+    std::vector<Rigid3> cands;
+    Vector6d d;
+    for (int k = 0; k < 6; ++k) d[k] = n(rng) * (k < 3 ? 0.5 * kDeg : 0.0005);
+    cands.push_back(PerturbLeft(truth, d));
+    if (e % 2 == 0) cands.push_back(RandomRigid(rng, 0.2));  // a wrong (mirror) hypothesis
+    pair.AddEvent(cands);
+  }
+  pair.total_events = pair.num_events;
+  pair.total_candidates = static_cast<int64_t>(pair.a_from_b.size());
+  MedoidOptions mo;
+  mo.point_scale = 0.1;
+  const GraphEdge edge = EvaluateEdge(pair, mo, 10.0, ConsistencyOptions());
+  EXPECT_LT(TranslationDistance(edge.a_from_b, truth), 0.002);
+  EXPECT_LT(RotationAngle(edge.a_from_b, truth), 2 * kDeg);
+  EXPECT_EQ(edge.candidates, 90);
+  EXPECT_GE(edge.support, 58);  // every event has its true candidate
+  EXPECT_EQ(edge.stored_events, 60);
+  // Few candidates make the edge dear (tau_n): same d/s, fewer candidates -> higher cost.
+  PairCandidates few;
+  few.a = 0;
+  few.b = 1;
+  for (int e = 0; e < 3; ++e) few.AddEvent({pair.a_from_b[e * 3]});
+  few.total_events = 3;
+  few.total_candidates = 3;
+  const GraphEdge dear = EvaluateEdge(few, mo, 10.0, ConsistencyOptions());
+  EXPECT_GT(dear.cost, 0.0);
+  MedoidResult r;
+  r.num_candidates = 3;
+  r.summed_distance = 1.0;
+  EXPECT_NEAR(MedoidEdgeCost(r, 10.0), (1.0 / 3) * (10.0 / 3), 1e-12);
+}
+
+TEST(MapperGraph, InconsistentPairHasLittleSupport) {
+  std::mt19937_64 rng(7);
+  PairCandidates pair;
+  pair.a = 0;
+  pair.b = 1;
+  for (int e = 0; e < 50; ++e) pair.AddEvent({RandomRigid(rng, 0.5)});
+  pair.total_events = 50;
+  pair.total_candidates = 50;
+  const GraphEdge edge = EvaluateEdge(pair, MedoidOptions(), 10.0, ConsistencyOptions());
+  EXPECT_LT(edge.SupportFraction(), 0.2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ceres residual and manifold
+
+TEST(MapperBundle, ManifoldPlusMinusRoundTrip) {
+  LeftPoseManifold manifold;
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    const PoseBlock x = BlockFromRigid(RandomRigid(rng, 1.0));
+    double delta[6] = {0.1, -0.2, 0.05, 0.01, 0.02, -0.03};
+    PoseBlock y;
+    ASSERT_TRUE(manifold.Plus(x.data(), delta, y.data()));
+    double back[6];
+    ASSERT_TRUE(manifold.Minus(y.data(), x.data(), back));
+    for (int k = 0; k < 6; ++k) EXPECT_NEAR(back[k], delta[k], 1e-12);
+    // Plus is the left perturbation of core's PerturbLeft for rotation, plain addition for translation.
+    const Rigid3 px = RigidFromBlock(x.data()), py = RigidFromBlock(y.data());
+    const Eigen::Matrix3d expected =
+        RotationFromVector(Eigen::Vector3d(delta[0], delta[1], delta[2])) * px.linear();
+    EXPECT_LT(RotationAngle(py.linear(), expected), 1e-12);
+    EXPECT_LT((py.translation() - px.translation() - Eigen::Vector3d(delta[3], delta[4], delta[5])).norm(),
+              1e-15);
+  }
+}
+
+TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
+  for (int distortion = 0; distortion < 3; ++distortion) {
+    CameraModel model;
+    model.width = 1280;
+    model.height = 720;
+    model.fx = 900;
+    model.fy = 905;
+    model.cx = 640;
+    model.cy = 360;
+    if (distortion == 1) {
+      model.model = DistortionModel::kRadTan;
+      model.distortion = {-0.3, 0.05, -0.004, 0.004, 0.06};
+    } else if (distortion == 2) {
+      model.model = DistortionModel::kFisheye;
+      model.distortion = {0.05, -0.01, 0.002, -0.001};
+    }
+    const Rigid3 cam_from_rig = Pose(0.1, -0.3, 0.2, 0.05, -0.1, 0.8);
+    const Rigid3 object_from_marker = Pose(0.2, 0.4, -0.1, 0.05, 0.02, 0.01);
+    const Rigid3 rig_from_object = Pose(-0.2, 0.1, 0.3, 0.1, 0.0, 0.3);
+    MarkerCorners2d observed;
+    for (int k = 0; k < 4; ++k) observed[k] = Eigen::Vector2d(600 + 10 * k, 350 - 5 * k);
+    std::unique_ptr<ceres::CostFunction> cost(ReprojectionCost::Create(&model, observed, 0.04));
+    std::array<PoseBlock, 3> blocks = {BlockFromRigid(cam_from_rig), BlockFromRigid(object_from_marker),
+                                       BlockFromRigid(rig_from_object)};
+    const double* params[3] = {blocks[0].data(), blocks[1].data(), blocks[2].data()};
+    double residuals[8];
+    Eigen::Matrix<double, 8, 7, Eigen::RowMajor> jac[3];
+    double* jacobians[3] = {jac[0].data(), jac[1].data(), jac[2].data()};
+    ASSERT_TRUE(cost->Evaluate(params, residuals, jacobians));
+    // The residual itself: projection minus observation.
+    const Eigen::Vector3d p =
+        cam_from_rig * rig_from_object * object_from_marker * MarkerCornersInMarker(0.04)[2];
+    EXPECT_NEAR(residuals[4], model.Project(p).x() - observed[2].x(), 1e-9);
+    LeftPoseManifold manifold;
+    for (int b = 0; b < 3; ++b) {
+      for (int k = 0; k < 6; ++k) {
+        const double h = 1e-6;
+        double delta[6] = {0, 0, 0, 0, 0, 0};
+        PoseBlock plus, minus;
+        delta[k] = h;
+        manifold.Plus(blocks[b].data(), delta, plus.data());
+        delta[k] = -h;
+        manifold.Plus(blocks[b].data(), delta, minus.data());
+        double rp[8], rm[8];
+        const double* pp[3] = {params[0], params[1], params[2]};
+        pp[b] = plus.data();
+        ASSERT_TRUE(cost->Evaluate(pp, rp, nullptr));
+        pp[b] = minus.data();
+        ASSERT_TRUE(cost->Evaluate(pp, rm, nullptr));
+        for (int r = 0; r < 8; ++r) {
+          const double numeric = (rp[r] - rm[r]) / (2 * h);
+          EXPECT_NEAR(jac[b](r, k), numeric, 1e-4 * std::max(1.0, std::abs(numeric)))
+              << "distortion " << distortion << " block " << b << " tangent " << k << " residual " << r;
+        }
+      }
+      for (int r = 0; r < 8; ++r) EXPECT_EQ(jac[b](r, 6), 0.0);
+    }
+  }
+}
+
+TEST(MapperBundle, PointBehindCameraFailsTheEvaluation) {
+  CameraModel model;
+  model.width = 640;
+  model.height = 480;
+  model.fx = model.fy = 500;
+  model.cx = 320;
+  model.cy = 240;
+  MarkerCorners2d observed{};
+  std::unique_ptr<ceres::CostFunction> cost(ReprojectionCost::Create(&model, observed, 0.04));
+  std::array<PoseBlock, 3> blocks = {BlockFromRigid(Pose(0, 0, 0, 0, 0, -1)),
+                                     BlockFromRigid(Rigid3::Identity()), BlockFromRigid(Rigid3::Identity())};
+  const double* params[3] = {blocks[0].data(), blocks[1].data(), blocks[2].data()};
+  double residuals[8];
+  EXPECT_FALSE(cost->Evaluate(params, residuals, nullptr));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Initialisation steps on a synthetic scene (refine = false): the graph initialisation alone must land
+// near the truth, which needs the right IPPE hypotheses, the right MST paths and per-frame medoids.
+
+TEST(MapperInit, InitialisationAloneIsCloseToTruth) {
+  testing::SynthOptions so;
+  so.frames = 120;
+  so.noise_px = 0.2;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  MapperOptions options = testing::SceneMapperOptions(scene);
+  options.refine = false;
+  Mapper mapper(options);
+  for (const auto& d : scene.detections) mapper.Add(d);
+  const MapResult result = mapper.Solve();
+  EXPECT_GT(result.report.ambiguous_observations, 0) << "the scene should exercise both hypotheses";
+  ASSERT_EQ(result.initial_map.cameras.size(), 5u);
+  ASSERT_EQ(result.initial_map.markers.size(), 4u);
+  const testing::MapErrors e = testing::CompareToTruth(scene, result.initial_map, result.initial_trajectory);
+  EXPECT_LT(e.camera_position_m, 0.03);
+  EXPECT_LT(e.camera_rotation_deg, 2.0);
+  EXPECT_LT(e.configuration_m, 0.005);
+  EXPECT_LT(e.object_translation_m, 0.01);
+  EXPECT_LT(e.object_rotation_deg, 5.0);  // single-square poses: degrees before refinement
+  EXPECT_GE(e.frames_compared, 110);
+  // The reference camera and marker are identity in the map.
+  const MapCamera* ref = result.initial_map.FindCamera(result.initial_map.reference_camera);
+  ASSERT_NE(ref, nullptr);
+  EXPECT_LT(ref->rig_from_cam.translation().norm(), 1e-12);
+  const MapMarker* refm = result.initial_map.FindMarker(result.initial_map.reference_marker);
+  ASSERT_NE(refm, nullptr);
+  EXPECT_LT(refm->object_from_marker.translation().norm(), 1e-12);
+}
+
+TEST(MapperInit, ConfiguredReferencesAreUsed) {
+  testing::SynthOptions so;
+  so.frames = 60;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  MapperOptions options = testing::SceneMapperOptions(scene);
+  options.reference_camera = "cam3";
+  options.reference_marker = scene.ids[2];
+  options.refine = false;
+  Mapper mapper(options);
+  for (const auto& d : scene.detections) mapper.Add(d);
+  const MapResult result = mapper.Solve();
+  EXPECT_EQ(result.map.reference_camera, "cam3");
+  EXPECT_EQ(result.map.reference_marker, scene.ids[2]);
+  EXPECT_LT(result.map.FindCamera("cam3")->rig_from_cam.translation().norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace mcmt
