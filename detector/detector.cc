@@ -1,0 +1,514 @@
+#include "detector/detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "core/dictionary.h"
+
+namespace mcmt {
+namespace {
+
+// Bilinear interpolation of an 8-bit image at (x, y), pixel centres at integer coordinates. Returns
+// false outside the image.
+inline bool Sample(const cv::Mat& gray, double x, double y, float* value) {
+  if (!(x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.001 && y <= gray.rows - 1.001)) return false;
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
+  const uint8_t* r1 = r0 + gray.step[0];
+  const float top = r0[0] + fx * (r0[1] - r0[0]);
+  const float bottom = r1[0] + fx * (r1[1] - r1[0]);
+  *value = top + fy * (bottom - top);
+  return true;
+}
+
+// Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
+struct PixelMap {
+  const CameraModel* camera = nullptr;
+  Eigen::Vector2d ToImage(const Eigen::Vector2d& u) const {
+    if (!camera) return u;
+    const double x = (u.x() - camera->cx) / camera->fx, y = (u.y() - camera->cy) / camera->fy;
+    double xd, yd;
+    camera->Distort(x, y, &xd, &yd);
+    return {camera->fx * xd + camera->cx, camera->fy * yd + camera->cy};
+  }
+  Eigen::Vector2d ToIdeal(const Eigen::Vector2d& p) const { return camera ? camera->Undistort(p) : p; }
+};
+
+double Median(std::vector<float>* v) {
+  if (v->empty()) return 0.0;
+  auto mid = v->begin() + v->size() / 2;
+  std::nth_element(v->begin(), mid, v->end());
+  return *mid;
+}
+
+// A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
+struct Line {
+  Eigen::Vector2d n;
+  double c;
+};
+
+bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
+  for (int round = 0; round < 3; ++round) {
+    if (points.size() < 3) return false;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : points) mean += p;
+    mean /= static_cast<double>(points.size());
+    double sxx = 0, sxy = 0, syy = 0;
+    for (const auto& p : points) {
+      const Eigen::Vector2d d = p - mean;
+      sxx += d.x() * d.x(), sxy += d.x() * d.y(), syy += d.y() * d.y();
+    }
+    // Direction of the largest spread: angle 0.5 * atan2(2 sxy, sxx - syy); the normal is perpendicular.
+    const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+    line->n = Eigen::Vector2d(-std::sin(angle), std::cos(angle));
+    line->c = line->n.dot(mean);
+    if (round == 2) break;
+    // Residuals; drop those beyond 3 robust sigmas (at least 0.25 px).
+    std::vector<float> abs_res(points.size());
+    for (size_t i = 0; i < points.size(); ++i)
+      abs_res[i] = static_cast<float>(std::abs(line->n.dot(points[i]) - line->c));
+    std::vector<float> tmp = abs_res;
+    const double threshold = std::max(0.25, 3.0 * 1.4826 * Median(&tmp));
+    std::vector<Eigen::Vector2d> kept;
+    kept.reserve(points.size());
+    for (size_t i = 0; i < points.size(); ++i)
+      if (abs_res[i] <= threshold) kept.push_back(points[i]);
+    if (kept.size() == points.size()) break;
+    points.swap(kept);
+  }
+  return true;
+}
+
+bool Intersect(const Line& a, const Line& b, Eigen::Vector2d* p) {
+  const double det = a.n.x() * b.n.y() - a.n.y() * b.n.x();
+  if (std::abs(det) < 1e-6) return false;
+  *p = Eigen::Vector2d((a.c * b.n.y() - b.c * a.n.y()) / det, (a.n.x() * b.c - b.n.x() * a.c) / det);
+  return true;
+}
+
+// Value of the grid cell (row, col) of the full marker (border included): 1 = differs from the border.
+inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
+  if (row <= 0 || col <= 0 || row >= cells - 1 || col >= cells - 1) return 0;
+  return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
+}
+
+// Is the inner neighbour of side `side` at position u (cells from the side's start corner) of the
+// border's colour? Side 0 runs corner 0 -> 1 (top, left to right), 1: right side top to bottom,
+// 2: bottom right to left, 3: left bottom to top.
+bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
+  if (bits.empty()) return true;
+  for (double du : {-0.5, 0.0, 0.5}) {
+    int j = static_cast<int>(std::floor(u + du));
+    j = std::clamp(j, 0, cells - 1);
+    int row = 0, col = 0;
+    switch (side) {
+      case 0:
+        row = 1, col = j;
+        break;
+      case 1:
+        row = j, col = cells - 2;
+        break;
+      case 2:
+        row = cells - 2, col = cells - 1 - j;
+        break;
+      default:
+        row = cells - 1 - j, col = 1;
+        break;
+    }
+    if (GridCell(bits, cells, row, col)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
+                         int passes, std::array<cv::Point2d, 4>* corners) {
+  CV_Assert(gray.type() == CV_8UC1);
+  PixelMap map;
+  if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
+  std::array<Eigen::Vector2d, 4> img, ideal;
+  for (int k = 0; k < 4; ++k) img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
+  const std::array<Eigen::Vector2d, 4> original = img;
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += (img[(k + 1) % 4] - img[k]).norm();
+  if (!(perimeter > 4 * 4.0)) return false;
+
+  std::vector<float> profiles, inside, outside;
+  std::vector<Eigen::Vector2d> points, origins, normals;
+  std::vector<char> clean;
+  for (int pass = 0; pass < std::max(1, passes); ++pass) {
+    for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 4; ++k) centre += img[k] / 4.0;
+    std::array<Line, 4> lines;
+    for (int side = 0; side < 4; ++side) {
+      const Eigen::Vector2d a = ideal[side], b = ideal[(side + 1) % 4];
+      const Eigen::Vector2d dir = (b - a).normalized();
+      const double length_img = (img[(side + 1) % 4] - img[side]).norm();
+      const double cell = length_img / cells;
+      // Half-width of the profile across the edge: half a cell, so that the level read on each side
+      // is the border's and the surround's, not the next cell's.
+      const double h = std::clamp(0.5 * cell, 0.75, 3.0);
+      const double margin = std::min(0.3, std::max(0.6 * cell, 1.5) / length_img);
+      const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.5), 6, 240);
+      const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.2)));
+      const int m = 2 * steps + 1;
+      const double ds = h / steps;
+      profiles.assign(static_cast<size_t>(n) * m, 0.f);
+      origins.assign(n, Eigen::Vector2d::Zero());
+      normals.assign(n, Eigen::Vector2d::Zero());
+      clean.assign(n, 0);
+      std::vector<char> valid(n, 0);
+      int num_clean = 0, num_valid = 0;
+      for (int i = 0; i < n; ++i) {
+        const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
+        const Eigen::Vector2d q = a + t * (b - a);
+        const Eigen::Vector2d p = map.ToImage(q);
+        Eigen::Vector2d tangent =
+            map.camera ? (map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir)) : dir;
+        tangent.normalize();
+        Eigen::Vector2d normal(tangent.y(), -tangent.x());
+        if (normal.dot(p - centre) < 0) normal = -normal;
+        origins[i] = p;
+        normals[i] = normal;
+        bool ok = true;
+        float* prof = &profiles[static_cast<size_t>(i) * m];
+        for (int j = 0; j < m && ok; ++j) {
+          const double s = -h + j * ds;
+          ok = Sample(gray, p.x() + s * normal.x(), p.y() + s * normal.y(), &prof[j]);
+        }
+        if (!ok) continue;
+        valid[i] = 1;
+        ++num_valid;
+        clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
+        num_clean += clean[i];
+      }
+      if (num_valid < 4) return false;
+      const bool use_clean = num_clean >= std::max(4, num_valid / 5);
+      inside.clear();
+      outside.clear();
+      for (int i = 0; i < n; ++i) {
+        if (!valid[i] || (use_clean && !clean[i])) continue;
+        inside.push_back(profiles[static_cast<size_t>(i) * m]);
+        outside.push_back(profiles[static_cast<size_t>(i) * m + m - 1]);
+      }
+      const double level_in = Median(&inside), level_out = Median(&outside);
+      if (std::abs(level_out - level_in) < 8.0) return false;  // no edge
+      const float mid = static_cast<float>(0.5 * (level_in + level_out));
+      const float sign = level_out > level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
+      points.clear();
+      for (int i = 0; i < n; ++i) {
+        if (!valid[i] || (use_clean && !clean[i])) continue;
+        const float* prof = &profiles[static_cast<size_t>(i) * m];
+        // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+        double best = 1e9;
+        for (int j = 0; j + 1 < m; ++j) {
+          const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+          if (v0 <= 0.f && v1 > 0.f) {
+            const double s = -h + (j + v0 / (v0 - v1)) * ds;
+            if (std::abs(s) < std::abs(best)) best = s;
+          }
+        }
+        if (best > 1e8) continue;
+        points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
+      }
+      if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
+    }
+    std::array<Eigen::Vector2d, 4> next;
+    for (int k = 0; k < 4; ++k) {
+      Eigen::Vector2d p;
+      if (!Intersect(lines[(k + 3) % 4], lines[k], &p)) return false;
+      next[k] = map.ToImage(p);
+    }
+    img = next;
+  }
+  const double limit = std::max(2.0, 0.15 * perimeter / 4.0);
+  for (int k = 0; k < 4; ++k) {
+    if (!std::isfinite(img[k].x()) || !std::isfinite(img[k].y()) || (img[k] - original[k]).norm() > limit)
+      return false;
+  }
+  for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(img[k].x(), img[k].y());
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
+  DetectorOptions o;
+  o.inverted = rig.markers.inverted;
+  const YamlSection& s = rig.detector;
+  s.CheckKnownKeys({"corner_refinement",
+                    "subpix_window",
+                    "edge_passes",
+                    "adaptive_window_min",
+                    "adaptive_window_max",
+                    "adaptive_window_step",
+                    "adaptive_constant",
+                    "min_perimeter_px",
+                    "max_perimeter_rate",
+                    "polygonal_approx_rate",
+                    "min_corner_distance_rate",
+                    "min_distance_to_border",
+                    "error_correction_rate",
+                    "perspective_pixels_per_cell",
+                    "perspective_ignored_margin",
+                    "inverted",
+                    "aruco3",
+                    "aruco3_min_side",
+                    "fast",
+                    "full_search_every",
+                    "drop_duplicate_ids",
+                    "fps",
+                    "images",
+                    "image_rate",
+                    "image_quality",
+                    "image_scale",
+                    "status_period_s",
+                    "caliscope_time"});
+  o.corner_refinement = s.GetString("corner_refinement", o.corner_refinement);
+  if (o.corner_refinement != "edges" && o.corner_refinement != "none" && o.corner_refinement != "subpix" &&
+      o.corner_refinement != "contour")
+    s.Fail("corner_refinement",
+           "expected one of edges, none, subpix, contour, got '" + o.corner_refinement + "'");
+  o.subpix_window = s.GetInt("subpix_window", o.subpix_window);
+  o.edge_passes = s.GetInt("edge_passes", o.edge_passes);
+  o.adaptive_window_min = s.GetInt("adaptive_window_min", o.adaptive_window_min);
+  o.adaptive_window_max = s.GetInt("adaptive_window_max", o.adaptive_window_max);
+  o.adaptive_window_step = s.GetInt("adaptive_window_step", o.adaptive_window_step);
+  o.adaptive_constant = s.GetDouble("adaptive_constant", o.adaptive_constant);
+  o.min_perimeter_px = s.GetDouble("min_perimeter_px", o.min_perimeter_px);
+  o.max_perimeter_rate = s.GetDouble("max_perimeter_rate", o.max_perimeter_rate);
+  o.polygonal_approx_rate = s.GetDouble("polygonal_approx_rate", o.polygonal_approx_rate);
+  o.min_corner_distance_rate = s.GetDouble("min_corner_distance_rate", o.min_corner_distance_rate);
+  o.min_distance_to_border = s.GetInt("min_distance_to_border", o.min_distance_to_border);
+  o.error_correction_rate = s.GetDouble("error_correction_rate", o.error_correction_rate);
+  o.perspective_pixels_per_cell = s.GetInt("perspective_pixels_per_cell", o.perspective_pixels_per_cell);
+  o.perspective_ignored_margin = s.GetDouble("perspective_ignored_margin", o.perspective_ignored_margin);
+  o.inverted = s.GetBool("inverted", o.inverted);
+  o.aruco3 = s.GetBool("aruco3", o.aruco3);
+  o.aruco3_min_side = s.GetInt("aruco3_min_side", o.aruco3_min_side);
+  o.fast = s.GetBool("fast", o.fast);
+  o.full_search_every = s.GetInt("full_search_every", o.full_search_every);
+  o.drop_duplicate_ids = s.GetBool("drop_duplicate_ids", o.drop_duplicate_ids);
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(rig.path + ": detector." + e.what());
+  }
+  return o;
+}
+
+void DetectorOptions::Validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (corner_refinement != "edges" && corner_refinement != "none" && corner_refinement != "subpix" &&
+      corner_refinement != "contour")
+    fail("corner_refinement: expected edges, none, subpix or contour, got '" + corner_refinement + "'");
+  if (subpix_window < 1) fail("subpix_window: must be >= 1");
+  if (edge_passes < 1 || edge_passes > 10) fail("edge_passes: must be in 1..10");
+  if (adaptive_window_min < 3) fail("adaptive_window_min: must be >= 3");
+  if (adaptive_window_max < adaptive_window_min) fail("adaptive_window_max: must be >= adaptive_window_min");
+  if (adaptive_window_step < 1) fail("adaptive_window_step: must be >= 1");
+  if (!(min_perimeter_px > 0)) fail("min_perimeter_px: must be positive");
+  if (!(max_perimeter_rate > 0)) fail("max_perimeter_rate: must be positive");
+  if (!(polygonal_approx_rate > 0 && polygonal_approx_rate < 1))
+    fail("polygonal_approx_rate: must be in (0, 1)");
+  if (!(error_correction_rate >= 0 && error_correction_rate <= 1))
+    fail("error_correction_rate: must be in [0, 1]");
+  if (perspective_pixels_per_cell < 1) fail("perspective_pixels_per_cell: must be >= 1");
+  if (!(perspective_ignored_margin >= 0 && perspective_ignored_margin < 0.5))
+    fail("perspective_ignored_margin: must be in [0, 0.5)");
+  if (full_search_every < 1) fail("full_search_every: must be >= 1");
+}
+
+MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
+    : markers_(markers), options_(options) {
+  options_.Validate();
+  dictionary_ = LoadDictionary(markers.dictionary);
+  bits_.resize(dictionary_->bytesList.rows);
+}
+
+MarkerDetector::~MarkerDetector() = default;
+
+void MarkerDetector::SetCamera(const CameraModel& camera) { camera_ = std::make_unique<CameraModel>(camera); }
+
+void MarkerDetector::Reset() {
+  last_.clear();
+  frames_since_full_ = 0;
+}
+
+std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, const cv::Rect& roi,
+                                                        double min_perimeter, double max_perimeter,
+                                                        int window_min, int window_max) const {
+  cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
+  const cv::Mat view = gray(roi);
+  const double side = std::max(view.cols, view.rows);
+  p->adaptiveThreshWinSizeMin = window_min;
+  p->adaptiveThreshWinSizeMax = window_max;
+  p->adaptiveThreshWinSizeStep = options_.adaptive_window_step;
+  p->adaptiveThreshConstant = options_.adaptive_constant;
+  p->minMarkerPerimeterRate = min_perimeter / side;
+  p->maxMarkerPerimeterRate = max_perimeter / side;
+  p->polygonalApproxAccuracyRate = options_.polygonal_approx_rate;
+  p->minCornerDistanceRate = options_.min_corner_distance_rate;
+  p->minDistanceToBorder = options_.min_distance_to_border;
+  p->errorCorrectionRate = options_.error_correction_rate;
+  p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;
+  p->perspectiveRemoveIgnoredMarginPerCell = options_.perspective_ignored_margin;
+  p->detectInvertedMarker = options_.inverted;
+  p->useAruco3Detection = options_.aruco3;
+  p->minSideLengthCanonicalImg = options_.aruco3_min_side;
+  if (options_.corner_refinement == "subpix") {
+    p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+    p->cornerRefinementWinSize = options_.subpix_window;
+  } else if (options_.corner_refinement == "contour") {
+    p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_CONTOUR;
+  } else {
+    p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
+  }
+  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<int> ids;
+  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p);
+  std::vector<Raw> out;
+  out.reserve(ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    if (!markers_.Accepts(ids[i])) continue;
+    Raw r;
+    r.id = ids[i];
+    for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[i][k].x + roi.x, corners[i][k].y + roi.y);
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) const {
+  // One region per previous marker: its bounding box grown by 40 % of its size, overlapping regions
+  // merged; each searched at the scale its markers had.
+  struct Region {
+    cv::Rect rect;
+    double min_perimeter, max_perimeter;
+    std::vector<int> ids;
+  };
+  const cv::Rect image(0, 0, gray.cols, gray.rows);
+  std::vector<Region> regions;
+  for (const Raw& r : last_) {
+    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9, perimeter = 0;
+    for (int k = 0; k < 4; ++k) {
+      x0 = std::min(x0, r.corners[k].x), x1 = std::max(x1, r.corners[k].x);
+      y0 = std::min(y0, r.corners[k].y), y1 = std::max(y1, r.corners[k].y);
+      perimeter += cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
+    }
+    const double grow = 0.4 * std::max(x1 - x0, y1 - y0) + 4.0;
+    cv::Rect rect(cv::Point(static_cast<int>(std::floor(x0 - grow)), static_cast<int>(std::floor(y0 - grow))),
+                  cv::Point(static_cast<int>(std::ceil(x1 + grow)), static_cast<int>(std::ceil(y1 + grow))));
+    rect &= image;
+    if (rect.area() <= 0) continue;
+    regions.push_back({rect, 0.6 * perimeter, 1.6 * perimeter, {r.id}});
+  }
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < regions.size() && !merged; ++i) {
+      for (size_t j = i + 1; j < regions.size() && !merged; ++j) {
+        if ((regions[i].rect & regions[j].rect).area() > 0) {
+          regions[i].rect |= regions[j].rect;
+          regions[i].min_perimeter = std::min(regions[i].min_perimeter, regions[j].min_perimeter);
+          regions[i].max_perimeter = std::max(regions[i].max_perimeter, regions[j].max_perimeter);
+          regions[i].ids.insert(regions[i].ids.end(), regions[j].ids.begin(), regions[j].ids.end());
+          regions.erase(regions.begin() + j);
+          merged = true;
+        }
+      }
+    }
+  }
+  std::vector<Raw> out;
+  *ok = true;
+  for (const Region& region : regions) {
+    // Window of about three cells of the smallest marker.
+    const double cell = region.min_perimeter / 0.6 / 4.0 / (dictionary_->markerSize + 2);
+    int window = static_cast<int>(std::lround(3.0 * cell)) | 1;
+    window = std::clamp(window, 3, 31);
+    const double min_perimeter = std::max(options_.min_perimeter_px, region.min_perimeter);
+    std::vector<Raw> found = Search(gray, region.rect, min_perimeter, region.max_perimeter, window, window);
+    for (int id : region.ids) {
+      bool seen = false;
+      for (const Raw& f : found) seen = seen || f.id == id;
+      if (!seen) *ok = false;
+    }
+    out.insert(out.end(), found.begin(), found.end());
+  }
+  return out;
+}
+
+std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
+  cv::Mat gray;
+  if (image.channels() == 3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+  else
+    gray = image;
+  if (gray.depth() != CV_8U) gray.convertTo(gray, CV_8U);
+  ++stats_.frames;
+
+  std::vector<Raw> raw;
+  bool done = false;
+  if (options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every) {
+    bool ok = false;
+    raw = TrackSearch(gray, &ok);
+    done = ok;
+    ++frames_since_full_;
+  }
+  if (!done) {
+    raw = Search(gray, cv::Rect(0, 0, gray.cols, gray.rows), options_.min_perimeter_px,
+                 options_.max_perimeter_rate * std::max(gray.cols, gray.rows), options_.adaptive_window_min,
+                 options_.adaptive_window_max);
+    frames_since_full_ = 0;
+    ++stats_.full_searches;
+  }
+  // Duplicated ids (regions overlapping in fast mode give the same marker twice: keep one; two
+  // distinct places with one id: one is wrong, drop both).
+  std::map<int, std::vector<size_t>> by_id;
+  for (size_t i = 0; i < raw.size(); ++i) by_id[raw[i].id].push_back(i);
+  std::vector<Raw> unique;
+  for (const auto& [id, indices] : by_id) {
+    bool same_place = true;
+    for (size_t j = 1; j < indices.size(); ++j)
+      same_place = same_place && cv::norm(raw[indices[j]].corners[0] - raw[indices[0]].corners[0]) < 2.0;
+    if (indices.size() > 1 && !same_place && options_.drop_duplicate_ids) continue;
+    if (indices.size() > 1 && !same_place) {
+      for (size_t j : indices) unique.push_back(raw[j]);
+    } else {
+      unique.push_back(raw[indices[0]]);
+    }
+  }
+
+  std::vector<marker_t> out;
+  out.reserve(unique.size());
+  const int cells = dictionary_->markerSize + 2;
+  for (Raw& r : unique) {
+    if (options_.corner_refinement == "edges") {
+      cv::Mat& bits = bits_[r.id];
+      if (bits.empty())
+        bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(r.id, r.id + 1),
+                                                          dictionary_->markerSize);
+      if (!RefineMarkerCorners(gray, cells, bits, camera_.get(), options_.edge_passes, &r.corners))
+        ++stats_.refine_failures;
+    }
+    marker_t m;
+    m.id = r.id;
+    for (int k = 0; k < 4; ++k) {
+      m.corners[k][0] = r.corners[k].x;
+      m.corners[k][1] = r.corners[k].y;
+    }
+    out.push_back(m);
+  }
+  stats_.markers += static_cast<long long>(out.size());
+  if (options_.fast) last_ = unique;
+  return out;
+}
+
+}  // namespace mcmt

@@ -1,0 +1,125 @@
+// Marker detection with unbiased sub-pixel corners.
+//
+// Candidates and ids come from OpenCV's ArUco detector (no corner refinement). The corners are then
+// refined by RefineMarkerCorners(): the marker's outer edge is located to sub-pixel precision at many
+// points along each side (skipping the corners and the places where a bit of the other colour lies
+// next to the border, whose blur would pull the edge), a line is fitted robustly to each side (in
+// undistorted pixels when the camera model is known) and the corners are the intersections of adjacent
+// lines. Two passes: the second samples around the first result, so the window is centred on the edge.
+//
+// Fast mode (DetectorOptions::fast): after a full-frame search, the next frames are searched only near
+// the markers' last positions, at their last scale; a full search runs every `full_search_every` frames
+// and whenever a marker is lost. Corners are refined the same way in both modes.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <opencv2/aruco.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/config.h"
+#include "mcmt/detections_t.hpp"
+#include "mcmt/marker_t.hpp"
+
+namespace mcmt {
+
+struct DetectorOptions {
+  // "edges": this project's line-fit refinement (default, unbiased); "none": OpenCV's contour corners;
+  // "subpix": cv::cornerSubPix (OpenCV CORNER_REFINE_SUBPIX with subpix_window); "contour": OpenCV's
+  // CORNER_REFINE_CONTOUR.
+  std::string corner_refinement = "edges";
+  int subpix_window = 2;  // half window of "subpix", pixels
+  int edge_passes = 2;    // refinement passes of "edges"
+
+  // OpenCV candidate search.
+  int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
+  int adaptive_window_max = 15;
+  int adaptive_window_step = 10;
+  double adaptive_constant = 7.0;       // subtracted from the local mean
+  double min_perimeter_px = 40.0;       // smallest marker perimeter searched (15 px markers: 60)
+  double max_perimeter_rate = 4.0;      // largest, relative to the image's larger side
+  double polygonal_approx_rate = 0.05;  // contour -> quadrilateral tolerance, relative to perimeter
+  double min_corner_distance_rate = 0.05;
+  int min_distance_to_border = 1;            // pixels
+  double error_correction_rate = 0.6;        // of the dictionary's correction capacity
+  int perspective_pixels_per_cell = 6;       // bit sampling resolution
+  double perspective_ignored_margin = 0.15;  // part of each cell ignored when reading its bit
+  bool inverted = false;     // also look for white-on-black markers (default: markers.inverted)
+  bool aruco3 = false;       // OpenCV's ArUco3 fast search (downsampled candidate search)
+  int aruco3_min_side = 32;  // its minSideLengthCanonicalImg
+  // Fast mode.
+  bool fast = false;
+  int full_search_every = 10;  // frames between full searches in fast mode
+  // Drop every marker whose id is detected twice in one image (one of them is wrong).
+  bool drop_duplicate_ids = true;
+
+  // From the rig YAML `detector:` section (keys as the field names), markers.inverted as the default
+  // of `inverted`. Unknown keys and bad values throw ConfigError naming the file and key.
+  static DetectorOptions FromConfig(const RigConfig& rig);
+  void Validate() const;  // throws std::invalid_argument naming the field
+};
+
+struct DetectorStats {
+  long long frames = 0;
+  long long full_searches = 0;
+  long long markers = 0;
+  long long refine_failures = 0;  // markers kept with unrefined corners
+};
+
+// Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
+// marker in place. `gray` is 8-bit. `cells` is the marker's width in cells including the border
+// (bits + 2). `bits` (cells-2 x cells-2, CV_8U 0/1, the marker's bits as in its dictionary at corner 0 =
+// top-left) may be empty; with it, edge samples next to bit cells of value 1 are skipped. `camera` may be
+// null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
+bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
+                         int passes, std::array<cv::Point2d, 4>* corners);
+
+class MarkerDetector {
+ public:
+  MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options);
+  ~MarkerDetector();
+
+  // Refinement with the camera model (edges fitted as straight lines in undistorted pixels). Without it
+  // sides are fitted as straight lines in the image.
+  void SetCamera(const CameraModel& camera);
+
+  // Markers in the image (8-bit gray or BGR), corners in ArUco order, whitelist applied, sorted by id.
+  std::vector<marker_t> Detect(const cv::Mat& image);
+  // Forgets the previous frame (fast mode).
+  void Reset();
+
+  const DetectorStats& stats() const { return stats_; }
+  const DetectorOptions& options() const { return options_; }
+  const cv::aruco::Dictionary& dictionary() const { return *dictionary_; }
+
+ private:
+  struct Raw {
+    int id;
+    std::array<cv::Point2d, 4> corners;
+  };
+  std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
+                          double max_perimeter, int window_min, int window_max) const;
+  std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok) const;
+
+  MarkerConfig markers_;
+  DetectorOptions options_;
+  cv::Ptr<cv::aruco::Dictionary> dictionary_;
+  std::unique_ptr<CameraModel> camera_;
+  std::vector<cv::Mat> bits_;  // per id, cached
+  DetectorStats stats_;
+  // Fast mode state.
+  std::vector<Raw> last_;
+  int frames_since_full_ = 0;
+};
+
+// Offline: every frame of one camera's recorded source (rig YAML), detected at full speed with the
+// camera's intrinsics and the rig's detector settings, as the messages mcmt-detector would publish
+// (utime, seq, camera, dictionary, camera model, markers, detection_ms). max_frames < 0: all.
+// Throws std::runtime_error naming the camera and file on bad input (see DetectorNode).
+std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::string& camera,
+                                          int max_frames = -1);
+
+}  // namespace mcmt

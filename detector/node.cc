@@ -1,0 +1,226 @@
+#include "detector/node.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "core/lcm_util.h"
+
+namespace mcmt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {
+  const YamlSection& s = rig.detector;
+  fps = s.GetDouble("fps", fps);
+  images = s.GetBool("images", images);
+  image_rate_hz = s.GetDouble("image_rate", image_rate_hz);
+  image_quality = s.GetInt("image_quality", image_quality);
+  image_scale = s.GetDouble("image_scale", image_scale);
+  status_period_s = s.GetDouble("status_period_s", status_period_s);
+  caliscope_time = s.GetString("caliscope_time", caliscope_time);
+  if (fps < 0) s.Fail("fps", "must be >= 0");
+  if (!(image_rate_hz > 0)) s.Fail("image_rate", "must be positive");
+  if (image_quality < 1 || image_quality > 100) s.Fail("image_quality", "must be in 1..100");
+  if (!(image_scale > 0 && image_scale <= 1)) s.Fail("image_scale", "must be in (0, 1]");
+  if (caliscope_time != "sync" && caliscope_time != "camera")
+    s.Fail("caliscope_time", "expected sync or camera, got '" + caliscope_time + "'");
+}
+
+CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options) {
+  const CameraConfig* cam = rig.FindCamera(options.camera);
+  if (!cam) {
+    std::string names;
+    for (const auto& c : rig.cameras) names += (names.empty() ? "" : ", ") + c.name;
+    throw std::runtime_error("camera '" + options.camera + "' is not in " + rig.path + " (cameras: " + names +
+                             ")");
+  }
+  camera_ = *cam;
+  DetectorOptions detector_options = DetectorOptions::FromConfig(rig);
+  try {
+    detector_ = std::make_unique<MarkerDetector>(rig.markers, detector_options);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("camera " + camera_.name + ": " + rig.path +
+                             ": markers.dictionary: " + e.what());
+  }
+  detector_->SetCamera(camera_.model);
+  SourceOptions so;
+  so.source = options.source.empty() ? camera_.source : options.source;
+  if (!options.source.empty()) {
+    // A relative --source is relative to the working directory.
+    std::error_code ec;
+    if (std::filesystem::exists(so.source, ec)) so.source = std::filesystem::absolute(so.source).string();
+  }
+  so.timestamps_path = camera_.timestamps_path;
+  so.camera = camera_.name;
+  so.fps = options.fps;
+  so.start_utime = options.start_utime;
+  so.caliscope_time = options.caliscope_time;
+  so.loop = options.loop;
+  source_name_ = so.source;
+  source_ = FrameSource::Open(so);
+  dictionary_name_ = rig.markers.dictionary;
+  model_msg_ = ToCameraModelMsg(camera_.model);
+}
+
+bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
+  Frame frame;
+  if (!source_->Read(&frame)) return false;
+  if (!size_checked_) {
+    if (frame.image.cols != camera_.model.width || frame.image.rows != camera_.model.height)
+      throw std::runtime_error("camera " + camera_.name + ": intrinsics " + camera_.intrinsics_path +
+                               " are for " + std::to_string(camera_.model.width) + "x" +
+                               std::to_string(camera_.model.height) + " images but the frames of " +
+                               source_name_ + " are " + std::to_string(frame.image.cols) + "x" +
+                               std::to_string(frame.image.rows));
+    size_checked_ = true;
+  }
+  const auto t0 = Clock::now();
+  std::vector<marker_t> markers = detector_->Detect(frame.image);
+  d->detection_ms = MsSince(t0);
+  d->utime = frame.utime;
+  d->seq = frame.index;
+  d->camera = camera_.name;
+  d->dictionary = dictionary_name_;
+  d->camera_model = model_msg_;
+  d->markers = std::move(markers);
+  d->num_markers = static_cast<int32_t>(d->markers.size());
+  if (image_out) *image_out = frame.image;
+  return true;
+}
+
+std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::string& camera, int max_frames) {
+  DetectorNodeOptions options;
+  options.camera = camera;
+  options.LoadFromConfig(rig);
+  CameraPipeline pipeline(rig, options);
+  if (pipeline.source().live())
+    throw std::runtime_error("camera " + camera + ": DetectRecording needs a recorded source, not " +
+                             pipeline.source().description());
+  std::vector<detections_t> out;
+  detections_t d;
+  while ((max_frames < 0 || static_cast<int>(out.size()) < max_frames) && pipeline.Next(&d)) out.push_back(d);
+  return out;
+}
+
+std::vector<uint8_t> EncodeJpegWithComment(const cv::Mat& image, int quality, const std::string& comment) {
+  std::vector<uint8_t> jpeg;
+  if (!cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, quality}))
+    throw std::runtime_error("cannot encode JPEG");
+  const std::string text = comment.substr(0, 60000);
+  const size_t length = text.size() + 2;
+  std::vector<uint8_t> out;
+  out.reserve(jpeg.size() + length + 2);
+  out.insert(out.end(), jpeg.begin(), jpeg.begin() + 2);  // SOI
+  out.push_back(0xFF);
+  out.push_back(0xFE);
+  out.push_back(static_cast<uint8_t>(length >> 8));
+  out.push_back(static_cast<uint8_t>(length & 0xFF));
+  out.insert(out.end(), text.begin(), text.end());
+  out.insert(out.end(), jpeg.begin() + 2, jpeg.end());
+  return out;
+}
+
+DetectorNode::DetectorNode(const RigConfig& rig, const DetectorNodeOptions& options, lcm::LCM& lcm)
+    : options_(options), lcm_(lcm), pipeline_(rig, options) {
+  if (options_.rate != "max" && options_.rate != "realtime")
+    throw std::runtime_error("--rate: expected max or realtime, got '" + options_.rate + "'");
+  channel_ = DetectionsChannel(options_.camera);
+  image_channel_ = ImageChannel(options_.camera);
+}
+
+void DetectorNode::PublishImage(const cv::Mat& image, const detections_t& d) {
+  const int64_t min_gap = static_cast<int64_t>(1e6 / options_.image_rate_hz);
+  if (last_image_utime_ != INT64_MIN && d.utime - last_image_utime_ < min_gap && d.utime >= last_image_utime_)
+    return;
+  last_image_utime_ = d.utime;
+  cv::Mat scaled = image;
+  if (options_.image_scale < 1.0)
+    cv::resize(image, scaled, cv::Size(), options_.image_scale, options_.image_scale, cv::INTER_AREA);
+  const std::string comment = "mcmt-image camera=" + options_.camera + " seq=" + std::to_string(d.seq) +
+                              " utime=" + std::to_string(d.utime);
+  const std::vector<uint8_t> jpeg = EncodeJpegWithComment(scaled, options_.image_quality, comment);
+  lcm_.publish(image_channel_, jpeg.data(), static_cast<unsigned int>(jpeg.size()));
+  ++stats_.images;
+}
+
+void DetectorNode::Run(const std::atomic<bool>& stop) {
+  FrameSource& source = pipeline_.source();
+  if (!options_.quiet)
+    std::cout << "camera " << options_.camera << ": " << source.description() << " -> " << channel_
+              << (options_.images ? " (+ " + image_channel_ + ")" : "") << std::endl;
+  const bool realtime = options_.rate == "realtime" && !source.live();
+  Clock::time_point wall_start;
+  int64_t first_utime = 0;
+  auto status_start = Clock::now();
+  int64_t status_frames = 0, status_markers = 0;
+  double status_ms = 0, status_max_ms = 0;
+  detections_t d;
+  cv::Mat image;
+  while (!stop && (options_.max_frames < 0 || stats_.frames < options_.max_frames)) {
+    if (!pipeline_.Next(&d, options_.images ? &image : nullptr)) break;
+    if (realtime) {
+      if (stats_.frames == 0) {
+        wall_start = Clock::now();
+        first_utime = d.utime;
+      } else {
+        const auto due = wall_start + std::chrono::microseconds(d.utime - first_utime);
+        while (!stop && Clock::now() < due)
+          std::this_thread::sleep_for(
+              std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
+        if (stop) break;
+      }
+    }
+    const std::vector<uint8_t> bytes = Encode(d);
+    lcm_.publish(channel_, bytes.data(), static_cast<unsigned int>(bytes.size()));
+    if (options_.images) PublishImage(image, d);
+    ++stats_.frames;
+    stats_.markers += d.num_markers;
+    stats_.detection_ms_total += d.detection_ms;
+    ++status_frames;
+    status_markers += d.num_markers;
+    status_ms += d.detection_ms;
+    status_max_ms = std::max(status_max_ms, d.detection_ms);
+    const double elapsed = MsSince(status_start) / 1000.0;
+    if (!options_.quiet && options_.status_period_s > 0 && elapsed >= options_.status_period_s) {
+      char line[256];
+      std::snprintf(line, sizeof(line),
+                    "camera %s: %lld frames, %.1f fps, %.2f markers/frame, detection %.2f ms (max %.2f), "
+                    "skipped %lld",
+                    options_.camera.c_str(), static_cast<long long>(stats_.frames), status_frames / elapsed,
+                    static_cast<double>(status_markers) / status_frames, status_ms / status_frames,
+                    status_max_ms, static_cast<long long>(source.skipped()));
+      std::cout << line << std::endl;
+      status_start = Clock::now();
+      status_frames = status_markers = 0;
+      status_ms = status_max_ms = 0;
+    }
+  }
+  stats_.skipped = source.skipped();
+  if (!options_.quiet) {
+    char line[256];
+    std::snprintf(
+        line, sizeof(line),
+        "camera %s: done: %lld frames, %lld markers (%.2f/frame), mean detection %.2f ms, skipped %lld%s",
+        options_.camera.c_str(), static_cast<long long>(stats_.frames),
+        static_cast<long long>(stats_.markers),
+        stats_.frames ? static_cast<double>(stats_.markers) / stats_.frames : 0.0,
+        stats_.frames ? stats_.detection_ms_total / stats_.frames : 0.0,
+        static_cast<long long>(stats_.skipped), stop ? " (stopped)" : "");
+    std::cout << line << std::endl;
+  }
+}
+
+}  // namespace mcmt

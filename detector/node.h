@@ -1,0 +1,97 @@
+// DetectorNode: one camera's frames -> detections_t on MCMT_DETECTIONS_<CAMERA> (the mcmt-detector
+// process, with an injected lcm::LCM).
+//
+// Optional images on MCMT_IMAGE_<CAMERA> (off by default, rate-limited): the payload is a plain JPEG
+// file (starts with FF D8), not an LCM type; right after the SOI marker a COM segment holds
+// "mcmt-image camera=<name> seq=<seq> utime=<utime>" so that a recorded image can be matched with its
+// detections. Any JPEG decoder reads it (cv::imdecode, a file written from the bytes).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+
+#include "core/config.h"
+#include "detector/detector.h"
+#include "detector/source.h"
+#include "mcmt/detections_t.hpp"
+
+namespace mcmt {
+
+struct DetectorNodeOptions {
+  std::string camera;          // name in the rig YAML
+  std::string source;          // overrides the camera's source when not empty
+  std::string rate = "max";    // "max": as fast as possible; "realtime": at the recording's frame rate
+  bool loop = false;           // recordings: start again at the end
+  long long max_frames = -1;   // stop after this many frames (< 0: no limit)
+  bool images = false;         // publish MCMT_IMAGE_<CAMERA> JPEGs
+  double image_rate_hz = 2.0;  // at most this many images per second (message time)
+  int image_quality = 80;      // JPEG quality
+  double image_scale = 1.0;    // images downscaled by this factor (0 < s <= 1)
+  long long start_utime = kDefaultStartUtime;  // utime of frame 0 of recordings without timestamps
+  double fps = 0.0;                     // recordings: frame rate (0: the video's own, image folders 30)
+  std::string caliscope_time = "sync";  // see detector/source.h
+  double status_period_s = 5.0;         // status line period (wall time); <= 0: none
+  bool quiet = false;                   // no status lines
+
+  // Reads the process settings of the rig YAML `detector:` section (fps, images, image_rate,
+  // image_quality, image_scale, status_period_s, caliscope_time) over the defaults above.
+  void LoadFromConfig(const RigConfig& rig);
+};
+
+// The camera's detector and source, opened and checked (shared by DetectorNode and DetectRecording).
+class CameraPipeline {
+ public:
+  // Throws std::runtime_error / ConfigError naming the camera and the file: unknown camera, missing or
+  // unreadable source, unknown dictionary, bad detector settings.
+  CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options);
+  // Next frame's detections; false at the end. Throws when the frame size differs from the
+  // intrinsics' (naming camera, intrinsics file and source).
+  bool Next(detections_t* detections, cv::Mat* image = nullptr);
+  FrameSource& source() { return *source_; }
+  MarkerDetector& detector() { return *detector_; }
+  const CameraConfig& camera() const { return camera_; }
+
+ private:
+  CameraConfig camera_;
+  std::string source_name_;
+  std::string dictionary_name_;
+  camera_model_t model_msg_;
+  std::unique_ptr<FrameSource> source_;
+  std::unique_ptr<MarkerDetector> detector_;
+  bool size_checked_ = false;
+};
+
+struct DetectorNodeStats {
+  int64_t frames = 0;  // published
+  int64_t markers = 0;
+  int64_t images = 0;   // published JPEGs
+  int64_t skipped = 0;  // unreadable frames
+  double detection_ms_total = 0.0;
+};
+
+class DetectorNode {
+ public:
+  DetectorNode(const RigConfig& rig, const DetectorNodeOptions& options, lcm::LCM& lcm);
+  // Publishes until the recording ends (after publishing everything), max_frames, or `stop` becomes
+  // true. Returns normally in all three cases; throws on fatal errors (frame size mismatch...).
+  void Run(const std::atomic<bool>& stop);
+  const DetectorNodeStats& stats() const { return stats_; }
+  std::string channel() const { return channel_; }
+
+ private:
+  void PublishImage(const cv::Mat& image, const detections_t& detections);
+  DetectorNodeOptions options_;
+  lcm::LCM& lcm_;
+  CameraPipeline pipeline_;
+  std::string channel_, image_channel_;
+  DetectorNodeStats stats_;
+  int64_t last_image_utime_ = INT64_MIN;
+};
+
+// JPEG bytes of an image with a COM segment holding `comment` after the SOI marker.
+std::vector<uint8_t> EncodeJpegWithComment(const cv::Mat& image, int quality, const std::string& comment);
+
+}  // namespace mcmt
