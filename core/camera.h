@@ -13,7 +13,7 @@ namespace mcmt {
 
 enum class DistortionModel { kNone, kRadTan, kFisheye };
 
-std::string DistortionModelName(DistortionModel model);          // "none", "radtan", "fisheye"
+std::string DistortionModelName(DistortionModel model);            // "none", "radtan", "fisheye"
 DistortionModel DistortionModelFromName(const std::string& name);  // throws std::invalid_argument
 
 struct CameraModel {
@@ -58,7 +58,7 @@ struct CameraModel {
   double HorizontalFovRad() const { return 2.0 * std::atan2(0.5 * width, fx); }
   bool InImage(const Eigen::Vector2d& pixel, double margin = 0.0) const;
 
-  cv::Mat CameraMatrix() const;     // 3x3 CV_64F
+  cv::Mat CameraMatrix() const;      // 3x3 CV_64F
   cv::Mat DistortionCoeffs() const;  // 1xN CV_64F (empty for none)
   bool operator==(const CameraModel& other) const;
 };

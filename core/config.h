@@ -59,7 +59,7 @@ struct MarkerConfig {
   std::vector<int> ids;                     // only these ids belong to the object (empty: all)
   bool inverted = false;                    // white-on-black prints
   MarkerSizes Sizes() const { return MarkerSizes{size, sizes}; }
-  bool Accepts(int id) const;               // whitelist check
+  bool Accepts(int id) const;  // whitelist check
 };
 
 struct CameraConfig {
@@ -75,7 +75,7 @@ struct RigConfig {
   std::string dir;   // its folder (relative paths are relative to it)
   MarkerConfig markers;
   std::vector<CameraConfig> cameras;
-  std::string lcm_url;  // lcm.url, empty: LCM's default
+  std::string lcm_url;           // lcm.url, empty: LCM's default
   std::string reference_camera;  // mapper.reference_camera, optional
   // Raw per-process sections (absent: empty nodes); components parse them with YamlSection.
   YamlSection detector, mapper, tracker, sync, lcm, logger, viz;

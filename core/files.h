@@ -27,9 +27,9 @@ struct MapCamera {
   std::string name;
   CameraModel model;
   Rigid3 rig_from_cam = Rigid3::Identity();
-  int observations = 0;      // marker observations used
-  double rms_px = 0.0;       // RMS reprojection error of its corners
-  double max_px = 0.0;       // largest corner error
+  int observations = 0;  // marker observations used
+  double rms_px = 0.0;   // RMS reprojection error of its corners
+  double max_px = 0.0;   // largest corner error
 };
 
 struct MapMarker {

@@ -20,11 +20,16 @@ struct FrameSyncOptions {
   int64_t tolerance_us = 2000;          // detections within this of a frame's utime join it
   int64_t deadline_us = 15000;          // wall-time wait after a frame's first arrival
   int64_t camera_timeout_us = 1000000;  // a camera silent this long (message time) is not waited for
+  // Cameras expected (e.g. the rig's). Optional. A listed camera not heard of yet is waited for until
+  // camera_timeout_us of message time has passed since the first message. Without the list, no frame
+  // completes before the camera set has settled (some camera reported a second frame), so the first
+  // frame is not emitted with only the first camera that happened to report.
+  std::vector<std::string> cameras;
 };
 
 struct SyncedFrame {
-  int64_t utime = 0;  // of the first detection that opened the frame
-  int64_t seq = 0;    // of the first detection that opened the frame
+  int64_t utime = 0;                // of the first detection that opened the frame
+  int64_t seq = 0;                  // of the first detection that opened the frame
   std::vector<detections_t> views;  // one per camera, in order of arrival
   int64_t last_arrival_us = 0;      // wall time the last view arrived
   bool complete = false;            // every alive camera reported (false: emitted by deadline/flush)
@@ -56,12 +61,15 @@ class FrameSynchronizer {
 
  private:
   FrameSyncOptions options_;
-  std::map<int64_t, SyncedFrame> pending_;       // by frame utime
-  std::map<std::string, int64_t> last_utime_;    // per camera, newest message utime
+  std::map<int64_t, SyncedFrame> pending_;     // by frame utime
+  std::map<std::string, int64_t> last_utime_;  // per camera, newest message utime
   int64_t newest_utime_ = INT64_MIN;
-  int64_t emitted_until_utime_ = INT64_MIN;      // frames at or before this are closed
+  int64_t emitted_until_utime_ = INT64_MIN;  // frames at or before this are closed
   FrameSyncStats stats_;
-  std::map<int64_t, int64_t> first_arrival_;     // frame utime -> wall time of first view
+  std::map<int64_t, int64_t> first_arrival_;    // frame utime -> wall time of first view
+  std::map<std::string, int64_t> first_utime_;  // per camera, first message utime
+  int64_t oldest_utime_ = INT64_MAX;            // first message utime overall
+  bool settled_ = false;                        // the camera set is known (see options.cameras)
   std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
   std::set<std::string> AliveCameras() const;
 };

@@ -16,9 +16,9 @@ struct PoseHypothesis {
 };
 
 struct SquarePose {
-  bool ok = false;                    // false if the corners are degenerate
+  bool ok = false;                           // false if the corners are degenerate
   std::array<PoseHypothesis, 2> hypotheses;  // sorted: hypotheses[0] has the smaller error
-  int num_hypotheses = 0;             // 2 normally; 1 if the solver returned one
+  int num_hypotheses = 0;                    // 2 normally; 1 if the solver returned one
   // e2 / e1 >= 1 (capped at 1e6 when e1 is ~0). Large: the best hypothesis is sure.
   double ratio = 1.0;
   const PoseHypothesis& best() const { return hypotheses[0]; }

@@ -16,6 +16,9 @@
 #include "core/se3.h"
 #include "mcmt/camera_model_t.hpp"
 #include "mcmt/detections_t.hpp"
+#include "mcmt/mapper_command_t.hpp"
+#include "mcmt/mapper_status_t.hpp"
+#include "mcmt/marker_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/pose3d_t.hpp"
 #include "mcmt/rig_map_t.hpp"
@@ -47,12 +50,37 @@ std::vector<uint8_t> Encode(const Msg& msg) {
   return buffer;
 }
 
-// Decodes exactly `size` bytes. A truncated, over-long or foreign (fingerprint mismatch) buffer
-// returns false with a reason in *error (never crashes, never throws).
+// Structural check of an encoded message before LCM's generated decode() runs: LCM 1.3.1's decoders
+// overflow on absurd array lengths (sizeof(double) * n in an int) and read out of bounds, so a
+// foreign or corrupted buffer must be rejected first. Overloads for every mcmt type check the
+// fingerprint, every string length and every array length against the bytes present.
+bool CheckEncoded(const void* data, size_t size, const camera_model_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const marker_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const detections_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const pose3d_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const rig_map_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const object_pose_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const mapper_status_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const mapper_command_t*, std::string* error);
+// Other (non-mcmt) types: no structural check beyond what their decode() does.
+template <typename Msg>
+bool CheckEncoded(const void*, size_t, const Msg*, std::string*) {
+  return true;
+}
+
+// Decodes exactly `size` bytes. A truncated, over-long, corrupted or foreign (fingerprint mismatch)
+// buffer returns false with a reason in *error (never crashes, never throws).
 template <typename Msg>
 bool Decode(const void* data, size_t size, Msg* msg, std::string* error = nullptr) {
   if (size > static_cast<size_t>(INT32_MAX)) {
     if (error) *error = "message too large";
+    return false;
+  }
+  std::string reason;
+  if (!CheckEncoded(data, size, static_cast<const Msg*>(nullptr), &reason)) {
+    if (error)
+      *error = std::string("not a valid ") + Msg::getTypeName() + " (" + std::to_string(size) +
+               " bytes: " + reason + ")";
     return false;
   }
   int n = -1;

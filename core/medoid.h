@@ -21,8 +21,8 @@ struct MedoidOptions {
 };
 
 struct MedoidResult {
-  int index = -1;              // index of the chosen candidate, -1 if there were none
-  int num_candidates = 0;      // s in the paper
+  int index = -1;          // index of the chosen candidate, -1 if there were none
+  int num_candidates = 0;  // s in the paper
   // d in the paper: sum over the other candidates of the distance between the chosen candidate's
   // mapped probe points and theirs (sum over the three points of Euclidean distances, metres).
   // When subsampled, scaled up to all candidates.

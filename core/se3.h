@@ -46,7 +46,8 @@ double TranslationDistance(const Rigid3& a, const Rigid3& b);
 // rotation about the rig-frame origin then a translation.
 Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta);
 
-// A random transform: rotation uniform on SO(3), translation uniform in [-max_translation, max_translation]^3.
+// A random transform: rotation uniform on SO(3), translation uniform in [-max_translation,
+// max_translation]^3.
 Rigid3 RandomRigid(std::mt19937_64& rng, double max_translation);
 
 // Rigid (no scale) least-squares alignment (Horn / Umeyama): returns a_from_b minimising

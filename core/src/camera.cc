@@ -1,5 +1,6 @@
 #include "core/camera.h"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <limits>
 #include <stdexcept>

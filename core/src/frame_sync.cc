@@ -5,7 +5,7 @@
 
 namespace mcmt {
 
-FrameSynchronizer::FrameSynchronizer(FrameSyncOptions options) : options_(options) {}
+FrameSynchronizer::FrameSynchronizer(FrameSyncOptions options) : options_(std::move(options)) {}
 
 std::set<std::string> FrameSynchronizer::Cameras() const {
   std::set<std::string> out;
@@ -15,30 +15,36 @@ std::set<std::string> FrameSynchronizer::Cameras() const {
 
 std::set<std::string> FrameSynchronizer::StaleCameras() const {
   std::set<std::string> out;
+  if (newest_utime_ == INT64_MIN) return out;
   for (const auto& kv : last_utime_)
     if (kv.second < newest_utime_ - options_.camera_timeout_us) out.insert(kv.first);
+  if (newest_utime_ - oldest_utime_ > options_.camera_timeout_us)
+    for (const auto& cam : options_.cameras)
+      if (!last_utime_.count(cam)) out.insert(cam);
   return out;
 }
 
 std::set<std::string> FrameSynchronizer::AliveCameras() const {
   std::set<std::string> out;
+  if (newest_utime_ == INT64_MIN) return out;
   for (const auto& kv : last_utime_)
     if (kv.second >= newest_utime_ - options_.camera_timeout_us) out.insert(kv.first);
+  if (newest_utime_ - oldest_utime_ <= options_.camera_timeout_us)
+    for (const auto& cam : options_.cameras) out.insert(cam);  // expected, not yet heard of
   return out;
 }
 
 namespace {
 
+bool HasCamera(const SyncedFrame& frame, const std::string& camera) {
+  for (const auto& v : frame.views)
+    if (v.camera == camera) return true;
+  return false;
+}
+
 bool HasAll(const SyncedFrame& frame, const std::set<std::string>& cameras) {
-  for (const auto& cam : cameras) {
-    bool found = false;
-    for (const auto& v : frame.views)
-      if (v.camera == cam) {
-        found = true;
-        break;
-      }
-    if (!found) return false;
-  }
+  for (const auto& cam : cameras)
+    if (!HasCamera(frame, cam)) return false;
   return true;
 }
 
@@ -48,8 +54,8 @@ std::vector<SyncedFrame> FrameSynchronizer::EmitUpTo(int64_t utime_inclusive) {
   std::vector<SyncedFrame> out;
   const std::set<std::string> alive = AliveCameras();
   while (!pending_.empty() && pending_.begin()->first <= utime_inclusive) {
-    SyncedFrame frame = std::move(pending_.begin()->second);
     const int64_t key = pending_.begin()->first;
+    SyncedFrame frame = std::move(pending_.begin()->second);
     pending_.erase(pending_.begin());
     first_arrival_.erase(key);
     frame.complete = HasAll(frame, alive);
@@ -63,17 +69,6 @@ std::vector<SyncedFrame> FrameSynchronizer::EmitUpTo(int64_t utime_inclusive) {
 
 std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, int64_t arrival_us) {
   const int64_t utime = detections.utime;
-  // A view of a frame already emitted (or older): late or out of order, dropped.
-  if (emitted_until_utime_ != INT64_MIN && utime <= emitted_until_utime_ + options_.tolerance_us) {
-    // Still inside the tolerance of a newer pending frame? Then it belongs there.
-    bool pending_match = false;
-    for (const auto& kv : pending_)
-      if (std::llabs(kv.first - utime) <= options_.tolerance_us) pending_match = true;
-    if (!pending_match) {
-      ++stats_.out_of_order;
-      return {};
-    }
-  }
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -85,20 +80,35 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
       best_gap = gap;
     }
   }
-  if (best != pending_.end()) {
-    for (const auto& v : best->second.views)
-      if (v.camera == detections.camera) {
-        ++stats_.duplicates;
-        return {};
-      }
+  // No pending frame takes it, and it is not newer than the frames already emitted (with tolerance):
+  // a late view of an emitted frame, or an out-of-order message. Dropped.
+  if (best == pending_.end() && emitted_until_utime_ != INT64_MIN &&
+      utime <= emitted_until_utime_ + options_.tolerance_us) {
+    ++stats_.out_of_order;
+    return {};
   }
-  // Accepted: update liveness.
-  auto seen = last_utime_.find(detections.camera);
-  if (seen == last_utime_.end())
-    last_utime_[detections.camera] = utime;
-  else
-    seen->second = std::max(seen->second, utime);
+  if (best != pending_.end() && HasCamera(best->second, detections.camera)) {
+    ++stats_.duplicates;
+    return {};
+  }
+
+  // Accepted: liveness and the camera set.
+  const std::string& camera = detections.camera;
+  auto last = last_utime_.find(camera);
+  if (last == last_utime_.end()) {
+    last_utime_[camera] = utime;
+    first_utime_[camera] = utime;
+  } else {
+    last->second = std::max(last->second, utime);
+    if (utime > first_utime_[camera] + options_.tolerance_us) settled_ = true;  // a second frame
+  }
   newest_utime_ = std::max(newest_utime_, utime);
+  oldest_utime_ = std::min(oldest_utime_, utime);
+  if (!settled_ && !options_.cameras.empty()) {
+    settled_ = std::all_of(options_.cameras.begin(), options_.cameras.end(),
+                           [this](const std::string& c) { return last_utime_.count(c) > 0; });
+  }
+
   if (best == pending_.end()) {
     SyncedFrame frame;
     frame.utime = utime;
@@ -108,6 +118,7 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   }
   best->second.views.push_back(detections);
   best->second.last_arrival_us = arrival_us;
+  if (!settled_) return {};
 
   // The newest pending frame that every alive camera has reported closes it and everything older
   // (cameras report in order, so an older frame missing a camera will not get it any more).

@@ -17,7 +17,153 @@ std::string ChannelSuffix(const std::string& camera_name) {
   return out;
 }
 
+// Walks an encoded LCM message (big-endian, strings as int32 length incl. NUL + bytes) checking
+// that every length fits in the bytes present. Mirrors the field order of lcmtypes/*.lcm.
+class WireReader {
+ public:
+  WireReader(const void* data, size_t size) : data_(static_cast<const uint8_t*>(data)), size_(size) {}
+
+  bool Fixed(size_t bytes, const char* what) {
+    if (size_ - pos_ < bytes) return Fail(std::string("truncated at ") + what);
+    pos_ += bytes;
+    return true;
+  }
+  bool Int32(int32_t* v, const char* what) {
+    if (size_ - pos_ < 4) return Fail(std::string("truncated at ") + what);
+    const uint8_t* b = data_ + pos_;
+    *v = static_cast<int32_t>((uint32_t(b[0]) << 24) | (uint32_t(b[1]) << 16) | (uint32_t(b[2]) << 8) |
+                              uint32_t(b[3]));
+    pos_ += 4;
+    return true;
+  }
+  bool Count(int32_t* n, size_t min_element_bytes, const char* what) {
+    if (!Int32(n, what)) return false;
+    if (*n < 0) return Fail(std::string("negative length ") + std::to_string(*n) + " of " + what);
+    if (static_cast<uint64_t>(*n) * min_element_bytes > size_ - pos_)
+      return Fail(std::string("length ") + std::to_string(*n) + " of " + what + " exceeds the message");
+    return true;
+  }
+  bool String(const char* what) {
+    int32_t len = 0;
+    if (!Int32(&len, what)) return false;
+    if (len < 1 || static_cast<uint64_t>(len) > size_ - pos_)
+      return Fail(std::string("bad string length ") + std::to_string(len) + " of " + what);
+    pos_ += static_cast<size_t>(len);
+    return true;
+  }
+  bool Hash(int64_t expected) {
+    if (size_ < 8) return Fail("shorter than a fingerprint");
+    uint64_t h = 0;
+    for (int i = 0; i < 8; ++i) h = (h << 8) | data_[i];
+    if (static_cast<int64_t>(h) != expected) return Fail("fingerprint mismatch (another message type?)");
+    pos_ = 8;
+    return true;
+  }
+  bool End() {
+    if (pos_ != size_) return Fail("trailing bytes");
+    return true;
+  }
+  bool Fail(const std::string& why) {
+    if (error_.empty()) error_ = why;
+    return false;
+  }
+  const std::string& error() const { return error_; }
+
+ private:
+  const uint8_t* data_;
+  size_t size_;
+  size_t pos_ = 0;
+  std::string error_;
+};
+
+bool CameraModelBody(WireReader& r) {
+  int32_t n = 0;
+  return r.Fixed(4 + 4 + 4 * 8, "camera_model_t.width..cy") && r.String("distortion_model") &&
+         r.Count(&n, 8, "distortion") && r.Fixed(8 * static_cast<size_t>(n), "distortion");
+}
+bool MarkerBody(WireReader& r) { return r.Fixed(4 + 8 * 8, "marker_t"); }
+bool Pose3dBody(WireReader& r) { return r.Fixed(8 * 7, "pose3d_t"); }
+constexpr size_t kMinCameraModelBytes = 4 + 4 + 32 + 5 + 4;
+constexpr size_t kMarkerBytes = 4 + 64;
+constexpr size_t kPoseBytes = 56;
+
+bool DetectionsBody(WireReader& r) {
+  int32_t n = 0;
+  if (!(r.Fixed(16, "utime, seq") && r.String("camera") && r.String("dictionary") && CameraModelBody(r) &&
+        r.Count(&n, kMarkerBytes, "markers")))
+    return false;
+  for (int32_t i = 0; i < n; ++i)
+    if (!MarkerBody(r)) return false;
+  return r.Fixed(8, "detection_ms");
+}
+
+bool RigMapBody(WireReader& r) {
+  int32_t nc = 0, nm = 0;
+  if (!(r.Fixed(12, "utime, version") && r.String("reference_camera") && r.Fixed(4, "reference_marker") &&
+        r.String("dictionary") && r.Count(&nc, 5 + kMinCameraModelBytes + kPoseBytes, "cameras")))
+    return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!r.String("camera_names")) return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!CameraModelBody(r)) return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!Pose3dBody(r)) return false;
+  if (!r.Count(&nm, 4 + 8 + kPoseBytes, "markers")) return false;
+  if (!r.Fixed(12 * static_cast<size_t>(nm), "marker_ids, marker_sizes")) return false;
+  for (int32_t i = 0; i < nm; ++i)
+    if (!Pose3dBody(r)) return false;
+  return r.Fixed(16, "rms_px, num_frames, num_observations");
+}
+
+bool ObjectPoseBody(WireReader& r) {
+  int32_t nc = 0, nm = 0;
+  if (!(r.Fixed(16, "utime, seq") && r.String("object") && Pose3dBody(r) &&
+        r.Fixed(36 * 8 + 8, "covariance, rms_px") && r.Count(&nc, 5, "cameras")))
+    return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!r.String("cameras")) return false;
+  return r.Count(&nm, 4, "markers") && r.Fixed(4 * static_cast<size_t>(nm), "markers") &&
+         r.Fixed(4 + 1 + 8, "num_rejected, status, latency_ms");
+}
+
+template <typename Msg>
+bool CheckTop(const void* data, size_t size, bool (*body)(WireReader&), std::string* error) {
+  WireReader r(data, size);
+  const bool ok = r.Hash(Msg::getHash()) && body(r) && r.End();
+  if (!ok && error) *error = r.error();
+  return ok;
+}
+
 }  // namespace
+
+bool CheckEncoded(const void* data, size_t size, const camera_model_t*, std::string* error) {
+  return CheckTop<camera_model_t>(data, size, CameraModelBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const marker_t*, std::string* error) {
+  return CheckTop<marker_t>(data, size, MarkerBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const detections_t*, std::string* error) {
+  return CheckTop<detections_t>(data, size, DetectionsBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const pose3d_t*, std::string* error) {
+  return CheckTop<pose3d_t>(data, size, Pose3dBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const rig_map_t*, std::string* error) {
+  return CheckTop<rig_map_t>(data, size, RigMapBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const object_pose_t*, std::string* error) {
+  return CheckTop<object_pose_t>(data, size, ObjectPoseBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const mapper_status_t*, std::string* error) {
+  return CheckTop<mapper_status_t>(
+      data, size,
+      [](WireReader& r) { return r.Fixed(8 + 1 + 6 * 4 + 16, "mapper_status_t") && r.String("message"); },
+      error);
+}
+bool CheckEncoded(const void* data, size_t size, const mapper_command_t*, std::string* error) {
+  return CheckTop<mapper_command_t>(
+      data, size, [](WireReader& r) { return r.Fixed(8, "utime") && r.String("command"); }, error);
+}
 
 std::string DetectionsChannel(const std::string& camera_name) {
   return kDetectionsChannelPrefix + ChannelSuffix(camera_name);

@@ -1,0 +1,275 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/files.h"
+#include "test_util.h"
+
+namespace mcmt {
+namespace {
+
+using testing_util::TempDir;
+
+#define EXPECT_CONTAINS(haystack, needle)                          \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
+      << "'" << (haystack) << "' lacks '" << (needle) << "'"
+
+bool SameRigid(const Rigid3& a, const Rigid3& b) { return a.matrix() == b.matrix(); }
+
+void ExpectSameMap(const RigMap& a, const RigMap& b) {
+  EXPECT_EQ(a.version, b.version);
+  EXPECT_EQ(a.dictionary, b.dictionary);
+  EXPECT_EQ(a.reference_camera, b.reference_camera);
+  EXPECT_EQ(a.reference_marker, b.reference_marker);
+  EXPECT_EQ(a.rms_px, b.rms_px);
+  EXPECT_EQ(a.num_frames, b.num_frames);
+  EXPECT_EQ(a.num_observations, b.num_observations);
+  ASSERT_EQ(a.cameras.size(), b.cameras.size());
+  for (size_t i = 0; i < a.cameras.size(); ++i) {
+    EXPECT_EQ(a.cameras[i].name, b.cameras[i].name);
+    EXPECT_TRUE(a.cameras[i].model == b.cameras[i].model) << i;
+    EXPECT_TRUE(SameRigid(a.cameras[i].rig_from_cam, b.cameras[i].rig_from_cam))
+        << a.cameras[i].rig_from_cam.matrix() << "\n"
+        << b.cameras[i].rig_from_cam.matrix();
+    EXPECT_EQ(a.cameras[i].observations, b.cameras[i].observations);
+    EXPECT_EQ(a.cameras[i].rms_px, b.cameras[i].rms_px);
+    EXPECT_EQ(a.cameras[i].max_px, b.cameras[i].max_px);
+  }
+  ASSERT_EQ(a.markers.size(), b.markers.size());
+  for (size_t i = 0; i < a.markers.size(); ++i) {
+    EXPECT_EQ(a.markers[i].id, b.markers[i].id);
+    EXPECT_EQ(a.markers[i].size, b.markers[i].size);
+    EXPECT_TRUE(SameRigid(a.markers[i].object_from_marker, b.markers[i].object_from_marker));
+    EXPECT_EQ(a.markers[i].observations, b.markers[i].observations);
+    EXPECT_EQ(a.markers[i].rms_px, b.markers[i].rms_px);
+    EXPECT_EQ(a.markers[i].max_px, b.markers[i].max_px);
+  }
+}
+
+RigMap RandomMap(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  RigMap map;
+  map.dictionary = "DICT_6X6_250";
+  map.reference_camera = "cam 1 \"front\"";
+  map.reference_marker = 3;
+  map.rms_px = u(rng);
+  map.num_frames = 1234;
+  map.num_observations = 98765;
+  for (int i = 0; i < 5; ++i) {
+    MapCamera c;
+    c.name = i == 1 ? map.reference_camera : "cam" + std::to_string(i);
+    c.model.width = 640 + i;
+    c.model.height = 480;
+    c.model.fx = 500 + u(rng);
+    c.model.fy = 500 + u(rng);
+    c.model.cx = 320 + u(rng);
+    c.model.cy = 240 + u(rng);
+    if (i % 3 == 0) {
+      c.model.model = DistortionModel::kRadTan;
+      c.model.distortion = {u(rng) - 0.5, u(rng) * 1e-3, -u(rng) * 1e-5, 1e-300, u(rng)};
+    } else if (i % 3 == 1) {
+      c.model.model = DistortionModel::kFisheye;
+      c.model.distortion = {u(rng), u(rng), u(rng), u(rng)};
+    }
+    c.rig_from_cam = i == 1 ? Rigid3::Identity() : RandomRigid(rng, 3.0);
+    c.observations = 100 * i;
+    c.rms_px = u(rng);
+    c.max_px = 10 * u(rng);
+    map.cameras.push_back(c);
+  }
+  for (int id : {3, 0, 17, 249}) {
+    MapMarker m;
+    m.id = id;
+    m.size = 0.04 + 0.001 * u(rng);
+    m.object_from_marker = id == 3 ? Rigid3::Identity() : RandomRigid(rng, 0.2);
+    m.observations = id * 7;
+    m.rms_px = u(rng);
+    m.max_px = u(rng) * 3;
+    map.markers.push_back(m);
+  }
+  return map;
+}
+
+TEST(Files, MapRoundTripsExactly) {
+  TempDir dir;
+  for (uint64_t seed : {1, 2, 3}) {
+    const RigMap map = RandomMap(seed);
+    const std::string path = dir.File("map.yaml");
+    WriteMap(path, map);
+    const RigMap back = ReadMap(path);
+    ExpectSameMap(map, back);
+    // Writing what was read gives the same bytes.
+    const std::string first = ReadFile(path);
+    WriteMap(dir.File("map2.yaml"), back);
+    EXPECT_EQ(first, ReadFile(dir.File("map2.yaml")));
+    EXPECT_EQ(back.FindCamera("cam2"), &back.cameras[2]);
+    EXPECT_EQ(back.FindMarker(17), &back.markers[2]);
+    EXPECT_EQ(back.FindMarker(18), nullptr);
+  }
+  // An empty map.
+  RigMap empty;
+  WriteMap(dir.File("empty.yaml"), empty);
+  ExpectSameMap(empty, ReadMap(dir.File("empty.yaml")));
+}
+
+TEST(Files, MapWithoutRotationMatrixUsesQuaternion) {
+  TempDir dir;
+  const RigMap map = RandomMap(4);
+  WriteMap(dir.File("map.yaml"), map);
+  // Drop every rotation_matrix line (a hand-written map): poses come from the quaternions.
+  std::string text = ReadFile(dir.File("map.yaml")), out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find("rotation_matrix") == std::string::npos) out += line + "\n";
+  const RigMap back = ReadMap(dir.Write("hand.yaml", out));
+  for (size_t i = 0; i < map.cameras.size(); ++i) {
+    EXPECT_LT(RotationAngle(map.cameras[i].rig_from_cam, back.cameras[i].rig_from_cam), 1e-15);
+    EXPECT_EQ(map.cameras[i].rig_from_cam.translation(), back.cameras[i].rig_from_cam.translation());
+  }
+}
+
+std::string MapError(const std::string& text) {
+  TempDir dir;
+  const std::string path = dir.Write("map.yaml", text);
+  try {
+    ReadMap(path);
+  } catch (const FileFormatError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path, 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    return what;
+  }
+  ADD_FAILURE() << "no error";
+  return "";
+}
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+TEST(Files, MapErrorsNameTheKey) {
+  TempDir dir;
+  WriteMap(dir.File("m.yaml"), RandomMap(5));
+  const std::string good = ReadFile(dir.File("m.yaml"));
+  EXPECT_CONTAINS(MapError(Replace(good, "version: 1", "version: 2")), "version: unsupported map version 2");
+  EXPECT_CONTAINS(MapError(Replace(good, "version: 1\n", "")), "version: missing");
+  EXPECT_CONTAINS(MapError(Replace(good, "      fx: ", "      fxx: ")), "cameras[0].intrinsics.fx: missing");
+  EXPECT_CONTAINS(MapError(Replace(good, "distortion_model: fisheye", "distortion_model: fish")),
+                  "cameras[1].intrinsics.distortion_model: unknown distortion model");
+  EXPECT_CONTAINS(MapError(Replace(good, "  - id: 17", "  - id: x17")), "markers[2].id: expected an integer");
+  EXPECT_CONTAINS(MapError(Replace(good, "  - id: 17", "  - id: 0")),
+                  "markers[2].id: duplicated marker id 0");
+  EXPECT_CONTAINS(MapError(Replace(good, "rotation_wxyz: [", "rotation_wxyz: [0.5, ")),
+                  "cameras[0].rig_from_cam.rotation_wxyz: expected 4 numbers, got 5");
+  // Editing only the quaternion is caught.
+  {
+    std::string edited = good;
+    const size_t at = edited.find("rotation_wxyz: [", edited.find("- name: \"cam2\""));
+    const size_t end = edited.find('\n', at);
+    edited.replace(at, end - at, "rotation_wxyz: [0, 1, 0, 0]");
+    EXPECT_CONTAINS(MapError(edited),
+                    "cameras[2].rig_from_cam.rotation_matrix: disagrees with rotation_wxyz");
+  }
+  EXPECT_CONTAINS(MapError("version: [1\n"), "YAML syntax error");
+  EXPECT_CONTAINS(MapError("- 1\n- 2\n"), "not a map file");
+  EXPECT_THROW(ReadMap(dir.File("absent.yaml")), FileFormatError);
+}
+
+TEST(Files, TrajectoryRoundTrips) {
+  TempDir dir;
+  std::mt19937_64 rng(8);
+  std::vector<TrajectoryRow> rows;
+  for (int i = 0; i < 200; ++i) {
+    TrajectoryRow r;
+    r.utime = 1700000000000000LL + 33333LL * i;
+    r.seq = i;
+    r.rig_from_object = RandomRigid(rng, 2.0);
+    r.rms_px = 0.1 * i + 1.0 / 3.0;
+    r.cameras = i % 5;
+    r.markers = i % 11;
+    rows.push_back(r);
+  }
+  const std::string path = dir.File("trajectory.csv");
+  WriteTrajectory(path, rows);
+  const std::string text = ReadFile(path);
+  EXPECT_EQ(text.rfind(std::string(kTrajectoryHeader) + "\n", 0), 0u);
+  const auto back = ReadTrajectory(path);
+  ASSERT_EQ(back.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(back[i].utime, rows[i].utime);
+    EXPECT_EQ(back[i].seq, rows[i].seq);
+    EXPECT_EQ(back[i].rig_from_object.translation(), rows[i].rig_from_object.translation());
+    // The quaternion is written exactly; matrix -> quaternion -> matrix is exact to rounding.
+    EXPECT_LT(RotationAngle(back[i].rig_from_object, rows[i].rig_from_object), 1e-15);
+    EXPECT_EQ(back[i].rms_px, rows[i].rms_px);
+    EXPECT_EQ(back[i].cameras, rows[i].cameras);
+    EXPECT_EQ(back[i].markers, rows[i].markers);
+  }
+  // Everything but the rotation is bit-exact; the rotation goes through a quaternion (the file's
+  // format) and is exact to rounding (checked above, < 1e-15 rad).
+  // An empty trajectory is the header alone.
+  WriteTrajectory(dir.File("empty.csv"), {});
+  EXPECT_EQ(ReadFile(dir.File("empty.csv")), std::string(kTrajectoryHeader) + "\n");
+  EXPECT_TRUE(ReadTrajectory(dir.File("empty.csv")).empty());
+}
+
+TEST(Files, TrajectoryErrorsNameTheLine) {
+  TempDir dir;
+  auto error = [&](const std::string& text) -> std::string {
+    const std::string path = dir.Write("t.csv", text);
+    try {
+      ReadTrajectory(path);
+    } catch (const FileFormatError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path, 0), 0u);
+      return e.what();
+    }
+    return "";
+  };
+  const std::string h = std::string(kTrajectoryHeader) + "\n";
+  EXPECT_CONTAINS(error("utime,seq\n1,2\n"), "t.csv:1: expected the header");
+  EXPECT_CONTAINS(error(h + "1,2,0,0,0,1,0,0,0,0.5,1,1\n1,2,0,0,0,1,0,0\n"),
+                  "t.csv:3: expected 12 fields, got 8");
+  EXPECT_CONTAINS(error(h + "1,2,0,0,zero,1,0,0,0,0.5,1,1\n"), "t.csv:2: tz: not a number: 'zero'");
+  EXPECT_CONTAINS(error(h + "1.5,2,0,0,0,1,0,0,0,0.5,1,1\n"), "t.csv:2: utime: not an integer");
+  EXPECT_CONTAINS(error(h + "1,2,0,0,0,0,0,0,0,0.5,1,1\n"), "t.csv:2: qw..qz");
+  EXPECT_CONTAINS(error(""), "empty file");
+  // CRLF line ends are accepted.
+  const std::string crlf = std::string(kTrajectoryHeader) + "\r\n1,2,0,0,0,1,0,0,0,0.5,1,1\r\n";
+  EXPECT_EQ(ReadTrajectory(dir.Write("crlf.csv", crlf)).size(), 1u);
+}
+
+TEST(Files, AtomicWriteLeavesNoPartialFile) {
+  TempDir dir;
+  const std::string path = dir.File("out.txt");
+  WriteFileAtomic(path, "first");
+  EXPECT_EQ(ReadFile(path), "first");
+  WriteFileAtomic(path, std::string(1 << 20, 'x'));
+  EXPECT_EQ(ReadFile(path).size(), 1u << 20);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string(), "out.txt");
+  // A folder that does not exist: error naming the file, nothing written.
+  try {
+    WriteFileAtomic(dir.File("no/such/dir/f.txt"), "x");
+    FAIL();
+  } catch (const FileFormatError& e) {
+    EXPECT_CONTAINS(e.what(), "no/such/dir/f.txt");
+  }
+  // The target is a folder: rename fails, the temporary file is removed.
+  std::filesystem::create_directories(dir.File("adir/sub"));
+  EXPECT_THROW(WriteFileAtomic(dir.File("adir"), "x"), FileFormatError);
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    (void)entry;
+    ++count;
+  }
+  EXPECT_EQ(count, 2);  // out.txt and adir
+  EXPECT_THROW(ReadFile(dir.File("absent")), FileFormatError);
+}
+
+}  // namespace
+}  // namespace mcmt

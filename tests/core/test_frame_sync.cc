@@ -1,0 +1,199 @@
+#include <gtest/gtest.h>
+
+#include "core/frame_sync.h"
+
+namespace mcmt {
+namespace {
+
+constexpr int64_t kPeriod = 33333;
+
+detections_t View(const std::string& camera, int64_t frame, int64_t jitter_us = 0) {
+  detections_t d;
+  d.utime = 1000000 + frame * kPeriod + jitter_us;
+  d.seq = frame;
+  d.camera = camera;
+  d.dictionary = "DICT_6X6_250";
+  d.num_markers = 0;
+  d.detection_ms = 0;
+  return d;
+}
+
+void Append(std::vector<SyncedFrame>* out, std::vector<SyncedFrame> more) {
+  for (auto& f : more) out->push_back(std::move(f));
+}
+
+std::vector<std::string> CamerasOf(const SyncedFrame& f) {
+  std::vector<std::string> out;
+  for (const auto& v : f.views) out.push_back(v.camera);
+  return out;
+}
+
+TEST(FrameSync, GroupsInOrderViewsIntoCompleteFrames) {
+  FrameSynchronizer sync;
+  std::vector<SyncedFrame> frames;
+  int64_t wall = 0;
+  for (int f = 0; f < 50; ++f) {
+    Append(&frames, sync.Add(View("cam0", f, 0), wall += 100));
+    Append(&frames, sync.Add(View("cam1", f, 800), wall += 100));
+    Append(&frames, sync.Add(View("cam2", f, -900), wall += 100));
+  }
+  // The last frame completes with its third view; nothing stays pending.
+  EXPECT_TRUE(sync.Flush().empty());
+  ASSERT_EQ(frames.size(), 50u);
+  for (int f = 0; f < 50; ++f) {
+    EXPECT_EQ(frames[f].utime, 1000000 + f * kPeriod) << f;
+    EXPECT_EQ(frames[f].seq, f);
+    EXPECT_TRUE(frames[f].complete);
+    EXPECT_EQ(CamerasOf(frames[f]), (std::vector<std::string>{"cam0", "cam1", "cam2"}));
+  }
+  EXPECT_EQ(sync.stats().frames_emitted, 50);
+  EXPECT_EQ(sync.stats().frames_incomplete, 0);
+  EXPECT_EQ(sync.stats().duplicates, 0);
+  EXPECT_EQ(sync.stats().out_of_order, 0);
+  EXPECT_EQ(sync.Cameras(), (std::set<std::string>{"cam0", "cam1", "cam2"}));
+  EXPECT_TRUE(sync.StaleCameras().empty());
+}
+
+TEST(FrameSync, FirstFrameWaitsForTheCameraSet) {
+  // Without the camera list, the first frame is held until the set settles, then completes.
+  FrameSynchronizer sync;
+  EXPECT_TRUE(sync.Add(View("a", 0), 0).empty());
+  EXPECT_TRUE(sync.Add(View("b", 0), 0).empty());
+  const auto out = sync.Add(View("a", 1), 0);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].views.size(), 2u);
+  EXPECT_TRUE(out[0].complete);
+  // With the list, a frame completes as soon as every listed camera has reported.
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer listed(options);
+  EXPECT_TRUE(listed.Add(View("b", 0), 0).empty());
+  const auto first = listed.Add(View("a", 0), 0);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(CamerasOf(first[0]), (std::vector<std::string>{"b", "a"}));
+}
+
+TEST(FrameSync, ToleranceSeparatesFrames) {
+  FrameSyncOptions options;
+  options.tolerance_us = 2000;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  EXPECT_TRUE(sync.Add(View("a", 0, 0), 0).empty());
+  // 2500 us later: not the same capture, a frame of its own.
+  EXPECT_TRUE(sync.Add(View("b", 0, 2500), 0).empty());
+  const auto flushed = sync.Flush();
+  ASSERT_EQ(flushed.size(), 2u);
+  EXPECT_EQ(flushed[0].views.size(), 1u);
+  EXPECT_FALSE(flushed[0].complete);
+  EXPECT_EQ(flushed[1].views.size(), 1u);
+  EXPECT_EQ(sync.stats().frames_incomplete, 2);
+}
+
+TEST(FrameSync, DuplicatesAreDropped) {
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  EXPECT_TRUE(sync.Add(View("a", 0), 0).empty());
+  EXPECT_TRUE(sync.Add(View("a", 0, 10), 0).empty());  // same camera, same frame
+  const auto out = sync.Add(View("b", 0), 0);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].views.size(), 2u);
+  EXPECT_EQ(sync.stats().duplicates, 1);
+}
+
+TEST(FrameSync, OutOfOrderAndLateViewsAreDropped) {
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  for (int f = 0; f < 5; ++f) {
+    Append(&frames, sync.Add(View("a", f), 0));
+    Append(&frames, sync.Add(View("b", f), 0));
+  }
+  ASSERT_EQ(frames.size(), 5u);
+  // An old frame arriving now.
+  EXPECT_TRUE(sync.Add(View("a", 2), 0).empty());
+  EXPECT_EQ(sync.stats().out_of_order, 1);
+  // A view of frame 5 emitted by its deadline, then b's late view of it.
+  EXPECT_TRUE(sync.Add(View("a", 5), 1000).empty());
+  EXPECT_TRUE(sync.Poll(1000 + options.deadline_us - 1).empty());
+  const auto due = sync.Poll(1000 + options.deadline_us);
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_FALSE(due[0].complete);
+  EXPECT_EQ(due[0].views.size(), 1u);
+  EXPECT_TRUE(sync.Add(View("b", 5, 300), 50000).empty());
+  EXPECT_EQ(sync.stats().out_of_order, 2);
+  EXPECT_EQ(sync.stats().frames_incomplete, 1);
+  // The next frame is unaffected.
+  EXPECT_TRUE(sync.Add(View("a", 6), 60000).empty());
+  const auto next = sync.Add(View("b", 6), 60000);
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_TRUE(next[0].complete);
+}
+
+TEST(FrameSync, DeadCameraStopsBeingWaitedFor) {
+  FrameSyncOptions options;
+  options.cameras = {"a", "b", "c"};
+  options.camera_timeout_us = 10 * kPeriod;
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  for (int f = 0; f < 40; ++f) {
+    Append(&frames, sync.Add(View("a", f), 0));
+    Append(&frames, sync.Add(View("b", f), 0));
+    if (f < 10) Append(&frames, sync.Add(View("c", f), 0));  // c dies after frame 9
+  }
+  Append(&frames, sync.Flush());
+  // No frame is lost or duplicated; frames are in order.
+  ASSERT_EQ(frames.size(), 40u);
+  for (int f = 0; f < 40; ++f) EXPECT_EQ(frames[f].seq, f);
+  for (int f = 0; f < 10; ++f) EXPECT_EQ(frames[f].views.size(), 3u);
+  for (int f = 10; f < 40; ++f) EXPECT_EQ(frames[f].views.size(), 2u);
+  EXPECT_EQ(sync.StaleCameras(), (std::set<std::string>{"c"}));
+  // Once c is stale, frames complete with a and b alone, as soon as b reports.
+  FrameSynchronizer again(options);
+  for (int f = 0; f < 40; ++f) {
+    again.Add(View("a", f), 0);
+    const auto out = again.Add(View("b", f), 0);
+    if (f < 10) again.Add(View("c", f), 0);
+    if (f >= 25) {
+      ASSERT_EQ(out.size(), 1u) << f;
+      EXPECT_EQ(out[0].seq, f);
+      EXPECT_TRUE(out[0].complete);
+    }
+  }
+}
+
+TEST(FrameSync, NeverSeenListedCameraTimesOut) {
+  FrameSyncOptions options;
+  options.cameras = {"a", "ghost"};
+  options.camera_timeout_us = 5 * kPeriod;
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  for (int f = 0; f < 20; ++f) Append(&frames, sync.Add(View("a", f), 0));
+  // Waited for ghost for 5 periods, then frames flow (the held ones emitted in order).
+  ASSERT_GE(frames.size(), 19u);
+  for (size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].seq, static_cast<int64_t>(i));
+  EXPECT_EQ(sync.StaleCameras(), (std::set<std::string>{"ghost"}));
+}
+
+TEST(FrameSync, PollAndFlushEmitOldestFirst) {
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  sync.Add(View("a", 0), 100);
+  sync.Add(View("a", 1), 200);
+  sync.Add(View("a", 2), 300);
+  const auto due = sync.Poll(200 + options.deadline_us);
+  ASSERT_EQ(due.size(), 2u);
+  EXPECT_EQ(due[0].seq, 0);
+  EXPECT_EQ(due[1].seq, 1);
+  const auto rest = sync.Flush();
+  ASSERT_EQ(rest.size(), 1u);
+  EXPECT_EQ(rest[0].seq, 2);
+  EXPECT_EQ(rest[0].last_arrival_us, 300);
+  EXPECT_TRUE(sync.Flush().empty());
+  EXPECT_EQ(sync.stats().frames_emitted, 3);
+}
+
+}  // namespace
+}  // namespace mcmt
