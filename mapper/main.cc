@@ -1,5 +1,8 @@
 // mcmt-mapper: the paper's initialisation and bundle adjustment over detections from live LCM or a log.
+#include <unistd.h>
+
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 
 #include "core/cli.h"
@@ -74,7 +77,14 @@ int Run(int argc, char** argv) {
   std::unique_ptr<lcm::LCM> input, output;
   if (!log.empty()) {
     if (access(log.c_str(), R_OK) != 0) throw std::runtime_error("cannot read log " + log);
-    input = mcmt::OpenLcm(mcmt::LogReadUrl(log));
+    std::error_code ec;
+    if (std::filesystem::file_size(log, ec) == 0 && !ec)
+      throw std::runtime_error("no detections_t messages on MCMT_DETECTIONS_* in " + log + " (empty log)");
+    try {
+      input = mcmt::OpenLcm(mcmt::LogReadUrl(log));
+    } catch (const std::exception&) {
+      throw std::runtime_error("cannot read " + log + " as an LCM log");
+    }
     node_options.from_log = true;
     node_options.publish = publish;
     if (publish) output = mcmt::OpenLcm(lcm_url);
