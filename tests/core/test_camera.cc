@@ -183,3 +183,33 @@ TEST(Camera, ValidateAndNames) {
 
 }  // namespace
 }  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// A real, strongly distorted wide-angle calibration (caliscope's 4-camera rig, cam0): every pixel of
+// the image unprojects and projects back to itself.
+TEST(Camera, StrongBarrelDistortionRoundTripOverWholeImage) {
+  CameraModel cam;
+  cam.width = 1280;
+  cam.height = 720;
+  cam.fx = 894.5288733178912;
+  cam.fy = 896.877811780321;
+  cam.cx = 624.011791468827;
+  cam.cy = 361.28189843593503;
+  cam.model = DistortionModel::kRadTan;
+  cam.distortion = {-0.3383569013465177, 0.09672714756989992, -0.0013512226751077358, 0.003155760325647937,
+                    -0.0037489346582201062};
+  double worst = 0;
+  for (double y = -0.5; y <= cam.height - 0.5; y += 15.5)
+    for (double x = -0.5; x <= cam.width - 0.5; x += 15.5) {
+      const Eigen::Vector2d px(x, y);
+      const Eigen::Vector2d n = cam.Unproject(px);
+      const Eigen::Vector2d back = cam.Project(Eigen::Vector3d(n.x(), n.y(), 1.0));
+      worst = std::max(worst, (back - px).norm());
+    }
+  EXPECT_LT(worst, 1e-9);
+}
+
+}  // namespace
+}  // namespace mcmt

@@ -170,7 +170,7 @@ TEST(Config, LoadsGoodRig) {
   EXPECT_EQ(k0.cx, 640.1);
   EXPECT_EQ(k0.model, DistortionModel::kRadTan);
   EXPECT_EQ(k0.distortion, (std::vector<double>{-2.1000000000000001e-01, 8.0000000000000002e-02,
-                                                 1.1999999999999999e-03, -8.0000000000000004e-04, -1.2e-02}));
+                                                1.1999999999999999e-03, -8.0000000000000004e-04, -1.2e-02}));
   // ROS intrinsics.
   const CameraModel& k1 = rig.cameras[1].model;
   EXPECT_EQ(k1.width, 640);
