@@ -105,6 +105,16 @@ class MapReader {
     return v;
   }
 
+  // Statistics are optional (a hand-written map need not have them).
+  double OptDouble(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = parent[key];
+    return n.IsDefined() && !n.IsNull() ? Double(parent, parent_key, key) : 0.0;
+  }
+  int OptInt(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+    const YAML::Node n = parent[key];
+    return n.IsDefined() && !n.IsNull() ? Int(parent, parent_key, key) : 0;
+  }
+
   std::string String(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
     const YAML::Node n = Get(parent, parent_key, key);
     if (!n.IsScalar()) Fail(Key(parent_key, key), "expected a string");
@@ -299,9 +309,9 @@ RigMap ReadMap(const std::string& path) {
   map.dictionary = r.String(root, "", "dictionary");
   map.reference_camera = r.String(root, "", "reference_camera");
   map.reference_marker = r.Int(root, "", "reference_marker");
-  map.rms_px = r.Double(root, "", "rms_px");
-  map.num_frames = r.Int(root, "", "num_frames");
-  map.num_observations = r.Int(root, "", "num_observations");
+  map.rms_px = r.OptDouble(root, "", "rms_px");
+  map.num_frames = r.OptInt(root, "", "num_frames");
+  map.num_observations = r.OptInt(root, "", "num_observations");
   const YAML::Node cams = r.Get(root, "", "cameras");
   if (!cams.IsSequence()) r.Fail("cameras", "expected a list");
   for (size_t i = 0; i < cams.size(); ++i) {
@@ -331,9 +341,9 @@ RigMap ReadMap(const std::string& path) {
       r.Fail(ik, e.what());
     }
     cam.rig_from_cam = r.Pose(c, key, "rig_from_cam");
-    cam.observations = r.Int(c, key, "observations");
-    cam.rms_px = r.Double(c, key, "rms_px");
-    cam.max_px = r.Double(c, key, "max_px");
+    cam.observations = r.OptInt(c, key, "observations");
+    cam.rms_px = r.OptDouble(c, key, "rms_px");
+    cam.max_px = r.OptDouble(c, key, "max_px");
     if (map.FindCamera(cam.name)) r.Fail(key + ".name", "duplicated camera '" + cam.name + "'");
     map.cameras.push_back(cam);
   }
@@ -348,9 +358,9 @@ RigMap ReadMap(const std::string& path) {
     marker.size = r.Double(m, key, "size");
     if (!(marker.size > 0)) r.Fail(key + ".size", "must be positive");
     marker.object_from_marker = r.Pose(m, key, "object_from_marker");
-    marker.observations = r.Int(m, key, "observations");
-    marker.rms_px = r.Double(m, key, "rms_px");
-    marker.max_px = r.Double(m, key, "max_px");
+    marker.observations = r.OptInt(m, key, "observations");
+    marker.rms_px = r.OptDouble(m, key, "rms_px");
+    marker.max_px = r.OptDouble(m, key, "max_px");
     if (map.FindMarker(marker.id)) r.Fail(key + ".id", "duplicated marker id " + std::to_string(marker.id));
     map.markers.push_back(marker);
   }

@@ -273,3 +273,39 @@ TEST(Files, AtomicWriteLeavesNoPartialFile) {
 
 }  // namespace
 }  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// A map written by hand: statistics and rotation matrices may be left out.
+TEST(Files, MinimalHandWrittenMap) {
+  testing_util::TempDir dir;
+  const std::string path = dir.Write("map.yaml", R"(version: 1
+dictionary: DICT_6X6_250
+reference_camera: left
+reference_marker: 0
+cameras:
+  - name: left
+    intrinsics: {width: 640, height: 480, fx: 500, fy: 500, cx: 319.5, cy: 239.5, distortion_model: none,
+                 distortion: []}
+    rig_from_cam: {translation: [0, 0, 0], rotation_wxyz: [1, 0, 0, 0]}
+  - name: right
+    intrinsics: {width: 640, height: 480, fx: 500, fy: 500, cx: 319.5, cy: 239.5, distortion_model: radtan,
+                 distortion: [0.1, 0, 0, 0]}
+    rig_from_cam: {translation: [0.2, 0, 0], rotation_wxyz: [0.7071067811865476, 0, 0.7071067811865476, 0]}
+markers:
+  - {id: 0, size: 0.05, object_from_marker: {translation: [0, 0, 0], rotation_wxyz: [1, 0, 0, 0]}}
+)");
+  const RigMap map = ReadMap(path);
+  ASSERT_EQ(map.cameras.size(), 2u);
+  EXPECT_EQ(map.cameras[1].model.model, DistortionModel::kRadTan);
+  EXPECT_NEAR((map.cameras[1].rig_from_cam * Eigen::Vector3d(0, 0, 1) - Eigen::Vector3d(1.2, 0, 0)).norm(), 0,
+              1e-15);
+  EXPECT_EQ(map.cameras[1].observations, 0);
+  EXPECT_EQ(map.num_frames, 0);
+  ASSERT_EQ(map.markers.size(), 1u);
+  EXPECT_EQ(map.markers[0].size, 0.05);
+}
+
+}  // namespace
+}  // namespace mcmt
