@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     std::string lcm_url;
     long long max_messages = 0;
     bool no_fsync = false;
+    double recv_buf_mb = 16;
     mcmt::ArgParser args("mcmt-logger",
                          "Records LCM channels into an LCM event log (lcm-logplayer replays it).");
     args.AddString("out", &o.out, "log file to create, e.g. session.lcmlog (never overwritten)", true);
@@ -32,6 +33,9 @@ int main(int argc, char** argv) {
     args.AddDouble("max-seconds", &o.max_seconds, "stop after this many seconds; 0: until SIGINT/SIGTERM");
     args.AddInt64("max-messages", &max_messages, "stop after recording this many messages; 0: no limit");
     args.AddInt("queue-capacity", &o.queue_capacity, "LCM subscription queue, messages (LCM's default: 30)");
+    args.AddDouble(
+        "recv-buf-mb", &recv_buf_mb,
+        "udpm: socket receive buffer to ask for (recv_buf_size) unless the URL sets one; 0: leave it");
     args.AddDouble("status-seconds", &o.status_seconds, "status line interval on stderr; 0: quiet");
     args.AddEpilog(
         "Files: without splitting exactly --out; with --split-mb/--split-minutes the parts are "
@@ -65,6 +69,18 @@ int main(int argc, char** argv) {
     options.max_seconds = o.max_seconds;
     options.max_messages = max_messages;
     if (args.Given("lcm-url")) url = lcm_url;
+    if (recv_buf_mb < 0) throw std::invalid_argument("--recv-buf-mb: must be >= 0");
+    long long recv_buf = static_cast<long long>(recv_buf_mb * 1e6);
+    const long long cap = mcmt::KernelReceiveBufferMax();
+    if (cap > 0 && recv_buf > cap) recv_buf = cap;  // the kernel would cap it anyway
+    std::string note;
+    const std::string effective = mcmt::WithReceiveBuffer(url, recv_buf);
+    if (effective != url) {
+      if (recv_buf < 1000000)
+        note = "mcmt-logger: note: the kernel caps socket receive buffers at " + std::to_string(cap / 1000) +
+               " kB (net.core.rmem_max); for image rates raise it: sysctl -w net.core.rmem_max=16000000";
+      url = effective;
+    }
     options.lcm_url = url;
 
     std::unique_ptr<lcm::LCM> lcm = mcmt::OpenLcm(url);
@@ -74,6 +90,7 @@ int main(int argc, char** argv) {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    if (!note.empty()) std::cerr << note << std::endl;
     std::cerr << "mcmt-logger: recording " << options.channels << " into " << logger.current_part()
               << " (sidecar " << logger.sidecar_path() << ")" << std::endl;
     logger.Run(&g_stop);

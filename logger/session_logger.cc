@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <iostream>
 #include <sstream>
@@ -80,6 +81,25 @@ void LoadLoggerOptions(const YamlSection& section, LoggerOptions* options) {
   options->queue_capacity = section.GetInt("queue_capacity", options->queue_capacity);
   options->max_unwritten_mb = section.GetDouble("max_unwritten_mb", options->max_unwritten_mb);
   options->status_seconds = section.GetDouble("status_seconds", options->status_seconds);
+}
+
+std::string WithReceiveBuffer(const std::string& url, long long bytes) {
+  std::string u = url;
+  if (u.empty()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    u = env && *env ? env : "udpm://239.255.76.67:7667?ttl=0";
+  }
+  if (bytes <= 0 || u.rfind("udpm://", 0) != 0 || u.find("recv_buf_size=") != std::string::npos) return url;
+  return u + (u.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=" + std::to_string(bytes);
+}
+
+long long KernelReceiveBufferMax() {
+  FILE* f = std::fopen("/proc/sys/net/core/rmem_max", "r");
+  if (!f) return -1;
+  long long v = -1;
+  if (std::fscanf(f, "%lld", &v) != 1) v = -1;
+  std::fclose(f);
+  return v;
 }
 
 std::string SidecarPath(const std::string& log_path) {

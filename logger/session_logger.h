@@ -53,6 +53,13 @@ struct LoggerOptions {
 // fsync, queue_capacity, max_unwritten_mb, status_seconds). Unknown keys throw naming file and key.
 void LoadLoggerOptions(const YamlSection& section, LoggerOptions* options);
 
+// A udpm URL (empty: $LCM_DEFAULT_URL, else LCM's default udpm URL) with recv_buf_size=bytes added when it
+// has none: the kernel's default socket buffer (~200 kB) overflows within milliseconds at image rates.
+// Other providers (file://, memq://, tcpq://) and bytes <= 0 leave the URL unchanged.
+std::string WithReceiveBuffer(const std::string& url, long long bytes);
+// net.core.rmem_max (the kernel's cap on recv_buf_size), -1 if unknown.
+long long KernelReceiveBufferMax();
+
 // "dir/session.lcmlog" -> "dir/session.yaml"; "x" -> "x.yaml".
 std::string SidecarPath(const std::string& log_path);
 
