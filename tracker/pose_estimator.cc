@@ -144,50 +144,56 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
 //   d p_rig / d delta = [-[p_rig]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig]x | I],
 //   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig]x | I]   (analytic, 2x6 per corner).
 // Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
-double PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
-                               int* iterations, Matrix6d* hessian) const {
-  const double k = options_.huber_px;
-  auto evaluate = [&](const Rigid3& t, Matrix6d* h, Vector6d* g, double* plain) {
-    h->setZero();
-    g->setZero();
-    double cost = 0.0, plain_cost = 0.0;
-    const Eigen::Matrix3d r = t.linear();
-    const Eigen::Vector3d tr = t.translation();
-    for (size_t i = 0; i < obs.size(); ++i) {
-      if (!active[i]) continue;
-      const Camera& cam = cameras_[obs[i].camera];
-      const Marker& mk = markers_[obs[i].marker];
-      for (int c = 0; c < 4; ++c) {
-        const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
-        const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
-        Eigen::Vector2d px;
-        Eigen::Matrix<double, 2, 3> jp;
-        if (!cam.model.Project(p_cam, &px, &jp)) {
-          cost += kBehindPenalty;
-          plain_cost += kBehindPenalty;
-          continue;
-        }
-        const Eigen::Vector2d res = px - (*obs[i].pixels)[c];
-        const double sq = res.squaredNorm();
-        double w = 1.0;
-        cost += Huber(sq, k, &w);
-        plain_cost += sq;
-        const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
-        Eigen::Matrix<double, 2, 6> j;
-        j.leftCols<3>() = -a * Skew(p_rig);
-        j.rightCols<3>() = a;
-        h->noalias() += w * j.transpose() * j;
-        g->noalias() += w * j.transpose() * res;
+double PoseEstimator::Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active,
+                               const Rigid3& pose, double huber_px, Matrix6d* h, Vector6d* g,
+                               double* plain_cost) const {
+  h->setZero();
+  g->setZero();
+  double cost = 0.0, plain = 0.0;
+  const Eigen::Matrix3d r = pose.linear();
+  const Eigen::Vector3d tr = pose.translation();
+  for (size_t i = 0; i < obs.size(); ++i) {
+    if (!active[i]) continue;
+    const Camera& cam = cameras_[obs[i].camera];
+    const Marker& mk = markers_[obs[i].marker];
+    for (int c = 0; c < 4; ++c) {
+      const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
+      const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
+      Eigen::Vector2d px;
+      Eigen::Matrix<double, 2, 3> jp;
+      if (!cam.model.Project(p_cam, &px, &jp)) {
+        cost += kBehindPenalty;
+        plain += kBehindPenalty;
+        continue;
       }
+      const Eigen::Vector2d res = px - (*obs[i].pixels)[c];
+      const double sq = res.squaredNorm();
+      double w = 1.0;
+      cost += huber_px > 0 ? Huber(sq, huber_px, &w) : sq;
+      plain += sq;
+      const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
+      Eigen::Matrix<double, 2, 6> j;
+      j.leftCols<3>() = -a * Skew(p_rig);
+      j.rightCols<3>() = a;
+      h->noalias() += w * j.transpose() * j;
+      g->noalias() += w * j.transpose() * res;
     }
-    if (plain) *plain = plain_cost;
-    return cost;
-  };
+  }
+  if (plain_cost) *plain_cost = plain;
+  return cost;
+}
 
+// Cost (Huber on each corner's pixel distance d, k = huber_px):
+//   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
+// with T = rig_from_object, perturbed on the left, T <- Exp(delta) * T, delta = (w, v):
+//   d p_rig / d delta = [-[p_rig]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig]x | I],
+//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig]x | I]   (analytic, 2x6 per corner).
+// Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
+void PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
+                             int* iterations) const {
   Matrix6d h;
   Vector6d g;
-  double plain = 0.0;
-  double cost = evaluate(*pose, &h, &g, &plain);
+  double cost = Evaluate(obs, active, *pose, options_.huber_px, &h, &g, nullptr);
   double lambda = 1e-4;
   int it = 0;
   for (; it < options_.max_iterations && cost > 1e-24; ++it) {
@@ -198,17 +204,16 @@ double PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<ch
     const Rigid3 candidate = ApplyLeft(*pose, dx);
     Matrix6d h_new;
     Vector6d g_new;
-    double plain_new = 0.0;
-    const double cost_new = evaluate(candidate, &h_new, &g_new, &plain_new);
+    const double cost_new = Evaluate(obs, active, candidate, options_.huber_px, &h_new, &g_new, nullptr);
     if (cost_new < cost) {
       const double decrease = cost - cost_new;
       *pose = candidate;
       h = h_new;
       g = g_new;
       cost = cost_new;
-      plain = plain_new;
       lambda = std::max(lambda * 0.1, 1e-10);
-      if (dx.norm() < 1e-10 || decrease < 1e-12 * cost_new) {
+      // Converged: a step below 1e-9 (rad, m) or a negligible decrease.
+      if (dx.norm() < 1e-9 || decrease < 1e-10 * cost_new) {
         ++it;
         break;
       }
@@ -218,33 +223,6 @@ double PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<ch
     }
   }
   if (iterations) *iterations += it;
-  if (hessian) {
-    // The unweighted Gauss-Newton matrix J^T J at the result, for the covariance.
-    Matrix6d unweighted = Matrix6d::Zero();
-    // Recompute without robust weights: all inliers are within a few pixels, weights ~1 anyway, but the
-    // covariance must describe plain least squares.
-    const Eigen::Matrix3d r = pose->linear();
-    const Eigen::Vector3d tr = pose->translation();
-    for (size_t i = 0; i < obs.size(); ++i) {
-      if (!active[i]) continue;
-      const Camera& cam = cameras_[obs[i].camera];
-      const Marker& mk = markers_[obs[i].marker];
-      for (int c = 0; c < 4; ++c) {
-        const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
-        const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
-        Eigen::Vector2d px;
-        Eigen::Matrix<double, 2, 3> jp;
-        if (!cam.model.Project(p_cam, &px, &jp)) continue;
-        const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
-        Eigen::Matrix<double, 2, 6> j;
-        j.leftCols<3>() = -a * Skew(p_rig);
-        j.rightCols<3>() = a;
-        unweighted.noalias() += j.transpose() * j;
-      }
-    }
-    *hessian = unweighted;
-  }
-  return plain;
 }
 
 PoseEstimator::Refined PoseEstimator::RefineFrom(const std::vector<Obs>& obs, const Rigid3& start) const {
@@ -253,7 +231,7 @@ PoseEstimator::Refined PoseEstimator::RefineFrom(const std::vector<Obs>& obs, co
   std::vector<char> active(obs.size(), 1);
   constexpr int kRounds = 4;
   for (int round = 0; round < kRounds; ++round) {
-    Optimise(obs, active, &out.pose, &out.iterations, nullptr);
+    Optimise(obs, active, &out.pose, &out.iterations);
     std::vector<char> next(obs.size(), 0);
     int n = 0;
     for (size_t i = 0; i < obs.size(); ++i) {
@@ -270,7 +248,7 @@ PoseEstimator::Refined PoseEstimator::RefineFrom(const std::vector<Obs>& obs, co
       // Out of rounds: keep the set the pose was optimised on, minus what is now gross.
       for (size_t i = 0; i < obs.size(); ++i) active[i] = active[i] && next[i];
       if (std::find(active.begin(), active.end(), 1) == active.end()) active = next;
-      Optimise(obs, active, &out.pose, &out.iterations, nullptr);
+      Optimise(obs, active, &out.pose, &out.iterations);
       break;
     }
     active = next;
@@ -396,9 +374,10 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
 
   // Final covariance at the solution: sigma^2 (J^T J)^-1 over the inliers, sigma^2 = RSS / (N - 6).
   Matrix6d h;
-  int unused_iterations = 0;
-  std::vector<char> active = best.inlier;
-  const double rss = Optimise(obs, active, &best.pose, &unused_iterations, &h);
+  Vector6d g;
+  double rss = 0.0;
+  const std::vector<char>& active = best.inlier;
+  Evaluate(obs, active, best.pose, 0.0, &h, &g, &rss);  // unweighted J^T J and residual sum of squares
   const int n_inliers = static_cast<int>(std::count(active.begin(), active.end(), 1));
   const int n_residuals = 8 * n_inliers;
   double sigma2 = n_residuals > 6 ? rss / (n_residuals - 6) : rss;

@@ -127,9 +127,14 @@ class PoseEstimator {
 
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
-  // Levenberg-Marquardt on the active observations; returns the final unweighted cost.
-  double Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose, int* iterations,
-                  Matrix6d* hessian) const;
+  // Robust cost (Huber, huber_px <= 0: plain squares) of the active observations at `pose`, with the
+  // IRLS-weighted Gauss-Newton matrix J^T W J in *h and gradient J^T W r in *g; *plain_cost gets the
+  // unweighted sum of squares.
+  double Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active, const Rigid3& pose,
+                  double huber_px, Matrix6d* h, Vector6d* g, double* plain_cost) const;
+  // Levenberg-Marquardt on the active observations.
+  void Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
+                int* iterations) const;
   // LM with outlier rejection from one start.
   Refined RefineFrom(const std::vector<Obs>& obs, const Rigid3& start) const;
   static bool Better(const Refined& a, const Refined& b);

@@ -122,16 +122,28 @@ SyntheticSession MakeSession(const SyntheticOptions& o) {
     cam.rig_from_cam = Normalized(rig_from_world * world_from_cam[c]);
     s.map.cameras.push_back(cam);
   }
-  // Cube markers, ids 0..5; object frame = marker 0's.
+  // Cube markers (grid x grid per face); object frame = marker 0's.
   const double h = 0.5 * o.cube_side;
-  std::vector<Rigid3> cube_from_marker = {
+  const std::vector<Rigid3> cube_from_face = {
       FaceMarker({0, 0, 1}, {0, 1, 0}, h),  FaceMarker({1, 0, 0}, {0, 0, 1}, h),
       FaceMarker({0, 1, 0}, {0, 0, 1}, h),  FaceMarker({-1, 0, 0}, {0, 0, 1}, h),
       FaceMarker({0, -1, 0}, {0, 0, 1}, h), FaceMarker({0, 0, -1}, {0, 1, 0}, h)};
+  std::vector<Rigid3> cube_from_marker;
+  const int rows = o.grid_rows > 0 ? o.grid_rows : o.grid;
+  const double pitch_x = o.cube_side / o.grid, pitch_y = o.cube_side / rows;
+  for (const Rigid3& face : cube_from_face) {
+    for (int gy = 0; gy < rows; ++gy) {
+      for (int gx = 0; gx < o.grid; ++gx) {
+        Rigid3 offset = Rigid3::Identity();
+        offset.translation() = Eigen::Vector3d((gx + 0.5) * pitch_x - h, h - (gy + 0.5) * pitch_y, 0.0);
+        cube_from_marker.push_back(face * offset);
+      }
+    }
+  }
   const Rigid3 object_from_cube = Inverse(cube_from_marker[0]);
-  for (int m = 0; m < 6; ++m) {
+  for (size_t m = 0; m < cube_from_marker.size(); ++m) {
     MapMarker mk;
-    mk.id = m;
+    mk.id = static_cast<int>(m);
     mk.size = o.marker_size;
     mk.object_from_marker = Normalized(object_from_cube * cube_from_marker[m]);
     s.map.markers.push_back(mk);

@@ -21,6 +21,8 @@ struct SyntheticOptions {
   double height = 0.5;        // camera height above the centre
   double marker_size = 0.04;  // metres
   double cube_side = 0.06;    // metres
+  int grid = 1;               // markers per face: grid columns x grid_rows rows (ids in order)
+  int grid_rows = 0;          // 0: same as grid
   int frames = 150;
   double fps = 30.0;
   double noise_px = 0.1;   // Gaussian corner noise
