@@ -223,6 +223,14 @@ void WriteFileAtomic(const std::string& path, const std::string& content) {
     ::unlink(tmp.c_str());
     throw FileFormatError(path + ": cannot rename " + tmp + ": " + reason);
   }
+  // Make the rename itself durable (best effort: some file systems refuse fsync on folders).
+  const std::string::size_type slash = path.find_last_of('/');
+  const std::string folder = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const int dir_fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd >= 0) {
+    (void)::fsync(dir_fd);
+    ::close(dir_fd);
+  }
 }
 
 std::string ReadFile(const std::string& path) {

@@ -160,3 +160,27 @@ TEST(Ippe, DegenerateCornersAreRejected) {
 
 }  // namespace
 }  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+TEST(Ippe, CloseFrontalSquareHasLargeRatio) {
+  // Close and frontal: perspective tells the two tilts apart (the "ratio large when close").
+  const CameraModel cam = TestCamera();
+  std::mt19937_64 rng(6);
+  const double side = 0.1;
+  int large = 0;
+  const int trials = 50;
+  for (int trial = 0; trial < trials; ++trial) {
+    const Rigid3 truth = Facing(Eigen::Vector3d(0.02, -0.01, 0.25), 0.0, Eigen::Vector3d(1, 0, 0));
+    const SquarePose pose = EstimateSquarePose(cam, ProjectSquare(cam, truth, side, 0.3, &rng), side);
+    ASSERT_TRUE(pose.ok);
+    double terr = 0;
+    EXPECT_LT(MinPoseError(pose, truth, &terr), 0.05);
+    if (pose.ratio > 2.0) ++large;
+  }
+  EXPECT_GE(large, trials * 8 / 10);
+}
+
+}  // namespace
+}  // namespace mcmt
