@@ -1,0 +1,313 @@
+// mcmt-viz as a separate process: headless snapshot of a known map, before/after, --video, a log,
+// live LCM over udpm (ports 7780-7799 belong to viz), no display, and bad input.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "core/lcm_util.h"
+#include "tests/viz/viz_test_util.h"
+#include "viz/scene.h"
+
+namespace mcmt::viz {
+namespace {
+
+using testing::MakeTestRig;
+using testing::NotBackgroundNear;
+using testing::RunCommand;
+using testing::TempDir;
+using testing::VizBin;
+
+// The background colour the program renders: the viewports' colour. Checked against the image's
+// left edge, which the automatic view leaves empty when there is no grid.
+cv::Vec3b CornerColour(const cv::Mat& img) {
+  const cv::Vec3b bg = BackgroundBgr();
+  EXPECT_FALSE(NotBackgroundNear(img, Eigen::Vector2d(1.5, img.rows / 2.0), bg, 1, 8)) << "background moved";
+  return bg;
+}
+
+// The viewer's own projection for the map the program read: same library, same options.
+VizScene SceneLike(const RigMap& map, const std::vector<TrajectoryRow>& rows, int w, int h,
+                   const RigMap* initial = nullptr,
+                   const std::vector<TrajectoryRow>* initial_rows = nullptr) {
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  VizScene scene(o);
+  std::vector<PanelInput> panels;
+  if (initial) panels.push_back(PanelInput{"initial", *initial, *initial_rows});
+  panels.push_back(PanelInput{"refined", map, rows});
+  scene.SetPanels(panels);
+  return scene;
+}
+
+TEST(VizProcess, SnapshotOfAKnownMapShowsCamerasAndObject) {
+  TempDir dir("snapshot");
+  const auto rig = MakeTestRig(4, 10);
+  WriteMap(dir / "map.yaml", rig.map);
+  WriteTrajectory(dir / "trajectory.csv", rig.trajectory);
+  const auto r = RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + VizBin() + " --map " + (dir / "map.yaml") +
+                            " --trajectory " + (dir / "trajectory.csv") + " --snapshot " + (dir / "out.png") +
+                            " --size 720x400 --frame 4 --no-grid");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  cv::Mat img = cv::imread(dir / "out.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 720);
+  EXPECT_EQ(img.rows, 400);
+  // Projection from the viewer camera, for the map as the program read it back.
+  const RigMap map = ReadMap(dir / "map.yaml");
+  const auto rows = ReadTrajectory(dir / "trajectory.csv");
+  VizScene scene = SceneLike(map, rows, 720, 400);
+  scene.SetCurrentFrame(4);
+  const cv::Vec3b bg = CornerColour(img);
+  for (const auto& cam : map.cameras) {
+    Eigen::Vector2d px;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, cam.rig_from_cam.translation(), &px));
+    EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << cam.name << " at " << px.transpose();
+  }
+  Eigen::Vector2d obj;
+  ASSERT_TRUE(scene.ProjectRigPoint(0, rows[4].rig_from_object.translation(), &obj));
+  EXPECT_TRUE(NotBackgroundNear(img, obj, bg, 1)) << "object at " << obj.transpose();
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.png.tmp"));
+}
+
+TEST(VizProcess, BeforeAfterAndSaveScene) {
+  TempDir dir("before_after");
+  const auto rig = MakeTestRig(3, 6);
+  RigMap initial = rig.map;
+  for (auto& c : initial.cameras) c.rig_from_cam.translation() += Eigen::Vector3d(0.08, 0.0, -0.05);
+  std::vector<TrajectoryRow> initial_rows = rig.trajectory;
+  for (auto& row : initial_rows) row.rig_from_object.translation() += Eigen::Vector3d(0.02, 0.02, 0);
+  WriteMap(dir / "map.yaml", rig.map);
+  WriteMap(dir / "map_initial.yaml", initial);
+  WriteTrajectory(dir / "trajectory.csv", rig.trajectory);
+  WriteTrajectory(dir / "trajectory_initial.csv", initial_rows);
+  const auto r =
+      RunCommand(VizBin() + " --map " + (dir / "map.yaml") + " --initial-map " + (dir / "map_initial.yaml") +
+                 " --trajectory " + (dir / "trajectory.csv") + " --snapshot " + (dir / "ba.png") +
+                 " --save-scene " + (dir / "scene.3Dscene") + " --size 900x360 --no-grid");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  cv::Mat img = cv::imread(dir / "ba.png", cv::IMREAD_COLOR);
+  ASSERT_EQ(img.cols, 900);
+  ASSERT_EQ(img.rows, 360);
+  EXPECT_GT(std::filesystem::file_size(dir / "scene.3Dscene"), 1000u);
+  const RigMap map = ReadMap(dir / "map.yaml"), init = ReadMap(dir / "map_initial.yaml");
+  const auto rows = ReadTrajectory(dir / "trajectory.csv");
+  const auto irows = ReadTrajectory(dir / "trajectory_initial.csv");
+  VizScene scene = SceneLike(map, rows, 900, 360, &init, &irows);
+  const cv::Vec3b bg = CornerColour(img);
+  for (int panel = 0; panel < 2; ++panel) {
+    for (const auto& cam : (panel == 0 ? init : map).cameras) {
+      Eigen::Vector2d px;
+      ASSERT_TRUE(scene.ProjectRigPoint(panel, cam.rig_from_cam.translation(), &px));
+      EXPECT_EQ(px.x() >= 450, panel == 1);
+      EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << "panel " << panel << " " << cam.name;
+    }
+    Eigen::Vector2d obj;
+    ASSERT_TRUE(
+        scene.ProjectRigPoint(panel, (panel == 0 ? irows : rows).back().rig_from_object.translation(), &obj));
+    EXPECT_TRUE(NotBackgroundNear(img, obj, bg, 1)) << "object in panel " << panel;
+  }
+}
+
+TEST(VizProcess, VideoWritesOneImagePerFrame) {
+  TempDir dir("video");
+  const auto rig = MakeTestRig(3, 5);
+  WriteMap(dir / "map.yaml", rig.map);
+  WriteTrajectory(dir / "trajectory.csv", rig.trajectory);
+  const auto r = RunCommand(VizBin() + " --map " + (dir / "map.yaml") + " --trajectory " +
+                            (dir / "trajectory.csv") + " --video " + (dir / "frames") + " --size 320x240");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "frames"))
+    names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  ASSERT_EQ(names.size(), 5u);
+  cv::Mat previous;
+  for (int i = 0; i < 5; ++i) {
+    char expected[32];
+    std::snprintf(expected, sizeof(expected), "frame_%06d.png", i);
+    EXPECT_EQ(names[i], expected);
+    cv::Mat img = cv::imread((dir.path() / "frames" / expected).string(), cv::IMREAD_COLOR);
+    ASSERT_EQ(img.cols, 320);
+    ASSERT_EQ(img.rows, 240);
+    if (!previous.empty()) {
+      EXPECT_GT(cv::norm(img, previous, cv::NORM_L1), 0.0) << "frame " << i << " unchanged";
+    }
+    previous = img;
+  }
+}
+
+// Writes a log with LCM's own file provider: the map, poses and detections.
+void WriteLog(const std::string& path, const testing::TestRig& rig) {
+  lcm::LCM log("file://" + path + "?mode=w");
+  ASSERT_TRUE(log.good());
+  rig_map_t map = ToRigMapMsg(rig.map, 1);
+  log.publish(kMapChannel, &map);
+  for (const auto& row : rig.trajectory) {
+    for (const auto& cam : rig.map.cameras) {
+      detections_t d;
+      d.utime = row.utime;
+      d.seq = row.seq;
+      d.camera = cam.name;
+      d.dictionary = rig.map.dictionary;
+      d.camera_model = ToCameraModelMsg(cam.model);
+      for (int id : {0, 1}) {
+        marker_t m{};
+        m.id = id;
+        d.markers.push_back(m);
+      }
+      d.num_markers = static_cast<int32_t>(d.markers.size());
+      d.detection_ms = 1;
+      log.publish(DetectionsChannel(cam.name), &d);
+    }
+    object_pose_t p{};
+    p.utime = row.utime;
+    p.seq = row.seq;
+    p.object = "object";
+    p.rig_from_object = ToPose3d(row.rig_from_object);
+    p.rms_px = row.rms_px;
+    p.status = object_pose_t::STATUS_TRACKING;
+    log.publish(kPoseChannel, &p);
+  }
+}
+
+TEST(VizProcess, ReadsALogWithRays) {
+  TempDir dir("log");
+  const auto rig = MakeTestRig(3, 6);
+  WriteLog(dir / "session.lcmlog", rig);
+  for (const std::string rays : {"", " --no-rays"}) {
+    const std::string out = dir / ("log" + std::string(rays.empty() ? "_rays" : "_norays") + ".png");
+    const auto r = RunCommand(VizBin() + " --log " + (dir / "session.lcmlog") + " --snapshot " + out +
+                              " --size 640x360 --no-legend" + rays);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  cv::Mat with = cv::imread(dir / "log_rays.png", cv::IMREAD_COLOR);
+  cv::Mat without = cv::imread(dir / "log_norays.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(with.empty());
+  ASSERT_FALSE(without.empty());
+  // A point half-way along the ray from camera 1 to marker 1 (in the last frame) is drawn only
+  // with rays.
+  const RigMap map = FromRigMapMsg(ToRigMapMsg(rig.map, 1));
+  VizScene scene = SceneLike(map, rig.trajectory, 640, 360);
+  const Eigen::Vector3d a = map.cameras[1].rig_from_cam.translation();
+  const Eigen::Vector3d b =
+      (rig.trajectory.back().rig_from_object * map.FindMarker(1)->object_from_marker).translation();
+  int differ = 0;
+  for (double t : {0.3, 0.45, 0.6}) {
+    Eigen::Vector2d px;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, a + t * (b - a), &px));
+    const cv::Vec3b bg = without.at<cv::Vec3b>(static_cast<int>(px.y()), static_cast<int>(px.x()));
+    differ += NotBackgroundNear(with, px, bg, 1, 20);
+  }
+  EXPECT_GE(differ, 2);
+}
+
+TEST(VizProcess, LiveLcmOverUdpmWritesASnapshotAfterNPoses) {
+  TempDir dir("live");
+  const std::string url = "udpm://239.255.76.67:7781?ttl=0";
+  const auto rig = MakeTestRig(3, 1);
+  std::atomic<bool> done{false};
+  testing::ProcessResult result;
+  std::thread viewer([&] {
+    result = RunCommand(VizBin() + " --lcm-url '" + url + "' --snapshot " + (dir / "live.png") +
+                            " --max-poses 5 --timeout 30 --size 480x320 --no-grid",
+                        60);
+    done = true;
+  });
+  auto lcm = OpenLcm(url);
+  const rig_map_t map = ToRigMapMsg(rig.map, 1);
+  object_pose_t pose{};
+  pose.object = "object";
+  pose.rig_from_object = ToPose3d(rig.trajectory[0].rig_from_object);
+  pose.status = object_pose_t::STATUS_TRACKING;
+  pose.rms_px = 0.3;
+  pose.latency_ms = 2.0;
+  // The viewer may still be starting: keep publishing (same pose) until it is done.
+  for (int k = 0; !done && k < 1200; ++k) {
+    lcm->publish(kMapChannel, &map);
+    pose.utime = 1000000 + 33333 * k;
+    pose.seq = k;
+    lcm->publish(kPoseChannel, &pose);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  viewer.join();
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  cv::Mat img = cv::imread(dir / "live.png", cv::IMREAD_COLOR);
+  ASSERT_EQ(img.cols, 480);
+  ASSERT_EQ(img.rows, 320);
+  const RigMap got = FromRigMapMsg(map);
+  std::vector<TrajectoryRow> rows(5, rig.trajectory[0]);
+  for (auto& row : rows) row.rig_from_object = FromPose3d(pose.rig_from_object);
+  VizScene scene = SceneLike(got, rows, 480, 320);
+  const cv::Vec3b bg = CornerColour(img);
+  for (const auto& cam : got.cameras) {
+    Eigen::Vector2d px;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, cam.rig_from_cam.translation(), &px));
+    EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << cam.name;
+  }
+  Eigen::Vector2d obj;
+  ASSERT_TRUE(scene.ProjectRigPoint(0, rows[0].rig_from_object.translation(), &obj));
+  EXPECT_TRUE(NotBackgroundNear(img, obj, bg, 1));
+}
+
+TEST(VizProcess, LiveWindowWithoutDisplayExitsWithAClearMessage) {
+  TempDir dir("nodisplay");
+  const auto rig = MakeTestRig(2, 2);
+  WriteMap(dir / "map.yaml", rig.map);
+  const auto r = RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + VizBin() + " --map " + (dir / "map.yaml") +
+                                " --lcm-url 'udpm://239.255.76.67:7782?ttl=0'",
+                            30);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.exit_code, 124) << "timed out: " << r.output;  // coreutils timeout
+  EXPECT_NE(r.output.find("no display"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--snapshot"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+}
+
+TEST(VizProcess, BadInputGivesOneLineErrors) {
+  TempDir dir("bad");
+  const auto rig = MakeTestRig(2, 3);
+  WriteMap(dir / "map.yaml", rig.map);
+  {
+    std::ofstream f(dir / "bad.csv");
+    f << kTrajectoryHeader << "\n1000,0,0.1,0.2,not_a_number,1,0,0,0,0.1,2,3\n";
+  }
+  struct Case {
+    std::string args, expect;
+    int code;
+  };
+  const std::vector<Case> cases = {
+      {"--map " + (dir / "missing.yaml") + " --snapshot " + (dir / "a.png"), "missing.yaml", 1},
+      {"--map " + (dir / "map.yaml") + " --trajectory " + (dir / "bad.csv") + " --snapshot " +
+           (dir / "b.png"),
+       "bad.csv", 1},
+      {"--map " + (dir / "map.yaml") + " --snapshot " + (dir / "c.png") + " --size 12x", "--size", 2},
+      {"--log " + (dir / "nolog.lcmlog") + " --snapshot " + (dir / "d.png"), "nolog.lcmlog", 1},
+      {"--map " + (dir / "map.yaml") + " --snapshot " + (dir / "e.png") + " --frame 7", "--frame", 1},
+      {"--map " + (dir / "map.yaml") + " --snapshot " + (dir / "f.png") + " --dictionary DICT_NOPE",
+       "DICT_NOPE", 1},
+  };
+  for (const auto& c : cases) {
+    const auto r = RunCommand("env -u DISPLAY " + VizBin() + " " + c.args, 30);
+    SCOPED_TRACE(c.args);
+    EXPECT_EQ(r.exit_code, c.code) << r.output;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  }
+  for (const char* name : {"a.png", "b.png", "c.png", "d.png", "e.png", "f.png"})
+    EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+}
+
+TEST(VizProcess, HelpListsTheOptions) {
+  const auto r = RunCommand(VizBin() + " --help", 10);
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* opt :
+       {"--map", "--initial-map", "--trajectory", "--log", "--lcm-url", "--snapshot", "--size",
+        "--save-scene", "--video", "--frame", "--dictionary", "--no-rays", "--max-poses"})
+    EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
+}
+
+}  // namespace
+}  // namespace mcmt::viz

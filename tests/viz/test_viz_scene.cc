@@ -1,0 +1,291 @@
+// Unit tests of the viewer's scene: colours, frames, the viewer camera's projection against what
+// MRPT actually renders offscreen (EGL, no display), frustum direction and marker texture orientation.
+#include <gtest/gtest.h>
+#include <mrpt/opengl/CFBORender.h>
+
+#include <memory>
+#include <opencv2/imgproc.hpp>
+
+#include "core/dictionary.h"
+#include "tests/viz/viz_test_util.h"
+#include "viz/scene.h"
+#include "viz/viewer.h"
+
+namespace mcmt::viz {
+namespace {
+
+using testing::MakeTestRig;
+using testing::NotBackgroundNear;
+
+// One offscreen renderer for the whole test binary (creating EGL contexts is slow).
+mrpt::opengl::CFBORender& Renderer(int w, int h) {
+  static std::map<std::pair<int, int>, std::unique_ptr<mrpt::opengl::CFBORender>> renderers;
+  auto& r = renderers[{w, h}];
+  if (!r) r = std::make_unique<mrpt::opengl::CFBORender>(w, h);
+  return *r;
+}
+
+// Keeps a rendered image for a look when MCMT_VIZ_DUMP names a folder.
+void Dump(const cv::Mat& img, const std::string& name) {
+  if (const char* dir = std::getenv("MCMT_VIZ_DUMP")) cv::imwrite(std::string(dir) + "/" + name, img);
+}
+
+// The colour of the background: a render of a scene with nothing in it.
+cv::Vec3b Background(int w, int h) {
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.legend = false;
+  VizScene empty(o);
+  cv::Mat img = empty.Render(&Renderer(w, h));
+  return img.at<cv::Vec3b>(h / 2, w / 2);
+}
+
+TEST(VizColors, ResidualColourGoesFromGreenToRed) {
+  const Eigen::Vector3d low = ResidualColor(0.0, 2.0), mid = ResidualColor(1.0, 2.0),
+                        high = ResidualColor(2.0, 2.0);
+  EXPECT_LT(low.x(), 0.05);
+  EXPECT_GT(low.y(), 0.8);
+  EXPECT_GT(mid.x(), 0.9);
+  EXPECT_GT(mid.y(), 0.8);  // yellow
+  EXPECT_GT(high.x(), 0.9);
+  EXPECT_LT(high.y(), 0.05);
+  EXPECT_EQ(ResidualColor(5.0, 2.0), high);  // saturates
+  double prev_red = -1;
+  for (double v = 0; v <= 2.0; v += 0.1) {
+    const Eigen::Vector3d c = ResidualColor(v, 2.0);
+    EXPECT_GE(c.x(), prev_red);
+    prev_red = c.x();
+  }
+}
+
+TEST(VizFrames, FrustumLooksAlongTheOpenCvOpticalAxis) {
+  const Rigid3 cam_from_frustum = CamFromFrustum();
+  EXPECT_NEAR(cam_from_frustum.linear().determinant(), 1.0, 1e-12);
+  // Frustum +X (its axis) is the camera's +Z; frustum +Z (up) is the camera's -Y (image up).
+  EXPECT_TRUE((cam_from_frustum.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitZ()));
+  EXPECT_TRUE((cam_from_frustum.linear() * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitY()));
+}
+
+TEST(VizFrames, DisplayFrameHasTheCamerasUpAsZ) {
+  const auto rig = MakeTestRig();
+  const Rigid3 world_from_rig = WorldFromRig(rig.map);
+  // The test cameras sit on a circle, upright: their mean up is the true world up.
+  const Eigen::Vector3d true_up_in_rig = rig.world_from_rig.linear().transpose() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d shown_up = world_from_rig.linear() * true_up_in_rig;
+  EXPECT_GT(shown_up.z(), std::cos(1.0 * M_PI / 180.0));
+  EXPECT_NEAR(world_from_rig.linear().determinant(), 1.0, 1e-9);
+}
+
+TEST(VizViewCamera, FramingKeepsEveryPointInside) {
+  ViewCamera v;
+  v.viewport_width = 800;
+  v.viewport_height = 400;
+  v.image_height = 400;
+  std::vector<Eigen::Vector3d> pts = {{0, 0, 0}, {3, 0, 0}, {0, 2, 1}, {-1, -1, 2}, {1, 1, -0.5}};
+  FramePoints(pts, 0.05, &v);
+  for (const auto& p : pts) {
+    Eigen::Vector2d px;
+    ASSERT_TRUE(v.Project(p, &px));
+    EXPECT_GE(px.x(), 0.05 * 800 - 1e-6);
+    EXPECT_LE(px.x(), 0.95 * 800 + 1e-6);
+    EXPECT_GE(px.y(), 0.05 * 400 - 1e-6);
+    EXPECT_LE(px.y(), 0.95 * 400 + 1e-6);
+  }
+  // Tight: 10% closer and some point leaves the margin.
+  ViewCamera closer = v;
+  closer.distance *= 0.9;
+  bool all_inside = true;
+  for (const auto& p : pts) {
+    Eigen::Vector2d px;
+    const bool in = closer.Project(p, &px) && px.x() >= 40 && px.x() <= 760 && px.y() >= 20 && px.y() <= 380;
+    all_inside = all_inside && in;
+  }
+  EXPECT_FALSE(all_inside);
+  // The pointing target lands at the viewport centre.
+  Eigen::Vector2d c;
+  ASSERT_TRUE(v.Project(v.pointing, &c));
+  EXPECT_NEAR(c.x(), 400, 1e-6);
+  EXPECT_NEAR(c.y(), 200, 1e-6);
+}
+
+TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
+  const int w = 800, h = 450;
+  const auto rig = MakeTestRig(4, 12);
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
+  scene.SetCurrentFrame(5);
+  cv::Mat img = scene.Render(&Renderer(w, h));
+  ASSERT_EQ(img.cols, w);
+  ASSERT_EQ(img.rows, h);
+  const cv::Vec3b bg = Background(w, h);
+  for (const auto& cam : rig.map.cameras) {
+    Eigen::Vector2d px;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, cam.rig_from_cam.translation(), &px)) << cam.name;
+    EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << cam.name << " at " << px.transpose();
+  }
+  Eigen::Vector2d obj;
+  ASSERT_TRUE(scene.ProjectRigPoint(0, rig.trajectory[5].rig_from_object.translation(), &obj));
+  EXPECT_TRUE(NotBackgroundNear(img, obj, bg, 1)) << "object at " << obj.transpose();
+
+  Dump(img, "cameras_object.png");
+  // Control: with camera 2 moved 5 m back (same view, same display frame), its old place is
+  // background, so the check can fail.
+  RigMap without = rig.map;
+  without.cameras[2].rig_from_cam = without.cameras[2].rig_from_cam * Rigid3(Eigen::Translation3d(0, 0, -5));
+  VizScene other(o);
+  other.SetPanels({PanelInput{"map", without, rig.trajectory}});
+  other.SetView(scene.view(0));
+  other.SetCurrentFrame(5);
+  cv::Mat img2 = other.Render(&Renderer(w, h));
+  Eigen::Vector2d px2;
+  ASSERT_TRUE(other.ProjectRigPoint(0, rig.map.cameras[2].rig_from_cam.translation(), &px2));
+  EXPECT_FALSE(NotBackgroundNear(img2, px2, bg, 1)) << "removed camera still drawn at " << px2.transpose();
+}
+
+TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
+  const int w = 640, h = 480;
+  auto rig = MakeTestRig(2, 0);
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"map", rig.map, {}}});
+  cv::Mat img = scene.Render(&Renderer(w, h));
+  Dump(img, "frustum.png");
+  const cv::Vec3b bg = Background(w, h);
+  // Camera 1 (not the reference, so no rig axes there). The frustum is drawn to 0.3 x the
+  // distance between the cameras (no trajectory): points well inside it along +Z are covered by
+  // its translucent faces; the same distance along +X or -Z is empty space.
+  const Rigid3& rig_from_cam = rig.map.cameras[1].rig_from_cam;
+  const double length =
+      0.3 * (rig.map.cameras[0].rig_from_cam.translation() - rig_from_cam.translation()).norm();
+  int inside_hits = 0, outside_hits = 0;
+  for (double f : {0.5, 0.7, 0.9}) {
+    Eigen::Vector2d in, out_x, out_back;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, f * length), &in));
+    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(f * length, 0, 0), &out_x));
+    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, -f * length), &out_back));
+    inside_hits += NotBackgroundNear(img, in, bg, 0, 6);
+    outside_hits += NotBackgroundNear(img, out_x, bg, 0, 6) + NotBackgroundNear(img, out_back, bg, 0, 6);
+  }
+  EXPECT_EQ(inside_hits, 3);
+  EXPECT_EQ(outside_hits, 0);
+}
+
+TEST(VizRender, MarkerTextureIsUprightWithArucoTopLeftAtMinusXPlusY) {
+  const int w = 640, h = 640;
+  auto rig = MakeTestRig(4, 1);
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  o.rays = false;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
+  scene.SetCurrentFrame(0);
+  const auto dict = LoadDictionary("DICT_4X4_50");
+  const int cells = dict->markerSize + 2;
+  for (const auto& marker : rig.map.markers) {
+    SCOPED_TRACE("marker " + std::to_string(marker.id));
+    const Rigid3 rig_from_marker = rig.trajectory[0].rig_from_object * marker.object_from_marker;
+    // Look straight at the marker's face from 0.35 m.
+    const Rigid3 world_from_marker = scene.world_from_rig() * rig_from_marker;
+    const Eigen::Vector3d n = world_from_marker.linear().col(2);
+    ViewCamera v = scene.view(0);
+    v.pointing = world_from_marker.translation();
+    v.azimuth_deg = std::atan2(n.y(), n.x()) * 180.0 / M_PI;
+    v.elevation_deg = std::asin(std::clamp(n.z(), -1.0, 1.0)) * 180.0 / M_PI;
+    v.distance = 0.35;
+    v.fov_deg = 30;
+    scene.SetView(v);
+    cv::Mat img = scene.Render(&Renderer(w, h));
+    Dump(img, "marker_" + std::to_string(marker.id) + ".png");
+    cv::Mat gray;
+    cv::cvtColor(img, gray, cv::COLOR_BGR2GRAY);
+    const cv::Mat bitmap = MarkerImage(*dict, marker.id, cells * 10);
+    // Sample each cell's centre; compare to the bitmap, and to the bitmap flipped upside down.
+    std::vector<double> values;
+    std::vector<int> truth, flipped;
+    for (int r = 0; r < cells; ++r) {
+      for (int c = 0; c < cells; ++c) {
+        const double s = marker.size;
+        const Eigen::Vector3d p_marker(-s / 2 + (c + 0.5) * s / cells, s / 2 - (r + 0.5) * s / cells, 0);
+        Eigen::Vector2d px;
+        ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_marker * p_marker, &px));
+        const cv::Rect patch(static_cast<int>(px.x()) - 1, static_cast<int>(px.y()) - 1, 3, 3);
+        values.push_back(cv::mean(gray(patch))[0]);
+        truth.push_back(bitmap.at<uchar>(r * 10 + 5, c * 10 + 5) > 127);
+        flipped.push_back(bitmap.at<uchar>((cells - 1 - r) * 10 + 5, c * 10 + 5) > 127);
+      }
+    }
+    const double lo = *std::min_element(values.begin(), values.end());
+    const double hi = *std::max_element(values.begin(), values.end());
+    ASSERT_GT(hi - lo, 60) << "no contrast: the marker is not textured";
+    int match = 0, match_flipped = 0;
+    for (size_t i = 0; i < values.size(); ++i) {
+      const int seen = values[i] > 0.5 * (lo + hi);
+      match += seen == truth[i];
+      match_flipped += seen == flipped[i];
+    }
+    EXPECT_EQ(match, cells * cells);
+    EXPECT_LT(match_flipped, cells * cells);
+  }
+}
+
+TEST(VizRender, BackgroundColourIsKnown) {
+  const cv::Vec3b measured = Background(64, 48), expected = BackgroundBgr();
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(measured[c], expected[c], 2);
+}
+
+TEST(VizRender, BeforeAfterPanelsSitSideBySide) {
+  const int w = 960, h = 400;
+  const auto rig = MakeTestRig(3, 8);
+  RigMap initial = rig.map;
+  for (auto& c : initial.cameras) c.rig_from_cam.translation() += Eigen::Vector3d(0.05, -0.03, 0.04);
+  for (auto& c : initial.cameras) c.rms_px += 3.0;
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  VizScene scene(o);
+  scene.SetPanels(
+      {PanelInput{"initial", initial, rig.trajectory}, PanelInput{"refined", rig.map, rig.trajectory}});
+  ASSERT_EQ(scene.num_panels(), 2);
+  EXPECT_EQ(scene.view(0).viewport_width, w / 2);
+  EXPECT_EQ(scene.view(1).viewport_x, w / 2);
+  EXPECT_GE(scene.residual_scale_px(), 3.0);
+  cv::Mat img = scene.Render(&Renderer(w, h));
+  Dump(img, "before_after.png");
+  const cv::Vec3b bg = Background(w, h);
+  for (int panel = 0; panel < 2; ++panel) {
+    const RigMap& map = panel == 0 ? initial : rig.map;
+    for (const auto& cam : map.cameras) {
+      Eigen::Vector2d px;
+      ASSERT_TRUE(scene.ProjectRigPoint(panel, cam.rig_from_cam.translation(), &px));
+      EXPECT_EQ(px.x() >= w / 2, panel == 1);
+      EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << "panel " << panel << " " << cam.name;
+    }
+  }
+}
+
+TEST(VizOptions, SizeParsing) {
+  int w = 0, h = 0;
+  ParseSize("1280x720", &w, &h);
+  EXPECT_EQ(w, 1280);
+  EXPECT_EQ(h, 720);
+  EXPECT_THROW(ParseSize("1280", &w, &h), std::invalid_argument);
+  EXPECT_THROW(ParseSize("12x720", &w, &h), std::invalid_argument);
+  EXPECT_THROW(ParseSize("1280x720x3", &w, &h), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace mcmt::viz

@@ -1,0 +1,109 @@
+#include "viz/collector.h"
+
+#include <cstdlib>
+#include <iostream>
+
+#include "core/lcm_util.h"
+#include "mcmt/detections_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/rig_map_t.hpp"
+
+namespace mcmt::viz {
+
+LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames) : lcm_(lcm), keep_frames_(keep_frames) {
+  subscriptions_.push_back(lcm_.subscribe(kMapChannel, &LcmCollector::OnMap, this));
+  subscriptions_.push_back(lcm_.subscribe(kPoseChannel, &LcmCollector::OnPose, this));
+  subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &LcmCollector::OnDetections, this));
+}
+
+LcmCollector::~LcmCollector() {
+  for (auto* s : subscriptions_) lcm_.unsubscribe(s);
+}
+
+void LcmCollector::DrainLog() {
+  while (lcm_.handle() == 0) {
+  }
+}
+
+void LcmCollector::OnMap(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  ++messages_;
+  rig_map_t msg;
+  std::string error;
+  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+    if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
+    return;
+  }
+  try {
+    map_ = FromRigMapMsg(msg);
+    ++map_count_;
+  } catch (const std::exception& e) {
+    if (stats_.decode_errors++ == 0)
+      std::cerr << "mcmt-viz: warning: " << channel << ": " << e.what() << "\n";
+  }
+}
+
+void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  ++messages_;
+  object_pose_t msg;
+  std::string error;
+  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+    if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
+    return;
+  }
+  stats_.status = msg.status;
+  if (msg.status == object_pose_t::STATUS_LOST) {
+    ++stats_.lost;
+    return;
+  }
+  TrajectoryRow row;
+  row.utime = msg.utime;
+  row.seq = msg.seq;
+  row.rig_from_object = FromPose3d(msg.rig_from_object);
+  row.rms_px = msg.rms_px;
+  row.cameras = msg.num_cameras;
+  row.markers = msg.num_markers;
+  poses_.push_back(row);
+  ++stats_.poses;
+  stats_.latency_ms = msg.latency_ms;
+  stats_.rms_px = msg.rms_px;
+  const int64_t now = NowUtime();
+  arrivals_us_.push_back(now);
+  while (!arrivals_us_.empty() && arrivals_us_.front() < now - 1000000) arrivals_us_.pop_front();
+  stats_.rate_hz = static_cast<double>(arrivals_us_.size());
+}
+
+void LcmCollector::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  ++messages_;
+  detections_t msg;
+  std::string error;
+  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+    if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
+    return;
+  }
+  std::vector<int>& ids = detections_[msg.utime][msg.camera];
+  ids.clear();
+  for (const auto& m : msg.markers) ids.push_back(m.id);
+  if (keep_frames_ > 0)
+    while (detections_.size() > keep_frames_) detections_.erase(detections_.begin());
+}
+
+std::map<std::string, std::vector<int>> LcmCollector::DetectionsAt(int64_t utime) const {
+  // Cameras of one frame share its utime; a small tolerance covers cameras stamped apart.
+  constexpr int64_t kToleranceUs = 2000;
+  std::map<std::string, std::vector<int>> out;
+  std::map<std::string, int64_t> best_gap;
+  for (auto it = detections_.lower_bound(utime - kToleranceUs);
+       it != detections_.end() && it->first <= utime + kToleranceUs; ++it) {
+    const int64_t gap = std::abs(it->first - utime);
+    for (const auto& [camera, ids] : it->second) {
+      auto g = best_gap.find(camera);
+      if (g == best_gap.end() || gap < g->second) {
+        best_gap[camera] = gap;
+        out[camera] = ids;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace mcmt::viz

@@ -1,0 +1,65 @@
+// Collects what the viewer shows from LCM (live or a log through the file:// provider): the newest
+// MCMT_MAP, the poses on MCMT_POSE and the marker ids on MCMT_DETECTIONS_.* per frame utime.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/files.h"
+
+namespace mcmt::viz {
+
+// Live statistics of the pose stream (for the overlay).
+struct PoseStats {
+  int64_t poses = 0;          // poses with a valid pose (tracking or ambiguous)
+  int64_t lost = 0;           // STATUS_LOST messages
+  double rate_hz = 0.0;       // poses per second of wall time over the last second
+  double latency_ms = 0.0;    // the newest message's latency_ms (tracker)
+  double rms_px = 0.0;        // the newest message's RMS reprojection error
+  int status = -1;            // the newest message's status
+  int64_t decode_errors = 0;  // messages that did not decode (any channel)
+};
+
+class LcmCollector {
+ public:
+  // keep_frames: detections of at most this many frames (utimes) are kept (0: all, for logs).
+  LcmCollector(lcm::LCM& lcm, size_t keep_frames);
+  ~LcmCollector();
+  LcmCollector(const LcmCollector&) = delete;
+  LcmCollector& operator=(const LcmCollector&) = delete;
+
+  // Reads a whole log (file:// provider) until its end.
+  void DrainLog();
+
+  bool has_map() const { return map_.has_value(); }
+  const RigMap& map() const { return *map_; }
+  int map_count() const { return map_count_; }  // maps received (a new one replaces the old)
+  const std::vector<TrajectoryRow>& poses() const { return poses_; }
+  // Marker ids per camera detected in the frame of `utime` (empty if none known).
+  std::map<std::string, std::vector<int>> DetectionsAt(int64_t utime) const;
+  const PoseStats& stats() const { return stats_; }
+  int64_t messages() const { return messages_; }
+
+ private:
+  void OnMap(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+
+  lcm::LCM& lcm_;
+  size_t keep_frames_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  std::optional<RigMap> map_;
+  int map_count_ = 0;
+  std::vector<TrajectoryRow> poses_;
+  std::map<int64_t, std::map<std::string, std::vector<int>>> detections_;
+  std::deque<int64_t> arrivals_us_;  // wall time of recent poses (rate)
+  PoseStats stats_;
+  int64_t messages_ = 0;
+};
+
+}  // namespace mcmt::viz

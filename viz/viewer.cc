@@ -1,0 +1,370 @@
+#include "viz/viewer.h"
+
+#include <mrpt/gui/CDisplayWindow3D.h>
+#include <mrpt/opengl/CFBORender.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "core/lcm_util.h"
+
+namespace mcmt::viz {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::string FrameOverlay(const std::vector<TrajectoryRow>& rows, int index) {
+  if (index < 0 || rows.empty()) return "no pose";
+  const TrajectoryRow& r = rows[index];
+  char text[200];
+  std::snprintf(text, sizeof(text), "frame %d/%zu  seq %lld  t %.3f s  RMS %.3f px  cameras %d  markers %d",
+                index + 1, rows.size(), static_cast<long long>(r.seq), 1e-6 * static_cast<double>(r.utime),
+                r.rms_px, r.cameras, r.markers);
+  return text;
+}
+
+}  // namespace
+
+bool ViewerOptions::NeedsLiveLcm() const {
+  if (!log_path.empty()) return false;
+  if (!Headless()) return true;  // the live window always listens
+  return map_path.empty() || max_poses > 0;
+}
+
+void ViewerOptions::Validate() const {
+  scene.Validate();
+  if (max_poses < 0)
+    throw std::invalid_argument("--max-poses: expected >= 0, got " + std::to_string(max_poses));
+  if (!(timeout_s > 0)) throw std::invalid_argument("--timeout: expected > 0 seconds");
+  if (!(redraw_hz > 0 && redraw_hz <= 240)) throw std::invalid_argument("--redraw-hz: expected in (0, 240]");
+  if (!initial_trajectory_path.empty() && initial_map_path.empty())
+    throw std::invalid_argument("--initial-trajectory needs --initial-map");
+}
+
+void LoadVizSection(const YamlSection& s, ViewerOptions* o) {
+  s.CheckKnownKeys({"width", "height", "rays", "legend", "residual_scale_px", "trail_max", "azimuth_deg",
+                    "elevation_deg", "fov_deg", "redraw_hz", "follow"});
+  o->scene.width = s.GetInt("width", o->scene.width);
+  o->scene.height = s.GetInt("height", o->scene.height);
+  o->scene.rays = s.GetBool("rays", o->scene.rays);
+  o->scene.legend = s.GetBool("legend", o->scene.legend);
+  o->scene.residual_scale_px = s.GetDouble("residual_scale_px", o->scene.residual_scale_px);
+  o->scene.trail_max = s.GetInt("trail_max", o->scene.trail_max);
+  o->scene.azimuth_deg = s.GetDouble("azimuth_deg", o->scene.azimuth_deg);
+  o->scene.elevation_deg = s.GetDouble("elevation_deg", o->scene.elevation_deg);
+  o->scene.fov_deg = s.GetDouble("fov_deg", o->scene.fov_deg);
+  o->redraw_hz = s.GetPositiveDouble("redraw_hz", o->redraw_hz);
+  o->follow = s.GetBool("follow", o->follow);
+}
+
+std::string NoDisplayReason() {
+  const char* x = std::getenv("DISPLAY");
+  const char* w = std::getenv("WAYLAND_DISPLAY");
+  if ((x && *x) || (w && *w)) return "";
+  return "no display (DISPLAY and WAYLAND_DISPLAY are unset)";
+}
+
+void ParseSize(const std::string& text, int* width, int* height) {
+  int w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 16384 || h > 16384)
+    throw std::invalid_argument("--size: expected WIDTHxHEIGHT (16..16384), e.g. 1280x720, got '" + text +
+                                "'");
+  *width = w;
+  *height = h;
+}
+
+void WritePng(const std::string& path, const cv::Mat& bgr) {
+  std::vector<uchar> buffer;
+  if (!cv::imencode(".png", bgr, buffer)) throw std::runtime_error(path + ": cannot encode PNG");
+  WriteFileAtomic(path, std::string(buffer.begin(), buffer.end()));
+}
+
+Viewer::Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log)
+    : options_(std::move(options)), lcm_(lcm), is_log_(is_log) {
+  options_.Validate();
+  if (!options_.map_path.empty()) {
+    file_map_ = ReadMap(options_.map_path);
+    have_file_map_ = true;
+  }
+  if (!options_.initial_map_path.empty()) {
+    file_initial_map_ = ReadMap(options_.initial_map_path);
+    have_initial_ = true;
+    std::string traj = options_.initial_trajectory_path;
+    if (traj.empty()) {
+      const fs::path beside = fs::path(options_.initial_map_path).parent_path() / "trajectory_initial.csv";
+      if (fs::exists(beside)) traj = beside.string();
+    }
+    if (!traj.empty()) file_initial_trajectory_ = ReadTrajectory(traj);
+  }
+  if (!options_.trajectory_path.empty()) {
+    file_trajectory_ = ReadTrajectory(options_.trajectory_path);
+    have_file_trajectory_ = true;
+  }
+}
+
+std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
+  PanelInput refined;
+  refined.title = have_initial_ ? "refined" : "map";
+  if (have_file_map_)
+    refined.map = file_map_;
+  else if (collector && collector->has_map())
+    refined.map = collector->map();
+  else
+    return {};
+  if (have_file_trajectory_)
+    refined.trajectory = file_trajectory_;
+  else if (collector)
+    refined.trajectory = collector->poses();
+  std::vector<PanelInput> panels;
+  if (have_initial_) {
+    PanelInput initial;
+    initial.title = "initial";
+    initial.map = file_initial_map_;
+    initial.trajectory = file_initial_trajectory_;
+    panels.push_back(std::move(initial));
+  }
+  panels.push_back(std::move(refined));
+  return panels;
+}
+
+int Viewer::Run() {
+  std::unique_ptr<LcmCollector> collector;
+  if (lcm_) collector = std::make_unique<LcmCollector>(*lcm_, is_log_ ? 0 : 300);
+  if (collector && is_log_) {
+    collector->DrainLog();
+    if (!have_file_map_ && !collector->has_map())
+      throw std::runtime_error(options_.log_path + ": no MCMT_MAP message in the log (give --map map.yaml)");
+  }
+  if (!lcm_ && !have_file_map_) throw std::runtime_error("nothing to show: give --map, --log or --lcm-url");
+  return options_.Headless() ? RunHeadless(collector.get()) : RunWindow(collector.get());
+}
+
+int Viewer::RunHeadless(LcmCollector* collector) {
+  if (collector && !is_log_) {
+    // Live: wait for a map and enough poses.
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout_s);
+    auto ready = [&] {
+      return (have_file_map_ || collector->has_map()) &&
+             static_cast<int64_t>(collector->poses().size()) >= options_.max_poses;
+    };
+    while (!ready() && Clock::now() < deadline) lcm_->handleTimeout(20);
+    if (!ready()) {
+      char text[200];
+      std::snprintf(text, sizeof(text), "timed out after %.1f s waiting for %s (got %s and %zu poses)",
+                    options_.timeout_s, options_.max_poses > 0 ? "a map and --max-poses poses" : "a map",
+                    (have_file_map_ || collector->has_map()) ? "a map" : "no MCMT_MAP",
+                    collector->poses().size());
+      throw std::runtime_error(text);
+    }
+  }
+  VizScene scene(options_.scene);
+  scene.SetPanels(Panels(collector));
+  const auto& rows = scene.trajectory();
+  auto detections_at = [&](int index) {
+    if (!collector || index < 0) return std::map<std::string, std::vector<int>>();
+    return collector->DetectionsAt(rows[index].utime);
+  };
+
+  if (!rows.empty() || options_.frame != -1) {
+    const int n = static_cast<int>(rows.size());
+    const int index = options_.frame >= 0 ? options_.frame : n + options_.frame;
+    if (index < 0 || index >= n)
+      throw std::invalid_argument("--frame " + std::to_string(options_.frame) + ": the trajectory has " +
+                                  std::to_string(n) + " frames");
+    scene.SetCurrentFrame(index);
+    scene.SetDetections(detections_at(index));
+  }
+  scene.SetOverlay({FrameOverlay(rows, scene.current_frame())});
+
+  if (!options_.save_scene_path.empty()) {
+    scene.ApplyViews();
+    const std::string tmp = options_.save_scene_path + ".tmp." + std::to_string(::getpid());
+    if (!scene.scene()->saveToFile(tmp)) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(options_.save_scene_path + ": cannot write the scene");
+    }
+    if (std::rename(tmp.c_str(), options_.save_scene_path.c_str()) != 0) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(options_.save_scene_path + ": cannot rename the written scene into place");
+    }
+    std::cout << "mcmt-viz: wrote " << options_.save_scene_path << "\n";
+  }
+  if (options_.snapshot_path.empty() && options_.video_dir.empty()) return 0;
+
+  mrpt::opengl::CFBORender render(static_cast<unsigned>(options_.scene.width),
+                                  static_cast<unsigned>(options_.scene.height));
+  if (!options_.snapshot_path.empty()) {
+    WritePng(options_.snapshot_path, scene.Render(&render));
+    std::cout << "mcmt-viz: wrote " << options_.snapshot_path << " (" << options_.scene.width << "x"
+              << options_.scene.height << ")\n";
+  }
+  if (!options_.video_dir.empty()) {
+    if (rows.empty())
+      throw std::runtime_error("--video: no trajectory to render (give --trajectory or a log with poses)");
+    std::error_code ec;
+    fs::create_directories(options_.video_dir, ec);
+    if (ec) throw std::runtime_error(options_.video_dir + ": cannot create the folder: " + ec.message());
+    const int n = static_cast<int>(rows.size());
+    for (int i = 0; i < n; ++i) {
+      scene.SetCurrentFrame(i);
+      scene.SetDetections(detections_at(i));
+      scene.SetOverlay({FrameOverlay(rows, i)});
+      char name[32];
+      std::snprintf(name, sizeof(name), "frame_%06d.png", i);
+      WritePng((fs::path(options_.video_dir) / name).string(), scene.Render(&render));
+    }
+    std::cout << "mcmt-viz: wrote " << n << " frames to " << options_.video_dir << "\n";
+  }
+  return 0;
+}
+
+int Viewer::RunWindow(LcmCollector* collector) {
+  const std::string reason = NoDisplayReason();
+  if (!reason.empty()) {
+    std::cerr << "mcmt-viz: " << reason
+              << ": the live window cannot open; render headless instead with --snapshot out.png, "
+                 "--save-scene out.3Dscene or --video DIR\n";
+    return 1;
+  }
+  mrpt::gui::CDisplayWindow3D::Ptr win;
+  try {
+    win = mrpt::gui::CDisplayWindow3D::Create("mcmt-viz", options_.scene.width, options_.scene.height);
+  } catch (const std::exception& e) {
+    std::cerr << "mcmt-viz: cannot open the live window (" << e.what()
+              << "); render headless instead with --snapshot, --save-scene or --video\n";
+    return 1;
+  }
+  VizScene scene(options_.scene);
+  scene.EnableLegendViewport();
+  bool follow = options_.follow;
+  int map_count = -1;
+  size_t poses_shown = 0;
+  auto push_view = [&](const ViewCamera& v) {
+    win->setCameraPointingToPoint(static_cast<float>(v.pointing.x()), static_cast<float>(v.pointing.y()),
+                                  static_cast<float>(v.pointing.z()));
+    win->setCameraAzimuthDeg(static_cast<float>(v.azimuth_deg));
+    win->setCameraElevationDeg(static_cast<float>(v.elevation_deg));
+    win->setCameraZoom(static_cast<float>(v.distance));
+    win->setFOV(static_cast<float>(v.fov_deg));
+  };
+  auto pull_view = [&]() {
+    ViewCamera v = scene.view(scene.num_panels() > 0 ? scene.num_panels() - 1 : 0);
+    float x, y, z;
+    win->getCameraPointingToPoint(x, y, z);
+    v.pointing = Eigen::Vector3d(x, y, z);
+    v.azimuth_deg = win->getCameraAzimuthDeg();
+    v.elevation_deg = win->getCameraElevationDeg();
+    v.distance = win->getCameraZoom();
+    scene.SetView(v);
+  };
+  {
+    auto& ptr = win->get3DSceneAndLock();
+    ptr = scene.scene();
+    win->unlockAccess3DScene();
+  }
+  if (!collector) {  // files only: one static scene
+    auto& ptr = win->get3DSceneAndLock();
+    scene.SetPanels(Panels(nullptr));
+    ptr = scene.scene();
+    win->unlockAccess3DScene();
+    push_view(scene.view(scene.num_panels() - 1));
+  }
+  std::cout << "mcmt-viz: keys: f follow the object, r reset the view, t toggle rays, q quit\n";
+  const auto period = std::chrono::duration<double>(1.0 / options_.redraw_hz);
+  auto next_redraw = Clock::now();
+  bool dirty = true;
+  while (win->isOpen()) {
+    // LCM until the next redraw is due (redraws bounded however fast poses arrive).
+    while (Clock::now() < next_redraw) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(next_redraw - Clock::now());
+      if (collector && !is_log_)
+        lcm_->handleTimeout(std::max<int>(1, static_cast<int>(left.count())));
+      else
+        std::this_thread::sleep_for(left);
+    }
+    next_redraw = Clock::now() + std::chrono::duration_cast<Clock::duration>(period);
+    bool reset = false;
+    if (win->keyHit()) {
+      const int key = win->getPushedKey();
+      if (key == 'f' || key == 'F') follow = !follow;
+      if (key == 'r' || key == 'R') reset = true;
+      if (key == 't' || key == 'T') {
+        auto& ptr = win->get3DSceneAndLock();
+        (void)ptr;
+        scene.SetRaysVisible(!scene.rays_visible());
+        win->unlockAccess3DScene();
+      }
+      if (key == 'q' || key == 'Q' || key == 27) break;
+      dirty = true;
+    }
+    if (collector) {
+      auto& ptr = win->get3DSceneAndLock();
+      const bool new_map = collector->map_count() != map_count && (collector->has_map() || have_file_map_);
+      if (new_map || (map_count < 0 && have_file_map_)) {
+        map_count = collector->map_count();
+        scene.SetPanels(Panels(collector));
+        ptr = scene.scene();
+        poses_shown = scene.trajectory().size();
+        reset = true;
+        dirty = true;
+      }
+      if (scene.HasMap() && !have_file_trajectory_) {
+        const auto& poses = collector->poses();
+        for (; poses_shown < poses.size(); ++poses_shown) {
+          scene.AddPose(poses[poses_shown]);
+          dirty = true;
+        }
+      }
+      if (dirty && scene.HasMap() && scene.current_frame() >= 0)
+        scene.SetDetections(collector->DetectionsAt(scene.trajectory()[scene.current_frame()].utime));
+      const PoseStats& st = collector->stats();
+      char line[200];
+      std::snprintf(
+          line, sizeof(line), "poses %lld (lost %lld)  rate %.1f Hz  latency %.1f ms  RMS %.3f px%s%s",
+          static_cast<long long>(st.poses), static_cast<long long>(st.lost), st.rate_hz, st.latency_ms,
+          st.rms_px, follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
+      scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP ...",
+                        FrameOverlay(scene.trajectory(), scene.current_frame())});
+      win->unlockAccess3DScene();
+    }
+    if (!scene.HasMap()) {
+      if (dirty) win->forceRepaint();
+      dirty = false;
+      continue;
+    }
+    if (reset) {
+      auto& ptr = win->get3DSceneAndLock();
+      (void)ptr;
+      scene.AutoView();
+      win->unlockAccess3DScene();
+      push_view(scene.view(scene.num_panels() - 1));
+      dirty = true;
+    } else {
+      pull_view();  // the mouse may have moved the main view
+    }
+    if (follow && dirty) {
+      scene.FollowObject();
+      push_view(scene.view(scene.num_panels() - 1));
+    }
+    {
+      auto& ptr = win->get3DSceneAndLock();
+      (void)ptr;
+      scene.ApplyViews();  // keeps the side-by-side panels on the main view
+      win->unlockAccess3DScene();
+    }
+    win->forceRepaint();
+    dirty = false;
+  }
+  return 0;
+}
+
+}  // namespace mcmt::viz

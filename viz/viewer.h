@@ -1,0 +1,70 @@
+// mcmt-viz: gathers a map, trajectories and detections from files, a log or live LCM, then either
+// renders headless (PNG snapshot, .3Dscene, one PNG per frame) or opens the live MRPT window.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "viz/collector.h"
+#include "viz/scene.h"
+
+namespace mcmt::viz {
+
+struct ViewerOptions {
+  std::string map_path;                 // map.yaml (refined)
+  std::string initial_map_path;         // map_initial.yaml: before/after side by side
+  std::string trajectory_path;          // trajectory.csv of the refined map
+  std::string initial_trajectory_path;  // default: trajectory_initial.csv beside the initial map
+  std::string log_path;                 // LCM log read through the file:// provider
+  std::string snapshot_path;            // PNG
+  std::string save_scene_path;          // MRPT .3Dscene (SceneViewer3D)
+  std::string video_dir;                // one PNG per trajectory frame: frame_000000.png ...
+  int frame = -1;                       // trajectory row shown (negative: from the end, -1 = last)
+  int max_poses = 0;                    // live headless: wait for this many poses (and a map)
+  double timeout_s = 30.0;              // live headless: give up after this long
+  double redraw_hz = 30.0;              // live window: redraws per second at most
+  bool follow = false;                  // live window: start following the object
+  SceneOptions scene;
+
+  bool Headless() const { return !snapshot_path.empty() || !save_scene_path.empty() || !video_dir.empty(); }
+  // Whether the run needs LCM traffic (a log, or live messages).
+  bool NeedsLiveLcm() const;
+  void Validate() const;  // throws std::invalid_argument naming the option
+};
+
+// Reads the optional "viz:" section of a rig YAML into the options (keys: width, height, rays,
+// legend, residual_scale_px, trail_max, azimuth_deg, elevation_deg, fov_deg, redraw_hz, follow).
+void LoadVizSection(const YamlSection& section, ViewerOptions* options);
+
+// Why the live window cannot open here, or empty when a display is available.
+std::string NoDisplayReason();
+
+// "1280x720" -> width, height; throws std::invalid_argument.
+void ParseSize(const std::string& text, int* width, int* height);
+
+// Encodes as PNG and writes atomically (temporary file + rename).
+void WritePng(const std::string& path, const cv::Mat& bgr);
+
+class Viewer {
+ public:
+  // lcm: a log (file:// provider, is_log) or live traffic; may be null when neither is needed.
+  Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log);
+  int Run();
+
+ private:
+  std::vector<PanelInput> Panels(const LcmCollector* collector) const;
+  int RunHeadless(LcmCollector* collector);
+  int RunWindow(LcmCollector* collector);
+
+  ViewerOptions options_;
+  lcm::LCM* lcm_;
+  bool is_log_;
+  RigMap file_map_, file_initial_map_;
+  bool have_file_map_ = false, have_initial_ = false;
+  std::vector<TrajectoryRow> file_trajectory_, file_initial_trajectory_;
+  bool have_file_trajectory_ = false;
+};
+
+}  // namespace mcmt::viz
