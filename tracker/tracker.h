@@ -166,36 +166,6 @@ class MotionModel {
   Rigid3 pose_[2];
 };
 
-// Frame assembly with the cameras known in advance (the map's): core's FrameSynchronizer learns the
-// cameras from the traffic, so right after start it would close the first frame on the first camera's
-// message. Here every expected camera is waited for from the start, until it has been silent for
-// camera_timeout_us (message time); otherwise the same rules (tolerance, deadline after the first
-// arrival, out-of-order and duplicate views dropped, a complete frame closes all older ones).
-class FrameAssembler {
- public:
-  FrameAssembler(FrameSyncOptions options, std::set<std::string> expected_cameras);
-  std::vector<SyncedFrame> Add(const detections_t& detections, int64_t arrival_us);
-  std::vector<SyncedFrame> Poll(int64_t now_us);
-  std::vector<SyncedFrame> Flush();
-  std::set<std::string> StaleCameras() const;  // expected cameras not waited for any more
-  const FrameSyncStats& stats() const { return stats_; }
-
- private:
-  bool IsAlive(const std::string& camera) const;
-  bool HasAllAlive(const SyncedFrame& frame) const;
-  std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
-
-  FrameSyncOptions options_;
-  std::set<std::string> expected_;
-  std::map<int64_t, SyncedFrame> pending_;     // by frame utime
-  std::map<int64_t, int64_t> first_arrival_;   // frame utime -> arrival of its first view
-  std::map<std::string, int64_t> last_utime_;  // per camera, newest message utime
-  int64_t first_utime_ = INT64_MIN;            // of the first message: never-heard cameras count from it
-  int64_t newest_utime_ = INT64_MIN;
-  int64_t emitted_until_ = INT64_MIN;
-  FrameSyncStats stats_;
-};
-
 struct TrackerStats {
   int64_t frames = 0;   // frames solved (with a map)
   int64_t tracked = 0;  // TRACKING or AMBIGUOUS
@@ -258,7 +228,7 @@ class TrackerNode {
   TrackerNodeOptions options_;
   std::unique_ptr<PoseEstimator> estimator_;
   int64_t map_utime_ = INT64_MIN;
-  std::unique_ptr<FrameAssembler> sync_;
+  std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   MotionModel motion_;
   int64_t last_published_utime_ = INT64_MIN;
   std::vector<lcm::Subscription*> subscriptions_;

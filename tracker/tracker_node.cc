@@ -62,9 +62,8 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
   sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
   sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
-  std::set<std::string> cameras;
-  for (const auto& c : map.cameras) cameras.insert(c.name);
-  sync_ = std::make_unique<FrameAssembler>(sync, cameras);
+  for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
+  sync_ = std::make_unique<FrameSynchronizer>(sync);
   reported_stale_.clear();
   if (switching) stats_.map_switches++;
   if (!rig_.markers.dictionary.empty() && !map.dictionary.empty() &&
