@@ -574,14 +574,13 @@ MapResult Mapper::Solve() {
     std::vector<int> disconnected;
     for (int m = 0; m < num_markers; ++m) {
       if (marker_placed[m]) continue;
-      int64_t with_placed = 0, co_observed = 0;
+      int64_t with_placed = 0;
       int best_support = 0;
       int64_t best_events = 0;
       int best_other = -1;
       for (const GraphEdge& e : marker_edges) {
         if (e.a != m && e.b != m) continue;
         const int other = e.a == m ? e.b : e.a;
-        co_observed += e.events;
         if (!marker_placed[other]) continue;
         with_placed += e.events;
         if (best_other < 0 || e.support > best_support) {
@@ -599,13 +598,15 @@ MapResult Mapper::Solve() {
             << " agrees in only " << best_support << " of " << best_events << " frames seen together";
         r.reason = why.str();
         report.rejected_markers.push_back(r);
-      } else if (co_observed + marker_obs_count[m] < 2 * o.min_marker_support && with_placed > 0) {
+      } else if (with_placed > 0) {
         r.reason = "seen together with the object's markers in only " + std::to_string(with_placed) +
                    " frames (< min_marker_support " + std::to_string(o.min_marker_support) +
                    "): cannot verify it is on the object";
         report.rejected_markers.push_back(r);
-      } else if (marker_obs_count[m] < o.min_marker_support) {
-        r.reason = "only " + std::to_string(marker_obs_count[m]) + " observations";
+      } else if (marker_obs_count[m] < std::max(10, o.min_marker_support)) {
+        r.reason =
+            "seen in only " + std::to_string(marker_obs_count[m]) +
+            " camera frames, never together with the object's markers: cannot verify it is on the object";
         report.rejected_markers.push_back(r);
       } else {
         disconnected.push_back(m);

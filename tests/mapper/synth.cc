@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
 
+#include "core/config.h"
 #include "core/lcm_util.h"
 #include "core/marker.h"
+#include "mcmt/mapper_command_t.hpp"
 
 namespace mcmt {
 namespace testing {
@@ -243,6 +247,45 @@ MapErrors CompareToTruth(const SynthScene& scene, const RigMap& map,
     }
   }
   return e;
+}
+
+std::string WriteSceneRig(const std::string& dir, const SynthScene& scene, double marker_size,
+                          const std::string& extra) {
+  std::ofstream rig(dir + "/rig.yaml");
+  rig << "markers:\n  dictionary: DICT_6X6_250\n  size: " << marker_size << "\ncameras:\n";
+  for (size_t c = 0; c < scene.names.size(); ++c) {
+    WriteIntrinsicsOpenCv(dir + "/" + scene.names[c] + ".yml", scene.models[c]);
+    rig << "  - name: " << scene.names[c] << "\n    intrinsics: " << scene.names[c] << ".yml\n";
+  }
+  rig << "sync:\n  tolerance_ms: 5\n" << extra;
+  return dir + "/rig.yaml";
+}
+
+bool WriteSceneLog(const std::string& path, const SynthScene& scene, bool add_foreign) {
+  lcm::LogFile log(path, "w");
+  if (!log.good()) return false;
+  int64_t event = 0;
+  bool ok = true;
+  auto write = [&](const std::string& channel, const std::vector<uint8_t>& data, int64_t utime) {
+    lcm::LogEvent e;
+    e.eventnum = event++;
+    e.timestamp = utime;
+    e.channel = channel;
+    e.datalen = static_cast<int32_t>(data.size());
+    e.data = const_cast<uint8_t*>(data.data());
+    ok = ok && log.writeEvent(&e) == 0;
+  };
+  for (size_t i = 0; i < scene.detections.size(); ++i) {
+    const detections_t& d = scene.detections[i];
+    write(DetectionsChannel(d.camera), Encode(d), d.utime);
+    if (add_foreign && i == 3) {
+      mapper_command_t other;
+      other.utime = d.utime;
+      other.command = "not detections";
+      write(DetectionsChannel("cam0"), Encode(other), d.utime);
+    }
+  }
+  return ok;
 }
 
 }  // namespace testing

@@ -70,5 +70,12 @@ struct MapErrors {
 MapErrors CompareToTruth(const SynthScene& scene, const RigMap& map,
                          const std::vector<TrajectoryRow>& trajectory, double marker_size = 0.04);
 
+// Writes DIR/rig.yaml (+ camK.yml intrinsics) for the scene, `extra` appended; returns the rig path.
+std::string WriteSceneRig(const std::string& dir, const SynthScene& scene, double marker_size = 0.04,
+                          const std::string& extra = "");
+// Writes the scene's detections as an LCM log (channels MCMT_DETECTIONS_<CAM>); with add_foreign, one
+// message of another type on MCMT_DETECTIONS_CAM0. Returns false when the log cannot be written.
+bool WriteSceneLog(const std::string& path, const SynthScene& scene, bool add_foreign = false);
+
 }  // namespace testing
 }  // namespace mcmt

@@ -54,42 +54,13 @@ std::string TempDir(const std::string& name) {
   return dir.string();
 }
 
-// rig.yaml + camK.yml for a synthetic scene.
 std::string WriteRig(const std::string& dir, const testing::SynthScene& scene,
                      const std::string& extra = "") {
-  std::ofstream rig(dir + "/rig.yaml");
-  rig << "markers:\n  dictionary: DICT_6X6_250\n  size: 0.04\ncameras:\n";
-  for (size_t c = 0; c < scene.names.size(); ++c) {
-    WriteIntrinsicsOpenCv(dir + "/" + scene.names[c] + ".yml", scene.models[c]);
-    rig << "  - name: " << scene.names[c] << "\n    intrinsics: " << scene.names[c] << ".yml\n";
-  }
-  rig << "sync:\n  tolerance_ms: 5\n" << extra;
-  return dir + "/rig.yaml";
+  return testing::WriteSceneRig(dir, scene, 0.04, extra);
 }
 
 void WriteLog(const std::string& path, const testing::SynthScene& scene, bool add_foreign) {
-  lcm::LogFile log(path, "w");
-  ASSERT_TRUE(log.good());
-  int64_t event = 0;
-  auto write = [&](const std::string& channel, const std::vector<uint8_t>& data, int64_t utime) {
-    lcm::LogEvent e;
-    e.eventnum = event++;
-    e.timestamp = utime;
-    e.channel = channel;
-    e.datalen = static_cast<int32_t>(data.size());
-    e.data = const_cast<uint8_t*>(data.data());
-    ASSERT_EQ(log.writeEvent(&e), 0);
-  };
-  for (size_t i = 0; i < scene.detections.size(); ++i) {
-    const detections_t& d = scene.detections[i];
-    write(DetectionsChannel(d.camera), Encode(d), d.utime);
-    if (add_foreign && i == 3) {  // a message of another type on a detections channel
-      mapper_command_t other;
-      other.utime = d.utime;
-      other.command = "not detections";
-      write(DetectionsChannel("cam0"), Encode(other), d.utime);
-    }
-  }
+  ASSERT_TRUE(testing::WriteSceneLog(path, scene, add_foreign)) << path;
 }
 
 TEST(MapperProcess, Help) {

@@ -1,0 +1,150 @@
+// The mapper on the simulator's detections (mcmt_sim, in-process: the same generator as
+// `mcmt-sim --detections-only`) with the paper's rig and objects, evaluated by the simulator's own
+// metrics (sim::Evaluate: rigid alignment, then the paper's errors).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "mapper/mapper.h"
+#include "sim/eval.h"
+#include "sim/sim.h"
+
+namespace mcmt {
+namespace {
+
+struct SimRun {
+  sim::GroundTruth truth;
+  std::vector<detections_t> detections;
+};
+
+SimRun Simulate(sim::ObjectKind kind, double radius, int frames, uint64_t seed, double false_rate = 0.0,
+                double drop_rate = 0.0) {
+  SimRun run;
+  sim::RigOptions ro;
+  ro.num_cameras = 5;
+  ro.radius = radius;
+  ro.seed = seed;
+  sim::ObjectOptions oo;
+  oo.kind = kind;
+  oo.seed = seed;
+  if (kind == sim::ObjectKind::kPentagon) oo.marker_size = 0.025;
+  sim::TrajectoryOptions to;
+  to.frames = frames;
+  to.seed = seed;
+  run.truth.cameras = sim::MakeRig(ro);
+  const sim::SimObject object = sim::MakeObject(oo);
+  run.truth.object = sim::ObjectKindNames()[static_cast<int>(kind)];
+  run.truth.markers = object.markers;
+  run.truth.marker_size = object.Sizes().default_size;
+  for (const auto& m : object.markers) run.truth.marker_sizes[m.id] = m.size;
+  run.truth.frames = sim::MakeTrajectory(to);
+  sim::DetectionSimOptions dso;
+  dso.false_rate = false_rate;
+  dso.drop_rate = drop_rate;
+  for (size_t c = 0; c < run.truth.cameras.size(); ++c) {
+    std::mt19937_64 rng(seed * 100 + c);
+    for (const sim::SimFrame& f : run.truth.frames) {
+      detections_t d;
+      if (sim::SimulateDetections(run.truth.cameras[c], object, f, dso, rng, &d)) run.detections.push_back(d);
+    }
+  }
+  std::stable_sort(run.detections.begin(), run.detections.end(),
+                   [](const detections_t& a, const detections_t& b) { return a.utime < b.utime; });
+  return run;
+}
+
+MapperOptions OptionsFor(const sim::GroundTruth& truth, const std::vector<std::string>& cameras = {}) {
+  MapperOptions o;
+  if (cameras.empty())
+    for (const auto& c : truth.cameras) o.cameras.push_back(c.name);
+  else
+    o.cameras = cameras;
+  o.sizes.default_size = truth.marker_size;
+  for (const auto& [id, size] : truth.marker_sizes)
+    if (size != truth.marker_size) o.sizes.overrides[id] = size;
+  o.dictionary = truth.dictionary;
+  return o;
+}
+
+MapResult Map(const std::vector<detections_t>& detections, const MapperOptions& options) {
+  Mapper mapper(options);
+  for (const auto& d : detections) mapper.Add(d);
+  return mapper.Solve();
+}
+
+void ExpectIssueBounds(const sim::GroundTruth& truth, const MapResult& result, const std::string& what) {
+  const sim::EvalResult e = sim::Evaluate(truth, &result.map, &result.trajectory);
+  EXPECT_EQ(e.mapped_cameras, static_cast<int>(result.map.cameras.size())) << what;
+  EXPECT_EQ(e.mapped_markers, e.gt_markers) << what;
+  EXPECT_LT(e.object_translation_aligned_mm.mean, 0.5) << what;
+  EXPECT_LT(e.object_rotation_deg.mean, 0.3) << what;
+  EXPECT_LT(e.camera_position_mm.mean, 2.0) << what;
+  EXPECT_LT(e.configuration_mm.mean, 0.3) << what;
+  EXPECT_GT(e.frames_with_pose, 0.8 * e.gt_frames) << what;
+  ::testing::Test::RecordProperty(what, std::to_string(e.object_translation_aligned_mm.mean) + " mm, " +
+                                            std::to_string(e.object_rotation_deg.mean) + " deg, cam " +
+                                            std::to_string(e.camera_position_mm.mean) + " mm, config " +
+                                            std::to_string(e.configuration_mm.mean) + " mm");
+}
+
+TEST(MapperSim, PapersObjectsAtThreeRadii) {
+  const std::vector<std::pair<sim::ObjectKind, std::string>> objects = {
+      {sim::ObjectKind::kFourSided, "four_sided"},
+      {sim::ObjectKind::kBox, "box"},
+      {sim::ObjectKind::kPentagon, "pentagon"}};
+  for (const auto& [kind, name] : objects) {
+    for (double radius : {0.7, 1.0, 1.3}) {
+      const SimRun run = Simulate(kind, radius, 200, 3);
+      const std::string what = name + " at " + std::to_string(radius) + " m";
+      MapResult result;
+      ASSERT_NO_THROW(result = Map(run.detections, OptionsFor(run.truth))) << what;
+      EXPECT_EQ(result.map.cameras.size(), 5u) << what;
+      EXPECT_TRUE(result.report.rejected_markers.empty()) << what;
+      ExpectIssueBounds(run.truth, result, what);
+    }
+  }
+}
+
+TEST(MapperSim, EveryThreeCameraSubsetSucceeds) {
+  const SimRun run = Simulate(sim::ObjectKind::kFourSided, 1.0, 200, 5);
+  int subsets = 0;
+  for (int a = 0; a < 5; ++a)
+    for (int b = a + 1; b < 5; ++b)
+      for (int c = b + 1; c < 5; ++c) {
+        const std::vector<std::string> keep = {run.truth.cameras[a].name, run.truth.cameras[b].name,
+                                               run.truth.cameras[c].name};
+        std::vector<detections_t> subset;
+        for (const auto& d : run.detections)
+          if (std::find(keep.begin(), keep.end(), d.camera) != keep.end()) subset.push_back(d);
+        const std::string what = keep[0] + "+" + keep[1] + "+" + keep[2];
+        MapResult result;
+        ASSERT_NO_THROW(result = Map(subset, OptionsFor(run.truth, keep))) << what;
+        EXPECT_EQ(result.map.cameras.size(), 3u) << what;
+        ExpectIssueBounds(run.truth, result, what);
+        ++subsets;
+      }
+  EXPECT_EQ(subsets, 10);
+}
+
+TEST(MapperSim, FalseDetectionsAndDroppedFrames) {
+  const SimRun run = Simulate(sim::ObjectKind::kBox, 1.0, 300, 7, 0.1, 0.05);
+  std::set<int> false_ids;
+  for (const auto& d : run.detections)
+    for (const auto& m : d.markers)
+      if (!run.truth.FindMarker(m.id)) false_ids.insert(m.id);
+  ASSERT_FALSE(false_ids.empty());
+  const MapResult result = Map(run.detections, OptionsFor(run.truth));
+  ExpectIssueBounds(run.truth, result, "box, 10 % false detections, 5 % dropped frames");
+  // Every false id is reported and none is mapped; no true marker is rejected.
+  std::set<int> reported;
+  for (const RejectedMarker& r : result.report.rejected_markers) {
+    reported.insert(r.id);
+    EXPECT_TRUE(false_ids.count(r.id)) << "true marker " << r.id << " rejected: " << r.reason;
+  }
+  for (int id : false_ids) EXPECT_TRUE(reported.count(id)) << "false id " << id << " not reported";
+  for (const MapMarker& m : result.map.markers) EXPECT_NE(run.truth.FindMarker(m.id), nullptr) << m.id;
+}
+
+}  // namespace
+}  // namespace mcmt
