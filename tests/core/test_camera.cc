@@ -213,3 +213,35 @@ TEST(Camera, StrongBarrelDistortionRoundTripOverWholeImage) {
 
 }  // namespace
 }  // namespace mcmt
+
+#include <ceres/jet.h>
+
+namespace mcmt {
+namespace {
+
+// The templated Project (what Ceres' automatic differentiation runs) gives the same derivatives as
+// the analytic Jacobian, on the optical axis too.
+TEST(Camera, JetDerivativesMatchAnalyticJacobian) {
+  using Jet = ceres::Jet<double, 3>;
+  for (const CameraModel& cam : TestCameras()) {
+    auto points = RandomPoints(cam, 100, 5);
+    points.emplace_back(0, 0, 1.5);
+    for (const auto& p : points) {
+      Jet pj[3] = {Jet(p.x(), 0), Jet(p.y(), 1), Jet(p.z(), 2)};
+      Jet out[2];
+      ASSERT_TRUE(cam.Project(pj, out));
+      Eigen::Vector2d px;
+      Eigen::Matrix<double, 2, 3> j;
+      ASSERT_TRUE(cam.Project(p, &px, &j));
+      EXPECT_NEAR(out[0].a, px.x(), 1e-9);
+      EXPECT_NEAR(out[1].a, px.y(), 1e-9);
+      for (int r = 0; r < 2; ++r)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(out[r].v[c], j(r, c), 1e-9 * std::max(1.0, std::abs(j(r, c))))
+              << DistortionModelName(cam.model) << " " << r << "," << c;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mcmt
