@@ -2,8 +2,10 @@
 // Live use: a frame is complete as soon as every alive camera has reported it, or when its deadline
 // (first arrival + deadline) passes, so one slow or dead camera never stalls the others. A camera
 // is alive while it has reported within `camera_timeout_us` (in message utime).
-// Out-of-order messages (older than a frame already emitted) and duplicates (same camera, same
-// frame) are dropped and counted.
+// A frame that can no longer complete (every alive camera missing from it has already reported a
+// newer capture: cameras report in order) leaves at once, incomplete, without waiting for its deadline.
+// Out-of-order messages (older than a frame already emitted, including late views of a frame
+// emitted by its deadline) and duplicates (same camera, same frame) are dropped and counted.
 #pragma once
 
 #include <cstdint>

@@ -123,9 +123,29 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   // The newest pending frame that every alive camera has reported closes it and everything older
   // (cameras report in order, so an older frame missing a camera will not get it any more).
   const std::set<std::string> alive = AliveCameras();
+  int64_t emit_until = INT64_MIN;
   for (auto it = pending_.rbegin(); it != pending_.rend(); ++it)
-    if (HasAll(it->second, alive)) return EmitUpTo(it->first);
-  return {};
+    if (HasAll(it->second, alive)) {
+      emit_until = it->first;
+      break;
+    }
+  // A frame that cannot complete any more: every alive camera missing from it has already reported a
+  // newer capture (cameras report in order). Emitted at once as incomplete instead of waiting for the
+  // deadline (cameras at different rates, or clocks further apart than the tolerance).
+  for (auto it = pending_.upper_bound(emit_until); it != pending_.end(); ++it) {
+    bool hopeless = true;
+    for (const auto& cam : alive) {
+      if (HasCamera(it->second, cam)) continue;
+      const auto last_seen = last_utime_.find(cam);
+      if (last_seen == last_utime_.end() || last_seen->second <= it->first + options_.tolerance_us) {
+        hopeless = false;
+        break;
+      }
+    }
+    if (hopeless) emit_until = it->first;
+  }
+  if (emit_until == INT64_MIN) return {};
+  return EmitUpTo(emit_until);
 }
 
 std::vector<SyncedFrame> FrameSynchronizer::Poll(int64_t now_us) {

@@ -79,14 +79,19 @@ TEST(FrameSync, ToleranceSeparatesFrames) {
   options.cameras = {"a", "b"};
   FrameSynchronizer sync(options);
   EXPECT_TRUE(sync.Add(View("a", 0, 0), 0).empty());
-  // 2500 us later: not the same capture, a frame of its own.
-  EXPECT_TRUE(sync.Add(View("b", 0, 2500), 0).empty());
-  const auto flushed = sync.Flush();
-  ASSERT_EQ(flushed.size(), 2u);
-  EXPECT_EQ(flushed[0].views.size(), 1u);
-  EXPECT_FALSE(flushed[0].complete);
-  EXPECT_EQ(flushed[1].views.size(), 1u);
-  EXPECT_EQ(sync.stats().frames_incomplete, 2);
+  // 2500 us later: not the same capture, a frame of its own. a's frame cannot get b any more (b is
+  // past it), so it leaves at once, incomplete.
+  const auto first = sync.Add(View("b", 0, 2500), 0);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(CamerasOf(first[0]), std::vector<std::string>{"a"});
+  EXPECT_FALSE(first[0].complete);
+  // 1500 us after b: joins b's frame.
+  const auto second = sync.Add(View("a", 0, 4000), 0);
+  ASSERT_EQ(second.size(), 1u);
+  EXPECT_EQ(CamerasOf(second[0]), (std::vector<std::string>{"b", "a"}));
+  EXPECT_TRUE(second[0].complete);
+  EXPECT_TRUE(sync.Flush().empty());
+  EXPECT_EQ(sync.stats().frames_incomplete, 1);
 }
 
 TEST(FrameSync, DuplicatesAreDropped) {
@@ -193,6 +198,45 @@ TEST(FrameSync, PollAndFlushEmitOldestFirst) {
   EXPECT_EQ(rest[0].last_arrival_us, 300);
   EXPECT_TRUE(sync.Flush().empty());
   EXPECT_EQ(sync.stats().frames_emitted, 3);
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+TEST(FrameSync, HalfRateCameraDoesNotHoldFrames) {
+  // b runs at half the rate of a: frames without b are emitted (incomplete) as soon as b reports a
+  // newer one, without waiting for a deadline.
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  for (int f = 0; f < 20; ++f) {
+    Append(&frames, sync.Add(View("a", f), 0));
+    if (f % 2 == 0) Append(&frames, sync.Add(View("b", f, 300), 0));
+  }
+  ASSERT_EQ(frames.size(), 19u);  // the last (odd) frame may still get b
+  for (int f = 0; f < 19; ++f) {
+    EXPECT_EQ(frames[f].seq, f);
+    EXPECT_EQ(frames[f].views.size(), f % 2 == 0 ? 2u : 1u);
+    EXPECT_EQ(frames[f].complete, f % 2 == 0);
+  }
+}
+
+TEST(FrameSync, CamerasBeyondToleranceStillFlow) {
+  // Clocks 10 ms apart with a 2 ms tolerance: never one frame, but nothing piles up either.
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  size_t emitted = 0;
+  for (int f = 0; f < 100; ++f) {
+    emitted += sync.Add(View("a", f), 0).size();
+    emitted += sync.Add(View("b", f, 10000), 0).size();
+  }
+  EXPECT_GE(emitted, 198u);
+  EXPECT_EQ(sync.stats().frames_incomplete, static_cast<int64_t>(emitted));
 }
 
 }  // namespace
