@@ -265,7 +265,19 @@ CameraModel LoadIntrinsics(const std::string& path) {
   std::vector<double> d;
   if (s.Has("distortion_coefficients")) d = ReadMatrix(s, "distortion_coefficients", &rows, &cols);
   std::string model_name = s.GetString("distortion_model", "");
-  if (model_name.empty()) model_name = d.empty() ? "none" : "radtan";
+  if (model_name.empty()) {
+    // OpenCV's calibration sample marks fisheye calibrations with "fisheye_model: 1".
+    int fisheye_flag = 0;
+    if (s.Has("fisheye_model")) {
+      const YAML::Node f = root["fisheye_model"];
+      bool b = false;
+      const bool is_int = YAML::convert<int>::decode(f, fisheye_flag);
+      if (!is_int && !YAML::convert<bool>::decode(f, b))
+        s.Fail("fisheye_model", "expected 0 or 1, got '" + ScalarText(f) + "'");
+      if (!is_int) fisheye_flag = b ? 1 : 0;
+    }
+    model_name = fisheye_flag ? "fisheye" : (d.empty() ? "none" : "radtan");
+  }
   try {
     model.model = DistortionModelFromName(model_name);
   } catch (const std::invalid_argument& e) {

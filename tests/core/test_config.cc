@@ -29,8 +29,8 @@ camera_matrix: !!opencv-matrix
    data: [ 9.1234500000000000e+02, 0., 6.4010000000000002e+02, 0.,
        9.1011000000000001e+02, 3.5920000000000005e+02, 0., 0., 1. ]
 distortion_coefficients: !!opencv-matrix
-   rows: 5
-   cols: 1
+   rows: 1
+   cols: 5
    dt: d
    data: [ -2.1000000000000001e-01, 8.0000000000000002e-02,
        1.1999999999999999e-03, -8.0000000000000004e-04,
@@ -308,6 +308,25 @@ TEST(Config, IntrinsicsFormats) {
   fs << "distortion_coefficients" << d;
   fs.release();
   const CameraModel cv14 = LoadIntrinsics(dir.File("cv14.yml"));
+  // OpenCV's calibration sample marks a fisheye calibration with fisheye_model: 1.
+  const CameraModel fisheye = LoadIntrinsics(dir.Write("cv_fisheye.yml", R"(%YAML:1.0
+---
+image_width: 1280
+image_height: 720
+fisheye_model: 1
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 600., 0., 640., 0., 601., 360., 0., 0., 1. ]
+distortion_coefficients: !!opencv-matrix
+   rows: 4
+   cols: 1
+   dt: d
+   data: [ 0.1, -0.01, 0.001, -0.0001 ]
+)"));
+  EXPECT_EQ(fisheye.model, DistortionModel::kFisheye);
+  EXPECT_EQ(fisheye.distortion.size(), 4u);
   EXPECT_EQ(cv14.distortion.size(), 8u);
   EXPECT_EQ(cv14.distortion[5], 0.2);
   EXPECT_EQ(cv14.fy, 701);
