@@ -1,5 +1,6 @@
 #include "viz/collector.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 
@@ -69,7 +70,6 @@ void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& cha
   const int64_t now = NowUtime();
   arrivals_us_.push_back(now);
   while (!arrivals_us_.empty() && arrivals_us_.front() < now - 1000000) arrivals_us_.pop_front();
-  stats_.rate_hz = static_cast<double>(arrivals_us_.size());
 }
 
 void LcmCollector::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -85,6 +85,11 @@ void LcmCollector::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::strin
   for (const auto& m : msg.markers) ids.push_back(m.id);
   if (keep_frames_ > 0)
     while (detections_.size() > keep_frames_) detections_.erase(detections_.begin());
+}
+
+double LcmCollector::RateHz(int64_t now_us) const {
+  return static_cast<double>(std::count_if(arrivals_us_.begin(), arrivals_us_.end(),
+                                           [&](int64_t t) { return t >= now_us - 1000000; }));
 }
 
 std::map<std::string, std::vector<int>> LcmCollector::DetectionsAt(int64_t utime) const {

@@ -18,7 +18,6 @@ namespace mcmt::viz {
 struct PoseStats {
   int64_t poses = 0;          // poses with a valid pose (tracking or ambiguous)
   int64_t lost = 0;           // STATUS_LOST messages
-  double rate_hz = 0.0;       // poses per second of wall time over the last second
   double latency_ms = 0.0;    // the newest message's latency_ms (tracker)
   double rms_px = 0.0;        // the newest message's RMS reprojection error
   int status = -1;            // the newest message's status
@@ -43,6 +42,8 @@ class LcmCollector {
   // Marker ids per camera detected in the frame of `utime` (empty if none known).
   std::map<std::string, std::vector<int>> DetectionsAt(int64_t utime) const;
   const PoseStats& stats() const { return stats_; }
+  // Poses per second of wall time over the second before now_us (NowUtime()).
+  double RateHz(int64_t now_us) const;
   int64_t messages() const { return messages_; }
 
  private:

@@ -243,6 +243,13 @@ int Viewer::RunWindow(LcmCollector* collector) {
               << "); render headless instead with --snapshot, --save-scene or --video\n";
     return 1;
   }
+  if (!win || !win->isOpen()) {
+    std::cerr
+        << "mcmt-viz: cannot open the live window on display '"
+        << (std::getenv("DISPLAY") ? std::getenv("DISPLAY") : "")
+        << "'; render headless instead with --snapshot out.png, --save-scene out.3Dscene or --video DIR\n";
+    return 1;
+  }
   VizScene scene(options_.scene);
   scene.EnableLegendViewport();
   bool follow = options_.follow;
@@ -282,6 +289,8 @@ int Viewer::RunWindow(LcmCollector* collector) {
   const auto period = std::chrono::duration<double>(1.0 / options_.redraw_hz);
   auto next_redraw = Clock::now();
   bool dirty = true;
+  ViewCamera last_view;
+  auto last_repaint = Clock::now();
   while (win->isOpen()) {
     // LCM until the next redraw is due (redraws bounded however fast poses arrive).
     while (Clock::now() < next_redraw) {
@@ -330,8 +339,8 @@ int Viewer::RunWindow(LcmCollector* collector) {
       char line[200];
       std::snprintf(
           line, sizeof(line), "poses %lld (lost %lld)  rate %.1f Hz  latency %.1f ms  RMS %.3f px%s%s",
-          static_cast<long long>(st.poses), static_cast<long long>(st.lost), st.rate_hz, st.latency_ms,
-          st.rms_px, follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
+          static_cast<long long>(st.poses), static_cast<long long>(st.lost), collector->RateHz(NowUtime()),
+          st.latency_ms, st.rms_px, follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
       scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP ...",
                         FrameOverlay(scene.trajectory(), scene.current_frame())});
       win->unlockAccess3DScene();
@@ -355,6 +364,13 @@ int Viewer::RunWindow(LcmCollector* collector) {
       scene.FollowObject();
       push_view(scene.view(scene.num_panels() - 1));
     }
+    // Repaint when something changed: the scene, the view (mouse), or once a second (overlay).
+    const ViewCamera& v = scene.view(scene.num_panels() - 1);
+    const bool view_changed = (v.pointing - last_view.pointing).norm() > 0 ||
+                              v.azimuth_deg != last_view.azimuth_deg ||
+                              v.elevation_deg != last_view.elevation_deg || v.distance != last_view.distance;
+    if (!dirty && !view_changed && Clock::now() - last_repaint < std::chrono::seconds(1)) continue;
+    last_view = v;
     {
       auto& ptr = win->get3DSceneAndLock();
       (void)ptr;
@@ -362,6 +378,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
       win->unlockAccess3DScene();
     }
     win->forceRepaint();
+    last_repaint = Clock::now();
     dirty = false;
   }
   return 0;
