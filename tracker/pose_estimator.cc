@@ -359,7 +359,14 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
     for (int i = 0; i < static_cast<int>(candidates.size()) && i < kMaxRefined; ++i) {
       Refined r = RefineFrom(obs, candidates[i].pose);
       iterations += r.iterations;
-      if (Better(r, best)) {
+      // Against the prediction's result, a hypothesis must explain more observations, or as many clearly
+      // better: with equal support (e.g. one true and one false marker, or a mirror solution) continuity
+      // decides.
+      const bool replace =
+          from_prior ? (r.valid && (r.num_inliers > best.num_inliers ||
+                                    (r.num_inliers == best.num_inliers && r.cost < 0.5 * best.cost)))
+                     : Better(r, best);
+      if (replace) {
         best = r;
         from_prior = false;
       }

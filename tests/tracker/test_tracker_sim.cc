@@ -1,0 +1,181 @@
+// The tracker on mcmt-sim recordings with the map made by mcmt-mapper (real programs), measured with
+// the simulator's evaluation (rigid alignments of the map's frames to the ground truth):
+// accuracy at radius 1.0 m, a pose for every frame where a mapped marker is seen, a camera killed
+// mid-run, false markers (mapped ids placed where they are not) injected.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <lcm/lcm-cpp.hpp>
+#include <set>
+
+#include "core/files.h"
+#include "core/lcm_util.h"
+#include "sim/eval.h"
+#include "sim/sim.h"
+#include "tests/tracker/process_util.h"
+#include "tests/tracker/synthetic_rig.h"
+
+namespace mcmt {
+namespace {
+
+using tracker_test::RunProgram;
+
+const std::string kBin = MCMT_BIN_DIR;
+
+bool HavePrograms() {
+  for (const char* p : {"mcmt-sim", "mcmt-mapper", "mcmt-tracker"})
+    if (access((kBin + "/" + p).c_str(), X_OK) != 0) return false;
+  return true;
+}
+
+struct Recording {
+  std::string dir, rig, log, map, truth;
+  RigMap rig_map;
+};
+
+// mcmt-sim --detections-only + mcmt-mapper, once per object.
+Recording Record(const std::string& object, int frames, uint64_t seed) {
+  Recording r;
+  r.dir = tracker_test::MakeTempDir("sim_" + object);
+  std::string out;
+  EXPECT_EQ(
+      RunProgram({kBin + "/mcmt-sim", "--out", r.dir, "--object", object, "--radius", "1.0", "--frames",
+                  std::to_string(frames), "--seed", std::to_string(seed), "--detections-only", "--quiet"},
+                 r.dir + "/sim.txt", &out),
+      0)
+      << out;
+  r.rig = r.dir + "/rig.yaml";
+  r.log = r.dir + "/detections.lcmlog";
+  r.truth = r.dir + "/ground_truth.yaml";
+  EXPECT_EQ(RunProgram({kBin + "/mcmt-mapper", "--config", r.rig, "--log", r.log, "--out", r.dir + "/map"},
+                       r.dir + "/mapper.txt", &out),
+            0)
+      << out;
+  r.map = r.dir + "/map/map.yaml";
+  r.rig_map = ReadMap(r.map);
+  return r;
+}
+
+// Rewrites a detections log through `edit` (return false to drop the message).
+template <typename Edit>
+void RewriteLog(const std::string& in, const std::string& out, Edit edit) {
+  lcm::LogFile src(in, "r");
+  lcm::LogFile dst(out, "w");
+  ASSERT_TRUE(src.good() && dst.good());
+  while (const lcm::LogEvent* e = src.readNextEvent()) {
+    detections_t d;
+    if (!Decode(e->data, e->datalen, &d)) continue;
+    if (!edit(&d)) continue;
+    std::vector<uint8_t> bytes = Encode(d);
+    lcm::LogEvent copy = *e;
+    copy.data = bytes.data();
+    copy.datalen = static_cast<int32_t>(bytes.size());
+    dst.writeEvent(&copy);
+  }
+}
+
+// Frame seqs in which some camera of the map saw a marker of the map.
+std::set<int64_t> FramesWithMappedMarker(const std::string& log, const RigMap& map) {
+  std::set<int64_t> out;
+  lcm::LogFile src(log, "r");
+  while (const lcm::LogEvent* e = src.readNextEvent()) {
+    detections_t d;
+    if (!Decode(e->data, e->datalen, &d) || !map.FindCamera(d.camera)) continue;
+    for (const auto& m : d.markers)
+      if (map.FindMarker(m.id)) out.insert(d.seq);
+  }
+  return out;
+}
+
+std::vector<TrajectoryRow> Track(const Recording& r, const std::string& log, const std::string& name) {
+  const std::string poses = r.dir + "/" + name + ".csv";
+  std::string out;
+  EXPECT_EQ(
+      RunProgram({kBin + "/mcmt-tracker", "--config", r.rig, "--map", r.map, "--log", log, "--out", poses},
+                 r.dir + "/" + name + ".txt", &out),
+      0)
+      << out;
+  return ReadTrajectory(poses);
+}
+
+void ExpectAccurate(const Recording& r, const std::vector<TrajectoryRow>& rows, const std::string& what) {
+  const sim::GroundTruth truth = sim::ReadGroundTruth(r.truth);
+  const sim::EvalResult e = sim::Evaluate(truth, &r.rig_map, &rows);
+  std::cout << "[ tracker ] " << what << ": " << e.frames_with_pose << "/" << e.gt_frames
+            << " frames, object translation mean " << e.object_translation_mm.mean << " mm (max "
+            << e.object_translation_mm.max << "), rotation mean " << e.object_rotation_deg.mean
+            << " deg (max " << e.object_rotation_deg.max << ")" << std::endl;
+  EXPECT_LE(e.object_translation_mm.mean, 0.5) << what;
+  EXPECT_LE(e.object_rotation_deg.mean, 0.3) << what;
+}
+
+std::set<int64_t> Seqs(const std::vector<TrajectoryRow>& rows) {
+  std::set<int64_t> out;
+  for (const auto& r : rows) out.insert(r.seq);
+  return out;
+}
+
+class TrackerSim : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(TrackerSim, AccurateWithAPoseForEveryFrameWithAMappedMarker) {
+  if (!HavePrograms()) GTEST_SKIP() << "mcmt-sim / mcmt-mapper not built in " << kBin;
+  const Recording r = Record(GetParam(), 300, 11);
+  const auto rows = Track(r, r.log, "poses");
+  EXPECT_EQ(Seqs(rows), FramesWithMappedMarker(r.log, r.rig_map));
+  ExpectAccurate(r, rows, GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(Objects, TrackerSim, ::testing::Values("four_sided", "box"));
+
+TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
+  if (!HavePrograms()) GTEST_SKIP() << "mcmt-sim / mcmt-mapper not built in " << kBin;
+  const Recording r = Record("four_sided", 240, 5);
+  const auto clean = Track(r, r.log, "clean");
+
+  // cam2's messages stop at frame 120: the others carry on, every frame with a mapped marker still posed.
+  const std::string killed_log = r.dir + "/killed.lcmlog";
+  RewriteLog(r.log, killed_log, [](detections_t* d) { return !(d->camera == "cam2" && d->seq >= 120); });
+  const auto killed = Track(r, killed_log, "killed");
+  EXPECT_EQ(Seqs(killed), FramesWithMappedMarker(killed_log, r.rig_map));
+  ExpectAccurate(r, killed, "cam2 killed at frame 120");
+  const std::string killed_err = tracker_test::Slurp(r.dir + "/killed.txt");
+  EXPECT_NE(killed_err.find("camera 'cam2' stopped reporting"), std::string::npos) << killed_err;
+
+  // False markers: in every message of cam1 and cam3 with a marker, a copy of that marker's corners
+  // (shifted 2 px) under another mapped id that is not seen there. The poses must not move.
+  std::vector<int> ids;
+  for (const auto& m : r.rig_map.markers) ids.push_back(m.id);
+  const std::string false_log = r.dir + "/false.lcmlog";
+  int injected = 0;
+  RewriteLog(r.log, false_log, [&](detections_t* d) {
+    if ((d->camera != "cam1" && d->camera != "cam3") || d->markers.empty()) return true;
+    std::set<int> seen;
+    for (const auto& m : d->markers) seen.insert(m.id);
+    for (int id : ids) {
+      if (seen.count(id)) continue;
+      marker_t fake = d->markers[0];
+      fake.id = id;
+      for (auto& c : fake.corners) c[0] += 2.0;
+      d->markers.push_back(fake);
+      d->num_markers++;
+      ++injected;
+      break;
+    }
+    return true;
+  });
+  EXPECT_GT(injected, 100);
+  const auto dirty = Track(r, false_log, "false");
+  ASSERT_EQ(Seqs(dirty), Seqs(clean));
+  for (size_t i = 0; i < clean.size(); ++i) {
+    EXPECT_LT(tracker_test::TranslationError(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-6)
+        << "seq " << clean[i].seq;
+    EXPECT_LT(tracker_test::RotationError(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-5)
+        << "seq " << clean[i].seq;
+  }
+  const std::string err = tracker_test::Slurp(r.dir + "/false.txt");
+  EXPECT_NE(err.find("outliers rejected"), std::string::npos);
+  EXPECT_EQ(err.find(" 0 outliers rejected"), std::string::npos) << err;
+}
+
+}  // namespace
+}  // namespace mcmt
