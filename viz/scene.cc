@@ -464,15 +464,17 @@ void VizScene::UpdatePanelFrame(Panel* panel, int row) {
     panel->object->setVisibility(true);
     panel->object->setPose(ToCPose(world_from_rig_ * panel->input.trajectory[row].rig_from_object));
   }
-  // Trail: rows [first, row], the newest trail_max; extended in place when it only grows by one.
-  const int first = row < 0 ? 0 : std::max(0, row + 1 - std::max(1, options_.trail_max));
-  if (row >= 0 && first == panel->trail_first && row == panel->trail_last + 1 && panel->trail_last >= first) {
+  // Trail: about the newest trail_max rows up to `row`. Grows in place one row at a time and is
+  // rebuilt only when it is a quarter too long (amortised O(1) per live pose) or the row jumps.
+  const int keep = std::max(1, options_.trail_max);
+  if (row >= 0 && row == panel->trail_last + 1 && panel->trail_last >= panel->trail_first &&
+      row - panel->trail_first < keep + keep / 4) {
     const auto& rows = panel->input.trajectory;
     panel->trail->appendLine(ToPoint(rows[row - 1].rig_from_object.translation()),
                              ToPoint(rows[row].rig_from_object.translation()));
     panel->trail_last = row;
   } else {
-    panel->trail_first = first;
+    panel->trail_first = row < 0 ? 0 : std::max(0, row + 1 - keep);
     panel->trail_last = row;
     RebuildTrail(panel);
   }
