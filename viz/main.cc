@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
     args.AddString("save-scene", &o.save_scene_path, "save the scene for MRPT's SceneViewer3D (.3Dscene)");
     args.AddString("video", &o.video_dir,
                    "render one PNG per trajectory frame into DIR (frame_000000.png ...)");
+    args.AddString("view", &o.view,
+                   "headless view: rig (frame the rig and the trail), object (close-up of the object), "
+                   "follow (rig view centred on the object)");
     args.AddInt("frame", &o.frame, "trajectory row to show (negative: from the end; -1 = last)");
     args.AddString("dictionary", &o.scene.dictionary,
                    "marker dictionary for the bitmaps (default: the map's)");

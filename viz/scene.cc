@@ -21,6 +21,7 @@
 #include <stdexcept>
 
 #include "core/dictionary.h"
+#include "core/marker.h"
 
 namespace mcmt::viz {
 namespace {
@@ -365,8 +366,9 @@ void VizScene::BuildLegend() {
   using namespace mrpt::opengl;
   const int lw = 280, lh = 70;
   auto vp = scene_->createViewport(kLegendViewport);
-  // Absolute pixels: bottom-right corner of the image.
-  vp->setViewportPosition(std::max(2, options_.width - lw - 10), 10, lw, lh);
+  // Absolute pixels from the right edge (negative x), so it stays bottom-right when the window
+  // is resized.
+  vp->setViewportPosition(-(lw + 10), 10, lw, lh);
   vp->setTransparent(true);
   auto bar = CSetOfTriangles::Create();
   const int n = 24;
@@ -576,6 +578,19 @@ void VizScene::FollowObject() {
   SetView(v);
 }
 
+void VizScene::FrameObject() {
+  if (panels_.empty() || panels_.back().current < 0) return;
+  const Panel& p = panels_.back();
+  const Rigid3 world_from_object = world_from_rig_ * p.input.trajectory[p.current].rig_from_object;
+  std::vector<Eigen::Vector3d> pts = {world_from_object.translation()};
+  for (const auto& m : p.input.map.markers)
+    for (const auto& corner : MarkerCornersInMarker(m.size))
+      pts.push_back(world_from_object * (m.object_from_marker * corner));
+  ViewCamera v = views_.back();
+  FramePoints(pts, 0.15, &v);
+  SetView(v);
+}
+
 void VizScene::SetView(const ViewCamera& view) {
   for (auto& v : views_) {
     v.pointing = view.pointing;
@@ -591,8 +606,6 @@ void VizScene::Resize(int width, int height) {
   options_.height = height;
   options_.Validate();
   UpdateViewports();
-  if (auto vp = scene_->getViewport(kLegendViewport))
-    vp->setViewportPosition(std::max(2, options_.width - 290), 10, 280, 70);
 }
 
 bool VizScene::ProjectRigPoint(int panel, const Eigen::Vector3d& p_rig, Eigen::Vector2d* pixel) const {

@@ -92,6 +92,8 @@ class VizScene {
   // given by the caller (the live window's mouse).
   void AutoView();
   void FollowObject();
+  // Close-up: frames the object's markers at the current frame (the view direction kept).
+  void FrameObject();
   const ViewCamera& view(int panel) const { return views_.at(panel); }
   void SetView(const ViewCamera& view);  // same orbit for every panel (viewport kept)
   void Resize(int width, int height);

@@ -44,6 +44,8 @@ void ViewerOptions::Validate() const {
   if (max_poses < 0)
     throw std::invalid_argument("--max-poses: expected >= 0, got " + std::to_string(max_poses));
   if (!(timeout_s > 0)) throw std::invalid_argument("--timeout: expected > 0 seconds");
+  if (view != "rig" && view != "object" && view != "follow")
+    throw std::invalid_argument("--view: expected rig, object or follow, got '" + view + "'");
   if (!(redraw_hz > 0 && redraw_hz <= 240)) throw std::invalid_argument("--redraw-hz: expected in (0, 240]");
   if (!initial_trajectory_path.empty() && initial_map_path.empty())
     throw std::invalid_argument("--initial-trajectory needs --initial-map");
@@ -183,6 +185,11 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     scene.SetCurrentFrame(index);
     scene.SetDetections(detections_at(index));
   }
+  auto apply_view = [&] {
+    if (options_.view == "object") scene.FrameObject();
+    if (options_.view == "follow") scene.FollowObject();
+  };
+  apply_view();
   scene.SetOverlay({FrameOverlay(rows, scene.current_frame())});
 
   if (!options_.save_scene_path.empty()) {
@@ -218,6 +225,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
       scene.SetCurrentFrame(i);
       scene.SetDetections(detections_at(i));
       scene.SetOverlay({FrameOverlay(rows, i)});
+      apply_view();
       char name[32];
       std::snprintf(name, sizeof(name), "frame_%06d.png", i);
       WritePng((fs::path(options_.video_dir) / name).string(), scene.Render(&render));

@@ -26,6 +26,7 @@ struct ViewerOptions {
   double timeout_s = 30.0;              // live headless: give up after this long
   double redraw_hz = 30.0;              // live window: redraws per second at most
   bool follow = false;                  // live window: start following the object
+  std::string view = "rig";             // headless view: rig (all), object (close-up), follow
   SceneOptions scene;
 
   bool Headless() const { return !snapshot_path.empty() || !save_scene_path.empty() || !video_dir.empty(); }

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/dictionary.h"
+#include "core/marker.h"
 #include "tests/viz/viz_test_util.h"
 #include "viz/scene.h"
 #include "viz/viewer.h"
@@ -275,6 +276,40 @@ TEST(VizRender, BeforeAfterPanelsSitSideBySide) {
       EXPECT_TRUE(NotBackgroundNear(img, px, bg, 1)) << "panel " << panel << " " << cam.name;
     }
   }
+}
+
+TEST(VizRender, ObjectCloseUpFillsTheView) {
+  const int w = 640, h = 400;
+  const auto rig = MakeTestRig(4, 6);
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  o.rays = false;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
+  scene.SetCurrentFrame(3);
+  scene.FrameObject();
+  cv::Mat img = scene.Render(&Renderer(w, h));
+  Dump(img, "object.png");
+  double top = h, bottom = 0;
+  const Rigid3& rig_from_object = rig.trajectory[3].rig_from_object;
+  for (const auto& m : rig.map.markers) {
+    for (const auto& corner : MarkerCornersInMarker(m.size)) {
+      Eigen::Vector2d px;
+      ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_object * (m.object_from_marker * corner), &px));
+      top = std::min(top, px.y());
+      bottom = std::max(bottom, px.y());
+    }
+  }
+  EXPECT_GT(bottom - top, 0.5 * h);
+  // Most of the object's silhouette is drawn: pixels differ from the background there.
+  cv::Mat diff;
+  cv::absdiff(img, cv::Scalar(BackgroundBgr()[0], BackgroundBgr()[1], BackgroundBgr()[2]), diff);
+  cv::Mat gray;
+  cv::cvtColor(diff, gray, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(gray > 20), 0.1 * w * h);
 }
 
 TEST(VizOptions, SizeParsing) {
