@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <set>
 
@@ -175,6 +176,101 @@ TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
   const std::string err = tracker_test::Slurp(r.dir + "/false.txt");
   EXPECT_NE(err.find("outliers rejected"), std::string::npos);
   EXPECT_EQ(err.find(" 0 outliers rejected"), std::string::npos) << err;
+}
+
+// Real processes end to end: mcmt-sim renders images, one mcmt-detector per camera publishes over udpm
+// (port 7744) at the recording's frame rate, the live mcmt-tracker publishes poses, a subscriber here
+// receives one object_pose_t per frame, in order.
+class PoseCollector {
+ public:
+  explicit PoseCollector(lcm::LCM& lcm) { lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this); }
+  std::vector<object_pose_t> poses;
+
+ private:
+  void Handle(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    poses.push_back(DecodeOrThrow<object_pose_t>(rbuf->data, rbuf->data_size));
+  }
+};
+
+TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
+  if (!HavePrograms() || access((kBin + "/mcmt-detector").c_str(), X_OK) != 0)
+    GTEST_SKIP() << "mcmt-sim / mcmt-detector not built in " << kBin;
+  using namespace std::chrono_literals;
+  const std::string dir = tracker_test::MakeTempDir("detectors");
+  const int frames = 30;
+  std::string out;
+  ASSERT_EQ(RunProgram({kBin + "/mcmt-sim", "--out", dir, "--cameras", "3", "--frames",
+                        std::to_string(frames), "--seed", "4", "--quiet"},
+                       dir + "/sim.txt", &out),
+            0)
+      << out;
+  // The map from the ground truth (rig frame = the simulator's world frame; any frame will do).
+  const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+  RigMap map;
+  map.dictionary = truth.dictionary;
+  map.reference_camera = truth.cameras[0].name;
+  map.reference_marker = truth.markers[0].id;
+  for (const auto& c : truth.cameras) map.cameras.push_back(MapCamera{c.name, c.model, c.rig_from_cam});
+  for (const auto& m : truth.markers) {
+    MapMarker mm;
+    mm.id = m.id;
+    mm.size = m.size;
+    mm.object_from_marker = m.object_from_marker;
+    map.markers.push_back(mm);
+  }
+  WriteMap(dir + "/map.yaml", map);
+  // The detector processes start a few hundred ms apart and each replays the recording from its first
+  // frame: a generous frame deadline lets every frame wait for all three.
+  {
+    std::ofstream rig(dir + "/rig.yaml", std::ios::app);
+    rig << "tracker:\n  deadline_ms: 3000\n";
+  }
+
+  const std::string url = "udpm://239.255.76.67:7744?ttl=0";
+  const std::string tracker_err = dir + "/tracker.txt";
+  const pid_t tracker = tracker_test::Spawn(
+      {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url},
+      tracker_err);
+  ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << tracker_test::Slurp(tracker_err);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  std::vector<pid_t> detectors;
+  for (const auto& c : truth.cameras)
+    detectors.push_back(
+        tracker_test::Spawn({kBin + "/mcmt-detector", "--config", dir + "/rig.yaml", "--camera", c.name,
+                             "--lcm-url", url, "--rate", "realtime", "--quiet"},
+                            dir + "/detector_" + c.name + ".txt"));
+  const auto end = std::chrono::steady_clock::now() + 60s;
+  while (collector.poses.size() < static_cast<size_t>(frames) && std::chrono::steady_clock::now() < end)
+    lcm.handleTimeout(20);
+  for (size_t i = 0; i < detectors.size(); ++i)
+    EXPECT_EQ(tracker_test::WaitExit(detectors[i], 30s), 0)
+        << tracker_test::Slurp(dir + "/detector_" + truth.cameras[i].name + ".txt");
+  kill(tracker, SIGINT);
+  EXPECT_EQ(tracker_test::WaitExit(tracker, 20s), 0) << tracker_test::Slurp(tracker_err);
+  ASSERT_EQ(collector.poses.size(), static_cast<size_t>(frames)) << tracker_test::Slurp(tracker_err);
+  double mean_t = 0;
+  int max_cams = 0;
+  for (int f = 0; f < frames; ++f) {
+    const object_pose_t& p = collector.poses[f];
+    EXPECT_EQ(p.seq, f);
+    EXPECT_EQ(p.utime, truth.frames[f].utime);
+    // A frame where one camera sees one square may be flagged ambiguous; never lost here.
+    ASSERT_NE(p.status, object_pose_t::STATUS_LOST) << "frame " << f;
+    if (p.status == object_pose_t::STATUS_AMBIGUOUS) {
+      EXPECT_EQ(p.num_cameras, 1);
+      EXPECT_EQ(p.num_markers, 1);
+    }
+    // The map's object frame is the ground truth's (the map was made from it).
+    mean_t += tracker_test::TranslationError(FromPose3d(p.rig_from_object), truth.frames[f].rig_from_object);
+    max_cams = std::max(max_cams, p.num_cameras);
+  }
+  mean_t /= frames;
+  std::cout << "[ tracker ] detectors on rendered images: mean translation error " << mean_t * 1000 << " mm"
+            << std::endl;
+  EXPECT_LT(mean_t, 2e-3);
+  EXPECT_EQ(max_cams, 3);  // frames assembled across the detector processes
 }
 
 }  // namespace
