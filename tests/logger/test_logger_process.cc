@@ -64,6 +64,32 @@ void ExpectSameMessages(const std::vector<Msg>& a, const std::vector<Msg>& b) {
   }
 }
 
+// lcm-logger has no readiness signal: publish probes until one reaches its file.
+bool ProbeUntilRecorded(int port, const std::string& file) {
+  lcm::LCM lcm(Url(port));
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (FileSize(file) <= 0) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    lcm.publish("MCMT_PROBE", "p", 1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
+}
+
+std::vector<Msg> WithoutProbes(const std::vector<Msg>& msgs) {
+  std::vector<Msg> out;
+  for (const Msg& m : msgs)
+    if (m.channel != "MCMT_PROBE") out.push_back(m);
+  return out;
+}
+
+// Waits (up to 20 s) until `file` holds `count` messages besides probes.
+void WaitForMessages(const std::string& file, size_t count) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (WithoutProbes(ReadMessages(file)).size() < count && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
 class LoggerProcessTest : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = MakeTempDir("proc"); }
@@ -120,17 +146,16 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
   // lcm-logger records; mcmt-export reads.
   const std::string theirs = dir_ + "/theirs.lcmlog";
   {
-    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--channel=MCMT_.*", "--lcm-url=" + Url(7765),
-                      "--flush-interval=20", theirs},
+    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--channel=MCMT_.*",
+                      "--lcm-url=" + Url(7765) + "&recv_buf_size=4000000", "--flush-interval=20", theirs},
                      dir_ + "/l.out", dir_ + "/l.err");
-    ASSERT_TRUE(WaitFor(theirs, 10)) << ReadText(dir_ + "/l.err");
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no readiness signal
+    ASSERT_TRUE(ProbeUntilRecorded(7765, theirs)) << ReadText(dir_ + "/l.err");
     Publish(7765, traffic);
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    WaitForMessages(theirs, traffic.size());
     lcm_logger.Signal(SIGINT);
     ASSERT_EQ(lcm_logger.Wait(20), 0) << ReadText(dir_ + "/l.err");
   }
-  ExpectSameMessages(ReadMessages(theirs), traffic);
+  ExpectSameMessages(WithoutProbes(ReadMessages(theirs)), traffic);
   std::string out, err;
   ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--summary", theirs}, &out, &err), 0) << err;
   EXPECT_NE(out.find("cameras: 3"), std::string::npos) << out;
@@ -157,18 +182,20 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
   EXPECT_EQ(ReadText(dir_ + "/ours.csv"), ReadText(dir_ + "/theirs.csv"));
   const std::string again = dir_ + "/again.lcmlog";
   {
-    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--lcm-url=" + Url(7767), "--flush-interval=20", again},
+    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--lcm-url=" + Url(7767) + "&recv_buf_size=4000000",
+                      "--flush-interval=20", again},
                      dir_ + "/g.out", dir_ + "/g.err");
-    ASSERT_TRUE(WaitFor(again, 10));
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    ASSERT_EQ(
-        RunProgram({"/usr/bin/lcm-logplayer", "--speed=1", "--lcm-url=" + Url(7767), ours}, nullptr, &err), 0)
+    ASSERT_TRUE(ProbeUntilRecorded(7767, again));
+    ASSERT_EQ(RunProgram({"/usr/bin/lcm-logplayer", "--speed=1",
+                          "--lcm-url=" + Url(7767) + "&recv_buf_size=4000000", ours},
+                         nullptr, &err),
+              0)
         << err;
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    WaitForMessages(again, traffic.size());
     lcm_logger.Signal(SIGINT);
     ASSERT_EQ(lcm_logger.Wait(20), 0);
   }
-  ExpectSameMessages(ReadMessages(again), traffic);
+  ExpectSameMessages(WithoutProbes(ReadMessages(again)), traffic);
 }
 
 // kill -9 in the middle of recording: every event on disk decodes, and nothing before the last flush is lost.
