@@ -51,8 +51,8 @@ int main(int argc, char** argv) {
     args.AddDouble("redraw-hz", &o.redraw_hz, "live window: redraws per second at most");
     args.AddFlag("follow", &o.follow, "live window: start following the object (key f toggles)");
     args.AddEpilog(
-        "Live window keys: f follow the object, r reset the view, t toggle rays, q quit; the mouse orbits, "
-        "pans and zooms.\n"
+        "Live window keys: f follow the object, r reset the view, t toggle rays, left/right (or , .) step "
+        "through the frames, n back to the newest, q quit; the mouse orbits, pans and zooms.\n"
         "Examples:\n"
         "  mcmt-viz --map out/map.yaml --trajectory out/trajectory.csv --snapshot view.png\n"
         "  mcmt-viz --map out/map.yaml --initial-map out/map_initial.yaml --trajectory out/trajectory.csv "

@@ -1,9 +1,11 @@
 #include "viz/viewer.h"
 
 #include <mrpt/gui/CDisplayWindow3D.h>
+#include <mrpt/gui/keycodes.h>
 #include <mrpt/opengl/CFBORender.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -261,6 +263,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
   VizScene scene(options_.scene);
   scene.EnableLegendViewport();
   bool follow = options_.follow;
+  bool browsing = false;  // stepping through frames with the arrow keys
   int map_count = -1;
   size_t poses_shown = 0;
   auto push_view = [&](const ViewCamera& v) {
@@ -293,7 +296,10 @@ int Viewer::RunWindow(LcmCollector* collector) {
     win->unlockAccess3DScene();
     push_view(scene.view(scene.num_panels() - 1));
   }
-  std::cout << "mcmt-viz: keys: f follow the object, r reset the view, t toggle rays, q quit\n";
+  std::cout
+      << "mcmt-viz: keys: f follow the object, r reset the view, t toggle rays, left/right (or , .) step "
+         "frames, n newest frame, q quit"
+      << std::endl;
   const auto period = std::chrono::duration<double>(1.0 / options_.redraw_hz);
   auto next_redraw = Clock::now();
   bool dirty = true;
@@ -321,6 +327,24 @@ int Viewer::RunWindow(LcmCollector* collector) {
         win->unlockAccess3DScene();
       }
       if (key == 'q' || key == 'Q' || key == 27) break;
+      // Step through the trajectory (then the newest live pose is no longer followed until 'n').
+      const int n = static_cast<int>(scene.trajectory().size());
+      if (n > 0 &&
+          (key == ',' || key == mrpt::gui::MRPTK_LEFT || key == '.' || key == mrpt::gui::MRPTK_RIGHT)) {
+        const int step = (key == ',' || key == mrpt::gui::MRPTK_LEFT) ? -1 : 1;
+        browsing = true;
+        auto& ptr = win->get3DSceneAndLock();
+        (void)ptr;
+        scene.SetCurrentFrame(std::clamp(scene.current_frame() + step, 0, n - 1));
+        win->unlockAccess3DScene();
+      }
+      if (key == 'n' || key == 'N') {
+        browsing = false;
+        auto& ptr = win->get3DSceneAndLock();
+        (void)ptr;
+        scene.SetCurrentFrame(-1);
+        win->unlockAccess3DScene();
+      }
       dirty = true;
     }
     if (collector) {
@@ -337,7 +361,9 @@ int Viewer::RunWindow(LcmCollector* collector) {
       if (scene.HasMap() && !have_file_trajectory_) {
         const auto& poses = collector->poses();
         for (; poses_shown < poses.size(); ++poses_shown) {
+          const int shown = scene.current_frame();
           scene.AddPose(poses[poses_shown]);
+          if (browsing) scene.SetCurrentFrame(shown);
           dirty = true;
         }
       }
@@ -349,7 +375,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
           line, sizeof(line), "poses %lld (lost %lld)  rate %.1f Hz  latency %.1f ms  RMS %.3f px%s%s",
           static_cast<long long>(st.poses), static_cast<long long>(st.lost), collector->RateHz(NowUtime()),
           st.latency_ms, st.rms_px, follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
-      scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP ...",
+      scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP (or give --map map.yaml) ...",
                         FrameOverlay(scene.trajectory(), scene.current_frame())});
       win->unlockAccess3DScene();
     }
