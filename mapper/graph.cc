@@ -222,6 +222,74 @@ TreePoses PosesFromTree(int n, int root, const std::vector<GraphEdge>& tree) {
   return out;
 }
 
+namespace {
+
+double PoseError(const CameraModel& camera, const std::vector<Eigen::Vector3d>& points,
+                 const std::vector<Eigen::Vector2d>& pixels, const Rigid3& pose) {
+  double sum = 0.0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    Eigen::Vector2d px;
+    if (!camera.Project(pose * points[i], &px, nullptr)) return std::numeric_limits<double>::infinity();
+    sum += (px - pixels[i]).squaredNorm();
+  }
+  return sum;
+}
+
+}  // namespace
+
+double RefinePose(const CameraModel& camera, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<Eigen::Vector2d>& pixels, Rigid3* cam_from_points, int max_iterations) {
+  if (points.empty()) return 0.0;
+  Rigid3 pose = *cam_from_points;
+  double cost = PoseError(camera, points, pixels, pose);
+  if (!std::isfinite(cost)) return cost;
+  double lambda = 1e-3;
+  for (int it = 0; it < max_iterations; ++it) {
+    // r_i = Project(R x_i + t) - u_i; left perturbation: d p / d(dr, dt) = [-[p - t]x, I].
+    Matrix6d jtj = Matrix6d::Zero();
+    Vector6d jtr = Vector6d::Zero();
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d p = pose * points[i];
+      Eigen::Vector2d px;
+      Eigen::Matrix<double, 2, 3> dpix;
+      if (!camera.Project(p, &px, &dpix)) return std::numeric_limits<double>::infinity();
+      const Eigen::Vector3d q = p - pose.translation();
+      Eigen::Matrix3d skew;
+      skew << 0, -q.z(), q.y(), q.z(), 0, -q.x(), -q.y(), q.x(), 0;
+      Eigen::Matrix<double, 2, 6> j;
+      j.leftCols<3>() = -dpix * skew;
+      j.rightCols<3>() = dpix;
+      const Eigen::Vector2d r = px - pixels[i];
+      jtj += j.transpose() * j;
+      jtr += j.transpose() * r;
+    }
+    bool improved = false;
+    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
+      Matrix6d a = jtj;
+      a.diagonal() *= (1.0 + lambda);
+      const Vector6d delta = -a.ldlt().solve(jtr);
+      if (!delta.allFinite()) break;
+      Rigid3 candidate = Rigid3::Identity();
+      candidate.linear() = RotationFromVector(delta.head<3>()) * pose.linear();
+      candidate.translation() = pose.translation() + delta.tail<3>();
+      const double c = PoseError(camera, points, pixels, candidate);
+      if (c < cost) {
+        const double gain = cost - c;
+        pose = candidate;
+        cost = c;
+        lambda = std::max(1e-7, lambda * 0.3);
+        improved = true;
+        if (gain < 1e-10 * (1.0 + cost)) it = max_iterations;
+      } else {
+        lambda *= 10.0;
+      }
+    }
+    if (!improved) break;
+  }
+  *cam_from_points = Normalized(pose);
+  return std::sqrt(cost / points.size());
+}
+
 int MedoidIndex(const std::vector<Rigid3>& candidates, double point_scale) {
   MedoidOptions options;
   options.point_scale = point_scale;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <numeric>
 #include <sstream>
 #include <thread>
@@ -654,32 +655,72 @@ MapResult Mapper::Solve() {
   for (int m = 0; m < num_markers; ++m)
     if (marker_placed[m]) object_scale = std::max(object_scale, object_from_marker[m].translation().norm());
   object_scale = std::max(object_scale, 0.05);
-  // Per view: cam_from_object candidates (the hypotheses of a lone marker, else the medoid of all).
+  // Per view: cam_from_object candidates. A lone marker gives its kept hypotheses; several markers give
+  // one pose fitted to all their corners at once (Levenberg-Marquardt from each hypothesis-derived
+  // start, the best kept): far more precise than one square at grazing angles.
   struct View {
     int frame, camera;
     std::vector<Rigid3> cam_from_object;
+    double fit_rms = -1.0;  // multi-marker views: RMS pixel error of the fitted pose
   };
-  std::vector<View> view_poses;
-  view_poses.reserve(views.size());
-  for (const auto& v : views) {
-    View vp;
+  std::vector<View> view_poses(views.size());
+  std::vector<char> view_ok(views.size(), 0);
+  ParallelFor(static_cast<int>(views.size()), threads, [&](int k) {
+    const auto& v = views[k];
+    View& vp = view_poses[k];
     vp.frame = obs[v.first].frame;
     vp.camera = obs[v.first].camera;
     std::vector<Rigid3> cands;
+    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Vector2d> pixels;
+    int used_markers = 0;
     for (int i = v.first; i < v.second; ++i) {
-      if (!marker_placed[obs[i].marker]) continue;
+      if (!marker_placed[obs[i].marker] || obs[i].kept == 0) continue;
+      ++used_markers;
       for (int h = 0; h < obs[i].kept; ++h)
         cands.push_back(obs[i].pose.hypotheses[h].cam_from_marker * marker_from_object[obs[i].marker]);
+      const MarkerCorners3d corners = MarkerCornersInMarker(obs[i].side);
+      for (int c = 0; c < 4; ++c) {
+        points.push_back(object_from_marker[obs[i].marker] * corners[c]);
+        pixels.push_back(obs[i].corners[c]);
+      }
     }
-    if (cands.empty()) continue;
-    int used_markers = 0;
-    for (int i = v.first; i < v.second; ++i) used_markers += marker_placed[obs[i].marker] && obs[i].kept > 0;
+    if (cands.empty()) return;
+    view_ok[k] = 1;
     if (used_markers == 1) {
       vp.cam_from_object = cands;
-    } else {
-      vp.cam_from_object.push_back(cands[MedoidIndex(cands, object_scale)]);
+      return;
     }
-    view_poses.push_back(std::move(vp));
+    std::vector<Rigid3> starts = {cands[MedoidIndex(cands, object_scale)]};
+    for (size_t c = 0; c < cands.size() && starts.size() < 4; c += 2) starts.push_back(cands[c]);
+    double best = std::numeric_limits<double>::infinity();
+    Rigid3 best_pose = starts[0];
+    for (Rigid3 start : starts) {
+      const double e = RefinePose(s.models[vp.camera], points, pixels, &start);
+      if (e < best) {
+        best = e;
+        best_pose = start;
+      }
+    }
+    vp.cam_from_object.push_back(best_pose);
+    vp.fit_rms = best;
+  });
+  {
+    std::vector<View> kept;
+    kept.reserve(view_poses.size());
+    for (size_t k = 0; k < view_poses.size(); ++k)
+      if (view_ok[k]) kept.push_back(std::move(view_poses[k]));
+    view_poses.swap(kept);
+  }
+  // Median fit of each camera's multi-marker views: a camera whose views do not fit the marker layout has
+  // wrong intrinsics or images (e.g. rotated frames), which no initialisation can fix.
+  std::vector<double> camera_fit_rms(num_cameras, -1.0);
+  {
+    std::vector<std::vector<double>> fits(num_cameras);
+    for (const View& v : view_poses)
+      if (v.fit_rms >= 0) fits[v.camera].push_back(v.fit_rms);
+    for (int c = 0; c < num_cameras; ++c)
+      if (!fits[c].empty()) camera_fit_rms[c] = Median(fits[c]);
   }
   std::vector<double> depths;
   for (const View& v : view_poses) depths.push_back(v.cam_from_object[0].translation().norm());
@@ -744,7 +785,7 @@ MapResult Mapper::Solve() {
           ref_camera = c;
   }
   if (ref_camera < 0) throw MapperError("no camera saw a marker of the object");
-  const std::vector<bool> camera_placed = ComponentOf(num_cameras, ref_camera, camera_edges);
+  std::vector<bool> camera_placed = ComponentOf(num_cameras, ref_camera, camera_edges);
   {
     std::vector<std::string> placed_names, problems;
     for (int c = 0; c < num_cameras; ++c)
@@ -1005,6 +1046,56 @@ MapResult Mapper::Solve() {
         }
       }
       if (!changed) break;
+    }
+    // A camera whose observations mostly do not fit after refinement was placed wrongly (e.g. from a few
+    // grazing views): it is not part of a trustworthy map.
+    std::vector<int> cam_total(num_cameras, 0), cam_active(num_cameras, 0);
+    for (size_t k = 0; k < bp.observations.size(); ++k) {
+      ++cam_total[bp.observations[k].camera];
+      cam_active[bp.observations[k].camera] += bp.active[k];
+    }
+    std::vector<std::string> problems;
+    std::vector<int> bad_cameras;
+    for (int c = 0; c < num_cameras; ++c) {
+      if (!camera_placed[c] || c == ref_camera || cam_total[c] == 0) continue;
+      if (cam_active[c] >= 0.5 * cam_total[c]) continue;
+      std::ostringstream msg;
+      msg << "camera '" << s.camera_names[c]
+          << "' cannot be placed reliably: " << cam_total[c] - cam_active[c] << " of its " << cam_total[c]
+          << " marker observations (in " << camera_views[c]
+          << " frames) do not fit the map after refinement (rms > outlier_px " << o.outlier_px
+          << " px); record more frames where '" << s.camera_names[c]
+          << "' sees the object closer to face-on at the same time as another camera";
+      std::vector<double> others;
+      for (int k = 0; k < num_cameras; ++k)
+        if (k != c && camera_fit_rms[k] >= 0) others.push_back(camera_fit_rms[k]);
+      if (camera_fit_rms[c] >= 0 && !others.empty() && camera_fit_rms[c] > 3.0 * Median(others) &&
+          camera_fit_rms[c] > 2.0) {
+        msg << ". Its frames with several markers do not fit the marker layout (median rms "
+            << std::setprecision(3) << camera_fit_rms[c] << " px; other cameras " << Median(others)
+            << " px): check its intrinsics and the orientation of its images";
+      }
+      problems.push_back(msg.str());
+      bad_cameras.push_back(c);
+    }
+    if (!problems.empty()) {
+      if (!o.allow_partial) {
+        std::string all = problems[0];
+        if (problems.size() > 1) all += " (and " + std::to_string(problems.size() - 1) + " more cameras)";
+        throw MapperError(all + "; use --allow-partial to map without it");
+      }
+      for (int c : bad_cameras) {
+        camera_placed[c] = false;
+        report.dropped_cameras.push_back(s.camera_names[c]);
+        for (size_t k = 0; k < bp.observations.size(); ++k)
+          if (bp.active[k] && bp.observations[k].camera == c)
+            reject(k, 0.0, "camera left out (--allow-partial)");
+      }
+      for (const std::string& p : problems) report.warnings.push_back(p + ": left out (--allow-partial)");
+      const BundleSummary summary = SolveBundle(&bp, settings);
+      ++report.solves;
+      report.iterations += summary.iterations;
+      report.termination = summary.termination;
     }
     end_stage("refine");
   }

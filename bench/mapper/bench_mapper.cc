@@ -42,6 +42,8 @@ struct ProcessResult {
 ProcessResult RunProcess(const std::vector<std::string>& args, const std::string& output_path) {
   ProcessResult r;
   const auto start = std::chrono::steady_clock::now();
+  std::cout.flush();
+  std::cerr.flush();
   const pid_t pid = fork();
   if (pid == 0) {
     FILE* out = freopen(output_path.c_str(), "w", stdout);

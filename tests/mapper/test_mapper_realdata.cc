@@ -122,13 +122,20 @@ TEST_F(MapperRealData, CharucoCalibrationAgreesWithCaliscope) {
   std::set<int> ids;
   for (const MapMarker& m : result.map.markers) ids.insert(m.id);
   EXPECT_EQ(ids, (std::set<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9}));
-  double worst = 0;
+  // Ideal grid point of each marker centre (nearest 5.4 cm grid point in the reference marker's frame,
+  // z = 0), then a rigid fit of the measured centres to those points: residuals within 1 mm.
+  std::vector<Eigen::Vector3d> measured, ideal;
   for (const MapMarker& m : result.map.markers) {
     const Eigen::Vector3d p = m.object_from_marker.translation();
-    const double gx = 0.054 * std::round(p.x() / 0.054), gy = 0.054 * std::round(p.y() / 0.054);
-    const double off = std::max({std::abs(p.z()), std::abs(p.x() - gx), std::abs(p.y() - gy)});
+    measured.push_back(p);
+    ideal.emplace_back(0.054 * std::round(p.x() / 0.054), 0.054 * std::round(p.y() / 0.054), 0.0);
+  }
+  const Rigid3 grid_from_object = AlignRigid(measured, ideal);
+  double worst = 0;
+  for (size_t i = 0; i < measured.size(); ++i) {
+    const double off = (grid_from_object * measured[i] - ideal[i]).norm();
     worst = std::max(worst, off);
-    EXPECT_LT(off, 0.001) << "marker " << m.id << " at " << p.transpose();
+    EXPECT_LT(off, 0.001) << "marker " << result.map.markers[i].id << " at " << measured[i].transpose();
   }
   RecordProperty("grid_max_offset_mm", std::to_string(worst * 1000));
   // Every other id the detector reported is rejected (reported), not mapped.
@@ -151,7 +158,8 @@ TEST_F(MapperRealData, FourCamRecordingPlacesAllOrNamesTheCamera) {
                                            std::to_string(a.max_rotation_deg) + " deg");
   } catch (const MapperError& e) {
     const std::string what = e.what();
-    EXPECT_TRUE(std::regex_search(what, std::regex("camera 'cam[0-3]'"))) << what;
+    // The data's README: camera 1 sees the board rarely and at grazing angles.
+    EXPECT_NE(what.find("camera 'cam1'"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
     RecordProperty("error", what);
   }
