@@ -14,8 +14,14 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
                     "min_sigma_px", "max_start_markers", "status_period_s"});
   o.channel = s.GetString("channel", o.channel);
   o.object = s.GetString("object", o.object);
-  o.deadline_ms = s.GetPositiveDouble("deadline_ms", o.deadline_ms);
+  // The shared sync: section (also read by the mapper) gives the defaults; tracker: keys override.
+  if (rig.sync.Has("tolerance_ms"))
+    o.sync_tolerance_ms = rig.sync.GetDouble("tolerance_ms", o.sync_tolerance_ms);
+  if (rig.sync.Has("deadline_ms")) o.deadline_ms = rig.sync.GetPositiveDouble("deadline_ms", o.deadline_ms);
+  if (rig.sync.Has("camera_timeout_s"))
+    o.camera_timeout_s = rig.sync.GetPositiveDouble("camera_timeout_s", o.camera_timeout_s);
   o.sync_tolerance_ms = s.GetDouble("sync_tolerance_ms", o.sync_tolerance_ms);
+  o.deadline_ms = s.GetPositiveDouble("deadline_ms", o.deadline_ms);
   o.camera_timeout_s = s.GetPositiveDouble("camera_timeout_s", o.camera_timeout_s);
   o.max_iterations = s.GetInt("max_iterations", o.max_iterations);
   o.huber_px = s.GetPositiveDouble("huber_px", o.huber_px);

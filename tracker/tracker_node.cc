@@ -127,6 +127,16 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
                                       ": not in the map (" + Join(names) + ")");
     return;
   }
+  {
+    const CameraModel& mapped = estimator_->map().FindCamera(msg.camera)->model;
+    const camera_model_t& m = msg.camera_model;
+    auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(b)); };
+    if (m.width != mapped.width || m.height != mapped.height || differs(m.fx, mapped.fx) ||
+        differs(m.fy, mapped.fy) || differs(m.cx, mapped.cx) || differs(m.cy, mapped.cy))
+      WarnOnce("intrinsics:" + msg.camera,
+               "camera '" + msg.camera +
+                   "': the detections' intrinsics differ from the map's; the map's are used");
+  }
   if (!msg.dictionary.empty() && !rig_.markers.dictionary.empty() &&
       msg.dictionary != rig_.markers.dictionary)
     WarnOnce("dict:" + msg.camera, "camera '" + msg.camera + "' detects in '" + msg.dictionary +

@@ -331,6 +331,14 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
     EXPECT_EQ(o.channel, "POSE_X");
   }
   {
+    // The shared sync: section gives defaults, tracker: keys override them.
+    const std::string rig_path = tracker_test::WriteRigFiles(
+        dir, s.map, "sync:\n  tolerance_ms: 7\n  deadline_ms: 9\ntracker:\n  deadline_ms: 4\n");
+    const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+    EXPECT_EQ(o.sync_tolerance_ms, 7.0);
+    EXPECT_EQ(o.deadline_ms, 4.0);
+  }
+  {
     const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  outlier_pix: 3\n");
     try {
       TrackerOptions::FromConfig(LoadRigConfig(rig_path));

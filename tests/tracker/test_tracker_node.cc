@@ -127,7 +127,8 @@ TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
   for (size_t f = 0; f < fx.session.views.size(); ++f) {
     node.OnDetections("MCMT_DETECTIONS_CAM0", garbage.data(), garbage.size());
     node.OnDetections("MCMT_DETECTIONS_CAM0", garbage.data(), 0);
-    for (const auto& d : fx.session.views[f]) {
+    for (auto d : fx.session.views[f]) {
+      if (d.camera == "cam4") d.camera_model.fx += 5.0;  // a detector with other intrinsics
       Feed(node, d);
       Feed(node, d);  // duplicate
     }
@@ -148,6 +149,7 @@ TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
   };
   EXPECT_EQ(count("undecodable message on MCMT_DETECTIONS_CAM0"), 1u) << err;
   EXPECT_EQ(count("camera 'cam9'"), 1u) << err;
+  EXPECT_EQ(count("camera 'cam4': the detections' intrinsics differ"), 1u) << err;
 }
 
 TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
