@@ -1,5 +1,6 @@
 #include "detector/detector.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -124,10 +125,108 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
   return true;
 }
 
+// Least-squares fit of the mean edge profile m(u) (u: signed distance from the fitted line, outward)
+// with a blurred step and a second blurred step for the far side of the quiet zone:
+//   f(u) = D + (W - D) Phi((u - e) / sigma) + (B - W) Phi((u - e - q) / sigma)
+// (D: border, W: quiet zone, B: beyond it at distance q; sigma: blur incl. the pixel footprint).
+// Returns the edge offset e (outward), or NaN when the fit fails. The crossing estimate is biased when
+// the quiet zone is narrow and blurred; e is not.
+double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m, double cell) {
+  const int n = static_cast<int>(u.size());
+  if (n < 8) return NAN;
+  double p[6];  // e, sigma, D, W, B, q
+  p[0] = 0.0;
+  p[1] = 0.6;
+  p[2] = m.front();
+  p[4] = m.back();
+  p[3] = m.front();
+  for (int j = 0; j < n; ++j)
+    if (u[j] > 0 && u[j] < cell && std::abs(m[j] - m.front()) > std::abs(p[3] - m.front())) p[3] = m[j];
+  p[5] = cell;
+  auto cost_of = [&](const double* q, double* residuals) {
+    double cost = 0;
+    for (int j = 0; j < n; ++j) {
+      const double z1 = (u[j] - q[0]) / q[1], z2 = (u[j] - q[0] - q[5]) / q[1];
+      const double f = q[2] + (q[3] - q[2]) * 0.5 * std::erfc(-z1 * M_SQRT1_2) +
+                       (q[4] - q[3]) * 0.5 * std::erfc(-z2 * M_SQRT1_2);
+      const double r = f - m[j];
+      if (residuals) residuals[j] = r;
+      cost += r * r;
+    }
+    return cost;
+  };
+  std::vector<double> r(n);
+  double cost = cost_of(p, r.data());
+  double lambda = 1e-3;
+  for (int iter = 0; iter < 20; ++iter) {
+    Eigen::Matrix<double, 6, 6> jtj = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> jtr = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int j = 0; j < n; ++j) {
+      const double z1 = (u[j] - p[0]) / p[1], z2 = (u[j] - p[0] - p[5]) / p[1];
+      const double phi1 = std::exp(-0.5 * z1 * z1) * 0.3989422804014327;
+      const double phi2 = std::exp(-0.5 * z2 * z2) * 0.3989422804014327;
+      const double c1 = 0.5 * std::erfc(-z1 * M_SQRT1_2), c2 = 0.5 * std::erfc(-z2 * M_SQRT1_2);
+      Eigen::Matrix<double, 6, 1> g;
+      g << -((p[3] - p[2]) * phi1 + (p[4] - p[3]) * phi2) / p[1],
+          -((p[3] - p[2]) * phi1 * z1 + (p[4] - p[3]) * phi2 * z2) / p[1], 1.0 - c1, c1 - c2, c2,
+          -(p[4] - p[3]) * phi2 / p[1];
+      jtj += g * g.transpose();
+      jtr += g * r[j];
+    }
+    bool improved = false;
+    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
+      Eigen::Matrix<double, 6, 6> a = jtj;
+      for (int k = 0; k < 6; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
+      const Eigen::Matrix<double, 6, 1> step = a.ldlt().solve(-jtr);
+      double q[6];
+      for (int k = 0; k < 6; ++k) q[k] = p[k] + step(k);
+      q[1] = std::clamp(q[1], 0.2, 3.0);
+      q[5] = std::clamp(q[5], 0.4 * cell, 3.0 * cell);
+      const double c = cost_of(q, nullptr);
+      if (c < cost) {
+        std::copy(q, q + 6, p);
+        cost = cost_of(p, r.data());
+        lambda = std::max(1e-7, lambda * 0.3);
+        improved = true;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved) break;
+  }
+  if (!std::isfinite(p[0]) || std::abs(p[0]) > 0.75 || std::abs(p[3] - p[2]) < 5.0) return NAN;
+  return p[0];
+}
+
+// +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
+// brighter (inverted), 0 when unclear. Samples the border cells and the ring of cells around the quad.
+int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
+  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<cv::Point2f> quad;
+  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+  const cv::Matx33d h = cv::getPerspectiveTransform(square, quad);
+  std::vector<float> border, ring;
+  for (int i = 0; i < cells; ++i) {
+    const double t = (i + 0.5) / cells;
+    const double in = 0.5 / cells, out = -0.5 / cells;
+    const double pts[8][2] = {{t, in},  {t, 1 - in},  {in, t},  {1 - in, t},
+                              {t, out}, {t, 1 - out}, {out, t}, {1 - out, t}};
+    for (int k = 0; k < 8; ++k) {
+      const cv::Vec3d p = h * cv::Vec3d(pts[k][0], pts[k][1], 1.0);
+      float v;
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &v)) continue;
+      (k < 4 ? border : ring).push_back(v);
+    }
+  }
+  if (border.size() < 4 || ring.size() < 4) return 0;
+  const double b = Median(&border), r = Median(&ring);
+  if (std::abs(b - r) < 5.0) return 0;
+  return b < r ? 1 : -1;
+}
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                         int passes, std::array<cv::Point2d, 4>* corners) {
+                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit) {
   CV_Assert(gray.type() == CV_8UC1);
   PixelMap map;
   if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
@@ -139,7 +238,9 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   if (!(perimeter > 4 * 4.0)) return false;
 
   std::vector<float> profiles, inside, outside;
-  std::vector<Eigen::Vector2d> points, origins, normals;
+  std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
+  std::vector<double> grid_u, grid_sum, grid_mean;
+  std::vector<int> grid_count;
   std::vector<char> clean;
   for (int pass = 0; pass < std::max(1, passes); ++pass) {
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
@@ -150,17 +251,26 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       const Eigen::Vector2d a = ideal[side], b = ideal[(side + 1) % 4];
       const Eigen::Vector2d dir = (b - a).normalized();
       const double length_img = (img[(side + 1) % 4] - img[side]).norm();
-      const double cell = length_img / cells;
+      const double cell_along = length_img / cells;
+      // Cell depth across the edge: the marker's extent along this side's normal / cells.
+      const Eigen::Vector2d side_dir = (img[(side + 1) % 4] - img[side]) / length_img;
+      const Eigen::Vector2d side_normal(side_dir.y(), -side_dir.x());
+      const double extent = 0.5 * (std::abs(side_normal.dot(img[(side + 2) % 4] - img[side])) +
+                                   std::abs(side_normal.dot(img[(side + 3) % 4] - img[side])));
+      const double cell = extent / cells;
       // Half-width of the profile across the edge: half a cell, so that the level read on each side
-      // is the border's and the surround's, not the next cell's.
-      const double h = std::clamp(0.5 * cell, 0.75, 3.0);
-      const double margin = std::min(0.3, std::max(0.6 * cell, 1.5) / length_img);
+      // is the border's and the surround's, not the next cell's. The first pass searches wider (the
+      // initial corners may be a pixel or two off).
+      const double h =
+          pass == 0 ? std::clamp(std::min(0.9 * cell, 2.0), 0.75, 3.0) : std::clamp(0.5 * cell, 0.75, 3.0);
+      const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
       const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.5), 6, 240);
       const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.2)));
       const int m = 2 * steps + 1;
       const double ds = h / steps;
       profiles.assign(static_cast<size_t>(n) * m, 0.f);
       origins.assign(n, Eigen::Vector2d::Zero());
+      ideal_origins.assign(n, Eigen::Vector2d::Zero());
       normals.assign(n, Eigen::Vector2d::Zero());
       clean.assign(n, 0);
       std::vector<char> valid(n, 0);
@@ -175,6 +285,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
         Eigen::Vector2d normal(tangent.y(), -tangent.x());
         if (normal.dot(p - centre) < 0) normal = -normal;
         origins[i] = p;
+        ideal_origins[i] = q;
         normals[i] = normal;
         bool ok = true;
         float* prof = &profiles[static_cast<size_t>(i) * m];
@@ -218,6 +329,42 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
         points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
       }
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
+      if (pass + 1 == std::max(1, passes) && model_fit) {
+        // Mean profile across the fitted line (outward u), then the blurred-step model's offset.
+        Line& line = lines[side];
+        Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
+        for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
+        const double outward = line.n.dot(ideal_centre) < line.c ? 1.0 : -1.0;
+        const double du = std::clamp(cell / 8.0, 0.08, 0.5);
+        const int lo = -static_cast<int>(std::ceil(1.0 * cell / du)),
+                  hi = static_cast<int>(std::ceil(1.6 * cell / du));
+        const int bins = hi - lo + 1;
+        grid_sum.assign(bins, 0.0);
+        grid_count.assign(bins, 0);
+        for (int i = 0; i < n; ++i) {
+          if (!valid[i] || (use_clean && !clean[i])) continue;
+          const Eigen::Vector2d& q = ideal_origins[i];
+          const Eigen::Vector2d on_line = q - (line.n.dot(q) - line.c) * line.n;
+          const double delta = (map.ToImage(on_line) - origins[i]).dot(normals[i]);
+          for (int j = lo; j <= hi; ++j) {
+            const double s = delta + j * du;
+            float v;
+            if (!Sample(gray, origins[i].x() + s * normals[i].x(), origins[i].y() + s * normals[i].y(), &v))
+              continue;
+            grid_sum[j - lo] += v;
+            ++grid_count[j - lo];
+          }
+        }
+        grid_u.clear();
+        grid_mean.clear();
+        for (int j = lo; j <= hi; ++j) {
+          if (grid_count[j - lo] == 0) continue;
+          grid_u.push_back(j * du);
+          grid_mean.push_back(grid_sum[j - lo] / grid_count[j - lo]);
+        }
+        const double e = FitEdgeProfile(grid_u, grid_mean, cell);
+        if (std::isfinite(e)) line.c += outward * e;
+      }
     }
     std::array<Eigen::Vector2d, 4> next;
     for (int k = 0; k < 4; ++k) {
@@ -245,6 +392,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
   s.CheckKnownKeys({"corner_refinement",
                     "subpix_window",
                     "edge_passes",
+                    "edge_model",
                     "adaptive_window_min",
                     "adaptive_window_max",
                     "adaptive_window_step",
@@ -277,6 +425,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
            "expected one of edges, none, subpix, contour, got '" + o.corner_refinement + "'");
   o.subpix_window = s.GetInt("subpix_window", o.subpix_window);
   o.edge_passes = s.GetInt("edge_passes", o.edge_passes);
+  o.edge_model = s.GetBool("edge_model", o.edge_model);
   o.adaptive_window_min = s.GetInt("adaptive_window_min", o.adaptive_window_min);
   o.adaptive_window_max = s.GetInt("adaptive_window_max", o.adaptive_window_max);
   o.adaptive_window_step = s.GetInt("adaptive_window_step", o.adaptive_window_step);
@@ -345,7 +494,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
                                                         double min_perimeter, double max_perimeter,
                                                         int window_min, int window_max) const {
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
-  const cv::Mat view = gray(roi);
+  const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
   p->adaptiveThreshWinSizeMin = window_min;
   p->adaptiveThreshWinSizeMax = window_max;
@@ -486,16 +635,49 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     }
   }
 
+  const int cells = dictionary_->markerSize + 2;
+  // Inverted prints (markers.inverted): only white-bordered markers are real; the dark parts of an
+  // inverted marker can look like a normal one.
+  if (markers_.inverted && options_.inverted) {
+    std::vector<Raw> kept;
+    for (const Raw& r : unique)
+      if (MarkerPolarity(gray, r.corners, cells) < 0) kept.push_back(r);
+    unique.swap(kept);
+  }
+  // A marker inside another one's quad is a pattern of its bits, not a marker.
+  if (unique.size() > 1) {
+    std::vector<Raw> kept;
+    for (size_t i = 0; i < unique.size(); ++i) {
+      cv::Point2d centre(0, 0);
+      for (const auto& c : unique[i].corners) centre += 0.25 * c;
+      bool nested = false;
+      for (size_t j = 0; j < unique.size() && !nested; ++j) {
+        if (j == i) continue;
+        std::vector<cv::Point2f> quad;
+        for (const auto& c : unique[j].corners)
+          quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+        nested =
+            cv::contourArea(quad) > 1.5 * std::abs(cv::contourArea(std::vector<cv::Point2f>{
+                                              unique[i].corners[0], unique[i].corners[1],
+                                              unique[i].corners[2], unique[i].corners[3]})) &&
+            cv::pointPolygonTest(
+                quad, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
+      }
+      if (!nested) kept.push_back(unique[i]);
+    }
+    unique.swap(kept);
+  }
+
   std::vector<marker_t> out;
   out.reserve(unique.size());
-  const int cells = dictionary_->markerSize + 2;
   for (Raw& r : unique) {
     if (options_.corner_refinement == "edges") {
       cv::Mat& bits = bits_[r.id];
       if (bits.empty())
         bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(r.id, r.id + 1),
                                                           dictionary_->markerSize);
-      if (!RefineMarkerCorners(gray, cells, bits, camera_.get(), options_.edge_passes, &r.corners))
+      if (!RefineMarkerCorners(gray, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
+                               options_.edge_model))
         ++stats_.refine_failures;
     }
     marker_t m;

@@ -1,5 +1,6 @@
 // mcmt-detector: one camera's frames -> marker detections on LCM channel MCMT_DETECTIONS_<CAMERA>.
 #include <csignal>
+#include <cstdlib>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 
@@ -14,6 +15,8 @@ void OnSignal(int) { g_stop = true; }
 }  // namespace
 
 int main(int argc, char** argv) {
+  // FFmpeg's own log lines would break the one-line error contract; errors are reported by us.
+  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
   return mcmt::RunMain("mcmt-detector", [&]() {
     std::string config, lcm_url, source, rate = "max";
     std::string camera;

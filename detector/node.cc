@@ -73,12 +73,18 @@ CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& 
   source_ = FrameSource::Open(so);
   dictionary_name_ = rig.markers.dictionary;
   model_msg_ = ToCameraModelMsg(camera_.model);
+  // Recordings: read the first frame now, so that a size mismatch fails before anything is published.
+  if (!source_->live()) {
+    if (source_->Read(&pending_)) {
+      has_pending_ = true;
+      CheckSize(pending_);
+    }
+  }
 }
 
-bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
-  Frame frame;
-  if (!source_->Read(&frame)) return false;
-  if (!size_checked_) {
+void CameraPipeline::CheckSize(const Frame& frame) {
+  if (size_checked_) return;
+  {
     if (frame.image.cols != camera_.model.width || frame.image.rows != camera_.model.height)
       throw std::runtime_error("camera " + camera_.name + ": intrinsics " + camera_.intrinsics_path +
                                " are for " + std::to_string(camera_.model.width) + "x" +
@@ -87,6 +93,18 @@ bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
                                std::to_string(frame.image.rows));
     size_checked_ = true;
   }
+}
+
+bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
+  Frame frame;
+  if (has_pending_) {
+    frame = pending_;
+    pending_ = Frame();
+    has_pending_ = false;
+  } else if (!source_->Read(&frame)) {
+    return false;
+  }
+  CheckSize(frame);
   const auto t0 = Clock::now();
   std::vector<marker_t> markers = detector_->Detect(frame.image);
   d->detection_ms = MsSince(t0);

@@ -62,6 +62,9 @@ class CameraPipeline {
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<MarkerDetector> detector_;
   bool size_checked_ = false;
+  Frame pending_;
+  bool has_pending_ = false;
+  void CheckSize(const Frame& frame);
 };
 
 struct DetectorNodeStats {

@@ -1,0 +1,24 @@
+// Manual measurement tool (not a test): detector accuracy on sim renders for a few settings.
+#include <cstdio>
+#include <cstdlib>
+
+#include "tests/detector/sim_eval.h"
+using namespace mcmt;
+int main(int argc, char** argv) {
+  testing::SimEvalOptions o;
+  o.radius = argc > 1 ? atof(argv[1]) : 1.0;
+  o.blur = argc > 2 ? atof(argv[2]) : 0.0;
+  o.noise = argc > 3 ? atof(argv[3]) : 2.0;
+  if (argc > 4) o.dictionary = argv[4];
+  if (argc > 5) o.detector.corner_refinement = argv[5];
+  o.frames = argc > 6 ? atoi(argv[6]) : 20;
+  if (argc > 7) o.distortion = DistortionModelFromName(argv[7]);
+  auto r = testing::EvaluateOnSim(o);
+  printf(
+      "radius %.2f blur %.1f noise %.1f %s %s: recall60 %.3f (%d/%d) recall75 %.3f (%d/%d) wrong %d/%d "
+      "median %.3f mean offset %+.3f sizes %.1f..%.1f\n",
+      o.radius, o.blur, o.noise, o.dictionary.c_str(), o.detector.corner_refinement.c_str(), r.Recall60(),
+      r.found60, r.visible60, r.Recall75(), r.found75, r.visible75, r.wrong_ids, r.detections,
+      testing::MedianOf(r.corners.errors), testing::MeanOf(r.corners.offsets), r.min_size_seen,
+      r.max_size_seen);
+}

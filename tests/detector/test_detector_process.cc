@@ -1,0 +1,341 @@
+// Process tests: real mcmt-detector processes (and scripts/mcmt-launch) publish over LCM udpm on
+// loopback (ports 7700-7719 of this component) and a subscriber here receives every frame, in order,
+// with the right seq and utime. Bad input: one-line errors naming camera and file, non-zero exit.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "core/config.h"
+#include "core/dictionary.h"
+#include "core/lcm_util.h"
+#include "mcmt/detections_t.hpp"
+#include "tests/detector/synthetic.h"
+
+extern char** environ;
+
+namespace mcmt {
+namespace {
+namespace fs = std::filesystem;
+
+std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+
+struct Child {
+  pid_t pid = -1;
+  std::string out_path;
+};
+
+// Starts argv with stdout+stderr into out_path.
+Child Spawn(const std::vector<std::string>& argv, const std::string& out_path) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  Child c;
+  c.out_path = out_path;
+  const int rc = posix_spawn(&c.pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) c.pid = -1;
+  return c;
+}
+
+// Exit code, or -1 on timeout (the child is killed).
+int WaitExit(const Child& c, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(int(timeout_s * 1000));
+  while (std::chrono::steady_clock::now() < end) {
+    int status = 0;
+    const pid_t r = waitpid(c.pid, &status, WNOHANG);
+    if (r == c.pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  kill(c.pid, SIGKILL);
+  waitpid(c.pid, nullptr, 0);
+  return -1;
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A 3-camera recording rendered with tests/detector/synthetic.h: PNG folders, intrinsics, rig.yaml.
+class Recording {
+ public:
+  static constexpr int kFrames = 12;
+  static constexpr int kCameras = 3;
+  explicit Recording(const std::string& name) {
+    dir = fs::temp_directory_path() / ("mcmt_detector_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    auto dict = LoadDictionary("DICT_6X6_250");
+    std::mt19937_64 rng(11);
+    testing::SceneOptions scene;
+    scene.width = 320;
+    scene.height = 240;
+    scene.focal = 300;
+    scene.markers = 3;
+    scene.min_side_px = 25;
+    scene.max_side_px = 40;
+    scene.max_angle_deg = 40;
+    std::string yaml = "markers:\n  dictionary: DICT_6X6_250\n  size: 0.04\ncameras:\n";
+    for (int c = 0; c < kCameras; ++c) {
+      const std::string cam = "cam" + std::to_string(c);
+      fs::create_directories(dir / cam);
+      for (int k = 0; k < kFrames; ++k) {
+        std::vector<testing::RenderedMarker> truth;
+        const cv::Mat image = testing::RenderScene(*dict, scene, rng, &truth);
+        char name[32];
+        std::snprintf(name, sizeof(name), "%06d.png", k);
+        cv::imwrite((dir / cam / name).string(), image);
+        markers[cam] += static_cast<int>(truth.size());
+      }
+      CameraModel model;
+      model.width = scene.width;
+      model.height = scene.height;
+      model.fx = model.fy = scene.focal;
+      model.cx = scene.width / 2.0;
+      model.cy = scene.height / 2.0;
+      WriteIntrinsicsOpenCv((dir / (cam + ".yml")).string(), model);
+      yaml += "  - name: " + cam + "\n    intrinsics: " + cam + ".yml\n    source: " + cam + "/\n";
+    }
+    rig = (dir / "rig.yaml").string();
+    std::ofstream(rig) << yaml;
+  }
+  ~Recording() { fs::remove_all(dir); }
+  fs::path dir;
+  std::string rig;
+  std::map<std::string, int> markers;  // rendered markers per camera
+};
+
+class Receiver {
+ public:
+  explicit Receiver(const std::string& url) : lcm_(url) {
+    if (lcm_.good()) lcm_.subscribe(kDetectionsChannelRegex, &Receiver::OnMessage, this);
+  }
+  bool good() { return lcm_.good(); }
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    detections_t d;
+    std::string error;
+    if (!Decode(rbuf->data, rbuf->data_size, &d, &error)) {
+      ++bad;
+      return;
+    }
+    EXPECT_EQ(channel, DetectionsChannel(d.camera));
+    by_camera[d.camera].push_back(d);
+  }
+  // Handles messages until every camera has `frames` messages or the timeout passes.
+  void Receive(int cameras, int frames, double timeout_s, const std::function<bool()>& also_done = nullptr) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(int(timeout_s * 1000));
+    while (std::chrono::steady_clock::now() < end) {
+      lcm_.handleTimeout(50);
+      int complete = 0;
+      for (const auto& [cam, v] : by_camera) complete += static_cast<int>(v.size()) >= frames;
+      if (complete >= cameras) return;
+      if (also_done && also_done()) return;
+    }
+  }
+  lcm::LCM lcm_;
+  std::map<std::string, std::vector<detections_t>> by_camera;
+  int bad = 0;
+};
+
+void ExpectEveryFrameInOrder(const Receiver& rx, const Recording& rec) {
+  ASSERT_EQ(static_cast<int>(rx.by_camera.size()), Recording::kCameras);
+  EXPECT_EQ(rx.bad, 0);
+  for (const auto& [cam, frames] : rx.by_camera) {
+    SCOPED_TRACE(cam);
+    ASSERT_EQ(static_cast<int>(frames.size()), Recording::kFrames);
+    int markers = 0;
+    for (int k = 0; k < Recording::kFrames; ++k) {
+      EXPECT_EQ(frames[k].seq, k);
+      // Recordings without timestamps: kDefaultStartUtime + k / 30 fps, the same for every camera.
+      EXPECT_EQ(frames[k].utime, 1000000000000LL + std::llround(k * 1e6 / 30.0));
+      EXPECT_EQ(frames[k].dictionary, "DICT_6X6_250");
+      EXPECT_EQ(frames[k].camera_model.width, 320);
+      EXPECT_EQ(frames[k].num_markers, static_cast<int>(frames[k].markers.size()));
+      markers += frames[k].num_markers;
+    }
+    EXPECT_GE(markers, rec.markers.at(cam) * 9 / 10);
+  }
+}
+
+const std::string kDetector = std::string(MCMT_BIN_DIR) + "/mcmt-detector";
+
+// mcmt-launch takes the programs of this build.
+[[maybe_unused]] const bool kBinSet = setenv("MCMT_BIN", MCMT_BIN_DIR, 1) == 0;
+
+TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
+  Recording rec("proc");
+  Receiver rx(Url(7700));
+  ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
+  std::vector<Child> children;
+  for (int c = 0; c < Recording::kCameras; ++c) {
+    const std::string cam = "cam" + std::to_string(c);
+    children.push_back(
+        Spawn({kDetector, "--config", rec.rig, "--camera", cam, "--lcm-url", Url(7700), "--rate", "realtime"},
+              (rec.dir / (cam + ".out")).string()));
+    ASSERT_GT(children.back().pid, 0);
+  }
+  rx.Receive(Recording::kCameras, Recording::kFrames, 30.0);
+  for (const auto& c : children) {
+    EXPECT_EQ(WaitExit(c, 20.0), 0) << Slurp(c.out_path);
+    EXPECT_NE(Slurp(c.out_path).find("done: 12 frames"), std::string::npos) << Slurp(c.out_path);
+  }
+  ExpectEveryFrameInOrder(rx, rec);
+}
+
+TEST(DetectorProcess, SigintStopsALoopingDetectorCleanly) {
+  Recording rec("sigint");
+  Receiver rx(Url(7702));
+  ASSERT_TRUE(rx.good());
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", Url(7702), "--loop",
+                   "--rate", "realtime"},
+                  (rec.dir / "out.txt").string());
+  rx.Receive(1, Recording::kFrames + 3, 30.0);  // more frames than the recording: it loops
+  kill(c.pid, SIGINT);
+  EXPECT_EQ(WaitExit(c, 10.0), 0) << Slurp(c.out_path);
+  const auto& frames = rx.by_camera["cam1"];
+  ASSERT_GE(static_cast<int>(frames.size()), Recording::kFrames + 3);
+  for (size_t k = 0; k < frames.size(); ++k) EXPECT_EQ(frames[k].seq, static_cast<int64_t>(k));
+  EXPECT_NE(Slurp(c.out_path).find("(stopped)"), std::string::npos);
+}
+
+// Runs mcmt-detector expecting failure; returns its output (one line).
+std::string RunFailing(const std::vector<std::string>& args, const fs::path& dir) {
+  std::vector<std::string> argv = {kDetector};
+  argv.insert(argv.end(), args.begin(), args.end());
+  Child c = Spawn(argv, (dir / "fail.txt").string());
+  const int rc = WaitExit(c, 20.0);
+  const std::string out = Slurp(c.out_path);
+  EXPECT_NE(rc, 0) << out;
+  EXPECT_NE(rc, -1) << "timeout";
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  return out;
+}
+
+TEST(DetectorProcess, BadInputGivesOneLineNamingCameraAndFile) {
+  Recording rec("bad");
+  const std::string url = "memq://";
+  {
+    const std::string out = RunFailing({"--config", rec.rig, "--camera", "cam9", "--lcm-url", url}, rec.dir);
+    EXPECT_NE(out.find("cam9"), std::string::npos) << out;
+    EXPECT_NE(out.find("rig.yaml"), std::string::npos) << out;
+  }
+  {
+    const std::string out = RunFailing({"--config", rec.rig, "--camera", "cam0", "--source",
+                                        (rec.dir / "missing").string(), "--lcm-url", url},
+                                       rec.dir);
+    EXPECT_NE(out.find("cam0"), std::string::npos) << out;
+    EXPECT_NE(out.find("missing"), std::string::npos) << out;
+  }
+  {
+    // Intrinsics for 640x480, frames 320x240.
+    CameraModel model;
+    model.width = 640;
+    model.height = 480;
+    model.fx = model.fy = 500;
+    model.cx = 320;
+    model.cy = 240;
+    WriteIntrinsicsOpenCv((rec.dir / "cam2.yml").string(), model);
+    const std::string out = RunFailing({"--config", rec.rig, "--camera", "cam2", "--lcm-url", url}, rec.dir);
+    EXPECT_NE(out.find("cam2"), std::string::npos) << out;
+    EXPECT_NE(out.find("cam2.yml"), std::string::npos) << out;
+    EXPECT_NE(out.find("640x480"), std::string::npos) << out;
+    EXPECT_NE(out.find("320x240"), std::string::npos) << out;
+  }
+  {
+    std::string yaml = Slurp(rec.rig);
+    yaml.replace(yaml.find("DICT_6X6_250"), 12, "DICT_6X6_999");
+    const std::string bad_rig = (rec.dir / "bad_dict.yaml").string();
+    std::ofstream(bad_rig) << yaml;
+    const std::string out = RunFailing({"--config", bad_rig, "--camera", "cam0", "--lcm-url", url}, rec.dir);
+    EXPECT_NE(out.find("DICT_6X6_999"), std::string::npos) << out;
+    EXPECT_NE(out.find("bad_dict.yaml"), std::string::npos) << out;
+  }
+  {
+    // An unreadable (not a video) source file.
+    std::ofstream(rec.dir / "garbage.mp4") << "not a video";
+    const std::string out = RunFailing({"--config", rec.rig, "--camera", "cam1", "--source",
+                                        (rec.dir / "garbage.mp4").string(), "--lcm-url", url},
+                                       rec.dir);
+    EXPECT_NE(out.find("cam1"), std::string::npos) << out;
+    EXPECT_NE(out.find("garbage.mp4"), std::string::npos) << out;
+  }
+}
+
+// scripts/mcmt-launch in detect mode: one detector per camera, output prefixed, exit 0 at the end.
+TEST(DetectorProcess, LaunchDetectMode) {
+  Recording rec("launch");
+  Receiver rx(Url(7704));
+  ASSERT_TRUE(rx.good());
+  Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "detect",
+                   "--lcm-url", Url(7704), "--rate", "realtime"},
+                  (rec.dir / "launch.txt").string());
+  rx.Receive(Recording::kCameras, Recording::kFrames, 40.0);
+  const int rc = WaitExit(c, 30.0);
+  const std::string out = Slurp(c.out_path);
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("[detector cam0] camera cam0: done: 12 frames"), std::string::npos) << out;
+  EXPECT_NE(out.find("[detector cam2] "), std::string::npos) << out;
+  ExpectEveryFrameInOrder(rx, rec);
+}
+
+TEST(DetectorProcess, LaunchStopsEveryoneWhenOneFails) {
+  Recording rec("launchfail");
+  // cam1's intrinsics do not match its frames: it fails; the looping others must be stopped.
+  CameraModel model;
+  model.width = 100;
+  model.height = 100;
+  model.fx = model.fy = 100;
+  model.cx = model.cy = 50;
+  WriteIntrinsicsOpenCv((rec.dir / "cam1.yml").string(), model);
+  Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "detect",
+                   "--lcm-url", Url(7706), "--loop"},
+                  (rec.dir / "launch.txt").string());
+  const int rc = WaitExit(c, 40.0);
+  const std::string out = Slurp(c.out_path);
+  EXPECT_NE(rc, 0) << out;
+  EXPECT_NE(rc, -1) << out;
+  EXPECT_NE(out.find("detector cam1 failed"), std::string::npos) << out;
+  EXPECT_NE(out.find("[detector cam0] camera cam0: done"), std::string::npos) << out;
+}
+
+TEST(DetectorProcess, LaunchRecordMode) {
+  const std::string logger = std::string(MCMT_BIN_DIR) + "/mcmt-logger";
+  if (!fs::exists(logger))
+    GTEST_SKIP() << "mcmt-logger not built in " << MCMT_BIN_DIR << ": record mode not tested";
+  Recording rec("record");
+  const std::string log = (rec.dir / "session.lcmlog").string();
+  Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "record",
+                   "--out", log, "--lcm-url", Url(7708)},
+                  (rec.dir / "launch.txt").string());
+  const int rc = WaitExit(c, 60.0);
+  const std::string out = Slurp(c.out_path);
+  ASSERT_EQ(rc, 0) << out;
+  lcm::LogFile file(log, "r");
+  ASSERT_TRUE(file.good()) << log;
+  std::map<std::string, int> counts;
+  for (const lcm::LogEvent* e = file.readNextEvent(); e; e = file.readNextEvent()) ++counts[e->channel];
+  for (int cam = 0; cam < Recording::kCameras; ++cam)
+    EXPECT_EQ(counts[DetectionsChannel("cam" + std::to_string(cam))], Recording::kFrames) << out;
+}
+
+}  // namespace
+}  // namespace mcmt

@@ -1,0 +1,95 @@
+// The real caliscope recordings (../shared/data/caliscope): inverted ChArUco board, DICT_4X4_1000,
+// 1280x720 MPEG-4 at 6 fps, ids 0..9. Skipped with a message when the data is absent.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "core/config.h"
+#include "detector/detector.h"
+
+namespace mcmt {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kData = std::string(MCMT_SOURCE_DIR) + "/../shared/data/caliscope";
+
+// sync_index-ordered frame_time of one cam_id (the k-th is frame k of its video).
+std::vector<double> CsvTimes(const std::string& path, int cam) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::map<long long, double> by_sync;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<std::string> cells;
+    std::string c;
+    while (std::getline(ss, c, ',')) cells.push_back(c);
+    if (std::stoi(cells[1]) == cam) by_sync[std::stoll(cells[0])] = std::stod(cells.back());
+  }
+  std::vector<double> out;
+  for (const auto& [s, t] : by_sync) out.push_back(t);
+  return out;
+}
+
+TEST(DetectorRealData, CaliscopeCharucoEveryCameraSeesTheBoard) {
+  if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
+  const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
+  ASSERT_EQ(rig.cameras.size(), 4u);
+  for (const auto& cam : rig.cameras) {
+    const std::vector<detections_t> frames = DetectRecording(rig, cam.name);
+    ASSERT_EQ(frames.size(), 111u) << cam.name;
+    int detections = 0;
+    std::set<int> ids;
+    for (size_t k = 0; k < frames.size(); ++k) {
+      EXPECT_EQ(frames[k].seq, static_cast<int64_t>(k));
+      EXPECT_EQ(frames[k].camera, cam.name);
+      EXPECT_EQ(frames[k].camera_model.width, 1280);
+      for (const auto& m : frames[k].markers) {
+        EXPECT_GE(m.id, 0);
+        EXPECT_LE(m.id, 9);
+        ids.insert(m.id);
+        ++detections;
+      }
+    }
+    std::printf("%s: %d detections of ids 0..9 in 111 frames (%zu distinct ids)\n", cam.name.c_str(),
+                detections, ids.size());
+    EXPECT_GE(detections, 350) << cam.name;
+    EXPECT_EQ(ids.size(), 10u) << cam.name;
+  }
+}
+
+TEST(DetectorRealData, CaliscopeTimestampsFollowTheCsv) {
+  if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
+  const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
+  const std::string csv = kData + "/charuco_calibration/timestamps.csv";
+  std::vector<std::vector<double>> times;
+  for (int c = 0; c < 4; ++c) times.push_back(CsvTimes(csv, c));
+  for (int c = 0; c < 4; ++c) {
+    const std::vector<detections_t> frames = DetectRecording(rig, "cam" + std::to_string(c), 20);
+    ASSERT_EQ(frames.size(), 20u);
+    for (size_t k = 0; k < frames.size(); ++k) {
+      // Default caliscope_time "sync": the earliest camera's frame_time of the same sync_index, shared.
+      double earliest = times[0][k];
+      for (int o = 1; o < 4; ++o) earliest = std::min(earliest, times[o][k]);
+      EXPECT_EQ(frames[k].utime, std::llround(earliest * 1e6)) << "cam" << c << " frame " << k;
+      EXPECT_LE(std::abs(frames[k].utime - std::llround(times[c][k] * 1e6)), 60000);
+    }
+  }
+}
+
+TEST(DetectorRealData, Caliscope4CamRecordingOpens) {
+  if (!fs::exists(kData + "/4_cam_recording/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
+  const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_4cam.yaml");
+  const std::vector<detections_t> frames = DetectRecording(rig, "cam0");
+  EXPECT_EQ(frames.size(), 48u);
+  int detections = 0;
+  for (const auto& f : frames) detections += f.num_markers;
+  std::printf("4_cam_recording cam0: %d detections in %zu frames\n", detections, frames.size());
+  EXPECT_GT(detections, 0);
+}
+
+}  // namespace
+}  // namespace mcmt
