@@ -11,7 +11,8 @@
 
 namespace mcmt::viz {
 
-LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames) : lcm_(lcm), keep_frames_(keep_frames) {
+LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
+    : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
   subscriptions_.push_back(lcm_.subscribe(kMapChannel, &LcmCollector::OnMap, this));
   subscriptions_.push_back(lcm_.subscribe(kPoseChannel, &LcmCollector::OnPose, this));
   subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &LcmCollector::OnDetections, this));
@@ -64,6 +65,11 @@ void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& cha
   row.cameras = msg.num_cameras;
   row.markers = msg.num_markers;
   poses_.push_back(row);
+  if (keep_poses_ > 0 && poses_.size() >= 2 * keep_poses_) {
+    const size_t drop = poses_.size() - keep_poses_;
+    poses_.erase(poses_.begin(), poses_.begin() + static_cast<std::ptrdiff_t>(drop));
+    dropped_poses_ += static_cast<int64_t>(drop);
+  }
   ++stats_.poses;
   stats_.latency_ms = msg.latency_ms;
   stats_.rms_px = msg.rms_px;

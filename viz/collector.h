@@ -27,7 +27,9 @@ struct PoseStats {
 class LcmCollector {
  public:
   // keep_frames: detections of at most this many frames (utimes) are kept (0: all, for logs).
-  LcmCollector(lcm::LCM& lcm, size_t keep_frames);
+  // keep_poses: about this many newest poses are kept (0: all, for logs); older ones are dropped
+  // in chunks so that a long live session runs in bounded memory.
+  LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses = 0);
   ~LcmCollector();
   LcmCollector(const LcmCollector&) = delete;
   LcmCollector& operator=(const LcmCollector&) = delete;
@@ -38,7 +40,10 @@ class LcmCollector {
   bool has_map() const { return map_.has_value(); }
   const RigMap& map() const { return *map_; }
   int map_count() const { return map_count_; }  // maps received (a new one replaces the old)
+  // The poses kept; poses()[i] is the (first_pose_index() + i)-th pose received.
   const std::vector<TrajectoryRow>& poses() const { return poses_; }
+  int64_t first_pose_index() const { return dropped_poses_; }
+  int64_t total_poses() const { return dropped_poses_ + static_cast<int64_t>(poses_.size()); }
   // Marker ids per camera detected in the frame of `utime` (empty if none known).
   std::map<std::string, std::vector<int>> DetectionsAt(int64_t utime) const;
   const PoseStats& stats() const { return stats_; }
@@ -53,6 +58,8 @@ class LcmCollector {
 
   lcm::LCM& lcm_;
   size_t keep_frames_;
+  size_t keep_poses_;
+  int64_t dropped_poses_ = 0;
   std::vector<lcm::Subscription*> subscriptions_;
   std::optional<RigMap> map_;
   int map_count_ = 0;

@@ -427,7 +427,17 @@ const std::vector<TrajectoryRow>& VizScene::trajectory() const {
 
 void VizScene::AddPose(const TrajectoryRow& row) {
   if (panels_.empty()) return;
-  panels_.back().input.trajectory.push_back(row);
+  Panel& p = panels_.back();
+  auto& rows = p.input.trajectory;
+  rows.push_back(row);
+  // Bounded memory over a long live session: the oldest rows go in chunks (the trail only shows
+  // the newest trail_max), and the trail is rebuilt on the shifted indices.
+  const size_t keep = std::max<size_t>(5000, static_cast<size_t>(options_.trail_max));
+  if (rows.size() >= 2 * keep) {
+    rows.erase(rows.begin(), rows.end() - static_cast<std::ptrdiff_t>(keep));
+    p.trail_first = 0;
+    p.trail_last = -1;
+  }
   SetCurrentFrame(-1);
 }
 

@@ -142,7 +142,10 @@ std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
 
 int Viewer::Run() {
   std::unique_ptr<LcmCollector> collector;
-  if (lcm_) collector = std::make_unique<LcmCollector>(*lcm_, is_log_ ? 0 : 300);
+  // Live: bounded memory (the trail shows at most trail_max poses anyway).
+  const size_t keep_poses =
+      is_log_ ? 0 : std::max<size_t>(10000, 2 * static_cast<size_t>(options_.scene.trail_max));
+  if (lcm_) collector = std::make_unique<LcmCollector>(*lcm_, is_log_ ? 0 : 300, keep_poses);
   if (collector && is_log_) {
     collector->DrainLog();
     if (!have_file_map_ && !collector->has_map())
@@ -157,16 +160,15 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     // Live: wait for a map and enough poses.
     const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout_s);
     auto ready = [&] {
-      return (have_file_map_ || collector->has_map()) &&
-             static_cast<int64_t>(collector->poses().size()) >= options_.max_poses;
+      return (have_file_map_ || collector->has_map()) && collector->total_poses() >= options_.max_poses;
     };
     while (!ready() && Clock::now() < deadline) lcm_->handleTimeout(20);
     if (!ready()) {
       char text[200];
-      std::snprintf(text, sizeof(text), "timed out after %.1f s waiting for %s (got %s and %zu poses)",
+      std::snprintf(text, sizeof(text), "timed out after %.1f s waiting for %s (got %s and %lld poses)",
                     options_.timeout_s, options_.max_poses > 0 ? "a map and --max-poses poses" : "a map",
                     (have_file_map_ || collector->has_map()) ? "a map" : "no MCMT_MAP",
-                    collector->poses().size());
+                    static_cast<long long>(collector->total_poses()));
       throw std::runtime_error(text);
     }
   }
@@ -265,7 +267,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
   bool follow = options_.follow;
   bool browsing = false;  // stepping through frames with the arrow keys
   int map_count = -1;
-  size_t poses_shown = 0;
+  int64_t poses_shown = 0;  // poses received (collector's absolute index) already in the scene
   auto push_view = [&](const ViewCamera& v) {
     win->setCameraPointingToPoint(static_cast<float>(v.pointing.x()), static_cast<float>(v.pointing.y()),
                                   static_cast<float>(v.pointing.z()));
@@ -354,15 +356,16 @@ int Viewer::RunWindow(LcmCollector* collector) {
         map_count = collector->map_count();
         scene.SetPanels(Panels(collector));
         ptr = scene.scene();
-        poses_shown = scene.trajectory().size();
+        poses_shown = collector->total_poses();
         reset = true;
         dirty = true;
       }
       if (scene.HasMap() && !have_file_trajectory_) {
         const auto& poses = collector->poses();
-        for (; poses_shown < poses.size(); ++poses_shown) {
+        poses_shown = std::max(poses_shown, collector->first_pose_index());  // older ones dropped
+        for (; poses_shown < collector->total_poses(); ++poses_shown) {
           const int shown = scene.current_frame();
-          scene.AddPose(poses[poses_shown]);
+          scene.AddPose(poses[static_cast<size_t>(poses_shown - collector->first_pose_index())]);
           if (browsing) scene.SetCurrentFrame(shown);
           dirty = true;
         }

@@ -1,6 +1,8 @@
 // mcmt-viz as a separate process: headless snapshot of a known map, before/after, --video, a log,
 // live LCM over udpm (ports 7780-7799 belong to viz), no display, and bad input.
 #include <gtest/gtest.h>
+#include <mrpt/opengl/CFrustum.h>
+#include <mrpt/opengl/CTexturedPlane.h>
 
 #include <atomic>
 #include <opencv2/imgcodecs.hpp>
@@ -92,6 +94,17 @@ TEST(VizProcess, BeforeAfterAndSaveScene) {
   ASSERT_EQ(img.cols, 900);
   ASSERT_EQ(img.rows, 360);
   EXPECT_GT(std::filesystem::file_size(dir / "scene.3Dscene"), 1000u);
+  {  // The saved scene loads back (as SceneViewer3D would) with both panels.
+    mrpt::opengl::COpenGLScene loaded;
+    ASSERT_TRUE(loaded.loadFromFile(dir / "scene.3Dscene"));
+    ASSERT_TRUE(loaded.getViewport("main"));
+    ASSERT_TRUE(loaded.getViewport("left"));
+    for (const char* name : {"main", "left"}) {
+      EXPECT_GE(loaded.getViewport(name)->size(), 2u) << name;  // the rig and the object
+      EXPECT_TRUE(loaded.getViewport(name)->getByClass<mrpt::opengl::CFrustum>()) << name;
+      EXPECT_TRUE(loaded.getViewport(name)->getByClass<mrpt::opengl::CTexturedPlane>()) << name;
+    }
+  }
   const RigMap map = ReadMap(dir / "map.yaml"), init = ReadMap(dir / "map_initial.yaml");
   const auto rows = ReadTrajectory(dir / "trajectory.csv");
   const auto irows = ReadTrajectory(dir / "trajectory_initial.csv");
@@ -250,6 +263,18 @@ TEST(VizProcess, LiveLcmOverUdpmWritesASnapshotAfterNPoses) {
   Eigen::Vector2d obj;
   ASSERT_TRUE(scene.ProjectRigPoint(0, rows[0].rig_from_object.translation(), &obj));
   EXPECT_TRUE(NotBackgroundNear(img, obj, bg, 1));
+}
+
+TEST(VizProcess, LiveHeadlessWithoutAMapTimesOutWithAClearMessage) {
+  TempDir dir("timeout");
+  const auto r = RunCommand(VizBin() + " --lcm-url 'udpm://239.255.76.67:7787?ttl=0' --snapshot " +
+                                (dir / "never.png") + " --timeout 1",
+                            30);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("timed out"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no MCMT_MAP"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "never.png"));
 }
 
 TEST(VizProcess, LiveWindowWithoutDisplayExitsWithAClearMessage) {

@@ -312,6 +312,26 @@ TEST(VizRender, ObjectCloseUpFillsTheView) {
   EXPECT_GT(cv::countNonZero(gray > 20), 0.1 * w * h);
 }
 
+TEST(VizLive, ManyPosesKeepBoundedRowsAndShowTheNewest) {
+  const auto rig = MakeTestRig(3, 1);
+  SceneOptions o;
+  o.trail_max = 2000;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"live", rig.map, {}}});
+  EXPECT_FALSE(scene.CurrentPose(0).has_value());
+  TrajectoryRow row = rig.trajectory[0];
+  for (int i = 0; i < 30000; ++i) {
+    row.seq = i;
+    row.rig_from_object.translation().x() = 1e-4 * i;
+    scene.AddPose(row);
+  }
+  EXPECT_LT(scene.trajectory().size(), 10000u);
+  EXPECT_GE(scene.trajectory().size(), 2000u);
+  EXPECT_EQ(scene.trajectory().back().seq, 29999);
+  ASSERT_TRUE(scene.CurrentPose(0).has_value());
+  EXPECT_DOUBLE_EQ(scene.CurrentPose(0)->translation().x(), 1e-4 * 29999);
+}
+
 TEST(VizOptions, SizeParsing) {
   int w = 0, h = 0;
   ParseSize("1280x720", &w, &h);
