@@ -57,7 +57,8 @@ int main(int argc, char** argv) {
         "  mcmt-viz --map out/map.yaml --trajectory out/trajectory.csv --snapshot view.png\n"
         "  mcmt-viz --map out/map.yaml --initial-map out/map_initial.yaml --trajectory out/trajectory.csv "
         "--snapshot before_after.png\n"
-        "  mcmt-viz --log session.lcmlog --video frames/\n"
+        "  mcmt-viz --log session.lcmlog --video frames/   (then: ffmpeg -framerate 30 -i "
+        "frames/frame_%06d.png session.mp4)\n"
         "  mcmt-viz --lcm-url udpm://239.255.76.67:7667?ttl=0          (live window)\n");
     int exit_code = 0;
     if (!args.Parse(argc, argv, &exit_code)) return exit_code;
