@@ -29,6 +29,7 @@ void InstallSignalHandlers() {
 int Main(int argc, char** argv) {
   std::string config, map_path, log_path, out_path, lcm_url, channel;
   bool quiet = false;
+  double deadline_ms = 15.0;
   mcmt::ArgParser args(
       "mcmt-tracker",
       "Tracks the object with a known map: one object_pose_t per frame on MCMT_POSE (rig_from_object,\n"
@@ -42,6 +43,9 @@ int Main(int argc, char** argv) {
       "lcm-url", &lcm_url,
       "LCM URL (default: lcm.url of the rig YAML, else LCM's default); with --log: publish poses there");
   args.AddString("channel", &channel, "output channel (default: tracker.channel, else MCMT_POSE)");
+  args.AddDouble("deadline-ms", &deadline_ms,
+                 "frame deadline: wait this long after a frame's first detection for the other cameras "
+                 "(default: tracker.deadline_ms, else 15)");
   args.AddFlag("quiet", &quiet, "no status lines (warnings are still printed)");
   args.AddEpilog(
       "\nexamples:\n"
@@ -56,6 +60,7 @@ int Main(int argc, char** argv) {
   mcmt::TrackerNodeOptions options;
   options.tracker = mcmt::TrackerOptions::FromConfig(rig);
   if (args.Given("channel")) options.tracker.channel = channel;
+  if (args.Given("deadline-ms")) options.tracker.deadline_ms = deadline_ms;
   options.tracker.Validate();
   options.log_mode = !log_path.empty();
   options.keep_trajectory = !out_path.empty();

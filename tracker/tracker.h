@@ -176,6 +176,7 @@ struct TrackerStats {
   int64_t bad_messages = 0;    // undecodable detections
   int64_t unknown_camera = 0;  // detections of cameras not in the map
   int64_t map_switches = 0;
+  int64_t late_views = 0;  // views that arrived after their frame was solved (dropped)
 };
 
 struct TrackerNodeOptions {
@@ -234,6 +235,7 @@ class TrackerNode {
   std::vector<lcm::Subscription*> subscriptions_;
   std::set<std::string> warned_;
   std::set<std::string> reported_stale_;
+  std::map<std::string, int64_t> late_views_;  // per camera
   TrackerStats stats_;
   std::vector<TrajectoryRow> trajectory_;
   std::vector<double> latencies_ms_;  // since the last status line

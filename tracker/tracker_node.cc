@@ -18,6 +18,12 @@ double Percentile(std::vector<double> v, double q) {
   return v[k];
 }
 
+std::string FormatMs(double ms) {
+  std::ostringstream s;
+  s << ms;
+  return s.str();
+}
+
 std::string Join(const std::vector<std::string>& names) {
   std::string out;
   for (size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];
@@ -142,6 +148,7 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
     WarnOnce("dict:" + msg.camera, "camera '" + msg.camera + "' detects in '" + msg.dictionary +
                                        "', the rig uses '" + rig_.markers.dictionary + "'");
   std::vector<SyncedFrame> frames;
+  const int64_t late_before = sync_->stats().out_of_order;
   if (options_.log_mode) {
     // Deadlines in message time: deterministic whatever the reading speed.
     frames = sync_->Poll(msg.utime);
@@ -149,6 +156,16 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
     frames.insert(frames.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
   } else {
     frames = sync_->Add(msg, arrival_wall);
+  }
+  if (sync_->stats().out_of_order > late_before) {
+    // A view of a frame already solved: this camera's messages come later than the frame deadline.
+    late_views_[msg.camera]++;
+    stats_.late_views++;
+    WarnOnce("late:" + msg.camera,
+             "views of camera '" + msg.camera + "' arrive after their frame was solved (deadline " +
+                 FormatMs(options_.tracker.deadline_ms) +
+                 " ms) and are dropped; if this camera's messages lag the others (start offset, slow link), "
+                 "raise tracker.deadline_ms or --deadline-ms");
   }
   ProcessFrames(std::move(frames), arrival_wall);
 }
@@ -260,6 +277,10 @@ std::string TrackerNode::StatusLine() const {
   s << ", tracked " << (status_frames_ ? 100.0 * status_tracked_ / status_frames_ : 0.0) << "%";
   s << " (total: " << stats_.frames << " frames, " << stats_.tracked << " tracked, " << stats_.ambiguous
     << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected << " outliers rejected)";
+  if (!late_views_.empty()) {
+    s << ", late views dropped:";
+    for (const auto& kv : late_views_) s << " " << kv.first << " " << kv.second;
+  }
   if (!reported_stale_.empty()) {
     s << ", stale cameras:";
     for (const auto& c : reported_stale_) s << " " << c;

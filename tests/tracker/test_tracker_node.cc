@@ -152,6 +152,29 @@ TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
   EXPECT_EQ(count("camera 'cam4': the detections' intrinsics differ"), 1u) << err;
 }
 
+// A camera whose messages always come after the next frame's: its views miss the deadline, are
+// dropped, counted and warned about once; every frame is still posed from the others.
+TEST(TrackerNode, LaggingCameraViewsAreDroppedAndReported) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  testing::internal::CaptureStderr();
+  const auto& views = fx.session.views;
+  for (size_t f = 0; f < views.size(); ++f) {
+    for (const auto& d : views[f])
+      if (d.camera != "cam4") Feed(node, d);
+    if (f > 0) Feed(node, views[f - 1][4]);  // cam4's view of the previous frame, 33 ms late
+  }
+  node.Flush();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.trajectory().size(), views.size());
+  EXPECT_GE(node.stats().late_views, static_cast<int64_t>(views.size()) - 3);
+  EXPECT_NE(err.find("views of camera 'cam4' arrive after their frame was solved (deadline 15 ms)"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(node.StatusLine().find("late views dropped: cam4"), std::string::npos) << node.StatusLine();
+}
+
 TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
   Fixture fx;
   lcm::LCM in1("memq://"), in2("memq://");

@@ -219,17 +219,13 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
     map.markers.push_back(mm);
   }
   WriteMap(dir + "/map.yaml", map);
-  // The detector processes start a few hundred ms apart and each replays the recording from its first
-  // frame: a generous frame deadline lets every frame wait for all three.
-  {
-    std::ofstream rig(dir + "/rig.yaml", std::ios::app);
-    rig << "tracker:\n  deadline_ms: 3000\n";
-  }
-
   const std::string url = "udpm://239.255.76.67:7744?ttl=0";
   const std::string tracker_err = dir + "/tracker.txt";
   const pid_t tracker = tracker_test::Spawn(
-      {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url},
+      // The detector processes start a few hundred ms apart and each replays the recording from its first
+      // frame: a generous frame deadline lets every frame wait for all three.
+      {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url,
+       "--deadline-ms", "3000"},
       tracker_err);
   ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << tracker_test::Slurp(tracker_err);
   lcm::LCM lcm(url);
