@@ -242,7 +242,12 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   std::vector<double> grid_u, grid_sum, grid_mean;
   std::vector<int> grid_count;
   std::vector<char> clean;
-  for (int pass = 0; pass < std::max(1, passes); ++pass) {
+  // Passes of crossing-based line fits until the corners move less than 0.01 px (at least `passes`,
+  // at most `passes` + 4), then a last pass that also fits the blurred-step model to each side.
+  bool final_pass = false, converged = false;
+  const int max_passes = std::max(1, passes) + 4;
+  for (int pass = 0; !final_pass; ++pass) {
+    final_pass = pass + 1 >= max_passes || (pass + 1 >= std::max(1, passes) && converged);
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int k = 0; k < 4; ++k) centre += img[k] / 4.0;
@@ -329,7 +334,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
         points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
       }
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
-      if (pass + 1 == std::max(1, passes) && model_fit) {
+      if (final_pass && model_fit) {
         // Mean profile across the fitted line (outward u), then the blurred-step model's offset.
         Line& line = lines[side];
         Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
@@ -372,6 +377,9 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       if (!Intersect(lines[(k + 3) % 4], lines[k], &p)) return false;
       next[k] = map.ToImage(p);
     }
+    double moved = 0;
+    for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - img[k]).norm());
+    converged = moved < 0.01;
     img = next;
   }
   const double limit = std::max(2.0, 0.15 * perimeter / 4.0);
@@ -534,7 +542,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   return out;
 }
 
-std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) const {
+std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) {
   // One region per previous marker: its bounding box grown by 40 % of its size, overlapping regions
   // merged; each searched at the scale its markers had.
   struct Region {
@@ -582,10 +590,19 @@ std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray
     window = std::clamp(window, 3, 31);
     const double min_perimeter = std::max(options_.min_perimeter_px, region.min_perimeter);
     std::vector<Raw> found = Search(gray, region.rect, min_perimeter, region.max_perimeter, window, window);
+    bool all = true;
     for (int id : region.ids) {
       bool seen = false;
       for (const Raw& f : found) seen = seen || f.id == id;
-      if (!seen) *ok = false;
+      all = all && seen;
+    }
+    if (!all) {
+      // A marker not found at its last scale: search its region again with every window of the full
+      // search (it may have turned away or be occluded: then it is simply no longer tracked; new
+      // markers are found by the periodic full search).
+      ++stats_.region_retries;
+      found = Search(gray, region.rect, options_.min_perimeter_px, region.max_perimeter * 1.5,
+                     options_.adaptive_window_min, options_.adaptive_window_max);
     }
     out.insert(out.end(), found.begin(), found.end());
   }

@@ -70,6 +70,7 @@ struct DetectorStats {
   long long full_searches = 0;
   long long markers = 0;
   long long refine_failures = 0;  // markers kept with unrefined corners
+  long long region_retries = 0;   // fast mode: regions searched again with every window
 };
 
 // Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
@@ -105,7 +106,7 @@ class MarkerDetector {
   };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max) const;
-  std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok) const;
+  std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
 
   MarkerConfig markers_;
   DetectorOptions options_;

@@ -1,0 +1,133 @@
+// Detection time per image on one thread (cv::setNumThreads(1)) at the paper's resolutions, in the
+// accurate default mode and the fast mode (search near the previous frame's markers), on mcmt_sim
+// sequences (30 fps, box object: 2-8 markers in view), plus peak memory. Prints markdown tables.
+//   bench_detector [frames per camera (default 60)] [cameras (default 2)]
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <opencv2/core.hpp>
+
+#include "detector/detector.h"
+#include "sim/sim.h"
+#include "tests/detector/synthetic.h"
+
+using namespace mcmt;
+
+namespace {
+double PeakRssMb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int frames = argc > 1 ? std::atoi(argv[1]) : 60;
+  const int num_cameras = argc > 2 ? std::atoi(argv[2]) : 2;
+  cv::setNumThreads(1);
+  sim::ObjectOptions oo;
+  oo.kind = sim::ObjectKind::kBox;
+  oo.marker_size = 0.05;
+  const sim::SimObject object = sim::MakeObject(oo);
+  sim::TrajectoryOptions to;
+  to.frames = frames;
+  to.fps = 30;
+  const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
+  sim::RenderOptions ro;
+  ro.noise_sigma = 2.0;
+  sim::Renderer renderer(object, "DICT_6X6_250", ro);
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  for (const auto& m : object.markers) mc.ids.push_back(m.id);
+
+  std::printf("## mcmt detector: time per image, one thread\n\n");
+  std::printf(
+      "%d frames x %d cameras per resolution (mcmt_sim, box object, 5 cm markers, cameras 1 m away, noise "
+      "2).\n\n",
+      frames, num_cameras);
+  std::printf(
+      "| resolution | markers/image (min-max) | accurate ms | accurate images/s | fast ms | fast images/s | "
+      "fast full searches | fast vs accurate corners (max px) | stock detectMarkers ms | unrefined markers "
+      "(accurate/fast) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
+  for (const auto& size : sizes) {
+    sim::RigOptions ro2;
+    ro2.num_cameras = std::max(num_cameras, 3);
+    ro2.radius = 1.0;
+    ro2.width = size[0];
+    ro2.height = size[1];
+    const std::vector<sim::SimCamera> cameras = sim::MakeRig(ro2);
+    std::vector<std::vector<cv::Mat>> images(num_cameras);
+    for (int c = 0; c < num_cameras; ++c)
+      for (const auto& f : trajectory)
+        images[c].push_back(renderer.Render(cameras[c], c, f.seq, f.rig_from_object));
+    double accurate_ms = 0, fast_ms = 0, stock_ms = 0, max_diff = 0;
+    int min_markers = 1 << 30, max_markers = 0;
+    long long full = 0, fails_a = 0, fails_f = 0;
+    for (int c = 0; c < num_cameras; ++c) {
+      DetectorOptions accurate_options, fast_options;
+      fast_options.fast = true;
+      MarkerDetector accurate(mc, accurate_options), fast(mc, fast_options);
+      accurate.SetCamera(cameras[c].model);
+      fast.SetCamera(cameras[c].model);
+      auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_6X6_250);
+      auto params = cv::aruco::DetectorParameters::create();
+      for (const cv::Mat& image : images[c]) {
+        auto t0 = std::chrono::steady_clock::now();
+        const auto a = accurate.Detect(image);
+        auto t1 = std::chrono::steady_clock::now();
+        const auto f = fast.Detect(image);
+        auto t2 = std::chrono::steady_clock::now();
+        std::vector<std::vector<cv::Point2f>> corners;
+        std::vector<int> ids;
+        cv::aruco::detectMarkers(image, dict, corners, ids, params);
+        auto t3 = std::chrono::steady_clock::now();
+        accurate_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
+        fast_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
+        stock_ms += std::chrono::duration<double, std::milli>(t3 - t2).count();
+        min_markers = std::min<int>(min_markers, a.size());
+        max_markers = std::max<int>(max_markers, a.size());
+        if (std::getenv("MCMT_BENCH_DEBUG"))
+          for (const auto& m : f)
+            for (const auto& r : a)
+              if (m.id == r.id && std::abs(m.corners[0][0] - r.corners[0][0]) +
+                                          std::abs(m.corners[1][0] - r.corners[1][0]) +
+                                          std::abs(m.corners[2][0] - r.corners[2][0]) >
+                                      0.1) {
+                const size_t fi = &image - &images[c][0];
+                for (const auto& v : sim::ProjectMarkers(cameras[c], object, trajectory[fi].rig_from_object))
+                  if (v.id == m.id)
+                    std::fprintf(stderr,
+                                 "cam %d frame %zu id %d angle %.0f size %.1f occl %d vis %d: truth %.2f "
+                                 "%.2f %.2f %.2f acc %.2f %.2f %.2f %.2f fast %.2f %.2f %.2f %.2f\n",
+                                 c, fi, m.id, v.view_angle_deg, v.size_px, v.occluded, v.fully_visible,
+                                 v.corners[0].x(), v.corners[0].y(), v.corners[2].x(), v.corners[2].y(),
+                                 r.corners[0][0], r.corners[0][1], r.corners[2][0], r.corners[2][1],
+                                 m.corners[0][0], m.corners[0][1], m.corners[2][0], m.corners[2][1]);
+              }
+        for (const auto& m : f)
+          for (const auto& r : a)
+            if (m.id == r.id)
+              for (int k = 0; k < 4; ++k)
+                max_diff = std::max({max_diff, std::abs(m.corners[k][0] - r.corners[k][0]),
+                                     std::abs(m.corners[k][1] - r.corners[k][1])});
+      }
+      full += fast.stats().full_searches;
+      fails_a += accurate.stats().refine_failures;
+      fails_f += fast.stats().refine_failures;
+    }
+    const int n = num_cameras * frames;
+    std::printf("| %dx%d | %d-%d | %.2f | %.0f | %.2f | %.0f | %lld of %d | %.3f | %.2f | %lld/%lld |\n",
+                size[0], size[1], min_markers, max_markers, accurate_ms / n, 1000.0 * n / accurate_ms,
+                fast_ms / n, 1000.0 * n / fast_ms, full, n, max_diff, stock_ms / n, fails_a, fails_f);
+    std::fflush(stdout);
+  }
+  std::printf(
+      "\nPeak resident memory of this benchmark (all images of one resolution held in memory): %.0f MB\n",
+      PeakRssMb());
+  return 0;
+}
