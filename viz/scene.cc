@@ -33,6 +33,7 @@ constexpr char kMainViewport[] = "main";
 constexpr char kLeftViewport[] = "left";
 constexpr char kLegendViewport[] = "legend";
 const mrpt::img::TColorf kBackground(0.16f, 0.18f, 0.22f, 1.0f);
+const Eigen::Vector3d kNeutral(0.55, 0.75, 0.95);  // cameras and markers with no residual statistics
 
 mrpt::poses::CPose3D ToCPose(const Rigid3& t) {
   mrpt::math::CMatrixDouble44 m;
@@ -156,16 +157,15 @@ void VizScene::SetPanels(std::vector<PanelInput> inputs) {
   const ViewCamera old_view = views_.empty() ? ViewCamera() : views_.back();
   world_from_rig_ = WorldFromRig(inputs.back().map);
 
-  // Residual colour scale, common to all panels so that before/after compare.
-  residual_scale_ = options_.residual_scale_px;
-  if (residual_scale_ <= 0) {
-    double worst = 0.0;
-    for (const auto& in : inputs) {
-      for (const auto& c : in.map.cameras) worst = std::max(worst, c.rms_px);
-      for (const auto& m : in.map.markers) worst = std::max(worst, m.rms_px);
-    }
-    residual_scale_ = std::max(0.5, worst);
+  // Residual colour scale, common to all panels so that before/after compare. Maps without
+  // per-camera/marker statistics (MCMT_MAP carries none) are drawn in a neutral colour, no legend.
+  double worst = 0.0;
+  for (const auto& in : inputs) {
+    for (const auto& c : in.map.cameras) worst = std::max(worst, c.rms_px);
+    for (const auto& m : in.map.markers) worst = std::max(worst, m.rms_px);
   }
+  has_residuals_ = worst > 0.0;
+  residual_scale_ = options_.residual_scale_px > 0 ? options_.residual_scale_px : std::max(0.5, worst);
 
   // Sizes from the last panel: frustum length and floor height.
   const PanelInput& ref = inputs.back();
@@ -233,7 +233,7 @@ void VizScene::SetPanels(std::vector<PanelInput> inputs) {
     }
     BuildPanel(&p);
   }
-  if (options_.legend && legend_viewport_) BuildLegend();
+  if (options_.legend && legend_viewport_ && has_residuals_) BuildLegend();
   current_ = -1;
   SetCurrentFrame(-1);
   AutoView();
@@ -256,6 +256,9 @@ void VizScene::UpdateViewports() {
     if (!vp) vp = scene_->createViewport(name);
     vp->setViewportPosition(static_cast<double>(i) / n, 0.0, 1.0 / n, 1.0);
     vp->setCustomBackgroundColor(kBackground);
+    // More ambient light than MRPT's default: faces turned away from the light stay readable.
+    vp->lightParameters().ambient = mrpt::img::TColorf(0.5f, 0.5f, 0.5f, 1.0f);
+    vp->lightParameters().diffuse = mrpt::img::TColorf(0.6f, 0.6f, 0.6f, 1.0f);
   }
 }
 
@@ -272,7 +275,7 @@ void VizScene::BuildPanel(Panel* panel) {
   for (const auto& cam : map.cameras) {
     auto set = CSetOfObjects::Create();
     set->setPose(ToCPose(cam.rig_from_cam));
-    const Eigen::Vector3d color = ResidualColor(cam.rms_px, residual_scale_);
+    const Eigen::Vector3d color = has_residuals_ ? ResidualColor(cam.rms_px, residual_scale_) : kNeutral;
     const double hfov = cam.model.fx > 0 ? 2.0 * std::atan2(0.5 * cam.model.width, cam.model.fx) : 1.0;
     const double vfov = cam.model.fy > 0 ? 2.0 * std::atan2(0.5 * cam.model.height, cam.model.fy) : 0.75;
     auto frustum =
@@ -334,7 +337,7 @@ void VizScene::BuildPanel(Panel* panel) {
     frame->appendLine(e, -e, z, -e, -e, z);
     frame->appendLine(-e, -e, z, -e, e, z);
     frame->setLineWidth(3.0f);
-    frame->setColor(ToColor(ResidualColor(m.rms_px, residual_scale_)));
+    frame->setColor(ToColor(has_residuals_ ? ResidualColor(m.rms_px, residual_scale_) : kNeutral));
     set->insert(frame);
     panel->object->insert(set);
   }
@@ -644,13 +647,14 @@ cv::Mat VizScene::Render(mrpt::opengl::CFBORender* render) {
   render->render_RGB(*scene_, image);
   cv::Mat bgr = image.asCvMat<cv::Mat>(mrpt::img::DEEP_COPY);
   if (bgr.channels() == 1) cv::cvtColor(bgr, bgr, cv::COLOR_GRAY2BGR);
-  if (options_.legend && !panels_.empty()) DrawLegend(&bgr);
+  if (options_.legend && has_residuals_ && !panels_.empty()) DrawLegend(&bgr);
   return bgr;
 }
 
 void VizScene::EnableLegendViewport() {
   legend_viewport_ = true;
-  if (options_.legend && !panels_.empty() && !scene_->getViewport(kLegendViewport)) BuildLegend();
+  if (options_.legend && has_residuals_ && !panels_.empty() && !scene_->getViewport(kLegendViewport))
+    BuildLegend();
 }
 
 void VizScene::DrawLegend(cv::Mat* bgr) const {

@@ -103,6 +103,7 @@ class VizScene {
   bool ProjectRigPoint(int panel, const Eigen::Vector3d& p_rig, Eigen::Vector2d* pixel) const;
   const Rigid3& world_from_rig() const { return world_from_rig_; }
   double residual_scale_px() const { return residual_scale_; }
+  bool has_residuals() const { return has_residuals_; }  // any per-camera/marker RMS in the maps
 
   mrpt::opengl::COpenGLScene::Ptr scene() const { return scene_; }
   // Copies the panel views into the scene's viewports (call before rendering).
@@ -139,6 +140,7 @@ class VizScene {
   std::vector<ViewCamera> views_;
   Rigid3 world_from_rig_ = Rigid3::Identity();
   double residual_scale_ = 1.0;
+  bool has_residuals_ = false;
   double frustum_length_ = 0.1;
   double floor_z_ = 0.0;
   int current_ = -1;
