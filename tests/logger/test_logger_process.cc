@@ -64,30 +64,11 @@ void ExpectSameMessages(const std::vector<Msg>& a, const std::vector<Msg>& b) {
   }
 }
 
-// lcm-logger has no readiness signal: publish probes until one reaches its file.
-bool ProbeUntilRecorded(int port, const std::string& file) {
-  lcm::LCM lcm(Url(port));
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (FileSize(file) <= 0) {
-    if (std::chrono::steady_clock::now() > until) return false;
-    lcm.publish("MCMT_PROBE", "p", 1);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return true;
-}
-
 std::vector<Msg> WithoutProbes(const std::vector<Msg>& msgs) {
   std::vector<Msg> out;
   for (const Msg& m : msgs)
-    if (m.channel != "MCMT_PROBE") out.push_back(m);
+    if (m.channel != kProbeChannel) out.push_back(m);
   return out;
-}
-
-// Waits (up to 20 s) until `file` holds `count` messages besides probes.
-void WaitForMessages(const std::string& file, size_t count) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (WithoutProbes(ReadMessages(file)).size() < count && std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
 }
 
 class LoggerProcessTest : public ::testing::Test {
@@ -151,7 +132,7 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
                      dir_ + "/l.out", dir_ + "/l.err");
     ASSERT_TRUE(ProbeUntilRecorded(7765, theirs)) << ReadText(dir_ + "/l.err");
     Publish(7765, traffic);
-    WaitForMessages(theirs, traffic.size());
+    ASSERT_TRUE(ProbeUntilRecorded(7765, theirs, traffic.size()));
     lcm_logger.Signal(SIGINT);
     ASSERT_EQ(lcm_logger.Wait(20), 0) << ReadText(dir_ + "/l.err");
   }
@@ -191,7 +172,7 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
                          nullptr, &err),
               0)
         << err;
-    WaitForMessages(again, traffic.size());
+    ASSERT_TRUE(ProbeUntilRecorded(7767, again, traffic.size()));
     lcm_logger.Signal(SIGINT);
     ASSERT_EQ(lcm_logger.Wait(20), 0);
   }
@@ -355,6 +336,33 @@ TEST_F(LoggerProcessTest, SplitWritesNumberedPartsAndNeverOverwrites) {
   EXPECT_EQ(ReadText(dir_ + "/plain.lcmlog"), "keep me");
 }
 
+// Rotation by time: parts follow each other without loss.
+TEST_F(LoggerProcessTest, SplitByMinutesRotatesOnTime) {
+  const std::string log = dir_ + "/t.lcmlog";
+  auto args = LoggerArgs(log, 7764);
+  args.insert(args.end(), {"--split-minutes", "0.005"});  // 0.3 s
+  Child logger(args, dir_ + "/t.out", dir_ + "/t.err");
+  ASSERT_TRUE(WaitFor(dir_ + "/t.yaml", 10)) << ReadText(dir_ + "/t.err");
+  std::vector<Msg> traffic;
+  lcm::LCM lcm(Url(7764));
+  // Publish until three parts exist (time-based, so no fixed count), then a last message.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  for (int64_t seq = 0; !FileExists(LogPartName(log, 2)) && std::chrono::steady_clock::now() < until; ++seq) {
+    traffic.push_back({DetectionsChannel("cam0"), Encode(MakeDetections("cam0", seq, 1))});
+    lcm.publish(traffic.back().channel, traffic.back().data.data(),
+                static_cast<unsigned>(traffic.back().data.size()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(FileExists(LogPartName(log, 2)));
+  const auto wait_until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (ReadMessages(log).size() < traffic.size() && std::chrono::steady_clock::now() < wait_until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  logger.Signal(SIGINT);
+  ASSERT_EQ(logger.Wait(20), 0) << ReadText(dir_ + "/t.err");
+  EXPECT_GE(LogParts(log).size(), 3u);
+  ExpectSameMessages(ReadMessages(log), traffic);
+}
+
 // Bad input gives one clear line and a non-zero exit.
 TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
   std::string out, err;
@@ -375,6 +383,18 @@ TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
   one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--flush-ms", "0"}, "--flush-ms");
   one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--config", dir_ + "/norig.yaml"},
                  "norig.yaml");
+  CameraModel model;
+  model.width = 640;
+  model.height = 480;
+  model.fx = model.fy = 500;
+  model.cx = 320;
+  model.cy = 240;
+  WriteIntrinsicsOpenCv(dir_ + "/c.yml", model);
+  WriteText(
+      dir_ + "/typo.yaml",
+      "markers:\n  size: 0.05\ncameras:\n  - name: c\n    intrinsics: c.yml\nlogger:\n  flush_msx: 50\n");
+  one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--config", dir_ + "/typo.yaml"},
+                 "logger.flush_msx");
   EXPECT_FALSE(FileExists(dir_ + "/x.lcmlog"));
   EXPECT_FALSE(FileExists(dir_ + "/x.yaml"));
 }

@@ -10,11 +10,13 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "logger/event_log.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 
@@ -153,6 +155,32 @@ inline bool WaitFor(const std::string& path, double timeout_s) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   return true;
+}
+
+constexpr char kProbeChannel[] = "MCMT_PROBE";
+
+// Events in `file` other than probes (a cut-short last event is not counted).
+inline size_t CountNonProbeEvents(const std::string& file) {
+  size_t n = 0;
+  if (!FileExists(file)) return 0;
+  mcmt::EventLogReader reader(file);
+  mcmt::LogEvent e;
+  while (reader.Next(&e))
+    if (e.channel != kProbeChannel) ++n;
+  return n;
+}
+
+// lcm-logger has no readiness signal and flushes only when a message arrives: publish probes on `port`
+// until `file` holds at least `count` non-probe events (count 0: until it holds anything). Up to 20 s.
+inline bool ProbeUntilRecorded(int port, const std::string& file, size_t count = 0) {
+  lcm::LCM lcm(Url(port));
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    if (count == 0 ? FileSize(file) > 0 : CountNonProbeEvents(file) >= count) return true;
+    if (std::chrono::steady_clock::now() > until) return false;
+    lcm.publish(kProbeChannel, "p", 1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
 }
 
 // Deterministic detections of one camera frame.
