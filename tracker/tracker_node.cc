@@ -269,12 +269,17 @@ std::string TrackerNode::StatusLine() const {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(1);
-  s << "mcmt-tracker: " << status_frames_ / dt << " frames/s";
-  s.precision(3);
-  s << ", latency p50 " << Percentile(latencies_ms_, 0.5) << " ms p99 " << Percentile(latencies_ms_, 0.99)
-    << " ms";
-  s.precision(1);
-  s << ", tracked " << (status_frames_ ? 100.0 * status_tracked_ / status_frames_ : 0.0) << "%";
+  s << "mcmt-tracker: ";
+  if (status_frames_ > 0) {  // since the last status line
+    s << status_frames_ / dt << " frames/s";
+    s.precision(3);
+    s << ", latency p50 " << Percentile(latencies_ms_, 0.5) << " ms p99 " << Percentile(latencies_ms_, 0.99)
+      << " ms";
+    s.precision(1);
+    s << ", tracked " << 100.0 * status_tracked_ / status_frames_ << "%";
+  } else {
+    s << "no frame";
+  }
   s << " (total: " << stats_.frames << " frames, " << stats_.tracked << " tracked, " << stats_.ambiguous
     << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected << " outliers rejected)";
   if (!late_views_.empty()) {
