@@ -14,6 +14,14 @@ int main(int argc, char** argv) {
   o.frames = argc > 6 ? atoi(argv[6]) : 20;
   if (argc > 7) o.distortion = DistortionModelFromName(argv[7]);
   auto r = testing::EvaluateOnSim(o);
+  for (double lim : {2.0, 5.0, 90.0}) {
+    std::vector<double> e;
+    for (size_t i = 0; i < r.axis_angles.size(); ++i)
+      if (r.axis_angles[i] <= lim && (lim > 5 ? r.axis_angles[i] > 5 : true))
+        e.push_back(r.corners.errors[i]);
+    printf("corners with sides within %.0f deg of an axis: %zu median %.3f\n", lim, e.size(),
+           testing::MedianOf(e));
+  }
   printf(
       "radius %.2f blur %.1f noise %.1f %s %s: recall60 %.3f (%d/%d) recall75 %.3f (%d/%d) wrong %d/%d "
       "median %.3f mean offset %+.3f sizes %.1f..%.1f\n",

@@ -31,6 +31,8 @@ struct SimEvalResult {
   int visible60 = 0, found60 = 0, visible75 = 0, found75 = 0;
   int detections = 0, wrong_ids = 0;
   CornerErrors corners;
+  std::vector<double>
+      axis_angles;  // per corner: the smaller angle of its two sides to an image axis, degrees
   double min_size_seen = 1e9, max_size_seen = 0;
   double Recall60() const { return visible60 ? double(found60) / visible60 : 0; }
   double Recall75() const { return visible75 ? double(found75) / visible75 : 0; }
@@ -99,6 +101,15 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
           got[k] = cv::Point2d(hit->corners[k][0], hit->corners[k][1]);
         }
         AddCornerErrors(truth, got, &r.corners);
+        for (int k = 0; k < 4; ++k) {
+          double best = 90;
+          for (int side : {(k + 3) % 4, k}) {
+            const cv::Point2d d = truth.corners[(side + 1) % 4] - truth.corners[side];
+            double a = std::fmod(std::abs(std::atan2(d.y, d.x)) * 180 / M_PI, 90.0);
+            best = std::min({best, a, 90 - a});
+          }
+          r.axis_angles.push_back(best);
+        }
       }
     }
   }
