@@ -531,6 +531,28 @@ std::string FinishYaml(const YAML::Emitter& y, const std::string& what) {
 
 }  // namespace
 
+RigMap ReadMapOrLog(const std::string& path) {
+  bool is_log = false;
+  if (FILE* f = std::fopen(path.c_str(), "rb")) {
+    uint8_t magic[4];
+    is_log = std::fread(magic, 1, 4, f) == 4 && ((uint32_t(magic[0]) << 24) | (uint32_t(magic[1]) << 16) |
+                                                 (uint32_t(magic[2]) << 8) | magic[3]) == kLcmSyncWord;
+    std::fclose(f);
+  }
+  if (!is_log) return ReadMap(path);
+  rig_map_t last;
+  bool found = false;
+  ForEachEvent(path, [&](const LogEvent& e, int64_t index, const std::string& part) {
+    if (e.channel != kMapChannel) return;
+    std::string error;
+    if (!Decode(e.data.data(), e.data.size(), &last, &error))
+      throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
+    found = true;
+  });
+  if (!found) throw LogFormatError(path + ": no rig_map_t on " + std::string(kMapChannel) + " in this log");
+  return FromRigMapMsg(last);
+}
+
 std::string KalibrCamchain(const RigMap& map) {
   YAML::Emitter y;
   y.SetDoublePrecision(17);

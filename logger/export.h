@@ -92,6 +92,9 @@ CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& 
 
 // ---- from a map -----------------------------------------------------------------------------------------
 
+// map.yaml, or an LCM log: then the last rig_map_t on MCMT_MAP (throws naming the log when it has none).
+RigMap ReadMapOrLog(const std::string& path);
+
 // Kalibr camchain YAML: cam0..camN-1 in map order, pinhole-radtan or pinhole-equidistant, with
 // T_cn_cnm1 = cam_n_from_cam_(n-1) for n >= 1. Throws if a camera's model cannot be written exactly
 // (radtan with non-zero k3..k6).

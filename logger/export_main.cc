@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
     args.AddString("tum", &tum, "from --log: poses in TUM format (timestamp tx ty tz qx qy qz qw)");
     args.AddFlag("summary", &summary,
                  "from --log: print channels, counts, rates, span, cameras, ids, seq gaps");
-    args.AddString("map", &map_path, "map.yaml to read");
+    args.AddString("map", &map_path, "map.yaml to read, or a log: its last rig_map_t on MCMT_MAP");
     args.AddString("kalibr", &kalibr, "from --map: Kalibr camchain YAML");
     args.AddString("ros-dir", &ros_dir,
                    "from --map: folder of camera_info YAML per camera + static_transforms.yaml/.txt");
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
         std::cerr << "mcmt-export: " << r.pose_rows << " poses (" << r.poses_skipped << " lost skipped)\n";
     }
     if (map_action) {
-      mcmt::RigMap map = mcmt::ReadMap(map_path);
+      mcmt::RigMap map = mcmt::ReadMapOrLog(map_path);
       if (!kalibr.empty()) mcmt::WriteFileAtomic(kalibr, mcmt::KalibrCamchain(map));
       if (!ros_dir.empty()) mcmt::WriteRosDir(map, ros_dir, rig_frame, object_frame);
       if (!opencv.empty()) mcmt::WriteFileAtomic(opencv, mcmt::OpenCvMapYaml(map));

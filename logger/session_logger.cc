@@ -435,6 +435,16 @@ void SessionLogger::WriteSidecar(bool final_state) {
   y << YAML::Key << "end_utime" << YAML::Value << end;
   y << YAML::Key << "end_time" << YAML::Value << IsoTime(end);
   y << YAML::Key << "duration_s" << YAML::Value << static_cast<double>(end - s.start_utime) / 1e6;
+  {
+    const double duration = static_cast<double>(end - s.start_utime) / 1e6;
+    char status[160];
+    std::snprintf(status, sizeof(status),
+                  "%.1f msg/s, %.2f MB written, %lld missing (seq gaps), %lld dropped",
+                  duration > 0 ? static_cast<double>(s.received) / duration : 0.0,
+                  static_cast<double>(s.bytes_written) / 1e6, static_cast<long long>(s.Missing()),
+                  static_cast<long long>(s.dropped_backlog));
+    y << YAML::Key << "status" << YAML::Value << status;
+  }
   y << YAML::Key << "messages" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "received" << YAML::Value << s.received;
   y << YAML::Key << "written" << YAML::Value << s.written;

@@ -363,6 +363,41 @@ TEST_F(LoggerProcessTest, SplitByMinutesRotatesOnTime) {
   ExpectSameMessages(ReadMessages(log), traffic);
 }
 
+// scripts/mcmt-replay plays a split session part after part, into a live logger.
+TEST_F(LoggerProcessTest, McmtReplayPlaysSplitSessions) {
+  const auto traffic = MakeTraffic(20);
+  const std::string session = dir_ + "/split.lcmlog";
+  {
+    const size_t half = traffic.size() / 2;
+    for (int part = 0; part < 2; ++part) {
+      EventLogWriter w(LogPartName(session, part));
+      for (size_t i = part == 0 ? 0 : half; i < (part == 0 ? half : traffic.size()); ++i)
+        w.Write(1700000000000000LL + static_cast<int64_t>(i) * 2000, traffic[i].channel,
+                traffic[i].data.data(), traffic[i].data.size());
+      w.Close();
+    }
+  }
+  const std::string replay = std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-replay";
+  const std::string out = dir_ + "/played.lcmlog";
+  auto args = LoggerArgs(out, 7764);
+  args.insert(args.end(), {"--max-messages", std::to_string(traffic.size()), "--max-seconds", "60"});
+  Child logger(args, dir_ + "/p.out", dir_ + "/p.err");
+  ASSERT_TRUE(WaitFor(dir_ + "/played.yaml", 10));
+  std::string stdout_text, err;
+  ASSERT_EQ(RunProgram({replay, session, "--speed", "1", "--lcm-url", Url(7764)}, &stdout_text, &err), 0)
+      << err;
+  EXPECT_NE(err.find("split.00.lcmlog"), std::string::npos) << err;
+  EXPECT_NE(err.find("split.01.lcmlog"), std::string::npos) << err;
+  ASSERT_EQ(logger.Wait(60), 0) << ReadText(dir_ + "/p.err");
+  ExpectSameMessages(ReadMessages(out), traffic);
+  // Bad input: one line, exit 1.
+  WriteText(dir_ + "/text.lcmlog", "not a log");
+  EXPECT_EQ(RunProgram({replay, dir_ + "/text.lcmlog"}, &stdout_text, &err), 1);
+  EXPECT_NE(err.find("text.lcmlog: byte 0: not an LCM event log"), std::string::npos) << err;
+  EXPECT_EQ(RunProgram({replay, dir_ + "/none.lcmlog"}, &stdout_text, &err), 1);
+  EXPECT_NE(err.find("none.lcmlog: no such file"), std::string::npos) << err;
+}
+
 // Bad input gives one clear line and a non-zero exit.
 TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
   std::string out, err;

@@ -611,3 +611,37 @@ TEST_F(ExportTest, PlyAndObjHoldTheMarkerSquaresFacingOut) {
   ASSERT_EQ(ov.size(), v.size());
   for (size_t i = 0; i < v.size(); ++i) EXPECT_EQ(ov[i], v[i]);
 }
+
+TEST_F(ExportTest, MapFromALogIsTheLastRigMapOnMcmtMap) {
+  RigMap first = MakeMap();
+  RigMap second = MakeMap();
+  second.reference_camera = "cam1";
+  second.cameras[1].rig_from_cam = Rigid3::Identity();
+  second.rms_px = 0.25;
+  std::vector<Msg> msgs = MakeStream();
+  msgs.push_back({kMapChannel, Encode(ToRigMapMsg(first, 1)), 1});
+  msgs.push_back({kMapChannel, Encode(ToRigMapMsg(second, 2)), 2});
+  const std::string log = WriteLog(dir_ + "/m.lcmlog", msgs);
+  const RigMap got = ReadMapOrLog(log);
+  EXPECT_EQ(got.reference_camera, "cam1");
+  EXPECT_EQ(got.rms_px, 0.25);
+  ASSERT_EQ(got.cameras.size(), 3u);
+  EXPECT_LT(
+      (got.cameras[2].rig_from_cam.matrix() - second.cameras[2].rig_from_cam.matrix()).cwiseAbs().maxCoeff(),
+      1e-12);
+  EXPECT_EQ(got.cameras[1].model.model, DistortionModel::kFisheye);
+  ASSERT_EQ(got.markers.size(), 4u);
+  EXPECT_EQ(got.markers[2].size, 0.03);
+  // A log without a map says so.
+  const std::string no_map = WriteLog(dir_ + "/n.lcmlog", MakeStream());
+  try {
+    ReadMapOrLog(no_map);
+    FAIL();
+  } catch (const LogFormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("n.lcmlog: no rig_map_t on MCMT_MAP"), std::string::npos)
+        << e.what();
+  }
+  // A map.yaml still reads as a map.
+  WriteMap(dir_ + "/map.yaml", first);
+  EXPECT_EQ(ReadMapOrLog(dir_ + "/map.yaml").reference_camera, "cam0");
+}
