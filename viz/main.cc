@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
     args.AddInt("max-poses", &o.max_poses, "live headless: render after this many poses (and a map) arrived");
     args.AddDouble("timeout", &o.timeout_s, "live headless: seconds to wait for the map and poses");
     args.AddDouble("redraw-hz", &o.redraw_hz, "live window: redraws per second at most");
+    args.AddDouble("max-seconds", &o.max_seconds, "live window: close it after this many seconds (0: never)");
     args.AddFlag("follow", &o.follow, "live window: start following the object (key f toggles)");
     args.AddEpilog(
         "Live window keys: f follow the object, r reset the view, t toggle rays, left/right (or , .) step "

@@ -48,6 +48,7 @@ void ViewerOptions::Validate() const {
   if (!(timeout_s > 0)) throw std::invalid_argument("--timeout: expected > 0 seconds");
   if (view != "rig" && view != "object" && view != "follow")
     throw std::invalid_argument("--view: expected rig, object or follow, got '" + view + "'");
+  if (!(max_seconds >= 0)) throw std::invalid_argument("--max-seconds: expected >= 0");
   if (!(redraw_hz > 0 && redraw_hz <= 240)) throw std::invalid_argument("--redraw-hz: expected in (0, 240]");
   if (!initial_trajectory_path.empty() && initial_map_path.empty())
     throw std::invalid_argument("--initial-trajectory needs --initial-map");
@@ -307,7 +308,12 @@ int Viewer::RunWindow(LcmCollector* collector) {
   bool dirty = true;
   ViewCamera last_view;
   auto last_repaint = Clock::now();
+  const auto start = Clock::now();
+  int64_t repaints = 0;
   while (win->isOpen()) {
+    if (options_.max_seconds > 0 &&
+        Clock::now() - start > std::chrono::duration<double>(options_.max_seconds))
+      break;
     // LCM until the next redraw is due (redraws bounded however fast poses arrive).
     while (Clock::now() < next_redraw) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(next_redraw - Clock::now());
@@ -415,9 +421,13 @@ int Viewer::RunWindow(LcmCollector* collector) {
       win->unlockAccess3DScene();
     }
     win->forceRepaint();
+    ++repaints;
     last_repaint = Clock::now();
     dirty = false;
   }
+  std::printf("mcmt-viz: window closed after %.1f s: %zu poses shown, %lld repaints\n",
+              std::chrono::duration<double>(Clock::now() - start).count(), scene.trajectory().size(),
+              static_cast<long long>(repaints));
   return 0;
 }
 

@@ -26,6 +26,7 @@ struct ViewerOptions {
   double timeout_s = 30.0;              // live headless: give up after this long
   double redraw_hz = 30.0;              // live window: redraws per second at most
   bool follow = false;                  // live window: start following the object
+  double max_seconds = 0.0;             // live window: close after this long (0: never)
   std::string view = "rig";             // headless view: rig (all), object (close-up), follow
   SceneOptions scene;
 

@@ -291,6 +291,54 @@ TEST(VizProcess, LiveWindowWithoutDisplayExitsWithAClearMessage) {
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }
 
+// The live window itself needs an X server: run only where xvfb-run is installed (it is not
+// required by the suite). Poses arrive at ~200 Hz; repaints stay within --redraw-hz.
+TEST(VizProcess, LiveWindowUnderXvfbShowsPosesWithBoundedRedraws) {
+  if (RunCommand("sh -c 'command -v xvfb-run'", 5).exit_code != 0) GTEST_SKIP() << "xvfb-run not installed";
+  TempDir dir("window");
+  const auto rig = MakeTestRig(3, 1);
+  WriteMap(dir / "map.yaml", rig.map);
+  const std::string url = "udpm://239.255.76.67:7788?ttl=0";
+  std::atomic<bool> done{false};
+  testing::ProcessResult result;
+  std::thread viewer([&] {
+    result = RunCommand("xvfb-run -a -s '-screen 0 800x600x24' " + VizBin() + " --map " + (dir / "map.yaml") +
+                            " --lcm-url '" + url + "' --max-seconds 4 --redraw-hz 10 --size 640x400",
+                        60);
+    done = true;
+  });
+  auto lcm = OpenLcm(url);
+  object_pose_t pose{};
+  pose.object = "object";
+  pose.status = object_pose_t::STATUS_TRACKING;
+  for (int k = 0; !done && k < 12000; ++k) {
+    Rigid3 p = rig.trajectory[0].rig_from_object;
+    p.translation().x() += 1e-4 * (k % 100);
+    pose.rig_from_object = ToPose3d(p);
+    pose.utime = 1000000 + 5000 * k;
+    pose.seq = k;
+    lcm->publish(kPoseChannel, &pose);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  viewer.join();
+  if (result.output.find("cannot open the live window") != std::string::npos)
+    GTEST_SKIP() << "no X server could start here: " << result.output;
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  double seconds = 0;
+  long long shown = 0, repaints = 0;
+  const size_t at = result.output.find("window closed after");
+  ASSERT_NE(at, std::string::npos) << result.output;
+  ASSERT_EQ(
+      std::sscanf(result.output.c_str() + at, "window closed after %lf s: %lld poses shown, %lld repaints",
+                  &seconds, &shown, &repaints),
+      3)
+      << result.output;
+  EXPECT_GT(shown, 10) << result.output;
+  EXPECT_GT(repaints, 0);
+  // Each loop turn waits a full 1/10 s: never more repaints than that, however fast poses come.
+  EXPECT_LE(repaints, static_cast<long long>(seconds * 10) + 2) << result.output;
+}
+
 TEST(VizProcess, BadInputGivesOneLineErrors) {
   TempDir dir("bad");
   const auto rig = MakeTestRig(2, 3);
