@@ -197,7 +197,9 @@ int main(int argc, char** argv) {
   std::printf(
       "mcmt-logger recording over LCM udpm on loopback (publisher in this process, logger a separate "
       "process, default options: flush + fdatasync every 200 ms, socket receive buffer raised to "
-      "min(16 MB, net.core.rmem_max = %lld B)). Lost = sent - recorded; msgs/s and MB/s over the publishing time; CPU = the logger process's CPU time over the publishing time.\n\n",
+      "min(16 MB, net.core.rmem_max = %lld B)). Lost = sent - recorded; msgs/s and MB/s over the publishing "
+      "time; CPU = the logger "
+      "process's CPU time over the publishing time.\n\n",
       KernelReceiveBufferMax());
   std::printf(
       "| scenario | seconds | sent | recorded | lost | zero loss | msgs/s | MB/s | log MB | logger CPU %% | "
