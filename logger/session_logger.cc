@@ -150,6 +150,8 @@ SessionLogger::SessionLogger(lcm::LCM& lcm, LoggerOptions options) : lcm_(lcm), 
     subscription_->setQueueCapacity(options_.queue_capacity);
     WriteSidecar(false);
   } catch (...) {
+    if (subscription_) lcm_.unsubscribe(subscription_);
+    subscription_ = nullptr;
     writer_.reset();
     ::unlink(stats_.parts.back().path.c_str());
     throw;
