@@ -211,6 +211,14 @@ EventLogWriter::EventLogWriter(const std::string& path, size_t buffer_limit)
     throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
   }
   buffer_.reserve(buffer_limit_ + (64 << 10));
+  // Make the new name itself durable (a power cut right after creation must not lose the file).
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
 }
 
 EventLogWriter::~EventLogWriter() {
