@@ -46,10 +46,10 @@ struct DetectorOptions {
   double max_perimeter_rate = 4.0;      // largest, relative to the image's larger side
   double polygonal_approx_rate = 0.05;  // contour -> quadrilateral tolerance, relative to perimeter
   double min_corner_distance_rate = 0.05;
-  int min_distance_to_border = 1;            // pixels
-  double error_correction_rate = 0.6;        // of the dictionary's correction capacity
-  int perspective_pixels_per_cell = 6;       // bit sampling resolution
-  double perspective_ignored_margin = 0.15;  // part of each cell ignored when reading its bit
+  int min_distance_to_border = 1;           // pixels
+  double error_correction_rate = 0.6;       // of the dictionary's correction capacity
+  int perspective_pixels_per_cell = 6;      // bit sampling resolution
+  double perspective_ignored_margin = 0.3;  // part of each cell ignored when reading its bit
   bool inverted = false;     // also look for white-on-black markers (default: markers.inverted)
   bool aruco3 = false;       // OpenCV's ArUco3 fast search (downsampled candidate search)
   int aruco3_min_side = 32;  // its minSideLengthCanonicalImg

@@ -13,6 +13,12 @@ int main(int argc, char** argv) {
   if (argc > 5) o.detector.corner_refinement = argv[5];
   o.frames = argc > 6 ? atoi(argv[6]) : 20;
   if (argc > 7) o.distortion = DistortionModelFromName(argv[7]);
+  if (getenv("MCMT_MARGIN")) o.detector.perspective_ignored_margin = atof(getenv("MCMT_MARGIN"));
+  if (getenv("MCMT_PPC")) o.detector.perspective_pixels_per_cell = atoi(getenv("MCMT_PPC"));
+  if (getenv("MCMT_WMIN")) o.detector.adaptive_window_min = atoi(getenv("MCMT_WMIN"));
+  if (getenv("MCMT_WMAX")) o.detector.adaptive_window_max = atoi(getenv("MCMT_WMAX"));
+  if (getenv("MCMT_POLY")) o.detector.polygonal_approx_rate = atof(getenv("MCMT_POLY"));
+  if (getenv("MCMT_ECR")) o.detector.error_correction_rate = atof(getenv("MCMT_ECR"));
   auto r = testing::EvaluateOnSim(o);
   for (double lim : {2.0, 5.0, 90.0}) {
     std::vector<double> e;

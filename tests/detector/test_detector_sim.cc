@@ -57,6 +57,7 @@ TEST(DetectorOnSim, BlurAndNoise) {
   const auto r = testing::EvaluateOnSim(o);
   Report("radius 1.0, blur 0.8, noise 3", r);
   ExpectAccurate(r);
+  ExpectRecall(r);
 }
 
 TEST(DetectorOnSim, NoNoiseNoBlur) {
