@@ -104,7 +104,8 @@ TEST_F(LoggerPipelineTest, RealDetectorsRecordedThenReplayedGiveIdenticalLogs) {
 }
 
 // Log -> det.csv -> log -> det.csv is byte-identical, and mcmt-mapper maps both logs to the same map; a
-// log recorded by lcm-logger itself (from an lcm-logplayer replay) maps to the same map too.
+// log recorded by lcm-logger itself (from an lcm-logplayer replay) maps to the same map too; mcmt-tracker
+// reads all three to the same poses.
 TEST_F(LoggerPipelineTest, DetectionsCsvRoundTripGivesTheSameMap) {
   if (!Have("mcmt-sim") || !Have("mcmt-mapper"))
     GTEST_SKIP() << "mcmt-sim or mcmt-mapper not built in " << MCMT_BIN_DIR;
@@ -168,4 +169,23 @@ TEST_F(LoggerPipelineTest, DetectionsCsvRoundTripGivesTheSameMap) {
           << other;
     EXPECT_EQ(ReadText(m1 + "/trajectory.csv"), ReadText(other + "/trajectory.csv")) << other;
   }
+
+  // mcmt-tracker reads the three logs to the same poses.
+  if (!Have("mcmt-tracker")) {
+    std::cout << "mcmt-tracker not built: tracker part skipped\n";
+    return;
+  }
+  std::vector<std::string> poses;
+  for (const std::string& input : {log, back, theirs}) {
+    poses.push_back(dir_ + "/poses" + std::to_string(poses.size()) + ".csv");
+    ASSERT_EQ(RunProgram({Bin("mcmt-tracker"), "--config", rig, "--map", m1 + "/map.yaml", "--log", input,
+                          "--out", poses.back(), "--quiet"},
+                         &out, &err, 120),
+              0)
+        << err;
+  }
+  const std::vector<TrajectoryRow> rows = ReadTrajectory(poses[0]);
+  EXPECT_GT(rows.size(), 90u);
+  EXPECT_EQ(ReadText(poses[0]), ReadText(poses[1]));
+  EXPECT_EQ(ReadText(poses[0]), ReadText(poses[2]));
 }
