@@ -146,7 +146,7 @@ bool Exists(const std::string& path) {
 LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request) {
   LogExportResult result;
   std::string det_csv = std::string(kDetectionsCsvHeader) + "\n";
-  std::vector<TrajectoryRow> poses;
+  std::string poses_csv = std::string(kTrajectoryHeader) + "\n";
   std::string tum = "# timestamp tx ty tz qx qy qz qw (rig_from_object, seconds, metres)\n";
   const bool want_det = !request.detections_csv.empty();
   const bool want_poses = !request.poses_csv.empty() || !request.tum.empty();
@@ -176,16 +176,13 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
         ++result.poses_skipped;
         return;
       }
-      TrajectoryRow row;
-      row.utime = pose.utime;
-      row.seq = pose.seq;
-      row.rig_from_object = FromPose3d(pose.rig_from_object);
-      row.rms_px = pose.rms_px;
-      row.cameras = pose.num_cameras;
-      row.markers = pose.num_markers;
-      poses.push_back(row);
+      // The message's own numbers, in trajectory.csv's format (core's TrajectoryCsvLine would go through a
+      // rotation matrix and could change the last digit of the quaternion).
       const double* p = pose.rig_from_object.position;
       const double* q = pose.rig_from_object.orientation;  // w x y z
+      poses_csv += std::to_string(pose.utime) + "," + std::to_string(pose.seq);
+      for (double v : {p[0], p[1], p[2], q[0], q[1], q[2], q[3], pose.rms_px}) poses_csv += "," + G17(v);
+      poses_csv += "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) + "\n";
       char seconds[48];
       std::snprintf(seconds, sizeof(seconds), "%lld.%06lld", static_cast<long long>(pose.utime / 1000000),
                     static_cast<long long>(pose.utime % 1000000));
@@ -195,7 +192,7 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
     }
   });
   if (want_det) WriteFileAtomic(request.detections_csv, det_csv);
-  if (!request.poses_csv.empty()) WriteTrajectory(request.poses_csv, poses);
+  if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, poses_csv);
   if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
   return result;
 }

@@ -184,6 +184,31 @@ TEST_F(LoggerPipelineTest, DetectionsCsvRoundTripGivesTheSameMap) {
               0)
         << err;
   }
+  // The poses it publishes, recorded by mcmt-logger and exported, are its own trajectory file.
+  {
+    const std::string tracked = dir_ + "/tracked.lcmlog";
+    Child logger({Bin("mcmt-logger"), "--out", tracked, "--lcm-url", Url(7768), "--channels", "MCMT_POSE",
+                  "--status-seconds", "0"},
+                 dir_ + "/t.out", dir_ + "/t.err");
+    ASSERT_TRUE(WaitFor(dir_ + "/tracked.yaml", 10)) << ReadText(dir_ + "/t.err");
+    const std::string direct = dir_ + "/poses_direct.csv";
+    ASSERT_EQ(RunProgram({Bin("mcmt-tracker"), "--config", rig, "--map", m1 + "/map.yaml", "--log", log,
+                          "--out", direct, "--lcm-url", Url(7768), "--quiet"},
+                         &out, &err, 120),
+              0)
+        << err;
+    const size_t expected = ReadTrajectory(direct).size();
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (CountNonProbeEvents(tracked) < expected && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    logger.Signal(SIGINT);
+    ASSERT_EQ(logger.Wait(20), 0) << ReadText(dir_ + "/t.err");
+    ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--log", tracked, "--poses", dir_ + "/poses_exported.csv"},
+                         &out, &err),
+              0)
+        << err;
+    EXPECT_EQ(ReadText(dir_ + "/poses_exported.csv"), ReadText(direct));
+  }
   const std::vector<TrajectoryRow> rows = ReadTrajectory(poses[0]);
   EXPECT_GT(rows.size(), 90u);
   EXPECT_EQ(ReadText(poses[0]), ReadText(poses[1]));

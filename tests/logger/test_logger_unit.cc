@@ -209,8 +209,24 @@ TEST_F(ExportTest, PosesCsvAndTumHoldTheTrackedPoses) {
   LogExportResult r = ExportFromLog(log, req);
   EXPECT_EQ(r.pose_rows, 16);  // 20 frames, every 5th LOST
   EXPECT_EQ(r.poses_skipped, 4);
-  const auto rows = ReadTrajectory(req.poses_csv);
+  const auto rows = ReadTrajectory(req.poses_csv);  // core's reader accepts it
   ASSERT_EQ(rows.size(), 16u);
+  // Exactly the message's numbers, in the format core writes.
+  {
+    std::ifstream csv(req.poses_csv);
+    std::string header, first;
+    std::getline(csv, header);
+    std::getline(csv, first);
+    EXPECT_EQ(header, kTrajectoryHeader);
+    const object_pose_t p0 = MakePose(0, 0);
+    char expected[512];
+    std::snprintf(expected, sizeof(expected), "%lld,0,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,2,3",
+                  static_cast<long long>(p0.utime), p0.rig_from_object.position[0],
+                  p0.rig_from_object.position[1], p0.rig_from_object.position[2],
+                  p0.rig_from_object.orientation[0], p0.rig_from_object.orientation[1],
+                  p0.rig_from_object.orientation[2], p0.rig_from_object.orientation[3], p0.rms_px);
+    EXPECT_EQ(first, expected);
+  }
   std::ifstream tum(req.tum);
   std::string line;
   std::getline(tum, line);
