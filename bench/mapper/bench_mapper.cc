@@ -155,12 +155,12 @@ int main(int argc, char** argv) {
       }
       const double total = JsonValue(report, "total");
       const double refine = JsonValue(report, "refine");
-      std::cout << "| " << frames << " | " << cameras << " | " << JsonValue(report, "observations_used")
-                << " | " << std::fixed << std::setprecision(3) << r.seconds << " | " << total << " | "
-                << total - refine << " | " << refine << " | " << std::setprecision(0)
-                << JsonValue(report, "iterations") << " | " << std::setprecision(1) << r.peak_mib << " | "
-                << std::setprecision(3) << JsonValue(report, "final_rms_px")
-                << (r.code == 0 ? "" : " (FAILED)") << " |" << std::endl;
+      std::cout << "| " << frames << " | " << cameras << " | "
+                << static_cast<long>(JsonValue(report, "observations_used")) << " | " << std::fixed
+                << std::setprecision(3) << r.seconds << " | " << total << " | " << total - refine << " | "
+                << refine << " | " << std::setprecision(0) << JsonValue(report, "iterations") << " | "
+                << std::setprecision(1) << r.peak_mib << " | " << std::setprecision(3)
+                << JsonValue(report, "final_rms_px") << (r.code == 0 ? "" : " (FAILED)") << " |" << std::endl;
       fs::remove_all(dir);
     }
   }
