@@ -41,7 +41,8 @@ int Main(int argc, char** argv) {
   args.AddString("out", &out_path, "write the trajectory (trajectory.csv format) here on exit, atomically");
   args.AddString(
       "lcm-url", &lcm_url,
-      "LCM URL (default: lcm.url of the rig YAML, else LCM's default); with --log: publish poses there");
+      "LCM URL (default: lcm.url of the rig YAML, else LCM's default); with --log: publish poses there, "
+      "as fast as the log is read (slow receivers over udpm may drop some)");
   args.AddString("channel", &channel, "output channel (default: tracker.channel, else MCMT_POSE)");
   args.AddDouble("deadline-ms", &deadline_ms,
                  "frame deadline: wait this long after a frame's first detection for the other cameras "

@@ -11,6 +11,8 @@
 namespace mcmt {
 namespace {
 
+constexpr int kQueueCapacity = 10000;
+
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(q * (v.size() - 1) + 0.5)));
@@ -44,7 +46,10 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
     CheckMapMatchesRig(*map, rig_, "map");
     SetMap(*map, "map file");
   }
+  // LCM queues 30 messages per subscription by default and drops the rest: a burst of detections
+  // (many cameras, a replay) must not lose any.
   subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &TrackerNode::HandleDetections, this));
+  subscriptions_.back()->setQueueCapacity(kQueueCapacity);
   if (!map) subscriptions_.push_back(lcm_.subscribe(kMapChannel, &TrackerNode::HandleMap, this));
   last_status_wall_us_ = NowUtime();
 }

@@ -125,7 +125,7 @@ class Receiver {
   Receiver(const std::string& url, size_t frames) : lcm_(url) {
     got_.resize(frames);
     have_.assign(frames, 0);
-    lcm_.subscribe(mcmt::kPoseChannel, &Receiver::Handle, this);
+    lcm_.subscribe(mcmt::kPoseChannel, &Receiver::Handle, this)->setQueueCapacity(100000);
   }
   void Start() {
     thread_ = std::thread([this] {
@@ -192,7 +192,7 @@ void LatencyTable(int frames, double rate_hz) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   lcm::LCM lcm(url);
-  Receiver rx(url, s.views.size());
+  Receiver rx(url + "&recv_buf_size=4194304", s.views.size());
   rx.Start();
   std::vector<Clock::time_point> sent(s.views.size());
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);

@@ -21,7 +21,7 @@ using tracker_test::TranslationError;
 class PoseSink {
  public:
   explicit PoseSink(lcm::LCM& lcm, const std::string& channel = kPoseChannel) : lcm_(lcm) {
-    lcm_.subscribe(channel, &PoseSink::Handle, this);
+    lcm_.subscribe(channel, &PoseSink::Handle, this)->setQueueCapacity(100000);
   }
   void Drain() {
     while (lcm_.handleTimeout(0) > 0) {

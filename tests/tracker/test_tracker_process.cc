@@ -1,4 +1,4 @@
-// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7744), replay by the
+// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7745), replay by the
 // real lcm-logplayer, bad command lines and inputs.
 #include <gtest/gtest.h>
 
@@ -25,6 +25,9 @@ using tracker_test::WaitForText;
 const std::string kTracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
 
 std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+// This test's own LCM instances: a large receive buffer, since they see every message on the group
+// (their own detections included) and a burst of small datagrams fills the default buffer quickly.
+std::string TestUrl(int port) { return Url(port) + "&recv_buf_size=4194304"; }
 
 // One session on disk: rig.yaml, map.yaml, detections.lcmlog, and the poses --log mode gives.
 struct Session {
@@ -50,7 +53,9 @@ struct Session {
 
 class PoseCollector {
  public:
-  explicit PoseCollector(lcm::LCM& lcm) { lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this); }
+  explicit PoseCollector(lcm::LCM& lcm) {
+    lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this)->setQueueCapacity(100000);  // default: 30
+  }
   std::vector<object_pose_t> poses;
 
  private:
@@ -107,7 +112,7 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   const pid_t pid =
       Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
   ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   const std::vector<uint8_t> garbage(33, 0x5a);
@@ -159,7 +164,7 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   const pid_t pid =
       Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
   ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   // Receive while the player plays (udpm delivers every message on the group to every socket: an idle
@@ -214,6 +219,24 @@ TEST(TrackerProcess, BadInputGivesOneLineErrors) {
   EXPECT_FALSE(std::ifstream(never).good());
 }
 
+// --log with --lcm-url: the poses of a log are also published.
+TEST(TrackerProcess, LogModePublishesWithLcmUrl) {
+  const Session& x = Session::Get();
+  const int port = 7745;
+  lcm::LCM lcm(TestUrl(port));
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  const std::string err = x.dir + "/logpub.txt";
+  const pid_t pid =
+      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", Url(port)}, err);
+  Receive(
+      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << Slurp(err);
+  for (size_t f = 0; f < collector.poses.size(); ++f)
+    EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
+}
+
 // No --map: the tracker waits for MCMT_MAP, then tracks.
 TEST(TrackerProcess, LiveWaitsForMapMessage) {
   const Session& x = Session::Get();
@@ -221,7 +244,7 @@ TEST(TrackerProcess, LiveWaitsForMapMessage) {
   const std::string err = x.dir + "/waitmap.txt";
   const pid_t pid = Spawn({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
   ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(TestUrl(port));
   PoseCollector collector(lcm);
   const rig_map_t map_msg = ToRigMapMsg(x.s.map, 42);
   lcm.publish(kMapChannel, &map_msg);

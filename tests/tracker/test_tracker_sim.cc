@@ -183,7 +183,9 @@ TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
 // receives one object_pose_t per frame, in order.
 class PoseCollector {
  public:
-  explicit PoseCollector(lcm::LCM& lcm) { lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this); }
+  explicit PoseCollector(lcm::LCM& lcm) {
+    lcm.subscribe(kPoseChannel, &PoseCollector::Handle, this)->setQueueCapacity(100000);  // default: 30
+  }
   std::vector<object_pose_t> poses;
 
  private:
@@ -228,7 +230,7 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
        "--deadline-ms", "3000"},
       tracker_err);
   ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << tracker_test::Slurp(tracker_err);
-  lcm::LCM lcm(url);
+  lcm::LCM lcm(url + "&recv_buf_size=4194304");  // sees every message on the group
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   std::vector<pid_t> detectors;
