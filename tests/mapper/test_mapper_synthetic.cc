@@ -123,6 +123,24 @@ TEST(MapperSynthetic, FalseDetectionsAndDroppedFramesAreHandled) {
   EXPECT_NE(json.find("\"id\": 77"), std::string::npos);
 }
 
+TEST(MapperSynthetic, CamerasStartingLateAndStoppingEarly) {
+  testing::SynthOptions so;
+  so.frames = 200;
+  so.seed = 33;
+  so.camera_jitter_us = 900;
+  testing::SynthScene scene = testing::MakeScene(so);
+  std::vector<detections_t> kept;
+  for (const auto& d : scene.detections) {
+    if (d.camera == "cam3" && d.seq < 80) continue;   // starts late
+    if (d.camera == "cam4" && d.seq >= 90) continue;  // stops early
+    kept.push_back(d);
+  }
+  scene.detections = kept;
+  const MapResult result = MapScene(scene);
+  ExpectWithinIssueBounds(scene, result, "late start / early stop");
+  EXPECT_EQ(result.report.frames_assembled, 200);  // jittered utimes still join their frames
+}
+
 TEST(MapperSynthetic, WhitelistIgnoresOtherIds) {
   testing::SynthOptions so;
   so.frames = 80;
