@@ -1,6 +1,7 @@
 // The mapper's files: map.yaml, trajectory.csv, report.json and the initial (pre-refinement) pair.
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -117,8 +118,12 @@ std::string ReportJson(const MapResult& result) {
       << "\n";
   }
   j << "  ],\n";
+  // At most kMaxListed observations are listed (the count is exact).
+  constexpr size_t kMaxListed = 5000;
+  const size_t listed = std::min(kMaxListed, r.rejected_observations.size());
+  j << "  \"rejected_observations_count\": " << r.rejected_observations.size() << ",\n";
   j << "  \"rejected_observations\": [\n";
-  for (size_t i = 0; i < r.rejected_observations.size(); ++i) {
+  for (size_t i = 0; i < listed; ++i) {
     const RejectedObservation& o = r.rejected_observations[i];
     j << "    {\"utime\": " << o.utime << ", \"seq\": " << o.seq << ", \"camera\": " << JsonString(o.camera)
       << ", \"id\": " << o.id << ", \"rms_px\": " << JsonNumber(o.rms_px)
