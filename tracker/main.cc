@@ -46,7 +46,7 @@ int Main(int argc, char** argv) {
   args.AddString("channel", &channel, "output channel (default: tracker.channel, else MCMT_POSE)");
   args.AddDouble("deadline-ms", &deadline_ms,
                  "frame deadline: wait this long after a frame's first detection for the other cameras "
-                 "(default: tracker.deadline_ms, else 15)");
+                 "(overrides tracker.deadline_ms; raise it when cameras' messages lag each other)");
   args.AddFlag("quiet", &quiet, "no status lines (warnings are still printed)");
   args.AddEpilog(
       "\nexamples:\n"
