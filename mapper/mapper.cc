@@ -247,6 +247,8 @@ struct Mapper::Impl {
   std::set<std::string> ignored_cameras;
   std::vector<std::string> warnings;
   std::function<void(const MapperProgress&)> progress;
+  std::vector<int> messages_per_camera;
+  int max_messages_per_camera = 0;
 
   std::vector<Frame> AssembleFrames(int64_t tolerance_us) const;
 };
@@ -293,18 +295,15 @@ void Mapper::SetProgressCallback(std::function<void(const MapperProgress&)> call
 
 void Mapper::Reset() {
   impl_->messages.clear();
+  impl_->messages_per_camera.clear();
+  impl_->max_messages_per_camera = 0;
   impl_->warnings.clear();
   impl_->ignored_cameras.clear();
 }
 
 int Mapper::NumMessages() const { return static_cast<int>(impl_->messages.size()); }
 
-int Mapper::NumFramesApprox() const {
-  std::vector<int> per_camera(impl_->camera_names.size(), 0);
-  int best = 0;
-  for (const StoredMessage& m : impl_->messages) best = std::max(best, ++per_camera[m.camera]);
-  return best;
-}
+int Mapper::NumFramesApprox() const { return impl_->max_messages_per_camera; }
 
 void Mapper::Add(const detections_t& d) {
   Impl& s = *impl_;
@@ -341,6 +340,9 @@ void Mapper::Add(const detections_t& d) {
   m.markers.reserve(d.markers.size());
   for (const marker_t& mk : d.markers) m.markers.push_back({mk.id, CornersOf(mk)});
   s.messages.push_back(std::move(m));
+  if (s.messages_per_camera.size() <= static_cast<size_t>(camera))
+    s.messages_per_camera.resize(camera + 1, 0);
+  s.max_messages_per_camera = std::max(s.max_messages_per_camera, ++s.messages_per_camera[camera]);
 }
 
 std::vector<CameraCollectStats> Mapper::CollectStats() const {
