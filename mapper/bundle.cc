@@ -244,24 +244,31 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   return out;
 }
 
-std::vector<double> ObservationRms(const BundleProblem& bp) {
+std::vector<double> ObservationRms(const BundleProblem& bp, std::vector<double>* max_corner_px) {
   std::vector<double> out(bp.observations.size(), std::numeric_limits<double>::infinity());
+  if (max_corner_px) max_corner_px->assign(bp.observations.size(), std::numeric_limits<double>::infinity());
   for (size_t i = 0; i < bp.observations.size(); ++i) {
     const BundleObservation& o = bp.observations[i];
     const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[o.camera].data()) *
                                    RigidFromBlock(bp.rig_from_object[o.frame].data()) *
                                    RigidFromBlock(bp.object_from_marker[o.marker].data());
     const MarkerCorners3d corners = MarkerCornersInMarker(o.side);
-    double sum = 0.0;
+    double sum = 0.0, max_sq = 0.0;
     bool ok = true;
     for (int k = 0; k < 4 && ok; ++k) {
       Eigen::Vector2d pixel;
-      if (!bp.models[o.camera]->Project(cam_from_marker * corners[k], &pixel, nullptr))
+      if (!bp.models[o.camera]->Project(cam_from_marker * corners[k], &pixel, nullptr)) {
         ok = false;
-      else
-        sum += (pixel - o.corners[k]).squaredNorm();
+      } else {
+        const double sq = (pixel - o.corners[k]).squaredNorm();
+        sum += sq;
+        max_sq = std::max(max_sq, sq);
+      }
     }
-    if (ok) out[i] = std::sqrt(sum / 4.0);
+    if (ok) {
+      out[i] = std::sqrt(sum / 4.0);
+      if (max_corner_px) (*max_corner_px)[i] = std::sqrt(max_sq);
+    }
   }
   return out;
 }

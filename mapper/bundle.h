@@ -105,6 +105,8 @@ BundleSummary SolveBundle(BundleProblem* problem, const BundleSettings& settings
 
 // RMS corner error (pixels) of every observation at the current parameters; +inf when a corner is
 // behind the camera.
-std::vector<double> ObservationRms(const BundleProblem& problem);
+// With max_corner_px: also each observation's largest corner error.
+std::vector<double> ObservationRms(const BundleProblem& problem,
+                                   std::vector<double>* max_corner_px = nullptr);
 
 }  // namespace mcmt

@@ -909,7 +909,8 @@ MapResult Mapper::Solve() {
   std::vector<char> marker_rejected(num_markers, 0);
   for (const RejectedMarker& r : report.rejected_markers) marker_rejected[marker_index[r.id]] = 1;
   auto fill = [&](RigMap* map, std::vector<TrajectoryRow>* trajectory) {
-    const std::vector<double> rms = ObservationRms(bp);
+    std::vector<double> max_corner;
+    const std::vector<double> rms = ObservationRms(bp, &max_corner);
     map->dictionary = o.dictionary;
     map->reference_camera = s.camera_names[ref_camera];
     map->reference_marker = marker_ids[ref_marker];
@@ -925,12 +926,11 @@ MapResult Mapper::Solve() {
       if (!bp.active[k] || !std::isfinite(rms[k])) continue;
       const BundleObservation& b = bp.observations[k];
       const double sq = rms[k] * rms[k];
-      // Corner maxima are bounded by 2 * RMS of 4 corners; report the observation RMS maximum.
       cam_sq[b.camera] += sq;
-      cam_max[b.camera] = std::max(cam_max[b.camera], rms[k]);
+      cam_max[b.camera] = std::max(cam_max[b.camera], max_corner[k]);
       ++cam_n[b.camera];
       mk_sq[b.marker] += sq;
-      mk_max[b.marker] = std::max(mk_max[b.marker], rms[k]);
+      mk_max[b.marker] = std::max(mk_max[b.marker], max_corner[k]);
       ++mk_n[b.marker];
       fr_sq[b.frame] += sq;
       ++fr_n[b.frame];
