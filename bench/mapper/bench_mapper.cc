@@ -3,6 +3,7 @@
 // peak RSS is that process's (wait4 rusage) and the time includes reading the log.
 //
 //   bench_mapper [--quick] [--frames 300,1000,3000,10000] [--cameras 3,5,8] [--threads N] [--no-accuracy]
+//                [--rendered [--rendered-frames 100]]   (accuracy from rendered images, needs sim + detector)
 //
 // Logs come from `mcmt-sim --detections-only` when it is built (else from the tests' synthetic scene).
 // Prints markdown tables.
@@ -24,6 +25,11 @@
 #ifdef MCMT_HAVE_SIM
 #include "sim/eval.h"
 #include "sim/sim.h"
+#endif
+#ifdef MCMT_HAVE_DETECTOR
+#include "core/config.h"
+#include "detector/detector.h"
+#include "mapper/mapper.h"
 #endif
 #include "tests/mapper/synth.h"
 
@@ -107,7 +113,8 @@ std::string MakeLog(const std::string& dir, int frames, int cameras, double radi
 
 int main(int argc, char** argv) {
   std::vector<int> frames_list = {300, 1000, 3000, 10000}, cameras_list = {3, 5, 8};
-  bool accuracy = true;
+  bool accuracy = true, rendered = false;
+  int rendered_frames = 100;
   std::string threads = "0";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -120,11 +127,16 @@ int main(int argc, char** argv) {
       cameras_list = ParseList(argv[++i]);
     } else if (a == "--threads" && i + 1 < argc) {
       threads = argv[++i];
+    } else if (a == "--rendered") {
+      rendered = true;
+    } else if (a == "--rendered-frames" && i + 1 < argc) {
+      rendered_frames = std::stoi(argv[++i]);
     } else if (a == "--no-accuracy") {
       accuracy = false;
     } else {
       std::cerr
-          << "usage: bench_mapper [--quick] [--frames LIST] [--cameras LIST] [--threads N] [--no-accuracy]\n";
+          << "usage: bench_mapper [--quick] [--frames LIST] [--cameras LIST] [--threads N] [--no-accuracy] "
+             "[--rendered [--rendered-frames N]]\n";
       return a == "--help" ? 0 : 2;
     }
   }
@@ -210,6 +222,50 @@ int main(int argc, char** argv) {
   }
 #else
   (void)accuracy;
+#endif
+#if defined(MCMT_HAVE_SIM) && defined(MCMT_HAVE_DETECTOR)
+  if (rendered) {
+    std::cout
+        << "\n## Accuracy from rendered images (mcmt-sim renderer -> DetectRecording -> Mapper; 5 cameras, "
+        << rendered_frames << " frames; sim::Evaluate means)\n\n";
+    std::cout
+        << "| object | radius (m) | object rotation (deg) | object translation (mm) | camera position (mm) | "
+           "configuration (mm) | rms (px) | mapping (s) |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const char* object : {"four_sided", "box", "pentagon"}) {
+      for (double radius : {0.7, 0.9, 1.1, 1.3}) {
+        std::ostringstream name;
+        name << root << "/render_" << object << "_" << radius;
+        mcmt::sim::DatasetOptions options;
+        options.out_dir = name.str();
+        options.object.kind = mcmt::sim::ObjectKindFromName(object);
+        if (options.object.kind == mcmt::sim::ObjectKind::kPentagon) options.object.marker_size = 0.025;
+        options.rig.num_cameras = 5;
+        options.rig.radius = radius;
+        options.trajectory.frames = rendered_frames;
+        options.threads = 2;
+        std::cout << "| " << object << " | " << std::setprecision(1) << radius << " | "
+                  << std::setprecision(3);
+        try {
+          const mcmt::sim::DatasetSummary summary = mcmt::sim::GenerateDataset(options);
+          const mcmt::RigConfig rig = mcmt::LoadRigConfig(options.out_dir + "/rig.yaml");
+          mcmt::Mapper mapper(mcmt::MapperOptions::FromConfig(rig));
+          for (const mcmt::CameraConfig& c : rig.cameras)
+            for (const mcmt::detections_t& d : mcmt::DetectRecording(rig, c.name)) mapper.Add(d);
+          const mcmt::MapResult result = mapper.Solve();
+          const mcmt::sim::EvalResult e = mcmt::sim::Evaluate(summary.truth, &result.map, &result.trajectory);
+          std::cout << e.object_rotation_deg.mean << " | " << e.object_translation_aligned_mm.mean << " | "
+                    << e.camera_position_mm.mean << " | " << e.configuration_mm.mean << " | "
+                    << result.map.rms_px << " | " << result.report.total_seconds << " |" << std::endl;
+        } catch (const std::exception& ex) {
+          std::cout << ex.what() << " | | | | | |" << std::endl;
+        }
+        fs::remove_all(options.out_dir);
+      }
+    }
+  }
+#else
+  (void)rendered_frames;
+  if (rendered) std::cerr << "bench_mapper: --rendered needs the sim and detector components\n";
 #endif
   fs::remove_all(root);
   return 0;
