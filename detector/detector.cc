@@ -131,7 +131,8 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
 // (D: border, W: quiet zone, B: beyond it at distance q; sigma: blur incl. the pixel footprint).
 // Returns the edge offset e (outward), or NaN when the fit fails. The crossing estimate is biased when
 // the quiet zone is narrow and blurred; e is not.
-double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m, double cell) {
+double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m, double cell,
+                      double* sigma) {
   const int n = static_cast<int>(u.size());
   if (n < 8) return NAN;
   double p[6];  // e, sigma, D, W, B, q
@@ -155,10 +156,10 @@ double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m
     }
     return cost;
   };
-  std::vector<double> r(n);
+  std::vector<double> r(n), trial(n);
   double cost = cost_of(p, r.data());
   double lambda = 1e-3;
-  for (int iter = 0; iter < 20; ++iter) {
+  for (int iter = 0; iter < 15; ++iter) {
     Eigen::Matrix<double, 6, 6> jtj = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> jtr = Eigen::Matrix<double, 6, 1>::Zero();
     for (int j = 0; j < n; ++j) {
@@ -173,7 +174,7 @@ double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m
       jtj += g * g.transpose();
       jtr += g * r[j];
     }
-    bool improved = false;
+    bool improved = false, converged = false;
     for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
       Eigen::Matrix<double, 6, 6> a = jtj;
       for (int k = 0; k < 6; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
@@ -182,19 +183,22 @@ double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m
       for (int k = 0; k < 6; ++k) q[k] = p[k] + step(k);
       q[1] = std::clamp(q[1], 0.2, 3.0);
       q[5] = std::clamp(q[5], 0.4 * cell, 3.0 * cell);
-      const double c = cost_of(q, nullptr);
+      const double c = cost_of(q, trial.data());
       if (c < cost) {
+        converged = std::abs(q[0] - p[0]) < 2e-4 && std::abs(q[1] - p[1]) < 2e-3 && cost - c < 1e-6 * cost;
         std::copy(q, q + 6, p);
-        cost = cost_of(p, r.data());
+        cost = c;
+        r.swap(trial);
         lambda = std::max(1e-7, lambda * 0.3);
         improved = true;
       } else {
         lambda *= 10;
       }
     }
-    if (!improved) break;
+    if (!improved || converged) break;
   }
   if (!std::isfinite(p[0]) || std::abs(p[0]) > 0.75 || std::abs(p[3] - p[2]) < 5.0) return NAN;
+  *sigma = p[1];
   return p[0];
 }
 
@@ -225,8 +229,12 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
 }
 }  // namespace
 
-bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit) {
+namespace {
+bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
+                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width) {
+  double sigma_sum = 0;
+  int sigma_count = 0;
+  if (blur_sigma) *blur_sigma = NAN;
   CV_Assert(gray.type() == CV_8UC1);
   PixelMap map;
   if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
@@ -266,8 +274,9 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       // Half-width of the profile across the edge: half a cell, so that the level read on each side
       // is the border's and the surround's, not the next cell's. The first pass searches wider (the
       // initial corners may be a pixel or two off).
-      const double h =
-          pass == 0 ? std::clamp(std::min(0.9 * cell, 2.0), 0.75, 3.0) : std::clamp(0.5 * cell, 0.75, 3.0);
+      const double h = pass == 0 ? std::clamp(std::min(0.9 * cell * first_width, 2.0 * first_width), 0.75,
+                                              3.0 * first_width)
+                                 : std::clamp(0.5 * cell, 0.75, 3.0);
       const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
       const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.5), 6, 240);
       const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.2)));
@@ -367,8 +376,13 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
           grid_u.push_back(j * du);
           grid_mean.push_back(grid_sum[j - lo] / grid_count[j - lo]);
         }
-        const double e = FitEdgeProfile(grid_u, grid_mean, cell);
-        if (std::isfinite(e)) line.c += outward * e;
+        double sigma = NAN;
+        const double e = FitEdgeProfile(grid_u, grid_mean, cell, &sigma);
+        if (std::isfinite(e)) {
+          line.c += outward * e;
+          sigma_sum += sigma;
+          ++sigma_count;
+        }
       }
     }
     std::array<Eigen::Vector2d, 4> next;
@@ -382,13 +396,24 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
     converged = moved < 0.01;
     img = next;
   }
-  const double limit = std::max(2.0, 0.15 * perimeter / 4.0);
+  const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {
     if (!std::isfinite(img[k].x()) || !std::isfinite(img[k].y()) || (img[k] - original[k]).norm() > limit)
       return false;
   }
   for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(img[k].x(), img[k].y());
+  if (blur_sigma && sigma_count > 0) *blur_sigma = sigma_sum / sigma_count;
   return true;
+}
+}  // namespace
+
+bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
+                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit,
+                         double* blur_sigma) {
+  // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
+  // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
+  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0) ||
+         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -401,6 +426,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
                     "subpix_window",
                     "edge_passes",
                     "edge_model",
+                    "sharp_smoothing",
                     "adaptive_window_min",
                     "adaptive_window_max",
                     "adaptive_window_step",
@@ -434,6 +460,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
   o.subpix_window = s.GetInt("subpix_window", o.subpix_window);
   o.edge_passes = s.GetInt("edge_passes", o.edge_passes);
   o.edge_model = s.GetBool("edge_model", o.edge_model);
+  o.sharp_smoothing = s.GetDouble("sharp_smoothing", o.sharp_smoothing);
   o.adaptive_window_min = s.GetInt("adaptive_window_min", o.adaptive_window_min);
   o.adaptive_window_max = s.GetInt("adaptive_window_max", o.adaptive_window_max);
   o.adaptive_window_step = s.GetInt("adaptive_window_step", o.adaptive_window_step);
@@ -480,6 +507,7 @@ void DetectorOptions::Validate() const {
   if (!(perspective_ignored_margin >= 0 && perspective_ignored_margin < 0.5))
     fail("perspective_ignored_margin: must be in [0, 0.5)");
   if (full_search_every < 1) fail("full_search_every: must be >= 1");
+  if (!(sharp_smoothing >= 0 && sharp_smoothing <= 3)) fail("sharp_smoothing: must be in [0, 3]");
 }
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
@@ -693,9 +721,39 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       if (bits.empty())
         bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(r.id, r.id + 1),
                                                           dictionary_->markerSize);
-      if (!RefineMarkerCorners(gray, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
-                               options_.edge_model))
+      // Sharp images (the camera's fitted blur below 0.55 px): interpolated edge profiles lock to the
+      // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
+      // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under
+      // symmetric blur, the locking is gone. The camera's blur is tracked from every fit (on smoothed
+      // regions: sqrt(sigma^2 - smoothing^2)), with a raw refinement every 16th marker.
+      const bool smooth =
+          options_.sharp_smoothing > 0 && blur_estimate_ < 0.55 && (++markers_refined_ % 16) != 0;
+      const cv::Mat* source = &gray;
+      if (smooth) {
+        double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+        for (const auto& c : r.corners) {
+          x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
+          y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
+        }
+        const double grow = 0.5 * std::max(x1 - x0, y1 - y0) + 6.0;
+        const cv::Rect roi =
+            cv::Rect(cv::Point(static_cast<int>(x0 - grow), static_cast<int>(y0 - grow)),
+                     cv::Point(static_cast<int>(x1 + grow) + 1, static_cast<int>(y1 + grow) + 1)) &
+            cv::Rect(0, 0, gray.cols, gray.rows);
+        if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
+        cv::GaussianBlur(gray(roi), smooth_(roi), cv::Size(0, 0), options_.sharp_smoothing);
+        source = &smooth_;
+      }
+      double sigma = NAN;
+      if (!RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
+                               options_.edge_model, &sigma)) {
         ++stats_.refine_failures;
+      } else if (std::isfinite(sigma)) {
+        const double s2 = options_.sharp_smoothing * options_.sharp_smoothing;
+        const double raw = smooth ? std::sqrt(std::max(0.0, sigma * sigma - s2)) : sigma;
+        blur_estimate_ =
+            std::isfinite(blur_estimate_) && blur_estimate_ < 1e8 ? 0.8 * blur_estimate_ + 0.2 * raw : raw;
+      }
     }
     marker_t m;
     m.id = r.id;

@@ -36,6 +36,9 @@ struct DetectorOptions {
   // "edges": correct each side's offset with a blurred-step model fitted to its mean profile (removes
   // the bias of narrow quiet zones under blur).
   bool edge_model = true;
+  // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
+  // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
+  double sharp_smoothing = 0.6;
 
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
@@ -79,7 +82,8 @@ struct DetectorStats {
 // top-left) may be empty; with it, edge samples next to bit cells of value 1 are skipped. `camera` may be
 // null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true);
+                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
+                         double* blur_sigma = nullptr);
 
 class MarkerDetector {
  public:
@@ -112,7 +116,10 @@ class MarkerDetector {
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
-  std::vector<cv::Mat> bits_;  // per id, cached
+  std::vector<cv::Mat> bits_;   // per id, cached
+  cv::Mat smooth_;              // smoothed marker regions (sharp_smoothing)
+  double blur_estimate_ = 1e9;  // camera's edge blur (fitted sigma, px); unknown at first: refine raw
+  long long markers_refined_ = 0;
   DetectorStats stats_;
   // Fast mode state.
   std::vector<Raw> last_;
