@@ -745,8 +745,20 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         source = &smooth_;
       }
       double sigma = NAN;
-      if (!RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
-                               options_.edge_model, &sigma)) {
+      bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
+                                         &r.corners, options_.edge_model, &sigma);
+      if (!refined && options_.fast) {
+        // Fast mode: start again from the marker's refined corners of the previous frame.
+        for (const Raw& previous : last_) {
+          if (previous.id != r.id) continue;
+          std::array<cv::Point2d, 4> corners = previous.corners;
+          refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
+                                        options_.edge_model, &sigma);
+          if (refined) r.corners = corners;
+          break;
+        }
+      }
+      if (!refined) {
         ++stats_.refine_failures;
       } else if (std::isfinite(sigma)) {
         const double s2 = options_.sharp_smoothing * options_.sharp_smoothing;
