@@ -337,5 +337,48 @@ TEST(DetectorProcess, LaunchRecordMode) {
     EXPECT_EQ(counts[DetectionsChannel("cam" + std::to_string(cam))], Recording::kFrames) << out;
 }
 
+// --images: rate-limited JPEGs on MCMT_IMAGE_<CAMERA>, plain JPEG bytes with a COM segment naming the frame.
+class ImageReceiver {
+ public:
+  explicit ImageReceiver(const std::string& url) : lcm_(url) {
+    if (lcm_.good()) lcm_.subscribe("MCMT_IMAGE_CAM0", &ImageReceiver::OnMessage, this);
+  }
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    const uint8_t* p = static_cast<const uint8_t*>(rbuf->data);
+    images.emplace_back(p, p + rbuf->data_size);
+  }
+  lcm::LCM lcm_;
+  std::vector<std::vector<uint8_t>> images;
+};
+
+TEST(DetectorProcess, ImagesAreRateLimitedJpegsNamingTheirFrame) {
+  Recording rec("images");
+  ImageReceiver rx(Url(7710));
+  ASSERT_TRUE(rx.lcm_.good());
+  // 12 frames at 30 fps = 0.4 s of message time, at most 10 images/s: frames 0, 3, 6, 9.
+  std::string yaml = Slurp(rec.rig) + "detector:\n  image_rate: 10\n";
+  std::ofstream(rec.rig) << yaml;
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7710), "--images",
+                   "--rate", "realtime"},
+                  (rec.dir / "out.txt").string());
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (rx.images.size() < 4 && std::chrono::steady_clock::now() < end) rx.lcm_.handleTimeout(50);
+  EXPECT_EQ(WaitExit(c, 20.0), 0) << Slurp(c.out_path);
+  for (int i = 0; i < 10; ++i) rx.lcm_.handleTimeout(20);
+  ASSERT_EQ(rx.images.size(), 4u);
+  for (size_t i = 0; i < rx.images.size(); ++i) {
+    const auto& jpeg = rx.images[i];
+    ASSERT_GT(jpeg.size(), 100u);
+    EXPECT_EQ(jpeg[0], 0xFF);
+    EXPECT_EQ(jpeg[1], 0xD8);
+    const std::string text(jpeg.begin(), jpeg.begin() + std::min<size_t>(jpeg.size(), 200));
+    EXPECT_NE(text.find("mcmt-image camera=cam0 seq=" + std::to_string(3 * i) + " utime="),
+              std::string::npos);
+    const cv::Mat image = cv::imdecode(jpeg, cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(image.cols, 320);
+    EXPECT_EQ(image.rows, 240);
+  }
+}
+
 }  // namespace
 }  // namespace mcmt
