@@ -2,8 +2,10 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -141,7 +143,11 @@ std::string MapperNode::Collect() {
         break;
       }
     } else {
-      if (input_.handleTimeout(50) < 0) throw std::runtime_error("LCM receive failed");
+      if (input_.handleTimeout(50) < 0) {
+        // A signal (SIGINT/SIGTERM/SIGUSR1: solve) interrupts the wait: the loop's top decides.
+        if (errno == EINTR || StopFlag().load()) continue;
+        throw std::runtime_error(std::string("LCM receive failed: ") + std::strerror(errno));
+      }
       const auto now = Clock::now();
       if (std::chrono::duration<double>(now - last_progress).count() >= options_.progress_period_s) {
         ShowProgress(false);
