@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     bool loop = false, images = false, quiet = false;
     int max_frames = -1;
     long long start_utime = mcmt::kDefaultStartUtime;
+    long long start_wall_utime = 0;
     double fps = 0.0;
     mcmt::ArgParser args("mcmt-detector",
                          "Detects the rig's markers in one camera's frames (image folder, video file or live "
@@ -39,6 +40,9 @@ int main(int argc, char** argv) {
     args.AddFlag("images", &images, "also publish rate-limited JPEG images on MCMT_IMAGE_<CAMERA>");
     args.AddInt64("start-utime", &start_utime,
                   "utime (us) of frame 0 of recordings without a timestamps file (frame k: + k * 1e6 / fps)");
+    args.AddInt64("start-wall-utime", &start_wall_utime,
+                  "with --rate realtime: wall clock (us since the epoch) at which to publish the first frame; "
+                  "give several detectors the same value to publish each frame together");
     args.AddDouble("fps", &fps,
                    "frame rate of recordings (0: detector.fps of the rig, the video's own, or 30)");
     args.AddFlag("quiet", &quiet, "no status lines");
@@ -64,6 +68,7 @@ int main(int argc, char** argv) {
     options.max_frames = max_frames;
     if (args.Given("images")) options.images = images;
     options.start_utime = start_utime;
+    options.start_wall_utime = start_wall_utime;
     if (args.Given("fps")) {
       if (!(fps > 0)) throw std::runtime_error("--fps: must be positive");
       options.fps = fps;

@@ -193,6 +193,17 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
       if (stats_.frames == 0) {
         wall_start = Clock::now();
         first_utime = d.utime;
+        if (options_.start_wall_utime > 0) {
+          // Wait for the shared start, in steady-clock terms.
+          const int64_t wait_us = options_.start_wall_utime - NowUtime();
+          if (wait_us > 0) {
+            wall_start += std::chrono::microseconds(wait_us);
+            while (!stop && Clock::now() < wall_start)
+              std::this_thread::sleep_for(
+                  std::min<Clock::duration>(wall_start - Clock::now(), std::chrono::milliseconds(50)));
+            if (stop) break;
+          }
+        }
       } else {
         const auto due = wall_start + std::chrono::microseconds(d.utime - first_utime);
         while (!stop && Clock::now() < due)

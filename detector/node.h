@@ -31,6 +31,10 @@ struct DetectorNodeOptions {
   int image_quality = 80;      // JPEG quality
   double image_scale = 1.0;    // images downscaled by this factor (0 < s <= 1)
   long long start_utime = kDefaultStartUtime;  // utime of frame 0 of recordings without timestamps
+  // realtime pacing: wall clock (us since the epoch) at which the first frame is published; later frames
+  // follow at their utime offsets. Several detectors given the same value publish each frame together,
+  // as synchronised cameras would. 0: publish the first frame as soon as it is ready.
+  long long start_wall_utime = 0;
   double fps = 0.0;                     // recordings: frame rate (0: the video's own, image folders 30)
   std::string caliscope_time = "sync";  // see detector/source.h
   double status_period_s = 5.0;         // status line period (wall time); <= 0: none

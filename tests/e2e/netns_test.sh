@@ -60,8 +60,10 @@ sleep 1
 
 run_detectors() {
   local pids=()
+  local start=$(( $(date +%s%N) / 1000 + 1000000 ))
   for cam in $CAMS; do
     ip netns exec "$NA" "$BIN/mcmt-detector" --config "$RIG" --camera "$cam" --lcm-url "$URL" --rate realtime \
+      --start-wall-utime "$start" \
       >>"$WORK/detector_$cam.out" 2>&1 &
     pids+=("$!")
   done
