@@ -427,6 +427,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
                     "edge_passes",
                     "edge_model",
                     "sharp_smoothing",
+                    "gamma",
                     "adaptive_window_min",
                     "adaptive_window_max",
                     "adaptive_window_step",
@@ -461,6 +462,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
   o.edge_passes = s.GetInt("edge_passes", o.edge_passes);
   o.edge_model = s.GetBool("edge_model", o.edge_model);
   o.sharp_smoothing = s.GetDouble("sharp_smoothing", o.sharp_smoothing);
+  o.gamma = s.GetDouble("gamma", o.gamma);
   o.adaptive_window_min = s.GetInt("adaptive_window_min", o.adaptive_window_min);
   o.adaptive_window_max = s.GetInt("adaptive_window_max", o.adaptive_window_max);
   o.adaptive_window_step = s.GetInt("adaptive_window_step", o.adaptive_window_step);
@@ -508,6 +510,7 @@ void DetectorOptions::Validate() const {
     fail("perspective_ignored_margin: must be in [0, 0.5)");
   if (full_search_every < 1) fail("full_search_every: must be >= 1");
   if (!(sharp_smoothing >= 0 && sharp_smoothing <= 3)) fail("sharp_smoothing: must be in [0, 3]");
+  if (!(gamma >= 0.2 && gamma <= 5)) fail("gamma: must be in [0.2, 5]");
 }
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
@@ -728,8 +731,9 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       // regions: sqrt(sigma^2 - smoothing^2)), with a raw refinement every 16th marker.
       const bool smooth =
           options_.sharp_smoothing > 0 && blur_estimate_ < 0.55 && (++markers_refined_ % 16) != 0;
+      const bool linearise = options_.gamma != 1.0;
       const cv::Mat* source = &gray;
-      if (smooth) {
+      if (smooth || linearise) {
         double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
         for (const auto& c : r.corners) {
           x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
@@ -740,9 +744,24 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
             cv::Rect(cv::Point(static_cast<int>(x0 - grow), static_cast<int>(y0 - grow)),
                      cv::Point(static_cast<int>(x1 + grow) + 1, static_cast<int>(y1 + grow) + 1)) &
             cv::Rect(0, 0, gray.cols, gray.rows);
-        if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-        cv::GaussianBlur(gray(roi), smooth_(roi), cv::Size(0, 0), options_.sharp_smoothing);
-        source = &smooth_;
+        if (linearise) {
+          // Gamma-encoded camera images: edges are located on intensities proportional to light, where a
+          // blurred step crosses halfway at the true edge (in encoded values it shifts to the dark side).
+          if (gamma_lut_.empty()) {
+            gamma_lut_.create(1, 256, CV_8U);
+            for (int v = 0; v < 256; ++v)
+              gamma_lut_.at<uint8_t>(v) =
+                  cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+          }
+          if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
+          cv::LUT(gray(roi), gamma_lut_, linear_(roi));
+          source = &linear_;
+        }
+        if (smooth) {
+          if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
+          cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), options_.sharp_smoothing);
+          source = &smooth_;
+        }
       }
       double sigma = NAN;
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,

@@ -39,6 +39,10 @@ struct DetectorOptions {
   // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
   // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
+  // "edges": the camera's transfer curve. Edges are located on intensities linearised as
+  // 255 * (v / 255)^gamma: 1 for linear images (mcmt-sim renders), about 2.2 for typical video cameras
+  // (sRGB-like encoding), where the encoded half-way crossing of a blurred edge sits on its dark side.
+  double gamma = 1.0;
 
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
@@ -118,6 +122,8 @@ class MarkerDetector {
   std::unique_ptr<CameraModel> camera_;
   std::vector<cv::Mat> bits_;   // per id, cached
   cv::Mat smooth_;              // smoothed marker regions (sharp_smoothing)
+  cv::Mat linear_;              // linearised marker regions (gamma)
+  cv::Mat gamma_lut_;           // encoded value -> linear value
   double blur_estimate_ = 1e9;  // camera's edge blur (fitted sigma, px); unknown at first: refine raw
   long long markers_refined_ = 0;
   DetectorStats stats_;

@@ -1059,7 +1059,8 @@ MapResult Mapper::Solve() {
     std::vector<std::string> problems;
     std::vector<int> bad_cameras;
     for (int c = 0; c < num_cameras; ++c) {
-      if (!camera_placed[c] || c == ref_camera || cam_total[c] == 0) continue;
+      // The reference camera too: a badly placed reference makes every other pose meaningless.
+      if (!camera_placed[c] || cam_total[c] == 0) continue;
       if (cam_active[c] >= 0.5 * cam_total[c]) continue;
       std::ostringstream msg;
       msg << "camera '" << s.camera_names[c]
@@ -1086,6 +1087,10 @@ MapResult Mapper::Solve() {
         if (problems.size() > 1) all += " (and " + std::to_string(problems.size() - 1) + " more cameras)";
         throw MapperError(all + "; use --allow-partial to map without it");
       }
+      for (int c : bad_cameras)
+        if (c == ref_camera)
+          throw MapperError(problems[&c - &bad_cameras[0]] + "; it is the reference camera: name another one " +
+                            "(--reference-camera or mapper.reference_camera) to map without it");
       for (int c : bad_cameras) {
         camera_placed[c] = false;
         report.dropped_cameras.push_back(s.camera_names[c]);
