@@ -103,9 +103,10 @@ void WritePdf(const std::string& path, const MarkerSheetOptions& o, const cv::ar
   for (size_t i = 0; i < placed.size(); ++i) {
     cv::Mat m = MarkerCells(dict, placed[i].id);
     std::string data(reinterpret_cast<const char*>(m.data), m.total());
-    image_obj[i] = add("<< /Type /XObject /Subtype /Image /Width " + std::to_string(cells) + " /Height " +
-                       std::to_string(cells) + " /ColorSpace /DeviceGray /BitsPerComponent 8 /Interpolate false" +
-                       " /Length " + std::to_string(data.size()) + " >>\nstream\n" + data + "\nendstream");
+    image_obj[i] =
+        add("<< /Type /XObject /Subtype /Image /Width " + std::to_string(cells) + " /Height " +
+            std::to_string(cells) + " /ColorSpace /DeviceGray /BitsPerComponent 8 /Interpolate false" +
+            " /Length " + std::to_string(data.size()) + " >>\nstream\n" + data + "\nendstream");
   }
   std::vector<int> page_objs;
   for (int p = 0; p < pages; ++p) {
@@ -121,15 +122,16 @@ void WritePdf(const std::string& path, const MarkerSheetOptions& o, const cv::ar
       content << "q " << PdfNumber(s) << " 0 0 " << PdfNumber(s) << " " << PdfNumber(x) << " " << PdfNumber(y)
               << " cm /M" << i << " Do Q\n";
       const double quiet = pl.side_mm / cells * o.quiet_zone_cells;
-      content << "BT /F1 7 Tf " << PdfNumber(x) << " " << PdfNumber(y - (quiet + 3.0) * kPointsPerMm) << " Td ("
-              << o.dictionary << " id " << pl.id << ", " << PdfNumber(pl.side_mm) << " mm) Tj ET\n";
+      content << "BT /F1 7 Tf " << PdfNumber(x) << " " << PdfNumber(y - (quiet + 3.0) * kPointsPerMm)
+              << " Td (" << o.dictionary << " id " << pl.id << ", " << PdfNumber(pl.side_mm)
+              << " mm) Tj ET\n";
     }
     resources << " >> >>";
     const std::string c = content.str();
     const int content_obj = add("<< /Length " + std::to_string(c.size()) + " >>\nstream\n" + c + "endstream");
-    page_objs.push_back(add("<< /Type /Page /Parent 2 0 R /MediaBox [0 0 " + PdfNumber(pw * kPointsPerMm) + " " +
-                            PdfNumber(ph * kPointsPerMm) + "] /Resources " + resources.str() + " /Contents " +
-                            std::to_string(content_obj) + " 0 R >>"));
+    page_objs.push_back(add("<< /Type /Page /Parent 2 0 R /MediaBox [0 0 " + PdfNumber(pw * kPointsPerMm) +
+                            " " + PdfNumber(ph * kPointsPerMm) + "] /Resources " + resources.str() +
+                            " /Contents " + std::to_string(content_obj) + " 0 R >>"));
   }
   objects[0] = "<< /Type /Catalog /Pages 2 0 R >>";
   std::ostringstream kids;
@@ -155,7 +157,8 @@ void WritePdf(const std::string& path, const MarkerSheetOptions& o, const cv::ar
 }
 
 std::vector<std::string> WritePng(const std::string& path, const MarkerSheetOptions& o,
-                                  const cv::aruco::Dictionary& dict, const std::vector<Placement>& placed, int pages) {
+                                  const cv::aruco::Dictionary& dict, const std::vector<Placement>& placed,
+                                  int pages) {
   double pw, ph;
   PageSizeMm(o.page, &pw, &ph);
   const double px_per_mm = o.dpi / 25.4;
@@ -170,15 +173,19 @@ std::vector<std::string> WritePng(const std::string& path, const MarkerSheetOpti
       // Whole pixels per cell so every cell prints the same; the side is then within one cell's rounding.
       const int cell_px = std::max(1, static_cast<int>(std::lround(pl.side_mm * px_per_mm / cells)));
       cv::Mat m;
-      cv::resize(MarkerCells(dict, pl.id), m, cv::Size(cells * cell_px, cells * cell_px), 0, 0, cv::INTER_NEAREST);
+      cv::resize(MarkerCells(dict, pl.id), m, cv::Size(cells * cell_px, cells * cell_px), 0, 0,
+                 cv::INTER_NEAREST);
       const int x = static_cast<int>(std::lround(pl.x_mm * px_per_mm));
       const int y = static_cast<int>(std::lround(pl.y_mm * px_per_mm));
       if (x + m.cols > page.cols || y + m.rows > page.rows) continue;
       m.copyTo(page(cv::Rect(x, y, m.cols, m.rows)));
       const double quiet = pl.side_mm / cells * o.quiet_zone_cells;
-      cv::putText(page, "id " + std::to_string(pl.id) + "  " + std::to_string(cells * cell_px / px_per_mm).substr(0, 5) + " mm",
-                  cv::Point(x, y + m.rows + static_cast<int>((quiet + 3.0) * px_per_mm)), cv::FONT_HERSHEY_SIMPLEX,
-                  o.dpi / 300.0, cv::Scalar(0), std::max(1, static_cast<int>(o.dpi / 300)));
+      cv::putText(page,
+                  "id " + std::to_string(pl.id) + "  " +
+                      std::to_string(cells * cell_px / px_per_mm).substr(0, 5) + " mm",
+                  cv::Point(x, y + m.rows + static_cast<int>((quiet + 3.0) * px_per_mm)),
+                  cv::FONT_HERSHEY_SIMPLEX, o.dpi / 300.0, cv::Scalar(0),
+                  std::max(1, static_cast<int>(o.dpi / 300)));
     }
     const std::string file = p == 0 ? path : stem + "_" + std::to_string(p + 1) + ".png";
     std::vector<uchar> buffer;
@@ -226,7 +233,8 @@ std::vector<std::string> WriteMarkerSheet(const std::string& path, const MarkerS
   int pages = 0;
   const std::vector<Placement> placed = Layout(options, dict->markerSize + 2, &pages);
   auto ends_with = [&](const std::string& suffix) {
-    return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+    return path.size() >= suffix.size() &&
+           path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
   };
   if (ends_with(".pdf")) {
     WritePdf(path, options, *dict, placed, pages);

@@ -12,12 +12,12 @@ namespace sim {
 
 struct MarkerSheetOptions {
   std::string dictionary = "DICT_6X6_250";
-  std::vector<int> ids;          // markers to print
-  MarkerSizes sizes;             // side length per id, metres
-  std::string page = "a4";       // a4 | letter
-  double margin_mm = 10.0;       // page margin
-  double quiet_zone_cells = 1.0; // white border around each marker, in marker cells
-  double dpi = 600.0;            // PNG only
+  std::vector<int> ids;           // markers to print
+  MarkerSizes sizes;              // side length per id, metres
+  std::string page = "a4";        // a4 | letter
+  double margin_mm = 10.0;        // page margin
+  double quiet_zone_cells = 1.0;  // white border around each marker, in marker cells
+  double dpi = 600.0;             // PNG only
 };
 
 // Parses "0-9,12,15-17" into ids; throws std::invalid_argument naming the bad part.

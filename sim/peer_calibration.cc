@@ -72,7 +72,8 @@ std::vector<PeerCamera> ReadCaliscopeCameras(const std::string& path) {
     c.name = "cam" + std::to_string(index);
     Eigen::Matrix3d R;
     R << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
-    if (std::abs(R.determinant() - 1.0) > 1e-3 || (R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-3)
+    if (std::abs(R.determinant() - 1.0) > 1e-3 ||
+        (R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-3)
       throw std::runtime_error(where + ".rotation: not a rotation matrix");
     c.cam_from_world.linear() = R;
     c.cam_from_world.translation() = Eigen::Vector3d(t[0], t[1], t[2]);
@@ -99,7 +100,8 @@ PeerAgreement CompareWithPeer(const RigMap& map, const std::vector<PeerCamera>& 
     ours.push_back(c->rig_from_cam.translation());
     theirs.push_back(world_from_cam.translation());
   }
-  if (matched.size() < 2) throw std::runtime_error("fewer than two cameras shared by the map and the peer calibration");
+  if (matched.size() < 2)
+    throw std::runtime_error("fewer than two cameras shared by the map and the peer calibration");
   const Rigid3 world_from_rig = AlignRigid(ours, theirs);
   double dist_ours = 0, dist_theirs = 0;
   for (size_t i = 0; i < ours.size(); ++i)

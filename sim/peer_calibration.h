@@ -13,7 +13,7 @@ namespace mcmt {
 namespace sim {
 
 struct PeerCamera {
-  std::string name;                    // "cam<K>" for caliscope's [cameras.K]
+  std::string name;  // "cam<K>" for caliscope's [cameras.K]
   Rigid3 cam_from_world = Rigid3::Identity();
 };
 
@@ -29,9 +29,9 @@ struct PeerCameraAgreement {
 
 struct PeerAgreement {
   std::vector<PeerCameraAgreement> cameras;
-  std::vector<std::string> missing;   // peer cameras the map lacks
+  std::vector<std::string> missing;  // peer cameras the map lacks
   double max_position_mm = 0, max_rotation_deg = 0;
-  double scale_ratio = 1;             // map's mean centre distance / peer's (1 = same scale)
+  double scale_ratio = 1;  // map's mean centre distance / peer's (1 = same scale)
 };
 
 PeerAgreement CompareWithPeer(const RigMap& map, const std::vector<PeerCamera>& peer);

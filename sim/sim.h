@@ -45,7 +45,7 @@ struct RigOptions {
   double look_at_height = 0.0;  // cameras look at (0, 0, look_at_height)
   int width = 640;
   int height = 480;
-  double hfov_deg = 60.0;       // horizontal field of view (of the pinhole part)
+  double hfov_deg = 60.0;                               // horizontal field of view (of the pinhole part)
   DistortionModel distortion = DistortionModel::kNone;  // radtan: k1 k2 p1 p2 k3; fisheye: k1..k4
   // Per-camera differences: relative spread of focal length and principal point offset (px), and of
   // the distortion coefficients, drawn with `seed`. 0: all cameras identical.
@@ -83,7 +83,7 @@ struct SimObject {
 };
 
 enum class ObjectKind { kFourSided, kBox, kPentagon, kCube, kBoard };
-const std::vector<std::string>& ObjectKindNames();  // "four_sided", "box", "pentagon", "cube", "board"
+const std::vector<std::string>& ObjectKindNames();       // "four_sided", "box", "pentagon", "cube", "board"
 ObjectKind ObjectKindFromName(const std::string& name);  // throws std::invalid_argument listing names
 
 struct ObjectOptions {
@@ -108,7 +108,8 @@ struct SimFrame {
   Rigid3 rig_from_object = Rigid3::Identity();
 };
 
-// The first frame's utime (1e12 us, i.e. 1'000'000'000'000) and frame k's: kStartUtime + round(k * 1e6 / fps).
+// The first frame's utime (1e12 us, i.e. 1'000'000'000'000) and frame k's: kStartUtime + round(k * 1e6 /
+// fps).
 constexpr int64_t kStartUtime = 1000000000000LL;
 int64_t FrameUtime(int64_t frame, double fps);
 
@@ -137,16 +138,16 @@ std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& options);
 
 struct MarkerView {
   int id = 0;
-  MarkerCorners2d corners;         // distorted pixels, ArUco order (valid when all corners are in front)
-  bool in_front = false;           // every corner has z > 0 in the camera frame
-  bool in_image = false;           // all 4 corners inside the image (pixel centres 0..w-1, 0..h-1)
-  bool front_facing = false;       // the face points towards the camera
-  bool occluded = false;           // part of the marker (corners, edges, centre) is hidden by the body or
-                                   // another marker
-  bool fully_visible = false;      // in_front && in_image && front_facing && !occluded
-  double view_angle_deg = 180.0;   // angle between the marker normal and the direction to the camera
-  double size_px = 0.0;            // apparent side: sqrt of the projected quadrilateral's area, pixels
-  double depth = 0.0;              // z of the marker centre in the camera frame, metres
+  MarkerCorners2d corners;        // distorted pixels, ArUco order (valid when all corners are in front)
+  bool in_front = false;          // every corner has z > 0 in the camera frame
+  bool in_image = false;          // all 4 corners inside the image (pixel centres 0..w-1, 0..h-1)
+  bool front_facing = false;      // the face points towards the camera
+  bool occluded = false;          // part of the marker (corners, edges, centre) is hidden by the body or
+                                  // another marker
+  bool fully_visible = false;     // in_front && in_image && front_facing && !occluded
+  double view_angle_deg = 180.0;  // angle between the marker normal and the direction to the camera
+  double size_px = 0.0;           // apparent side: sqrt of the projected quadrilateral's area, pixels
+  double depth = 0.0;             // z of the marker centre in the camera frame, metres
   Rigid3 cam_from_marker = Rigid3::Identity();
 };
 
@@ -158,21 +159,26 @@ std::vector<MarkerView> ProjectMarkers(const SimCamera& camera, const SimObject&
 // Rendering
 
 struct RenderOptions {
-  int supersampling = 4;          // only for distortion-free "background" effects; marker and face
-                                  // edges use exact per-pixel coverage (see render.cc)
-  double noise_sigma = 2.0;       // Gaussian noise, gray levels
-  double blur_sigma = 0.0;        // Gaussian blur of the whole image (optics), pixels; 0: none
-  int motion_blur_samples = 0;    // > 1: average this many poses over the exposure (needs previous pose)
-  double exposure_fraction = 0.5; // exposure as a fraction of the frame interval (motion blur)
+  // 0 (default): exact anti-aliasing: every pixel gets the exact area-weighted mean of the scene over
+  // its square footprint (box filter; the footprint mapped onto each planar patch by the local affine
+  // map at the pixel centre, exact up to second-order perspective terms, < 1e-3 px of edge shift).
+  // S >= 1: plain SxS point supersampling instead (for comparison).
+  int supersampling = 0;
+  double noise_sigma = 2.0;        // Gaussian noise, gray levels
+  double blur_sigma = 0.0;         // Gaussian blur of the whole image (optics), pixels; 0: none
+  int motion_blur_samples = 0;     // > 1: average this many poses over the exposure (needs previous pose)
+  double exposure_fraction = 0.5;  // exposure as a fraction of the frame interval (motion blur)
   bool textured_background = true;
-  double lighting_gradient = 0.3; // relative brightness change across the image (0: uniform)
-  double shading = 0.3;           // relative brightness change between faces by their normal (0: flat)
-  double black_level = 25.0;      // gray level of the markers' black ink under full light
-  double white_level = 225.0;     // gray level of the white paper under full light
-  int quiet_zone_cells = 1;       // width of the white margin around each marker, in marker cells
-  bool bgr = false;               // 3-channel output (gray replicated with a slight tint)
-  bool inverted = false;          // white-on-black markers
-  uint64_t seed = 1;              // background texture and noise (noise also varies with frame and camera)
+  double background_level = 128.0;  // gray level of the uniform background when not textured
+  bool solid_markers = false;       // draw markers as plain black squares (tests of rendering exactness)
+  double lighting_gradient = 0.3;   // relative brightness change across the image (0: uniform)
+  double shading = 0.3;             // relative brightness change between faces by their normal (0: flat)
+  double black_level = 25.0;        // gray level of the markers' black ink under full light
+  double white_level = 225.0;       // gray level of the white paper under full light
+  int quiet_zone_cells = 1;         // width of the white margin around each marker, in marker cells
+  bool bgr = false;                 // 3-channel output (gray replicated with a slight tint)
+  bool inverted = false;            // white-on-black markers
+  uint64_t seed = 1;                // background texture and noise (noise also varies with frame and camera)
 };
 
 // Renders marker images of one dictionary. Thread-compatible (const methods are thread-safe).
@@ -213,12 +219,12 @@ double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double
 struct GroundTruth {
   std::string object;  // object kind name
   std::string dictionary = "DICT_6X6_250";
-  double marker_size = 0.04;          // default side
-  std::map<int, double> marker_sizes; // every id's side
+  double marker_size = 0.04;           // default side
+  std::map<int, double> marker_sizes;  // every id's side
   double fps = 30.0;
-  std::vector<SimCamera> cameras;     // name, model, rig_from_cam
-  std::vector<SimMarker> markers;     // id, size, object_from_marker
-  std::vector<SimFrame> frames;       // seq, utime, rig_from_object
+  std::vector<SimCamera> cameras;  // name, model, rig_from_cam
+  std::vector<SimMarker> markers;  // id, size, object_from_marker
+  std::vector<SimFrame> frames;    // seq, utime, rig_from_object
   const SimCamera* FindCamera(const std::string& name) const;
   const SimMarker* FindMarker(int id) const;
 };
@@ -243,14 +249,14 @@ GroundTruth ReadGroundTruth(const std::string& path);
 // Simulated detections (detections-only mode)
 
 struct DetectionSimOptions {
-  double corner_noise_px = 0.1;    // Gaussian sigma per corner coordinate
-  double miss_rate = 0.0;          // probability that a visible marker is not reported
-  double false_rate = 0.0;         // expected false detections per camera frame (Poisson), ids not on object
-  double drop_rate = 0.0;          // probability that a whole camera frame is not published
+  double corner_noise_px = 0.1;  // Gaussian sigma per corner coordinate
+  double miss_rate = 0.0;        // probability that a visible marker is not reported
+  double false_rate = 0.0;       // expected false detections per camera frame (Poisson), ids not on object
+  double drop_rate = 0.0;        // probability that a whole camera frame is not published
   double max_view_angle_deg = 80.0;  // markers seen more obliquely are not detected
-  double min_size_px = 8.0;        // smaller markers are not detected
+  double min_size_px = 8.0;          // smaller markers are not detected
   std::string dictionary = "DICT_6X6_250";
-  int dictionary_size = 250;       // false ids are drawn from [0, dictionary_size) minus the object's ids
+  int dictionary_size = 250;  // false ids are drawn from [0, dictionary_size) minus the object's ids
 };
 
 // One camera's detections_t for one frame (nullopt-like: returns false when the frame is dropped).
@@ -272,6 +278,7 @@ struct DatasetOptions {
   bool detections_only = false;
   bool video = false;  // per-camera MP4 instead of PNG folders
   bool quiet = true;   // no progress on stderr
+  int threads = 1;     // cameras rendered in parallel (results do not depend on it)
 };
 
 struct DatasetSummary {

@@ -1,0 +1,340 @@
+// Metrics of an estimate against ground truth (see eval.h for the alignments).
+#include "sim/eval.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "core/lcm_util.h"
+#include "core/marker.h"
+#include "core/se3.h"
+#include "mcmt/object_pose_t.hpp"
+
+namespace mcmt {
+namespace sim {
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  const Eigen::Matrix3d r = a.transpose() * b;
+  const double c = std::clamp(0.5 * (r.trace() - 1.0), -1.0, 1.0);
+  // acos is ill-conditioned near 0: use the skew part for small angles.
+  const Eigen::Vector3d s(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1));
+  return std::atan2(0.5 * s.norm(), c) * kRadToDeg;
+}
+
+std::string Fmt(double v, int digits = 3) {
+  char b[64];
+  std::snprintf(b, sizeof(b), "%.*f", digits, v);
+  return b;
+}
+
+std::string JsonNum(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[64];
+  std::snprintf(b, sizeof(b), "%.9g", v);
+  return b;
+}
+
+std::string JsonStats(const Stats& s) {
+  return "{\"count\": " + std::to_string(s.count) + ", \"mean\": " + JsonNum(s.mean) +
+         ", \"median\": " + JsonNum(s.median) + ", \"max\": " + JsonNum(s.max) +
+         ", \"rms\": " + JsonNum(s.rms) + "}";
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+Stats ComputeStats(std::vector<double> values) {
+  Stats s;
+  s.count = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  double sum = 0, sq = 0;
+  for (double v : values) {
+    sum += v;
+    sq += v * v;
+    s.max = std::max(s.max, v);
+  }
+  s.mean = sum / values.size();
+  s.rms = std::sqrt(sq / values.size());
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  return s;
+}
+
+EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
+                    const std::vector<TrajectoryRow>* trajectory) {
+  EvalResult r;
+  r.gt_cameras = static_cast<int>(truth.cameras.size());
+  r.gt_markers = static_cast<int>(truth.markers.size());
+  r.gt_frames = static_cast<int>(truth.frames.size());
+  if (!map) throw EvalInputError("a map is required (--map)");
+  r.has_map = true;
+  r.map_rms_px = map->rms_px;
+
+  // --- Cameras: names must belong to the ground truth.
+  std::vector<const SimCamera*> gt_cams;
+  std::vector<const MapCamera*> est_cams;
+  for (const MapCamera& c : map->cameras) {
+    const SimCamera* g = truth.FindCamera(c.name);
+    if (!g) {
+      std::string names;
+      for (const auto& t : truth.cameras) names += (names.empty() ? "" : ", ") + t.name;
+      throw EvalInputError("camera '" + c.name +
+                           "' of the map is not in the ground truth (cameras: " + names + ")");
+    }
+    gt_cams.push_back(g);
+    est_cams.push_back(&c);
+  }
+  if (gt_cams.empty()) throw EvalInputError("the map has no camera");
+  for (const SimCamera& c : truth.cameras)
+    if (!map->FindCamera(c.name)) r.missing_cameras.push_back(c.name);
+  r.mapped_cameras = static_cast<int>(gt_cams.size());
+  if (gt_cams.size() >= 3) {
+    std::vector<Eigen::Vector3d> est, gt;
+    for (size_t i = 0; i < gt_cams.size(); ++i) {
+      est.push_back(est_cams[i]->rig_from_cam.translation());
+      gt.push_back(gt_cams[i]->rig_from_cam.translation());
+    }
+    r.gt_rig_from_est_rig = AlignRigid(est, gt);
+  } else {
+    r.gt_rig_from_est_rig = gt_cams[0]->rig_from_cam * Inverse(est_cams[0]->rig_from_cam);
+  }
+  const Rigid3& A = r.gt_rig_from_est_rig;
+  std::vector<double> cam_pos, cam_rot;
+  for (size_t i = 0; i < gt_cams.size(); ++i) {
+    const Rigid3 est = A * est_cams[i]->rig_from_cam;
+    CameraError e;
+    e.name = gt_cams[i]->name;
+    e.position_mm = 1000.0 * (est.translation() - gt_cams[i]->rig_from_cam.translation()).norm();
+    e.rotation_deg = AngleDeg(est.linear(), gt_cams[i]->rig_from_cam.linear());
+    cam_pos.push_back(e.position_mm);
+    cam_rot.push_back(e.rotation_deg);
+    r.cameras.push_back(e);
+  }
+  r.camera_position_mm = ComputeStats(cam_pos);
+  r.camera_rotation_deg = ComputeStats(cam_rot);
+
+  // --- Markers: ids must belong to the ground truth.
+  std::vector<const SimMarker*> gt_marks;
+  std::vector<const MapMarker*> est_marks;
+  for (const MapMarker& m : map->markers) {
+    const SimMarker* g = truth.FindMarker(m.id);
+    if (!g) {
+      std::string ids;
+      for (const auto& t : truth.markers) ids += (ids.empty() ? "" : ", ") + std::to_string(t.id);
+      throw EvalInputError("marker id " + std::to_string(m.id) +
+                           " of the map is not in the ground truth (ids: " + ids + ")");
+    }
+    gt_marks.push_back(g);
+    est_marks.push_back(&m);
+  }
+  if (gt_marks.empty()) throw EvalInputError("the map has no marker");
+  for (const SimMarker& m : truth.markers)
+    if (!map->FindMarker(m.id)) r.missing_markers.push_back(m.id);
+  r.mapped_markers = static_cast<int>(gt_marks.size());
+  std::vector<Eigen::Vector3d> est_corners, gt_corners;
+  for (size_t i = 0; i < gt_marks.size(); ++i) {
+    const MarkerCorners3d ce = MarkerCornersInMarker(est_marks[i]->size);
+    const MarkerCorners3d cg = MarkerCornersInMarker(gt_marks[i]->size);
+    for (int k = 0; k < 4; ++k) {
+      est_corners.push_back(est_marks[i]->object_from_marker * ce[k]);
+      gt_corners.push_back(gt_marks[i]->object_from_marker * cg[k]);
+    }
+  }
+  r.gt_object_from_est_object = AlignRigid(est_corners, gt_corners);
+  const Rigid3& B = r.gt_object_from_est_object;
+  std::vector<double> conf;
+  for (size_t i = 0; i < gt_marks.size(); ++i) {
+    MarkerError e;
+    e.id = gt_marks[i]->id;
+    double sum = 0;
+    for (int k = 0; k < 4; ++k) {
+      const double d = 1000.0 * (B * est_corners[4 * i + k] - gt_corners[4 * i + k]).norm();
+      conf.push_back(d);
+      sum += d;
+    }
+    e.corner_mm = sum / 4;
+    e.size_mm = 1000.0 * (est_marks[i]->size - gt_marks[i]->size);
+    r.markers.push_back(e);
+  }
+  r.configuration_mm = ComputeStats(conf);
+
+  // --- Object poses.
+  if (trajectory) {
+    r.has_trajectory = true;
+    std::map<int64_t, const SimFrame*> by_seq;
+    for (const SimFrame& f : truth.frames) by_seq[f.seq] = &f;
+    std::set<int64_t> seen;
+    std::vector<double> trans, rot;
+    std::vector<Eigen::Vector3d> est_pos, gt_pos;
+    const Rigid3 B_inv = Inverse(B);
+    for (const TrajectoryRow& row : *trajectory) {
+      auto it = by_seq.find(row.seq);
+      if (it == by_seq.end())
+        throw EvalInputError("trajectory seq " + std::to_string(row.seq) +
+                             " is not a ground-truth frame (0.." +
+                             std::to_string(truth.frames.empty() ? -1 : truth.frames.back().seq) + ")");
+      if (!seen.insert(row.seq).second) continue;  // duplicate: first one counts
+      const Rigid3& gt = it->second->rig_from_object;
+      const Rigid3 est = A * row.rig_from_object * B_inv;
+      trans.push_back(1000.0 * (est.translation() - gt.translation()).norm());
+      rot.push_back(AngleDeg(est.linear(), gt.linear()));
+      est_pos.push_back((row.rig_from_object * B_inv).translation());
+      gt_pos.push_back(gt.translation());
+    }
+    r.frames_with_pose = static_cast<int>(seen.size());
+    r.object_translation_mm = ComputeStats(trans);
+    r.object_rotation_deg = ComputeStats(rot);
+    if (!est_pos.empty()) {
+      const Rigid3 align = AlignRigid(est_pos, gt_pos);
+      std::vector<double> d;
+      for (size_t i = 0; i < est_pos.size(); ++i)
+        d.push_back(1000.0 * (align * est_pos[i] - gt_pos[i]).norm());
+      r.object_translation_aligned_mm = ComputeStats(d);
+    }
+  }
+  return r;
+}
+
+std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileFormatError(path + ": cannot open the trajectory");
+  unsigned char magic[4] = {0, 0, 0, 0};
+  in.read(reinterpret_cast<char*>(magic), 4);
+  in.close();
+  const bool is_log = magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
+  if (!is_log) return ReadTrajectory(path);
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw FileFormatError(path + ": cannot read the LCM log");
+  std::vector<TrajectoryRow> rows;
+  int bad = 0;
+  for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
+    if (ev->channel != kPoseChannel) continue;
+    object_pose_t msg;
+    if (!Decode(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
+      ++bad;
+      continue;
+    }
+    if (msg.status != object_pose_t::STATUS_TRACKING && msg.status != object_pose_t::STATUS_AMBIGUOUS)
+      continue;
+    TrajectoryRow row;
+    row.utime = msg.utime;
+    row.seq = msg.seq;
+    row.rig_from_object = FromPose3d(msg.rig_from_object);
+    row.rms_px = msg.rms_px;
+    row.cameras = msg.num_cameras;
+    row.markers = msg.num_markers;
+    rows.push_back(row);
+  }
+  if (rows.empty() && bad > 0)
+    throw FileFormatError(path + ": " + std::to_string(bad) + " undecodable messages on " + kPoseChannel);
+  return rows;
+}
+
+std::string FormatTable(const EvalResult& r) {
+  std::ostringstream s;
+  s << "| metric (after rigid alignment)   | mean    | median  | max     |\n";
+  s << "|----------------------------------|---------|---------|---------|\n";
+  auto line = [&](const std::string& name, const Stats& st) {
+    std::string n = name;
+    if (n.size() < 32) n += std::string(32 - n.size(), ' ');
+    s << "| " << n << " | " << Fmt(st.mean) << std::string(std::max(0, 7 - (int)Fmt(st.mean).size()), ' ')
+      << " | " << Fmt(st.median) << std::string(std::max(0, 7 - (int)Fmt(st.median).size()), ' ') << " | "
+      << Fmt(st.max) << std::string(std::max(0, 7 - (int)Fmt(st.max).size()), ' ') << " |\n";
+  };
+  if (r.has_trajectory && r.object_rotation_deg.count > 0) {
+    line("object rotation error (deg)", r.object_rotation_deg);
+    line("object translation error (mm)", r.object_translation_mm);
+  }
+  line("camera position error (mm)", r.camera_position_mm);
+  line("object configuration error (mm)", r.configuration_mm);
+  line("camera rotation error (deg)", r.camera_rotation_deg);
+  if (r.has_trajectory && r.object_translation_aligned_mm.count > 0)
+    line("object transl. (traj. Horn) (mm)", r.object_translation_aligned_mm);
+  s << "\ncameras mapped: " << r.mapped_cameras << " / " << r.gt_cameras;
+  if (!r.missing_cameras.empty()) {
+    s << " (missing:";
+    for (const auto& n : r.missing_cameras) s << " " << n;
+    s << ")";
+  }
+  s << "; markers mapped: " << r.mapped_markers << " / " << r.gt_markers;
+  if (!r.missing_markers.empty()) {
+    s << " (missing:";
+    for (int id : r.missing_markers) s << " " << id;
+    s << ")";
+  }
+  s << "; map RMS reprojection error " << Fmt(r.map_rms_px) << " px\n";
+  if (r.has_trajectory) {
+    const double frac = r.gt_frames > 0 ? 100.0 * r.frames_with_pose / r.gt_frames : 0.0;
+    s << "frames with a pose: " << r.frames_with_pose << " / " << r.gt_frames << " (" << Fmt(frac, 1)
+      << " %)\n";
+  }
+  s << "\n| camera | position error (mm) | rotation error (deg) "
+       "|\n|--------|--------------------|----------------------|\n";
+  for (const auto& c : r.cameras)
+    s << "| " << c.name << " | " << Fmt(c.position_mm) << " | " << Fmt(c.rotation_deg, 4) << " |\n";
+  s << "\n| marker | corner error (mm) | size error (mm) "
+       "|\n|--------|-------------------|-----------------|\n";
+  for (const auto& m : r.markers)
+    s << "| " << m.id << " | " << Fmt(m.corner_mm) << " | " << Fmt(m.size_mm) << " |\n";
+  return s.str();
+}
+
+std::string FormatJson(const EvalResult& r) {
+  std::ostringstream s;
+  s << "{\n";
+  s << "  \"cameras\": {\"ground_truth\": " << r.gt_cameras << ", \"mapped\": " << r.mapped_cameras
+    << ", \"missing\": [";
+  for (size_t i = 0; i < r.missing_cameras.size(); ++i)
+    s << (i ? ", " : "") << JsonString(r.missing_cameras[i]);
+  s << "],\n    \"position_mm\": " << JsonStats(r.camera_position_mm)
+    << ",\n    \"rotation_deg\": " << JsonStats(r.camera_rotation_deg) << ",\n    \"per_camera\": [";
+  for (size_t i = 0; i < r.cameras.size(); ++i)
+    s << (i ? ", " : "") << "{\"name\": " << JsonString(r.cameras[i].name)
+      << ", \"position_mm\": " << JsonNum(r.cameras[i].position_mm)
+      << ", \"rotation_deg\": " << JsonNum(r.cameras[i].rotation_deg) << "}";
+  s << "]},\n";
+  s << "  \"markers\": {\"ground_truth\": " << r.gt_markers << ", \"mapped\": " << r.mapped_markers
+    << ", \"missing\": [";
+  for (size_t i = 0; i < r.missing_markers.size(); ++i) s << (i ? ", " : "") << r.missing_markers[i];
+  s << "],\n    \"configuration_mm\": " << JsonStats(r.configuration_mm) << ",\n    \"per_marker\": [";
+  for (size_t i = 0; i < r.markers.size(); ++i)
+    s << (i ? ", " : "") << "{\"id\": " << r.markers[i].id
+      << ", \"corner_mm\": " << JsonNum(r.markers[i].corner_mm)
+      << ", \"size_mm\": " << JsonNum(r.markers[i].size_mm) << "}";
+  s << "]},\n";
+  s << "  \"map_rms_px\": " << JsonNum(r.map_rms_px) << ",\n";
+  if (r.has_trajectory) {
+    s << "  \"object\": {\"ground_truth_frames\": " << r.gt_frames
+      << ", \"frames_with_pose\": " << r.frames_with_pose
+      << ", \"fraction_with_pose\": " << JsonNum(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
+      << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
+      << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
+      << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm)
+      << "}\n";
+  } else {
+    s << "  \"object\": null\n";
+  }
+  s << "}\n";
+  return s.str();
+}
+
+}  // namespace sim
+}  // namespace mcmt

@@ -1,0 +1,85 @@
+// mcmt-eval's metrics: an estimate (map.yaml and/or a trajectory) against the simulator's ground truth,
+// after rigid (Horn / Umeyama, no scale) alignments, as the paper measures.
+//
+// Alignments (the estimate's frames are its own choice: reference camera, reference marker):
+//  - rig:    A = gt_rig_from_est_rig, Umeyama on the camera centres (>= 3 cameras; with 1 or 2 cameras,
+//            the first common camera's full pose).
+//  - object: B = gt_object_from_est_object, Umeyama on the 4 corners of every common marker, each in
+//            its object frame (so marker sizes count).
+//  - poses:  the estimated object pose in ground-truth frames is A * rig_from_object_est * inv(B): it is
+//            composed from the two alignments above, never fitted to the trajectory itself, so it does
+//            not absorb trajectory errors. Translation error = distance between the positions of the
+//            ground-truth object origin; rotation error = angle of the relative rotation. A variant with
+//            its own Horn alignment of the trajectory positions (paper style) is reported alongside.
+// Figures: camera position (mm) and rotation (deg) errors per camera; object configuration error (mm)
+// = mean distance of marker corners after alignment, per marker; object translation (mm) and rotation
+// (deg) errors per frame; each with mean / median / max / RMS; fraction of frames with a pose.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/files.h"
+#include "sim/sim.h"
+
+namespace mcmt {
+namespace sim {
+
+struct Stats {
+  int count = 0;
+  double mean = 0, median = 0, max = 0, rms = 0;
+};
+Stats ComputeStats(std::vector<double> values);
+
+struct CameraError {
+  std::string name;
+  double position_mm = 0, rotation_deg = 0;
+};
+struct MarkerError {
+  int id = 0;
+  double corner_mm = 0;  // mean over the 4 corners
+  double size_mm = 0;    // estimated minus true side
+};
+
+struct EvalResult {
+  bool has_map = false, has_trajectory = false;
+  // Cameras
+  int gt_cameras = 0, mapped_cameras = 0;
+  std::vector<std::string> missing_cameras;
+  std::vector<CameraError> cameras;
+  Stats camera_position_mm, camera_rotation_deg;
+  // Object configuration
+  int gt_markers = 0, mapped_markers = 0;
+  std::vector<int> missing_markers;
+  std::vector<MarkerError> markers;
+  Stats configuration_mm;
+  // Object poses
+  int gt_frames = 0, frames_with_pose = 0;
+  Stats object_translation_mm, object_rotation_deg;
+  Stats object_translation_aligned_mm;  // own Horn alignment of trajectory positions (paper style)
+  double map_rms_px = 0;
+  Rigid3 gt_rig_from_est_rig = Rigid3::Identity();
+  Rigid3 gt_object_from_est_object = Rigid3::Identity();
+};
+
+class EvalInputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws EvalInputError (naming the camera / marker / seq) when the inputs do not belong together:
+// a camera or marker in the map that the ground truth lacks, a trajectory seq not in the ground truth,
+// no camera or marker in common.
+EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
+                    const std::vector<TrajectoryRow>* trajectory);
+
+// Trajectory from trajectory.csv / poses.csv, or from an LCM log of object_pose_t on MCMT_POSE
+// (poses with status TRACKING or AMBIGUOUS), recognised by content.
+std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path);
+
+std::string FormatTable(const EvalResult& result);
+std::string FormatJson(const EvalResult& result);
+
+}  // namespace sim
+}  // namespace mcmt

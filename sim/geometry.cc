@@ -1,0 +1,539 @@
+// Rigs, objects, trajectories and ground-truth projections of the simulator.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "sim/sim.h"
+#include "sim/sim_internal.h"
+
+namespace mcmt {
+namespace sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double Deg(double rad) { return rad * 180.0 / kPi; }
+double Rad(double deg) { return deg * kPi / 180.0; }
+
+// Rotation whose columns are the marker's x (right), y (up) and z (out of the face) axes.
+Eigen::Matrix3d FrameFromNormalUp(const Eigen::Vector3d& normal, const Eigen::Vector3d& up_hint) {
+  const Eigen::Vector3d z = normal.normalized();
+  Eigen::Vector3d y = up_hint - up_hint.dot(z) * z;
+  y.normalize();
+  const Eigen::Vector3d x = y.cross(z);
+  Eigen::Matrix3d r;
+  r.col(0) = x;
+  r.col(1) = y;
+  r.col(2) = z;
+  return r;
+}
+
+Rigid3 MakePose(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+  Rigid3 pose = Rigid3::Identity();
+  pose.linear() = rotation;
+  pose.translation() = translation;
+  return pose;
+}
+
+// Axis-aligned box faces (counter-clockwise seen from outside).
+std::vector<SimFace> BoxFaces(double sx, double sy, double sz, double albedo) {
+  const double hx = sx / 2, hy = sy / 2, hz = sz / 2;
+  auto v = [&](double x, double y, double z) { return Eigen::Vector3d(x * hx, y * hy, z * hz); };
+  std::vector<SimFace> faces = {
+      {{v(1, -1, -1), v(1, 1, -1), v(1, 1, 1), v(1, -1, 1)}, albedo},      // +x
+      {{v(-1, 1, -1), v(-1, -1, -1), v(-1, -1, 1), v(-1, 1, 1)}, albedo},  // -x
+      {{v(1, 1, -1), v(-1, 1, -1), v(-1, 1, 1), v(1, 1, 1)}, albedo},      // +y
+      {{v(-1, -1, -1), v(1, -1, -1), v(1, -1, 1), v(-1, -1, 1)}, albedo},  // -y
+      {{v(-1, -1, 1), v(1, -1, 1), v(1, 1, 1), v(-1, 1, 1)}, albedo},      // +z
+      {{v(-1, 1, -1), v(1, 1, -1), v(1, -1, -1), v(-1, -1, -1)}, albedo},  // -z
+  };
+  return faces;
+}
+
+// Regular prism with `sides` vertical sides, circumradius r, height h; side k's outward normal at
+// angle 2 pi k / sides.
+std::vector<SimFace> PrismFaces(int sides, double r, double h, double albedo) {
+  std::vector<Eigen::Vector3d> ring;
+  for (int k = 0; k < sides; ++k) {
+    const double a = 2 * kPi * (k - 0.5) / sides;
+    ring.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
+  }
+  const Eigen::Vector3d up(0, 0, h / 2);
+  std::vector<SimFace> faces;
+  for (int k = 0; k < sides; ++k) {
+    const Eigen::Vector3d& a = ring[k];
+    const Eigen::Vector3d& b = ring[(k + 1) % sides];
+    faces.push_back({{a - up, b - up, b + up, a + up}, albedo});
+  }
+  SimFace top, bottom;
+  for (int k = 0; k < sides; ++k) top.vertices.push_back(ring[k] + up);
+  for (int k = sides - 1; k >= 0; --k) bottom.vertices.push_back(ring[k] - up);
+  top.albedo = bottom.albedo = albedo;
+  faces.push_back(top);
+  faces.push_back(bottom);
+  return faces;
+}
+
+double CircumRadius(const std::vector<SimFace>& faces) {
+  double r = 0;
+  for (const auto& f : faces)
+    for (const auto& v : f.vertices) r = std::max(r, v.norm());
+  return r;
+}
+
+// Marker centred at `centre` on a face with outward `normal`, its up direction `up` rotated by `roll`
+// about the normal.
+Rigid3 MarkerOnFace(const Eigen::Vector3d& centre, const Eigen::Vector3d& normal, const Eigen::Vector3d& up,
+                    double roll = 0.0) {
+  Eigen::Matrix3d r = FrameFromNormalUp(normal, up);
+  r = r * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return MakePose(r, centre);
+}
+
+// Smooth bounded random signal: sum of three sinusoids, |f| <= 1.
+struct Wiggle {
+  double amp[3], freq[3], phase[3];
+  void Init(std::mt19937_64& rng, double min_hz, double max_hz) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    double total = 0;
+    for (int i = 0; i < 3; ++i) {
+      amp[i] = 0.3 + 0.7 * u(rng);
+      total += amp[i];
+      freq[i] = min_hz + (max_hz - min_hz) * u(rng);
+      phase[i] = 2 * kPi * u(rng);
+    }
+    for (double& a : amp) a /= total;
+  }
+  double operator()(double t) const {
+    double s = 0;
+    for (int i = 0; i < 3; ++i) s += amp[i] * std::sin(2 * kPi * freq[i] * t + phase[i]);
+    return s;
+  }
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Rig
+
+std::vector<double> DefaultDistortion(DistortionModel model) {
+  switch (model) {
+    case DistortionModel::kNone:
+      return {};
+    case DistortionModel::kRadTan:
+      return {-0.12, 0.05, 0.0006, -0.0004, 0.0};
+    case DistortionModel::kFisheye:
+      return {0.04, -0.012, 0.003, -0.0006};
+  }
+  return {};
+}
+
+std::vector<SimCamera> MakeRig(const RigOptions& o) {
+  if (o.num_cameras < 1 || o.num_cameras > 64)
+    throw std::invalid_argument("cameras: expected 1..64, got " + std::to_string(o.num_cameras));
+  if (!(o.radius > 0.05) || !(o.radius < 100))
+    throw std::invalid_argument("radius: expected 0.05..100 m, got " + std::to_string(o.radius));
+  if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192)
+    throw std::invalid_argument("image size: expected 16..8192 pixels per side, got " +
+                                std::to_string(o.width) + "x" + std::to_string(o.height));
+  if (!(o.hfov_deg > 5) || !(o.hfov_deg < 170))
+    throw std::invalid_argument("hfov-deg: expected 5..170, got " + std::to_string(o.hfov_deg));
+  const double height = o.camera_height;
+  std::mt19937_64 rng(o.seed * 7919 + 17);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::Vector3d target(0, 0, o.look_at_height);
+  std::vector<SimCamera> cameras;
+  for (int k = 0; k < o.num_cameras; ++k) {
+    SimCamera cam;
+    cam.name = "cam" + std::to_string(k);
+    const double a = 2 * kPi * k / o.num_cameras;
+    const Eigen::Vector3d centre(o.radius * std::cos(a), o.radius * std::sin(a), height);
+    const Eigen::Vector3d forward = (target - centre).normalized();
+    Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
+    if (right.norm() < 1e-9) right = Eigen::Vector3d::UnitY();  // looking straight down
+    right.normalize();
+    const Eigen::Vector3d down = forward.cross(right);
+    Eigen::Matrix3d r;
+    r.col(0) = right;
+    r.col(1) = down;
+    r.col(2) = forward;
+    cam.rig_from_cam = MakePose(r, centre);
+    CameraModel& m = cam.model;
+    m.width = o.width;
+    m.height = o.height;
+    const double f = 0.5 * o.width / std::tan(0.5 * Rad(o.hfov_deg));
+    m.fx = m.fy = f;
+    m.cx = 0.5 * (o.width - 1);
+    m.cy = 0.5 * (o.height - 1);
+    m.model = o.distortion;
+    m.distortion = DefaultDistortion(o.distortion);
+    if (o.intrinsics_spread > 0) {
+      const double s = o.intrinsics_spread;
+      m.fx *= 1 + s * gauss(rng);
+      m.fy = m.fx * (1 + 0.05 * s * gauss(rng));
+      m.cx += s * 0.1 * o.width * gauss(rng);
+      m.cy += s * 0.1 * o.height * gauss(rng);
+      for (double& d : m.distortion) d *= 1 + s * gauss(rng);
+    }
+    cameras.push_back(cam);
+  }
+  return cameras;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Objects
+
+const SimMarker* SimObject::FindMarker(int id) const {
+  for (const auto& m : markers)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+
+MarkerSizes SimObject::Sizes() const {
+  std::map<double, int> counts;
+  for (const auto& m : markers) counts[m.size]++;
+  MarkerSizes sizes;
+  int best = -1;
+  for (const auto& [size, n] : counts)
+    if (n > best) best = n, sizes.default_size = size;
+  for (const auto& m : markers)
+    if (m.size != sizes.default_size) sizes.overrides[m.id] = m.size;
+  return sizes;
+}
+
+const std::vector<std::string>& ObjectKindNames() {
+  static const std::vector<std::string> names = {"four_sided", "box", "pentagon", "cube", "board"};
+  return names;
+}
+
+ObjectKind ObjectKindFromName(const std::string& name) {
+  const auto& names = ObjectKindNames();
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<ObjectKind>(i);
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown object '" + name + "' (expected one of: " + list + ")");
+}
+
+SimObject MakeObject(const ObjectOptions& o) {
+  SimObject obj;
+  obj.name = ObjectKindNames().at(static_cast<int>(o.kind));
+  const double albedo = 0.45;
+  int id = o.first_id;
+  if (o.first_id < 0) throw std::invalid_argument("first marker id must be >= 0");
+  switch (o.kind) {
+    case ObjectKind::kFourSided: {
+      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+      const double side = s * 1.75, h = s * 1.75;  // 7 x 7 x 7 cm for 4 cm markers
+      obj.faces = PrismFaces(4, side / std::sqrt(2.0), h, albedo);
+      for (int k = 0; k < 4; ++k) {
+        const double a = 2 * kPi * k / 4;
+        const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
+        obj.markers.push_back({id++, s, MarkerOnFace(n * side / 2, n, Eigen::Vector3d::UnitZ())});
+      }
+      break;
+    }
+    case ObjectKind::kCube: {
+      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+      const double side = s + 0.02;
+      obj.faces = BoxFaces(side, side, side, albedo);
+      const Eigen::Vector3d normals[6] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                          Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
+                                          Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ()};
+      for (int k = 0; k < 6; ++k) {
+        const Eigen::Vector3d up = k < 4 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+        obj.markers.push_back({id++, s, MarkerOnFace(normals[k] * side / 2, normals[k], up)});
+      }
+      break;
+    }
+    case ObjectKind::kPentagon: {
+      const double s = o.marker_size > 0 ? o.marker_size : 0.025;
+      const double quiet = s * 1.25;  // marker plus a one-cell quiet zone each side (6x6 + border: 8 cells)
+      // Side length of the pentagon: room for one marker with margin; height: two markers stacked.
+      const double side = quiet * 1.25;
+      const double r = side / (2 * std::sin(kPi / 5));
+      const double apothem = r * std::cos(kPi / 5);
+      const double h = quiet * 2.4;
+      obj.faces = PrismFaces(5, r, h, albedo);
+      for (int k = 0; k < 5; ++k) {
+        const double a = 2 * kPi * k / 5;
+        const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
+        for (int level = 0; level < 2; ++level) {
+          const Eigen::Vector3d c =
+              n * apothem + Eigen::Vector3d(0, 0, (level == 0 ? 0.5 : -0.5) * quiet * 1.1);
+          obj.markers.push_back({id++, s, MarkerOnFace(c, n, Eigen::Vector3d::UnitZ())});
+        }
+      }
+      break;
+    }
+    case ObjectKind::kBoard: {
+      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+      const double pitch = s * 1.3;
+      const double w = 3 * pitch + 0.3 * s, thick = 0.01;
+      // Standing board: markers on its +x face, grid in y (columns) and z (rows).
+      obj.faces = BoxFaces(thick, w, w, albedo);
+      for (int row = 0; row < 3; ++row)
+        for (int col = 0; col < 3; ++col) {
+          const Eigen::Vector3d c(thick / 2, (col - 1) * pitch, (1 - row) * pitch);
+          obj.markers.push_back(
+              {id++, s, MarkerOnFace(c, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ())});
+        }
+      break;
+    }
+    case ObjectKind::kBox: {
+      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+      const double sx = 4.5 * s, sy = 3.5 * s, sz = 2.5 * s;
+      obj.faces = BoxFaces(sx, sy, sz, albedo);
+      std::mt19937_64 rng(o.seed * 104729 + 3);
+      std::uniform_real_distribution<double> u(0.0, 1.0);
+      struct Placed {
+        int face;
+        Eigen::Vector2d centre;
+        double ext;  // half extent of the rotated quiet square's bounding box
+      };
+      std::vector<Placed> placed;
+      const double half_quiet = 0.5 * s * 1.25;
+      // Faces: +x, -x, +y, -y, +z (the bottom is not seen by cameras above the object).
+      const Eigen::Vector3d normals[5] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                          Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
+                                          Eigen::Vector3d::UnitZ()};
+      const double half[3] = {sx / 2, sy / 2, sz / 2};
+      const int wanted = 8;
+      int attempts = 0;
+      // Two markers on the top face and one or two on every side, spread by rejection sampling.
+      const int face_plan[8] = {4, 0, 1, 2, 3, 4, 0, 2};
+      for (int k = 0; k < wanted; ++k) {
+        const int f = face_plan[k];
+        const Eigen::Vector3d n = normals[f];
+        int axis = f / 2;
+        // In-face axes: the two other coordinate axes.
+        const int a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+        bool ok = false;
+        for (; attempts < 200000 && !ok; ++attempts) {
+          const double roll = 2 * kPi * u(rng);
+          // Extent of the rotated quiet square along the face axes.
+          const double ext = half_quiet * (std::abs(std::cos(roll)) + std::abs(std::sin(roll)));
+          if (ext > half[a0] || ext > half[a1]) continue;
+          const Eigen::Vector2d c((2 * u(rng) - 1) * (half[a0] - ext), (2 * u(rng) - 1) * (half[a1] - ext));
+          bool clash = false;
+          for (const auto& p : placed)
+            if (p.face == f && std::abs(p.centre[0] - c[0]) < p.ext + ext + 0.002 &&
+                std::abs(p.centre[1] - c[1]) < p.ext + ext + 0.002)
+              clash = true;
+          if (clash) continue;
+          Eigen::Vector3d centre = n * half[axis];
+          centre[a0] = c[0];
+          centre[a1] = c[1];
+          const Eigen::Vector3d up = f == 4 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+          obj.markers.push_back({id++, s, MarkerOnFace(centre, n, up, roll)});
+          placed.push_back({f, c, ext});
+          ok = true;
+        }
+        if (!ok) throw std::runtime_error("box: cannot place marker " + std::to_string(k));
+      }
+      break;
+    }
+  }
+  obj.radius = CircumRadius(obj.faces);
+  return obj;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Trajectory
+
+int64_t FrameUtime(int64_t frame, double fps) {
+  return kStartUtime + static_cast<int64_t>(std::llround(static_cast<double>(frame) * 1e6 / fps));
+}
+
+std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& o) {
+  if (o.frames < 1) throw std::invalid_argument("frames: expected >= 1, got " + std::to_string(o.frames));
+  if (!(o.fps > 0) || !(o.fps <= 10000)) throw std::invalid_argument("fps: expected 0..10000");
+  if (o.still_frames < 0) throw std::invalid_argument("still-frames: expected >= 0");
+  std::mt19937_64 rng(o.seed * 6364136223846793005ULL + 1442695040888963407ULL);
+  const double rho = o.position_radius > 0 ? o.position_radius : 0.15;
+  const double vert = o.vertical_range > 0 ? o.vertical_range : 0.08;
+  Wiggle wx, wy, wz, tx, ty, yaw_wiggle;
+  wx.Init(rng, 0.04, 0.25);
+  wy.Init(rng, 0.04, 0.25);
+  wz.Init(rng, 0.05, 0.3);
+  tx.Init(rng, 0.05, 0.35);
+  ty.Init(rng, 0.05, 0.35);
+  yaw_wiggle.Init(rng, 0.05, 0.3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double yaw0 = 2 * kPi * u(rng);
+  const double direction = u(rng) < 0.5 ? -1.0 : 1.0;
+
+  // Still segments: evenly spaced; motion time does not advance inside them.
+  std::vector<bool> still(o.frames, false);
+  const int segments = o.still_frames > 0 ? std::max(0, o.still_segments) : 0;
+  for (int j = 0; j < segments; ++j) {
+    const int centre = static_cast<int>((j + 1) * static_cast<int64_t>(o.frames) / (segments + 1));
+    for (int k = centre - o.still_frames / 2; k < centre - o.still_frames / 2 + o.still_frames; ++k)
+      if (k >= 0 && k < o.frames) still[k] = true;
+  }
+  int moving = 0;
+  for (bool s : still) moving += s ? 0 : 1;
+  const double duration = std::max(1, moving) / o.fps;
+
+  std::vector<SimFrame> frames(o.frames);
+  int tau = 0;
+  for (int k = 0; k < o.frames; ++k) {
+    if (k > 0 && !still[k]) ++tau;
+    const double t = tau / o.fps;
+    const double s = std::max(1, moving - 1) > 0 ? static_cast<double>(tau) / std::max(1, moving - 1) : 0.0;
+    const Eigen::Vector3d p(rho * wx(t), rho * wy(t), o.look_at_height + vert * wz(t));
+    const double yaw = yaw0 + direction * (2 * kPi * o.turns * s) + 0.4 * yaw_wiggle(t);
+    Eigen::Vector2d tilt(tx(t), ty(t));
+    tilt *= Rad(o.max_tilt_deg) / std::sqrt(2.0);
+    Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (tilt.norm() > 0) {
+      const Eigen::Vector3d axis(tilt[0], tilt[1], 0);
+      r = Eigen::AngleAxisd(tilt.norm(), axis.normalized()).toRotationMatrix() * r;
+    }
+    frames[k].seq = k;
+    frames[k].utime = FrameUtime(k, o.fps);
+    frames[k].rig_from_object = MakePose(r, p);
+  }
+  (void)duration;
+  return frames;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Projections
+
+std::vector<MarkerView> ProjectMarkers(const SimCamera& camera, const SimObject& object,
+                                       const Rigid3& rig_from_object) {
+  const Rigid3 cam_from_object = internal::InverseRigid(camera.rig_from_cam) * rig_from_object;
+  const Rigid3 object_from_cam = internal::InverseRigid(cam_from_object);
+  const Eigen::Vector3d cam_in_object = object_from_cam.translation();
+  const internal::ValidRegion region(camera.model);
+  std::vector<MarkerView> views;
+  views.reserve(object.markers.size());
+  for (const SimMarker& m : object.markers) {
+    MarkerView v;
+    v.id = m.id;
+    v.cam_from_marker = cam_from_object * m.object_from_marker;
+    const Eigen::Matrix3d& r = v.cam_from_marker.linear();
+    const Eigen::Vector3d& t = v.cam_from_marker.translation();
+    v.depth = t.z();
+    const Eigen::Vector3d normal = r.col(2);
+    v.view_angle_deg = Deg(std::acos(std::clamp(-normal.dot(t) / std::max(t.norm(), 1e-300), -1.0, 1.0)));
+    v.front_facing = normal.dot(t) < 0;
+    const MarkerCorners3d corners = MarkerCornersInMarker(m.size);
+    v.in_front = true;
+    v.in_image = true;
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector3d p = v.cam_from_marker * corners[i];
+      if (!(p.z() > 1e-9)) {
+        v.in_front = false;
+        v.in_image = false;
+        v.corners[i] = Eigen::Vector2d(NAN, NAN);
+        continue;
+      }
+      double px[2] = {0, 0};
+      camera.model.Project(p.data(), px);
+      v.corners[i] = Eigen::Vector2d(px[0], px[1]);
+      if (!region.Contains(p.x() / p.z(), p.y() / p.z()) || !(px[0] >= 0) || !(px[1] >= 0) ||
+          !(px[0] <= camera.model.width - 1) || !(px[1] <= camera.model.height - 1))
+        v.in_image = false;
+    }
+    if (v.in_front) {
+      double area = 0;
+      for (int i = 0; i < 4; ++i) {
+        const Eigen::Vector2d& a = v.corners[i];
+        const Eigen::Vector2d& b = v.corners[(i + 1) % 4];
+        area += a.x() * b.y() - a.y() * b.x();
+      }
+      v.size_px = std::sqrt(std::abs(0.5 * area));
+    }
+    // Occlusion by the body: rays from the camera to sample points of the marker (corners slightly
+    // inset, edge midpoints, centre) must not cross any body face before reaching the marker.
+    if (v.front_facing && v.in_front) {
+      const double h = 0.5 * m.size * (1 - 1e-6);
+      const Eigen::Vector3d samples[9] = {{-h, h, 0}, {h, h, 0},  {h, -h, 0}, {-h, -h, 0}, {0, h, 0},
+                                          {h, 0, 0},  {0, -h, 0}, {-h, 0, 0}, {0, 0, 0}};
+      for (const auto& s : samples) {
+        const Eigen::Vector3d target = m.object_from_marker * s;
+        if (internal::SegmentHitsBody(object, cam_in_object, target)) {
+          v.occluded = true;
+          break;
+        }
+      }
+    }
+    v.fully_visible = v.in_front && v.in_image && v.front_facing && !v.occluded;
+    views.push_back(v);
+  }
+  return views;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Internal helpers
+
+namespace internal {
+
+Rigid3 InverseRigid(const Rigid3& a_from_b) {
+  Rigid3 b_from_a = Rigid3::Identity();
+  b_from_a.linear() = a_from_b.linear().transpose();
+  b_from_a.translation() = -(a_from_b.linear().transpose() * a_from_b.translation());
+  return b_from_a;
+}
+
+ValidRegion::ValidRegion(const CameraModel& model) {
+  // The distortion must be monotonic in the radius up to where a point may still land in the image;
+  // beyond the first turning point a far-off point could fold back into the image.
+  max_r2 = 1e30;
+  if (model.model == DistortionModel::kNone) return;
+  thread_local std::map<std::pair<int, std::vector<double>>, double> cache;
+  const auto key = std::make_pair(static_cast<int>(model.model), model.distortion);
+  auto it = cache.find(key);
+  if (it != cache.end()) {
+    max_r2 = it->second;
+    return;
+  }
+  double prev = 0;
+  const double step = 2e-3;
+  for (double r = step; r < 20; r += step) {
+    double xd, yd;
+    model.Distort(r, 0.0, &xd, &yd);
+    if (!(xd > prev)) {
+      max_r2 = (r - step) * (r - step);
+      break;
+    }
+    prev = xd;
+  }
+  if (cache.size() > 64) cache.clear();
+  cache[key] = max_r2;
+}
+
+bool SegmentHitsBody(const SimObject& object, const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  const Eigen::Vector3d d = to - from;
+  for (const SimFace& f : object.faces) {
+    const size_t n = f.vertices.size();
+    if (n < 3) continue;
+    const Eigen::Vector3d normal =
+        (f.vertices[1] - f.vertices[0]).cross(f.vertices[2] - f.vertices[0]).normalized();
+    const double denom = normal.dot(d);
+    if (std::abs(denom) < 1e-15) continue;
+    const double t = normal.dot(f.vertices[0] - from) / denom;
+    if (!(t > 1e-9) || !(t < 1 - 1e-7)) continue;
+    const Eigen::Vector3d p = from + t * d;
+    bool inside = true;
+    for (size_t i = 0; i < n && inside; ++i) {
+      const Eigen::Vector3d& a = f.vertices[i];
+      const Eigen::Vector3d& b = f.vertices[(i + 1) % n];
+      if ((b - a).cross(p - a).dot(normal) < 0) inside = false;
+    }
+    if (inside) return true;
+  }
+  return false;
+}
+
+}  // namespace internal
+
+}  // namespace sim
+}  // namespace mcmt
