@@ -5,19 +5,24 @@
 #include "core/cli.h"
 #include "core/files.h"
 #include "sim/eval.h"
+#include "sim/peer_calibration.h"
 
 namespace {
 
 int Main(int argc, char** argv) {
   using namespace mcmt;
-  std::string ground_truth, map_path, trajectory_path;
+  std::string ground_truth, caliscope, map_path, trajectory_path;
   bool json = false;
   ArgParser args(
       "mcmt-eval",
       "Compares the mapper's map.yaml (cameras, marker layout) and optionally a trajectory with "
       "mcmt-sim's ground_truth.yaml after rigid (Horn/Umeyama, no scale) alignments: camera centres "
-      "for the rig, marker corners for the object; object poses are compared through both alignments.");
-  args.AddString("ground-truth", &ground_truth, "ground_truth.yaml written by mcmt-sim", true);
+      "for the rig, marker corners for the object; object poses are compared through both alignments. "
+      "With --caliscope instead, compares the map's cameras with a caliscope calibration of the same rig.");
+  args.AddString("ground-truth", &ground_truth, "ground_truth.yaml written by mcmt-sim");
+  args.AddString("caliscope", &caliscope,
+                 "caliscope's camera_array.toml: report the map's agreement with it (camera centres aligned "
+                 "rigidly; position and rotation differences per camera) instead of ground-truth errors");
   args.AddString("map", &map_path, "map.yaml written by mcmt-mapper", true);
   args.AddString("trajectory", &trajectory_path,
                  "trajectory.csv / poses.csv, or an LCM log with object_pose_t on MCMT_POSE");
@@ -28,9 +33,21 @@ int Main(int argc, char** argv) {
       "mean / median / max; fraction of frames with a pose. Exit 1 with a one-line reason when the inputs "
       "do not match (camera names, marker ids, frame seqs).\n"
       "example:\n  mcmt-eval --ground-truth sim/ground_truth.yaml --map out/map.yaml --trajectory "
-      "out/poses.csv\n");
+      "out/poses.csv\n"
+      "  mcmt-eval --caliscope data/camera_array.toml --map out/map.yaml\n");
   int exit_code = 0;
   if (!args.Parse(argc, argv, &exit_code)) return exit_code;
+  if (ground_truth.empty() == caliscope.empty()) {
+    throw std::invalid_argument("give exactly one of --ground-truth and --caliscope");
+  }
+  if (!caliscope.empty()) {
+    if (!trajectory_path.empty()) throw std::invalid_argument("--trajectory needs --ground-truth");
+    const sim::PeerAgreement agreement =
+        sim::CompareWithPeer(ReadMap(map_path), sim::ReadCaliscopeCameras(caliscope));
+    std::cout << "mcmt-eval: " << map_path << " vs caliscope " << caliscope << "\n\n"
+              << sim::FormatPeerAgreement(agreement);
+    return 0;
+  }
   const sim::GroundTruth truth = sim::ReadGroundTruth(ground_truth);
   const RigMap map = ReadMap(map_path);
   std::vector<TrajectoryRow> trajectory;
