@@ -116,6 +116,9 @@ camera_model_t ToCameraModelMsg(const CameraModel& model);
 CameraModel FromCameraModelMsg(const camera_model_t& msg);  // throws std::invalid_argument
 rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime);
 RigMap FromRigMapMsg(const rig_map_t& msg);
+// A tracker pose as a trajectory row (utime, seq, rig_from_object, rms_px, cameras, markers); the status
+// is the caller's to check.
+TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg);
 MarkerCorners2d CornersOf(const marker_t& marker);
 
 // "file://<absolute path>?speed=0": reads a log as fast as possible through LCM's own provider.

@@ -57,14 +57,7 @@ void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& cha
     ++stats_.lost;
     return;
   }
-  TrajectoryRow row;
-  row.utime = msg.utime;
-  row.seq = msg.seq;
-  row.rig_from_object = FromPose3d(msg.rig_from_object);
-  row.rms_px = msg.rms_px;
-  row.cameras = msg.num_cameras;
-  row.markers = msg.num_markers;
-  poses_.push_back(row);
+  poses_.push_back(FromObjectPoseMsg(msg));
   if (keep_poses_ > 0 && poses_.size() >= 2 * keep_poses_) {
     const size_t drop = poses_.size() - keep_poses_;
     poses_.erase(poses_.begin(), poses_.begin() + static_cast<std::ptrdiff_t>(drop));

@@ -266,6 +266,17 @@ RigMap FromRigMapMsg(const rig_map_t& msg) {
   return map;
 }
 
+TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg) {
+  TrajectoryRow row;
+  row.utime = msg.utime;
+  row.seq = msg.seq;
+  row.rig_from_object = FromPose3d(msg.rig_from_object);
+  row.rms_px = msg.rms_px;
+  row.cameras = msg.num_cameras;
+  row.markers = msg.num_markers;
+  return row;
+}
+
 MarkerCorners2d CornersOf(const marker_t& marker) {
   MarkerCorners2d c;
   for (int i = 0; i < 4; ++i) c[i] = Eigen::Vector2d(marker.corners[i][0], marker.corners[i][1]);

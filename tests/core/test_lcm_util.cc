@@ -253,6 +253,26 @@ TEST(LcmUtil, Conversions) {
   for (int i = 0; i < 4; ++i) EXPECT_EQ(c[i], Eigen::Vector2d(m.corners[i][0], m.corners[i][1]));
 }
 
+TEST(LcmUtil, ObjectPoseAsTrajectoryRow) {
+  std::mt19937_64 rng(5);
+  object_pose_t msg;
+  msg.utime = 1234567;
+  msg.seq = 42;
+  const Rigid3 rig_from_object = RandomRigid(rng, 2.0);
+  msg.rig_from_object = ToPose3d(rig_from_object);
+  msg.rms_px = 0.25;
+  msg.num_cameras = 3;
+  msg.num_markers = 7;
+  const TrajectoryRow row = FromObjectPoseMsg(msg);
+  EXPECT_EQ(row.utime, 1234567);
+  EXPECT_EQ(row.seq, 42);
+  EXPECT_LT(RotationAngle(row.rig_from_object, rig_from_object), 1e-12);
+  EXPECT_LT((row.rig_from_object.translation() - rig_from_object.translation()).norm(), 1e-12);
+  EXPECT_EQ(row.rms_px, 0.25);
+  EXPECT_EQ(row.cameras, 3);
+  EXPECT_EQ(row.markers, 7);
+}
+
 class Counter {
  public:
   void OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel, const detections_t* msg) {
