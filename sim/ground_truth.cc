@@ -2,6 +2,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -39,6 +40,15 @@ double GetNumber(const YAML::Node& node, const std::string& file, const std::str
     return node.as<double>();
   } catch (const std::exception&) {
     Fail(file, key, "expected a number, got '" + node.Scalar() + "'");
+  }
+}
+
+int64_t GetInt64(const YAML::Node& node, const std::string& file, const std::string& key) {
+  if (!node || !node.IsScalar()) Fail(file, key, "missing or not an integer");
+  try {
+    return node.as<int64_t>();
+  } catch (const std::exception&) {
+    Fail(file, key, "expected an integer, got '" + node.Scalar() + "'");
   }
 }
 
@@ -137,8 +147,8 @@ GroundTruth ReadGroundTruth(const std::string& path) {
     const YAML::Node n = kv.second;
     c.rig_from_cam = GetPose(n["rig_from_cam"], path, key + ".rig_from_cam");
     if (n["width"]) {
-      c.model.width = static_cast<int>(GetNumber(n["width"], path, key + ".width"));
-      c.model.height = static_cast<int>(GetNumber(n["height"], path, key + ".height"));
+      c.model.width = static_cast<int>(GetInt64(n["width"], path, key + ".width"));
+      c.model.height = static_cast<int>(GetInt64(n["height"], path, key + ".height"));
       c.model.fx = GetNumber(n["fx"], path, key + ".fx");
       c.model.fy = GetNumber(n["fy"], path, key + ".fy");
       c.model.cx = GetNumber(n["cx"], path, key + ".cx");
@@ -177,8 +187,8 @@ GroundTruth ReadGroundTruth(const std::string& path) {
     for (size_t i = 0; i < frames.size(); ++i) {
       const std::string key = "frames[" + std::to_string(i) + "]";
       SimFrame f;
-      f.seq = static_cast<int64_t>(GetNumber(frames[i]["seq"], path, key + ".seq"));
-      if (frames[i]["utime"]) f.utime = frames[i]["utime"].as<int64_t>();
+      f.seq = GetInt64(frames[i]["seq"], path, key + ".seq");
+      if (frames[i]["utime"]) f.utime = GetInt64(frames[i]["utime"], path, key + ".utime");
       f.rig_from_object = GetPose(frames[i]["rig_from_object"], path, key + ".rig_from_object");
       truth.frames.push_back(f);
     }
