@@ -304,37 +304,73 @@ SimObject MakeObject(const ObjectOptions& o) {
                                           Eigen::Vector3d::UnitZ()};
       const double half[3] = {sx / 2, sy / 2, sz / 2};
       const int wanted = 8;
-      int attempts = 0;
       // Two markers on the top face and one or two on every side, spread by rejection sampling.
       const int face_plan[8] = {4, 0, 1, 2, 3, 4, 0, 2};
-      for (int k = 0; k < wanted; ++k) {
-        const int f = face_plan[k];
+      const double gap = 0.002;
+      auto place = [&](int f, const Eigen::Vector2d& c, double roll, double ext) {
         const Eigen::Vector3d n = normals[f];
-        int axis = f / 2;
-        // In-face axes: the two other coordinate axes.
-        const int a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
-        bool ok = false;
-        for (; attempts < 200000 && !ok; ++attempts) {
-          const double roll = 2 * kPi * u(rng);
-          // Extent of the rotated quiet square along the face axes.
-          const double ext = half_quiet * (std::abs(std::cos(roll)) + std::abs(std::sin(roll)));
-          if (ext > half[a0] || ext > half[a1]) continue;
-          const Eigen::Vector2d c((2 * u(rng) - 1) * (half[a0] - ext), (2 * u(rng) - 1) * (half[a1] - ext));
-          bool clash = false;
-          for (const auto& p : placed)
-            if (p.face == f && std::abs(p.centre[0] - c[0]) < p.ext + ext + 0.002 &&
-                std::abs(p.centre[1] - c[1]) < p.ext + ext + 0.002)
-              clash = true;
-          if (clash) continue;
-          Eigen::Vector3d centre = n * half[axis];
-          centre[a0] = c[0];
-          centre[a1] = c[1];
-          const Eigen::Vector3d up = f == 4 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
-          obj.markers.push_back({id++, s, MarkerOnFace(centre, n, up, roll)});
-          placed.push_back({f, c, ext});
-          ok = true;
+        const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+        Eigen::Vector3d centre = n * half[axis];
+        centre[a0] = c[0];
+        centre[a1] = c[1];
+        const Eigen::Vector3d up = f == 4 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+        obj.markers.push_back(
+            {o.first_id + static_cast<int>(obj.markers.size()), s, MarkerOnFace(centre, n, up, roll)});
+        placed.push_back({f, c, ext});
+      };
+      // A marker placed early can leave no room for the second one on its face (a second marker on
+      // a side needs the first near an end): then the whole layout is drawn again, the random stream
+      // continuing. A layout that succeeds at the first try is what earlier versions produced.
+      const int max_layouts = 200, max_attempts_per_marker = 20000;
+      bool done = false;
+      for (int layout = 0; layout < max_layouts && !done; ++layout) {
+        obj.markers.clear();
+        placed.clear();
+        bool failed = false;
+        for (int k = 0; k < wanted && !failed; ++k) {
+          const int f = face_plan[k];
+          const int axis = f / 2;
+          // In-face axes: the two other coordinate axes.
+          const int a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+          bool ok = false;
+          for (int attempts = 0; attempts < max_attempts_per_marker && !ok; ++attempts) {
+            const double roll = 2 * kPi * u(rng);
+            // Extent of the rotated quiet square along the face axes.
+            const double ext = half_quiet * (std::abs(std::cos(roll)) + std::abs(std::sin(roll)));
+            if (ext > half[a0] || ext > half[a1]) continue;
+            const Eigen::Vector2d c((2 * u(rng) - 1) * (half[a0] - ext), (2 * u(rng) - 1) * (half[a1] - ext));
+            bool clash = false;
+            for (const auto& p : placed)
+              if (p.face == f && std::abs(p.centre[0] - c[0]) < p.ext + ext + gap &&
+                  std::abs(p.centre[1] - c[1]) < p.ext + ext + gap)
+                clash = true;
+            if (clash) continue;
+            place(f, c, roll, ext);
+            ok = true;
+          }
+          failed = !ok;
         }
-        if (!ok) throw std::runtime_error("box: cannot place marker " + std::to_string(k));
+        done = !failed;
+      }
+      if (!done) {
+        // Deterministic fallback (only reached for odd marker sizes): upright markers spread evenly
+        // along each face's longer axis.
+        obj.markers.clear();
+        placed.clear();
+        for (int k = 0; k < wanted; ++k) {
+          const int f = face_plan[k];
+          const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+          int count = 0, index = 0;
+          for (int j = 0; j < wanted; ++j) {
+            if (face_plan[j] != f) continue;
+            if (j < k) ++index;
+            ++count;
+          }
+          const int along = half[a0] >= half[a1] ? 0 : 1;
+          Eigen::Vector2d c(0, 0);
+          c[along] = (count > 1 ? (2.0 * index / (count - 1) - 1) : 0.0) * half[along == 0 ? a0 : a1] / 2;
+          place(f, c, 0.0, half_quiet);
+        }
       }
       break;
     }
