@@ -1,15 +1,23 @@
 // mcmt-sim: writes a simulated session (rig.yaml, intrinsics, ground truth, images / video, or a log of
 // detections) for the other mcmt processes and for mcmt-eval.
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <string>
 
 #include "core/camera.h"
 #include "core/cli.h"
+#include "core/dictionary.h"
 #include "sim/sim.h"
 
 namespace {
+
+std::string Num(double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%g", v);
+  return buffer;
+}
 
 void ParseImageSize(const std::string& text, int* width, int* height) {
   int w = 0, h = 0;
@@ -17,14 +25,16 @@ void ParseImageSize(const std::string& text, int* width, int* height) {
   if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w <= 0 ||
       h <= 0)
     throw std::invalid_argument("--image-size: expected WIDTHxHEIGHT such as 640x480, got '" + text + "'");
+  if (w < 16 || h < 16 || w > 8192 || h > 8192)
+    throw std::invalid_argument("--image-size: expected 16..8192 pixels per side, got '" + text + "'");
   *width = w;
   *height = h;
 }
 
 void CheckRate(const char* name, double value, double max) {
   if (!(value >= 0 && value <= max))
-    throw std::invalid_argument(std::string("--") + name + ": expected 0.." +
-                                std::to_string(max).substr(0, 4) + ", got " + std::to_string(value));
+    throw std::invalid_argument(std::string("--") + name + ": expected 0.." + Num(max) + ", got " +
+                                Num(value));
 }
 
 int Main(int argc, char** argv) {
@@ -52,12 +62,11 @@ int Main(int argc, char** argv) {
   args.AddInt("cameras", &cameras, "number of cameras on the circle (named cam0 .. camN-1)");
   args.AddDouble("radius", &radius, "circle radius, metres");
   args.AddDouble("camera-height", &camera_height,
-                 "camera height above the object's mean height, metres (default "
-                 "-1: half the radius)");
+                 "camera height above the object's mean height, metres (-1: half the radius)");
   args.AddInt("frames", &frames, "number of frames");
   args.AddDouble("fps", &fps, "frame rate (frame k has utime 1e12 + round(k * 1e6 / fps) us)");
   args.AddInt64("seed", &seed, "random seed (same seed and options: same bytes)");
-  args.AddDouble("marker-size", &marker_size, "marker side, metres (default -1: 0.04, pentagon 0.025)");
+  args.AddDouble("marker-size", &marker_size, "marker side, metres (-1: 0.04, pentagon 0.025)");
   args.AddString("dictionary", &dictionary, "ArUco dictionary name or dictionary file");
   args.AddString("image-size", &image_size, "WIDTHxHEIGHT");
   args.AddDouble("hfov-deg", &hfov, "horizontal field of view of the pinhole part, degrees");
@@ -102,19 +111,29 @@ int Main(int argc, char** argv) {
   sim::DatasetOptions o;
   o.out_dir = out;
   o.dictionary = dictionary;
-  o.object.kind = sim::ObjectKindFromName(object);
+  try {
+    o.object.kind = sim::ObjectKindFromName(object);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("--object: ") + e.what());
+  }
+  try {
+    LoadDictionary(dictionary);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("--dictionary: ") + e.what());
+  }
   if (args.Given("marker-size") && !(marker_size > 0.001 && marker_size < 10))
-    throw std::invalid_argument("--marker-size: expected 0.001..10 m, got " + std::to_string(marker_size));
+    throw std::invalid_argument("--marker-size: expected 0.001..10 m, got " + Num(marker_size));
   o.object.marker_size = marker_size;
   o.object.seed = static_cast<uint64_t>(seed);
   if (cameras < 1 || cameras > 64)
     throw std::invalid_argument("--cameras: expected 1..64, got " + std::to_string(cameras));
   if (!(radius >= 0.1 && radius <= 100))
-    throw std::invalid_argument("--radius: expected 0.1..100 m, got " + std::to_string(radius));
+    throw std::invalid_argument("--radius: expected 0.1..100 m, got " + Num(radius));
   o.rig.num_cameras = cameras;
   o.rig.radius = radius;
   o.rig.camera_height = args.Given("camera-height") ? camera_height : 0.5 * radius;
   ParseImageSize(image_size, &o.rig.width, &o.rig.height);
+  if (!(hfov > 5 && hfov < 170)) throw std::invalid_argument("--hfov-deg: expected 5..170, got " + Num(hfov));
   o.rig.hfov_deg = hfov;
   try {
     o.rig.distortion = DistortionModelFromName(distortion);
@@ -127,8 +146,7 @@ int Main(int argc, char** argv) {
   o.rig.seed = static_cast<uint64_t>(seed);
   if (frames < 1 || frames > 10000000)
     throw std::invalid_argument("--frames: expected >= 1, got " + std::to_string(frames));
-  if (!(fps > 0 && fps <= 10000))
-    throw std::invalid_argument("--fps: expected 0..10000, got " + std::to_string(fps));
+  if (!(fps > 0 && fps <= 10000)) throw std::invalid_argument("--fps: expected 0..10000, got " + Num(fps));
   if (still_frames < 0) throw std::invalid_argument("--still-frames: expected >= 0");
   o.trajectory.frames = frames;
   o.trajectory.fps = fps;
@@ -167,6 +185,12 @@ int Main(int argc, char** argv) {
   if (threads < 1 || threads > 64) throw std::invalid_argument("--threads: expected 1..64");
   o.threads = threads;
   o.quiet = quiet;
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out, ec);
+    if (ec || !std::filesystem::is_directory(out))
+      throw std::runtime_error("--out: cannot create folder '" + out + "'" + (ec ? ": " + ec.message() : ""));
+  }
 
   const sim::DatasetSummary s = sim::GenerateDataset(o);
   if (!quiet) {

@@ -1,0 +1,548 @@
+// The real programs: mcmt-sim (determinism, files, video, detections log, option errors), mcmt-eval
+// (figures, mismatches, missing files) and mcmt-markers (help, bad ids).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <opencv2/aruco.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "core/dictionary.h"
+#include "core/files.h"
+#include "core/lcm_util.h"
+#include "core/marker.h"
+#include "mcmt/detections_t.hpp"
+#include "sim/eval.h"
+#include "sim/sim.h"
+
+namespace fs = std::filesystem;
+using namespace mcmt;
+
+namespace {
+
+const std::string kSim = MCMT_BIN_DIR "/mcmt-sim";
+const std::string kEval = MCMT_BIN_DIR "/mcmt-eval";
+const std::string kMarkers = MCMT_BIN_DIR "/mcmt-markers";
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() / ("mcmt_test_sim_process_" + std::to_string(::getpid()));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+TempDir& Tmp() {
+  static TempDir dir;
+  return dir;
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Runs `program args` with stdout and stderr captured.
+Result RunProgram(const std::string& program, const std::string& args) {
+  static int counter = 0;
+  const std::string base = Tmp() / ("run" + std::to_string(counter++));
+  const std::string cmd = program + " " + args + " >" + base + ".out 2>" + base + ".err";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(base + ".out");
+  r.err = Slurp(base + ".err");
+  fs::remove(base + ".out");
+  fs::remove(base + ".err");
+  return r;
+}
+
+int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+// Every regular file under `dir`, relative path -> bytes.
+std::map<std::string, std::string> Files(const std::string& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = Slurp(e.path().string());
+  return files;
+}
+
+// A rendered short session (cached: several tests look at it).
+const std::string& Rendered() {
+  static const std::string dir = [] {
+    const std::string d = Tmp() / "rendered_a";
+    const Result r = RunProgram(kSim, "--out " + d + " --frames 5 --cameras 2 --seed 5 --quiet");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    return d;
+  }();
+  return dir;
+}
+
+struct LogMessage {
+  std::string channel;
+  int64_t timestamp = 0;
+  detections_t msg;
+};
+
+std::vector<LogMessage> ReadDetectionsLog(const std::string& path) {
+  std::vector<LogMessage> out;
+  lcm::LogFile log(path, "r");
+  EXPECT_TRUE(log.good()) << path;
+  if (!log.good()) return out;
+  for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
+    LogMessage m;
+    m.channel = ev->channel;
+    m.timestamp = ev->timestamp;
+    std::string error;
+    EXPECT_TRUE(Decode(ev->data, static_cast<size_t>(ev->datalen), &m.msg, &error)) << error;
+    out.push_back(m);
+  }
+  return out;
+}
+
+// The estimate a mapper would produce from perfect data (rig frame: camera ref_cam, object frame:
+// marker ref_marker).
+RigMap MapFromTruth(const sim::GroundTruth& t, size_t ref_cam, size_t ref_marker,
+                    std::vector<TrajectoryRow>* trajectory) {
+  const Rigid3 est_from_rig = Inverse(t.cameras[ref_cam].rig_from_cam);
+  const Rigid3 obj_from_est = t.markers[ref_marker].object_from_marker;
+  const Rigid3 est_from_obj = Inverse(obj_from_est);
+  RigMap map;
+  map.dictionary = t.dictionary;
+  map.reference_camera = t.cameras[ref_cam].name;
+  map.reference_marker = t.markers[ref_marker].id;
+  for (const auto& c : t.cameras) {
+    MapCamera m;
+    m.name = c.name;
+    m.model = c.model;
+    m.rig_from_cam = est_from_rig * c.rig_from_cam;
+    map.cameras.push_back(m);
+  }
+  for (const auto& g : t.markers) {
+    MapMarker m;
+    m.id = g.id;
+    m.size = g.size;
+    m.object_from_marker = est_from_obj * g.object_from_marker;
+    map.markers.push_back(m);
+  }
+  for (const auto& f : t.frames) {
+    TrajectoryRow r;
+    r.seq = f.seq;
+    r.utime = f.utime;
+    r.rig_from_object = est_from_rig * f.rig_from_object * obj_from_est;
+    trajectory->push_back(r);
+  }
+  return map;
+}
+
+// The numbers after "key": in a JSON text, in order.
+std::vector<double> JsonNumbers(const std::string& json, const std::string& key) {
+  std::vector<double> v;
+  const std::regex re("\"" + key + "\": (-?[0-9.eE+-]+)");
+  for (auto it = std::sregex_iterator(json.begin(), json.end(), re); it != std::sregex_iterator(); ++it)
+    v.push_back(std::stod((*it)[1].str()));
+  return v;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// mcmt-sim
+
+TEST(SimProcess, HelpDocumentsEveryOption) {
+  const Result r = RunProgram(kSim, "--help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.err, "");
+  // Every option the program declares (read from its source) appears in --help.
+  const std::string source = Slurp(MCMT_SOURCE_DIR "/sim/sim_main.cc");
+  const std::regex re("args\\.Add(String|Int|Int64|Double|Flag|List)\\(\\s*\"([a-z0-9-]+)\"");
+  int count = 0;
+  for (auto it = std::sregex_iterator(source.begin(), source.end(), re); it != std::sregex_iterator(); ++it) {
+    ++count;
+    const std::string name = "--" + (*it)[2].str();
+    EXPECT_NE(r.out.find("  " + name + " "), std::string::npos) << name << " not in --help:\n" << r.out;
+  }
+  EXPECT_GE(count, 30);
+  for (const char* name :
+       {"--out", "--object", "--cameras", "--frames", "--seed", "--image-size", "--dictionary", "--video",
+        "--detections-only", "--motion-blur", "--threads", "--drop-rate"})
+    EXPECT_NE(r.out.find(name), std::string::npos) << name;
+  for (const char* object : {"four_sided", "box", "pentagon", "cube", "board"})
+    EXPECT_NE(r.out.find(object), std::string::npos) << object;
+}
+
+TEST(SimProcess, SameSeedSameBytesOtherSeedOtherBytes) {
+  const std::string& a = Rendered();
+  const std::string b = Tmp() / "rendered_b", c = Tmp() / "rendered_c";
+  // Same seed, rendered on 2 threads: byte-identical.
+  Result r = RunProgram(kSim, "--out " + b + " --frames 5 --cameras 2 --seed 5 --quiet --threads 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = RunProgram(kSim, "--out " + c + " --frames 5 --cameras 2 --seed 6 --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto fa = Files(a), fb = Files(b), fc = Files(c);
+  ASSERT_EQ(fa.size(), 1u + 2u + 1u + 10u);  // rig.yaml, 2 intrinsics, ground truth, 10 PNGs
+  for (const char* name : {"rig.yaml", "cam0.yml", "cam1.yml", "ground_truth.yaml", "cam0/000000.png",
+                           "cam0/000004.png", "cam1/000002.png"})
+    EXPECT_EQ(fa.count(name), 1u) << name;
+  ASSERT_EQ(fb.size(), fa.size());
+  for (const auto& [name, bytes] : fa) {
+    ASSERT_EQ(fb.count(name), 1u) << name;
+    EXPECT_TRUE(fb.at(name) == bytes) << name << " differs for the same seed";
+  }
+  // Another seed: another trajectory and other images (the intrinsics do not depend on it).
+  ASSERT_EQ(fc.size(), fa.size());
+  EXPECT_NE(fc.at("ground_truth.yaml"), fa.at("ground_truth.yaml"));
+  for (const auto& [name, bytes] : fa) {
+    if (name.size() > 4 && name.substr(name.size() - 4) == ".png") {
+      EXPECT_NE(fc.at(name), bytes) << name << " equal for different seeds";
+    }
+  }
+
+  // Detections-only, with every random option on.
+  const std::string opts =
+      " --frames 30 --cameras 3 --detections-only --quiet --corner-noise-px 0.3 "
+      "--miss-rate 0.1 --false-rate 0.2 --drop-rate 0.1 --object box";
+  const std::string d1 = Tmp() / "det_1", d2 = Tmp() / "det_2", d3 = Tmp() / "det_3";
+  ASSERT_EQ(RunProgram(kSim, "--out " + d1 + " --seed 9" + opts).code, 0);
+  ASSERT_EQ(RunProgram(kSim, "--out " + d2 + " --seed 9" + opts).code, 0);
+  ASSERT_EQ(RunProgram(kSim, "--out " + d3 + " --seed 10" + opts).code, 0);
+  const auto g1 = Files(d1), g2 = Files(d2), g3 = Files(d3);
+  ASSERT_EQ(g1.count("detections.lcmlog"), 1u);
+  EXPECT_EQ(g1.size(), 1u + 3u + 1u + 1u);  // rig.yaml, 3 intrinsics, ground truth, log
+  EXPECT_TRUE(g1 == g2) << "detections-only output differs for the same seed";
+  EXPECT_NE(g1.at("detections.lcmlog"), g3.at("detections.lcmlog"));
+  EXPECT_NE(g1.at("ground_truth.yaml"), g3.at("ground_truth.yaml"));
+}
+
+TEST(SimProcess, RenderedModeWritesWhatRigYamlSays) {
+  const std::string& dir = Rendered();
+  const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+  ASSERT_EQ(truth.cameras.size(), 2u);
+  ASSERT_EQ(truth.frames.size(), 5u);
+  const YAML::Node rig = YAML::LoadFile(dir + "/rig.yaml");
+  EXPECT_EQ(rig["markers"]["dictionary"].as<std::string>(), truth.dictionary);
+  EXPECT_DOUBLE_EQ(rig["markers"]["size"].as<double>(), truth.marker_size);
+  std::set<int> ids;
+  for (const auto& id : rig["markers"]["ids"]) ids.insert(id.as<int>());
+  std::set<int> truth_ids;
+  for (const auto& m : truth.markers) truth_ids.insert(m.id);
+  EXPECT_EQ(ids, truth_ids);
+  ASSERT_EQ(rig["cameras"].size(), 2u);
+  auto dictionary = LoadDictionary(truth.dictionary);
+  int detected = 0;
+  for (size_t k = 0; k < 2; ++k) {
+    const YAML::Node cam = rig["cameras"][k];
+    const sim::SimCamera& gt = truth.cameras[k];
+    EXPECT_EQ(cam["name"].as<std::string>(), gt.name);
+    // Intrinsics: OpenCV's FileStorage reads them; they are the ground truth's.
+    cv::FileStorage fs_in(dir + "/" + cam["intrinsics"].as<std::string>(), cv::FileStorage::READ);
+    ASSERT_TRUE(fs_in.isOpened()) << cam["intrinsics"].as<std::string>();
+    cv::Mat k_mat;
+    fs_in["camera_matrix"] >> k_mat;
+    ASSERT_EQ(k_mat.rows, 3);
+    EXPECT_DOUBLE_EQ(k_mat.at<double>(0, 0), gt.model.fx);
+    EXPECT_DOUBLE_EQ(k_mat.at<double>(1, 1), gt.model.fy);
+    EXPECT_DOUBLE_EQ(k_mat.at<double>(0, 2), gt.model.cx);
+    EXPECT_DOUBLE_EQ(k_mat.at<double>(1, 2), gt.model.cy);
+    EXPECT_EQ(static_cast<int>(fs_in["image_width"]), gt.model.width);
+    EXPECT_EQ(static_cast<int>(fs_in["image_height"]), gt.model.height);
+    // Images: one PNG per frame in the source folder, named by seq, of the camera's size.
+    const std::string source = cam["source"].as<std::string>();
+    EXPECT_EQ(source, gt.name + "/");
+    for (const auto& f : truth.frames) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(f.seq));
+      const cv::Mat image = cv::imread(dir + "/" + source + name, cv::IMREAD_UNCHANGED);
+      ASSERT_FALSE(image.empty()) << source << name;
+      EXPECT_EQ(image.cols, 640);
+      EXPECT_EQ(image.rows, 480);
+      EXPECT_EQ(image.type(), CV_8UC1);
+      // The markers in view are real markers of the object.
+      std::vector<int> found;
+      std::vector<std::vector<cv::Point2f>> corners;
+      cv::aruco::detectMarkers(image, dictionary, corners, found);
+      for (int id : found) EXPECT_EQ(truth_ids.count(id), 1u) << "id " << id << " in " << source << name;
+      detected += static_cast<int>(found.size());
+    }
+  }
+  EXPECT_GE(detected, 10);  // about 2 of the 4 sides face each camera
+}
+
+TEST(SimProcess, VideoIsDecodableWithEveryFrame) {
+  const std::string dir = Tmp() / "video";
+  const Result r = RunProgram(kSim, "--out " + dir + " --frames 7 --cameras 2 --seed 5 --video --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const YAML::Node rig = YAML::LoadFile(dir + "/rig.yaml");
+  const std::string& png_dir = Rendered();  // same seed and options, 5 frames, PNG
+  for (int k = 0; k < 2; ++k) {
+    const std::string source = rig["cameras"][k]["source"].as<std::string>();
+    EXPECT_EQ(source, "cam" + std::to_string(k) + ".mp4");
+    EXPECT_FALSE(fs::exists(dir + "/cam" + std::to_string(k))) << "PNG folder written with --video";
+    cv::VideoCapture video(dir + "/" + source);
+    ASSERT_TRUE(video.isOpened()) << source;
+    int frames = 0;
+    cv::Mat frame;
+    while (video.read(frame)) {
+      ASSERT_EQ(frame.cols, 640);
+      ASSERT_EQ(frame.rows, 480);
+      if (frames < 5) {
+        // The frame is the rendered image (up to compression).
+        char name[32];
+        std::snprintf(name, sizeof(name), "/cam%d/%06d.png", k, frames);
+        const cv::Mat png = cv::imread(png_dir + name, cv::IMREAD_GRAYSCALE);
+        cv::Mat gray;
+        cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
+        const double diff = cv::norm(gray, png, cv::NORM_L1) / gray.total();
+        EXPECT_LT(diff, 8.0) << source << " frame " << frames;
+      }
+      ++frames;
+    }
+    EXPECT_EQ(frames, 7) << source;
+  }
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+TEST(SimProcess, DetectionsLogHasOneMessagePerCameraFrameWithCornersNearTruth) {
+  const double sigma = 0.3;
+  for (double drop : {0.0, 0.3}) {
+    SCOPED_TRACE("drop rate " + std::to_string(drop));
+    const std::string dir = Tmp() / ("det_drop" + std::to_string(static_cast<int>(drop * 10)));
+    const int frames = 40, cameras = 3;
+    const Result r =
+        RunProgram(kSim, "--out " + dir + " --frames 40 --cameras 3 --seed 4 --detections-only --quiet " +
+                             "--corner-noise-px 0.3 --drop-rate " + std::to_string(drop));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out, "");
+    const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+    const std::vector<LogMessage> log = ReadDetectionsLog(dir + "/detections.lcmlog");
+    std::map<int64_t, const sim::SimFrame*> by_seq;
+    for (const auto& f : truth.frames) by_seq[f.seq] = &f;
+    std::set<std::pair<std::string, int64_t>> seen;
+    double sq = 0, max_err = 0;
+    int n_corners = 0, with_markers = 0;
+    for (const LogMessage& m : log) {
+      const detections_t& d = m.msg;
+      EXPECT_EQ(m.channel, DetectionsChannel(d.camera));
+      EXPECT_EQ(m.timestamp, d.utime);
+      EXPECT_TRUE(seen.insert({d.camera, d.seq}).second) << "duplicate " << d.camera << " " << d.seq;
+      ASSERT_EQ(by_seq.count(d.seq), 1u) << d.seq;
+      const sim::SimFrame& f = *by_seq.at(d.seq);
+      EXPECT_EQ(d.utime, f.utime);
+      EXPECT_EQ(d.dictionary, truth.dictionary);
+      const sim::SimCamera* cam = truth.FindCamera(d.camera);
+      ASSERT_NE(cam, nullptr) << d.camera;
+      EXPECT_EQ(d.camera_model.fx, cam->model.fx);
+      EXPECT_EQ(d.camera_model.width, cam->model.width);
+      EXPECT_EQ(d.num_markers, static_cast<int>(d.markers.size()));
+      if (!d.markers.empty()) ++with_markers;
+      for (const marker_t& mk : d.markers) {
+        const sim::SimMarker* gm = truth.FindMarker(mk.id);
+        ASSERT_NE(gm, nullptr) << "id " << mk.id;
+        // Independent projection of the true corners.
+        const Rigid3 cam_from_marker =
+            Inverse(cam->rig_from_cam) * f.rig_from_object * gm->object_from_marker;
+        const MarkerCorners3d corners = MarkerCornersInMarker(gm->size);
+        for (int i = 0; i < 4; ++i) {
+          const Eigen::Vector2d px = cam->model.Project(cam_from_marker * corners[i]);
+          const double ex = mk.corners[i][0] - px.x(), ey = mk.corners[i][1] - px.y();
+          sq += ex * ex + ey * ey;
+          max_err = std::max({max_err, std::abs(ex), std::abs(ey)});
+          n_corners += 2;
+        }
+      }
+    }
+    const int expected = frames * cameras;
+    if (drop == 0.0) {
+      EXPECT_EQ(static_cast<int>(log.size()), expected);
+    } else {
+      // 120 Bernoulli(0.7) trials: mean 84, sd 5.
+      EXPECT_GT(static_cast<int>(log.size()), 60);
+      EXPECT_LT(static_cast<int>(log.size()), 108);
+    }
+    EXPECT_GE(with_markers, static_cast<int>(0.9 * log.size()));
+    ASSERT_GT(n_corners, 200);
+    const double rms = std::sqrt(sq / n_corners);
+    EXPECT_NEAR(rms, sigma, 0.15 * sigma) << n_corners << " corner coordinates";
+    EXPECT_LT(max_err, 5.5 * sigma);
+  }
+}
+
+TEST(SimProcess, BadOptionsGiveOneLineNamingTheOption) {
+  const std::string out = Tmp() / "bad_out";
+  const std::string file = Tmp() / "a_file";
+  std::ofstream(file) << "x";
+  struct Case {
+    std::string args, named;
+  };
+  const std::vector<Case> cases = {
+      {"--out " + out + " --bogus 1", "--bogus"},
+      {"--out " + out + " --cameras 0", "--cameras"},
+      {"--out " + out + " --cameras two", "--cameras"},
+      {"--out " + out + " --object blob", "blob"},
+      {"--out " + out + " --object blob", "--object"},
+      {"--out " + out + " --image-size 12", "--image-size"},
+      {"--out " + out + " --image-size 12x8", "--image-size"},
+      {"--out " + out + " --dictionary NOPE", "NOPE"},
+      {"--out " + out + " --dictionary NOPE", "--dictionary"},
+      {"--frames 3", "--out"},
+      {"--out " + out + " --frames -1", "--frames"},
+      {"--out " + out + " --frames 0", "--frames"},
+      {"--out " + out + " --fps 0", "--fps"},
+      {"--out " + out + " --hfov-deg 180", "--hfov-deg"},
+      {"--out " + out + " --distortion wobbly", "--distortion"},
+      {"--out " + out + " --miss-rate 1.5", "--miss-rate"},
+      {"--out " + out + " --threads 0", "--threads"},
+      {"--out " + out + " --frames", "--frames"},
+      {"--out " + out + " --video --detections-only", "--video"},
+      {"--out " + file + "/sub --frames 2", "--out"},
+      {"--out " + file + "/sub --frames 2", file + "/sub"},
+  };
+  for (const Case& c : cases) {
+    const Result r = RunProgram(kSim, c.args);
+    SCOPED_TRACE(c.args);
+    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_TRUE(!r.err.empty() && r.err.back() == '\n') << r.err;
+    EXPECT_NE(r.err.find(c.named), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("mcmt-sim"), 0u) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_FALSE(fs::exists(out + "/ground_truth.yaml")) << "files written despite the error";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// mcmt-eval
+
+TEST(SimProcess, EvalOfAMapConvertedFromGroundTruth) {
+  const std::string dir = Tmp() / "eval";
+  ASSERT_EQ(
+      RunProgram(kSim, "--out " + dir + " --frames 20 --cameras 4 --seed 3 --detections-only --quiet").code,
+      0);
+  const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+  std::vector<TrajectoryRow> trajectory;
+  RigMap map = MapFromTruth(truth, 1, 2, &trajectory);
+  WriteMap(dir + "/map.yaml", map);
+  WriteTrajectory(dir + "/trajectory.csv", trajectory);
+  const std::string gt_arg = " --ground-truth " + dir + "/ground_truth.yaml";
+  {
+    const Result r = RunProgram(
+        kEval, gt_arg + " --map " + dir + "/map.yaml --trajectory " + dir + "/trajectory.csv --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    for (const char* key : {"mean", "median", "max", "rms"}) {
+      const std::vector<double> v = JsonNumbers(r.out, key);
+      EXPECT_EQ(v.size(), 6u) << key << "\n" << r.out;  // 6 statistics
+      for (double x : v) EXPECT_LT(std::abs(x), 1e-6) << key << "\n" << r.out;
+    }
+    EXPECT_EQ(JsonNumbers(r.out, "frames_with_pose"), std::vector<double>{20}) << r.out;
+    EXPECT_EQ(JsonNumbers(r.out, "mapped"), (std::vector<double>{4, 4})) << r.out;
+  }
+  {
+    // The table (default output) also exits 0.
+    const Result r = RunProgram(kEval, gt_arg + " --map " + dir + "/map.yaml");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("camera position error (mm)"), std::string::npos) << r.out;
+  }
+  {
+    // A 1 mm radial shift of cam3: (N-1)/N mm for it and 1/N mm for the others (see test_sim_eval).
+    RigMap shifted = map;
+    Eigen::Vector3d radial = truth.cameras[3].rig_from_cam.translation();
+    radial.z() = 0;
+    shifted.cameras[3].rig_from_cam.translation() +=
+        Inverse(truth.cameras[1].rig_from_cam).linear() * (0.001 * radial.normalized());
+    WriteMap(dir + "/shifted.yaml", shifted);
+    const Result r = RunProgram(kEval, gt_arg + " --map " + dir + "/shifted.yaml --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::vector<double> per = JsonNumbers(r.out, "position_mm");
+    ASSERT_EQ(per.size(), 4u) << r.out;  // the per-camera values (the summary is an object)
+    EXPECT_NEAR(per[0], 0.25, 1e-6);
+    EXPECT_NEAR(per[1], 0.25, 1e-6);
+    EXPECT_NEAR(per[2], 0.25, 1e-6);
+    EXPECT_NEAR(per[3], 0.75, 1e-6);
+    EXPECT_NE(r.out.find("\"object\": null"), std::string::npos) << r.out;
+  }
+  {
+    // A camera the ground truth lacks: one line naming it, non-zero exit.
+    RigMap wrong = map;
+    wrong.cameras[2].name = "camZ";
+    WriteMap(dir + "/wrong.yaml", wrong);
+    const Result r = RunProgram(kEval, gt_arg + " --map " + dir + "/wrong.yaml --json");
+    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("camZ"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+  }
+  {
+    // A trajectory row with a seq the ground truth lacks.
+    std::vector<TrajectoryRow> more = trajectory;
+    more.back().seq = 4321;
+    WriteTrajectory(dir + "/more.csv", more);
+    const Result r =
+        RunProgram(kEval, gt_arg + " --map " + dir + "/map.yaml --trajectory " + dir + "/more.csv");
+    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("4321"), std::string::npos) << r.err;
+  }
+  // Missing files: one line naming the file.
+  for (const std::string& args :
+       {gt_arg + " --map " + dir + "/absent_map.yaml",
+        " --ground-truth " + dir + "/absent_gt.yaml --map " + dir + "/map.yaml",
+        gt_arg + " --map " + dir + "/map.yaml --trajectory " + dir + "/absent_traj.csv"}) {
+    const Result r = RunProgram(kEval, args);
+    SCOPED_TRACE(args);
+    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("absent_"), std::string::npos) << r.err;
+  }
+  const Result help = RunProgram(kEval, "--help");
+  EXPECT_EQ(help.code, 0);
+  for (const char* name : {"--ground-truth", "--map", "--trajectory", "--json"})
+    EXPECT_NE(help.out.find(name), std::string::npos) << name;
+}
+
+// ---------------------------------------------------------------------------------------------
+// mcmt-markers (marker sheets themselves are covered by test_marker_sheet)
+
+TEST(SimProcess, MarkersHelpAndBadIds) {
+  const Result help = RunProgram(kMarkers, "--help");
+  EXPECT_EQ(help.code, 0);
+  for (const char* name : {"--out", "--ids", "--size", "--dictionary"})
+    EXPECT_NE(help.out.find(name), std::string::npos) << name;
+  const std::string out = Tmp() / "sheet.pdf";
+  const Result bad = RunProgram(kMarkers, "--out " + out + " --ids 1,x,3");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_EQ(Lines(bad.err), 1) << bad.err;
+  EXPECT_NE(bad.err.find("'x'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(out));
+}
