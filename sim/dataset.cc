@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -34,6 +35,30 @@ std::string Num(double v) {
 }
 
 std::string TempName(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
+
+// An image of a session: written to a temporary name then renamed (a reader never sees half a file),
+// without WriteFileAtomic's two fsyncs per file, which made writing PNGs I/O-bound (a generated session
+// is regenerated, not recovered, after a crash). Throws naming the file.
+void WriteImageFile(const std::string& path, const std::vector<uint8_t>& bytes) {
+  const std::string tmp = TempName(path);
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error("cannot write '" + tmp + "'");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(tmp, ec);
+    throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + reason);
+  }
+}
 
 void WriteRigYaml(const std::string& path, const DatasetOptions& o, const GroundTruth& truth,
                   const MarkerSizes& sizes) {
@@ -178,7 +203,7 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
             std::vector<uint8_t> bytes;
             if (!cv::imencode(".png", image, bytes, png_params))
               throw std::runtime_error("cannot encode PNG");
-            WriteFileAtomic((dir / cam.name / name).string(), std::string(bytes.begin(), bytes.end()));
+            WriteImageFile((dir / cam.name / name).string(), bytes);
           }
           ++written;
           if (!o.quiet && k == 0 && (i + 1) % 50 == 0)
