@@ -1,6 +1,7 @@
 // A whole simulated session: rig.yaml, intrinsics, ground truth, and images / video / detections log.
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -89,6 +91,32 @@ void WriteRigYaml(const std::string& path, const DatasetOptions& o, const Ground
     s << "    source: " << (o.video ? c.name + ".mp4" : c.name + "/") << "\n";
   }
   WriteFileAtomic(path, s.str());
+}
+
+std::string FrameFileName(int64_t seq) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(seq));
+  return name;
+}
+
+// A camera folder is read whole by the detector: numbered frames of an earlier, longer session in the
+// same --out folder would be read as this session's. Removes the numbered PNGs this session does not
+// write (nothing else).
+void RemoveStaleFrames(const fs::path& folder, const std::vector<SimFrame>& frames) {
+  std::set<std::string> names;
+  for (const SimFrame& f : frames) names.insert(FrameFileName(f.seq));
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < 5 || name.compare(name.size() - 4, 4, ".png") != 0) continue;
+    if (!std::all_of(name.begin(), name.end() - 4, [](char c) { return c >= '0' && c <= '9'; })) continue;
+    if (names.count(name) || !entry.is_regular_file()) continue;
+    std::error_code remove_ec;
+    if (!fs::remove(entry.path(), remove_ec) && remove_ec)
+      throw std::runtime_error("cannot remove the stale frame '" + entry.path().string() +
+                               "': " + remove_ec.message());
+  }
+  if (ec) throw std::runtime_error("cannot list '" + folder.string() + "': " + ec.message());
 }
 
 }  // namespace
@@ -185,6 +213,7 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
             throw std::runtime_error("cannot open a video writer for '" + video_tmp + "'");
         } else {
           fs::create_directories(dir / cam.name);
+          RemoveStaleFrames(dir / cam.name, frames);
         }
         const std::vector<int> png_params = {cv::IMWRITE_PNG_COMPRESSION, 1};
         for (size_t i = 0; i < frames.size(); ++i) {
@@ -198,8 +227,7 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
               bgr = image;
             video.write(bgr);
           } else {
-            char name[32];
-            std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(frames[i].seq));
+            const std::string name = FrameFileName(frames[i].seq);
             std::vector<uint8_t> bytes;
             if (!cv::imencode(".png", image, bytes, png_params))
               throw std::runtime_error("cannot encode PNG");

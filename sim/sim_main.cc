@@ -57,7 +57,10 @@ int Main(int argc, char** argv) {
       "the other processes), DIR/camK.yml intrinsics, DIR/ground_truth.yaml and either rendered images "
       "(DIR/camK/000000.png ..., or DIR/camK.mp4 with --video) or, with --detections-only, "
       "DIR/detections.lcmlog.");
-  args.AddString("out", &out, "output folder (created if needed)", true);
+  args.AddString("out", &out,
+                 "output folder (created if needed; numbered frames of an earlier session in its camera "
+                 "folders are removed)",
+                 true);
   args.AddString("object", &object, "four_sided | box | pentagon | cube | board");
   args.AddInt("cameras", &cameras, "number of cameras on the circle (named cam0 .. camN-1)");
   args.AddDouble("radius", &radius, "circle radius, metres");

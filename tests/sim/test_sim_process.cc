@@ -20,6 +20,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/config.h"
 #include "core/dictionary.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
@@ -296,6 +297,64 @@ TEST(SimProcess, RenderedModeWritesWhatRigYamlSays) {
     }
   }
   EXPECT_GE(detected, 10);  // about 2 of the 4 sides face each camera
+}
+
+// The rig file is what the other processes load: LoadRigConfig reads it and the intrinsics it names,
+// which are the ground truth's exactly (distortion and per-camera differences included).
+TEST(SimProcess, RigYamlLoadsWithTheGroundTruthIntrinsics) {
+  const std::string dir = Tmp() / "rig_check";
+  const Result r =
+      RunProgram(kSim, "--out " + dir +
+                           " --frames 3 --cameras 3 --seed 2 --detections-only --quiet --object pentagon "
+                           "--distortion radtan --intrinsics-spread 0.05 --image-size 800x600");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+  const RigConfig rig = LoadRigConfig(dir + "/rig.yaml");
+  EXPECT_EQ(rig.markers.dictionary, truth.dictionary);
+  ASSERT_EQ(rig.cameras.size(), 3u);
+  for (const auto& m : truth.markers) {
+    EXPECT_TRUE(rig.markers.Accepts(m.id)) << m.id;
+    EXPECT_EQ(rig.markers.Sizes().Get(m.id), m.size) << m.id;
+  }
+  EXPECT_FALSE(rig.markers.Accepts(truth.markers.back().id + 1));
+  for (size_t k = 0; k < 3; ++k) {
+    const CameraModel& a = rig.cameras[k].model;
+    const CameraModel& b = truth.cameras[k].model;
+    SCOPED_TRACE(truth.cameras[k].name);
+    EXPECT_EQ(rig.cameras[k].name, truth.cameras[k].name);
+    EXPECT_EQ(a.width, 800);
+    EXPECT_EQ(a.height, 600);
+    EXPECT_EQ(a.fx, b.fx);
+    EXPECT_EQ(a.fy, b.fy);
+    EXPECT_EQ(a.cx, b.cx);
+    EXPECT_EQ(a.cy, b.cy);
+    EXPECT_EQ(a.model, DistortionModel::kRadTan);
+    EXPECT_EQ(a.distortion, b.distortion);
+  }
+  // Per-camera spread: the cameras differ.
+  EXPECT_NE(truth.cameras[0].model.fx, truth.cameras[1].model.fx);
+  EXPECT_NE(truth.cameras[0].model.distortion, truth.cameras[1].model.distortion);
+}
+
+// A shorter session into the folder of a longer one: the camera folders hold this session's frames only
+// (the detector reads a folder whole); other files there are left alone.
+TEST(SimProcess, RerunIntoTheSameFolderLeavesNoStaleFrames) {
+  const std::string dir = Tmp() / "rerun";
+  ASSERT_EQ(RunProgram(kSim, "--out " + dir + " --frames 6 --cameras 2 --quiet --image-size 160x120").code,
+            0);
+  std::ofstream(dir + "/cam0/notes.txt") << "mine";
+  std::ofstream(dir + "/cam0/12.png.bak") << "mine";
+  ASSERT_EQ(RunProgram(kSim, "--out " + dir + " --frames 3 --cameras 2 --quiet --image-size 160x120").code,
+            0);
+  for (const char* cam : {"cam0", "cam1"}) {
+    std::set<std::string> pngs;
+    for (const auto& e : fs::directory_iterator(dir + "/" + cam))
+      if (e.path().extension() == ".png") pngs.insert(e.path().filename().string());
+    EXPECT_EQ(pngs, (std::set<std::string>{"000000.png", "000001.png", "000002.png"})) << cam;
+  }
+  EXPECT_TRUE(fs::exists(dir + "/cam0/notes.txt"));
+  EXPECT_TRUE(fs::exists(dir + "/cam0/12.png.bak"));
+  EXPECT_EQ(sim::ReadGroundTruth(dir + "/ground_truth.yaml").frames.size(), 3u);
 }
 
 TEST(SimProcess, VideoIsDecodableWithEveryFrame) {
