@@ -87,6 +87,12 @@ EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
   if (!map) throw EvalInputError("a map is required (--map)");
   r.has_map = true;
   r.map_rms_px = map->rms_px;
+  // Marker ids only mean the same markers in the same dictionary. Dictionary files may be named by
+  // different paths, so only two predefined names are compared.
+  auto predefined = [](const std::string& d) { return d.rfind("DICT_", 0) == 0; };
+  if (predefined(map->dictionary) && predefined(truth.dictionary) && map->dictionary != truth.dictionary)
+    throw EvalInputError("the map's dictionary " + map->dictionary + " is not the ground truth's " +
+                         truth.dictionary);
 
   // --- Cameras: names must belong to the ground truth.
   std::vector<const SimCamera*> gt_cams;

@@ -488,6 +488,18 @@ TEST(SimEval, MismatchedInputsThrowNamingTheCulprit) {
               std::string::npos);
   }
   EXPECT_NE(ThrownEvalInputError([&] { Evaluate(t, nullptr, nullptr); }).find("map"), std::string::npos);
+  {
+    // Ids of another dictionary are other markers.
+    Estimate e = ToEstimate(t);
+    e.map.dictionary = "DICT_4X4_50";
+    const std::string m = ThrownEvalInputError([&] { Evaluate(t, &e.map, nullptr); });
+    EXPECT_NE(m.find("DICT_4X4_50"), std::string::npos) << m;
+    // A dictionary file (named by a path) or no name at all is not compared.
+    e.map.dictionary = "/some/where/dict.yml";
+    EXPECT_NO_THROW(Evaluate(t, &e.map, nullptr));
+    e.map.dictionary = "";
+    EXPECT_NO_THROW(Evaluate(t, &e.map, nullptr));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
