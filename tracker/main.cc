@@ -1,6 +1,7 @@
 // mcmt-tracker: publishes the object's pose (object_pose_t on MCMT_POSE) from the detections of the
 // mapped cameras, live or from a log.
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -38,7 +39,10 @@ int Main(int argc, char** argv) {
   args.AddString("map", &map_path,
                  "map.yaml from mcmt-mapper; without it: wait for MCMT_MAP, switch to newer maps");
   args.AddString("log", &log_path, "process this LCM log as fast as possible instead of live traffic");
-  args.AddString("out", &out_path, "write the trajectory (trajectory.csv format) here on exit, atomically");
+  args.AddString(
+      "out", &out_path,
+      "write the trajectory (trajectory.csv format) here on exit, atomically; while running, every "
+      "pose is appended to OUT.partial at once (what survives a crash), removed at a clean exit");
   args.AddString(
       "lcm-url", &lcm_url,
       "LCM URL (default: lcm.url of the rig YAML, else LCM's default); with --log: publish poses there, "
@@ -65,6 +69,7 @@ int Main(int argc, char** argv) {
   options.tracker.Validate();
   options.log_mode = !log_path.empty();
   options.keep_trajectory = !out_path.empty();
+  if (!out_path.empty()) options.partial_path = out_path + ".partial";
   options.quiet = quiet;
 
   std::optional<mcmt::RigMap> map;
@@ -91,6 +96,7 @@ int Main(int argc, char** argv) {
   node.Run(&g_stop);
   if (!out_path.empty()) {
     mcmt::WriteTrajectory(out_path, node.trajectory());
+    std::remove(options.partial_path.c_str());
     if (!quiet)
       std::cerr << "mcmt-tracker: wrote " << node.trajectory().size() << " poses to " << out_path
                 << std::endl;

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
@@ -183,7 +184,11 @@ struct TrackerNodeOptions {
   TrackerOptions tracker;
   bool log_mode = false;         // reading a log: frame deadlines in message time
   bool keep_trajectory = false;  // remember TRACKING/AMBIGUOUS poses for --out
-  bool quiet = false;            // no status lines (warnings are always printed)
+  // When set (with keep_trajectory): every kept pose is also appended to this file (trajectory.csv
+  // format) and flushed at once, so a tracker killed mid-run loses nothing it computed. Created (or
+  // truncated) by the constructor, which throws naming the file when it cannot be written.
+  std::string partial_path;
+  bool quiet = false;  // no status lines (warnings are always printed)
 };
 
 class TrackerNode {
@@ -238,6 +243,7 @@ class TrackerNode {
   std::map<std::string, int64_t> late_views_;  // per camera
   TrackerStats stats_;
   std::vector<TrajectoryRow> trajectory_;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> partial_{nullptr, &std::fclose};
   std::vector<double> latencies_ms_;  // since the last status line
   int64_t last_status_wall_us_ = 0;
   int64_t status_frames_ = 0, status_tracked_ = 0;

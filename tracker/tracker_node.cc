@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/lcm_util.h"
 #include "tracker/tracker.h"
@@ -42,6 +43,12 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
       options_(options),
       motion_(options.tracker.max_gap_s) {
   options_.tracker.Validate();
+  if (options_.keep_trajectory && !options_.partial_path.empty()) {
+    partial_.reset(std::fopen(options_.partial_path.c_str(), "w"));
+    if (!partial_) throw std::runtime_error(options_.partial_path + ": cannot write");
+    std::fprintf(partial_.get(), "%s\n", kTrajectoryHeader);
+    std::fflush(partial_.get());
+  }
   if (map) {
     CheckMapMatchesRig(*map, rig_, "map");
     SetMap(*map, "map file");
@@ -248,14 +255,7 @@ void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wa
   msg.num_markers = static_cast<int32_t>(msg.markers.size());
   msg.num_rejected = sol.num_rejected;
   msg.status = static_cast<int8_t>(sol.status);
-  const int64_t now = NowUtime();
-  msg.latency_ms = std::max<int64_t>(0, now - last_arrival_wall_us) / 1000.0;
-  if (output_) output_->publish(options_.tracker.channel, &msg);
-  if (latencies_ms_.size() >= (1u << 20))
-    latencies_ms_.erase(latencies_ms_.begin(), latencies_ms_.begin() + (1u << 19));
-  latencies_ms_.push_back(msg.latency_ms);
-  last_published_utime_ = frame.utime;
-
+  // Kept (and on disk) before it is published: whatever a subscriber saw survives a crash.
   if (options_.keep_trajectory && sol.ok()) {
     TrajectoryRow row;
     row.utime = frame.utime;
@@ -265,7 +265,18 @@ void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wa
     row.cameras = static_cast<int>(sol.cameras.size());
     row.markers = static_cast<int>(sol.markers.size());
     trajectory_.push_back(row);
+    if (partial_) {
+      std::fprintf(partial_.get(), "%s\n", TrajectoryCsvLine(row).c_str());
+      std::fflush(partial_.get());
+    }
   }
+  const int64_t now = NowUtime();
+  msg.latency_ms = std::max<int64_t>(0, now - last_arrival_wall_us) / 1000.0;
+  if (output_) output_->publish(options_.tracker.channel, &msg);
+  if (latencies_ms_.size() >= (1u << 20))
+    latencies_ms_.erase(latencies_ms_.begin(), latencies_ms_.begin() + (1u << 19));
+  latencies_ms_.push_back(msg.latency_ms);
+  last_published_utime_ = frame.utime;
 }
 
 std::string TrackerNode::StatusLine() const {

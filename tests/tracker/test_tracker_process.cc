@@ -1,8 +1,9 @@
-// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7745), replay by the
+// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7746), replay by the
 // real lcm-logplayer, bad command lines and inputs.
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
@@ -154,6 +155,42 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
                  x.dir + "/o3.txt", &unused),
       0);
   EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
+  EXPECT_FALSE(std::ifstream(out_csv + ".partial")) << "a clean exit removes the partial trajectory";
+}
+
+// kill -9 mid-run: every pose published before the kill is in OUT.partial (appended and flushed as it is
+// computed), equal to --log mode's rows; OUT itself is not written half.
+TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
+  const Session& x = Session::Get();
+  const int port = 7746;
+  const std::string err = x.dir + "/killed.txt", out_csv = x.dir + "/poses_killed.csv";
+  const pid_t pid =
+      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  lcm::LCM lcm(TestUrl(port));
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  const size_t half = x.s.views.size() / 2;
+  for (size_t f = 0; f < half; ++f) {
+    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    lcm.handleTimeout(3);
+  }
+  Receive(
+      lcm, [&] { return collector.poses.size() >= half; }, 10s);
+  ASSERT_EQ(collector.poses.size(), half) << Slurp(err);
+  kill(pid, SIGKILL);
+  WaitExit(pid, 20s);
+  EXPECT_FALSE(std::ifstream(out_csv));
+  const auto partial = ReadTrajectory(out_csv + ".partial");
+  ASSERT_EQ(partial.size(), half);
+  std::string unused;
+  const std::string log_csv = x.dir + "/poses_log_for_killed.csv";
+  ASSERT_EQ(
+      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
+                 x.dir + "/o4.txt", &unused),
+      0);
+  const auto full = ReadTrajectory(log_csv);
+  for (size_t f = 0; f < half; ++f) EXPECT_EQ(TrajectoryCsvLine(partial[f]), TrajectoryCsvLine(full[f]));
 }
 
 // The same log replayed by the real lcm-logplayer into a live tracker gives the same poses as --log.
@@ -217,6 +254,14 @@ TEST(TrackerProcess, BadInputGivesOneLineErrors) {
                        x.dir + "/b5.txt", &out),
             1);
   EXPECT_FALSE(std::ifstream(never).good());
+  EXPECT_FALSE(std::ifstream(never + ".partial").good());
+  // An --out that cannot be written is refused at the start, not after a day of tracking.
+  EXPECT_EQ(RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out",
+                        x.dir + "/no_such_dir/poses.csv"},
+                       x.dir + "/b6.txt", &out),
+            1);
+  EXPECT_NE(out.find("no_such_dir/poses.csv.partial: cannot write"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
 }
 
 // --log with --lcm-url: the poses of a log are also published.
