@@ -637,66 +637,72 @@ double Separation(const std::vector<Vec2>& p, const std::vector<Vec2>& q) {
   return best;
 }
 
+// Builds the box for a marker size and seed and checks its layout: 8 markers with consecutive ids,
+// each (with the one-cell quiet zone of a 6x6 dictionary) inside one face, facing out, and not
+// overlapping another marker's quiet square on that face.
+void CheckBoxLayout(double size, uint64_t seed) {
+  sim::ObjectOptions o;
+  o.kind = sim::ObjectKind::kBox;
+  o.marker_size = size;
+  o.seed = seed;
+  o.first_id = 10;
+  sim::SimObject obj;
+  ASSERT_NO_THROW(obj = sim::MakeObject(o)) << "seed " << seed;
+  ASSERT_EQ(obj.markers.size(), 8u) << "seed " << seed;
+  const double half_quiet = 0.5 * size * (6 + 2 + 2) / (6 + 2);  // 8 cells + 1 each side
+  std::vector<int> face_of(8, -1);
+  std::vector<std::vector<Vec2>> squares(8);  // quiet squares in their face's 2D basis
+  for (size_t i = 0; i < obj.markers.size(); ++i) {
+    const sim::SimMarker& m = obj.markers[i];
+    EXPECT_EQ(m.id, 10 + static_cast<int>(i));
+    EXPECT_DOUBLE_EQ(m.size, size);
+    const Eigen::Matrix3d r = m.object_from_marker.linear();
+    EXPECT_NEAR((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+    const Vec3 c = m.object_from_marker.translation();
+    for (size_t f = 0; f < obj.faces.size(); ++f) {
+      const auto& v = obj.faces[f].vertices;
+      const Vec3 n = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+      if (std::abs(n.dot(c - v[0])) < 1e-12 && r.col(2).dot(n) > 1 - 1e-12) face_of[i] = static_cast<int>(f);
+    }
+    ASSERT_GE(face_of[i], 0) << "seed " << seed << ": marker " << m.id << " is not on a face, facing out";
+    const auto& v = obj.faces[face_of[i]].vertices;
+    const Vec3 n = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+    const Vec3 e1 = (v[1] - v[0]).normalized(), e2 = n.cross(e1);
+    for (int sx : {-1, 1})
+      for (int sy : {-1, 1}) {
+        const Vec3 corner = m.object_from_marker * Vec3(sx * half_quiet, sy * half_quiet, 0);
+        for (size_t k = 0; k < v.size(); ++k)
+          EXPECT_GE((v[(k + 1) % v.size()] - v[k]).cross(corner - v[k]).dot(n), -1e-12)
+              << "seed " << seed << ": marker " << m.id << "'s quiet zone leaves its face";
+      }
+    for (const Vec2& s : {Vec2(-1, -1), Vec2(1, -1), Vec2(1, 1), Vec2(-1, 1)}) {
+      const Vec3 corner = m.object_from_marker * Vec3(s.x() * half_quiet, s.y() * half_quiet, 0);
+      squares[i].emplace_back(e1.dot(corner - v[0]), e2.dot(corner - v[0]));
+    }
+  }
+  for (int i = 0; i < 8; ++i)
+    for (int j = i + 1; j < 8; ++j)
+      if (face_of[i] == face_of[j]) {
+        EXPECT_GT(Separation(squares[i], squares[j]), 0.0)
+            << "seed " << seed << ": markers " << obj.markers[i].id << " and " << obj.markers[j].id
+            << " overlap";
+      }
+  // Markers on at least four different faces (the layout spreads them).
+  std::sort(face_of.begin(), face_of.end());
+  EXPECT_GE(std::unique(face_of.begin(), face_of.end()) - face_of.begin(), 4) << "seed " << seed;
+}
+
 }  // namespace
 
 // Every seed builds the box with 8 markers, each (with its one-cell quiet zone of a 6x6 dictionary)
-// inside one face and not overlapping any other marker's quiet square on that face.
+// inside one face and not overlapping any other marker's quiet square on that face. (Seeds 9, 10 and
+// 12 used to throw "cannot place marker 6".)
 TEST(BoxLayout, EverySeedPlacesEightMarkersWithoutOverlap) {
-  for (double size : {0.04, 0.03}) {
-    for (uint64_t seed = 1; seed <= 50; ++seed) {
-      sim::ObjectOptions o;
-      o.kind = sim::ObjectKind::kBox;
-      o.marker_size = size;
-      o.seed = seed;
-      o.first_id = 10;
-      sim::SimObject obj;
-      ASSERT_NO_THROW(obj = sim::MakeObject(o)) << "seed " << seed;
-      ASSERT_EQ(obj.markers.size(), 8u) << "seed " << seed;
-      const double half_quiet = 0.5 * size * (6 + 2 + 2) / (6 + 2);  // 8 cells + 1 each side
-      std::vector<int> face_of(8, -1);
-      std::vector<std::vector<Vec2>> squares(8);  // quiet squares in their face's 2D basis
-      for (size_t i = 0; i < obj.markers.size(); ++i) {
-        const sim::SimMarker& m = obj.markers[i];
-        EXPECT_EQ(m.id, 10 + static_cast<int>(i));
-        EXPECT_DOUBLE_EQ(m.size, size);
-        const Eigen::Matrix3d r = m.object_from_marker.linear();
-        EXPECT_NEAR((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12);
-        EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
-        const Vec3 c = m.object_from_marker.translation();
-        for (size_t f = 0; f < obj.faces.size(); ++f) {
-          const auto& v = obj.faces[f].vertices;
-          const Vec3 n = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
-          if (std::abs(n.dot(c - v[0])) < 1e-12 && r.col(2).dot(n) > 1 - 1e-12)
-            face_of[i] = static_cast<int>(f);
-        }
-        ASSERT_GE(face_of[i], 0) << "seed " << seed << ": marker " << m.id << " is not on a face, facing out";
-        const auto& v = obj.faces[face_of[i]].vertices;
-        const Vec3 n = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
-        const Vec3 e1 = (v[1] - v[0]).normalized(), e2 = n.cross(e1);
-        for (int sx : {-1, 1})
-          for (int sy : {-1, 1}) {
-            const Vec3 corner = m.object_from_marker * Vec3(sx * half_quiet, sy * half_quiet, 0);
-            for (size_t k = 0; k < v.size(); ++k)
-              EXPECT_GE((v[(k + 1) % v.size()] - v[k]).cross(corner - v[k]).dot(n), -1e-12)
-                  << "seed " << seed << ": marker " << m.id << "'s quiet zone leaves its face";
-          }
-        for (const Vec2& s : {Vec2(-1, -1), Vec2(1, -1), Vec2(1, 1), Vec2(-1, 1)}) {
-          const Vec3 corner = m.object_from_marker * Vec3(s.x() * half_quiet, s.y() * half_quiet, 0);
-          squares[i].emplace_back(e1.dot(corner - v[0]), e2.dot(corner - v[0]));
-        }
-      }
-      for (int i = 0; i < 8; ++i)
-        for (int j = i + 1; j < 8; ++j)
-          if (face_of[i] == face_of[j]) {
-            EXPECT_GT(Separation(squares[i], squares[j]), 0.0)
-                << "seed " << seed << ": markers " << obj.markers[i].id << " and " << obj.markers[j].id
-                << " overlap";
-          }
-      // Markers on at least four different faces (the layout spreads them).
-      std::sort(face_of.begin(), face_of.end());
-      EXPECT_GE(std::unique(face_of.begin(), face_of.end()) - face_of.begin(), 4) << "seed " << seed;
-    }
-  }
+  for (double size : {0.04, 0.03})
+    for (uint64_t seed = 1; seed <= 50; ++seed) CheckBoxLayout(size, seed);
+  // Markers so small that the fixed 2 mm gap leaves no random layout: the deterministic fallback.
+  CheckBoxLayout(0.002, 1);
   // Deterministic for a seed, different between seeds.
   sim::ObjectOptions o;
   o.kind = sim::ObjectKind::kBox;
