@@ -570,6 +570,64 @@ TEST(RenderExact, OcclusionByDepth) {
   EXPECT_NEAR(covered, side_px * side_px, 0.01 * 4 * side_px);
 }
 
+// Motion blur: the exposure ends at the frame's pose and spans exposure_fraction of the motion from
+// the previous frame. A square translating parallel to the image plane keeps its dark area, its
+// coverage centroid sits where the square is at the middle of the exposure, and its edges become
+// ramps as long as the motion during the exposure.
+TEST(RenderExact, MotionBlurAveragesOverTheExposure) {
+  const sim::SimCamera cam = PinholeCamera(200, 160, 400.0, 99.5, 79.5);
+  const double size = 0.04, depth = 0.5;  // 32 px
+  const sim::SimObject obj = SingleMarker(size);
+  sim::RenderOptions o = ExactOptions();
+  o.motion_blur_samples = 41;
+  o.exposure_fraction = 0.5;
+  const sim::Renderer renderer(obj, "DICT_6X6_250", o);
+  const Rigid3 previous = FacingPose(Vec3(-0.01, 0.002, depth), 0, 0, 0);
+  const Rigid3 current = FacingPose(Vec3(0.015, 0.002, depth), 0, 0, 0);  // 20 px to the right
+  auto centroid = [](const cv::Mat& coverage) {
+    double sum = 0, su = 0, sv = 0;
+    for (int v = 0; v < coverage.rows; ++v)
+      for (int u = 0; u < coverage.cols; ++u) {
+        const double c = coverage.at<double>(v, u);
+        sum += c, su += c * u, sv += c * v;
+      }
+    return Vec2(su / sum, sv / sum);
+  };
+  auto coverage8 = [](const cv::Mat& image) {
+    cv::Mat f;
+    image.convertTo(f, CV_64F);
+    return Coverage(f);
+  };
+  const double side = cam.model.fx * size / depth;
+  // Without the previous pose: no blur, the square at the frame's pose.
+  const cv::Mat sharp = coverage8(renderer.Render(cam, 0, 1, current));
+  const Vec2 at_frame(cam.model.cx + cam.model.fx * 0.015 / depth,
+                      cam.model.cy + cam.model.fy * 0.002 / depth);
+  EXPECT_NEAR(DarkArea(sharp), side * side, 0.5);
+  EXPECT_NEAR((centroid(sharp) - at_frame).norm(), 0.0, 0.02);
+  // With it: the exposure covers the last half of the motion, centred at 3/4 of the way.
+  const cv::Mat blurred = coverage8(renderer.Render(cam, 0, 1, current, &previous));
+  const double x_mid = -0.01 + 0.75 * 0.025;
+  const Vec2 at_mid(cam.model.cx + cam.model.fx * x_mid / depth, at_frame.y());
+  EXPECT_NEAR(DarkArea(blurred), side * side, 0.5);
+  const Vec2 c = centroid(blurred);
+  EXPECT_NEAR(c.x(), at_mid.x(), 0.02);
+  EXPECT_NEAR(c.y(), at_mid.y(), 0.02);
+  // Each vertical edge becomes a ramp 10 px long (half of the 20 px motion): count partial pixels
+  // along the middle row.
+  const int row = static_cast<int>(std::lround(at_mid.y()));
+  int partial = 0;
+  for (int u = 0; u < blurred.cols; ++u) {
+    const double cov = blurred.at<double>(row, u);
+    if (cov > 0.02 && cov < 0.98) ++partial;
+  }
+  EXPECT_GE(partial, 2 * 9);
+  EXPECT_LE(partial, 2 * 11);
+  std::cout << "motion blur: centroid " << c.transpose() << " (expected " << at_mid.transpose() << "), area "
+            << DarkArea(blurred) << " px^2 (expected " << side * side << "), " << partial
+            << " partial pixels in the middle row\n";
+}
+
 // Same options and seed: identical bytes (also from a second renderer); another frame: new noise of
 // the configured sigma around the same noise-free image.
 TEST(RenderDeterminism, SameSeedSameBytesOtherFrameOtherNoise) {
