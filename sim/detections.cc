@@ -36,6 +36,9 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
   // Always draw the same random numbers for a frame, whatever is dropped, so that one option does
   // not reshuffle the others' outcomes.
   const bool dropped = uniform(rng) < o.drop_rate;
+  // False detections draw a varying amount of numbers: from their own generator, seeded by one fixed
+  // draw per frame, so that they do not reshuffle the following frames' noise and misses.
+  const uint64_t false_seed = rng();
   detections_t& msg = *out;
   msg = detections_t();
   msg.utime = frame.utime;
@@ -62,8 +65,9 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
   }
   // False detections: a Poisson number of plausible quadrilaterals with ids not on the object.
   if (o.false_rate > 0) {
+    std::mt19937_64 false_rng(false_seed);
     std::poisson_distribution<int> poisson(o.false_rate);
-    const int count = poisson(rng);
+    const int count = poisson(false_rng);
     std::set<int> object_ids;
     for (const auto& m : object.markers) object_ids.insert(m.id);
     const int n_ids = std::max(1, o.dictionary_size);
@@ -71,14 +75,14 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
     for (int k = 0; k < count; ++k) {
       int id = -1;
       for (int tries = 0; tries < 1000 && id < 0; ++tries) {
-        const int candidate = static_cast<int>(uniform(rng) * n_ids) % n_ids;
+        const int candidate = static_cast<int>(uniform(false_rng) * n_ids) % n_ids;
         if (!object_ids.count(candidate)) id = candidate;
       }
-      const double side = 12.0 + uniform(rng) * std::min(w, h) * 0.12;
-      const double angle = 2 * kPi * uniform(rng);
+      const double side = 12.0 + uniform(false_rng) * std::min(w, h) * 0.12;
+      const double angle = 2 * kPi * uniform(false_rng);
       const double margin = side;
-      const double cx = margin + uniform(rng) * std::max(1.0, w - 2 * margin);
-      const double cy = margin + uniform(rng) * std::max(1.0, h - 2 * margin);
+      const double cx = margin + uniform(false_rng) * std::max(1.0, w - 2 * margin);
+      const double cy = margin + uniform(false_rng) * std::max(1.0, h - 2 * margin);
       marker_t m;
       m.id = id;
       // A square seen in perspective: corners of a rotated square, jittered by up to 12 % of the side;
@@ -86,8 +90,10 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
       for (int i = 0; i < 4; ++i) {
         const double a = angle + i * kPi / 2;
         const double r = side / std::sqrt(2.0);
-        m.corners[i][0] = std::clamp(cx + r * std::cos(a) + (uniform(rng) - 0.5) * 0.24 * side, 0.0, w - 1);
-        m.corners[i][1] = std::clamp(cy + r * std::sin(a) + (uniform(rng) - 0.5) * 0.24 * side, 0.0, h - 1);
+        m.corners[i][0] =
+            std::clamp(cx + r * std::cos(a) + (uniform(false_rng) - 0.5) * 0.24 * side, 0.0, w - 1);
+        m.corners[i][1] =
+            std::clamp(cy + r * std::sin(a) + (uniform(false_rng) - 0.5) * 0.24 * side, 0.0, h - 1);
       }
       if (id >= 0) msg.markers.push_back(m);
     }

@@ -457,6 +457,120 @@ TEST(SimProcess, DetectionsLogHasOneMessagePerCameraFrameWithCornersNearTruth) {
   }
 }
 
+// Misses, false detections and drops each change only their own outcome (the random numbers drawn do
+// not depend on them): with the same seed, a run with misses reports a subset of the markers of a run
+// without, with identical corners; drops remove whole messages; false detections add ids not on the
+// object. Rates match the options. Every reported marker is truly detectable.
+TEST(SimProcess, DetectionOptionsChangeOnlyTheirOwnOutcome) {
+  const std::string base = " --frames 40 --cameras 3 --seed 12 --object box --detections-only --quiet";
+  std::map<std::string, std::vector<LogMessage>> logs;
+  for (const std::string& extra : {std::string(""), std::string(" --miss-rate 0.3"),
+                                   std::string(" --false-rate 0.5"), std::string(" --drop-rate 0.25")}) {
+    const std::string dir = Tmp() / ("opts" + std::to_string(logs.size()));
+    const Result r = RunProgram(kSim, "--out " + dir + base + extra);
+    ASSERT_EQ(r.code, 0) << r.err;
+    logs[extra] = ReadDetectionsLog(dir + "/detections.lcmlog");
+  }
+  const sim::GroundTruth truth = sim::ReadGroundTruth(Tmp() / "opts0/ground_truth.yaml");
+  using Key = std::pair<std::string, int64_t>;
+  auto index = [](const std::vector<LogMessage>& log) {
+    std::map<Key, const detections_t*> m;
+    for (const auto& e : log) m[{e.msg.camera, e.msg.seq}] = &e.msg;
+    return m;
+  };
+  auto same_marker = [](const marker_t& a, const marker_t& b) {
+    if (a.id != b.id) return false;
+    for (int i = 0; i < 4; ++i)
+      if (a.corners[i][0] != b.corners[i][0] || a.corners[i][1] != b.corners[i][1]) return false;
+    return true;
+  };
+  const auto all = index(logs[""]);
+  ASSERT_EQ(all.size(), 120u);
+
+  // Every reported marker is detectable: all true corners in the image, facing the camera within 80
+  // degrees (computed here independently of the simulator).
+  std::map<int64_t, const sim::SimFrame*> by_seq;
+  for (const auto& f : truth.frames) by_seq[f.seq] = &f;
+  int total = 0;
+  for (const auto& [key, d] : all) {
+    const sim::SimCamera& cam = *truth.FindCamera(key.first);
+    for (const marker_t& mk : d->markers) {
+      const sim::SimMarker* gm = truth.FindMarker(mk.id);
+      ASSERT_NE(gm, nullptr);
+      const Rigid3 cam_from_marker =
+          Inverse(cam.rig_from_cam) * by_seq.at(key.second)->rig_from_object * gm->object_from_marker;
+      const Eigen::Vector3d normal = cam_from_marker.linear().col(2);
+      const Eigen::Vector3d to_camera = -cam_from_marker.translation().normalized();
+      EXPECT_LE(std::acos(std::clamp(normal.dot(to_camera), -1.0, 1.0)) * 180 / M_PI, 80.0 + 1e-9);
+      for (const auto& c : MarkerCornersInMarker(gm->size)) {
+        const Eigen::Vector2d px = cam.model.Project(cam_from_marker * c);
+        EXPECT_TRUE(px.x() >= 0 && px.y() >= 0 && px.x() <= cam.model.width - 1 &&
+                    px.y() <= cam.model.height - 1)
+            << key.first << " seq " << key.second << " id " << mk.id << ": " << px.transpose();
+      }
+      ++total;
+    }
+  }
+  ASSERT_GT(total, 200);
+
+  // Misses: a subset, corners unchanged, about 30 % missing.
+  {
+    const auto missed = index(logs[" --miss-rate 0.3"]);
+    ASSERT_EQ(missed.size(), all.size());
+    int kept = 0;
+    for (const auto& [key, d] : missed) {
+      const detections_t& full = *all.at(key);
+      size_t j = 0;
+      for (const marker_t& mk : d->markers) {
+        while (j < full.markers.size() && full.markers[j].id != mk.id) ++j;
+        ASSERT_LT(j, full.markers.size()) << "marker " << mk.id << " not in the run without misses";
+        EXPECT_TRUE(same_marker(mk, full.markers[j])) << "marker " << mk.id;
+        ++kept;
+      }
+    }
+    EXPECT_NEAR(1.0 - double(kept) / total, 0.3, 0.07) << kept << " of " << total;
+  }
+  // False detections: the object's markers unchanged, extra ids not on the object, 0.5 per message.
+  {
+    const auto with_false = index(logs[" --false-rate 0.5"]);
+    ASSERT_EQ(with_false.size(), all.size());
+    int extra = 0;
+    for (const auto& [key, d] : with_false) {
+      const detections_t& full = *all.at(key);
+      std::vector<marker_t> own;
+      for (const marker_t& mk : d->markers) {
+        if (truth.FindMarker(mk.id)) {
+          own.push_back(mk);
+        } else {
+          ++extra;
+          EXPECT_GE(mk.id, 0);
+          EXPECT_LT(mk.id, 250);
+          for (const auto& c : mk.corners) {
+            EXPECT_GE(c[0], 0);
+            EXPECT_LE(c[0], d->camera_model.width - 1);
+          }
+        }
+      }
+      ASSERT_EQ(own.size(), full.markers.size());
+      for (size_t i = 0; i < own.size(); ++i) EXPECT_TRUE(same_marker(own[i], full.markers[i]));
+    }
+    // Poisson(0.5) over 120 messages: mean 60, sd 7.7.
+    EXPECT_GT(extra, 35);
+    EXPECT_LT(extra, 85);
+  }
+  // Drops: whole messages gone, the others unchanged, about 25 % dropped.
+  {
+    const auto dropped = index(logs[" --drop-rate 0.25"]);
+    for (const auto& [key, d] : dropped) {
+      const detections_t& full = *all.at(key);
+      ASSERT_EQ(d->markers.size(), full.markers.size());
+      for (size_t i = 0; i < full.markers.size(); ++i)
+        EXPECT_TRUE(same_marker(d->markers[i], full.markers[i]));
+    }
+    EXPECT_NEAR(1.0 - dropped.size() / 120.0, 0.25, 0.1) << dropped.size();
+  }
+}
+
 TEST(SimProcess, BadOptionsGiveOneLineNamingTheOption) {
   const std::string out = Tmp() / "bad_out";
   const std::string file = Tmp() / "a_file";
