@@ -124,7 +124,7 @@ int Main(int argc, char** argv) {
   } catch (const std::exception& e) {
     throw std::invalid_argument(std::string("--dictionary: ") + e.what());
   }
-  if (args.Given("marker-size") && !(marker_size > 0.001 && marker_size < 10))
+  if (marker_size != -1.0 && !(marker_size > 0.001 && marker_size < 10))
     throw std::invalid_argument("--marker-size: expected 0.001..10 m, got " + Num(marker_size));
   o.object.marker_size = marker_size;
   o.object.seed = static_cast<uint64_t>(seed);
@@ -134,7 +134,7 @@ int Main(int argc, char** argv) {
     throw std::invalid_argument("--radius: expected 0.1..100 m, got " + Num(radius));
   o.rig.num_cameras = cameras;
   o.rig.radius = radius;
-  o.rig.camera_height = args.Given("camera-height") ? camera_height : 0.5 * radius;
+  o.rig.camera_height = camera_height != -1.0 ? camera_height : 0.5 * radius;
   ParseImageSize(image_size, &o.rig.width, &o.rig.height);
   if (!(hfov > 5 && hfov < 170)) throw std::invalid_argument("--hfov-deg: expected 5..170, got " + Num(hfov));
   o.rig.hfov_deg = hfov;

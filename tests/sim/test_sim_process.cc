@@ -571,6 +571,26 @@ TEST(SimProcess, DetectionOptionsChangeOnlyTheirOwnOutcome) {
   }
 }
 
+// The documented -1 defaults mean the same given explicitly as omitted; other values take effect.
+TEST(SimProcess, ExplicitDefaultsAreTheDefaults) {
+  const std::string base = " --frames 2 --cameras 2 --detections-only --quiet";
+  auto truth_text = [&](const std::string& name, const std::string& extra) {
+    const std::string dir = Tmp() / name;
+    const Result r = RunProgram(kSim, "--out " + dir + base + extra);
+    EXPECT_EQ(r.code, 0) << extra << ": " << r.err;
+    return Slurp(dir + "/ground_truth.yaml");
+  };
+  const std::string plain = truth_text("defaults", "");
+  EXPECT_EQ(truth_text("explicit_defaults", " --camera-height -1 --marker-size -1"), plain);
+  const sim::GroundTruth t = sim::ReadGroundTruth(Tmp() / "defaults/ground_truth.yaml");
+  EXPECT_NEAR(t.cameras[0].rig_from_cam.translation().z(), 0.5, 1e-12);  // half the 1 m radius
+  EXPECT_EQ(t.marker_size, 0.04);
+  truth_text("other", " --camera-height 0.3 --marker-size 0.05");
+  const sim::GroundTruth o = sim::ReadGroundTruth(Tmp() / "other/ground_truth.yaml");
+  EXPECT_NEAR(o.cameras[0].rig_from_cam.translation().z(), 0.3, 1e-12);
+  EXPECT_EQ(o.marker_size, 0.05);
+}
+
 TEST(SimProcess, BadOptionsGiveOneLineNamingTheOption) {
   const std::string out = Tmp() / "bad_out";
   const std::string file = Tmp() / "a_file";
