@@ -13,6 +13,7 @@
 // above 20 px at 640x480.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -102,13 +103,32 @@ double Quantile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
+// Pose at s in [0, 1] between a (0) and b (1): slerp and lerp, as the renderer's motion blur.
+mcmt::Rigid3 Interpolate(const mcmt::Rigid3& a, const mcmt::Rigid3& b, double s) {
+  const Eigen::Quaterniond qa(a.linear()), qb(b.linear());
+  mcmt::Rigid3 pose = mcmt::Rigid3::Identity();
+  pose.linear() = qa.slerp(s, qb).toRotationMatrix();
+  pose.translation() = (1 - s) * a.translation() + s * b.translation();
+  return pose;
+}
+
 struct Case {
   sim::ObjectKind kind;
   int width, height;
   DistortionModel distortion;
+  // Rendering variants (defaults otherwise).
+  bool inverted = false;
+  bool bgr = false;
+  double blur_sigma = 0.0;
+  int motion_blur_samples = 0;
   std::string Name() const {
-    return sim::ObjectKindNames().at(static_cast<int>(kind)) + " " + std::to_string(width) + "x" +
-           std::to_string(height) + " " + mcmt::DistortionModelName(distortion);
+    std::string name = sim::ObjectKindNames().at(static_cast<int>(kind)) + " " + std::to_string(width) + "x" +
+                       std::to_string(height) + " " + mcmt::DistortionModelName(distortion);
+    if (inverted) name += " inverted";
+    if (bgr) name += " bgr";
+    if (blur_sigma > 0) name += " blur";
+    if (motion_blur_samples > 1) name += " motion-blur";
+    return name;
   }
 };
 
@@ -141,22 +161,36 @@ Stats RunCase(const Case& c, uint64_t seed) {
   const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
   sim::RenderOptions render_options;  // defaults: noise, textured background, lighting gradient, shading
   render_options.seed = seed;
+  render_options.inverted = c.inverted;
+  render_options.bgr = c.bgr;
+  render_options.blur_sigma = c.blur_sigma;
+  render_options.motion_blur_samples = c.motion_blur_samples;
   const sim::Renderer renderer(object, dictionary, render_options);
 
   const cv::Ptr<cv::aruco::Dictionary> dict = StockDictionary(dictionary);
   const cv::Ptr<cv::aruco::DetectorParameters> stock = cv::aruco::DetectorParameters::create();
   stock->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
   const cv::Ptr<cv::aruco::DetectorParameters> adapted = AdaptedParameters();
+  stock->detectInvertedMarker = adapted->detectInvertedMarker = c.inverted;
 
   std::set<int> object_ids;
   for (const auto& m : object.markers) object_ids.insert(m.id);
   Stats stats;
   for (int f = 0; f < kFrames; ++f) {
     const sim::SimFrame& frame = trajectory[10 * f + 5];
+    // Motion blur: the pose one frame earlier is where the object was a tenth of this (fast, 1.5 turns
+    // in 2 s) trajectory's frame interval ago, i.e. a typical hand-held speed; the exposure covers the
+    // last half of that motion, and the blurred marker is compared with its projection at mid-exposure.
+    const mcmt::Rigid3 previous =
+        Interpolate(trajectory[10 * f + 4].rig_from_object, frame.rig_from_object, 0.9);
+    const mcmt::Rigid3 truth_pose =
+        c.motion_blur_samples > 1
+            ? Interpolate(previous, frame.rig_from_object, 1.0 - 0.5 * render_options.exposure_fraction)
+            : frame.rig_from_object;
     for (int k = 0; k < kCameras; ++k) {
       const sim::SimCamera& cam = cameras[k];
       const std::string where = c.Name() + " " + cam.name + " frame " + std::to_string(frame.seq);
-      const cv::Mat image = renderer.Render(cam, k, frame.seq, frame.rig_from_object);
+      const cv::Mat image = renderer.Render(cam, k, frame.seq, frame.rig_from_object, &previous);
       ++stats.images;
       // id -> quadrilaterals, for each parameter set. Ids not on the object are failures; an id reported
       // twice must be the same marker seen twice (two candidate outlines within a few pixels, which the
@@ -189,7 +223,7 @@ Stats RunCase(const Case& c, uint64_t seed) {
           quads.push_back(corners[i]);
         }
       }
-      for (const sim::MarkerView& view : sim::ProjectMarkers(cam, object, frame.rig_from_object)) {
+      for (const sim::MarkerView& view : sim::ProjectMarkers(cam, object, truth_pose)) {
         for (int set = 0; set < 2; ++set)
           if (detected[set].count(view.id) && (!view.in_front || !view.front_facing)) {
             ++stats.impossible;
@@ -261,28 +295,17 @@ void Print(const std::string& name, const Stats& s) {
   std::cout << line;
 }
 
-void RunResolution(int width, int height) {
-  Stats total;
-  uint64_t seed = 1;
-  for (sim::ObjectKind kind : {sim::ObjectKind::kFourSided, sim::ObjectKind::kBox, sim::ObjectKind::kPentagon,
-                               sim::ObjectKind::kCube, sim::ObjectKind::kBoard}) {
-    for (DistortionModel distortion :
-         {DistortionModel::kNone, DistortionModel::kRadTan, DistortionModel::kFisheye}) {
-      const Case c{kind, width, height, distortion};
-      const Stats s = RunCase(c, seed++);
-      Print(c.Name(), s);
-      // Every case must actually test something.
-      EXPECT_GE(s.required, 10) << c.Name() << ": too few markers in the required range";
-      EXPECT_EQ(s.found, s.required) << c.Name();
-      EXPECT_EQ(s.accurate, s.required) << c.Name();
-      EXPECT_EQ(s.foreign_ids, 0) << c.Name();
-      EXPECT_EQ(s.impossible, 0) << c.Name();
-      total.Add(s);
-    }
-  }
-  const std::string name = "all " + std::to_string(width) + "x" + std::to_string(height);
-  Print(name, total);
-  const std::string prefix = std::to_string(width) + "x" + std::to_string(height) + "_";
+void Check(const Case& c, const Stats& s) {
+  Print(c.Name(), s);
+  // Every case must actually test something.
+  EXPECT_GE(s.required, 10) << c.Name() << ": too few markers in the required range";
+  EXPECT_EQ(s.found, s.required) << c.Name();
+  EXPECT_EQ(s.accurate, s.required) << c.Name();
+  EXPECT_EQ(s.foreign_ids, 0) << c.Name();
+  EXPECT_EQ(s.impossible, 0) << c.Name();
+}
+
+void Record(const std::string& prefix, const Stats& total) {
   ::testing::Test::RecordProperty(prefix + "required", total.required);
   ::testing::Test::RecordProperty(prefix + "found", total.found);
   ::testing::Test::RecordProperty(prefix + "corner_error_median_px",
@@ -293,8 +316,42 @@ void RunResolution(int width, int height) {
   ::testing::Test::RecordProperty(prefix + "stock_corners_within_1px", total.stock_accurate);
 }
 
+void RunResolution(int width, int height) {
+  Stats total;
+  uint64_t seed = 1;
+  for (sim::ObjectKind kind : {sim::ObjectKind::kFourSided, sim::ObjectKind::kBox, sim::ObjectKind::kPentagon,
+                               sim::ObjectKind::kCube, sim::ObjectKind::kBoard}) {
+    for (DistortionModel distortion :
+         {DistortionModel::kNone, DistortionModel::kRadTan, DistortionModel::kFisheye}) {
+      const Case c{kind, width, height, distortion};
+      const Stats s = RunCase(c, seed++);
+      Check(c, s);
+      total.Add(s);
+    }
+  }
+  Print("all " + std::to_string(width) + "x" + std::to_string(height), total);
+  Record(std::to_string(width) + "x" + std::to_string(height) + "_", total);
+}
+
 }  // namespace
 
 TEST(SimDetect, StockArucoFindsEveryVisibleMarker640x480) { RunResolution(640, 480); }
 
 TEST(SimDetect, StockArucoFindsEveryVisibleMarker1280x960) { RunResolution(1280, 960); }
+
+// The other image options on one object: white-on-black markers (found with detectInvertedMarker),
+// 3-channel output, optical blur and motion blur.
+TEST(SimDetect, RenderingVariants) {
+  Stats total;
+  uint64_t seed = 100;
+  for (int variant = 0; variant < 3; ++variant) {
+    Case c{sim::ObjectKind::kBox, 640, 480, DistortionModel::kRadTan};
+    if (variant == 0) c.inverted = true;
+    if (variant == 1) c.bgr = true, c.blur_sigma = 0.7;
+    if (variant == 2) c.motion_blur_samples = 8;
+    const Stats s = RunCase(c, seed++);
+    Check(c, s);
+    total.Add(s);
+  }
+  Record("variants_", total);
+}
