@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -78,6 +79,7 @@ struct Stats {
   int foreign_ids = 0;  // ids not on the object (either parameter set)
   int impossible = 0;   // object ids detected at two places, or although facing away / behind the camera
   int duplicates = 0;   // the same marker reported twice (near-coincident outlines)
+  double render_seconds = 0, detect_seconds = 0;
   std::vector<double> errors;        // every corner of every required marker found (adapted)
   std::vector<double> stock_errors;  // the same for the stock parameters
   void Add(const Stats& o) {
@@ -92,6 +94,8 @@ struct Stats {
     foreign_ids += o.foreign_ids;
     impossible += o.impossible;
     duplicates += o.duplicates;
+    render_seconds += o.render_seconds;
+    detect_seconds += o.detect_seconds;
     errors.insert(errors.end(), o.errors.begin(), o.errors.end());
     stock_errors.insert(stock_errors.end(), o.stock_errors.begin(), o.stock_errors.end());
   }
@@ -190,7 +194,10 @@ Stats RunCase(const Case& c, uint64_t seed) {
     for (int k = 0; k < kCameras; ++k) {
       const sim::SimCamera& cam = cameras[k];
       const std::string where = c.Name() + " " + cam.name + " frame " + std::to_string(frame.seq);
+      const auto t0 = std::chrono::steady_clock::now();
       const cv::Mat image = renderer.Render(cam, k, frame.seq, frame.rig_from_object, &previous);
+      const auto t1 = std::chrono::steady_clock::now();
+      stats.render_seconds += std::chrono::duration<double>(t1 - t0).count();
       ++stats.images;
       // id -> quadrilaterals, for each parameter set. Ids not on the object are failures; an id reported
       // twice must be the same marker seen twice (two candidate outlines within a few pixels, which the
@@ -223,6 +230,7 @@ Stats RunCase(const Case& c, uint64_t seed) {
           quads.push_back(corners[i]);
         }
       }
+      stats.detect_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
       for (const sim::MarkerView& view : sim::ProjectMarkers(cam, object, truth_pose)) {
         for (int set = 0; set < 2; ++set)
           if (detected[set].count(view.id) && (!view.in_front || !view.front_facing)) {
@@ -287,11 +295,13 @@ void Print(const std::string& name, const Stats& s) {
       line, sizeof(line),
       "%-26s required %4d | adapted: found %4d (%5.1f%%) corners <= 1 px %4d, error median %.3f "
       "p95 %.3f max %.3f px | stock: found %4d (%5.1f%%) corners <= 1 px %4d, error median %.3f max "
-      "%.3f px | all fully visible %4d found %4d | foreign ids %d, repeated %d\n",
+      "%.3f px | all fully visible %4d found %4d | foreign ids %d, repeated %d | render %.1f s, detect "
+      "%.1f s\n",
       name.c_str(), s.required, s.found, 100.0 * s.found / std::max(1, s.required), s.accurate,
       Quantile(s.errors, 0.5), Quantile(s.errors, 0.95), Quantile(s.errors, 1.0), s.stock_found,
       100.0 * s.stock_found / std::max(1, s.required), s.stock_accurate, Quantile(s.stock_errors, 0.5),
-      Quantile(s.stock_errors, 1.0), s.fully_visible, s.fully_visible_found, s.foreign_ids, s.duplicates);
+      Quantile(s.stock_errors, 1.0), s.fully_visible, s.fully_visible_found, s.foreign_ids, s.duplicates,
+      s.render_seconds, s.detect_seconds);
   std::cout << line;
 }
 
