@@ -53,12 +53,13 @@ cv::Ptr<cv::aruco::Dictionary> StockDictionary(const std::string& name) {
 // - minMarkerDistanceRate 0.05 -> 0.025: the outline of the white quiet zone (its far edge against the
 //   body) is a candidate about 1.4 cells from the marker's own outline, i.e. closer than 0.05 x the
 //   perimeter, and 4.6 keeps only the larger of two such candidates -- the quiet zone, which does not
-//   decode -- so most markers of >= 60 px are lost. OpenCV >= 4.7 keeps nested candidates and decodes
-//   the inner one.
+//   decode -- so most markers of >= 60 px are lost (with a 2-cell quiet zone, or detectInvertedMarker,
+//   which keeps both, they are found). Later OpenCV versions try the nested candidates too.
 // - cornerRefinementWinSize 5 -> 2: cornerSubPix's 11x11 window reaches the quiet zone's far edge on
 //   markers under ~50 px (cells under 6 px) and is pulled outwards by it, by up to ~5 px here. A 5x5
-//   window stays inside the quiet zone for cells of 3 px and more (OpenCV >= 4.7 shrinks the window to
-//   0.3 cells, which on 4 px cells leaves a 3x3 window that slides along the edges by up to 1.6 px).
+//   window stays inside the quiet zone for cells of 3 px and more. (Later OpenCV versions shrink the
+//   window to 0.3 cells, relativeCornerRefinmentWinSize; on 4 px cells that leaves a 3x3 window, which
+//   measured here slides along the edges by up to 1.6 px.)
 cv::Ptr<cv::aruco::DetectorParameters> AdaptedParameters() {
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
