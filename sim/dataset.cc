@@ -201,10 +201,11 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
     std::vector<std::string> errors(n_cams);
     std::atomic<int64_t> written{0};
     auto render_camera = [&](int k) {
+      std::string video_tmp;
       try {
         const SimCamera& cam = cameras[k];
         cv::VideoWriter video;
-        std::string video_path, video_tmp;
+        std::string video_path;
         if (o.video) {
           video_path = (dir / (cam.name + ".mp4")).string();
           video_tmp = (dir / (cam.name + ".tmp." + std::to_string(::getpid()) + ".mp4")).string();
@@ -243,6 +244,10 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
         }
       } catch (const std::exception& e) {
         errors[k] = e.what();
+        if (!video_tmp.empty()) {  // no half-written video left behind
+          std::error_code remove_ec;
+          fs::remove(video_tmp, remove_ec);
+        }
       }
     };
     const int threads = std::max(1, std::min(o.threads, n_cams));
