@@ -276,7 +276,8 @@ SimObject MakeObject(const ObjectOptions& o) {
       const double pitch = s * 1.3;
       const double w = 3 * pitch + 0.3 * s, thick = 0.01;
       // Standing board: markers on its +x face, grid in y (columns) and z (rows).
-      obj.faces = BoxFaces(thick, w, w, albedo);
+      // A printed sheet: white paper between the markers, as on a real printed board.
+      obj.faces = BoxFaces(thick, w, w, 225.0 / 255.0);
       for (int row = 0; row < 3; ++row)
         for (int col = 0; col < 3; ++col) {
           const Eigen::Vector3d c(thick / 2, (col - 1) * pitch, (1 - row) * pitch);

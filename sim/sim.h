@@ -92,11 +92,14 @@ struct ObjectOptions {
   int first_id = 0;           // ids first_id, first_id + 1, ...
   uint64_t seed = 1;          // box: random placement
 };
-// four_sided: a square prism (10 cm wide, 6 cm high) with one marker on each of its four sides, id 0..3.
-// box:        a 16x12x8 cm box with 8 markers at random places / in-plane rotations on its faces.
+// four_sided: a square prism 1.75 marker sides wide and high (7 cm for 4 cm markers) with one marker on each
+//             of its four sides, id 0..3.
+// box:        a box of 4.5 x 3.5 x 2.5 marker sides (18x14x10 cm) with 8 markers at random places / in-plane
+//             rotations on its faces (room for a one-cell quiet zone of a 6x6 dictionary).
 // pentagon:   a pentagonal prism (radius 6 cm) with two small markers on each side (10 markers, 2.5 cm).
 // cube:       a cube (side = marker side + 2 cm) with one marker per face, 6 markers.
-// board:      a flat board with a 3x3 grid of markers on its front face (a two-sided thin slab).
+// board:      a printed sheet on a thin board: a 3x3 grid of markers on its front face, white paper between
+//             them (the board's albedo is the paper's, RenderOptions::white_level / 255).
 SimObject MakeObject(const ObjectOptions& options);
 
 // ---------------------------------------------------------------------------------------------
@@ -164,9 +167,12 @@ struct RenderOptions {
   // map at the pixel centre, exact up to second-order perspective terms, < 1e-3 px of edge shift).
   // S >= 1: plain SxS point supersampling instead (for comparison).
   int supersampling = 0;
-  double noise_sigma = 2.0;        // Gaussian noise, gray levels
-  double blur_sigma = 0.0;         // Gaussian blur of the whole image (optics), pixels; 0: none
-  int motion_blur_samples = 0;     // > 1: average this many poses over the exposure (needs previous pose)
+  double noise_sigma = 2.0;  // Gaussian noise, gray levels
+  double blur_sigma = 0.0;   // Gaussian blur of the whole image (optics), pixels; 0: none
+  // > 1: average this many poses over the exposure (needs the previous pose). The exposure ends at the
+  // frame's pose (the ground truth), so a detector sees about the pose at mid-exposure, exposure_fraction / 2
+  // frames earlier: compare with that pose when measuring corner accuracy under motion blur.
+  int motion_blur_samples = 0;
   double exposure_fraction = 0.5;  // exposure as a fraction of the frame interval (motion blur)
   bool textured_background = true;
   double background_level = 128.0;  // gray level of the uniform background when not textured
