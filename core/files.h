@@ -19,6 +19,10 @@ class FileFormatError : public std::runtime_error {
 
 // Writes `content` to `path` through `path.tmp.<pid>` + rename; never leaves a half-written file.
 void WriteFileAtomic(const std::string& path, const std::string& content);
+// A double with 17 significant digits (parses back to the same double), non-finite values spelled as YAML
+// does (.nan, .inf, -.inf): how every mcmt YAML file writes numbers.
+std::string YamlNumber(double v);
+
 std::string ReadFile(const std::string& path);  // throws FileFormatError naming the file
 
 constexpr int kMapVersion = 1;

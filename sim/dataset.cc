@@ -30,11 +30,7 @@ namespace sim {
 
 namespace {
 
-std::string Num(double v) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.17g", v);
-  return buffer;
-}
+std::string Num(double v) { return YamlNumber(v); }
 
 std::string TempName(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
 

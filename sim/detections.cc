@@ -13,20 +13,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-camera_model_t CameraModelMessage(const CameraModel& m) {
-  camera_model_t msg;
-  msg.width = m.width;
-  msg.height = m.height;
-  msg.fx = m.fx;
-  msg.fy = m.fy;
-  msg.cx = m.cx;
-  msg.cy = m.cy;
-  msg.distortion_model = DistortionModelName(m.model);
-  msg.distortion = m.distortion;
-  msg.num_distortion = static_cast<int32_t>(m.distortion.size());
-  return msg;
-}
-
 }  // namespace
 
 bool SimulateDetections(const SimCamera& camera, const SimObject& object, const SimFrame& frame,
@@ -45,7 +31,7 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
   msg.seq = frame.seq;
   msg.camera = camera.name;
   msg.dictionary = o.dictionary;
-  msg.camera_model = CameraModelMessage(camera.model);
+  msg.camera_model = ToCameraModelMsg(camera.model);
   msg.detection_ms = 0.0;
   const std::vector<MarkerView> views = ProjectMarkers(camera, object, frame.rig_from_object);
   for (const MarkerView& v : views) {

@@ -44,8 +44,12 @@ int Main(int argc, char** argv) {
     if (!trajectory_path.empty()) throw std::invalid_argument("--trajectory needs --ground-truth");
     const sim::PeerAgreement agreement =
         sim::CompareWithPeer(ReadMap(map_path), sim::ReadCaliscopeCameras(caliscope));
-    std::cout << "mcmt-eval: " << map_path << " vs caliscope " << caliscope << "\n\n"
-              << sim::FormatPeerAgreement(agreement);
+    if (json) {
+      std::cout << sim::FormatPeerAgreementJson(agreement);
+    } else {
+      std::cout << "mcmt-eval: " << map_path << " vs caliscope " << caliscope << "\n\n"
+                << sim::FormatPeerAgreement(agreement);
+    }
     return 0;
   }
   const sim::GroundTruth truth = sim::ReadGroundTruth(ground_truth);

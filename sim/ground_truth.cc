@@ -15,11 +15,7 @@ namespace sim {
 
 namespace {
 
-std::string Num(double v) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.17g", v);
-  return buffer;
-}
+std::string Num(double v) { return YamlNumber(v); }
 
 std::string Pose(const Rigid3& pose) {
   const Eigen::Quaterniond q(pose.linear());

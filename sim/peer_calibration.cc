@@ -144,5 +144,20 @@ std::string FormatPeerAgreement(const PeerAgreement& a) {
   return s.str();
 }
 
+std::string FormatPeerAgreementJson(const PeerAgreement& a) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "{\"cameras\": [";
+  for (size_t i = 0; i < a.cameras.size(); ++i)
+    s << (i ? ", " : "") << "{\"name\": \"" << a.cameras[i].name
+      << "\", \"position_mm\": " << a.cameras[i].position_mm
+      << ", \"rotation_deg\": " << a.cameras[i].rotation_deg << "}";
+  s << "], \"missing\": [";
+  for (size_t i = 0; i < a.missing.size(); ++i) s << (i ? ", " : "") << "\"" << a.missing[i] << "\"";
+  s << "], \"max_position_mm\": " << a.max_position_mm << ", \"max_rotation_deg\": " << a.max_rotation_deg
+    << ", \"scale_ratio\": " << a.scale_ratio << "}\n";
+  return s.str();
+}
+
 }  // namespace sim
 }  // namespace mcmt

@@ -35,7 +35,8 @@ struct PeerAgreement {
 };
 
 PeerAgreement CompareWithPeer(const RigMap& map, const std::vector<PeerCamera>& peer);
-std::string FormatPeerAgreement(const PeerAgreement& agreement);  // markdown table
+std::string FormatPeerAgreement(const PeerAgreement& agreement);      // markdown table
+std::string FormatPeerAgreementJson(const PeerAgreement& agreement);  // the same figures as JSON
 
 }  // namespace sim
 }  // namespace mcmt

@@ -13,16 +13,18 @@
 #include <sstream>
 
 namespace mcmt {
-namespace {
 
-// 17 significant digits: parses back to the same double. YAML spellings for the non-finite values.
-std::string Num(double v) {
+std::string YamlNumber(double v) {
   if (std::isnan(v)) return ".nan";
   if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.17g", v);
   return buf;
 }
+
+namespace {
+
+std::string Num(double v) { return YamlNumber(v); }
 
 std::string CsvNum(double v) {
   if (std::isnan(v)) return "nan";
