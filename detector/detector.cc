@@ -97,6 +97,43 @@ inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
   return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
 }
 
+// Does the image show the marker's code (border included) in the quad `corners`? Every cell centre is
+// sampled through the quad's homography and put with the nearer of the two colour means; a refinement
+// that slid onto another edge (a cell off: the quiet zone's outer edge, an inner cell's edge) reads a
+// shifted code and fails. Polarity-free (inverted prints pass).
+bool CodeMatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, const cv::Mat& bits,
+                 int cells) {
+  if (bits.empty()) return true;
+  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<cv::Point2f> quad;
+  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+  const cv::Matx33d h = cv::getPerspectiveTransform(square, quad);
+  std::vector<float> values(static_cast<size_t>(cells) * cells);
+  double sum[2] = {0, 0};
+  int count[2] = {0, 0};
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
+      float v;
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &v)) return false;
+      values[row * cells + col] = v;
+      const int expected = GridCell(bits, cells, row, col);
+      sum[expected] += v;
+      ++count[expected];
+    }
+  if (count[0] == 0 || count[1] == 0) return false;
+  const double m0 = sum[0] / count[0], m1 = sum[1] / count[1];
+  if (std::abs(m1 - m0) < 10.0) return false;
+  int mismatches = 0;
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const float v = values[row * cells + col];
+      const int nearer = std::abs(v - m1) < std::abs(v - m0) ? 1 : 0;
+      mismatches += nearer != GridCell(bits, cells, row, col);
+    }
+  return mismatches <= cells * cells / 10;
+}
+
 // Is the inner neighbour of side `side` at position u (cells from the side's start corner) of the
 // border's colour? Side 0 runs corner 0 -> 1 (top, left to right), 1: right side top to bottom,
 // 2: bottom right to left, 3: left bottom to top.
@@ -764,21 +801,39 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         }
       }
       double sigma = NAN;
+      // A refinement counts only if the code still reads at the refined corners.
+      const std::array<cv::Point2d, 4> candidate = r.corners;
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
-                                         &r.corners, options_.edge_model, &sigma);
+                                         &r.corners, options_.edge_model, &sigma) &&
+                     CodeMatches(gray, r.corners, bits, cells);
+      if (!refined) r.corners = candidate;
       if (!refined && options_.fast) {
         // Fast mode: start again from the marker's refined corners of the previous frame.
         for (const Raw& previous : last_) {
           if (previous.id != r.id) continue;
           std::array<cv::Point2d, 4> corners = previous.corners;
           refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
-                                        options_.edge_model, &sigma);
+                                        options_.edge_model, &sigma) &&
+                    CodeMatches(gray, corners, bits, cells);
           if (refined) r.corners = corners;
           break;
         }
       }
       if (!refined) {
+        // No clean edge on some side (a marker cut by the image border, touching another one, under
+        // glare): OpenCV's corner refinement in a window of about half a cell, rather than the candidate
+        // polygon's pixel-level corners.
         ++stats_.refine_failures;
+        std::vector<cv::Point2f> corners;
+        double side = 0;
+        for (int k = 0; k < 4; ++k) {
+          corners.emplace_back(static_cast<float>(r.corners[k].x), static_cast<float>(r.corners[k].y));
+          side += 0.25 * cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
+        }
+        const int half = std::clamp(static_cast<int>(0.5 * side / cells), 1, 5);
+        cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
+                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01));
+        for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[k].x, corners[k].y);
       } else if (std::isfinite(sigma)) {
         const double s2 = options_.sharp_smoothing * options_.sharp_smoothing;
         const double raw = smooth ? std::sqrt(std::max(0.0, sigma * sigma - s2)) : sigma;

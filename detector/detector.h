@@ -76,7 +76,7 @@ struct DetectorStats {
   long long frames = 0;
   long long full_searches = 0;
   long long markers = 0;
-  long long refine_failures = 0;  // markers kept with unrefined corners
+  long long refine_failures = 0;  // markers whose edges could not be fitted (corners by cornerSubPix)
   long long region_retries = 0;   // fast mode: regions searched again with every window
 };
 
