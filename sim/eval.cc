@@ -240,14 +240,7 @@ std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path) {
     }
     if (msg.status != object_pose_t::STATUS_TRACKING && msg.status != object_pose_t::STATUS_AMBIGUOUS)
       continue;
-    TrajectoryRow row;
-    row.utime = msg.utime;
-    row.seq = msg.seq;
-    row.rig_from_object = FromPose3d(msg.rig_from_object);
-    row.rms_px = msg.rms_px;
-    row.cameras = msg.num_cameras;
-    row.markers = msg.num_markers;
-    rows.push_back(row);
+    rows.push_back(FromObjectPoseMsg(msg));
   }
   if (rows.empty() && bad > 0)
     throw FileFormatError(path + ": " + std::to_string(bad) + " undecodable messages on " + kPoseChannel);

@@ -70,6 +70,27 @@ void Receive(lcm::LCM& lcm, const std::function<bool()>& done, std::chrono::mill
   while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
 }
 
+// The real tracker, live on `port`, writing --out out_csv: its pid once it has subscribed, or -1 (killed)
+// when it never says so.
+pid_t StartLiveTracker(const Session& x, int port, const std::string& out_csv, const std::string& err) {
+  const pid_t pid =
+      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
+  if (WaitForText(err, "ready", 20s)) return pid;
+  kill(pid, SIGKILL);
+  WaitExit(pid, 20s);
+  return -1;
+}
+
+// --log mode's poses of the session, written to DIR/NAME.csv: the path, or "" when the tracker failed.
+std::string LogModePoses(const Session& x, const std::string& name) {
+  const std::string csv = x.dir + "/" + name + ".csv";
+  std::string unused;
+  const int code =
+      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", csv, "--quiet"},
+                 x.dir + "/" + name + ".txt", &unused);
+  return code == 0 ? csv : "";
+}
+
 TEST(TrackerProcess, Help) {
   std::string out;
   EXPECT_EQ(RunProgram({kTracker, "--help"}, Session::Get().dir + "/help.txt", &out), 0);
@@ -110,9 +131,8 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   const Session& x = Session::Get();
   const int port = 7741;
   const std::string err = x.dir + "/live.txt", out_csv = x.dir + "/poses_live.csv";
-  const pid_t pid =
-      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
-  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_GT(pid, 0) << Slurp(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -148,12 +168,8 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   // SIGINT wrote the trajectory, the same as --log mode's.
   const auto live = ReadTrajectory(out_csv);
   ASSERT_EQ(live.size(), x.s.views.size());
-  std::string unused;
-  const std::string log_csv = x.dir + "/poses_log_for_live.csv";
-  ASSERT_EQ(
-      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
-                 x.dir + "/o3.txt", &unused),
-      0);
+  const std::string log_csv = LogModePoses(x, "poses_log_for_live");
+  ASSERT_FALSE(log_csv.empty());
   EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
   EXPECT_FALSE(std::ifstream(out_csv + ".partial")) << "a clean exit removes the partial trajectory";
 }
@@ -164,9 +180,8 @@ TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
   const Session& x = Session::Get();
   const int port = 7746;
   const std::string err = x.dir + "/killed.txt", out_csv = x.dir + "/poses_killed.csv";
-  const pid_t pid =
-      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
-  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_GT(pid, 0) << Slurp(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -183,12 +198,8 @@ TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
   EXPECT_FALSE(std::ifstream(out_csv));
   const auto partial = ReadTrajectory(out_csv + ".partial");
   ASSERT_EQ(partial.size(), half);
-  std::string unused;
-  const std::string log_csv = x.dir + "/poses_log_for_killed.csv";
-  ASSERT_EQ(
-      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
-                 x.dir + "/o4.txt", &unused),
-      0);
+  const std::string log_csv = LogModePoses(x, "poses_log_for_killed");
+  ASSERT_FALSE(log_csv.empty());
   const auto full = ReadTrajectory(log_csv);
   for (size_t f = 0; f < half; ++f) EXPECT_EQ(TrajectoryCsvLine(partial[f]), TrajectoryCsvLine(full[f]));
 }
@@ -198,9 +209,8 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   const Session& x = Session::Get();
   const int port = 7742;
   const std::string err = x.dir + "/replay.txt", out_csv = x.dir + "/poses_replay.csv";
-  const pid_t pid =
-      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
-  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_GT(pid, 0) << Slurp(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -214,12 +224,8 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   kill(pid, SIGINT);
   EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
   EXPECT_EQ(collector.poses.size(), x.s.views.size());
-  std::string unused;
-  const std::string log_csv = x.dir + "/poses_log_for_replay.csv";
-  ASSERT_EQ(
-      RunProgram({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--out", log_csv, "--quiet"},
-                 x.dir + "/o4.txt", &unused),
-      0);
+  const std::string log_csv = LogModePoses(x, "poses_log_for_replay");
+  ASSERT_FALSE(log_csv.empty());
   EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
 }
 
