@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <sstream>
 
 namespace mcmt {
@@ -262,6 +263,18 @@ void EventLogWriter::Close() {
   int fd = fd_;
   fd_ = -1;
   if (::close(fd) != 0) throw std::runtime_error(path_ + ": close failed: " + std::strerror(errno));
+}
+
+std::string IsoTime(int64_t utime) {
+  if (utime <= 0) return "";
+  const std::time_t seconds = static_cast<std::time_t>(utime / 1000000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[64];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &tm);
+  char full[96];
+  std::snprintf(full, sizeof(full), "%s.%06lldZ", text, static_cast<long long>(utime % 1000000));
+  return full;
 }
 
 }  // namespace mcmt

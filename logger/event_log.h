@@ -27,6 +27,10 @@ struct LogEvent {
   uint64_t offset = 0;  // byte offset of the event in its file (reader only)
 };
 
+// An LCM time (microseconds since the epoch) as UTC ISO 8601 with microseconds, e.g.
+// "2026-11-22T06:24:33.123456Z"; "" for utime <= 0 (no time).
+std::string IsoTime(int64_t utime);
+
 class LogFormatError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -89,18 +89,6 @@ std::string TypeOf(const std::vector<uint8_t>& data) {
   return text;
 }
 
-std::string IsoTime(int64_t utime) {
-  std::time_t seconds = static_cast<std::time_t>(utime / 1000000);
-  std::tm tm{};
-  gmtime_r(&seconds, &tm);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &tm);
-  char full[96];
-  std::snprintf(full, sizeof(full), "%s.%06lldZ", text,
-                static_cast<long long>(((utime % 1000000) + 1000000) % 1000000));
-  return full;
-}
-
 // Calls fn(event, index, part) for every event of every part, strictly.
 template <typename Fn>
 void ForEachEvent(const std::string& log, Fn fn) {

@@ -32,18 +32,6 @@ int64_t WallUs() {
       .count();
 }
 
-std::string IsoTime(int64_t utime) {
-  if (utime <= 0) return "";
-  std::time_t seconds = static_cast<std::time_t>(utime / 1000000);
-  std::tm tm{};
-  gmtime_r(&seconds, &tm);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &tm);
-  char full[96];
-  std::snprintf(full, sizeof(full), "%s.%06lldZ", text, static_cast<long long>(utime % 1000000));
-  return full;
-}
-
 bool Exists(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0;
