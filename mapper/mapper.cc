@@ -44,7 +44,8 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
                     "consistency_m",
                     "consistency_rel",
                     "marker_reject_fraction",
-                    "max_pair_events"});
+                    "max_pair_events",
+                    "continuity_gap_s"});
   o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
   o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
   o.huber_px = s.GetDouble("huber_px", o.huber_px);
@@ -66,6 +67,7 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.consistency_rel = s.GetDouble("consistency_rel", o.consistency_rel);
   o.marker_reject_fraction = s.GetDouble("marker_reject_fraction", o.marker_reject_fraction);
   o.max_pair_events = s.GetInt("max_pair_events", o.max_pair_events);
+  o.continuity_gap_s = s.GetDouble("continuity_gap_s", o.continuity_gap_s);
   if (rig.sync.Has("tolerance_ms"))
     o.sync_tolerance_us =
         static_cast<int64_t>(std::llround(rig.sync.GetPositiveDouble("tolerance_ms", 2.0) * 1000));
@@ -79,6 +81,7 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   if (o.max_rejection_rounds < 0) fail("max_rejection_rounds", "must be >= 0");
   if (o.min_marker_support < 1) fail("min_marker_support", "must be at least 1");
   if (o.max_pair_events < 10) fail("max_pair_events", "must be at least 10");
+  if (!(o.continuity_gap_s >= 0)) fail("continuity_gap_s", "must be >= 0 (0: no continuity)");
   if (!(o.marker_inlier_fraction >= 0 && o.marker_inlier_fraction <= 1))
     fail("marker_inlier_fraction", "must be in [0, 1]");
   if (!(o.marker_reject_fraction > 0 && o.marker_reject_fraction <= 1))
@@ -103,6 +106,7 @@ void MapperOptions::Validate() const {
   if (!(outlier_px > 0)) bad("outlier_px must be positive");
   if (max_iterations < 1) bad("max_iterations must be at least 1");
   if (sync_tolerance_us < 0) bad("sync tolerance must be >= 0");
+  if (!(continuity_gap_s >= 0)) bad("continuity_gap_s must be >= 0");
   if (!(sizes.default_size > 0)) {
     bool all_overridden = !marker_ids.empty();
     for (int id : marker_ids)
@@ -842,19 +846,74 @@ MapResult Mapper::Solve() {
     std::vector<int> frame_first(num_frames + 1, static_cast<int>(obs.size()));
     for (int i = static_cast<int>(obs.size()) - 1; i >= 0; --i) frame_first[obs[i].frame] = i;
     for (int f = num_frames - 1; f >= 0; --f) frame_first[f] = std::min(frame_first[f], frame_first[f + 1]);
+    // A frame is weak when its markers are all seen by one camera, or when no two of its observations
+    // agree on its pose: a small or distant marker's two planar hypotheses fit its corners about equally,
+    // the ratio test may keep the wrong one, and the bundle adjustment cannot leave that minimum. Its
+    // candidates (both hypotheses of every marker) are kept and it is decided below by continuity with
+    // the nearest frame whose observations agree.
+    std::vector<std::vector<Rigid3>> weak_candidates(num_frames);
+    const double support_angle = o.consistency_deg * M_PI / 180.0;
     ParallelFor(num_frames, threads, [&](int f) {
-      std::vector<Rigid3> cands;
+      std::vector<Rigid3> cands, all;
+      std::vector<int> source;  // observation of each kept candidate
+      int first_camera = -1;
+      bool one_camera = true;
       for (int i = frame_first[f]; i < frame_first[f + 1]; ++i) {
         if (!obs_usable[i]) continue;
         const Observation& ob = obs[i];
-        for (int h = 0; h < ob.kept; ++h)
-          cands.push_back(rig_from_cam[ob.camera] * ob.pose.hypotheses[h].cam_from_marker *
-                          marker_from_object[ob.marker]);
+        if (first_camera < 0) first_camera = ob.camera;
+        one_camera = one_camera && ob.camera == first_camera;
+        for (int h = 0; h < ob.pose.num_hypotheses; ++h) {
+          const Rigid3 pose =
+              rig_from_cam[ob.camera] * ob.pose.hypotheses[h].cam_from_marker * marker_from_object[ob.marker];
+          if (h < ob.kept) {
+            cands.push_back(pose);
+            source.push_back(i);
+          }
+          all.push_back(pose);
+        }
       }
       if (cands.empty()) return;
-      rig_from_object[f] = Normalized(cands[MedoidIndex(cands, object_scale)]);
+      const size_t medoid = MedoidIndex(cands, object_scale);
+      rig_from_object[f] = Normalized(cands[medoid]);
       frame_has_pose[f] = 1;
+      // Supported: another observation's candidate agrees with the medoid.
+      bool supported = false;
+      for (size_t k = 0; k < cands.size() && !supported; ++k)
+        supported = source[k] != source[medoid] && RotationAngle(cands[k], cands[medoid]) < support_angle &&
+                    (cands[k].translation() - cands[medoid].translation()).norm() <
+                        o.consistency_m + o.consistency_rel * object_scale;
+      if (one_camera || !supported) weak_candidates[f] = std::move(all);
     });
+    // Forward, then backward: a weak frame within continuity_gap_s of the last decided frame takes its
+    // candidate nearest to that frame's pose in rotation, and is decided in turn.
+    std::vector<char> decided(num_frames, 0);
+    for (int f = 0; f < num_frames; ++f) decided[f] = frame_has_pose[f] && weak_candidates[f].empty();
+    const int64_t max_gap_us = static_cast<int64_t>(1e6 * o.continuity_gap_s);
+    auto sweep = [&](int begin, int end, int step) {
+      int last = -1;
+      for (int f = begin; f != end; f += step) {
+        if (!frame_has_pose[f]) continue;
+        if (!decided[f] && last >= 0 && std::llabs(frames[f].utime - frames[last].utime) <= max_gap_us) {
+          const std::vector<Rigid3>& cands = weak_candidates[f];
+          size_t best = 0;
+          for (size_t k = 1; k < cands.size(); ++k)
+            if (RotationAngle(cands[k], rig_from_object[last]) <
+                RotationAngle(cands[best], rig_from_object[last]))
+              best = k;
+          rig_from_object[f] = Normalized(cands[best]);
+          decided[f] = 1;
+        }
+        if (decided[f]) last = f;
+      }
+    };
+    sweep(0, num_frames, 1);
+    sweep(num_frames - 1, -1, -1);
+    for (int f = 0; f < num_frames; ++f)
+      if (!weak_candidates[f].empty()) {
+        ++report.weak_frames;
+        report.undecided_frames += !decided[f];
+      }
   }
   end_stage("object poses");
 
@@ -1089,7 +1148,8 @@ MapResult Mapper::Solve() {
       }
       for (int c : bad_cameras)
         if (c == ref_camera)
-          throw MapperError(problems[&c - &bad_cameras[0]] + "; it is the reference camera: name another one " +
+          throw MapperError(problems[&c - &bad_cameras[0]] +
+                            "; it is the reference camera: name another one " +
                             "(--reference-camera or mapper.reference_camera) to map without it");
       for (int c : bad_cameras) {
         camera_placed[c] = false;

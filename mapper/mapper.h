@@ -74,6 +74,10 @@ struct MapperOptions {
   double marker_reject_fraction = 0.5;
   // At most this many co-observation events per camera or marker pair enter the medoid (strided subset).
   int max_pair_events = 3000;
+  // A frame whose markers are all seen by one camera (planar ambiguity) takes, among both hypotheses of
+  // each of its markers, the pose nearest in rotation to the nearest decided frame at most this far away
+  // in time (0: the paper's rule alone).
+  double continuity_gap_s = 0.5;
 
   // From the rig: expected cameras (empty: whatever sends detections), marker id whitelist, sizes.
   std::vector<std::string> cameras;
@@ -123,6 +127,8 @@ struct MapReport {
   int ambiguous_observations = 0;  // both IPPE hypotheses kept
   int ignored_ids = 0;             // detections of ids outside markers.ids
   int duplicates = 0;              // same id twice in one camera frame (both dropped)
+  int weak_frames = 0;             // frames seen by one camera only (object pose decided by continuity)
+  int undecided_frames = 0;        // ... of which with no decided frame near enough (medoid kept)
   std::vector<std::string> duplicate_examples;
   std::vector<RejectedMarker> rejected_markers;
   std::vector<RejectedObservation> rejected_observations;

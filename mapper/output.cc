@@ -76,6 +76,8 @@ std::string ReportJson(const MapResult& result) {
   j << "  \"observations_total\": " << r.observations_total << ",\n";
   j << "  \"observations_used\": " << r.observations_used << ",\n";
   j << "  \"ambiguous_observations\": " << r.ambiguous_observations << ",\n";
+  j << "  \"weak_frames\": " << r.weak_frames << ",\n";
+  j << "  \"undecided_frames\": " << r.undecided_frames << ",\n";
   j << "  \"ignored_ids\": " << r.ignored_ids << ",\n";
   j << "  \"duplicates\": " << r.duplicates << ",\n";
   j << "  \"duplicate_examples\": [";
