@@ -97,13 +97,15 @@ inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
   return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
 }
 
-// Does the image show the marker's code (border included) in the quad `corners`? Every cell centre is
-// sampled through the quad's homography and put with the nearer of the two colour means; a refinement
-// that slid onto another edge (a cell off: the quiet zone's outer edge, an inner cell's edge) reads a
-// shifted code and fails. Polarity-free (inverted prints pass).
-bool CodeMatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, const cv::Mat& bits,
-                 int cells) {
-  if (bits.empty()) return true;
+// How many cells of the marker's code (border included) read wrong in the quad `corners`: every cell
+// centre is sampled through the quad's homography and put with the nearer of the two colour means
+// (polarity-free: inverted prints read the same). cells * cells when it cannot be read (a corner outside
+// the image, no contrast). A refinement that slid onto another edge (a cell off: the quiet zone's outer
+// edge, an inner cell's edge) reads a shifted code: a whole border side and half the inner cells wrong.
+int CodeMismatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, const cv::Mat& bits,
+                   int cells) {
+  const int unreadable = cells * cells;
+  if (bits.empty()) return 0;
   const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   std::vector<cv::Point2f> quad;
   for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
@@ -115,15 +117,15 @@ bool CodeMatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
     for (int col = 0; col < cells; ++col) {
       const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
       float v;
-      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &v)) return false;
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &v)) return unreadable;
       values[row * cells + col] = v;
       const int expected = GridCell(bits, cells, row, col);
       sum[expected] += v;
       ++count[expected];
     }
-  if (count[0] == 0 || count[1] == 0) return false;
+  if (count[0] == 0 || count[1] == 0) return unreadable;
   const double m0 = sum[0] / count[0], m1 = sum[1] / count[1];
-  if (std::abs(m1 - m0) < 10.0) return false;
+  if (std::abs(m1 - m0) < 10.0) return unreadable;
   int mismatches = 0;
   for (int row = 0; row < cells; ++row)
     for (int col = 0; col < cells; ++col) {
@@ -131,7 +133,7 @@ bool CodeMatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners,
       const int nearer = std::abs(v - m1) < std::abs(v - m0) ? 1 : 0;
       mismatches += nearer != GridCell(bits, cells, row, col);
     }
-  return mismatches <= cells * cells / 10;
+  return mismatches;
 }
 
 // Is the inner neighbour of side `side` at position u (cells from the side's start corner) of the
@@ -483,6 +485,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
                     "fast",
                     "full_search_every",
                     "drop_duplicate_ids",
+                    "drop_unrefined",
                     "fps",
                     "images",
                     "image_rate",
@@ -518,6 +521,7 @@ DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
   o.fast = s.GetBool("fast", o.fast);
   o.full_search_every = s.GetInt("full_search_every", o.full_search_every);
   o.drop_duplicate_ids = s.GetBool("drop_duplicate_ids", o.drop_duplicate_ids);
+  o.drop_unrefined = s.GetBool("drop_unrefined", o.drop_unrefined);
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -801,11 +805,16 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         }
       }
       double sigma = NAN;
-      // A refinement counts only if the code still reads at the refined corners.
+      // A refinement counts only if the code reads at the refined corners about as well as at the
+      // candidate's (which decoded): not a cell off.
       const std::array<cv::Point2d, 4> candidate = r.corners;
+      const int candidate_mismatches = CodeMismatches(gray, candidate, bits, cells);
+      auto reads = [&](const std::array<cv::Point2d, 4>& corners) {
+        return CodeMismatches(gray, corners, bits, cells) <= candidate_mismatches + cells;
+      };
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
                                          &r.corners, options_.edge_model, &sigma) &&
-                     CodeMatches(gray, r.corners, bits, cells);
+                     reads(r.corners);
       if (!refined) r.corners = candidate;
       if (!refined && options_.fast) {
         // Fast mode: start again from the marker's refined corners of the previous frame.
@@ -814,16 +823,17 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
           std::array<cv::Point2d, 4> corners = previous.corners;
           refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
                                         options_.edge_model, &sigma) &&
-                    CodeMatches(gray, corners, bits, cells);
+                    reads(corners);
           if (refined) r.corners = corners;
           break;
         }
       }
       if (!refined) {
         // No clean edge on some side (a marker cut by the image border, touching another one, under
-        // glare): OpenCV's corner refinement in a window of about half a cell, rather than the candidate
-        // polygon's pixel-level corners.
+        // glare, a refinement a cell off): dropped, or OpenCV's corner refinement in a window of about
+        // half a cell rather than the candidate polygon's pixel-level corners.
         ++stats_.refine_failures;
+        if (options_.drop_unrefined) continue;
         std::vector<cv::Point2f> corners;
         double side = 0;
         for (int k = 0; k < 4; ++k) {

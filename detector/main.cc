@@ -40,9 +40,10 @@ int main(int argc, char** argv) {
     args.AddFlag("images", &images, "also publish rate-limited JPEG images on MCMT_IMAGE_<CAMERA>");
     args.AddInt64("start-utime", &start_utime,
                   "utime (us) of frame 0 of recordings without a timestamps file (frame k: + k * 1e6 / fps)");
-    args.AddInt64("start-wall-utime", &start_wall_utime,
-                  "with --rate realtime: wall clock (us since the epoch) at which to publish the first frame; "
-                  "give several detectors the same value to publish each frame together");
+    args.AddInt64(
+        "start-wall-utime", &start_wall_utime,
+        "with --rate realtime: wall clock (us since the epoch) at which to publish the first frame; "
+        "give several detectors the same value to publish each frame together");
     args.AddDouble("fps", &fps,
                    "frame rate of recordings (0: detector.fps of the rig, the video's own, or 30)");
     args.AddFlag("quiet", &quiet, "no status lines");

@@ -239,13 +239,21 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
   }
   stats_.skipped = source.skipped();
   if (!options_.quiet) {
-    char line[256];
+    const MarkerDetector& detector = pipeline_.detector();
+    const long long unrefined = detector.stats().refine_failures;
+    const std::string unrefined_text =
+        unrefined == 0 ? ""
+                       : "; " + std::to_string(unrefined) +
+                             (detector.options().drop_unrefined ? " more dropped" : " of them kept") +
+                             " without a clean edge fit";
+    char line[320];
     std::snprintf(
         line, sizeof(line),
-        "camera %s: done: %lld frames, %lld markers (%.2f/frame), mean detection %.2f ms, skipped %lld%s",
+        "camera %s: done: %lld frames, %lld markers (%.2f/frame%s), mean detection %.2f ms, skipped "
+        "%lld%s",
         options_.camera.c_str(), static_cast<long long>(stats_.frames),
         static_cast<long long>(stats_.markers),
-        stats_.frames ? static_cast<double>(stats_.markers) / stats_.frames : 0.0,
+        stats_.frames ? static_cast<double>(stats_.markers) / stats_.frames : 0.0, unrefined_text.c_str(),
         stats_.frames ? stats_.detection_ms_total / stats_.frames : 0.0,
         static_cast<long long>(stats_.skipped), stop ? " (stopped)" : "");
     std::cout << line << std::endl;
