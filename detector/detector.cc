@@ -812,9 +812,10 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       auto reads = [&](const std::array<cv::Point2d, 4>& corners) {
         return CodeMismatches(gray, corners, bits, cells) <= candidate_mismatches + cells;
       };
+      bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
-                                         &r.corners, options_.edge_model, &sigma) &&
-                     reads(r.corners);
+                                         &r.corners, options_.edge_model, &sigma);
+      if (refined && !reads(r.corners)) refined = false, slid = true;
       if (!refined) r.corners = candidate;
       if (!refined && options_.fast) {
         // Fast mode: start again from the marker's refined corners of the previous frame.
@@ -824,16 +825,21 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
           refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
                                         options_.edge_model, &sigma) &&
                     reads(corners);
-          if (refined) r.corners = corners;
+          if (refined) r.corners = corners, slid = false;
           break;
         }
       }
       if (!refined) {
-        // No clean edge on some side (a marker cut by the image border, touching another one, under
-        // glare, a refinement a cell off): dropped, or OpenCV's corner refinement in a window of about
-        // half a cell rather than the candidate polygon's pixel-level corners.
+        // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner
+        // a pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side
+        // (a small or blurred marker, one cut by the image border, glare): OpenCV's corner refinement in a
+        // window of about half a cell rather than the candidate polygon's pixel-level corners, or dropped
+        // (drop_unrefined).
         ++stats_.refine_failures;
-        if (options_.drop_unrefined) continue;
+        if (slid || options_.drop_unrefined) {
+          ++stats_.dropped;
+          continue;
+        }
         std::vector<cv::Point2f> corners;
         double side = 0;
         for (int k = 0; k < 4; ++k) {

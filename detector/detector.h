@@ -65,10 +65,10 @@ struct DetectorOptions {
   int full_search_every = 10;  // frames between full searches in fast mode
   // Drop every marker whose id is detected twice in one image (one of them is wrong).
   bool drop_duplicate_ids = true;
-  // A marker whose edges cannot be fitted (or whose refined corners no longer read its code) is dropped,
-  // not published with cv::cornerSubPix corners: a pixel-level corner passes a bundle adjustment's
-  // outlier test yet biases it. false: keep it with cornerSubPix corners (more markers, less accuracy).
-  bool drop_unrefined = true;
+  // A marker whose edges cannot be fitted keeps cv::cornerSubPix corners (small markers often: they still
+  // connect cameras and markers); true: dropped. A refinement that slid a cell off (its refined corners
+  // no longer read the code) is always dropped.
+  bool drop_unrefined = false;
 
   // From the rig YAML `detector:` section (keys as the field names), markers.inverted as the default
   // of `inverted`. Unknown keys and bad values throw ConfigError naming the file and key.
@@ -80,7 +80,8 @@ struct DetectorStats {
   long long frames = 0;
   long long full_searches = 0;
   long long markers = 0;
-  long long refine_failures = 0;  // markers whose edges could not be fitted (dropped, or cornerSubPix)
+  long long refine_failures = 0;  // markers whose edges could not be fitted (cornerSubPix or dropped)
+  long long dropped = 0;          // ... of which dropped
   long long region_retries = 0;   // fast mode: regions searched again with every window
 };
 

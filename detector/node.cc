@@ -240,12 +240,11 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
   stats_.skipped = source.skipped();
   if (!options_.quiet) {
     const MarkerDetector& detector = pipeline_.detector();
-    const long long unrefined = detector.stats().refine_failures;
-    const std::string unrefined_text =
-        unrefined == 0 ? ""
-                       : "; " + std::to_string(unrefined) +
-                             (detector.options().drop_unrefined ? " more dropped" : " of them kept") +
-                             " without a clean edge fit";
+    const long long dropped = detector.stats().dropped;
+    const long long kept = detector.stats().refine_failures - dropped;
+    std::string unrefined_text;
+    if (kept > 0) unrefined_text += "; " + std::to_string(kept) + " with cornerSubPix corners";
+    if (dropped > 0) unrefined_text += "; " + std::to_string(dropped) + " more dropped (no clean edge fit)";
     char line[320];
     std::snprintf(
         line, sizeof(line),

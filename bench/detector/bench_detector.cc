@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   std::printf(
       "| resolution | markers/image (min-max) | accurate ms | accurate images/s | fast ms | fast images/s | "
       "fast full searches | fast vs accurate corners, max px (<= 75 deg) | stock detectMarkers ms | "
-      "dropped, no clean edge fit (accurate/fast) |\n");
+      "no clean edge fit (accurate/fast) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {

@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   if (argc > 7) o.distortion = DistortionModelFromName(argv[7]);
   if (getenv("MCMT_OBJECT")) o.object = sim::ObjectKindFromName(getenv("MCMT_OBJECT"));
   if (getenv("MCMT_MARKER_SIZE")) o.marker_size = atof(getenv("MCMT_MARKER_SIZE"));
+  if (getenv("MCMT_DROP_UNREFINED")) o.detector.drop_unrefined = true;
+  if (getenv("MCMT_MIN_SIZE")) o.min_size_px = atof(getenv("MCMT_MIN_SIZE"));
   if (getenv("MCMT_MARGIN")) o.detector.perspective_ignored_margin = atof(getenv("MCMT_MARGIN"));
   if (getenv("MCMT_PPC")) o.detector.perspective_pixels_per_cell = atoi(getenv("MCMT_PPC"));
   if (getenv("MCMT_WMIN")) o.detector.adaptive_window_min = atoi(getenv("MCMT_WMIN"));
