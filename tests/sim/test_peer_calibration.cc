@@ -9,7 +9,8 @@
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kArray = std::string(MCMT_SOURCE_DIR) + "/../shared/data/caliscope/charuco_calibration/camera_array.toml";
+const std::string kArray =
+    std::string(MCMT_SOURCE_DIR) + "/../shared/data/caliscope/charuco_calibration/camera_array.toml";
 
 // The peer's cameras as a map whose rig frame is cam1's.
 mcmt::RigMap MapFromPeer(const std::vector<mcmt::sim::PeerCamera>& peer) {
