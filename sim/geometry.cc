@@ -445,8 +445,8 @@ std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& o) {
 
 std::vector<MarkerView> ProjectMarkers(const SimCamera& camera, const SimObject& object,
                                        const Rigid3& rig_from_object) {
-  const Rigid3 cam_from_object = internal::InverseRigid(camera.rig_from_cam) * rig_from_object;
-  const Rigid3 object_from_cam = internal::InverseRigid(cam_from_object);
+  const Rigid3 cam_from_object = Inverse(camera.rig_from_cam) * rig_from_object;
+  const Rigid3 object_from_cam = Inverse(cam_from_object);
   const Eigen::Vector3d cam_in_object = object_from_cam.translation();
   const internal::ValidRegion region(camera.model);
   std::vector<MarkerView> views;
@@ -512,13 +512,6 @@ std::vector<MarkerView> ProjectMarkers(const SimCamera& camera, const SimObject&
 // Internal helpers
 
 namespace internal {
-
-Rigid3 InverseRigid(const Rigid3& a_from_b) {
-  Rigid3 b_from_a = Rigid3::Identity();
-  b_from_a.linear() = a_from_b.linear().transpose();
-  b_from_a.translation() = -(a_from_b.linear().transpose() * a_from_b.translation());
-  return b_from_a;
-}
 
 ValidRegion::ValidRegion(const CameraModel& model) {
   // The distortion must be monotonic in the radius up to where a point may still land in the image;

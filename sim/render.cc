@@ -308,7 +308,7 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
                                 const Rigid3& rig_from_object, const RenderOptions& o, cv::Mat* image) const {
   const CameraModel& m = camera.model;
   const int w = m.width, h = m.height;
-  const Rigid3 cam_from_object = internal::InverseRigid(camera.rig_from_cam) * rig_from_object;
+  const Rigid3 cam_from_object = Inverse(camera.rig_from_cam) * rig_from_object;
   const internal::ValidRegion region(m);
   std::vector<ViewPatch> views;
   int bu0 = w, bu1 = -1, bv0 = h, bv1 = -1;

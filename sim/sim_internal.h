@@ -11,8 +11,6 @@ namespace mcmt {
 namespace sim {
 namespace internal {
 
-Rigid3 InverseRigid(const Rigid3& a_from_b);
-
 // Normalised image points a camera model maps one-to-one: beyond the first turning point of the
 // radial distortion a point far outside the field of view could fold back into the image.
 struct ValidRegion {
