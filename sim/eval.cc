@@ -219,6 +219,40 @@ EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
   return r;
 }
 
+RigMap MapFromGroundTruth(const GroundTruth& truth, size_t ref_camera, size_t ref_marker,
+                          std::vector<TrajectoryRow>* trajectory) {
+  const Rigid3 est_from_gt_rig = Inverse(truth.cameras.at(ref_camera).rig_from_cam);
+  const Rigid3 gt_object_from_est = truth.markers.at(ref_marker).object_from_marker;
+  const Rigid3 est_from_gt_object = Inverse(gt_object_from_est);
+  RigMap map;
+  map.dictionary = truth.dictionary;
+  map.reference_camera = truth.cameras[ref_camera].name;
+  map.reference_marker = truth.markers[ref_marker].id;
+  for (const SimCamera& c : truth.cameras) {
+    MapCamera m;
+    m.name = c.name;
+    m.model = c.model;
+    m.rig_from_cam = est_from_gt_rig * c.rig_from_cam;
+    map.cameras.push_back(m);
+  }
+  for (const SimMarker& g : truth.markers) {
+    MapMarker m;
+    m.id = g.id;
+    m.size = g.size;
+    m.object_from_marker = est_from_gt_object * g.object_from_marker;
+    map.markers.push_back(m);
+  }
+  if (trajectory)
+    for (const SimFrame& f : truth.frames) {
+      TrajectoryRow r;
+      r.seq = f.seq;
+      r.utime = f.utime;
+      r.rig_from_object = est_from_gt_rig * f.rig_from_object * gt_object_from_est;
+      trajectory->push_back(r);
+    }
+  return map;
+}
+
 std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileFormatError(path + ": cannot open the trajectory");

@@ -74,6 +74,12 @@ class EvalInputError : public std::runtime_error {
 EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
                     const std::vector<TrajectoryRow>* trajectory);
 
+// The ground truth as an estimator expresses it: rig frame = camera truth.cameras[ref_camera]'s frame,
+// object frame = marker truth.markers[ref_marker]'s frame (as the mapper chooses its references).
+// trajectory (optional): every frame's rig_from_object in those frames (utime, seq, pose only).
+RigMap MapFromGroundTruth(const GroundTruth& truth, size_t ref_camera = 0, size_t ref_marker = 0,
+                          std::vector<TrajectoryRow>* trajectory = nullptr);
+
 // Trajectory from trajectory.csv / poses.csv, or from an LCM log of object_pose_t on MCMT_POSE
 // (poses with status TRACKING or AMBIGUOUS), recognised by content.
 std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "detector/detector.h"
+#include "sim/eval.h"
 #include "sim/sim.h"
 #include "tracker/tracker.h"
 
@@ -29,8 +30,9 @@ struct Session {
   std::vector<sim::SimCamera> cameras;
   std::vector<sim::SimFrame> frames;
   std::vector<std::vector<cv::Mat>> images;  // [frame][camera]
-  RigMap map;
-  double marker_px = 0;  // mean apparent side of the fully visible markers, pixels
+  RigMap map;                                // the ground truth in cam0's and marker 0's frames
+  std::vector<TrajectoryRow> truth;          // rig_from_object per frame in those frames
+  double marker_px = 0;                      // mean apparent side of the fully visible markers, pixels
 };
 
 Session Render(const sim::SimObject& object, int width, int height, int frames) {
@@ -57,22 +59,11 @@ Session Render(const sim::SimObject& object, int width, int height, int frames) 
     s.images.push_back(std::move(row));
   }
   if (visible > 0) s.marker_px /= visible;
-  s.map.dictionary = "DICT_6X6_250";
-  s.map.reference_camera = s.cameras[0].name;
-  for (const sim::SimCamera& c : s.cameras) {
-    MapCamera mc;
-    mc.name = c.name;
-    mc.model = c.model;
-    mc.rig_from_cam = c.rig_from_cam;
-    s.map.cameras.push_back(mc);
-  }
-  for (const sim::SimMarker& m : object.markers) {
-    MapMarker mm;
-    mm.id = m.id;
-    mm.size = m.size;
-    mm.object_from_marker = m.object_from_marker;
-    s.map.markers.push_back(mm);
-  }
+  sim::GroundTruth truth;
+  truth.cameras = s.cameras;
+  truth.markers = object.markers;
+  truth.frames = s.frames;
+  s.map = sim::MapFromGroundTruth(truth, 0, 0, &s.truth);
   return s;
 }
 
@@ -133,9 +124,10 @@ Result Track(const Session& s, const sim::SimObject& object, bool fast, bool par
     if (sol.ok()) {
       previous = sol.rig_from_object;
       ++tracked;
-      // The map is the simulator's ground truth, so poses compare directly.
+      // The map is the ground truth in the estimator's frames: poses compare directly (translation of the
+      // object frame's origin, marker 0's centre).
       error_sum +=
-          1000 * (sol.rig_from_object.translation() - s.frames[f].rig_from_object.translation()).norm();
+          1000 * (sol.rig_from_object.translation() - s.truth[f].rig_from_object.translation()).norm();
     }
   }
   const double total = std::chrono::duration<double>(Clock::now() - t0).count();

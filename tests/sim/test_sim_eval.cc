@@ -83,33 +83,10 @@ Estimate ToEstimate(const GroundTruth& t, size_t ref_cam = 0, size_t ref_marker 
   Estimate e;
   e.gt_rig_from_est = t.cameras[ref_cam].rig_from_cam;
   e.gt_object_from_est = t.markers[ref_marker].object_from_marker;
-  const Rigid3 est_from_gt_rig = Inverse(e.gt_rig_from_est);
-  const Rigid3 est_from_gt_obj = Inverse(e.gt_object_from_est);
-  e.map.dictionary = t.dictionary;
-  e.map.reference_camera = t.cameras[ref_cam].name;
-  e.map.reference_marker = t.markers[ref_marker].id;
-  for (const SimCamera& c : t.cameras) {
-    MapCamera m;
-    m.name = c.name;
-    m.model = c.model;
-    m.rig_from_cam = est_from_gt_rig * c.rig_from_cam;
-    e.map.cameras.push_back(m);
-  }
-  for (const SimMarker& g : t.markers) {
-    MapMarker m;
-    m.id = g.id;
-    m.size = g.size;
-    m.object_from_marker = est_from_gt_obj * g.object_from_marker;
-    e.map.markers.push_back(m);
-  }
-  for (const SimFrame& f : t.frames) {
-    TrajectoryRow r;
-    r.seq = f.seq;
-    r.utime = f.utime;
-    r.rig_from_object = est_from_gt_rig * f.rig_from_object * e.gt_object_from_est;
+  e.map = MapFromGroundTruth(t, ref_cam, ref_marker, &e.trajectory);
+  for (TrajectoryRow& r : e.trajectory) {
     r.cameras = static_cast<int>(t.cameras.size());
     r.markers = 2;
-    e.trajectory.push_back(r);
   }
   return e;
 }

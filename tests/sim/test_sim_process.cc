@@ -131,41 +131,6 @@ std::vector<LogMessage> ReadDetectionsLog(const std::string& path) {
   return out;
 }
 
-// The estimate a mapper would produce from perfect data (rig frame: camera ref_cam, object frame:
-// marker ref_marker).
-RigMap MapFromTruth(const sim::GroundTruth& t, size_t ref_cam, size_t ref_marker,
-                    std::vector<TrajectoryRow>* trajectory) {
-  const Rigid3 est_from_rig = Inverse(t.cameras[ref_cam].rig_from_cam);
-  const Rigid3 obj_from_est = t.markers[ref_marker].object_from_marker;
-  const Rigid3 est_from_obj = Inverse(obj_from_est);
-  RigMap map;
-  map.dictionary = t.dictionary;
-  map.reference_camera = t.cameras[ref_cam].name;
-  map.reference_marker = t.markers[ref_marker].id;
-  for (const auto& c : t.cameras) {
-    MapCamera m;
-    m.name = c.name;
-    m.model = c.model;
-    m.rig_from_cam = est_from_rig * c.rig_from_cam;
-    map.cameras.push_back(m);
-  }
-  for (const auto& g : t.markers) {
-    MapMarker m;
-    m.id = g.id;
-    m.size = g.size;
-    m.object_from_marker = est_from_obj * g.object_from_marker;
-    map.markers.push_back(m);
-  }
-  for (const auto& f : t.frames) {
-    TrajectoryRow r;
-    r.seq = f.seq;
-    r.utime = f.utime;
-    r.rig_from_object = est_from_rig * f.rig_from_object * obj_from_est;
-    trajectory->push_back(r);
-  }
-  return map;
-}
-
 // The numbers after "key": in a JSON text, in order.
 std::vector<double> JsonNumbers(const std::string& json, const std::string& key) {
   std::vector<double> v;
@@ -644,7 +609,7 @@ TEST(SimProcess, EvalOfAMapConvertedFromGroundTruth) {
       0);
   const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
   std::vector<TrajectoryRow> trajectory;
-  RigMap map = MapFromTruth(truth, 1, 2, &trajectory);
+  RigMap map = sim::MapFromGroundTruth(truth, 1, 2, &trajectory);
   WriteMap(dir + "/map.yaml", map);
   WriteTrajectory(dir + "/trajectory.csv", trajectory);
   const std::string gt_arg = " --ground-truth " + dir + "/ground_truth.yaml";
