@@ -31,16 +31,18 @@ Eigen::Matrix3d ExpRotation(const Eigen::Vector3d& w) {
   return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
 }
 
-// rig_from_object <- Exp(delta) * rig_from_object, delta = (rotation vector, translation) in the rig
-// frame: p_rig -> R(w) p_rig + v.
-Rigid3 ApplyLeft(const Rigid3& pose, const Vector6d& delta) {
+// rig_from_object <- a rotation about `pivot` (rig frame) then a translation, delta = (rotation vector w,
+// translation v) in rig axes: p_rig -> R(w) (p_rig - pivot) + pivot + v. The optimiser pivots about the
+// object's origin, so rotation and translation steps stay decoupled however far the rig origin (the
+// reference camera) is from the object.
+Rigid3 ApplyAbout(const Rigid3& pose, const Vector6d& delta, const Eigen::Vector3d& pivot) {
   const Eigen::Matrix3d dr = ExpRotation(delta.head<3>());
   Rigid3 out = Rigid3::Identity();
   Eigen::Matrix3d r = dr * pose.linear();
   // Keep the rotation orthonormal over thousands of frames of incremental updates.
   r = Eigen::Quaterniond(r).normalized().toRotationMatrix();
   out.linear() = r;
-  out.translation() = dr * pose.translation() + delta.tail<3>();
+  out.translation() = dr * (pose.translation() - pivot) + pivot + delta.tail<3>();
   return out;
 }
 
@@ -140,13 +142,14 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
 
 // Cost (Huber on each corner's pixel distance d, k = huber_px):
 //   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
-// with T = rig_from_object, perturbed on the left, T <- Exp(delta) * T, delta = (w, v):
-//   d p_rig / d delta = [-[p_rig]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig]x | I],
-//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig]x | I]   (analytic, 2x6 per corner).
+// with T = rig_from_object perturbed by a rotation about the pivot c (rig frame) and a translation,
+// p_rig <- R(w) (p_rig - c) + c + v, delta = (w, v); the optimiser takes c = the object's origin:
+//   d p_rig / d delta = [-[p_rig - c]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig - c]x | I],
+//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig - c]x | I]   (analytic, 2x6 per corner).
 // Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
 double PoseEstimator::Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active,
-                               const Rigid3& pose, double huber_px, Matrix6d* h, Vector6d* g,
-                               double* plain_cost) const {
+                               const Rigid3& pose, const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h,
+                               Vector6d* g, double* plain_cost) const {
   h->setZero();
   g->setZero();
   double cost = 0.0, plain = 0.0;
@@ -173,7 +176,7 @@ double PoseEstimator::Evaluate(const std::vector<Obs>& obs, const std::vector<ch
       plain += sq;
       const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
       Eigen::Matrix<double, 2, 6> j;
-      j.leftCols<3>() = -a * Skew(p_rig);
+      j.leftCols<3>() = -a * Skew(p_rig - pivot);
       j.rightCols<3>() = a;
       h->noalias() += w * j.transpose() * j;
       g->noalias() += w * j.transpose() * res;
@@ -185,15 +188,16 @@ double PoseEstimator::Evaluate(const std::vector<Obs>& obs, const std::vector<ch
 
 // Cost (Huber on each corner's pixel distance d, k = huber_px):
 //   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
-// with T = rig_from_object, perturbed on the left, T <- Exp(delta) * T, delta = (w, v):
-//   d p_rig / d delta = [-[p_rig]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig]x | I],
-//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig]x | I]   (analytic, 2x6 per corner).
+// with T = rig_from_object perturbed by a rotation about the pivot c (rig frame) and a translation,
+// p_rig <- R(w) (p_rig - c) + c + v, delta = (w, v); the optimiser takes c = the object's origin:
+//   d p_rig / d delta = [-[p_rig - c]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig - c]x | I],
+//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig - c]x | I]   (analytic, 2x6 per corner).
 // Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
 void PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
                              int* iterations) const {
   Matrix6d h;
   Vector6d g;
-  double cost = Evaluate(obs, active, *pose, options_.huber_px, &h, &g, nullptr);
+  double cost = Evaluate(obs, active, *pose, pose->translation(), options_.huber_px, &h, &g, nullptr);
   double lambda = 1e-4;
   int it = 0;
   for (; it < options_.max_iterations && cost > 1e-24; ++it) {
@@ -201,10 +205,11 @@ void PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char
     a.diagonal() += lambda * h.diagonal() + Vector6d::Constant(1e-12);
     const Vector6d dx = a.ldlt().solve(-g);
     if (!dx.allFinite()) break;
-    const Rigid3 candidate = ApplyLeft(*pose, dx);
+    const Rigid3 candidate = ApplyAbout(*pose, dx, pose->translation());
     Matrix6d h_new;
     Vector6d g_new;
-    const double cost_new = Evaluate(obs, active, candidate, options_.huber_px, &h_new, &g_new, nullptr);
+    const double cost_new =
+        Evaluate(obs, active, candidate, candidate.translation(), options_.huber_px, &h_new, &g_new, nullptr);
     if (cost_new < cost) {
       const double decrease = cost - cost_new;
       *pose = candidate;
@@ -384,7 +389,8 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
   Vector6d g;
   double rss = 0.0;
   const std::vector<char>& active = best.inlier;
-  Evaluate(obs, active, best.pose, 0.0, &h, &g, &rss);  // unweighted J^T J and residual sum of squares
+  // Unweighted J^T J and residual sum of squares; rotations about the rig origin, as the message documents.
+  Evaluate(obs, active, best.pose, Eigen::Vector3d::Zero(), 0.0, &h, &g, &rss);
   const int n_inliers = static_cast<int>(std::count(active.begin(), active.end(), 1));
   const int n_residuals = 8 * n_inliers;
   double sigma2 = n_residuals > 6 ? rss / (n_residuals - 6) : rss;

@@ -129,10 +129,11 @@ class PoseEstimator {
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
   // Robust cost (Huber, huber_px <= 0: plain squares) of the active observations at `pose`, with the
-  // IRLS-weighted Gauss-Newton matrix J^T W J in *h and gradient J^T W r in *g; *plain_cost gets the
-  // unweighted sum of squares.
+  // IRLS-weighted Gauss-Newton matrix J^T W J in *h and gradient J^T W r in *g for a perturbation that
+  // rotates about `pivot` (rig frame) and translates; *plain_cost gets the unweighted sum of squares.
   double Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active, const Rigid3& pose,
-                  double huber_px, Matrix6d* h, Vector6d* g, double* plain_cost) const;
+                  const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h, Vector6d* g,
+                  double* plain_cost) const;
   // Levenberg-Marquardt on the active observations.
   void Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
                 int* iterations) const;
