@@ -97,6 +97,15 @@ inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
   return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
 }
 
+// The homography from the unit square (0,0)-(1,0)-(1,1)-(0,1) to a marker's corners (ArUco order): marker
+// coordinates (cells / cells-per-side) to image pixels.
+cv::Matx33d QuadFromUnitSquare(const std::array<cv::Point2d, 4>& corners) {
+  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<cv::Point2f> quad;
+  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+  return cv::getPerspectiveTransform(square, quad);
+}
+
 // How many cells of the marker's code (border included) read wrong in the quad `corners`: every cell
 // centre is sampled through the quad's homography and put with the nearer of the two colour means
 // (polarity-free: inverted prints read the same). cells * cells when it cannot be read (a corner outside
@@ -106,10 +115,7 @@ int CodeMismatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
                    int cells) {
   const int unreadable = cells * cells;
   if (bits.empty()) return 0;
-  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  std::vector<cv::Point2f> quad;
-  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-  const cv::Matx33d h = cv::getPerspectiveTransform(square, quad);
+  const cv::Matx33d h = QuadFromUnitSquare(corners);
   std::vector<float> values(static_cast<size_t>(cells) * cells);
   double sum[2] = {0, 0};
   int count[2] = {0, 0};
@@ -244,10 +250,7 @@ double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m
 // +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
 // brighter (inverted), 0 when unclear. Samples the border cells and the ring of cells around the quad.
 int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
-  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  std::vector<cv::Point2f> quad;
-  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-  const cv::Matx33d h = cv::getPerspectiveTransform(square, quad);
+  const cv::Matx33d h = QuadFromUnitSquare(corners);
   std::vector<float> border, ring;
   for (int i = 0; i < cells; ++i) {
     const double t = (i + 0.5) / cells;
@@ -808,8 +811,9 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       // A refinement counts only if the code reads at the refined corners about as well as at the
       // candidate's (which decoded): not a cell off.
       const std::array<cv::Point2d, 4> candidate = r.corners;
-      const int candidate_mismatches = CodeMismatches(gray, candidate, bits, cells);
+      int candidate_mismatches = -1;  // read once, when a refinement is to be judged
       auto reads = [&](const std::array<cv::Point2d, 4>& corners) {
+        if (candidate_mismatches < 0) candidate_mismatches = CodeMismatches(gray, candidate, bits, cells);
         return CodeMismatches(gray, corners, bits, cells) <= candidate_mismatches + cells;
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
