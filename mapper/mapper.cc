@@ -897,10 +897,11 @@ MapResult Mapper::Solve() {
         if (!decided[f] && last >= 0 && std::llabs(frames[f].utime - frames[last].utime) <= max_gap_us) {
           const std::vector<Rigid3>& cands = weak_candidates[f];
           size_t best = 0;
-          for (size_t k = 1; k < cands.size(); ++k)
-            if (RotationAngle(cands[k], rig_from_object[last]) <
-                RotationAngle(cands[best], rig_from_object[last]))
-              best = k;
+          double best_angle = RotationAngle(cands[0], rig_from_object[last]);
+          for (size_t k = 1; k < cands.size(); ++k) {
+            const double angle = RotationAngle(cands[k], rig_from_object[last]);
+            if (angle < best_angle) best = k, best_angle = angle;
+          }
           rig_from_object[f] = Normalized(cands[best]);
           decided[f] = 1;
         }
