@@ -16,6 +16,7 @@
 #include "mcmt/object_pose_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/sim/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace mcmt;
@@ -26,25 +27,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kTol = 1e-9;
 
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("mcmt_test_sim_eval_" + tag + "_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  std::string str() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
+using mcmt::sim::testing::TempDir;
 
 GroundTruth MakeTruth(int cameras, int frames, ObjectKind kind = ObjectKind::kFourSided, uint64_t seed = 3) {
   RigOptions ro;

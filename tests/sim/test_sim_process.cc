@@ -28,6 +28,7 @@
 #include "mcmt/detections_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/sim/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace mcmt;
@@ -38,25 +39,10 @@ const std::string kSim = MCMT_BIN_DIR "/mcmt-sim";
 const std::string kEval = MCMT_BIN_DIR "/mcmt-eval";
 const std::string kMarkers = MCMT_BIN_DIR "/mcmt-markers";
 
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() / ("mcmt_test_sim_process_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
+using mcmt::sim::testing::TempDir;
 
 TempDir& Tmp() {
-  static TempDir dir;
+  static TempDir dir("process");
   return dir;
 }
 
