@@ -8,38 +8,11 @@
 #include <iomanip>
 #include <sstream>
 
+#include "core/json.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
 namespace {
-
-std::string JsonString(const std::string& s) {
-  std::ostringstream out;
-  out << '"';
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"':
-        out << "\\\"";
-        break;
-      case '\\':
-        out << "\\\\";
-        break;
-      case '\n':
-        out << "\\n";
-        break;
-      case '\t':
-        out << "\\t";
-        break;
-      default:
-        if (c < 0x20)
-          out << "\\u" << std::hex << std::setw(4) << std::setfill('0') << int(c) << std::dec;
-        else
-          out << c;
-    }
-  }
-  out << '"';
-  return out.str();
-}
 
 std::string JsonNumber(double v) {
   if (!std::isfinite(v)) return "null";

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/json.h"
 #include "core/lcm_util.h"
 #include "core/marker.h"
 #include "core/se3.h"
@@ -47,15 +48,6 @@ std::string JsonStats(const Stats& s) {
   return "{\"count\": " + std::to_string(s.count) + ", \"mean\": " + JsonNum(s.mean) +
          ", \"median\": " + JsonNum(s.median) + ", \"max\": " + JsonNum(s.max) +
          ", \"rms\": " + JsonNum(s.rms) + "}";
-}
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
 }
 
 }  // namespace

@@ -402,6 +402,25 @@ TEST(SimEval, MissingCamerasMarkersAndFramesAreCounted) {
   ExpectStatsZero(r2.camera_rotation_deg, "camera rotation (2 cameras)");
 }
 
+TEST(SimEval, JsonEscapesControlCharactersInCameraNames) {
+  // A camera named with a tab (or any control character) must still give valid JSON: no raw byte below
+  // 0x20 inside a string (FormatJson itself indents with spaces only).
+  const GroundTruth t = MakeTruth(3, 5, ObjectKind::kBox);
+  Estimate e = ToEstimate(t, 0, 0);
+  e.map.cameras.erase(e.map.cameras.begin() + 1);
+  EvalResult r = Evaluate(t, &e.map, &e.trajectory);
+  ASSERT_FALSE(r.cameras.empty());
+  r.cameras[0].name = "cam\t0\x01";
+  r.missing_cameras = {"cam\n1"};
+  const std::string json = FormatJson(r);
+  for (const char c : json) {
+    if (c == '\n') continue;
+    EXPECT_GE(static_cast<unsigned char>(c), 0x20u) << "raw control byte " << int(c) << " in " << json;
+  }
+  EXPECT_NE(json.find("\"cam\\t0\\u0001\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"cam\\n1\""), std::string::npos) << json;
+}
+
 template <typename F>
 std::string ThrownEvalInputError(F f) {
   try {
