@@ -4,6 +4,9 @@
 #include <numeric>
 #include <queue>
 #include <tuple>
+#include <unordered_map>
+
+#include "mapper/parallel.h"
 
 namespace mcmt {
 
@@ -115,6 +118,99 @@ GraphEdge EvaluateEdge(const PairCandidates& pair, const MedoidOptions& medoid_o
   edge.events = std::max<int64_t>(pair.total_events, pair.num_events);
   edge.stored_events = pair.num_events;
   return edge;
+}
+
+namespace {
+
+// Two passes over co-observation events of node pairs: first count (Count), then store a strided
+// subset (Store) so that memory stays bounded on long sequences.
+class PairCollector {
+ public:
+  PairCollector(int num_nodes, int max_events) : n_(num_nodes), max_events_(max_events) {}
+  void Count(int a, int b, int64_t candidates) {
+    Slot& s = slots_[Key(a, b)];
+    ++s.events;
+    s.candidates += candidates;
+  }
+  void FinishCounting() {
+    for (auto& kv : slots_) {
+      kv.second.stride = std::max<int64_t>(1, (kv.second.events + max_events_ - 1) / max_events_);
+      kv.second.pair.a = static_cast<int>(kv.first / n_);
+      kv.second.pair.b = static_cast<int>(kv.first % n_);
+      kv.second.pair.total_events = kv.second.events;
+      kv.second.pair.total_candidates = kv.second.candidates;
+    }
+  }
+  // Returns true when the event at this position is stored (then call Store with its candidates).
+  bool Wanted(int a, int b) {
+    Slot& s = slots_[Key(a, b)];
+    return (s.seen++ % s.stride) == 0;
+  }
+  void Store(int a, int b, const std::vector<Rigid3>& candidates) {
+    slots_[Key(a, b)].pair.AddEvent(candidates);
+  }
+  std::vector<PairCandidates*> Pairs() {
+    std::vector<PairCandidates*> out;
+    for (auto& kv : slots_) out.push_back(&kv.second.pair);
+    std::sort(out.begin(), out.end(), [](const PairCandidates* x, const PairCandidates* y) {
+      return std::make_pair(x->a, x->b) < std::make_pair(y->a, y->b);
+    });
+    return out;
+  }
+
+ private:
+  struct Slot {
+    int64_t events = 0, candidates = 0, stride = 1, seen = 0;
+    PairCandidates pair;
+  };
+  int64_t Key(int a, int b) const { return static_cast<int64_t>(a) * n_ + b; }
+  int n_;
+  int max_events_;
+  std::unordered_map<int64_t, Slot> slots_;
+};
+
+// fn(x, y) for every pair of items of a group, ordered so that items[x].node < items[y].node.
+template <typename Fn>
+void ForEachPair(const std::vector<GraphItem>& items, const Fn& fn) {
+  for (size_t i = 0; i < items.size();) {
+    size_t j = i;
+    while (j < items.size() && items[j].group == items[i].group) ++j;
+    for (size_t x = i; x < j; ++x)
+      for (size_t y = x + 1; y < j; ++y) {
+        if (items[x].node < items[y].node)
+          fn(items[x], items[y]);
+        else
+          fn(items[y], items[x]);
+      }
+    i = j;
+  }
+}
+
+}  // namespace
+
+std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
+                                       const EdgeOptions& options, int threads) {
+  PairCollector collector(std::max(1, num_nodes), options.max_events);
+  ForEachPair(items, [&](const GraphItem& a, const GraphItem& b) {
+    collector.Count(a.node, b.node,
+                    static_cast<int64_t>(a.node_from_common.size() * b.common_from_node.size()));
+  });
+  collector.FinishCounting();
+  std::vector<Rigid3> candidates;
+  ForEachPair(items, [&](const GraphItem& a, const GraphItem& b) {
+    if (!collector.Wanted(a.node, b.node)) return;
+    candidates.clear();
+    for (const Rigid3& a_from_common : a.node_from_common)
+      for (const Rigid3& common_from_b : b.common_from_node)
+        candidates.push_back(a_from_common * common_from_b);
+    collector.Store(a.node, b.node, candidates);
+  });
+  const std::vector<PairCandidates*> pairs = collector.Pairs();
+  std::vector<GraphEdge> edges(pairs.size());
+  ParallelFor(static_cast<int>(pairs.size()), threads, [&](int k) {
+    edges[k] = EvaluateEdge(*pairs[k], options.medoid, options.tau_n, options.consistency);
+  });
+  return edges;
 }
 
 namespace {

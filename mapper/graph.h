@@ -48,6 +48,29 @@ struct GraphEdge {
 GraphEdge EvaluateEdge(const PairCandidates& pair, const MedoidOptions& medoid_options, double tau_n,
                        const ConsistencyOptions& consistency);
 
+// The one edge builder of both graphs. Items are nodes seen in one co-observation event (`group`: a camera
+// frame for the marker graph, a frame for the camera graph), each with its candidate poses relative to
+// what the group shares (the camera, or the object), node_from_common[h] and common_from_node[h] =
+// inverse of the former. Every pair of items (a < b by node) of a group gives the candidates
+// a_from_b = a.node_from_common[i] * b.common_from_node[j]; at most max_events events per pair are kept
+// (a strided subset); each pair's medoid and cost by EvaluateEdge.
+struct GraphItem {
+  int group = 0;  // items of one group are contiguous
+  int node = 0;
+  std::vector<Rigid3> node_from_common;
+  std::vector<Rigid3> common_from_node;
+};
+
+struct EdgeOptions {
+  int max_events = 3000;
+  MedoidOptions medoid;
+  double tau_n = 10.0;
+  ConsistencyOptions consistency;
+};
+
+std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
+                                       const EdgeOptions& options, int threads);
+
 // Kruskal's minimum spanning forest over nodes 0..n-1 (ties broken by (a, b)).
 std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges);
 

@@ -1,0 +1,322 @@
+// Stages: the bundle problem from the initial poses, refinement with outlier rejection and re-solves
+// (the paper's step 5), cameras that do not fit, and the map at the bundle's parameters.
+#include <cmath>
+#include <iomanip>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+#include "core/math.h"
+#include "mapper/stages.h"
+
+namespace mcmt {
+
+void RejectObservation(const MapperBundle& bundle, const Observations& observations,
+                       const ObservationNames& names, size_t k, double rms_px, const std::string& reason,
+                       BundleProblem* problem, MapReport* report) {
+  problem->active[k] = 0;
+  const Observation& ob = observations.obs[bundle.observation[k]];
+  RejectedObservation r;
+  r.utime = (*names.frames)[ob.frame].utime;
+  r.seq = (*names.frames)[ob.frame].seq;
+  r.camera = (*names.camera_names)[ob.camera];
+  r.id = (*names.marker_ids)[ob.marker];
+  r.rms_px = rms_px;
+  r.reason = reason;
+  report->rejected_observations.push_back(r);
+}
+
+MapperBundle MakeBundleProblem(const Observations& observations, const ObservationNames& names,
+                               const MarkerLayout& layout, const CameraPlacement& cameras,
+                               const ObjectPoses& poses, const std::vector<CameraModel>& models,
+                               MapReport* report) {
+  const int num_cameras = static_cast<int>(cameras.rig_from_cam.size());
+  const int num_markers = static_cast<int>(layout.object_from_marker.size());
+  const int num_frames = static_cast<int>(poses.rig_from_object.size());
+  MapperBundle bundle;
+  BundleProblem& bp = bundle.problem;
+  bp.models.resize(num_cameras);
+  for (int c = 0; c < num_cameras; ++c) {
+    bp.cam_from_rig.push_back(BlockFromRigid(Inverse(cameras.rig_from_cam[c])));
+    bp.models[c] = &models[c];
+  }
+  bp.camera_fixed.assign(num_cameras, 0);
+  bp.camera_fixed[cameras.reference] = 1;
+  for (int m = 0; m < num_markers; ++m)
+    bp.object_from_marker.push_back(BlockFromRigid(layout.object_from_marker[m]));
+  bp.marker_fixed.assign(num_markers, 0);
+  bp.marker_fixed[layout.reference] = 1;
+  for (int f = 0; f < num_frames; ++f) bp.rig_from_object.push_back(BlockFromRigid(poses.rig_from_object[f]));
+  const std::vector<Observation>& obs = observations.obs;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    if (!poses.usable[i] || !poses.has_pose[obs[i].frame]) continue;
+    bp.observations.push_back({obs[i].camera, obs[i].marker, obs[i].frame, obs[i].corners, obs[i].side});
+    bundle.observation.push_back(static_cast<int>(i));
+  }
+  bp.active.assign(bp.observations.size(), 1);
+  const std::vector<double> rms = ObservationRms(bp);
+  for (size_t k = 0; k < rms.size(); ++k)
+    if (!std::isfinite(rms[k]))
+      RejectObservation(bundle, observations, names, k, rms[k], "behind the camera at initialisation", &bp,
+                        report);
+  bundle.marker_rejected.assign(num_markers, 0);
+  for (const RejectedMarker& r : report->rejected_markers)
+    bundle.marker_rejected[observations.marker_index.at(r.id)] = 1;
+  return bundle;
+}
+
+BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
+  BundleSettings settings;
+  settings.huber_px = o.huber_px;
+  settings.max_iterations = o.max_iterations;
+  settings.paper_stop = o.paper_stop;
+  settings.paper_stop_px = o.paper_stop_px;
+  settings.threads = threads;
+  settings.linear_solver = o.linear_solver;
+  return settings;
+}
+
+namespace {
+
+BundleSummary Solve(const BundleSettings& settings, MapperBundle* bundle, MapReport* report) {
+  const BundleSummary summary = SolveBundle(&bundle->problem, settings);
+  ++report->solves;
+  report->iterations += summary.iterations;
+  report->termination = summary.termination;
+  return summary;
+}
+
+// One rejection round at the current parameters; returns true when an observation was rejected.
+bool RejectGrossResiduals(const Observations& observations, const ObservationNames& names,
+                          const MarkerLayout& layout, const MapperOptions& o, MapperBundle* bundle,
+                          MapReport* report) {
+  BundleProblem& bp = bundle->problem;
+  const int num_markers = static_cast<int>(bundle->marker_rejected.size());
+  const std::vector<double> rms = ObservationRms(bp);
+  bool changed = false;
+  std::vector<int> active_n(num_markers, 0), rejected_n(num_markers, 0);
+  for (size_t k = 0; k < rms.size(); ++k) {
+    if (!bp.active[k]) continue;
+    ++active_n[bp.observations[k].marker];
+    if (!(rms[k] <= o.outlier_px)) {
+      std::ostringstream why;
+      why << "gross residual (rms " << rms[k] << " px > outlier_px " << o.outlier_px << ")";
+      RejectObservation(*bundle, observations, names, k, rms[k], why.str(), &bp, report);
+      ++rejected_n[bp.observations[k].marker];
+      changed = true;
+    }
+  }
+  for (int m = 0; m < num_markers; ++m) {
+    if (m == layout.reference || active_n[m] == 0) continue;
+    if (!(rejected_n[m] > o.marker_reject_fraction * active_n[m])) continue;
+    bundle->marker_rejected[m] = 1;
+    std::ostringstream why;
+    why << "not rigidly attached: " << rejected_n[m] << " of " << active_n[m]
+        << " observations have gross residuals after refinement";
+    report->rejected_markers.push_back({(*names.marker_ids)[m], layout.observations[m], why.str()});
+    for (size_t k = 0; k < bp.observations.size(); ++k)
+      if (bp.active[k] && bp.observations[k].marker == m)
+        RejectObservation(*bundle, observations, names, k, rms[k], "marker dropped", &bp, report);
+  }
+  return changed;
+}
+
+}  // namespace
+
+void RefineWithRejection(const Observations& observations, const ObservationNames& names,
+                         const MarkerLayout& layout, const MapperOptions& o, const BundleSettings& settings,
+                         MapperBundle* bundle, MapReport* report) {
+  for (int round = 0;; ++round) {
+    const BundleSummary summary = Solve(settings, bundle, report);
+    report->linear_solver = summary.linear_solver;
+    if (!summary.usable) throw MapperError("refinement failed: " + summary.termination);
+    if (round >= o.max_rejection_rounds) break;
+    if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
+  }
+}
+
+namespace {
+
+std::string UnreliableCameraMessage(int c, int total, int active, const CameraPlacement& cameras,
+                                    const std::vector<std::string>& names, const MapperOptions& o) {
+  std::ostringstream msg;
+  msg << "camera '" << names[c] << "'" << (c == cameras.reference ? " (the reference camera)" : "")
+      << " cannot be placed reliably: " << total - active << " of its " << total
+      << " marker observations (in " << cameras.views[c]
+      << " frames) do not fit the map after refinement (rms > outlier_px " << o.outlier_px
+      << " px); record more frames where '" << names[c]
+      << "' sees the object closer to face-on at the same time as another camera";
+  std::vector<double> others;
+  for (size_t k = 0; k < names.size(); ++k)
+    if (static_cast<int>(k) != c && cameras.fit_rms[k] >= 0) others.push_back(cameras.fit_rms[k]);
+  const double fit = cameras.fit_rms[c];
+  if (fit >= 0 && !others.empty() && fit > 3.0 * Median(others) && fit > 2.0)
+    msg << ". Its frames with several markers do not fit the marker layout (median rms "
+        << std::setprecision(3) << fit << " px; other cameras " << Median(others)
+        << " px): check its intrinsics and the orientation of "
+        << "its images";
+  return msg.str();
+}
+
+// Makes camera `reference` the rig frame: every cam_from_rig and rig_from_object re-expressed in it.
+void ReanchorOn(int reference, CameraPlacement* cameras, BundleProblem* bp) {
+  const Rigid3 rig_from_new = Inverse(RigidFromBlock(bp->cam_from_rig[reference].data()));
+  const Rigid3 new_from_rig = Inverse(rig_from_new);
+  for (PoseBlock& b : bp->cam_from_rig)
+    b = BlockFromRigid(Normalized(RigidFromBlock(b.data()) * rig_from_new));
+  for (PoseBlock& b : bp->rig_from_object)
+    b = BlockFromRigid(Normalized(new_from_rig * RigidFromBlock(b.data())));
+  bp->cam_from_rig[reference] = BlockFromRigid(Rigid3::Identity());
+  bp->camera_fixed.assign(bp->camera_fixed.size(), 0);
+  bp->camera_fixed[reference] = 1;
+  cameras->reference = reference;
+}
+
+// With --allow-partial a reference that does not fit is replaced by the best-connected camera that does;
+// a reference the user named, or none left, is an error naming it.
+void ReplaceReference(const std::vector<int>& bad, const std::string& problem, const MapperOptions& o,
+                      const std::vector<std::string>& names, CameraPlacement* cameras, BundleProblem* bp,
+                      MapReport* report) {
+  const int n = static_cast<int>(names.size());
+  if (!o.reference_camera.empty())
+    throw MapperError(problem + "; it is the reference camera: name another one " +
+                      "(--reference-camera or mapper.reference_camera) to map without it");
+  std::vector<bool> eligible(cameras->placed.begin(), cameras->placed.end());
+  for (int c : bad) eligible[c] = false;
+  const int next = BestConnectedNode(n, cameras->edges, eligible);
+  if (next < 0) throw MapperError(problem + "; it is the reference camera and no other camera fits the map");
+  report->warnings.push_back("reference camera '" + names[cameras->reference] + "' left out: '" +
+                             names[next] + "' is the reference camera instead");
+  ReanchorOn(next, cameras, bp);
+}
+
+}  // namespace
+
+void DropUnreliableCameras(const Observations& observations, const ObservationNames& names,
+                           const MapperOptions& o, const BundleSettings& settings, CameraPlacement* cameras,
+                           MapperBundle* bundle, MapReport* report) {
+  BundleProblem& bp = bundle->problem;
+  const std::vector<std::string>& camera_names = *names.camera_names;
+  const int n = static_cast<int>(camera_names.size());
+  std::vector<int> total(n, 0), active(n, 0);
+  for (size_t k = 0; k < bp.observations.size(); ++k) {
+    ++total[bp.observations[k].camera];
+    active[bp.observations[k].camera] += bp.active[k];
+  }
+  std::vector<std::string> problems;
+  std::vector<int> bad;
+  for (int c = 0; c < n; ++c) {
+    // The reference camera too: a badly placed reference makes every other pose meaningless.
+    if (!cameras->placed[c] || total[c] == 0 || active[c] >= 0.5 * total[c]) continue;
+    problems.push_back(UnreliableCameraMessage(c, total[c], active[c], *cameras, camera_names, o));
+    bad.push_back(c);
+  }
+  if (problems.empty()) return;
+  if (!o.allow_partial) {
+    std::string all = problems[0];
+    if (problems.size() > 1) all += " (and " + std::to_string(problems.size() - 1) + " more cameras)";
+    throw MapperError(all + "; use --allow-partial to map without it");
+  }
+  for (size_t i = 0; i < bad.size(); ++i)
+    if (bad[i] == cameras->reference)
+      ReplaceReference(bad, problems[i], o, camera_names, cameras, &bp, report);
+  for (int c : bad) {
+    cameras->placed[c] = false;
+    report->dropped_cameras.push_back(camera_names[c]);
+    for (size_t k = 0; k < bp.observations.size(); ++k)
+      if (bp.active[k] && bp.observations[k].camera == c)
+        RejectObservation(*bundle, observations, names, k, 0.0, "camera left out (--allow-partial)", &bp,
+                          report);
+  }
+  for (const std::string& p : problems) report->warnings.push_back(p + ": left out (--allow-partial)");
+  Solve(settings, bundle, report);
+}
+
+namespace {
+
+// Sums of squared observation RMS (and largest corner errors) per camera, marker and frame.
+struct ResidualStats {
+  std::vector<double> cam_sq, cam_max, mk_sq, mk_max, fr_sq;
+  std::vector<int> cam_n, mk_n, fr_n;
+  std::vector<std::set<int>> fr_cams, fr_markers;
+  double total_sq = 0;
+  int total_n = 0;
+};
+
+ResidualStats StatsOf(const BundleProblem& bp) {
+  const size_t nc = bp.cam_from_rig.size(), nm = bp.object_from_marker.size(), nf = bp.rig_from_object.size();
+  ResidualStats s{std::vector<double>(nc, 0),    std::vector<double>(nc, 0), std::vector<double>(nm, 0),
+                  std::vector<double>(nm, 0),    std::vector<double>(nf, 0), std::vector<int>(nc, 0),
+                  std::vector<int>(nm, 0),       std::vector<int>(nf, 0),    std::vector<std::set<int>>(nf),
+                  std::vector<std::set<int>>(nf)};
+  std::vector<double> max_corner;
+  const std::vector<double> rms = ObservationRms(bp, &max_corner);
+  for (size_t k = 0; k < bp.observations.size(); ++k) {
+    if (!bp.active[k] || !std::isfinite(rms[k])) continue;
+    const BundleObservation& b = bp.observations[k];
+    const double sq = rms[k] * rms[k];
+    s.cam_sq[b.camera] += sq;
+    s.cam_max[b.camera] = std::max(s.cam_max[b.camera], max_corner[k]);
+    ++s.cam_n[b.camera];
+    s.mk_sq[b.marker] += sq;
+    s.mk_max[b.marker] = std::max(s.mk_max[b.marker], max_corner[k]);
+    ++s.mk_n[b.marker];
+    s.fr_sq[b.frame] += sq;
+    ++s.fr_n[b.frame];
+    s.fr_cams[b.frame].insert(b.camera);
+    s.fr_markers[b.frame].insert(b.marker);
+    s.total_sq += sq;
+    ++s.total_n;
+  }
+  return s;
+}
+
+}  // namespace
+
+void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
+             const MarkerLayout& layout, const CameraPlacement& cameras,
+             const std::vector<CameraModel>& models, const MapperOptions& o, RigMap* map,
+             std::vector<TrajectoryRow>* trajectory) {
+  const BundleProblem& bp = bundle.problem;
+  const ResidualStats s = StatsOf(bp);
+  const std::vector<int>& ids = observations.marker_ids;
+  map->dictionary = o.dictionary;
+  map->reference_camera = (*names.camera_names)[cameras.reference];
+  map->reference_marker = ids[layout.reference];
+  map->cameras.clear();
+  map->markers.clear();
+  for (size_t c = 0; c < bp.cam_from_rig.size(); ++c) {
+    if (!cameras.placed[c]) continue;
+    const double rms = s.cam_n[c] ? std::sqrt(s.cam_sq[c] / s.cam_n[c]) : 0.0;
+    map->cameras.push_back({(*names.camera_names)[c], models[c],
+                            Normalized(Inverse(RigidFromBlock(bp.cam_from_rig[c].data()))), s.cam_n[c], rms,
+                            s.cam_max[c]});
+  }
+  std::vector<int> order(ids.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int x, int y) { return ids[x] < ids[y]; });
+  for (int m : order) {
+    if (!layout.placed[m] || bundle.marker_rejected[m]) continue;
+    const double rms = s.mk_n[m] ? std::sqrt(s.mk_sq[m] / s.mk_n[m]) : 0.0;
+    map->markers.push_back({ids[m], o.sizes.Get(ids[m]),
+                            Normalized(RigidFromBlock(bp.object_from_marker[m].data())), s.mk_n[m], rms,
+                            s.mk_max[m]});
+  }
+  map->rms_px = s.total_n ? std::sqrt(s.total_sq / s.total_n) : 0.0;
+  map->num_observations = s.total_n;
+  trajectory->clear();
+  for (size_t f = 0; f < bp.rig_from_object.size(); ++f) {
+    if (s.fr_n[f] == 0) continue;
+    TrajectoryRow row;
+    row.utime = (*names.frames)[f].utime;
+    row.seq = (*names.frames)[f].seq;
+    row.rig_from_object = Normalized(RigidFromBlock(bp.rig_from_object[f].data()));
+    row.rms_px = std::sqrt(s.fr_sq[f] / s.fr_n[f]);
+    row.cameras = static_cast<int>(s.fr_cams[f].size());
+    row.markers = static_cast<int>(s.fr_markers[f].size());
+    trajectory->push_back(row);
+  }
+  map->num_frames = static_cast<int>(trajectory->size());
+}
+
+}  // namespace mcmt
