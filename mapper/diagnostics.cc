@@ -1,6 +1,7 @@
 // Calibration diagnostics from a MapResult: residuals, verdicts, pose covariance (see diagnostics.h).
 #include "mapper/diagnostics.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -248,82 +249,124 @@ void CameraStatistics(const MapResult& result, const std::vector<ObservationResi
   }
 }
 
-// Marginal covariance of every non-reference camera pose at the solution (Gauss-Newton, no robust
-// loss, inliers only), scaled by the residuals' variance.
-void PoseCovariance(Rebuilt* r, Diagnostics* d) {
-  BundleProblem& bp = r->bp;
-  ceres::Problem::Options po;
-  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  LeftPoseManifold manifold;
-  std::set<double*> used;
-  int residuals = 0;
-  double sum_sq = 0;
-  for (size_t k = 0; k < bp.observations.size(); ++k) {
-    if (!bp.active[k]) continue;
-    const BundleObservation& b = bp.observations[k];
-    const ObservationResidual& row = d->observations[r->row_of_observation[k]];
-    if (!row.inlier) continue;
-    double* blocks[3] = {bp.cam_from_rig[b.camera].data(), bp.object_from_marker[b.marker].data(),
-                         bp.rig_from_object[b.frame].data()};
-    problem.AddResidualBlock(ReprojectionCost::Create(bp.models[b.camera], b.corners, b.side), nullptr,
-                             blocks[0], blocks[1], blocks[2]);
-    for (double* p : blocks)
-      if (used.insert(p).second) problem.SetManifold(p, &manifold);
-    residuals += 8;
-    for (const Eigen::Vector2d& v : row.residual) sum_sq += v.squaredNorm();
+// Gauss-Newton information of the camera and marker poses with every frame pose eliminated (Schur
+// complement: frames are independent given cameras and markers), from the inlier observations at the
+// solution, without robust loss. Parameters are the 6-dof left perturbations of the mapper's blocks.
+struct ReducedSystem {
+  std::vector<int> camera_slot, marker_slot;  // -1: fixed or unobserved
+  Eigen::MatrixXd information;                // 6 slots x 6 slots
+  int residuals = 0, parameters = 0;
+  double sum_sq = 0.0;
+};
+
+using Block6 = Eigen::Matrix<double, 6, 6>;
+using Jacobian8x6 = Eigen::Matrix<double, 8, 6>;
+
+// One frame's share: its observations' Jacobians (slots of camera and marker, J_slot, J_frame).
+struct FrameTerms {
+  Block6 c = Block6::Zero();
+  std::map<int, Block6> b;  // slot -> J_slot^T J_frame
+};
+
+void EliminateFrame(const FrameTerms& f, Eigen::MatrixXd* h) {
+  const Eigen::LDLT<Block6> c(f.c);
+  if (c.info() != Eigen::Success) return;
+  for (const auto& [i, bi] : f.b) {
+    const Block6 ki = c.solve(bi.transpose());
+    for (const auto& [j, bj] : f.b) h->block<6, 6>(6 * j, 6 * i) -= bj * ki;  // S_ji -= B_j C^-1 B_i^T
   }
-  for (size_t c = 0; c < bp.cam_from_rig.size(); ++c)
-    if (bp.camera_fixed[c] && used.count(bp.cam_from_rig[c].data()))
-      problem.SetParameterBlockConstant(bp.cam_from_rig[c].data());
-  for (size_t m = 0; m < bp.object_from_marker.size(); ++m)
-    if (bp.marker_fixed[m] && used.count(bp.object_from_marker[m].data()))
-      problem.SetParameterBlockConstant(bp.object_from_marker[m].data());
-  const int parameters = 6 * static_cast<int>(used.size());
-  d->residual_sigma_px = residuals > parameters ? std::sqrt(sum_sq / (residuals - parameters)) : 0.0;
-  std::vector<std::pair<const double*, const double*>> blocks;
-  std::vector<CameraDiagnostics*> wanted;
+}
+
+ReducedSystem BuildReducedSystem(const Rebuilt& r, const std::vector<ObservationResidual>& rows) {
+  const BundleProblem& bp = r.bp;
+  ReducedSystem sys;
+  sys.camera_slot.assign(bp.cam_from_rig.size(), -1);
+  sys.marker_slot.assign(bp.object_from_marker.size(), -1);
+  std::vector<std::vector<size_t>> by_frame(bp.rig_from_object.size());
+  int slots = 0;
+  for (size_t k = 0; k < bp.observations.size(); ++k) {
+    if (!rows[r.row_of_observation[k]].inlier) continue;
+    const BundleObservation& b = bp.observations[k];
+    if (!bp.camera_fixed[b.camera] && sys.camera_slot[b.camera] < 0) sys.camera_slot[b.camera] = slots++;
+    if (!bp.marker_fixed[b.marker] && sys.marker_slot[b.marker] < 0) sys.marker_slot[b.marker] = slots++;
+    by_frame[b.frame].push_back(k);
+  }
+  sys.information = Eigen::MatrixXd::Zero(6 * slots, 6 * slots);
+  for (const std::vector<size_t>& obs : by_frame) {
+    if (obs.empty()) continue;
+    FrameTerms f;
+    for (size_t k : obs) {
+      const BundleObservation& b = bp.observations[k];
+      ReprojectionCost cost(bp.models[b.camera], b.corners, b.side);
+      const double* params[3] = {bp.cam_from_rig[b.camera].data(), bp.object_from_marker[b.marker].data(),
+                                 bp.rig_from_object[b.frame].data()};
+      double res[8];
+      Eigen::Matrix<double, 8, 7, Eigen::RowMajor> jac[3];
+      double* jacs[3] = {jac[0].data(), jac[1].data(), jac[2].data()};
+      if (!cost.Evaluate(params, res, jacs)) continue;
+      const Jacobian8x6 jf = jac[2].leftCols<6>();
+      f.c += jf.transpose() * jf;
+      const int slot[2] = {sys.camera_slot[b.camera], sys.marker_slot[b.marker]};
+      for (int a = 0; a < 2; ++a) {
+        if (slot[a] < 0) continue;
+        const Jacobian8x6 ja = jac[a].leftCols<6>();
+        auto it = f.b.emplace(slot[a], Block6::Zero()).first;
+        it->second += ja.transpose() * jf;
+        for (int e = 0; e < 2; ++e)
+          if (slot[e] >= 0)
+            sys.information.block<6, 6>(6 * slot[a], 6 * slot[e]) += ja.transpose() * jac[e].leftCols<6>();
+      }
+      sys.residuals += 8;
+      sys.sum_sq += Eigen::Map<const Eigen::Matrix<double, 8, 1>>(res).squaredNorm();
+    }
+    sys.parameters += 6;
+    EliminateFrame(f, &sys.information);
+  }
+  sys.parameters += 6 * slots;
+  return sys;
+}
+
+// Camera centre c = -R^T t of cam_from_rig (R, t) under the left perturbation: dc = -R^T ([t]x dr + dt).
+void FillPoseSigmas(const PoseBlock& cam_from_rig_block, CameraDiagnostics* cam) {
+  const Rigid3 cam_from_rig = RigidFromBlock(cam_from_rig_block.data());
+  const Eigen::Matrix3d rt = cam_from_rig.linear().transpose();
+  const Eigen::Vector3d t = cam_from_rig.translation();
+  Eigen::Matrix3d tx;
+  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Eigen::Matrix<double, 3, 6> j;
+  j << -rt * tx, -rt;
+  const Eigen::Matrix3d cov_c = j * cam->covariance * j.transpose();
+  cam->sigma_position_mm = 1000.0 * cov_c.diagonal().cwiseMax(0).cwiseSqrt();
+  cam->sigma_rotation_deg =
+      (180.0 / M_PI) * cam->covariance.topLeftCorner<3, 3>().diagonal().cwiseMax(0).cwiseSqrt();
+  cam->has_covariance = true;
+}
+
+// Marginal covariance of every non-reference camera pose, scaled by the residuals' variance.
+void PoseCovariance(const Rebuilt& r, Diagnostics* d) {
+  const ReducedSystem sys = BuildReducedSystem(r, d->observations);
+  d->residual_sigma_px =
+      sys.residuals > sys.parameters ? std::sqrt(sys.sum_sq / (sys.residuals - sys.parameters)) : 0.0;
+  const Eigen::LDLT<Eigen::MatrixXd> h(sys.information);
+  const bool ok = sys.information.size() > 0 && h.info() == Eigen::Success && h.isPositive() &&
+                  h.vectorD().minCoeff() > 1e-12 * h.vectorD().maxCoeff();
+  const Eigen::MatrixXd cov =
+      ok ? Eigen::MatrixXd(h.solve(Eigen::MatrixXd::Identity(sys.information.rows(), sys.information.cols())))
+         : Eigen::MatrixXd();
+  const double s2 = d->residual_sigma_px * d->residual_sigma_px;
   for (size_t c = 0; c < d->cameras.size(); ++c) {
     CameraDiagnostics& cam = d->cameras[c];
-    if (cam.reference)
+    const int slot = sys.camera_slot[c];
+    if (cam.reference) {
       cam.covariance_note = "reference camera (defines the rig frame)";
-    else if (!used.count(bp.cam_from_rig[c].data()))
+    } else if (slot < 0) {
       cam.covariance_note = "no inlier observation";
-    else {
-      blocks.emplace_back(bp.cam_from_rig[c].data(), bp.cam_from_rig[c].data());
-      wanted.push_back(&cam);
+    } else if (!ok) {
+      cam.covariance_note = "the poses are not determined by the observations (rank-deficient)";
+    } else {
+      cam.covariance = s2 * cov.block<6, 6>(6 * slot, 6 * slot);
+      FillPoseSigmas(r.bp.cam_from_rig[c], &cam);
     }
-  }
-  if (blocks.empty()) return;
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::SPARSE_QR;
-  co.apply_loss_function = false;
-  co.num_threads = 2;
-  ceres::Covariance covariance(co);
-  if (!covariance.Compute(blocks, &problem)) {
-    for (CameraDiagnostics* cam : wanted)
-      cam->covariance_note = "rank-deficient problem: pose not determined";
-    return;
-  }
-  const double s2 = d->residual_sigma_px * d->residual_sigma_px;
-  for (size_t i = 0; i < wanted.size(); ++i) {
-    CameraDiagnostics& cam = *wanted[i];
-    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> cov;
-    covariance.GetCovarianceBlockInTangentSpace(blocks[i].first, blocks[i].first, cov.data());
-    cam.covariance = s2 * cov;
-    cam.has_covariance = true;
-    // Centre c = -R^T t of cam_from_rig (R, t) under the left perturbation: dc = -R^T ([t]x dr + dt).
-    const Rigid3 cam_from_rig = RigidFromBlock(blocks[i].first);
-    const Eigen::Matrix3d rt = cam_from_rig.linear().transpose();
-    const Eigen::Vector3d t = cam_from_rig.translation();
-    Eigen::Matrix3d tx;
-    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-    Eigen::Matrix<double, 3, 6> j;
-    j << -rt * tx, -rt;
-    const Eigen::Matrix3d cov_c = j * cam.covariance * j.transpose();
-    cam.sigma_position_mm = 1000.0 * cov_c.diagonal().cwiseMax(0).cwiseSqrt();
-    cam.sigma_rotation_deg =
-        (180.0 / M_PI) * cam.covariance.topLeftCorner<3, 3>().diagonal().cwiseMax(0).cwiseSqrt();
   }
 }
 
@@ -351,7 +394,7 @@ Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions
   Rebuilt r = Rebuild(result, &d.observations);
   FillResiduals(r, &d.observations);
   CameraStatistics(result, d.observations, &d);
-  if (options.covariance) PoseCovariance(&r, &d);
+  if (options.covariance) PoseCovariance(r, &d);
   return d;
 }
 
@@ -377,10 +420,17 @@ std::string ResidualsCsv(const Diagnostics& d) {
 }
 
 std::string DiagnosticsJson(const Diagnostics& d) {
+  const DiagnosticsOptions& o = d.options;
   std::ostringstream j;
   j << "{\n    \"corner_noise_px\": " << Num(d.options.corner_noise_px)
     << ",\n    \"print_tolerance\": " << Num(d.options.print_tolerance)
-    << ",\n    \"residual_sigma_px\": " << Num(d.residual_sigma_px) << ",\n    \"cameras\": [\n";
+    << ",\n    \"residual_sigma_px\": " << Num(d.residual_sigma_px)
+    << ",\n    \"rules\": {\"fair_rms_ratio\": " << Num(o.fair_rms_ratio)
+    << ", \"poor_rms_ratio\": " << Num(o.poor_rms_ratio) << ", \"fair_rejected\": " << Num(o.fair_rejected)
+    << ", \"poor_rejected\": " << Num(o.poor_rejected) << ", \"fair_coverage\": " << Num(o.fair_coverage)
+    << ", \"poor_coverage\": " << Num(o.poor_coverage) << ", \"fair_observations\": " << o.fair_observations
+    << ", \"poor_observations\": " << o.poor_observations << ", \"coverage_cells\": " << o.coverage_cells
+    << "},\n    \"cameras\": [\n";
   for (size_t i = 0; i < d.cameras.size(); ++i) {
     const CameraDiagnostics& c = d.cameras[i];
     j << "      {\"name\": " << Quote(c.name) << ", \"verdict\": " << Quote(c.verdict)

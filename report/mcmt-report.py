@@ -346,11 +346,17 @@ def verdict_table(cams, diag):
                      esc(c["reason"])))
     head = ["camera", "verdict", "rms (px)", "predicted (px)", "observations", "inliers", "rejected (%)",
             "coverage (%)", "marker side (px)", "pose 1-sigma (mm)", "(deg)", "why"]
+    u = diag.get("rules", {})
+    cells = u.get("coverage_cells", 8)
     note = (f'<p class="note">Predicted rms = sqrt(2 &middot; {diag["corner_noise_px"]}&sup2; + '
             f'({diag["print_tolerance"]} &middot; marker side / 2)&sup2;): corner noise of '
             f'{diag["corner_noise_px"]} px per coordinate plus a {100 * diag["print_tolerance"]:.1f}% error of the '
-            'printed size. good: rms within 1.5x of it, at most 5% rejected, markers seen in at least 30% of the '
-            'image (8x8 cells), at least 50 observations; poor: beyond 3x, 20%, 10%, 10.</p>')
+            f'printed size. good: rms within {u.get("fair_rms_ratio")}x of it, at most '
+            f'{100 * u.get("fair_rejected", 0):.0f}% rejected, markers seen in at least '
+            f'{100 * u.get("fair_coverage", 0):.0f}% of the image ({cells}x{cells} cells), at least '
+            f'{u.get("fair_observations")} observations; poor: beyond {u.get("poor_rms_ratio")}x, '
+            f'{100 * u.get("poor_rejected", 0):.0f}%, {100 * u.get("poor_coverage", 0):.0f}%, '
+            f'{u.get("poor_observations")}.</p>')
     return "<h2>Cameras</h2>" + table(head, rows, numeric=range(2, 11)) + note
 
 
