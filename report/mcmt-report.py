@@ -37,24 +37,23 @@ class ReportError(Exception):
 
 # ---- inputs ------------------------------------------------------------------------------------------
 
-def read_json(path):
+def read_structured(path, parse, kind, errors):
+    """A JSON or YAML file; errors name the file."""
     try:
         with open(path) as f:
-            return json.load(f)
+            return parse(f)
     except OSError as e:
         raise ReportError(f"{path}: cannot read: {e.strerror}")
-    except json.JSONDecodeError as e:
-        raise ReportError(f"{path}: not valid JSON: {e}")
+    except errors as e:
+        raise ReportError(f"{path}: not valid {kind}: {str(e).splitlines()[0]}")
+
+
+def read_json(path):
+    return read_structured(path, json.load, "JSON", json.JSONDecodeError)
 
 
 def read_map(path):
-    try:
-        with open(path) as f:
-            return yaml.safe_load(f)
-    except OSError as e:
-        raise ReportError(f"{path}: cannot read: {e.strerror}")
-    except yaml.YAMLError as e:
-        raise ReportError(f"{path}: not valid YAML: {str(e).splitlines()[0]}")
+    return read_structured(path, yaml.safe_load, "YAML", yaml.YAMLError)
 
 
 def read_csv(path, required):
