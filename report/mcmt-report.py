@@ -15,6 +15,7 @@ import io
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -390,10 +391,10 @@ def uncertainty_section(d):
     for c in cams:
         if "sigma_position_mm" in c:
             rows.append((esc(c["name"]), *[fmt(v, 3) for v in c["sigma_position_mm"]],
-                         *[fmt(v, 4) for v in c["sigma_rotation_deg"]]))
+                         *[fmt(v, 4) for v in c["sigma_rotation_deg"]], ""))
         else:
-            rows.append((esc(c["name"]), "-", "-", "-", "-", "-", esc(c.get("covariance_note", ""))))
-    head = ["camera", "x (mm)", "y (mm)", "z (mm)", "rx (deg)", "ry (deg)", "rz (deg)"]
+            rows.append((esc(c["name"]), "-", "-", "-", "-", "-", "-", esc(c.get("covariance_note", ""))))
+    head = ["camera", "x (mm)", "y (mm)", "z (mm)", "rx (deg)", "ry (deg)", "rz (deg)", "note"]
     return ("<h2>Camera pose uncertainty</h2><div class='figs'>" + img(uncertainty_figure(cams), "uncertainty")
             + "</div>" + table(head, rows, numeric=range(1, 7))
             + '<p class="note">1-sigma of each camera pose from the bundle adjustment\'s covariance at the '
@@ -410,12 +411,18 @@ def rejection_section(d):
     else:
         out.append("<p>No marker was rejected.</p>")
     rejected = ~res["inlier"]
-    counts = {}
-    for cam, reason in zip(res["camera"][rejected], res["reason"][rejected]):
-        counts[(cam, reason)] = counts.get((cam, reason), 0) + 1
-    rows = [(esc(cam), n // 4, esc(reason)) for (cam, reason), n in sorted(counts.items())]
-    out.append(table(["camera", "observations", "reason"], rows) if rows else
-               "<p>No observation was rejected.</p>")
+    groups = {}
+    err = np.hypot(res["dx"], res["dy"])
+    for cam, reason, e in zip(res["camera"][rejected], res["reason"][rejected], err[rejected]):
+        kind = re.sub(r"\(rms [^ ]+ px > ", "(rms > ", reason)  # one row per kind, not per value
+        groups.setdefault((cam, kind), []).append(e)
+    rows = []
+    for (cam, kind), errors in sorted(groups.items()):
+        e = np.array(errors)
+        e = e[np.isfinite(e)]
+        rows.append((esc(cam), len(errors) // 4, esc(kind), fmt(float(np.median(e)), 2) if len(e) else "-"))
+    out.append(table(["camera", "observations", "reason", "median corner residual (px)"], rows, numeric=(1, 3))
+               if rows else "<p>No observation was rejected.</p>")
     for key, text in (("duplicates", "detections dropped: the same id twice in one image"),
                       ("ignored_ids", "detections of ids outside markers.ids"),
                       ("weak_frames", "frames seen by one camera only (pose decided by continuity)")):
