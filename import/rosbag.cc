@@ -88,6 +88,30 @@ std::string Bz2StreamDecompress(const std::string& data, const std::string& what
   return out;
 }
 
+std::string ChunkContent(const std::map<std::string, std::string>& h, const std::string& compression,
+                         const uint8_t* payload, uint32_t size, const std::string& where) {
+  const uint32_t raw_size = FieldU32(h, "size", where);
+  const std::string packed(reinterpret_cast<const char*>(payload), size);
+  if (compression == "none") return packed;
+  if (compression == "bz2") return Bz2Decompress(packed, raw_size, where);
+  if (compression == "lz4") return Lz4FrameDecompress(packed, raw_size, where);
+  throw BagError(where + ": chunk compression '" + compression + "' unknown (none, bz2, lz4)");
+}
+
+BagConnection ParseConnection(uint32_t id, const std::map<std::string, std::string>& h,
+                              const uint8_t* payload, uint32_t size, const std::string& where) {
+  const auto c = ParseHeader(payload, size, where + " (connection header)");
+  BagConnection conn;
+  conn.id = id;
+  conn.topic = Require(h, "topic", where);
+  conn.type = Require(c, "type", where);
+  auto md5 = c.find("md5sum");
+  if (md5 != c.end()) conn.md5sum = md5->second;
+  auto def = c.find("message_definition");
+  if (def != c.end()) conn.definition = def->second;
+  return conn;
+}
+
 }  // namespace
 
 // ---- decompressors ------------------------------------------------------------------------------------
@@ -186,17 +210,7 @@ void RosBag::ReadRecords(const uint8_t* data, size_t size, uint64_t base, bool i
     switch (op[0]) {
       case 0x05: {  // chunk
         const std::string& compression = Require(h, "compression", where);
-        const uint32_t raw_size = FieldU32(h, "size", where);
-        const std::string packed(reinterpret_cast<const char*>(payload), data_len);
-        std::string raw;
-        if (compression == "none")
-          raw = packed;
-        else if (compression == "bz2")
-          raw = Bz2Decompress(packed, raw_size, where);
-        else if (compression == "lz4")
-          raw = Lz4FrameDecompress(packed, raw_size, where);
-        else
-          throw BagError(where + ": chunk compression '" + compression + "' unknown (none, bz2, lz4)");
+        const std::string raw = ChunkContent(h, compression, payload, data_len, where);
         ++compressions_[compression];
         ReadRecords(reinterpret_cast<const uint8_t*>(raw.data()), raw.size(), 0, true);
         break;
@@ -204,17 +218,8 @@ void RosBag::ReadRecords(const uint8_t* data, size_t size, uint64_t base, bool i
       case 0x07: {  // connection
         const uint32_t id = FieldU32(h, "conn", where);
         if (connection_index_.count(id)) break;  // repeated in the index section
-        const auto c = ParseHeader(payload, data_len, where + " (connection header)");
-        BagConnection conn;
-        conn.id = id;
-        conn.topic = Require(h, "topic", where);
-        conn.type = Require(c, "type", where);
-        auto md5 = c.find("md5sum");
-        if (md5 != c.end()) conn.md5sum = md5->second;
-        auto def = c.find("message_definition");
-        if (def != c.end()) conn.definition = def->second;
         connection_index_[id] = connections_.size();
-        connections_.push_back(conn);
+        connections_.push_back(ParseConnection(id, h, payload, data_len, where));
         break;
       }
       case 0x02: {  // message data

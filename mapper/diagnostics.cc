@@ -64,27 +64,35 @@ std::string FindRejection(const RejectionIndex& index, const std::string& camera
   return "";
 }
 
-// Observations of the input, classified, and the bundle problem of the usable ones.
-Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows) {
+// The map's and trajectory's poses as the bundle problem's blocks; name / id -> block index.
+void InitialBlocks(const MapResult& result, Rebuilt* rebuilt, std::map<std::string, int>* camera_index,
+                   std::map<int, int>* marker_index) {
   const RigMap& map = result.map;
-  Rebuilt r;
-  std::map<std::string, int> camera_index;
+  Rebuilt& r = *rebuilt;
   for (size_t c = 0; c < map.cameras.size(); ++c) {
-    camera_index[map.cameras[c].name] = static_cast<int>(c);
+    (*camera_index)[map.cameras[c].name] = static_cast<int>(c);
     r.bp.cam_from_rig.push_back(BlockFromRigid(Inverse(map.cameras[c].rig_from_cam)));
     r.bp.models.push_back(&map.cameras[c].model);
     r.bp.camera_fixed.push_back(map.cameras[c].name == map.reference_camera);
     if (r.bp.camera_fixed.back()) r.reference_camera = static_cast<int>(c);
   }
-  std::map<int, int> marker_index;
   for (size_t m = 0; m < map.markers.size(); ++m) {
-    marker_index[map.markers[m].id] = static_cast<int>(m);
+    (*marker_index)[map.markers[m].id] = static_cast<int>(m);
     r.bp.object_from_marker.push_back(BlockFromRigid(map.markers[m].object_from_marker));
     r.bp.marker_fixed.push_back(map.markers[m].id == map.reference_marker);
     if (r.bp.marker_fixed.back()) r.reference_marker = static_cast<int>(m);
   }
   for (const TrajectoryRow& t : result.trajectory)
     r.bp.rig_from_object.push_back(BlockFromRigid(t.rig_from_object));
+}
+
+// Observations of the input, classified, and the bundle problem of the usable ones.
+Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows) {
+  const RigMap& map = result.map;
+  Rebuilt r;
+  std::map<std::string, int> camera_index;
+  std::map<int, int> marker_index;
+  InitialBlocks(result, &r, &camera_index, &marker_index);
   RejectionIndex rejections;
   for (const RejectedObservation& o : result.report.rejected_observations)
     rejections[{o.camera, o.id}].emplace_back(o.utime, o.reason);

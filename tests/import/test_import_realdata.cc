@@ -80,6 +80,35 @@ std::pair<double, size_t> TrackedRms(const std::string& dir, const std::string& 
   return {rows.empty() ? 0.0 : std::sqrt(sq / rows.size()), rows.size()};
 }
 
+// Inlier observations (residuals.csv) whose marker shows the camera its printed face (z out of the face
+// towards the camera), and those seen from behind (a mirrored corner order would make them so).
+std::pair<int, int> CountFacing(const std::string& dir, const RigMap& map) {
+  std::map<int64_t, Rigid3> rig_from_object;
+  for (const TrajectoryRow& r : ReadTrajectory(dir + "/map/trajectory.csv"))
+    rig_from_object[r.utime] = r.rig_from_object;
+  std::ifstream residuals(dir + "/map/residuals.csv");
+  std::string line;
+  std::getline(residuals, line);
+  int facing = 0, away = 0;
+  while (std::getline(residuals, line)) {
+    std::stringstream s(line);
+    std::string utime, seq, camera, id, corner, status;
+    std::getline(s, utime, ',');
+    std::getline(s, seq, ',');
+    std::getline(s, camera, ',');
+    std::getline(s, id, ',');
+    std::getline(s, corner, ',');
+    if (corner != "0" || line.find(",inlier,") == std::string::npos) continue;
+    const auto frame = rig_from_object.find(std::stoll(utime));
+    if (frame == rig_from_object.end()) continue;
+    const Rigid3 cam_from_marker = Inverse(map.FindCamera(camera)->rig_from_cam) * frame->second *
+                                   map.FindMarker(std::stoi(id))->object_from_marker;
+    const Eigen::Vector3d normal = cam_from_marker.linear().col(2);
+    (normal.dot(cam_from_marker.translation()) < 0 ? facing : away)++;
+  }
+  return {facing, away};
+}
+
 struct Limits {
   double mm, deg, rms_px;
 };
@@ -115,30 +144,7 @@ void RunSession(const std::string& name, Limits limits) {
     EXPECT_LT(mm, limits.mm) << c.name;
     EXPECT_LT(deg, limits.deg) << c.name;
   }
-  // Every inlier observation sees the printed face of its marker (z out of the face towards the camera).
-  std::map<int64_t, Rigid3> rig_from_object;
-  for (const TrajectoryRow& r : ReadTrajectory(dir / "map/trajectory.csv"))
-    rig_from_object[r.utime] = r.rig_from_object;
-  std::ifstream residuals(dir / "map/residuals.csv");
-  std::string line;
-  std::getline(residuals, line);
-  int facing = 0, away = 0;
-  while (std::getline(residuals, line)) {
-    std::stringstream s(line);
-    std::string utime, seq, camera, id, corner, status;
-    std::getline(s, utime, ',');
-    std::getline(s, seq, ',');
-    std::getline(s, camera, ',');
-    std::getline(s, id, ',');
-    std::getline(s, corner, ',');
-    if (corner != "0" || line.find(",inlier,") == std::string::npos) continue;
-    const auto frame = rig_from_object.find(std::stoll(utime));
-    if (frame == rig_from_object.end()) continue;
-    const Rigid3 cam_from_marker = Inverse(map.FindCamera(camera)->rig_from_cam) * frame->second *
-                                   map.FindMarker(std::stoi(id))->object_from_marker;
-    const Eigen::Vector3d normal = cam_from_marker.linear().col(2);
-    (normal.dot(cam_from_marker.translation()) < 0 ? facing : away)++;
-  }
+  const auto [facing, away] = CountFacing(dir.str(), map);
   EXPECT_GT(facing, 100);
   EXPECT_EQ(away, 0) << "markers seen from behind: corner order mirrored";
   // Which calibration explains the detections better: the same tracker on the same detections, with

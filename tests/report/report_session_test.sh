@@ -2,14 +2,14 @@
 # Maps a session with the real programs and checks mcmt-report's page in headless Chromium
 # (report_page_test.sh). Detectors write LCM logs through LCM's file provider: no network.
 #   report_session_test.sh demo|caliscope BIN_DIR SOURCE_DIR WORK_DIR
-#     demo:      mcmt-sim renders 3 cameras x 60 frames (the demo's object) -> mcmt-detector per camera
+#     demo:      mcmt-sim renders 3 cameras x 40 frames (the demo's object) -> mcmt-detector per camera
 #     caliscope: the real caliscope charuco recording (../shared/data/caliscope; skipped when absent)
 #   then mcmt-mapper -> mcmt-report -> Chromium.  Exit 77: skipped.
 set -euo pipefail
 MODE="$1"; BIN="$2"; SRC="$3"; WORK="$4"
 rm -rf "$WORK"; mkdir -p "$WORK"
 if [[ $MODE == demo ]]; then
-  "$BIN/mcmt-sim" --out "$WORK/sim" --cameras 3 --frames 60 --seed 7 --quiet
+  "$BIN/mcmt-sim" --out "$WORK/sim" --cameras 3 --frames 40 --seed 7 --quiet
   RIG="$WORK/sim/rig.yaml"
 else
   [[ -d "$SRC/../shared/data/caliscope/charuco_calibration" ]] || {
