@@ -194,7 +194,7 @@ MapResult MapperNode::SolveWriteAndPublish() {
   }
   mapper_.SetProgressCallback(nullptr);
   if (tty_) log_ << "\r\033[K";
-  WriteMapOutputs(options_.outdir, result);
+  const std::string verdicts = WriteMapOutputs(options_.outdir, result);
   const MapReport& r = result.report;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(3) << "mapped " << result.map.cameras.size() << " cameras, "
@@ -212,7 +212,8 @@ MapResult MapperNode::SolveWriteAndPublish() {
     log_ << "dropped " << r.duplicates << " duplicate detections (same id twice in one frame)\n";
   for (const std::string& w : r.warnings) log_ << "warning: " << w << "\n";
   log_ << "wrote " << options_.outdir << "/map.yaml, trajectory.csv, report.json, map_initial.yaml, "
-       << "trajectory_initial.csv\n";
+       << "trajectory_initial.csv, residuals.csv\n"
+       << verdicts;
   if (options_.publish && output_) {
     const rig_map_t msg = ToRigMapMsg(result.map, NowUtime());
     output_->publish(kMapChannel, &msg);
