@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "core/version.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
@@ -68,6 +69,7 @@ std::string ReportJson(const MapResult& result) {
   const RigMap& map = result.map;
   std::ostringstream j;
   j << "{\n";
+  j << "  \"mcmt_version\": " << JsonString(Version()) << ",\n";
   j << "  \"reference_camera\": " << JsonString(map.reference_camera) << ",\n";
   j << "  \"reference_marker\": " << map.reference_marker << ",\n";
   j << "  \"detections_messages\": " << r.detections_messages << ",\n";
