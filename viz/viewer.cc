@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "core/progress.h"
 
 namespace mcmt::viz {
 namespace {
@@ -226,6 +227,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     fs::create_directories(options_.video_dir, ec);
     if (ec) throw std::runtime_error(options_.video_dir + ": cannot create the folder: " + ec.message());
     const int n = static_cast<int>(rows.size());
+    Progress progress("mcmt-viz --video", n);
     for (int i = 0; i < n; ++i) {
       scene.SetCurrentFrame(i);
       scene.SetDetections(detections_at(i));
@@ -234,7 +236,9 @@ int Viewer::RunHeadless(LcmCollector* collector) {
       char name[32];
       std::snprintf(name, sizeof(name), "frame_%06d.png", i);
       WritePng((fs::path(options_.video_dir) / name).string(), scene.Render(&render));
+      progress.Update(i + 1);
     }
+    progress.Finish();
     std::cout << "mcmt-viz: wrote " << n << " frames to " << options_.video_dir << "\n";
   }
   return 0;
