@@ -31,6 +31,16 @@ void Dump(const cv::Mat& img, const std::string& name) {
   if (const char* dir = std::getenv("MCMT_VIZ_DUMP")) cv::imwrite(std::string(dir) + "/" + name, img);
 }
 
+// w x h, no grid and no legend: only the rig and the object.
+SceneOptions BareOptions(int w, int h) {
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  return o;
+}
+
 // The colour of the background: a render of a scene with nothing in it.
 cv::Vec3b Background(int w, int h) {
   SceneOptions o;
@@ -136,11 +146,7 @@ TEST(VizViewCamera, FramingKeepsEveryPointInside) {
 TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
   const int w = 800, h = 450;
   const auto rig = MakeTestRig(4, 12);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
   scene.SetCurrentFrame(5);
@@ -175,11 +181,7 @@ TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
 TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
   const int w = 640, h = 480;
   auto rig = MakeTestRig(2, 0);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, {}}});
   cv::Mat img = scene.Render(&Renderer(w, h));
@@ -219,11 +221,7 @@ TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
 TEST(VizRender, FrustumsDoNotCoverTheObject) {
   const int w = 800, h = 450;
   const auto rig = MakeTestRig(4, 12);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   o.rays = false;
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
@@ -284,11 +282,7 @@ TEST(VizRender, FrustumsDoNotCoverTheObject) {
 TEST(VizRender, MarkerTextureIsUprightWithArucoTopLeftAtMinusXPlusY) {
   const int w = 640, h = 640;
   auto rig = MakeTestRig(4, 1);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   o.rays = false;
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
@@ -381,11 +375,7 @@ TEST(VizRender, BeforeAfterPanelsSitSideBySide) {
 TEST(VizRender, ObjectCloseUpFillsTheView) {
   const int w = 640, h = 400;
   const auto rig = MakeTestRig(4, 6);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   o.rays = false;
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
