@@ -181,6 +181,9 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
     out.termination = "no observations";
     return out;
   }
+  // Ceres orders the blocks of one group by address: cameras and markers (separate vectors, anywhere on the
+  // heap relative to each other) get a group each, so the reduced system's order -- and the last bits of
+  // the solution -- do not depend on where the heap put them.
   auto* ordering = new ceres::ParameterBlockOrdering;
   int num_reduced = 0;
   for (size_t c = 0; c < camera_used.size(); ++c) {
@@ -188,7 +191,7 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
     double* block = bp->cam_from_rig[c].data();
     problem.SetManifold(block, &manifold);
     if (bp->camera_fixed[c]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 1);
+    ordering->AddElementToGroup(block, 1);  // cameras
     ++num_reduced;
   }
   for (size_t m = 0; m < marker_used.size(); ++m) {
@@ -196,7 +199,7 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
     double* block = bp->object_from_marker[m].data();
     problem.SetManifold(block, &manifold);
     if (bp->marker_fixed[m]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 1);
+    ordering->AddElementToGroup(block, 2);  // markers
     ++num_reduced;
   }
   for (size_t f = 0; f < frame_used.size(); ++f) {

@@ -10,6 +10,7 @@
 
 #include "core/json.h"
 #include "mapper/diagnostics.h"
+#include "core/version.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
@@ -35,6 +36,7 @@ std::string ReportJson(const MapResult& result) {
   const RigMap& map = result.map;
   std::ostringstream j;
   j << "{\n";
+  j << "  \"mcmt_version\": " << JsonString(Version()) << ",\n";
   j << "  \"reference_camera\": " << JsonString(map.reference_camera) << ",\n";
   j << "  \"reference_marker\": " << map.reference_marker << ",\n";
   j << "  \"detections_messages\": " << r.detections_messages << ",\n";
