@@ -237,6 +237,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
                     options_.camera.c_str(), static_cast<long long>(stats_.frames), status_frames / elapsed,
                     static_cast<double>(status_markers) / status_frames, status_ms / status_frames,
                     status_max_ms, static_cast<long long>(source.skipped()));
+      if (progress && progress->terminal()) std::cerr << "\r\033[K" << std::flush;  // the bar redraws after
       std::cout << line << std::endl;
       status_start = Clock::now();
       status_frames = status_markers = 0;

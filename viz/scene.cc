@@ -676,6 +676,8 @@ void VizScene::DrawLegend(cv::Mat* bgr) const {
   cv::putText(*bgr, "residual RMS (px)", {x0, y0 - 6}, font, 0.4, white, 1, cv::LINE_AA);
   cv::putText(*bgr, "0", {x0 - 3, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
   char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", 0.25 * residual_scale_);  // green up to here
+  cv::putText(*bgr, text, {x0 + bar_w / 4 - 12, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
   std::snprintf(text, sizeof(text), ">= %.2f", residual_scale_);
   cv::putText(*bgr, text, {x0 + bar_w - 30, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
 }

@@ -22,7 +22,7 @@ for p in "$BIN"/mcmt-*; do
   out=$("$p" --version 2>&1) || { fail "$name --version exits non-zero: $out"; continue; }
   [[ "$out" == "$name $VERSION"* && $(wc -l <<<"$out") == 1 ]] || fail "$name --version printed '$out'"
 done
-for s in mcmt-launch mcmt-replay mcmt-spy; do
+for s in mcmt-launch mcmt-replay mcmt-spy caliscope-to-mcmt; do
   out=$("$SRC/scripts/$s" --version 2>&1) || fail "$s --version exits non-zero"
   [[ "$out" == "$s $VERSION"* ]] || fail "scripts/$s --version printed '$out'"
   help=$("$SRC/scripts/$s" --help 2>&1) || fail "$s --help exits non-zero"

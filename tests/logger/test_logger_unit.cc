@@ -764,3 +764,25 @@ TEST_F(ExportTest, AnEmptyPosesExportSaysWhyAndWhereThePosesAre) {
   EXPECT_NE(err.find("t.tum is empty: no object_pose_t on MCMT_POSE in " + log), std::string::npos) << err;
   EXPECT_NE(err.find("--trajectory OUTDIR/trajectory.csv"), std::string::npos) << err;
 }
+
+// The caliscope recordings' own intrinsics (configs/caliscope, k3 = -0.0037): Kalibr refuses them
+// naming k3; ROS (plumb_bob, 5 coefficients) and OpenCV hold them exactly.
+TEST_F(ExportTest, CaliscopeIntrinsicsHaveNoKalibrCamchainButRosAndOpenCvHoldThem) {
+  RigMap map = MakeMap();
+  map.cameras.resize(1);
+  map.cameras[0].model = LoadIntrinsics(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope/4cam_cam0.yml");
+  ASSERT_EQ(map.cameras[0].model.distortion.size(), 5u);
+  try {
+    KalibrCamchain(map);
+    FAIL() << "expected a refusal";
+  } catch (const MapExportRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("camera cam0: radtan coefficient k3 = -0.0037489346582201062"),
+              std::string::npos)
+        << e.what();
+  }
+  const YAML::Node ros = YAML::Load(RosCameraInfo(map.cameras[0]));
+  EXPECT_EQ(ros["distortion_model"].as<std::string>(), "plumb_bob");
+  for (int k = 0; k < 5; ++k)
+    EXPECT_EQ(ros["distortion_coefficients"]["data"][k].as<double>(), map.cameras[0].model.distortion[k]);
+  EXPECT_NO_THROW(OpenCvMapYaml(map));
+}
