@@ -27,6 +27,14 @@ struct FrameSyncOptions {
   // completes before the camera set has settled (some camera reported a second frame), so the first
   // frame is not emitted with only the first camera that happened to report.
   std::vector<std::string> cameras;
+  // Clock check (0: none). A message whose utime is more than this ahead of what its camera's clock
+  // predicts (its newest accepted utime, plus the wall time elapsed since it arrived when arrivals are
+  // wall times), or -- for a camera's first messages -- of what the other cameras' clocks predict, is
+  // rejected (counted in clock_jumps) and moves no clock: one message stamped +100 s must not make every
+  // later frame late. A camera whose messages keep coming on the new clock (kClockJumpConfirm in a row,
+  // consistent with each other) is followed (a restarted source); a camera ahead of the others is not.
+  int64_t max_clock_jump_us = 5000000;
+  bool arrival_is_wall_time = true;  // false: arrivals are message times (a log)
 };
 
 struct SyncedFrame {
@@ -42,10 +50,12 @@ struct FrameSyncStats {
   int64_t frames_incomplete = 0;
   int64_t duplicates = 0;
   int64_t out_of_order = 0;
+  int64_t clock_jumps = 0;  // messages rejected by the clock check
 };
 
 class FrameSynchronizer {
  public:
+  static constexpr int kClockJumpConfirm = 5;
   explicit FrameSynchronizer(FrameSyncOptions options = {});
 
   // Adds one camera's detections (arrival: wall time in us). Returns the frames completed by it,
@@ -55,6 +65,10 @@ class FrameSynchronizer {
   std::vector<SyncedFrame> Poll(int64_t now_us);
   // Everything pending, oldest first (end of a log).
   std::vector<SyncedFrame> Flush();
+
+  // Why the last message given to Add was rejected by the clock check ("" when it was not): one line
+  // naming the camera, its utime and the clock it disagrees with.
+  const std::string& clock_rejection() const { return clock_rejection_; }
 
   // Cameras ever seen, and those not heard of for camera_timeout_us before the newest utime.
   std::set<std::string> Cameras() const;
@@ -72,6 +86,14 @@ class FrameSynchronizer {
   std::map<std::string, int64_t> first_utime_;  // per camera, first message utime
   int64_t oldest_utime_ = INT64_MAX;            // first message utime overall
   bool settled_ = false;                        // the camera set is known (see options.cameras)
+  struct Jump {
+    int64_t utime = 0;  // last rejected utime
+    int count = 0;      // consistent rejections in a row
+  };
+  std::map<std::string, int64_t> last_arrival_;  // per camera, arrival of its newest accepted message
+  std::map<std::string, Jump> jumps_;
+  std::string clock_rejection_;
+  bool ClockPlausible(const detections_t& detections, int64_t arrival_us);
   std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
   std::set<std::string> AliveCameras() const;
 };

@@ -80,18 +80,14 @@ int Run(int argc, char** argv) {
     std::error_code ec;
     if (std::filesystem::file_size(log, ec) == 0 && !ec)
       throw std::runtime_error("no detections_t messages on MCMT_DETECTIONS_* in " + log + " (empty log)");
-    try {
-      input = mcmt::OpenLcm(mcmt::LogReadUrl(log));
-    } catch (const std::exception&) {
-      throw std::runtime_error("cannot read " + log + " as an LCM log");
-    }
-    node_options.from_log = true;
+    node_options.log_path = log;
     node_options.publish = publish;
+    input = mcmt::OpenLcm("memq://");  // nothing arrives on it: the log is read by core's reader
     if (publish) output = mcmt::OpenLcm(lcm_url);
   } else {
     input = mcmt::OpenLcm(lcm_url);
   }
-  lcm::LCM* out_lcm = output ? output.get() : (node_options.from_log ? nullptr : input.get());
+  lcm::LCM* out_lcm = output ? output.get() : (log.empty() ? input.get() : nullptr);
   mcmt::MapperNode node(*input, out_lcm, mapper, node_options, std::cerr);
 
   struct sigaction action = {};
@@ -109,6 +105,11 @@ int Run(int argc, char** argv) {
     throw std::runtime_error(log.empty() ? "no detections received on MCMT_DETECTIONS_*"
                                          : "no detections_t messages on MCMT_DETECTIONS_* in " + log);
   node.SolveWriteAndPublish();
+  if (node.log_report().damaged()) {
+    std::cerr << "mcmt-mapper: " << node.log_report().Summary() << " (exit status " << mcmt::kExitDamagedLog
+              << ")\n";
+    return mcmt::kExitDamagedLog;
+  }
   return 0;
 }
 

@@ -81,7 +81,7 @@ int Main(int argc, char** argv) {
   if (options.log_mode) {
     if (!std::ifstream(log_path, std::ios::binary))
       throw std::runtime_error(log_path + ": cannot open the log");
-    input = mcmt::OpenLcm(mcmt::LogReadUrl(log_path));
+    input = mcmt::OpenLcm("memq://");  // nothing arrives on it: the log is read by core's reader
     if (args.Given("lcm-url")) output = mcmt::OpenLcm(lcm_url);
   } else {
     input = mcmt::OpenLcm(live_url);
@@ -93,13 +93,22 @@ int Main(int argc, char** argv) {
               << options.tracker.channel
               << (options.log_mode && !output ? " (not published: --log without --lcm-url)" : "")
               << std::endl;
-  node.Run(&g_stop);
+  mcmt::LogReadReport report;
+  if (options.log_mode)
+    report = node.RunLog(log_path, &g_stop);
+  else
+    node.Run(&g_stop);
   if (!out_path.empty()) {
     mcmt::WriteTrajectory(out_path, node.trajectory());
     std::remove(options.partial_path.c_str());
     if (!quiet)
       std::cerr << "mcmt-tracker: wrote " << node.trajectory().size() << " poses to " << out_path
                 << std::endl;
+  }
+  if (report.damaged()) {
+    std::cerr << "mcmt-tracker: " << report.Summary() << " (exit status " << mcmt::kExitDamagedLog << ")"
+              << std::endl;
+    return mcmt::kExitDamagedLog;
   }
   return 0;
 }

@@ -67,8 +67,47 @@ std::vector<SyncedFrame> FrameSynchronizer::EmitUpTo(int64_t utime_inclusive) {
   return out;
 }
 
+bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us) {
+  clock_rejection_.clear();
+  const int64_t jump = options_.max_clock_jump_us;
+  if (jump <= 0) return true;
+  auto elapsed = [&](int64_t since) { return options_.arrival_is_wall_time ? arrival_us - since : 0; };
+  std::string against;
+  int64_t predicted = INT64_MIN;
+  const auto own = last_utime_.find(d.camera);
+  if (own != last_utime_.end()) {
+    predicted = own->second + elapsed(last_arrival_[d.camera]);
+    against = "its own clock";
+  } else {
+    for (const auto& [camera, utime] : last_utime_) {  // the other cameras' newest, as they run on
+      const int64_t p = utime + elapsed(last_arrival_[camera]);
+      if (p > predicted) predicted = p;
+    }
+    against = "the other cameras' clocks";
+  }
+  if (predicted == INT64_MIN || d.utime - predicted <= jump) {
+    jumps_.erase(d.camera);
+    return true;
+  }
+  // A restarted source: its messages keep coming on the new clock, consistent with each other.
+  Jump& j = jumps_[d.camera];
+  j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
+  j.utime = d.utime;
+  if (own != last_utime_.end() && j.count >= kClockJumpConfirm) {
+    jumps_.erase(d.camera);
+    own->second = d.utime;  // follow it from here on
+    return true;
+  }
+  ++stats_.clock_jumps;
+  clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
+                     std::to_string((d.utime - predicted) / 1000) + " ms ahead of " + against +
+                     " (more than " + std::to_string(jump / 1000) + " ms): message rejected";
+  return false;
+}
+
 std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, int64_t arrival_us) {
   const int64_t utime = detections.utime;
+  if (!ClockPlausible(detections, arrival_us)) return {};
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -94,6 +133,7 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
 
   // Accepted: liveness and the camera set.
   const std::string& camera = detections.camera;
+  last_arrival_[camera] = arrival_us;
   auto last = last_utime_.find(camera);
   if (last == last_utime_.end()) {
     last_utime_[camera] = utime;
