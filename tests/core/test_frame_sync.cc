@@ -239,5 +239,59 @@ TEST(FrameSync, CamerasBeyondToleranceStillFlow) {
   EXPECT_EQ(sync.stats().frames_incomplete, static_cast<int64_t>(emitted));
 }
 
+// Issue 14: one message stamped +100 s (live, wall-time arrivals) made every later frame late. It is
+// rejected, named, and moves no clock; so is a camera whose clock runs 100 s ahead; a source that
+// restarts on a new clock is followed after kClockJumpConfirm messages.
+TEST(FrameSync, AFarFutureUtimeIsRejectedAndMovesNoClock) {
+  FrameSynchronizer sync;
+  std::vector<SyncedFrame> frames;
+  int64_t wall = 5000000000;
+  for (int f = 0; f < 60; ++f) {
+    wall += kPeriod;
+    detections_t b = View("cam1", f, 300);
+    if (f == 20) b.utime += 100000000;
+    Append(&frames, sync.Add(View("cam0", f), wall));
+    Append(&frames, sync.Add(b, wall + 200));
+    if (f == 20) {
+      EXPECT_NE(sync.clock_rejection().find("camera 'cam1': utime"), std::string::npos)
+          << sync.clock_rejection();
+    } else {
+      EXPECT_EQ(sync.clock_rejection(), "") << f;
+    }
+    Append(&frames, sync.Poll(wall + 20000));  // frame 20 leaves by its deadline without cam1
+  }
+  ASSERT_EQ(frames.size(), 60u);
+  for (int f = 0; f < 60; ++f) EXPECT_EQ(frames[f].views.size(), f == 20 ? 1u : 2u) << f;
+  EXPECT_EQ(sync.stats().clock_jumps, 1);
+  EXPECT_EQ(sync.stats().out_of_order, 0);
+  EXPECT_TRUE(sync.StaleCameras().empty());
+}
+
+TEST(FrameSync, ACameraAheadOfTheOthersIsRejectedARestartedOneFollowed) {
+  FrameSynchronizer sync;
+  int64_t wall = 5000000000;
+  int64_t ahead_rejected = 0;
+  for (int f = 0; f < 20; ++f) {
+    wall += kPeriod;
+    sync.Add(View("cam0", f), wall);
+    sync.Add(View("cam1", f), wall);
+    detections_t c = View("cam2", f);
+    c.utime += 100000000;
+    sync.Add(c, wall);
+    ahead_rejected += sync.clock_rejection().find("the other cameras' clocks") != std::string::npos;
+  }
+  EXPECT_EQ(ahead_rejected, 20);  // every one: the others reported first
+  // cam0 restarts 50 s later (a new recording): followed after kClockJumpConfirm messages.
+  int accepted = 0;
+  for (int f = 0; f < 10; ++f) {
+    wall += kPeriod;
+    detections_t d = View("cam0", 20 + f);
+    d.utime += 50000000;
+    sync.Add(d, wall);
+    accepted += sync.clock_rejection().empty();
+  }
+  EXPECT_EQ(accepted, 10 - FrameSynchronizer::kClockJumpConfirm + 1);
+}
+
 }  // namespace
 }  // namespace mcmt
