@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -84,6 +85,21 @@ void MapperNode::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string&
   detections_t msg;
   if (!Decode(channel, rbuf->data, rbuf->data_size, &msg) || !Admit(&msg, channel)) return;
   AddChecked(msg);
+  AppendEncodedEvent(collected_events_++, rbuf->recv_utime, channel, rbuf->data, rbuf->data_size,
+                     &collected_);
+}
+
+std::string MapperNode::SaveCollected() const {
+  const std::string name = "collected-" + std::to_string(NowUtime() / 1000000) + ".lcmlog";
+  for (const std::string& dir : {options_.outdir, std::filesystem::temp_directory_path().string()}) {
+    try {
+      const std::string path = (std::filesystem::path(dir) / name).string();
+      WriteFileAtomic(path, collected_);
+      return path;
+    } catch (const std::exception&) {
+    }
+  }
+  return "";
 }
 
 std::string MapperNode::CollectFromLog() {
@@ -139,6 +155,8 @@ void MapperNode::OnCommand(const lcm::ReceiveBuffer*, const std::string&, const 
   } else if (msg->command == "reset") {
     mapper_.Reset();
     first_utime_ = last_utime_ = INT64_MIN;
+    collected_.clear();
+    collected_events_ = 0;
     log_ << "reset: collected detections dropped\n";
   } else {
     log_ << "warning: unknown mapper command '" << msg->command << "' (solve, reset)\n";
@@ -269,15 +287,22 @@ MapResult MapperNode::SolveWriteAndPublish() {
     for (const std::string& e : duplicates_.examples())
       if (result.report.duplicate_examples.size() < 40)
         result.report.duplicate_examples.push_back("repeated message: " + e);
+    mapper_.SetProgressCallback(nullptr);
+    if (tty_) log_ << "\r\033[K";
+    WriteMapOutputs(options_.outdir, result);
   } catch (const std::exception& e) {
     if (tty_) log_ << "\n";
     PublishStatus(mapper_status_t::STATE_FAILED, e.what());
     mapper_.SetProgressCallback(nullptr);
+    if (collected_events_ > 0) {  // live: what was collected is not lost
+      const std::string kept = SaveCollected();
+      log_ << (kept.empty()
+                   ? "could not keep the collected detections either\n"
+                   : "kept the " + std::to_string(collected_events_) + " collected detections messages in " +
+                         kept + " (map them with --log " + kept + ")\n");
+    }
     throw;
   }
-  mapper_.SetProgressCallback(nullptr);
-  if (tty_) log_ << "\r\033[K";
-  WriteMapOutputs(options_.outdir, result);
   const MapReport& r = result.report;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(3) << "mapped " << result.map.cameras.size() << " cameras, "

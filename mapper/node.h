@@ -25,6 +25,10 @@
 
 namespace mcmt {
 
+// Creates the output folder when missing and checks that files can be written in it; throws one line
+// naming --out otherwise. Called before collecting, so that a bad path loses no session.
+void CheckOutputFolder(const std::string& outdir);
+
 struct MapperNodeOptions {
   std::string outdir;        // where the files go (required)
   std::string log_path;      // read detections from this log (core's reader) instead of `input`
@@ -84,6 +88,10 @@ class MapperNode {
   std::set<std::string> warned_;
   int64_t invalid_messages_ = 0, invalid_markers_ = 0;
   LogReadReport log_report_;
+  // Live: every accepted detections message as log events (kept on disk when the solve or write fails).
+  std::string collected_;
+  int64_t collected_events_ = 0;
+  std::string SaveCollected() const;  // returns the path written, "" when it could not be
   bool tty_ = false;
 };
 
