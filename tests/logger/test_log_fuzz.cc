@@ -36,7 +36,7 @@ namespace fs = std::filesystem;
 using tracker_test::RunProgram;
 const std::string kBin = MCMT_BIN_DIR;
 constexpr int kLogs = 300;        // in process
-constexpr int kProcessLogs = 40;  // also through the real programs
+constexpr int kProcessLogs = 24;  // also through the real programs
 
 struct Base {
   std::string dir, rig, map, log;
