@@ -73,6 +73,8 @@ int Run(int argc, char** argv) {
   mcmt::Mapper mapper(options);
   mcmt::MapperNodeOptions node_options;
   node_options.outdir = out;
+  for (const mcmt::CameraConfig& c : rig.cameras)
+    node_options.rig_image_sizes[c.name] = {c.model.width, c.model.height};
   node_options.max_frames = frames;
   node_options.max_seconds = seconds;
   std::unique_ptr<lcm::LCM> input, output;

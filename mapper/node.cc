@@ -63,6 +63,15 @@ bool MapperNode::Admit(detections_t* msg, const std::string& channel) {
                                        std::to_string(ids.front()) + " (seq " + std::to_string(msg->seq) +
                                        ") has non-finite or absurd corners; such markers are dropped");
   }
+  const auto rig_size = options_.rig_image_sizes.find(msg->camera);
+  if (rig_size != options_.rig_image_sizes.end() &&
+      rig_size->second != std::make_pair(msg->camera_model.width, msg->camera_model.height))
+    Warn("size:" + msg->camera,
+         "camera '" + msg->camera + "' on " + channel + ": detections of " +
+             std::to_string(msg->camera_model.width) + "x" + std::to_string(msg->camera_model.height) +
+             " images, but the rig's intrinsics are " + std::to_string(rig_size->second.first) + "x" +
+             std::to_string(rig_size->second.second) +
+             " (another calibration? the detections' own model is used)");
   auto first = first_model_.find(msg->camera);
   if (first == first_model_.end()) {
     first_model_.emplace(msg->camera, msg->camera_model);

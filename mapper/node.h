@@ -36,6 +36,8 @@ struct MapperNodeOptions {
   double max_seconds = 0.0;  // > 0: stop after this long (live: wall time; log: message utime span)
   bool publish = true;       // publish status and map on `output`
   double progress_period_s = 1.0;
+  // Image size per camera from the rig's intrinsics files: detections of another size are warned about.
+  std::map<std::string, std::pair<int, int>> rig_image_sizes;
 };
 
 class MapperNode {

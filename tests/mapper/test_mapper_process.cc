@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "core/config.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
+#include "core/log_reader.h"
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/rig_map_t.hpp"
@@ -348,6 +350,72 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
   EXPECT_NE(again.output.find("collected " + std::to_string(sent) + " detections messages"),
             std::string::npos)
       << again.output;
+  fs::remove_all(dir);
+}
+
+// Issue 14: invalid content was dropped with a misleading message ("sent no detections") or none. Each
+// kind now gets one line naming the camera and channel; the valid messages still map.
+TEST(MapperProcess, InvalidMessagesGetAOneLineReasonNamingTheCamera) {
+  testing::SynthOptions so;
+  so.frames = 40;
+  so.seed = 49;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  const std::string dir = TempDir("invalid");
+  const std::string rig = WriteRig(dir, scene);
+  std::string bytes;
+  int64_t n = 0;
+  auto add = [&](const std::string& channel, const detections_t& d) {
+    const std::vector<uint8_t> data = Encode(d);
+    AppendEncodedEvent(n++, d.utime, channel, data.data(), data.size(), &bytes);
+  };
+  for (const detections_t& d : scene.detections) add(DetectionsChannel(d.camera), d);
+  const int64_t after = scene.utimes.back() + 1000000;
+  for (const detections_t& original : scene.detections) {
+    if (original.seq != 5) continue;
+    detections_t d = original;
+    d.utime = after + 1000 * static_cast<int64_t>(n);
+    d.seq = 1000;
+    if (d.camera == "cam0") {  // a camera field that disagrees with its channel
+      d.camera = "cam9";
+      add("MCMT_DETECTIONS_CAM0", d);
+    } else if (d.camera == "cam1") {  // width -640
+      d.camera_model.width = -640;
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam2") {  // three radtan coefficients
+      d.camera_model.distortion_model = "radtan";
+      d.camera_model.distortion = {0.1, 0.01, 0.001};
+      d.camera_model.num_distortion = 3;
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam3" && !d.markers.empty()) {  // a NaN corner
+      d.markers[0].corners[2][1] = std::nan("");
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam4") {  // the model changes mid-stream, then the size differs from the rig
+      d.camera_model.fx *= 1.01;
+      add(DetectionsChannel(d.camera), d);
+      d.seq = 1001;
+      d.utime += 33333;
+      d.camera_model.width *= 2;
+      d.camera_model.height *= 2;
+      add(DetectionsChannel(d.camera), d);
+    }
+  }
+  std::ofstream(dir + "/s.lcmlog", std::ios::binary) << bytes;
+  const CommandResult r = RunCommand(kMapper + " --config " + rig + " --log " + dir + "/s.lcmlog --out " +
+                                     dir + "/out --no-refine");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* line :
+       {"warning: camera 'cam9' on MCMT_DETECTIONS_CAM0: the message's camera field belongs on "
+        "MCMT_DETECTIONS_CAM9 (camera field and channel disagree); its messages are dropped",
+        "warning: camera 'cam1' on MCMT_DETECTIONS_CAM1: invalid camera model in the message: image size "
+        "must "
+        "be positive, got -640x",
+        "warning: camera 'cam2' on MCMT_DETECTIONS_CAM2: invalid camera model in the message: radtan "
+        "distortion needs 4, 5 or 8 coefficients, got 3",
+        "warning: camera 'cam3' on MCMT_DETECTIONS_CAM3: marker ", "has non-finite or absurd corners",
+        "warning: camera 'cam4' on MCMT_DETECTIONS_CAM4: its camera model changed mid-stream (seq 1000)",
+        "warning: camera 'cam4' on MCMT_DETECTIONS_CAM4: detections of "})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  EXPECT_EQ(r.output.find("sent no detections"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
 
