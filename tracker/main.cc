@@ -30,7 +30,7 @@ void InstallSignalHandlers() {
 int Main(int argc, char** argv) {
   std::string config, map_path, log_path, out_path, lcm_url, channel;
   bool quiet = false;
-  double deadline_ms = 15.0;
+  double deadline_ms = 15.0, max_wait_ms = 100.0;
   mcmt::ArgParser args(
       "mcmt-tracker",
       "Tracks the object with a known map: one object_pose_t per frame on MCMT_POSE (rig_from_object,\n"
@@ -51,6 +51,9 @@ int Main(int argc, char** argv) {
   args.AddDouble("deadline-ms", &deadline_ms,
                  "frame deadline: wait this long after a frame's first detection for the other cameras "
                  "(overrides tracker.deadline_ms; raise it when cameras' messages lag each other)");
+  args.AddDouble("max-wait-ms", &max_wait_ms,
+                 "live: longest wait for a camera whose messages lag (measured per camera) after a frame's "
+                 "first detection (overrides tracker.max_wait_ms; 0: only the deadline)");
   args.AddFlag("quiet", &quiet, "no status lines (warnings are still printed)");
   args.AddEpilog(
       "\nexamples:\n"
@@ -66,6 +69,7 @@ int Main(int argc, char** argv) {
   options.tracker = mcmt::TrackerOptions::FromConfig(rig);
   if (args.Given("channel")) options.tracker.channel = channel;
   if (args.Given("deadline-ms")) options.tracker.deadline_ms = deadline_ms;
+  if (args.Given("max-wait-ms")) options.tracker.max_wait_ms = max_wait_ms;
   options.tracker.Validate();
   options.log_mode = !log_path.empty();
   options.keep_trajectory = !out_path.empty();

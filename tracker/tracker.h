@@ -42,6 +42,9 @@ struct TrackerOptions {
   // Frame assembly: a frame is solved when every alive camera reported it, or deadline_ms after its
   // first detection (wall time live, message time with --log), so one slow camera never stalls the rest.
   double deadline_ms = 15.0;
+  // Live: a frame missing a camera whose messages lag (measured per camera) waits for it up to this long
+  // after the frame's first detection; deadline_ms is the wait for cameras without a measured lag.
+  double max_wait_ms = 100.0;
   double sync_tolerance_ms = 2.0;  // detections within this of a frame's utime belong to it
   double camera_timeout_s = 1.0;   // a camera silent this long (message time) is not waited for
   // A message whose utime is more than this ahead of its camera's clock (or of the other cameras', for

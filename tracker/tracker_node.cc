@@ -83,6 +83,7 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
   sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
   sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
+  sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
   sync.arrival_is_wall_time = !options_.log_mode;
   for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
   sync_ = std::make_unique<FrameSynchronizer>(sync);
@@ -203,9 +204,10 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
     stats_.late_views++;
     WarnOnce("late:" + msg.camera,
              "views of camera '" + msg.camera + "' arrive after their frame was solved (deadline " +
-                 FormatMs(options_.tracker.deadline_ms) +
+                 FormatMs(options_.tracker.deadline_ms) + " ms, adaptive wait at most " +
+                 FormatMs(options_.tracker.max_wait_ms) +
                  " ms) and are dropped; if this camera's messages lag the others (start offset, slow link), "
-                 "raise tracker.deadline_ms or --deadline-ms");
+                 "raise tracker.max_wait_ms or --max-wait-ms");
   }
   ProcessFrames(std::move(frames), arrival_wall);
 }

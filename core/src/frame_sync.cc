@@ -108,6 +108,8 @@ bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us
 std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, int64_t arrival_us) {
   const int64_t utime = detections.utime;
   if (!ClockPlausible(detections, arrival_us)) return {};
+  // Measured before the late-view check: a camera whose views all come late must get its wait.
+  if (options_.max_wait_us > 0) RecordLag(detections.camera, arrival_us - utime);
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -188,10 +190,40 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   return EmitUpTo(emit_until);
 }
 
+void FrameSynchronizer::RecordLag(const std::string& camera, int64_t lag_us) {
+  std::vector<int64_t>& ring = lags_[camera];
+  size_t& next = lag_next_[camera];
+  if (ring.size() < kLagWindow)
+    ring.push_back(lag_us);
+  else
+    ring[next] = lag_us;
+  next = (next + 1) % kLagWindow;
+}
+
+int64_t FrameSynchronizer::Lag(const std::string& camera) const {
+  const auto it = lags_.find(camera);
+  if (it == lags_.end() || it->second.empty()) return INT64_MIN;
+  return *std::max_element(it->second.begin(), it->second.end());
+}
+
+int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
+                                   const std::set<std::string>& alive) const {
+  int64_t due = first_arrival_us + options_.deadline_us;
+  if (options_.max_wait_us <= options_.deadline_us) return due;
+  const SyncedFrame& frame = pending_.at(key);
+  for (const std::string& camera : alive) {
+    const int64_t lag = Lag(camera);
+    if (lag == INT64_MIN || HasCamera(frame, camera)) continue;
+    due = std::max(due, key + lag + options_.deadline_us);  // when its view usually arrives
+  }
+  return std::min(due, first_arrival_us + options_.max_wait_us);
+}
+
 std::vector<SyncedFrame> FrameSynchronizer::Poll(int64_t now_us) {
   int64_t newest_due = INT64_MIN;
+  const std::set<std::string> alive = AliveCameras();
   for (const auto& kv : first_arrival_)
-    if (kv.second + options_.deadline_us <= now_us) newest_due = std::max(newest_due, kv.first);
+    if (DueTime(kv.first, kv.second, alive) <= now_us) newest_due = std::max(newest_due, kv.first);
   if (newest_due == INT64_MIN) return {};
   return EmitUpTo(newest_due);
 }

@@ -293,5 +293,54 @@ TEST(FrameSync, ACameraAheadOfTheOthersIsRejectedARestartedOneFollowed) {
   EXPECT_EQ(accepted, 10 - FrameSynchronizer::kClockJumpConfirm + 1);
 }
 
+// Issue 14: detectors that drift apart lost views (declared late) whatever the deadline. The lag of each
+// camera is measured and the wait adapts, within max_wait_us.
+TEST(FrameSync, ALaggingCameraIsWaitedForWithinTheBound) {
+  for (const int64_t max_wait : {int64_t{0}, int64_t{200000}}) {
+    FrameSyncOptions o;
+    o.deadline_us = 15000;
+    o.max_wait_us = max_wait;
+    o.cameras = {"cam0", "cam1"};
+    FrameSynchronizer sync(o);
+    std::vector<SyncedFrame> frames;
+    const int64_t lag1 = 80000;  // cam1's messages arrive 80 ms after cam0's
+    for (int64_t now = 0; now < 60 * kPeriod + 300000; now += 1000) {
+      const int64_t f0 = now / kPeriod, f1 = (now - lag1) / kPeriod;
+      if (now % kPeriod < 1000 && f0 < 60) Append(&frames, sync.Add(View("cam0", f0), 1000000 + now));
+      if (now >= lag1 && (now - lag1) % kPeriod < 1000 && f1 < 60)
+        Append(&frames, sync.Add(View("cam1", f1), 1000000 + now));
+      Append(&frames, sync.Poll(1000000 + now));
+    }
+    Append(&frames, sync.Flush());
+    int complete = 0;
+    for (const auto& f : frames) complete += f.views.size() == 2;
+    if (max_wait == 0) {
+      EXPECT_GT(sync.stats().out_of_order, 50) << "fixed deadline: cam1's views come too late";
+    } else {
+      // Only the frames that left before cam1's first view arrived (its lag unknown until then).
+      EXPECT_LE(sync.stats().out_of_order, lag1 / kPeriod + 1);
+      EXPECT_GE(complete, 60 - (lag1 / kPeriod + 1));
+      EXPECT_GE(sync.Lag("cam1") - sync.Lag("cam0"), lag1 - 1000);
+    }
+  }
+}
+
+// A dead camera costs at most max_wait_us per frame.
+TEST(FrameSync, AdaptiveWaitIsBounded) {
+  FrameSyncOptions o;
+  o.deadline_us = 15000;
+  o.max_wait_us = 50000;
+  FrameSynchronizer sync(o);
+  for (int f = 0; f < 10; ++f) {  // cam1 lags 30 ms
+    sync.Add(View("cam0", f), 1000000 + f * kPeriod);
+    sync.Add(View("cam1", f), 1000000 + f * kPeriod + 30000);
+  }
+  sync.Add(View("cam0", 10), 1000000 + 10 * kPeriod);  // cam1 stops
+  const int64_t first = 1000000 + 10 * kPeriod;
+  EXPECT_TRUE(sync.Poll(first + 15000).empty());       // past the plain deadline: still waiting
+  EXPECT_TRUE(sync.Poll(first + 30000).empty());       // cam1 usually arrives at +30 ms (+ deadline)
+  EXPECT_EQ(sync.Poll(first + 45000 + 1).size(), 1u);  // its usual arrival + deadline passed
+}
+
 }  // namespace
 }  // namespace mcmt
