@@ -171,6 +171,23 @@ class LiveListener {
   int last_state = -1;
 };
 
+// Starts a live mcmt-mapper (stdout and stderr into log_path); returns its pid (-1 on failure).
+pid_t SpawnLiveMapper(const std::string& rig, const std::string& out, const std::string& url,
+                      const std::string& log_path) {
+  std::vector<std::string> args = {kMapper, "--config", rig, "--out", out, "--lcm-url", url};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  return pid;
+}
+
 TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   const std::string url = "udpm://239.255.76.67:7720?ttl=0";
   lcm::LCM lcm(url);
@@ -186,17 +203,8 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
 
   const std::string log_path = dir + "/mapper.out";
-  std::vector<std::string> args = {kMapper, "--config", rig, "--out", dir + "/out", "--lcm-url", url};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
+  const pid_t pid = SpawnLiveMapper(rig, dir + "/out", url, log_path);
+  ASSERT_GT(pid, 0);
   auto handle_for = [&](double seconds, const std::function<bool()>& done) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
@@ -308,17 +316,8 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
   LiveListener listener;
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
   const std::string log_path = dir + "/mapper.out";
-  std::vector<std::string> args = {kMapper, "--config", rig, "--out", dir + "/out", "--lcm-url", url};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
+  const pid_t pid = SpawnLiveMapper(rig, dir + "/out", url, log_path);
+  ASSERT_GT(pid, 0);
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (!listener.collecting && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
   int sent = 0;
