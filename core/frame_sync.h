@@ -26,6 +26,7 @@ struct FrameSyncOptions {
   // usually arrive (+ deadline_us), but never more than max_wait_us after the frame's first arrival.
   // Detectors that drift apart (videos at --rate max in parallel, a camera whose messages lag) lose no
   // view; a dead camera costs at most max_wait_us per frame until camera_timeout_us declares it stale.
+  // An expected camera (options.cameras) not heard of yet is waited for max_wait_us. Wall-time arrivals only.
   int64_t max_wait_us = 0;
   int64_t camera_timeout_us = 1000000;  // a camera silent this long (message time) is not waited for
   // Cameras expected (e.g. the rig's). Optional. A listed camera not heard of yet is waited for until

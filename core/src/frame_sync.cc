@@ -109,7 +109,8 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   const int64_t utime = detections.utime;
   if (!ClockPlausible(detections, arrival_us)) return {};
   // Measured before the late-view check: a camera whose views all come late must get its wait.
-  if (options_.max_wait_us > 0) RecordLag(detections.camera, arrival_us - utime);
+  if (options_.max_wait_us > 0 && options_.arrival_is_wall_time)
+    RecordLag(detections.camera, arrival_us - utime);
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -209,12 +210,14 @@ int64_t FrameSynchronizer::Lag(const std::string& camera) const {
 int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
                                    const std::set<std::string>& alive) const {
   int64_t due = first_arrival_us + options_.deadline_us;
-  if (options_.max_wait_us <= options_.deadline_us) return due;
+  if (options_.max_wait_us <= options_.deadline_us || !options_.arrival_is_wall_time) return due;
   const SyncedFrame& frame = pending_.at(key);
   for (const std::string& camera : alive) {
+    if (HasCamera(frame, camera)) continue;
     const int64_t lag = Lag(camera);
-    if (lag == INT64_MIN || HasCamera(frame, camera)) continue;
-    due = std::max(due, key + lag + options_.deadline_us);  // when its view usually arrives
+    // An expected camera not heard of yet: its lag is unknown, wait as long as allowed (the first second).
+    due = std::max(due, lag == INT64_MIN ? first_arrival_us + options_.max_wait_us
+                                         : key + lag + options_.deadline_us);  // when it usually arrives
   }
   return std::min(due, first_arrival_us + options_.max_wait_us);
 }
