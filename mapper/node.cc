@@ -268,27 +268,8 @@ std::string MapperNode::Collect() {
   return reason;
 }
 
-MapResult MapperNode::SolveWriteAndPublish() {
-  using Clock = std::chrono::steady_clock;
-  auto last_status = Clock::now() - std::chrono::seconds(10);
-  mapper_.SetProgressCallback([&](const MapperProgress& p) {
-    const auto now = Clock::now();
-    const bool refining = p.stage == MapperProgress::kRefining;
-    if (refining && std::chrono::duration<double>(now - last_status).count() < 0.2) return;
-    last_status = now;
-    const int8_t state = refining ? mapper_status_t::STATE_REFINING : mapper_status_t::STATE_INITIALISING;
-    PublishStatus(state, p.message, p.iteration, p.cost, p.rms_px);
-    if (refining && p.max_iterations > 0) {
-      const int width = 30;
-      const int filled = std::min(width, p.iteration * width / p.max_iterations);
-      std::ostringstream bar;
-      bar << "[" << std::string(filled, '#') << std::string(width - filled, '.') << "] " << p.message;
-      if (tty_) log_ << "\r\033[K" << bar.str() << std::flush;
-    } else if (!refining) {
-      if (tty_) log_ << "\r\033[K";
-      log_ << p.message << (tty_ ? "" : "\n") << std::flush;
-    }
-  });
+// Solves and writes OUTDIR; on failure publishes STATE_FAILED and keeps what a live session collected.
+MapResult MapperNode::SolveAndWrite() {
   MapResult result;
   try {
     result = mapper_.Solve();
@@ -312,6 +293,31 @@ MapResult MapperNode::SolveWriteAndPublish() {
     }
     throw;
   }
+  return result;
+}
+
+MapResult MapperNode::SolveWriteAndPublish() {
+  using Clock = std::chrono::steady_clock;
+  auto last_status = Clock::now() - std::chrono::seconds(10);
+  mapper_.SetProgressCallback([&](const MapperProgress& p) {
+    const auto now = Clock::now();
+    const bool refining = p.stage == MapperProgress::kRefining;
+    if (refining && std::chrono::duration<double>(now - last_status).count() < 0.2) return;
+    last_status = now;
+    const int8_t state = refining ? mapper_status_t::STATE_REFINING : mapper_status_t::STATE_INITIALISING;
+    PublishStatus(state, p.message, p.iteration, p.cost, p.rms_px);
+    if (refining && p.max_iterations > 0) {
+      const int width = 30;
+      const int filled = std::min(width, p.iteration * width / p.max_iterations);
+      std::ostringstream bar;
+      bar << "[" << std::string(filled, '#') << std::string(width - filled, '.') << "] " << p.message;
+      if (tty_) log_ << "\r\033[K" << bar.str() << std::flush;
+    } else if (!refining) {
+      if (tty_) log_ << "\r\033[K";
+      log_ << p.message << (tty_ ? "" : "\n") << std::flush;
+    }
+  });
+  MapResult result = SolveAndWrite();
   const MapReport& r = result.report;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(3) << "mapped " << result.map.cameras.size() << " cameras, "

@@ -72,6 +72,7 @@ class MapperNode {
   void Warn(const std::string& key, const std::string& text);
   void OnCommand(const lcm::ReceiveBuffer* rbuf, const std::string& channel, const mapper_command_t* msg);
   void ShowProgress(bool final_line);
+  MapResult SolveAndWrite();
   void PublishStatus(int8_t state, const std::string& message, int iteration = 0, double cost = 0.0,
                      double rms = 0.0);
 
