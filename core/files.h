@@ -8,6 +8,10 @@
 #include <vector>
 
 #include "core/camera.h"
+
+namespace YAML {
+class Node;
+}
 #include "core/se3.h"
 
 namespace mcmt {
@@ -78,5 +82,9 @@ extern const char kTrajectoryHeader[];
 std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+
+// The first key that appears twice in one mapping anywhere in `root` (yaml-cpp keeps both and answers
+// lookups with the first), as "LINE: duplicated key 'KEY' (first at line N)"; "" when none.
+std::string DuplicateYamlKey(const YAML::Node& root);
 
 }  // namespace mcmt

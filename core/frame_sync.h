@@ -19,14 +19,29 @@
 namespace mcmt {
 
 struct FrameSyncOptions {
-  int64_t tolerance_us = 2000;          // detections within this of a frame's utime join it
-  int64_t deadline_us = 15000;          // wall-time wait after a frame's first arrival
+  int64_t tolerance_us = 2000;  // detections within this of a frame's utime join it
+  int64_t deadline_us = 15000;  // wall-time wait after a frame's first arrival
+  // Adaptive wait (0: none, only deadline_us). Each camera's lag (arrival - utime, the largest of its
+  // last kLagWindow messages) is measured; a frame missing a camera waits until that camera's views
+  // usually arrive (+ deadline_us), but never more than max_wait_us after the frame's first arrival.
+  // Detectors that drift apart (videos at --rate max in parallel, a camera whose messages lag) lose no
+  // view; a dead camera costs at most max_wait_us per frame until camera_timeout_us declares it stale.
+  // An expected camera (options.cameras) not heard of yet is waited for max_wait_us. Wall-time arrivals only.
+  int64_t max_wait_us = 0;
   int64_t camera_timeout_us = 1000000;  // a camera silent this long (message time) is not waited for
   // Cameras expected (e.g. the rig's). Optional. A listed camera not heard of yet is waited for until
   // camera_timeout_us of message time has passed since the first message. Without the list, no frame
   // completes before the camera set has settled (some camera reported a second frame), so the first
   // frame is not emitted with only the first camera that happened to report.
   std::vector<std::string> cameras;
+  // Clock check (0: none). A message whose utime is more than this ahead of what its camera's clock
+  // predicts (its newest accepted utime, plus the wall time elapsed since it arrived when arrivals are
+  // wall times), or -- for a camera's first messages -- of what the other cameras' clocks predict, is
+  // rejected (counted in clock_jumps) and moves no clock: one message stamped +100 s must not make every
+  // later frame late. A camera whose messages keep coming on the new clock (kClockJumpConfirm in a row,
+  // consistent with each other) is followed (a restarted source); a camera ahead of the others is not.
+  int64_t max_clock_jump_us = 5000000;
+  bool arrival_is_wall_time = true;  // false: arrivals are message times (a log)
 };
 
 struct SyncedFrame {
@@ -42,10 +57,13 @@ struct FrameSyncStats {
   int64_t frames_incomplete = 0;
   int64_t duplicates = 0;
   int64_t out_of_order = 0;
+  int64_t clock_jumps = 0;  // messages rejected by the clock check
 };
 
 class FrameSynchronizer {
  public:
+  static constexpr int kClockJumpConfirm = 5;
+  static constexpr size_t kLagWindow = 32;
   explicit FrameSynchronizer(FrameSyncOptions options = {});
 
   // Adds one camera's detections (arrival: wall time in us). Returns the frames completed by it,
@@ -55,6 +73,13 @@ class FrameSynchronizer {
   std::vector<SyncedFrame> Poll(int64_t now_us);
   // Everything pending, oldest first (end of a log).
   std::vector<SyncedFrame> Flush();
+
+  // Why the last message given to Add was rejected by the clock check ("" when it was not): one line
+  // naming the camera, its utime and the clock it disagrees with.
+  const std::string& clock_rejection() const { return clock_rejection_; }
+
+  // The measured lag of a camera (arrival - utime, largest recent), or INT64_MIN when unknown.
+  int64_t Lag(const std::string& camera) const;
 
   // Cameras ever seen, and those not heard of for camera_timeout_us before the newest utime.
   std::set<std::string> Cameras() const;
@@ -72,6 +97,19 @@ class FrameSynchronizer {
   std::map<std::string, int64_t> first_utime_;  // per camera, first message utime
   int64_t oldest_utime_ = INT64_MAX;            // first message utime overall
   bool settled_ = false;                        // the camera set is known (see options.cameras)
+  struct Jump {
+    int64_t utime = 0;  // last rejected utime
+    int count = 0;      // consistent rejections in a row
+  };
+  std::map<std::string, int64_t> last_arrival_;  // per camera, arrival of its newest accepted message
+  std::map<std::string, Jump> jumps_;
+  std::map<std::string, std::vector<int64_t>> lags_;  // per camera, recent arrival - utime (ring)
+  std::map<std::string, size_t> lag_next_;
+  // Wall time at which the pending frame `key` (first arrival first_arrival_us) is due.
+  int64_t DueTime(int64_t key, int64_t first_arrival_us, const std::set<std::string>& alive) const;
+  void RecordLag(const std::string& camera, int64_t lag_us);
+  std::string clock_rejection_;
+  bool ClockPlausible(const detections_t& detections, int64_t arrival_us);
   std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
   std::set<std::string> AliveCameras() const;
 };

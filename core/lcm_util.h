@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -120,6 +122,33 @@ RigMap FromRigMapMsg(const rig_map_t& msg);
 // is the caller's to check.
 TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg);
 MarkerCorners2d CornersOf(const marker_t& marker);
+
+// Content checks of a decoded detections_t received on `channel`, beyond its structure: "" when it is
+// usable, else a one-line reason naming the camera and the channel (its `camera` field names another
+// channel's camera, or its camera model is invalid, e.g. width -640 or three radtan coefficients).
+std::string DetectionsProblem(const detections_t& msg, const std::string& channel);
+// Removes the markers whose corners are not finite or absurd (beyond +-1e6 px) and returns how many;
+// their ids go to *dropped_ids when given.
+int DropInvalidMarkers(detections_t* msg, std::vector<int>* dropped_ids = nullptr);
+bool IsDetectionsChannel(const std::string& channel);  // MCMT_DETECTIONS_*
+
+// Drops repeated detections messages: the same camera, seq and utime seen before (a message recorded or
+// relayed twice). Remembers the newest `window` messages per camera.
+class DuplicateFilter {
+ public:
+  explicit DuplicateFilter(size_t window = 1 << 16) : window_(window) {}
+  // True when (camera, seq, utime) was seen before (the caller drops the message); counts it.
+  bool Repeated(const detections_t& msg);
+  int64_t count() const { return count_; }
+  // Up to 20 examples: "camera cam0 seq 12 utime 1000000".
+  const std::vector<std::string>& examples() const { return examples_; }
+
+ private:
+  size_t window_;
+  std::map<std::string, std::set<std::pair<int64_t, int64_t>>> seen_;  // camera -> (utime, seq)
+  int64_t count_ = 0;
+  std::vector<std::string> examples_;
+};
 
 // "file://<absolute path>?speed=0": reads a log as fast as possible through LCM's own provider.
 std::string LogReadUrl(const std::string& log_path);

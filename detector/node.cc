@@ -70,6 +70,8 @@ CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& 
   so.fps = options.fps;
   so.start_utime = options.start_utime;
   so.caliscope_time = options.caliscope_time;
+  so.width = camera_.model.width;  // every frame's size is checked (the first one below)
+  so.height = camera_.model.height;
   so.loop = options.loop;
   source_name_ = so.source;
   source_ = FrameSource::Open(so);

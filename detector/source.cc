@@ -102,6 +102,7 @@ class FolderSource : public FrameSource {
         cv::minMaxLoc(image.reshape(1), &lo, &hi);
         image.convertTo(image, CV_8U, hi > 0 ? 255.0 / hi : 1.0);
       }
+      if (!SizeAccepted(options_, image, indices_[i])) continue;
       frame->image = image;
       frame->index = indices_[i] + loops_ * period_;
       frame->utime = times_.empty() ? options_.start_utime + std::llround(frame->index * 1e6 / fps_)
@@ -140,8 +141,13 @@ class VideoSource : public FrameSource {
     while (true) {
       cv::Mat image;
       bool ok = capture_.read(image);
+      if ((!ok || image.empty()) && SkipDamagedFrame()) continue;
       if (!ok || image.empty()) {
         // End of the file (or a frame that does not decode at the very end).
+        if (position_ < frames_ - 2 && !options_.loop)
+          std::cerr << "warning: camera " << options_.camera << ": video " << options_.source
+                    << " ends at frame " << position_ << " of the " << frames_ << " its container announces"
+                    << std::endl;
         if (position_ == 0)
           throw std::runtime_error("camera " + options_.camera + ": no frame decodes in video " +
                                    options_.source);
@@ -152,8 +158,10 @@ class VideoSource : public FrameSource {
         Open();
         continue;
       }
-      frame->image = image;
       const int64_t index = position_++;
+      failures_in_a_row_ = 0;
+      if (!SizeAccepted(options_, image, index)) continue;
+      frame->image = image;
       frame->index = index + loops_ * period_;
       frame->utime = times_.empty()
                          ? options_.start_utime + std::llround(frame->index * 1e6 / fps_)
@@ -170,6 +178,16 @@ class VideoSource : public FrameSource {
   }
 
  private:
+  // A frame that does not decode before the end the container announces: skipped (counted, warned) and
+  // the next one tried; false at the real end or after 10 failures in a row.
+  bool SkipDamagedFrame() {
+    if (frames_ <= 0 || position_ >= frames_ - 2 || ++failures_in_a_row_ > 10) return false;
+    ++skipped_;
+    std::cerr << "warning: camera " << options_.camera << ": frame " << position_ << " of video "
+              << options_.source << " does not decode, skipped" << std::endl;
+    ++position_;
+    return true;
+  }
   void Open() {
     capture_.release();
     if (!capture_.open(options_.source, cv::CAP_FFMPEG) || !capture_.isOpened())
@@ -180,6 +198,7 @@ class VideoSource : public FrameSource {
   cv::VideoCapture capture_;
   double fps_ = 30.0;
   int64_t frames_ = -1;
+  int64_t failures_in_a_row_ = 0;
   int64_t position_ = 0;
   int64_t period_ = 0;
   int64_t loops_ = 0;
@@ -195,10 +214,12 @@ class LiveSource : public FrameSource {
     while (!stop_) {
       cv::Mat image;
       if (capture_.isOpened() && capture_.read(image) && !image.empty()) {
+        failures_ = 0;
+        const int64_t index = index_++;
+        if (!SizeAccepted(options_, image, index)) continue;
         frame->utime = WallUtime();
         frame->image = image;
-        frame->index = index_++;
-        failures_ = 0;
+        frame->index = index;
         return true;
       }
       ++failures_;
@@ -355,6 +376,18 @@ int64_t FrameTimes::Utime(int64_t index) const {
   auto up = utimes_.upper_bound(index);
   const auto& base = up == utimes_.begin() ? *up : *std::prev(up);
   return base.second + std::llround((index - base.first) * interval_us_);
+}
+
+bool FrameSource::SizeAccepted(const SourceOptions& options, const cv::Mat& image, int64_t index) {
+  const bool first = !first_frame_seen_;
+  first_frame_seen_ = true;
+  if (first || options.width <= 0 || (image.cols == options.width && image.rows == options.height))
+    return true;
+  ++skipped_;
+  std::cerr << "warning: camera " << options.camera << ": frame " << index << " of " << options.source
+            << " is " << image.cols << "x" << image.rows << ", the calibration is for " << options.width
+            << "x" << options.height << ": refused" << std::endl;
+  return false;
 }
 
 std::unique_ptr<FrameSource> FrameSource::Open(const SourceOptions& o) {

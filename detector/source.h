@@ -40,6 +40,9 @@ struct SourceOptions {
   int64_t start_utime = kDefaultStartUtime;
   std::string caliscope_time = "sync";  // "sync" or "camera" (see above)
   bool loop = false;                    // recordings: start again at the end (seq and utime keep increasing)
+  // Image size of the calibration (0: unchecked). After the first frame (which the caller checks), a frame
+  // of another size is refused with a warning naming camera, frame and sizes, and counted in skipped().
+  int width = 0, height = 0;
 };
 
 struct Frame {
@@ -74,7 +77,8 @@ class FrameSource {
   static std::unique_ptr<FrameSource> Open(const SourceOptions& options);
 
   // Next frame; false at the end of a recording (live sources return false only when stopped).
-  // Unreadable frames are skipped and counted.
+  // Unreadable frames, frames that do not decode in a video, and frames of another size than
+  // options.width x height (after the first) are skipped, counted and warned about.
   virtual bool Read(Frame* frame) = 0;
   virtual bool live() const = 0;
   virtual double fps() const = 0;  // recording's frame rate (live: the device's, 0 if unknown)
@@ -86,7 +90,10 @@ class FrameSource {
   void RequestStop() { stop_ = true; }
 
  protected:
+  // False (counted, warned) when a frame after the first is not width x height.
+  bool SizeAccepted(const SourceOptions& options, const cv::Mat& image, int64_t index);
   int64_t skipped_ = 0;
+  bool first_frame_seen_ = false;
   volatile bool stop_ = false;
 };
 

@@ -44,10 +44,6 @@ std::string EventWhere(const std::string& path, const LogEvent& e, int64_t index
   return s.str();
 }
 
-bool IsDetectionsChannel(const std::string& channel) {
-  return channel.rfind(kDetectionsChannelPrefix, 0) == 0;
-}
-
 uint64_t Fingerprint(const std::vector<uint8_t>& data) {
   uint64_t v = 0;
   for (size_t i = 0; i < 8 && i < data.size(); ++i) v = (v << 8) | data[i];

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <iostream>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -42,6 +43,12 @@ bool Exists(const std::string& path) {
 void LoggerOptions::Validate() const {
   if (out.empty()) throw std::invalid_argument("--out: missing");
   if (channels.empty()) throw std::invalid_argument("--channels: empty regex");
+  try {                          // LCM's own regex compiler crashes on some invalid ones: check first
+    std::regex check(channels);  // ECMAScript: the closest to the PCRE syntax LCM uses
+  } catch (const std::regex_error& e) {
+    throw std::invalid_argument("--channels (or logger.channels): invalid regex '" + channels +
+                                "': " + e.what());
+  }
   if (!(split_mb >= 0) || !std::isfinite(split_mb)) throw std::invalid_argument("--split-mb: must be >= 0");
   if (split_mb > 0 && split_mb < 0.001)
     throw std::invalid_argument("--split-mb: must be at least 0.001 (1000 bytes)");
@@ -128,20 +135,23 @@ SessionLogger::SessionLogger(lcm::LCM& lcm, LoggerOptions options) : lcm_(lcm), 
     }
   }
 
-  stats_.start_utime = WallUs();
-  OpenPart();
-  // Subscribe before the sidecar appears: a sidecar on disk means the logger is listening.
+  // Subscribe first (a regex LCM refuses leaves no file behind), then create the log, then the sidecar:
+  // a sidecar on disk means the logger is listening. No message is handled before Run().
   subscription_ = lcm_.subscribe(options_.channels, &SessionLogger::OnMessage, this);
+  if (!subscription_)
+    throw std::runtime_error("--channels: LCM refused the regex '" + options_.channels + "'");
+  stats_.start_utime = WallUs();
   try {
-    if (!subscription_)
-      throw std::runtime_error("--channels: LCM refused the regex '" + options_.channels + "'");
     subscription_->setQueueCapacity(options_.queue_capacity);
+    OpenPart();
     WriteSidecar(false);
   } catch (...) {
-    if (subscription_) lcm_.unsubscribe(subscription_);
+    lcm_.unsubscribe(subscription_);
     subscription_ = nullptr;
-    writer_.reset();
-    ::unlink(stats_.parts.back().path.c_str());
+    if (writer_) {
+      writer_.reset();
+      ::unlink(stats_.parts.back().path.c_str());
+    }
     throw;
   }
 }

@@ -71,11 +71,14 @@ int Run(int argc, char** argv) {
   if (seconds < 0) throw std::runtime_error("--seconds must be >= 0");
   if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
 
+  mcmt::CheckOutputFolder(out);  // before collecting: a bad path must not lose the session
   mcmt::Mapper mapper(options);
   mcmt::MapperNodeOptions node_options;
   node_options.outdir = out;
   node_options.session = mcmt::MapperSession(log);
   node_options.force = force;
+  for (const mcmt::CameraConfig& c : rig.cameras)
+    node_options.rig_image_sizes[c.name] = {c.model.width, c.model.height};
   node_options.max_frames = frames;
   node_options.max_seconds = seconds;
   std::unique_ptr<lcm::LCM> input, output;
@@ -84,18 +87,14 @@ int Run(int argc, char** argv) {
     std::error_code ec;
     if (std::filesystem::file_size(log, ec) == 0 && !ec)
       throw std::runtime_error("no detections_t messages on MCMT_DETECTIONS_* in " + log + " (empty log)");
-    try {
-      input = mcmt::OpenLcm(mcmt::LogReadUrl(log));
-    } catch (const std::exception&) {
-      throw std::runtime_error("cannot read " + log + " as an LCM log");
-    }
-    node_options.from_log = true;
+    node_options.log_path = log;
     node_options.publish = publish;
+    input = mcmt::OpenLcm("memq://");  // nothing arrives on it: the log is read by core's reader
     if (publish) output = mcmt::OpenLcm(lcm_url);
   } else {
     input = mcmt::OpenLcm(lcm_url);
   }
-  lcm::LCM* out_lcm = output ? output.get() : (node_options.from_log ? nullptr : input.get());
+  lcm::LCM* out_lcm = output ? output.get() : (log.empty() ? input.get() : nullptr);
   mcmt::MapperNode node(*input, out_lcm, mapper, node_options, std::cerr);
 
   struct sigaction action = {};
@@ -113,6 +112,11 @@ int Run(int argc, char** argv) {
     throw std::runtime_error(log.empty() ? "no detections received on MCMT_DETECTIONS_*"
                                          : "no detections_t messages on MCMT_DETECTIONS_* in " + log);
   node.SolveWriteAndPublish();
+  if (node.log_report().damaged()) {
+    std::cerr << "mcmt-mapper: " << node.log_report().Summary() << " (exit status " << mcmt::kExitDamagedLog
+              << ")\n";
+    return mcmt::kExitDamagedLog;
+  }
   return 0;
 }
 

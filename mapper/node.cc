@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -26,7 +27,7 @@ MapperNode::MapperNode(lcm::LCM& input, lcm::LCM* output, Mapper& mapper, Mapper
                        std::ostream& log)
     : input_(input), output_(output), mapper_(mapper), options_(std::move(options)), log_(log) {
   subscriptions_.push_back(input_.subscribe(kDetectionsChannelRegex, &MapperNode::OnDetections, this));
-  if (!options_.from_log)
+  if (options_.log_path.empty())
     subscriptions_.push_back(input_.subscribe(kMapperCommandChannel, &MapperNode::OnCommand, this));
   tty_ = (&log_ == &std::cerr) && isatty(STDERR_FILENO);
   CheckOutFolder(options_.outdir, options_.session, options_.force);  // before hours of collecting
@@ -36,19 +37,136 @@ MapperNode::~MapperNode() {
   for (lcm::Subscription* s : subscriptions_) input_.unsubscribe(s);
 }
 
-void MapperNode::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-  detections_t msg;
+void MapperNode::Warn(const std::string& key, const std::string& text) {
+  if (warned_.insert(key).second) log_ << "warning: " << text << "\n";
+}
+
+bool MapperNode::Decode(const std::string& channel, const void* data, size_t size, detections_t* msg) {
   std::string error;
-  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
-    ++bad_messages_;
-    if (bad_by_channel_[channel]++ == 0)
-      log_ << "warning: ignoring a message on " << channel << " that is not a detections_t: " << error
-           << " (further ones on this channel are counted silently)\n";
-    return;
+  if (mcmt::Decode(data, size, msg, &error)) return true;
+  ++bad_messages_;
+  if (bad_by_channel_[channel]++ == 0)
+    log_ << "warning: ignoring a message on " << channel << " that is not a detections_t: " << error
+         << " (further ones on this channel are counted silently)\n";
+  return false;
+}
+
+bool MapperNode::Admit(detections_t* msg, const std::string& channel) {
+  const std::string problem = DetectionsProblem(*msg, channel);
+  if (!problem.empty()) {
+    ++invalid_messages_;
+    Warn("problem:" + channel + ":" + problem, problem + "; its messages are dropped");
+    return false;
   }
+  if (duplicates_.Repeated(*msg)) return false;
+  std::vector<int> ids;
+  if (const int n = DropInvalidMarkers(msg, &ids)) {
+    invalid_markers_ += n;
+    Warn("corners:" + msg->camera, "camera '" + msg->camera + "' on " + channel + ": marker " +
+                                       std::to_string(ids.front()) + " (seq " + std::to_string(msg->seq) +
+                                       ") has non-finite or absurd corners; such markers are dropped");
+  }
+  const auto rig_size = options_.rig_image_sizes.find(msg->camera);
+  if (rig_size != options_.rig_image_sizes.end() &&
+      rig_size->second != std::make_pair(msg->camera_model.width, msg->camera_model.height))
+    Warn("size:" + msg->camera,
+         "camera '" + msg->camera + "' on " + channel + ": detections of " +
+             std::to_string(msg->camera_model.width) + "x" + std::to_string(msg->camera_model.height) +
+             " images, but the rig's intrinsics are " + std::to_string(rig_size->second.first) + "x" +
+             std::to_string(rig_size->second.second) +
+             " (another calibration? the detections' own model is used)");
+  auto first = first_model_.find(msg->camera);
+  if (first == first_model_.end()) {
+    first_model_.emplace(msg->camera, msg->camera_model);
+  } else if (Encode(first->second) != Encode(msg->camera_model)) {
+    Warn("model:" + msg->camera,
+         "camera '" + msg->camera + "' on " + channel + ": its camera model changed mid-stream (seq " +
+             std::to_string(msg->seq) + "); the mapper keeps the first one it received");
+  }
+  return true;
+}
+
+void MapperNode::AddChecked(const detections_t& msg) {
   if (first_utime_ == INT64_MIN) first_utime_ = msg.utime;
+  first_utime_ = std::min(first_utime_, msg.utime);
   last_utime_ = std::max(last_utime_, msg.utime);
   mapper_.Add(msg);
+}
+
+void MapperNode::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  detections_t msg;
+  if (!Decode(channel, rbuf->data, rbuf->data_size, &msg) || !Admit(&msg, channel)) return;
+  AddChecked(msg);
+  AppendEncodedEvent(collected_events_++, rbuf->recv_utime, channel, rbuf->data, rbuf->data_size,
+                     &collected_);
+}
+
+std::string MapperNode::SaveCollected() const {
+  const std::string name = "collected-" + std::to_string(NowUtime() / 1000000) + ".lcmlog";
+  for (const std::string& dir : {options_.outdir, std::filesystem::temp_directory_path().string()}) {
+    try {
+      const std::string path = (std::filesystem::path(dir) / name).string();
+      WriteFileAtomic(path, collected_);
+      return path;
+    } catch (const std::exception&) {
+    }
+  }
+  return "";
+}
+
+std::string MapperNode::CollectFromLog() {
+  struct Item {
+    std::string channel;
+    detections_t msg;
+    std::vector<uint8_t> bytes;
+  };
+  std::vector<Item> items;
+  std::unique_ptr<Progress> reading;  // a long log takes minutes: bytes read, rate and ETA
+  if (&log_ == &std::cerr) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(options_.log_path, ec);
+    reading = std::make_unique<Progress>("reading the log", ec ? 0 : static_cast<int64_t>(size >> 10), "KiB");
+  }
+  log_report_ = ForEachLogEvent(options_.log_path, [&](const LogEvent& e) {
+    if (reading) reading->Update(static_cast<int64_t>(e.offset >> 10));
+    if (!IsDetectionsChannel(e.channel)) return true;
+    Item item;
+    item.channel = e.channel;
+    item.bytes = e.data;
+    if (Decode(e.channel, e.data.data(), e.data.size(), &item.msg)) items.push_back(std::move(item));
+    return !StopFlag().load();
+  });
+  if (reading) reading->Finish();
+  // Capture-time order (then camera, seq, bytes): the same result whatever the order of the events.
+  std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
+    if (a.msg.utime != b.msg.utime) return a.msg.utime < b.msg.utime;
+    if (a.msg.camera != b.msg.camera) return a.msg.camera < b.msg.camera;
+    if (a.msg.seq != b.msg.seq) return a.msg.seq < b.msg.seq;
+    return a.bytes < b.bytes;
+  });
+  std::string reason = "end of log";
+  for (Item& item : items) {
+    if (LimitReached(&reason, first_utime_ == INT64_MIN ? 0.0 : (last_utime_ - first_utime_) * 1e-6)) break;
+    if (StopFlag().load()) {
+      reason = "signal";
+      break;
+    }
+    if (Admit(&item.msg, item.channel)) AddChecked(item.msg);
+  }
+  for (const std::string& line : log_report_.damage) log_ << "warning: " << line << "\n";
+  return reason;
+}
+
+bool MapperNode::LimitReached(std::string* reason, double elapsed_s) const {
+  if (options_.max_frames > 0 && mapper_.NumFramesApprox() >= options_.max_frames) {
+    *reason = std::to_string(options_.max_frames) + " frames";
+    return true;
+  }
+  if (options_.max_seconds > 0 && elapsed_s >= options_.max_seconds) {
+    *reason = "time limit";
+    return true;
+  }
+  return false;
 }
 
 void MapperNode::OnCommand(const lcm::ReceiveBuffer*, const std::string&, const mapper_command_t* msg) {
@@ -57,6 +175,8 @@ void MapperNode::OnCommand(const lcm::ReceiveBuffer*, const std::string&, const 
   } else if (msg->command == "reset") {
     mapper_.Reset();
     first_utime_ = last_utime_ = INT64_MIN;
+    collected_.clear();
+    collected_events_ = 0;
     log_ << "reset: collected detections dropped\n";
   } else {
     log_ << "warning: unknown mapper command '" << msg->command << "' (solve, reset)\n";
@@ -116,41 +236,22 @@ void MapperNode::ShowProgress(bool final_line) {
 
 std::string MapperNode::Collect() {
   using Clock = std::chrono::steady_clock;
-  const auto start = Clock::now();
-  auto last_progress = start;
   std::string reason;
-  std::unique_ptr<Progress> reading;  // a long log takes minutes: messages read and rate
-  if (options_.from_log && &log_ == &std::cerr)
-    reading = std::make_unique<Progress>("reading the log", 0, "messages");
-  for (;;) {
-    if (StopFlag().load()) {
-      reason = "signal";
-      break;
-    }
-    if (solve_requested_) {
-      reason = "solve command";
-      break;
-    }
-    if (options_.max_frames > 0 && mapper_.NumFramesApprox() >= options_.max_frames) {
-      reason = std::to_string(options_.max_frames) + " frames";
-      break;
-    }
-    if (options_.max_seconds > 0) {
-      const double elapsed = options_.from_log
-                                 ? (first_utime_ == INT64_MIN ? 0.0 : (last_utime_ - first_utime_) * 1e-6)
-                                 : std::chrono::duration<double>(Clock::now() - start).count();
-      if (elapsed >= options_.max_seconds) {
-        reason = "time limit";
+  if (!options_.log_path.empty()) {
+    reason = CollectFromLog();
+  } else {
+    const auto start = Clock::now();
+    auto last_progress = start;
+    for (;;) {
+      if (StopFlag().load()) {
+        reason = "signal";
         break;
       }
-    }
-    if (options_.from_log) {
-      if (input_.handle() != 0) {
-        reason = "end of log";
+      if (solve_requested_) {
+        reason = "solve command";
         break;
       }
-      if (reading) reading->Update(mapper_.NumMessages());
-    } else {
+      if (LimitReached(&reason, std::chrono::duration<double>(Clock::now() - start).count())) break;
       if (input_.handleTimeout(50) < 0) {
         // A signal (SIGINT/SIGTERM/SIGUSR1: solve) interrupts the wait: the loop's top decides.
         if (errno == EINTR || StopFlag().load()) continue;
@@ -162,13 +263,49 @@ std::string MapperNode::Collect() {
         last_progress = now;
       }
     }
+    ShowProgress(true);
   }
-  if (reading) reading->Finish();
-  if (!options_.from_log) ShowProgress(true);
   if (bad_messages_ > 0)
     log_ << "warning: ignored " << bad_messages_
          << " messages on detections channels that were not detections_t\n";
+  if (invalid_messages_ > 0)
+    log_ << "warning: dropped " << invalid_messages_ << " invalid detections messages\n";
+  if (invalid_markers_ > 0)
+    log_ << "warning: dropped " << invalid_markers_ << " markers with non-finite or absurd corners\n";
+  if (duplicates_.count() > 0)
+    log_ << "warning: dropped " << duplicates_.count()
+         << " repeated detections messages (same camera, seq and utime), e.g. "
+         << duplicates_.examples().front() << "\n";
   return reason;
+}
+
+// Solves and writes OUTDIR; on failure publishes STATE_FAILED and keeps what a live session collected.
+MapResult MapperNode::SolveAndWrite(std::string* verdicts) {
+  MapResult result;
+  try {
+    result = mapper_.Solve();
+    result.report.duplicates += static_cast<int>(duplicates_.count());
+    for (const std::string& e : duplicates_.examples())
+      if (result.report.duplicate_examples.size() < 40)
+        result.report.duplicate_examples.push_back("repeated message: " + e);
+    mapper_.SetProgressCallback(nullptr);
+    if (tty_) log_ << "\r\033[K";
+    *verdicts = WriteMapOutputs(options_.outdir, result);
+    RecordSession(options_.outdir, options_.session);
+  } catch (const std::exception& e) {
+    if (tty_) log_ << "\n";
+    PublishStatus(mapper_status_t::STATE_FAILED, e.what());
+    mapper_.SetProgressCallback(nullptr);
+    if (collected_events_ > 0) {  // live: what was collected is not lost
+      const std::string kept = SaveCollected();
+      log_ << (kept.empty()
+                   ? "could not keep the collected detections either\n"
+                   : "kept the " + std::to_string(collected_events_) + " collected detections messages in " +
+                         kept + " (map them with --log " + kept + ")\n");
+    }
+    throw;
+  }
+  return result;
 }
 
 MapResult MapperNode::SolveWriteAndPublish() {
@@ -192,19 +329,8 @@ MapResult MapperNode::SolveWriteAndPublish() {
       log_ << p.message << (tty_ ? "" : "\n") << std::flush;
     }
   });
-  MapResult result;
-  try {
-    result = mapper_.Solve();
-  } catch (const std::exception& e) {
-    if (tty_) log_ << "\n";
-    PublishStatus(mapper_status_t::STATE_FAILED, e.what());
-    mapper_.SetProgressCallback(nullptr);
-    throw;
-  }
-  mapper_.SetProgressCallback(nullptr);
-  if (tty_) log_ << "\r\033[K";
-  const std::string verdicts = WriteMapOutputs(options_.outdir, result);
-  RecordSession(options_.outdir, options_.session);
+  std::string verdicts;
+  MapResult result = SolveAndWrite(&verdicts);
   const MapReport& r = result.report;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(3) << "mapped " << result.map.cameras.size() << " cameras, "
@@ -218,8 +344,9 @@ MapResult MapperNode::SolveWriteAndPublish() {
     log_ << "rejected marker " << m.id << " (" << m.observations << " observations): " << m.reason << "\n";
   if (!r.rejected_observations.empty())
     log_ << "rejected " << r.rejected_observations.size() << " observations (see report.json)\n";
-  if (r.duplicates > 0)
-    log_ << "dropped " << r.duplicates << " duplicate detections (same id twice in one frame)\n";
+  if (r.duplicates > duplicates_.count())
+    log_ << "dropped " << r.duplicates - duplicates_.count()
+         << " duplicate detections (same id twice in one frame)\n";
   for (const std::string& w : r.warnings) log_ << "warning: " << w << "\n";
   log_ << "wrote " << (std::filesystem::path(options_.outdir) / "map.yaml").string()
        << ", trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv, residuals.csv\n"

@@ -1,32 +1,99 @@
 // The mapper's files: map.yaml, trajectory.csv, report.json and the initial (pre-refinement) pair.
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
 #include "core/json.h"
-#include "mapper/diagnostics.h"
 #include "core/version.h"
+#include "mapper/diagnostics.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
 namespace {
 
-void MakeDirs(const std::string& dir) {
-  std::string path;
-  std::stringstream ss(dir);
-  std::string part;
-  if (!dir.empty() && dir[0] == '/') path = "/";
-  while (std::getline(ss, part, '/')) {
-    if (part.empty()) continue;
-    path += part + "/";
-    if (mkdir(path.c_str(), 0755) != 0 && errno != EEXIST)
-      throw std::runtime_error("cannot create folder " + path + ": " + std::strerror(errno));
+namespace fs = std::filesystem;
+
+const char* const kOutputFiles[] = {"map.yaml", "trajectory.csv", "report.json", "map_initial.yaml",
+                                    "trajectory_initial.csv", "residuals.csv"};
+constexpr char kStagingMarker[] = ".mcmt-staging-";
+
+bool ProcessAlive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+
+// The pid after `marker` at the end of `name` ("map.yaml.tmp.1234", ".out.mcmt-staging-1234"), else -1.
+long PidAfter(const std::string& name, const std::string& marker) {
+  const size_t at = name.rfind(marker);
+  if (at == std::string::npos || at + marker.size() >= name.size()) return -1;
+  const std::string digits = name.substr(at + marker.size());
+  if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) return -1;
+  return std::stol(digits);
+}
+
+// Leftovers of earlier runs that died while writing: temporary files in `out` (WriteFileAtomic's
+// NAME.tmp.PID) and staging folders beside it, of processes that are gone.
+void RemoveLeftovers(const fs::path& out) {
+  std::error_code ec;
+  if (fs::is_directory(out, ec))
+    for (const auto& e : fs::directory_iterator(out, ec)) {
+      const long pid = PidAfter(e.path().filename().string(), ".tmp.");
+      if (pid > 0 && !ProcessAlive(pid)) fs::remove_all(e.path(), ec);
+    }
+  const std::string prefix = "." + out.filename().string() + kStagingMarker;
+  for (const auto& e : fs::directory_iterator(out.parent_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const long pid = PidAfter(name, kStagingMarker);
+    if (pid > 0 && !ProcessAlive(pid)) fs::remove_all(e.path(), ec);
   }
+}
+
+void WriteSet(const std::string& dir, const MapResult& result, const Diagnostics& diagnostics) {
+  WriteMap(dir + "/map_initial.yaml", result.initial_map);
+  WriteTrajectory(dir + "/trajectory_initial.csv", result.initial_trajectory);
+  WriteTrajectory(dir + "/trajectory.csv", result.trajectory);
+  WriteFileAtomic(dir + "/residuals.csv", ResidualsCsv(diagnostics));
+  WriteFileAtomic(dir + "/report.json", WithDiagnostics(ReportJson(result), diagnostics));
+  WriteMap(dir + "/map.yaml", result.map);  // last: its presence means the rest is there
+}
+
+bool IsOutputFile(const std::string& name) {
+  for (const char* f : kOutputFiles)
+    if (name == f) return true;
+  return false;
+}
+
+// Can `out` be replaced as a whole? Not when it holds folders that are not ours, or holds the current
+// directory (a shell there would be left in a deleted folder).
+bool Swappable(const fs::path& out) {
+  std::error_code ec;
+  const fs::path cwd = fs::weakly_canonical(fs::current_path(ec), ec);
+  const fs::path canonical = fs::weakly_canonical(out, ec);
+  const std::string c = cwd.string() + "/", o = canonical.string() + "/";
+  if (c.rfind(o, 0) == 0) return false;
+  for (const auto& e : fs::directory_iterator(out, ec))
+    if (e.is_directory(ec) && !e.is_symlink(ec)) return false;
+  return true;
+}
+
+// Atomically exchanges `staging` and `out` (both exist); the old set ends at `staging`.
+void Exchange(const fs::path& staging, const fs::path& out) {
+  if (::renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, out.c_str(), RENAME_EXCHANGE) == 0) return;
+  if (errno != EINVAL && errno != ENOSYS)
+    throw std::runtime_error("cannot replace " + out.string() + ": " + std::strerror(errno));
+  // No exchange on this file system: out is briefly absent, never mixed.
+  const fs::path old = staging.string() + ".old";
+  fs::rename(out, old);
+  fs::rename(staging, out);
+  fs::rename(old, staging);
 }
 
 }  // namespace
@@ -115,16 +182,60 @@ std::string ReportJson(const MapResult& result) {
 }
 
 std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) {
-  MakeDirs(outdir);
-  const std::string dir = outdir.back() == '/' ? outdir : outdir + "/";
-  WriteMap(dir + "map_initial.yaml", result.initial_map);
-  WriteTrajectory(dir + "trajectory_initial.csv", result.initial_trajectory);
-  WriteTrajectory(dir + "trajectory.csv", result.trajectory);
   const Diagnostics diagnostics = ComputeDiagnostics(result);  // mapper/diagnostics.h
-  WriteFileAtomic(dir + "residuals.csv", ResidualsCsv(diagnostics));
-  WriteFileAtomic(dir + "report.json", WithDiagnostics(ReportJson(result), diagnostics));
-  WriteMap(dir + "map.yaml", result.map);  // last: its presence means the rest is there
-  return VerdictLines(diagnostics);
+  const std::string verdicts = VerdictLines(diagnostics);
+  fs::path out = fs::absolute(outdir).lexically_normal();
+  if (!out.has_filename()) out = out.parent_path();
+  std::error_code ec;
+  fs::create_directories(out.parent_path(), ec);
+  if (ec)
+    throw std::runtime_error("cannot create folder " + out.parent_path().string() + ": " + ec.message());
+  RemoveLeftovers(out);
+  const bool exists = fs::exists(out);
+  // Without write access beside `out` (its staging folder goes there), or when it cannot be swapped:
+  if (exists &&
+      (!Swappable(out) || ::access(out.parent_path().c_str(), W_OK) !=
+                              0)) {  // in place: map.yaml (whose presence means the set is whole) last
+    fs::remove(out / "map.yaml", ec);
+    WriteSet(out.string(), result, diagnostics);
+    return verdicts;
+  }
+  // The whole set in a staging folder beside `out`, then swapped in at once.
+  const fs::path staging =
+      out.parent_path() / ("." + out.filename().string() + kStagingMarker + std::to_string(::getpid()));
+  fs::remove_all(staging, ec);
+  if (!fs::create_directory(staging, ec))
+    throw std::runtime_error("cannot create folder " + staging.string() + ": " + ec.message());
+  try {
+    WriteSet(staging.string(), result, diagnostics);
+    if (!exists) {
+      fs::rename(staging, out);
+      return verdicts;
+    }
+    for (const auto& e : fs::directory_iterator(out)) {  // the user's files stay (hard links)
+      const std::string name = e.path().filename().string();
+      if (!IsOutputFile(name)) fs::create_hard_link(e.path(), staging / name);
+    }
+    Exchange(staging, out);
+  } catch (...) {
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  fs::remove_all(staging, ec);  // the old set
+  return verdicts;
+}
+
+void CheckOutputFolder(const std::string& outdir) {
+  std::error_code ec;
+  fs::create_directories(outdir, ec);
+  if (ec || !fs::is_directory(outdir))
+    throw std::runtime_error("--out " + outdir + ": cannot create the output folder" +
+                             (ec ? ": " + ec.message() : std::string(": not a folder")));
+  const std::string probe = (fs::path(outdir) / (".mcmt-probe.tmp." + std::to_string(::getpid()))).string();
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("--out " + outdir + ": cannot write there: " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
 }
 
 }  // namespace mcmt

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <set>
 #include <sstream>
 
 #include "core/json.h"
 #include "core/lcm_util.h"
+#include "core/log_reader.h"
 #include "core/marker.h"
 #include "core/se3.h"
 #include "mcmt/object_pose_t.hpp"
@@ -246,21 +246,21 @@ std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path) {
   in.close();
   const bool is_log = magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
   if (!is_log) return ReadTrajectory(path);
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw FileFormatError(path + ": cannot read the LCM log");
   std::vector<TrajectoryRow> rows;
   int bad = 0;
-  for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
-    if (ev->channel != kPoseChannel) continue;
+  const LogReadReport report = ForEachLogEvent(path, [&](const LogEvent& ev) {
+    if (ev.channel != kPoseChannel) return true;
     object_pose_t msg;
-    if (!Decode(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
+    if (!Decode(ev.data.data(), ev.data.size(), &msg)) {
       ++bad;
-      continue;
+      return true;
     }
-    if (msg.status != object_pose_t::STATUS_TRACKING && msg.status != object_pose_t::STATUS_AMBIGUOUS)
-      continue;
-    rows.push_back(FromObjectPoseMsg(msg));
-  }
+    if (msg.status == object_pose_t::STATUS_TRACKING || msg.status == object_pose_t::STATUS_AMBIGUOUS)
+      rows.push_back(FromObjectPoseMsg(msg));
+    return true;
+  });
+  if (report.damaged())  // what is readable would be judged as if it were the whole trajectory
+    throw FileFormatError(path + ": " + report.Summary());
   if (rows.empty() && bad > 0)
     throw FileFormatError(path + ": " + std::to_string(bad) + " undecodable messages on " + kPoseChannel);
   return rows;

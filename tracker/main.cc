@@ -30,7 +30,7 @@ void InstallSignalHandlers() {
 int Main(int argc, char** argv) {
   std::string config, map_path, log_path, out_path, lcm_url, channel;
   bool quiet = false;
-  double deadline_ms = 15.0;
+  double deadline_ms = 15.0, max_wait_ms = 100.0;
   mcmt::ArgParser args(
       "mcmt-tracker",
       "Tracks the object with a known map: one object_pose_t per frame on MCMT_POSE (rig_from_object,\n"
@@ -51,6 +51,9 @@ int Main(int argc, char** argv) {
   args.AddDouble("deadline-ms", &deadline_ms,
                  "frame deadline: wait this long after a frame's first detection for the other cameras "
                  "(overrides tracker.deadline_ms; raise it when cameras' messages lag each other)");
+  args.AddDouble("max-wait-ms", &max_wait_ms,
+                 "live: longest wait for a camera whose messages lag (measured per camera) after a frame's "
+                 "first detection (overrides tracker.max_wait_ms; 0: only the deadline)");
   args.AddFlag("quiet", &quiet, "no status lines (warnings are still printed)");
   args.AddEpilog(
       "\nexamples:\n"
@@ -66,6 +69,7 @@ int Main(int argc, char** argv) {
   options.tracker = mcmt::TrackerOptions::FromConfig(rig);
   if (args.Given("channel")) options.tracker.channel = channel;
   if (args.Given("deadline-ms")) options.tracker.deadline_ms = deadline_ms;
+  if (args.Given("max-wait-ms")) options.tracker.max_wait_ms = max_wait_ms;
   options.tracker.Validate();
   options.log_mode = !log_path.empty();
   options.keep_trajectory = !out_path.empty();
@@ -81,7 +85,7 @@ int Main(int argc, char** argv) {
   if (options.log_mode) {
     if (!std::ifstream(log_path, std::ios::binary))
       throw std::runtime_error(log_path + ": cannot open the log");
-    input = mcmt::OpenLcm(mcmt::LogReadUrl(log_path));
+    input = mcmt::OpenLcm("memq://");  // nothing arrives on it: the log is read by core's reader
     if (args.Given("lcm-url")) output = mcmt::OpenLcm(lcm_url);
   } else {
     input = mcmt::OpenLcm(live_url);
@@ -93,13 +97,22 @@ int Main(int argc, char** argv) {
               << options.tracker.channel
               << (options.log_mode && !output ? " (not published: --log without --lcm-url)" : "")
               << std::endl;
-  node.Run(&g_stop);
+  mcmt::LogReadReport report;
+  if (options.log_mode)
+    report = node.RunLog(log_path, &g_stop);
+  else
+    node.Run(&g_stop);
   if (!out_path.empty()) {
     mcmt::WriteTrajectory(out_path, node.trajectory());
     std::remove(options.partial_path.c_str());
     if (!quiet)
       std::cerr << "mcmt-tracker: wrote " << node.trajectory().size() << " poses to " << out_path
                 << std::endl;
+  }
+  if (report.damaged()) {
+    std::cerr << "mcmt-tracker: " << report.Summary() << " (exit status " << mcmt::kExitDamagedLog << ")"
+              << std::endl;
+    return mcmt::kExitDamagedLog;
   }
   return 0;
 }

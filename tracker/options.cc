@@ -11,7 +11,8 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   const YamlSection& s = rig.tracker;
   s.CheckKnownKeys({"channel", "object", "deadline_ms", "sync_tolerance_ms", "camera_timeout_s",
                     "max_iterations", "huber_px", "outlier_px", "ambiguity_ratio", "max_gap_s",
-                    "min_sigma_px", "max_start_markers", "status_period_s"});
+                    "min_sigma_px", "max_start_markers", "status_period_s", "max_clock_jump_s",
+                    "max_wait_ms"});
   o.channel = s.GetString("channel", o.channel);
   o.object = s.GetString("object", o.object);
   // The shared sync: section (also read by the mapper) gives the defaults; tracker: keys override.
@@ -23,6 +24,8 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   o.sync_tolerance_ms = s.GetDouble("sync_tolerance_ms", o.sync_tolerance_ms);
   o.deadline_ms = s.GetPositiveDouble("deadline_ms", o.deadline_ms);
   o.camera_timeout_s = s.GetPositiveDouble("camera_timeout_s", o.camera_timeout_s);
+  o.max_wait_ms = s.GetDouble("max_wait_ms", o.max_wait_ms);
+  o.max_clock_jump_s = s.GetDouble("max_clock_jump_s", o.max_clock_jump_s);
   o.max_iterations = s.GetInt("max_iterations", o.max_iterations);
   o.huber_px = s.GetPositiveDouble("huber_px", o.huber_px);
   o.outlier_px = s.GetPositiveDouble("outlier_px", o.outlier_px);
@@ -47,6 +50,8 @@ void TrackerOptions::Validate() const {
   if (!(deadline_ms > 0)) fail("deadline_ms", "must be > 0");
   if (!(sync_tolerance_ms >= 0)) fail("sync_tolerance_ms", "must be >= 0");
   if (!(camera_timeout_s > 0)) fail("camera_timeout_s", "must be > 0");
+  if (!(max_wait_ms >= 0)) fail("max_wait_ms", "must be >= 0 (0: only deadline_ms)");
+  if (!(max_clock_jump_s >= 0)) fail("max_clock_jump_s", "must be >= 0 (0: no clock check)");
   if (max_iterations < 1) fail("max_iterations", "must be >= 1");
   if (!(huber_px > 0)) fail("huber_px", "must be > 0");
   if (!(outlier_px > 0)) fail("outlier_px", "must be > 0");

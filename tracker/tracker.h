@@ -25,6 +25,8 @@
 #include "core/config.h"
 #include "core/files.h"
 #include "core/frame_sync.h"
+#include "core/lcm_util.h"
+#include "core/log_reader.h"
 #include "core/marker.h"
 #include "core/se3.h"
 #include "mcmt/detections_t.hpp"
@@ -40,8 +42,14 @@ struct TrackerOptions {
   // Frame assembly: a frame is solved when every alive camera reported it, or deadline_ms after its
   // first detection (wall time live, message time with --log), so one slow camera never stalls the rest.
   double deadline_ms = 15.0;
+  // Live: a frame missing a camera whose messages lag (measured per camera) waits for it up to this long
+  // after the frame's first detection; deadline_ms is the wait for cameras without a measured lag.
+  double max_wait_ms = 100.0;
   double sync_tolerance_ms = 2.0;  // detections within this of a frame's utime belong to it
   double camera_timeout_s = 1.0;   // a camera silent this long (message time) is not waited for
+  // A message whose utime is more than this ahead of its camera's clock (or of the other cameras', for
+  // a camera's first messages) is rejected with a warning naming the camera; 0: no check.
+  double max_clock_jump_s = 5.0;
   // Solver.
   int max_iterations = 20;       // Levenberg-Marquardt iterations per start
   double huber_px = 1.0;         // Huber threshold of the robust loss, pixels (corner distance)
@@ -178,7 +186,11 @@ struct TrackerStats {
   int64_t bad_messages = 0;    // undecodable detections
   int64_t unknown_camera = 0;  // detections of cameras not in the map
   int64_t map_switches = 0;
-  int64_t late_views = 0;  // views that arrived after their frame was solved (dropped)
+  int64_t late_views = 0;       // views that arrived after their frame was solved (dropped)
+  int64_t duplicates = 0;       // repeated messages (same camera, seq, utime), dropped
+  int64_t invalid = 0;          // messages dropped for their content (camera vs channel, camera model)
+  int64_t invalid_markers = 0;  // markers with non-finite or absurd corners, dropped
+  int64_t clock_jumps = 0;      // messages whose utime is far from their camera's or the others' (dropped)
 };
 
 struct TrackerNodeOptions {
@@ -205,6 +217,10 @@ class TrackerNode {
 
   // Handles messages until *stop is set or (log mode) the log ends; then solves what is pending.
   void Run(const volatile bool* stop);
+  // Log mode: reads the log with core's reader (damage skipped and reported) and tracks its frames in
+  // capture-time order whatever the order of the events (the detections between two maps of the log
+  // are sorted by utime, camera, seq); then solves what is pending.
+  LogReadReport RunLog(const std::string& path, const volatile bool* stop);
   // Solves and publishes every pending frame (end of a log, or shutdown).
   void Flush();
   // Solves frames whose deadline passed (live mode; called by Run).
@@ -242,6 +258,8 @@ class TrackerNode {
   std::set<std::string> warned_;
   std::set<std::string> reported_stale_;
   std::map<std::string, int64_t> late_views_;  // per camera
+  DuplicateFilter duplicates_;
+  bool waits_for_map_ = false;  // no map file: maps come from MCMT_MAP
   TrackerStats stats_;
   std::vector<TrajectoryRow> trajectory_;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> partial_{nullptr, &std::fclose};

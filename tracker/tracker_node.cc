@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "core/lcm_util.h"
 #include "tracker/tracker.h"
@@ -57,6 +58,7 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
   // (many cameras, a replay) must not lose any.
   subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &TrackerNode::HandleDetections, this));
   subscriptions_.back()->setQueueCapacity(kQueueCapacity);
+  waits_for_map_ = !map;
   if (!map) subscriptions_.push_back(lcm_.subscribe(kMapChannel, &TrackerNode::HandleMap, this));
   last_status_wall_us_ = NowUtime();
 }
@@ -80,6 +82,9 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
   sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
   sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
+  sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
+  sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
+  sync.arrival_is_wall_time = !options_.log_mode;
   for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
   sync_ = std::make_unique<FrameSynchronizer>(sync);
   reported_stale_.clear();
@@ -137,6 +142,27 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
     WarnOnce("no-map", "no map yet: detections are dropped until " + std::string(kMapChannel) + " arrives");
     return;
   }
+  if (const std::string problem = DetectionsProblem(msg, channel); !problem.empty()) {
+    stats_.invalid++;
+    WarnOnce("problem:" + channel + problem, problem + "; its messages are dropped");
+    return;
+  }
+  if (duplicates_.Repeated(msg)) {
+    stats_.duplicates++;
+    WarnOnce("dup:" + msg.camera, "camera '" + msg.camera + "' on " + channel +
+                                      ": repeated message (same seq and utime) dropped, e.g. " +
+                                      duplicates_.examples().back());
+    return;
+  }
+  {
+    std::vector<int> ids;
+    if (const int n = DropInvalidMarkers(&msg, &ids)) {
+      stats_.invalid_markers += n;
+      WarnOnce("corners:" + msg.camera, "camera '" + msg.camera + "' on " + channel + ": marker " +
+                                            std::to_string(ids.front()) + " (seq " + std::to_string(msg.seq) +
+                                            ") has non-finite or absurd corners; such markers are dropped");
+    }
+  }
   if (!estimator_->map().FindCamera(msg.camera)) {
     stats_.unknown_camera++;
     std::vector<std::string> names;
@@ -161,13 +187,16 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
                                        "', the rig uses '" + rig_.markers.dictionary + "'");
   std::vector<SyncedFrame> frames;
   const int64_t late_before = sync_->stats().out_of_order;
+  frames = sync_->Add(msg, options_.log_mode ? msg.utime : arrival_wall);
+  if (!sync_->clock_rejection().empty()) {  // a far-off utime: moves no clock
+    stats_.clock_jumps++;
+    WarnOnce("clock:" + msg.camera, sync_->clock_rejection() + " (further ones are counted)");
+    return;
+  }
   if (options_.log_mode) {
     // Deadlines in message time: deterministic whatever the reading speed.
-    frames = sync_->Poll(msg.utime);
-    auto more = sync_->Add(msg, msg.utime);
-    frames.insert(frames.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
-  } else {
-    frames = sync_->Add(msg, arrival_wall);
+    auto due = sync_->Poll(msg.utime);
+    frames.insert(frames.end(), std::make_move_iterator(due.begin()), std::make_move_iterator(due.end()));
   }
   if (sync_->stats().out_of_order > late_before) {
     // A view of a frame already solved: this camera's messages come later than the frame deadline.
@@ -175,9 +204,10 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
     stats_.late_views++;
     WarnOnce("late:" + msg.camera,
              "views of camera '" + msg.camera + "' arrive after their frame was solved (deadline " +
-                 FormatMs(options_.tracker.deadline_ms) +
+                 FormatMs(options_.tracker.deadline_ms) + " ms, adaptive wait at most " +
+                 FormatMs(options_.tracker.max_wait_ms) +
                  " ms) and are dropped; if this camera's messages lag the others (start offset, slow link), "
-                 "raise tracker.deadline_ms or --deadline-ms");
+                 "raise tracker.max_wait_ms or --max-wait-ms");
   }
   ProcessFrames(std::move(frames), arrival_wall);
 }
@@ -305,6 +335,11 @@ std::string TrackerNode::StatusLine() const {
     s << ", late views dropped:";
     for (const auto& kv : late_views_) s << " " << kv.first << " " << kv.second;
   }
+  if (stats_.duplicates > 0) s << ", " << stats_.duplicates << " repeated messages dropped";
+  if (stats_.invalid > 0) s << ", " << stats_.invalid << " invalid messages dropped";
+  if (stats_.invalid_markers > 0) s << ", " << stats_.invalid_markers << " markers with bad corners dropped";
+  if (stats_.clock_jumps > 0) s << ", " << stats_.clock_jumps << " messages with a far-off utime dropped";
+  if (stats_.bad_messages > 0) s << ", " << stats_.bad_messages << " undecodable messages";
   if (!reported_stale_.empty()) {
     s << ", stale cameras:";
     for (const auto& c : reported_stale_) s << " " << c;
@@ -321,6 +356,46 @@ void TrackerNode::MaybePrintStatus() {
   last_status_wall_us_ = now;
   latencies_ms_.clear();
   status_frames_ = status_tracked_ = 0;
+}
+
+LogReadReport TrackerNode::RunLog(const std::string& path, const volatile bool* stop) {
+  struct Item {
+    int64_t utime = 0, seq = 0;
+    std::string camera, channel;
+    std::vector<uint8_t> bytes;
+  };
+  std::vector<Item> segment;  // detections since the last map event
+  auto track_segment = [&] {
+    std::sort(segment.begin(), segment.end(), [](const Item& a, const Item& b) {
+      return std::tie(a.utime, a.camera, a.seq, a.bytes) < std::tie(b.utime, b.camera, b.seq, b.bytes);
+    });
+    for (const Item& item : segment) OnDetections(item.channel, item.bytes.data(), item.bytes.size());
+    segment.clear();
+  };
+  const bool maps_from_log = waits_for_map_;
+  const LogReadReport report = ForEachLogEvent(path, [&](const LogEvent& e) {
+    if (IsDetectionsChannel(e.channel)) {
+      Item item;
+      item.channel = e.channel;
+      item.bytes = e.data;
+      detections_t msg;
+      if (Decode(e.data.data(), e.data.size(), &msg)) {  // undecodable ones sort first (utime 0)
+        item.utime = msg.utime;
+        item.seq = msg.seq;
+        item.camera = msg.camera;
+      }
+      segment.push_back(std::move(item));
+    } else if (maps_from_log && e.channel == kMapChannel) {
+      track_segment();
+      OnMap(e.data.data(), e.data.size());
+    }
+    return !*stop;
+  });
+  track_segment();
+  Flush();
+  for (const std::string& line : report.damage) std::cerr << "mcmt-tracker: warning: " << line << std::endl;
+  if (!options_.quiet) std::cerr << StatusLine() << std::endl;
+  return report;
 }
 
 void TrackerNode::Run(const volatile bool* stop) {

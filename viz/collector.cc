@@ -13,25 +13,42 @@ namespace mcmt::viz {
 
 LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
     : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
-  subscriptions_.push_back(lcm_.subscribe(kMapChannel, &LcmCollector::OnMap, this));
-  subscriptions_.push_back(lcm_.subscribe(kPoseChannel, &LcmCollector::OnPose, this));
-  subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &LcmCollector::OnDetections, this));
+  for (const char* channel : {kMapChannel, kPoseChannel, kDetectionsChannelRegex})
+    subscriptions_.push_back(lcm_.subscribe(channel, &LcmCollector::OnMessage, this));
 }
 
 LcmCollector::~LcmCollector() {
   for (auto* s : subscriptions_) lcm_.unsubscribe(s);
 }
 
-void LcmCollector::DrainLog() {
-  while (lcm_.handle() == 0) {
-  }
+LogReadReport LcmCollector::ReadLog(const std::string& path) {
+  const LogReadReport report = ForEachLogEvent(path, [this](const LogEvent& e) {
+    Handle(e.channel, e.data.data(), e.data.size());
+    return true;
+  });
+  for (const std::string& line : report.damage) std::cerr << "mcmt-viz: warning: " << line << "\n";
+  if (report.damaged()) std::cerr << "mcmt-viz: warning: " << report.Summary() << "\n";
+  return report;
 }
 
-void LcmCollector::OnMap(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+void LcmCollector::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  Handle(channel, rbuf->data, rbuf->data_size);
+}
+
+void LcmCollector::Handle(const std::string& channel, const void* data, size_t size) {
+  if (channel == kMapChannel)
+    OnMap(data, size, channel);
+  else if (channel == kPoseChannel)
+    OnPose(data, size, channel);
+  else if (IsDetectionsChannel(channel))
+    OnDetections(data, size, channel);
+}
+
+void LcmCollector::OnMap(const void* data, size_t size, const std::string& channel) {
   ++messages_;
   rig_map_t msg;
   std::string error;
-  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+  if (!Decode(data, size, &msg, &error)) {
     if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
     return;
   }
@@ -44,11 +61,11 @@ void LcmCollector::OnMap(const lcm::ReceiveBuffer* rbuf, const std::string& chan
   }
 }
 
-void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+void LcmCollector::OnPose(const void* data, size_t size, const std::string& channel) {
   ++messages_;
   object_pose_t msg;
   std::string error;
-  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+  if (!Decode(data, size, &msg, &error)) {
     if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
     return;
   }
@@ -71,11 +88,11 @@ void LcmCollector::OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& cha
   while (!arrivals_us_.empty() && arrivals_us_.front() < now - 1000000) arrivals_us_.pop_front();
 }
 
-void LcmCollector::OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+void LcmCollector::OnDetections(const void* data, size_t size, const std::string& channel) {
   ++messages_;
   detections_t msg;
   std::string error;
-  if (!Decode(rbuf->data, rbuf->data_size, &msg, &error)) {
+  if (!Decode(data, size, &msg, &error)) {
     if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
     return;
   }

@@ -1,4 +1,4 @@
-// Collects what the viewer shows from LCM (live or a log through the file:// provider): the newest
+// Collects what the viewer shows from LCM (live) or a log (core's reader): the newest
 // MCMT_MAP, the poses on MCMT_POSE and the marker ids on MCMT_DETECTIONS_.* per frame utime.
 #pragma once
 
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/files.h"
+#include "core/log_reader.h"
 
 namespace mcmt::viz {
 
@@ -34,8 +35,10 @@ class LcmCollector {
   LcmCollector(const LcmCollector&) = delete;
   LcmCollector& operator=(const LcmCollector&) = delete;
 
-  // Reads a whole log (file:// provider) until its end.
-  void DrainLog();
+  // Reads a whole log (core's reader: damage is skipped, and reported on stderr and in the result).
+  LogReadReport ReadLog(const std::string& path);
+  // One message, as a subscription would deliver it.
+  void Handle(const std::string& channel, const void* data, size_t size);
 
   bool has_map() const { return map_.has_value(); }
   const RigMap& map() const { return *map_; }
@@ -52,9 +55,10 @@ class LcmCollector {
   int64_t messages() const { return messages_; }
 
  private:
-  void OnMap(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void OnDetections(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void OnMap(const void* data, size_t size, const std::string& channel);
+  void OnPose(const void* data, size_t size, const std::string& channel);
+  void OnDetections(const void* data, size_t size, const std::string& channel);
 
   lcm::LCM& lcm_;
   size_t keep_frames_;

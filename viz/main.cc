@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
     if (!o.log_path.empty()) {
       if (!std::filesystem::is_regular_file(o.log_path))
         throw std::runtime_error(o.log_path + ": no such log file");
-      lcm = mcmt::OpenLcm(mcmt::LogReadUrl(o.log_path));
+      lcm = mcmt::OpenLcm("memq://");  // nothing arrives on it: the log is read by core's reader
       is_log = true;
     } else if (o.NeedsLiveLcm()) {
       lcm = mcmt::OpenLcm(lcm_url);

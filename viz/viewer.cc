@@ -156,7 +156,7 @@ int Viewer::Run() {
       is_log_ ? 0 : std::max<size_t>(10000, 2 * static_cast<size_t>(options_.scene.trail_max));
   if (lcm_) collector = std::make_unique<LcmCollector>(*lcm_, is_log_ ? 0 : 300, keep_poses);
   if (collector && is_log_) {
-    collector->DrainLog();
+    log_damaged_ = collector->ReadLog(options_.log_path).damaged();
     if (!have_file_map_ && !collector->has_map())
       throw std::runtime_error(options_.log_path + ": no MCMT_MAP message in the log (give --map map.yaml)");
     if (!have_file_trajectory_ && collector->total_poses() == 0) {
@@ -165,7 +165,8 @@ int Viewer::Run() {
     }
   }
   if (!lcm_ && !have_file_map_) throw std::runtime_error("nothing to show: give --map, --log or --lcm-url");
-  return options_.Headless() ? RunHeadless(collector.get()) : RunWindow(collector.get());
+  const int code = options_.Headless() ? RunHeadless(collector.get()) : RunWindow(collector.get());
+  return code == 0 && log_damaged_ ? kExitDamagedLog : code;
 }
 
 int Viewer::RunHeadless(LcmCollector* collector) {

@@ -17,7 +17,7 @@ struct ViewerOptions {
   std::string initial_map_path;         // map_initial.yaml: before/after side by side
   std::string trajectory_path;          // trajectory.csv of the refined map
   std::string initial_trajectory_path;  // default: trajectory_initial.csv beside the initial map
-  std::string log_path;                 // LCM log read through the file:// provider
+  std::string log_path;                 // LCM log read by core's reader
   std::string snapshot_path;            // PNG
   std::string save_scene_path;          // MRPT .3Dscene (SceneViewer3D)
   std::string video_dir;                // one PNG per trajectory frame: frame_000000.png ...
@@ -64,6 +64,7 @@ class Viewer {
   ViewerOptions options_;
   lcm::LCM* lcm_;
   bool is_log_;
+  bool log_damaged_ = false;  // the log was damaged: exit status kExitDamagedLog
   RigMap file_map_, file_initial_map_;
   bool have_file_map_ = false, have_initial_ = false;
   std::vector<TrajectoryRow> file_trajectory_, file_initial_trajectory_;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "core/dictionary.h"
@@ -42,7 +43,14 @@ YAML::Node LoadYamlFile(const std::string& path) {
     skipped_lines = 1;
   }
   try {
-    return YAML::Load(text);
+    YAML::Node root = YAML::Load(text);
+    const std::string duplicate = DuplicateYamlKey(root);
+    if (!duplicate.empty()) {  // line numbers of the text as read (the %YAML line dropped)
+      const size_t colon = duplicate.find(':');
+      throw ConfigError(path + ":" + std::to_string(std::stoi(duplicate.substr(0, colon)) + skipped_lines) +
+                        duplicate.substr(colon));
+    }
+    return root;
   } catch (const YAML::ParserException& e) {
     throw ConfigError(path + ":" + std::to_string(e.mark.line + 1 + skipped_lines) +
                       ": YAML syntax error: " + e.msg);
@@ -338,6 +346,35 @@ void WriteIntrinsicsOpenCv(const std::string& path, const CameraModel& model) {
 // ---------------------------------------------------------------------------------------------
 // Rig config
 
+namespace {
+
+constexpr double kMaxMarkerSize_m = 10.0;
+
+// ids: non-negative, no repeats, and (with `sizes` keys) within the dictionary.
+void CheckMarkerIds(const YamlSection& m, const MarkerConfig& mc) {
+  int dictionary_size = -1;
+  try {
+    dictionary_size = LoadDictionary(mc.dictionary)->bytesList.rows;
+  } catch (const std::exception&) {  // already reported by the dictionary check
+  }
+  std::set<int> seen;
+  for (int id : mc.ids) {
+    if (id < 0) m.Fail("ids", "marker ids must be non-negative, got " + std::to_string(id));
+    if (!seen.insert(id).second) m.Fail("ids", "marker id " + std::to_string(id) + " is listed twice");
+    if (dictionary_size >= 0 && id >= dictionary_size)
+      m.Fail("ids", "marker id " + std::to_string(id) + " is not in " + mc.dictionary + " (ids 0-" +
+                        std::to_string(dictionary_size - 1) + ")");
+  }
+  if (dictionary_size >= 0)
+    for (const auto& [id, size] : mc.sizes)
+      if (id >= dictionary_size)
+        m.Fail("sizes." + std::to_string(id), "marker id " + std::to_string(id) + " is not in " +
+                                                  mc.dictionary + " (ids 0-" +
+                                                  std::to_string(dictionary_size - 1) + ")");
+}
+
+}  // namespace
+
 RigConfig LoadRigConfig(const std::string& path) {
   RigConfig rig;
   rig.path = path;
@@ -375,6 +412,9 @@ RigConfig LoadRigConfig(const std::string& path) {
   }
   if (!m.Has("size")) m.Fail("size", "missing");
   mc.size = m.GetPositiveDouble("size", 0.0);
+  if (mc.size > kMaxMarkerSize_m)
+    m.Fail("size", "absurd marker side length " + ScalarText(m.node()["size"]) + " m (at most " +
+                       FormatDouble(kMaxMarkerSize_m) + " m)");
   if (m.Has("sizes")) {
     const YAML::Node sizes = m.node()["sizes"];
     if (!sizes.IsMap()) m.Fail("sizes", "expected a mapping id: size, got '" + ScalarText(sizes) + "'");
@@ -387,12 +427,14 @@ RigConfig LoadRigConfig(const std::string& path) {
       if (!it->second.IsScalar() || !YAML::convert<double>::decode(it->second, v) || !(v > 0) ||
           !std::isfinite(v))
         m.Fail("sizes." + key_text, "expected a positive number, got '" + ScalarText(it->second) + "'");
+      if (v > kMaxMarkerSize_m)
+        m.Fail("sizes." + key_text, "absurd marker side length " + ScalarText(it->second) + " m (at most " +
+                                        FormatDouble(kMaxMarkerSize_m) + " m)");
       mc.sizes[id] = v;
     }
   }
   mc.ids = m.GetIntList("ids");
-  for (int id : mc.ids)
-    if (id < 0) m.Fail("ids", "marker ids must be non-negative, got " + std::to_string(id));
+  CheckMarkerIds(m, mc);
   mc.inverted = m.GetBool("inverted", false);
 
   // cameras

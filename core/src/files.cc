@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/version.h"
@@ -93,11 +94,14 @@ class MapReader {
     return n;
   }
 
-  double Double(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
+  double Double(const YAML::Node& parent, const std::string& parent_key, const std::string& key,
+                bool finite = true) const {
     const YAML::Node n = Get(parent, parent_key, key);
     double v = 0;
     if (!n.IsScalar() || !YAML::convert<double>::decode(n, v))
       Fail(Key(parent_key, key), "expected a number, got '" + Text(n) + "'");
+    if (finite && !std::isfinite(v))
+      Fail(Key(parent_key, key), "expected a finite number, got '" + Text(n) + "'");
     return v;
   }
 
@@ -112,7 +116,7 @@ class MapReader {
   // Statistics are optional (a hand-written map need not have them).
   double OptDouble(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
     const YAML::Node n = parent[key];
-    return n.IsDefined() && !n.IsNull() ? Double(parent, parent_key, key) : 0.0;
+    return n.IsDefined() && !n.IsNull() ? Double(parent, parent_key, key, /*finite=*/false) : 0.0;
   }
   int OptInt(const YAML::Node& parent, const std::string& parent_key, const std::string& key) const {
     const YAML::Node n = parent[key];
@@ -135,8 +139,8 @@ class MapReader {
     std::vector<double> out;
     for (size_t i = 0; i < n.size(); ++i) {
       double v = 0;
-      if (!n[i].IsScalar() || !YAML::convert<double>::decode(n[i], v))
-        Fail(full, "item " + std::to_string(i) + ": expected a number, got '" + Text(n[i]) + "'");
+      if (!n[i].IsScalar() || !YAML::convert<double>::decode(n[i], v) || !std::isfinite(v))
+        Fail(full, "item " + std::to_string(i) + ": expected a finite number, got '" + Text(n[i]) + "'");
       out.push_back(v);
     }
     return out;
@@ -304,6 +308,29 @@ void WriteMap(const std::string& path, const RigMap& map) {
   WriteFileAtomic(path, out.str());
 }
 
+std::string DuplicateYamlKey(const YAML::Node& root) {
+  if (root.IsSequence()) {
+    for (const YAML::Node& item : root) {
+      const std::string found = DuplicateYamlKey(item);
+      if (!found.empty()) return found;
+    }
+  } else if (root.IsMap()) {
+    std::map<std::string, int> first_line;
+    for (auto it = root.begin(); it != root.end(); ++it) {
+      if (it->first.IsScalar()) {
+        const int line = it->first.Mark().line + 1;
+        const auto [where, fresh] = first_line.emplace(it->first.Scalar(), line);
+        if (!fresh)
+          return std::to_string(line) + ": duplicated key '" + it->first.Scalar() + "' (first at line " +
+                 std::to_string(where->second) + ")";
+      }
+      const std::string found = DuplicateYamlKey(it->second);
+      if (!found.empty()) return found;
+    }
+  }
+  return "";
+}
+
 RigMap ReadMap(const std::string& path) {
   const std::string text = ReadFile(path);
   YAML::Node root;
@@ -312,6 +339,8 @@ RigMap ReadMap(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw FileFormatError(path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
   }
+  const std::string duplicate = DuplicateYamlKey(root);
+  if (!duplicate.empty()) throw FileFormatError(path + ":" + duplicate);
   MapReader r(path);
   if (!root.IsMap()) throw FileFormatError(path + ": not a map file (expected a YAML mapping)");
   RigMap map;

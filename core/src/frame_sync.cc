@@ -67,8 +67,50 @@ std::vector<SyncedFrame> FrameSynchronizer::EmitUpTo(int64_t utime_inclusive) {
   return out;
 }
 
+bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us) {
+  clock_rejection_.clear();
+  const int64_t jump = options_.max_clock_jump_us;
+  if (jump <= 0) return true;
+  auto elapsed = [&](int64_t since) { return options_.arrival_is_wall_time ? arrival_us - since : 0; };
+  std::string against;
+  int64_t predicted = INT64_MIN;
+  const auto own = last_utime_.find(d.camera);
+  if (own != last_utime_.end()) {
+    predicted = own->second + elapsed(last_arrival_[d.camera]);
+    against = "its own clock";
+  } else {
+    for (const auto& [camera, utime] : last_utime_) {  // the other cameras' newest, as they run on
+      const int64_t p = utime + elapsed(last_arrival_[camera]);
+      if (p > predicted) predicted = p;
+    }
+    against = "the other cameras' clocks";
+  }
+  if (predicted == INT64_MIN || d.utime - predicted <= jump) {
+    jumps_.erase(d.camera);
+    return true;
+  }
+  // A restarted source: its messages keep coming on the new clock, consistent with each other.
+  Jump& j = jumps_[d.camera];
+  j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
+  j.utime = d.utime;
+  if (own != last_utime_.end() && j.count >= kClockJumpConfirm) {
+    jumps_.erase(d.camera);
+    own->second = d.utime;  // follow it from here on
+    return true;
+  }
+  ++stats_.clock_jumps;
+  clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
+                     std::to_string((d.utime - predicted) / 1000) + " ms ahead of " + against +
+                     " (more than " + std::to_string(jump / 1000) + " ms): message rejected";
+  return false;
+}
+
 std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, int64_t arrival_us) {
   const int64_t utime = detections.utime;
+  if (!ClockPlausible(detections, arrival_us)) return {};
+  // Measured before the late-view check: a camera whose views all come late must get its wait.
+  if (options_.max_wait_us > 0 && options_.arrival_is_wall_time)
+    RecordLag(detections.camera, arrival_us - utime);
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -94,6 +136,7 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
 
   // Accepted: liveness and the camera set.
   const std::string& camera = detections.camera;
+  last_arrival_[camera] = arrival_us;
   auto last = last_utime_.find(camera);
   if (last == last_utime_.end()) {
     last_utime_[camera] = utime;
@@ -148,10 +191,42 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   return EmitUpTo(emit_until);
 }
 
+void FrameSynchronizer::RecordLag(const std::string& camera, int64_t lag_us) {
+  std::vector<int64_t>& ring = lags_[camera];
+  size_t& next = lag_next_[camera];
+  if (ring.size() < kLagWindow)
+    ring.push_back(lag_us);
+  else
+    ring[next] = lag_us;
+  next = (next + 1) % kLagWindow;
+}
+
+int64_t FrameSynchronizer::Lag(const std::string& camera) const {
+  const auto it = lags_.find(camera);
+  if (it == lags_.end() || it->second.empty()) return INT64_MIN;
+  return *std::max_element(it->second.begin(), it->second.end());
+}
+
+int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
+                                   const std::set<std::string>& alive) const {
+  int64_t due = first_arrival_us + options_.deadline_us;
+  if (options_.max_wait_us <= options_.deadline_us || !options_.arrival_is_wall_time) return due;
+  const SyncedFrame& frame = pending_.at(key);
+  for (const std::string& camera : alive) {
+    if (HasCamera(frame, camera)) continue;
+    const int64_t lag = Lag(camera);
+    // An expected camera not heard of yet: its lag is unknown, wait as long as allowed (the first second).
+    due = std::max(due, lag == INT64_MIN ? first_arrival_us + options_.max_wait_us
+                                         : key + lag + options_.deadline_us);  // when it usually arrives
+  }
+  return std::min(due, first_arrival_us + options_.max_wait_us);
+}
+
 std::vector<SyncedFrame> FrameSynchronizer::Poll(int64_t now_us) {
   int64_t newest_due = INT64_MIN;
+  const std::set<std::string> alive = AliveCameras();
   for (const auto& kv : first_arrival_)
-    if (kv.second + options_.deadline_us <= now_us) newest_due = std::max(newest_due, kv.first);
+    if (DueTime(kv.first, kv.second, alive) <= now_us) newest_due = std::max(newest_due, kv.first);
   if (newest_due == INT64_MIN) return {};
   return EmitUpTo(newest_due);
 }

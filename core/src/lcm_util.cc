@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -213,6 +214,54 @@ CameraModel FromCameraModelMsg(const camera_model_t& msg) {
   model.distortion = msg.distortion;
   model.Validate();
   return model;
+}
+
+bool IsDetectionsChannel(const std::string& channel) {
+  return channel.rfind(kDetectionsChannelPrefix, 0) == 0;
+}
+
+std::string DetectionsProblem(const detections_t& msg, const std::string& channel) {
+  const std::string who = "camera '" + msg.camera + "' on " + channel;
+  if (msg.camera.empty()) return "a detections message on " + channel + " has no camera name";
+  if (DetectionsChannel(msg.camera) != channel)
+    return who + ": the message's camera field belongs on " + DetectionsChannel(msg.camera) +
+           " (camera field and channel disagree)";
+  try {
+    FromCameraModelMsg(msg.camera_model);
+  } catch (const std::exception& e) {
+    return who + ": invalid camera model in the message: " + e.what();
+  }
+  return "";
+}
+
+int DropInvalidMarkers(detections_t* msg, std::vector<int>* dropped_ids) {
+  constexpr double kMaxPixel = 1e6;
+  const size_t before = msg->markers.size();
+  auto bad = [&](const marker_t& m) {
+    for (const auto& c : m.corners)
+      for (double v : c)
+        if (!std::isfinite(v) || std::abs(v) > kMaxPixel) {
+          if (dropped_ids) dropped_ids->push_back(m.id);
+          return true;
+        }
+    return false;
+  };
+  msg->markers.erase(std::remove_if(msg->markers.begin(), msg->markers.end(), bad), msg->markers.end());
+  msg->num_markers = static_cast<int32_t>(msg->markers.size());
+  return static_cast<int>(before - msg->markers.size());
+}
+
+bool DuplicateFilter::Repeated(const detections_t& msg) {
+  auto& seen = seen_[msg.camera];
+  if (!seen.insert({msg.utime, msg.seq}).second) {
+    ++count_;
+    if (examples_.size() < 20)
+      examples_.push_back("camera " + msg.camera + " seq " + std::to_string(msg.seq) + " utime " +
+                          std::to_string(msg.utime));
+    return true;
+  }
+  if (seen.size() > window_) seen.erase(seen.begin());
+  return false;
 }
 
 rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime) {

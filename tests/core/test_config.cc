@@ -238,6 +238,25 @@ TEST(Config, ErrorsNameFileAndKey) {
   EXPECT_CONTAINS(LoadError("markers: {size: 0.04\ncameras: []\n"), "YAML syntax error");
 }
 
+// Issue 14: accepted silently before.
+TEST(Config, IdsOutsideTheDictionaryRepeatedIdsDuplicatedKeysAndAbsurdSizesAreRefused) {
+  const std::string good = GoodRig();
+  EXPECT_CONTAINS(LoadError(Replace(good, "ids: [1, 2, 7, 9]", "ids: [1, 2, 7, 50]")),
+                  "markers.ids: marker id 50 is not in DICT_4X4_50 (ids 0-49)");
+  EXPECT_CONTAINS(LoadError(Replace(good, "ids: [1, 2, 7, 9]", "ids: [1, 2, 7, 2]")),
+                  "markers.ids: marker id 2 is listed twice");
+  EXPECT_CONTAINS(LoadError(Replace(good, "{7: 0.03, 9: 0.05}", "{7: 0.03, 77: 0.05}")),
+                  "markers.sizes.77: marker id 77 is not in DICT_4X4_50");
+  EXPECT_CONTAINS(LoadError(Replace(good, "size: 0.04", "size: 1e300")),
+                  "markers.size: absurd marker side length 1e300 m (at most 10 m)");
+  EXPECT_CONTAINS(LoadError(Replace(good, "{7: 0.03, 9: 0.05}", "{7: 0.03, 9: 1e300}")),
+                  "markers.sizes.9: absurd marker side length");
+  EXPECT_CONTAINS(LoadError(good + "lcm:\n  url: udpm://239.255.76.67:7667\n"),
+                  "duplicated key 'lcm' (first at line");
+  EXPECT_CONTAINS(LoadError(Replace(good, "  size: 0.04\n", "  size: 0.04\n  size: 0.05\n")),
+                  "duplicated key 'size'");
+}
+
 TEST(Config, MalformedIntrinsicsNameTheFileAndKey) {
   struct Case {
     std::string content, expected;

@@ -175,6 +175,16 @@ TEST(Files, MapErrorsNameTheKey) {
     EXPECT_CONTAINS(MapError(edited),
                     "cameras[2].rig_from_cam.rotation_matrix: disagrees with rotation_wxyz");
   }
+  // Issue 14: a NaN translation was accepted (and exported as .Nan); a duplicated key too.
+  {
+    std::string edited = good;
+    const size_t first = edited.find("translation: [") + std::string("translation: [").size();
+    edited.replace(first, edited.find(',', first) - first, ".nan");
+    EXPECT_CONTAINS(MapError(edited),
+                    "rig_from_cam.translation: item 0: expected a finite number, got '.nan'");
+  }
+  EXPECT_CONTAINS(MapError(Replace(good, "version: 1\n", "version: 1\nversion: 1\n")),
+                  ": duplicated key 'version' (first at line ");
   EXPECT_CONTAINS(MapError("version: [1\n"), "YAML syntax error");
   EXPECT_CONTAINS(MapError("- 1\n- 2\n"), "not a map file");
   EXPECT_THROW(ReadMap(dir.File("absent.yaml")), FileFormatError);

@@ -239,5 +239,108 @@ TEST(FrameSync, CamerasBeyondToleranceStillFlow) {
   EXPECT_EQ(sync.stats().frames_incomplete, static_cast<int64_t>(emitted));
 }
 
+// Issue 14: one message stamped +100 s (live, wall-time arrivals) made every later frame late. It is
+// rejected, named, and moves no clock; so is a camera whose clock runs 100 s ahead; a source that
+// restarts on a new clock is followed after kClockJumpConfirm messages.
+TEST(FrameSync, AFarFutureUtimeIsRejectedAndMovesNoClock) {
+  FrameSynchronizer sync;
+  std::vector<SyncedFrame> frames;
+  int64_t wall = 5000000000;
+  for (int f = 0; f < 60; ++f) {
+    wall += kPeriod;
+    detections_t b = View("cam1", f, 300);
+    if (f == 20) b.utime += 100000000;
+    Append(&frames, sync.Add(View("cam0", f), wall));
+    Append(&frames, sync.Add(b, wall + 200));
+    if (f == 20) {
+      EXPECT_NE(sync.clock_rejection().find("camera 'cam1': utime"), std::string::npos)
+          << sync.clock_rejection();
+    } else {
+      EXPECT_EQ(sync.clock_rejection(), "") << f;
+    }
+    Append(&frames, sync.Poll(wall + 20000));  // frame 20 leaves by its deadline without cam1
+  }
+  ASSERT_EQ(frames.size(), 60u);
+  for (int f = 0; f < 60; ++f) EXPECT_EQ(frames[f].views.size(), f == 20 ? 1u : 2u) << f;
+  EXPECT_EQ(sync.stats().clock_jumps, 1);
+  EXPECT_EQ(sync.stats().out_of_order, 0);
+  EXPECT_TRUE(sync.StaleCameras().empty());
+}
+
+TEST(FrameSync, ACameraAheadOfTheOthersIsRejectedARestartedOneFollowed) {
+  FrameSynchronizer sync;
+  int64_t wall = 5000000000;
+  int64_t ahead_rejected = 0;
+  for (int f = 0; f < 20; ++f) {
+    wall += kPeriod;
+    sync.Add(View("cam0", f), wall);
+    sync.Add(View("cam1", f), wall);
+    detections_t c = View("cam2", f);
+    c.utime += 100000000;
+    sync.Add(c, wall);
+    ahead_rejected += sync.clock_rejection().find("the other cameras' clocks") != std::string::npos;
+  }
+  EXPECT_EQ(ahead_rejected, 20);  // every one: the others reported first
+  // cam0 restarts 50 s later (a new recording): followed after kClockJumpConfirm messages.
+  int accepted = 0;
+  for (int f = 0; f < 10; ++f) {
+    wall += kPeriod;
+    detections_t d = View("cam0", 20 + f);
+    d.utime += 50000000;
+    sync.Add(d, wall);
+    accepted += sync.clock_rejection().empty();
+  }
+  EXPECT_EQ(accepted, 10 - FrameSynchronizer::kClockJumpConfirm + 1);
+}
+
+// Issue 14: detectors that drift apart lost views (declared late) whatever the deadline. The lag of each
+// camera is measured and the wait adapts, within max_wait_us.
+TEST(FrameSync, ALaggingCameraIsWaitedForWithinTheBound) {
+  for (const int64_t max_wait : {int64_t{0}, int64_t{200000}}) {
+    FrameSyncOptions o;
+    o.deadline_us = 15000;
+    o.max_wait_us = max_wait;
+    o.cameras = {"cam0", "cam1"};
+    FrameSynchronizer sync(o);
+    std::vector<SyncedFrame> frames;
+    const int64_t lag1 = 80000;  // cam1's messages arrive 80 ms after cam0's
+    for (int64_t now = 0; now < 60 * kPeriod + 300000; now += 1000) {
+      const int64_t f0 = now / kPeriod, f1 = (now - lag1) / kPeriod;
+      if (now % kPeriod < 1000 && f0 < 60) Append(&frames, sync.Add(View("cam0", f0), 1000000 + now));
+      if (now >= lag1 && (now - lag1) % kPeriod < 1000 && f1 < 60)
+        Append(&frames, sync.Add(View("cam1", f1), 1000000 + now));
+      Append(&frames, sync.Poll(1000000 + now));
+    }
+    Append(&frames, sync.Flush());
+    int complete = 0;
+    for (const auto& f : frames) complete += f.views.size() == 2;
+    if (max_wait == 0) {
+      EXPECT_GT(sync.stats().out_of_order, 50) << "fixed deadline: cam1's views come too late";
+    } else {
+      // Only the frames that left before cam1's first view arrived (its lag unknown until then).
+      EXPECT_LE(sync.stats().out_of_order, lag1 / kPeriod + 1);
+      EXPECT_GE(complete, 60 - (lag1 / kPeriod + 1));
+      EXPECT_GE(sync.Lag("cam1") - sync.Lag("cam0"), lag1 - 1000);
+    }
+  }
+}
+
+// A dead camera costs at most max_wait_us per frame.
+TEST(FrameSync, AdaptiveWaitIsBounded) {
+  FrameSyncOptions o;
+  o.deadline_us = 15000;
+  o.max_wait_us = 50000;
+  FrameSynchronizer sync(o);
+  for (int f = 0; f < 10; ++f) {  // cam1 lags 30 ms
+    sync.Add(View("cam0", f), 1000000 + f * kPeriod);
+    sync.Add(View("cam1", f), 1000000 + f * kPeriod + 30000);
+  }
+  sync.Add(View("cam0", 10), 1000000 + 10 * kPeriod);  // cam1 stops
+  const int64_t first = 1000000 + 10 * kPeriod;
+  EXPECT_TRUE(sync.Poll(first + 15000).empty());       // past the plain deadline: still waiting
+  EXPECT_TRUE(sync.Poll(first + 30000).empty());       // cam1 usually arrives at +30 ms (+ deadline)
+  EXPECT_EQ(sync.Poll(first + 45000 + 1).size(), 1u);  // its usual arrival + deadline passed
+}
+
 }  // namespace
 }  // namespace mcmt

@@ -433,3 +433,25 @@ TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
   EXPECT_FALSE(FileExists(dir_ + "/x.lcmlog"));
   EXPECT_FALSE(FileExists(dir_ + "/x.yaml"));
 }
+
+// Issue 14: an invalid --channels regex (or logger.channels) segfaulted inside LCM and left an empty log
+// that blocked the next start. Now: one line naming the regex, no file, and the next start records.
+TEST_F(LoggerProcessTest, InvalidChannelRegexIsRefusedBeforeAnyFileExists) {
+  std::string out, err;
+  const std::string log = dir_ + "/regex.lcmlog";
+  for (const char* regex : {"([", "MCMT_(", "*"}) {
+    const int code = RunProgram(
+        {Bin("mcmt-logger"), "--out", log, "--channels", regex, "--lcm-url", Url(7777)}, &out, &err);
+    EXPECT_EQ(code, 1) << regex << ": " << err;
+    EXPECT_NE(err.find("invalid regex '" + std::string(regex) + "'"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_FALSE(FileExists(log)) << regex;
+    EXPECT_FALSE(FileExists(dir_ + "/regex.yaml")) << regex;
+  }
+  EXPECT_EQ(RunProgram({Bin("mcmt-logger"), "--out", log, "--channels", "MCMT_.*", "--lcm-url", Url(7777),
+                        "--max-seconds", "0.3"},
+                       &out, &err),
+            0)
+      << err;
+  EXPECT_TRUE(FileExists(log));
+}

@@ -1,5 +1,5 @@
-// mcmt-mapper as a separate process: over a log file (LCM file:// provider), live over UDP multicast on
-// this component's own port (7720-7739), and on bad input.
+// mcmt-mapper as a separate process: over a log file (core's log reader), live over UDP multicast on
+// this component's own ports (7720-7739: 7720-7722 used), and on bad input.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +19,7 @@
 #include "core/config.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
+#include "core/log_reader.h"
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/rig_map_t.hpp"
@@ -168,6 +171,23 @@ class LiveListener {
   int last_state = -1;
 };
 
+// Starts a live mcmt-mapper (stdout and stderr into log_path); returns its pid (-1 on failure).
+pid_t SpawnLiveMapper(const std::string& rig, const std::string& out, const std::string& url,
+                      const std::string& log_path) {
+  std::vector<std::string> args = {kMapper, "--config", rig, "--out", out, "--lcm-url", url};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  return pid;
+}
+
 TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   const std::string url = "udpm://239.255.76.67:7720?ttl=0";
   lcm::LCM lcm(url);
@@ -183,17 +203,8 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
 
   const std::string log_path = dir + "/mapper.out";
-  std::vector<std::string> args = {kMapper, "--config", rig, "--out", dir + "/out", "--lcm-url", url};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
+  const pid_t pid = SpawnLiveMapper(rig, dir + "/out", url, log_path);
+  ASSERT_GT(pid, 0);
   auto handle_for = [&](double seconds, const std::function<bool()>& done) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
@@ -234,6 +245,176 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
       testing::CompareToTruth(scene, written, ReadTrajectory(dir + "/out/trajectory.csv"));
   EXPECT_LT(e.camera_position_m, 0.002);
   EXPECT_GE(e.frames_compared, 55);  // nearly every frame arrived over loopback
+  fs::remove_all(dir);
+}
+
+// Issue 14: a mapper killed while writing left NAME.tmp.PID files no later run removed, and a folder with
+// new trajectory files next to an old map.yaml. The whole set is now staged beside OUTDIR and swapped in;
+// leftovers of dead runs are removed; the user's own files in OUTDIR stay.
+TEST(MapperProcess, OutputSetIsReplacedWholeAndLeftoversAreCleaned) {
+  testing::SynthOptions so;
+  so.frames = 40;
+  so.seed = 47;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  const std::string dir = TempDir("outset");
+  const std::string rig = WriteRig(dir, scene);
+  WriteLog(dir + "/s.lcmlog", scene, false);
+  const std::string out = dir + "/out";
+  fs::create_directories(out);
+  for (const char* f :
+       {"map.yaml", "trajectory.csv", "report.json", "map_initial.yaml", "trajectory_initial.csv"})
+    WriteFileAtomic(out + "/" + f, "old\n");
+  WriteFileAtomic(out + "/notes.txt", "mine\n");
+  WriteFileAtomic(out + "/trajectory.csv.tmp.99999999", "half-written\n");  // of a dead process
+  fs::create_directories(dir + "/.out.mcmt-staging-99999999");
+  const CommandResult r =
+      RunCommand(kMapper + " --config " + rig + " --log " + dir + "/s.lcmlog --out " + out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"map.yaml", "map_initial.yaml", "notes.txt", "report.json",
+                                             "trajectory.csv", "trajectory_initial.csv"}));
+  for (const std::string& n : names)
+    if (n != "notes.txt") {
+      EXPECT_NE(ReadFile(out + "/" + n), "old\n") << n;
+    }
+  EXPECT_EQ(ReadFile(out + "/notes.txt"), "mine\n");
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find("mcmt-staging"), std::string::npos) << e.path();
+  fs::remove_all(dir);
+}
+
+// Issue 14: the live mapper checked --out only after collecting and solving. Now before listening.
+TEST(MapperProcess, LiveChecksTheOutputFolderFirst) {
+  testing::SynthOptions so;
+  so.frames = 5;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  const std::string dir = TempDir("badout");
+  const std::string rig = WriteRig(dir, scene);
+  WriteFileAtomic(dir + "/file.txt", "x\n");
+  const auto start = std::chrono::steady_clock::now();
+  const CommandResult r = RunCommand("timeout 10 " + kMapper + " --config " + rig + " --out " + dir +
+                                     "/file.txt/out --lcm-url 'udpm://239.255.76.67:7721?ttl=0'");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("--out " + dir + "/file.txt/out"), std::string::npos) << r.output;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  fs::remove_all(dir);
+}
+
+// Issue 14: whatever a live mapper collected is kept (a detections log in OUTDIR) when the solve fails.
+TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
+  const std::string url = "udpm://239.255.76.67:7722?ttl=0";
+  lcm::LCM lcm(url);
+  if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
+  testing::SynthOptions so;
+  so.frames = 30;
+  so.seed = 45;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  const std::string dir = TempDir("keep");
+  const std::string rig = WriteRig(dir, scene);
+  LiveListener listener;
+  lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
+  const std::string log_path = dir + "/mapper.out";
+  const pid_t pid = SpawnLiveMapper(rig, dir + "/out", url, log_path);
+  ASSERT_GT(pid, 0);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!listener.collecting && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
+  int sent = 0;
+  if (listener.collecting)
+    for (const detections_t& d : scene.detections)
+      if (d.camera == "cam1") {  // only one camera: the solve fails
+        lcm.publish(DetectionsChannel(d.camera), &d);
+        ++sent;
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  kill(pid, SIGUSR1);  // solve
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const std::string output = ReadFile(log_path);
+  ASSERT_TRUE(listener.collecting) << output;
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << output;
+  EXPECT_NE(output.find("sent no detections"), std::string::npos) << output;
+  std::string kept;
+  for (const auto& e : fs::directory_iterator(dir + "/out"))
+    if (e.path().filename().string().rfind("collected-", 0) == 0) kept = e.path().string();
+  ASSERT_FALSE(kept.empty()) << output;
+  EXPECT_NE(output.find("kept the " + std::to_string(sent) + " collected detections messages in " + kept),
+            std::string::npos)
+      << output;
+  // The kept log maps like the live session would have: here it fails the same way, from the file.
+  const CommandResult again =
+      RunCommand(kMapper + " --config " + rig + " --log " + kept + " --out " + dir + "/again");
+  EXPECT_NE(again.output.find("collected " + std::to_string(sent) + " detections messages"),
+            std::string::npos)
+      << again.output;
+  fs::remove_all(dir);
+}
+
+// Issue 14: invalid content was dropped with a misleading message ("sent no detections") or none. Each
+// kind now gets one line naming the camera and channel; the valid messages still map.
+TEST(MapperProcess, InvalidMessagesGetAOneLineReasonNamingTheCamera) {
+  testing::SynthOptions so;
+  so.frames = 40;
+  so.seed = 49;
+  const testing::SynthScene scene = testing::MakeScene(so);
+  const std::string dir = TempDir("invalid");
+  const std::string rig = WriteRig(dir, scene);
+  std::string bytes;
+  int64_t n = 0;
+  auto add = [&](const std::string& channel, const detections_t& d) {
+    const std::vector<uint8_t> data = Encode(d);
+    AppendEncodedEvent(n++, d.utime, channel, data.data(), data.size(), &bytes);
+  };
+  for (const detections_t& d : scene.detections) add(DetectionsChannel(d.camera), d);
+  const int64_t after = scene.utimes.back() + 1000000;
+  for (const detections_t& original : scene.detections) {
+    if (original.seq != 5) continue;
+    detections_t d = original;
+    d.utime = after + 1000 * static_cast<int64_t>(n);
+    d.seq = 1000;
+    if (d.camera == "cam0") {  // a camera field that disagrees with its channel
+      d.camera = "cam9";
+      add("MCMT_DETECTIONS_CAM0", d);
+    } else if (d.camera == "cam1") {  // width -640
+      d.camera_model.width = -640;
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam2") {  // three radtan coefficients
+      d.camera_model.distortion_model = "radtan";
+      d.camera_model.distortion = {0.1, 0.01, 0.001};
+      d.camera_model.num_distortion = 3;
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam3" && !d.markers.empty()) {  // a NaN corner
+      d.markers[0].corners[2][1] = std::nan("");
+      add(DetectionsChannel(d.camera), d);
+    } else if (d.camera == "cam4") {  // the model changes mid-stream, then the size differs from the rig
+      d.camera_model.fx *= 1.01;
+      add(DetectionsChannel(d.camera), d);
+      d.seq = 1001;
+      d.utime += 33333;
+      d.camera_model.width *= 2;
+      d.camera_model.height *= 2;
+      add(DetectionsChannel(d.camera), d);
+    }
+  }
+  std::ofstream(dir + "/s.lcmlog", std::ios::binary) << bytes;
+  const CommandResult r = RunCommand(kMapper + " --config " + rig + " --log " + dir + "/s.lcmlog --out " +
+                                     dir + "/out --no-refine");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* line :
+       {"warning: camera 'cam9' on MCMT_DETECTIONS_CAM0: the message's camera field belongs on "
+        "MCMT_DETECTIONS_CAM9 (camera field and channel disagree); its messages are dropped",
+        "warning: camera 'cam1' on MCMT_DETECTIONS_CAM1: invalid camera model in the message: image size "
+        "must "
+        "be positive, got -640x",
+        "warning: camera 'cam2' on MCMT_DETECTIONS_CAM2: invalid camera model in the message: radtan "
+        "distortion needs 4, 5 or 8 coefficients, got 3",
+        "warning: camera 'cam3' on MCMT_DETECTIONS_CAM3: marker ", "has non-finite or absurd corners",
+        "warning: camera 'cam4' on MCMT_DETECTIONS_CAM4: its camera model changed mid-stream (seq 1000)",
+        "warning: camera 'cam4' on MCMT_DETECTIONS_CAM4: detections of "})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  EXPECT_EQ(r.output.find("sent no detections"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
 

@@ -16,6 +16,13 @@
 namespace mcmt {
 namespace tracker_test {
 
+// Are all these programs built in MCMT_BIN_DIR?
+inline bool ProgramsBuilt(const std::vector<std::string>& names) {
+  for (const auto& p : names)
+    if (access((std::string(MCMT_BIN_DIR) + "/" + p).c_str(), X_OK) != 0) return false;
+  return true;
+}
+
 inline std::string Slurp(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::ostringstream s;

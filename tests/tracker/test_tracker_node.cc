@@ -4,6 +4,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <regex>
+#include <limits>
 
 #include "core/lcm_util.h"
 #include "tests/tracker/synthetic_rig.h"
@@ -170,7 +171,7 @@ TEST(TrackerNode, LaggingCameraViewsAreDroppedAndReported) {
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_EQ(node.trajectory().size(), views.size());
   EXPECT_GE(node.stats().late_views, static_cast<int64_t>(views.size()) - 3);
-  EXPECT_NE(err.find("views of camera 'cam4' arrive after their frame was solved (deadline 15 ms)"),
+  EXPECT_NE(err.find("views of camera 'cam4' arrive after their frame was solved (deadline 15 ms,"),
             std::string::npos)
       << err;
   EXPECT_NE(node.StatusLine().find("late views dropped: cam4"), std::string::npos) << node.StatusLine();
@@ -296,6 +297,44 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
     }
   }
   EXPECT_EQ(node.stats().lost, 10);
+}
+
+// Issue 14: invalid content gets one line naming camera and channel, and is counted; the valid views of
+// the same frames are still used.
+TEST(TrackerNode, InvalidContentIsDroppedWithAReasonNamingTheCamera) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  testing::internal::CaptureStderr();
+  const auto& views = fx.session.views;
+  int nan_markers = 0;
+  for (size_t f = 0; f < views.size(); ++f)
+    for (detections_t d : views[f]) {
+      if (d.camera == "cam1") {  // its camera field says cam3: refused on CAM1's channel
+        d.camera = "cam3";
+        const std::vector<uint8_t> bytes = Encode(d);
+        node.OnDetections("MCMT_DETECTIONS_CAM1", bytes.data(), bytes.size());
+        continue;
+      }
+      if (d.camera == "cam2") d.camera_model.width = -640;
+      if (d.camera == "cam0" && !d.markers.empty()) {
+        d.markers[0].corners[0][0] = std::numeric_limits<double>::infinity();
+        ++nan_markers;
+      }
+      Feed(node, d);
+    }
+  node.Flush();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.trajectory().size(), views.size());
+  EXPECT_EQ(node.stats().invalid, 2 * static_cast<int64_t>(views.size()));
+  EXPECT_EQ(node.stats().invalid_markers, nan_markers);
+  for (const char* line :
+       {"camera 'cam3' on MCMT_DETECTIONS_CAM1: the message's camera field belongs on MCMT_DETECTIONS_CAM3",
+        "camera 'cam2' on MCMT_DETECTIONS_CAM2: invalid camera model in the message: image size must be "
+        "positive, got -640x",
+        "camera 'cam0' on MCMT_DETECTIONS_CAM0: marker "})
+    EXPECT_NE(err.find(line), std::string::npos) << line << "\n" << err;
+  EXPECT_NE(node.StatusLine().find("invalid messages dropped"), std::string::npos) << node.StatusLine();
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7746), replay by the
+// mcmt-tracker as a real process: --log mode, live over udpm on loopback (ports 7741-7747), replay by the
 // real lcm-logplayer, bad command lines and inputs.
 #include <gtest/gtest.h>
 
@@ -172,6 +172,48 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   ASSERT_FALSE(log_csv.empty());
   EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
   EXPECT_FALSE(std::ifstream(out_csv + ".partial")) << "a clean exit removes the partial trajectory";
+}
+
+// Issue 14, live: one camera's messages lag the others by ~5 frames (detectors drifting apart) and one
+// message is stamped +100 s. The lag is measured and waited for (within tracker.max_wait_ms), the future
+// message is rejected naming its camera: every frame is solved with every camera, exactly as --log mode.
+TEST(TrackerProcess, LiveWaitsForALaggingCameraAndIgnoresAFutureUtime) {
+  const Session& x = Session::Get();
+  const int port = 7747;
+  const std::string err = x.dir + "/lagging.txt", out_csv = x.dir + "/poses_lagging.csv";
+  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_GT(pid, 0) << Slurp(err);
+  lcm::LCM lcm(TestUrl(port));
+  ASSERT_TRUE(lcm.good());
+  PoseCollector collector(lcm);
+  constexpr size_t kLagFrames = 4;  // x 8 ms: ~32 ms, beyond the 15 ms deadline, within 100 ms
+  const size_t frames = x.s.views.size();
+  for (size_t f = 0; f < frames + kLagFrames; ++f) {
+    if (f < frames)
+      for (size_t c = 0; c + 1 < x.s.views[f].size(); ++c)
+        lcm.publish(DetectionsChannel(x.s.views[f][c].camera), &x.s.views[f][c]);
+    if (f >= kLagFrames) {
+      const detections_t& late = x.s.views[f - kLagFrames].back();
+      lcm.publish(DetectionsChannel(late.camera), &late);
+    }
+    if (f == 40) {
+      detections_t future = x.s.views[f][0];
+      future.utime += 100000000;
+      lcm.publish(DetectionsChannel(future.camera), &future);
+    }
+    const auto next = std::chrono::steady_clock::now() + 8ms;  // paced: 8 ms per frame
+    while (std::chrono::steady_clock::now() < next) lcm.handleTimeout(1);
+  }
+  Receive(
+      lcm, [&] { return collector.poses.size() >= frames; }, 10s);
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  const std::string log = Slurp(err);
+  EXPECT_NE(log.find("camera '" + x.s.views[40][0].camera + "': utime"), std::string::npos) << log;
+  ASSERT_EQ(collector.poses.size(), frames) << log;
+  const std::string log_csv = LogModePoses(x, "poses_log_for_lagging");
+  ASSERT_FALSE(log_csv.empty());
+  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv)) << log;
 }
 
 // kill -9 mid-run: every pose published before the kill is in OUT.partial (appended and flushed as it is

@@ -23,11 +23,7 @@ using tracker_test::RunProgram;
 
 const std::string kBin = MCMT_BIN_DIR;
 
-bool HavePrograms() {
-  for (const char* p : {"mcmt-sim", "mcmt-mapper", "mcmt-tracker"})
-    if (access((kBin + "/" + p).c_str(), X_OK) != 0) return false;
-  return true;
-}
+bool HavePrograms() { return tracker_test::ProgramsBuilt({"mcmt-sim", "mcmt-mapper", "mcmt-tracker"}); }
 
 struct Recording {
   std::string dir, rig, log, map, truth;
