@@ -11,12 +11,45 @@
 #include <unordered_map>
 
 #include "core/lcm_util.h"
+#include "mapper/intrinsics.h"
 #include "mapper/stages.h"
 
 namespace mcmt {
 
 // ---------------------------------------------------------------------------------------------
 // Options
+
+namespace {
+
+// mapper.refine_intrinsics, refine_intrinsics_cameras, intrinsics_sigma {focal_rel, center_px, radial,
+// tangential}, observability_ratio.
+void ReadIntrinsicsSettings(const RigConfig& rig, IntrinsicsSettings* out) {
+  const YamlSection& s = rig.mapper;
+  try {
+    out->refine = IntrinsicsRefinementFromName(s.GetString("refine_intrinsics", "none"));
+  } catch (const std::invalid_argument& e) {
+    s.Fail("refine_intrinsics", e.what());
+  }
+  if (s.Has("refine_intrinsics_cameras")) {
+    const YAML::Node list = s.node()["refine_intrinsics_cameras"];
+    if (!list.IsSequence()) s.Fail("refine_intrinsics_cameras", "expected a list of camera names");
+    for (const YAML::Node& n : list) {
+      const std::string name = n.as<std::string>();
+      if (!rig.FindCamera(name)) s.Fail("refine_intrinsics_cameras", "no camera named '" + name + "'");
+      out->cameras.push_back(name);
+    }
+  }
+  const YamlSection sigma = s.Child("intrinsics_sigma");
+  sigma.CheckKnownKeys({"focal_rel", "center_px", "radial", "tangential"});
+  out->sigma.focal_rel = sigma.GetPositiveDouble("focal_rel", out->sigma.focal_rel);
+  out->sigma.center_px = sigma.GetPositiveDouble("center_px", out->sigma.center_px);
+  out->sigma.radial = sigma.GetPositiveDouble("radial", out->sigma.radial);
+  out->sigma.tangential = sigma.GetPositiveDouble("tangential", out->sigma.tangential);
+  out->observability_ratio = s.GetPositiveDouble("observability_ratio", out->observability_ratio);
+  if (!(out->observability_ratio <= 1)) s.Fail("observability_ratio", "must be in (0, 1]");
+}
+
+}  // namespace
 
 MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   MapperOptions o;
@@ -42,7 +75,11 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
                     "consistency_rel",
                     "marker_reject_fraction",
                     "max_pair_events",
-                    "continuity_gap_s"});
+                    "continuity_gap_s",
+                    "refine_intrinsics",
+                    "refine_intrinsics_cameras",
+                    "intrinsics_sigma",
+                    "observability_ratio"});
   o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
   o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
   o.huber_px = s.GetDouble("huber_px", o.huber_px);
@@ -65,6 +102,7 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.marker_reject_fraction = s.GetDouble("marker_reject_fraction", o.marker_reject_fraction);
   o.max_pair_events = s.GetInt("max_pair_events", o.max_pair_events);
   o.continuity_gap_s = s.GetDouble("continuity_gap_s", o.continuity_gap_s);
+  ReadIntrinsicsSettings(rig, &o.intrinsics);
   if (rig.sync.Has("tolerance_ms"))
     o.sync_tolerance_us =
         static_cast<int64_t>(std::llround(rig.sync.GetPositiveDouble("tolerance_ms", 2.0) * 1000));
@@ -337,8 +375,7 @@ MapResult Mapper::Solve() {
 
   const ObservationNames names{&frames, &s.camera_names, &observations.marker_ids};
   MapperBundle bundle = MakeBundleProblem(observations, names, layout, cameras, poses, s.models, &report);
-  FillMap(bundle, observations, names, layout, cameras, s.models, o, &result.initial_map,
-          &result.initial_trajectory);
+  FillMap(bundle, observations, names, layout, cameras, o, &result.initial_map, &result.initial_trajectory);
   report.initial_rms_px = result.initial_map.rms_px;
   log.End("initial statistics");
 
@@ -349,7 +386,7 @@ MapResult Mapper::Solve() {
     DropUnreliableCameras(observations, names, o, settings, &cameras, &bundle, &report);
     log.End("refine");
   }
-  FillMap(bundle, observations, names, layout, cameras, s.models, o, &result.map, &result.trajectory);
+  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
   report.final_rms_px = result.map.rms_px;
   report.frames_used = result.map.num_frames;
   report.observations_used = result.map.num_observations;

@@ -194,11 +194,11 @@ void DropUnreliableCameras(const Observations& observations, const ObservationNa
                            const MapperOptions& options, const BundleSettings& settings,
                            CameraPlacement* cameras, MapperBundle* bundle, MapReport* report);
 
-// The map and trajectory at the bundle's current parameters (statistics over active observations).
+// The map and trajectory at the bundle's current parameters, refined intrinsics included (statistics
+// over active observations).
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
-             const MarkerLayout& layout, const CameraPlacement& cameras,
-             const std::vector<CameraModel>& models, const MapperOptions& options, RigMap* map,
-             std::vector<TrajectoryRow>* trajectory);
+             const MarkerLayout& layout, const CameraPlacement& cameras, const MapperOptions& options,
+             RigMap* map, std::vector<TrajectoryRow>* trajectory);
 
 // The options' consistency thresholds (consistency_deg, consistency_m, consistency_rel).
 ConsistencyOptions ConsistencyFor(const MapperOptions& options);
