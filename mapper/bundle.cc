@@ -205,7 +205,7 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
   if (with_time_ && time_.velocity) {
     w = Eigen::Vector3d(time_.velocity[0], time_.velocity[1], time_.velocity[2]);
     v = Eigen::Vector3d(time_.velocity[3], time_.velocity[4], time_.velocity[5]);
-    const double dt = time_.time_s + parameters[time_block][0];
+    const double dt = time_.time_s - parameters[time_block][0];  // capture time = utime - offset
     r_dt = RotationFromVector(dt * w);
     rig_from_object.linear() = r_dt * rig_from_object.linear();
     rig_from_object.translation() += dt * v;
@@ -250,7 +250,7 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
                          jacobians[intrinsics_block] + 2 * k * n_intr);
     }
     if (time_block >= 0 && jacobians[time_block]) {
-      const Eigen::Vector2d d = dpix * r_cam * (w.cross(p_rig - rig_from_object.translation()) + v);
+      const Eigen::Vector2d d = -dpix * r_cam * (w.cross(p_rig - rig_from_object.translation()) + v);
       jacobians[time_block][2 * k] = d.x();
       jacobians[time_block][2 * k + 1] = d.y();
     }
@@ -265,7 +265,7 @@ CameraModel BundleProblem::Model(int camera) const {
 
 double BundleProblem::ObservationDt(size_t k) const {
   if (!RefinesTime()) return 0.0;
-  return observations[k].time_s + time_offset_s[observations[k].camera];
+  return observations[k].time_s - time_offset_s[observations[k].camera];
 }
 
 void UpdateFrameVelocities(double max_gap_s, BundleProblem* bp) {

@@ -68,13 +68,15 @@ CameraModel ModelWithIntrinsics(const CameraModel& base, const double* values);
 // Names of the intrinsics block's entries: fx, fy, cx, cy, k1, k2, p1, p2, k3 (radtan) or k1..k4 (fisheye).
 std::vector<std::string> IntrinsicsNames(const CameraModel& model);
 
-// An observation's capture time in the frame's clock: the frame block is the object's pose at the
-// frame's time; the camera saw it dt = (time_s + offset) seconds later, offset being the camera's time
-// offset block (seconds; the reference camera's is 0 and constant). The pose seen is the frame pose
-// moved along the frame's velocity (a twist in the rig frame, per second, held constant in a solve):
+// An observation's capture time relative to its frame: the frame block is the object's pose at the
+// frame's time; the camera's clock reads utime at capture, its true capture time (in the reference
+// camera's clock) is utime - offset, offset being the camera's time offset block (seconds; the reference
+// camera's is 0 and constant): dt = time_s - offset with time_s = (utime - frame utime) / 1e6. The pose
+// seen is the frame pose moved along the frame's velocity (a twist in the rig frame, per second, held
+// constant in a solve):
 //   rig_from_object(dt) = (Exp(dt * w) * R, t + dt * v)
 struct ObservationTime {
-  double time_s = 0.0;               // capture time minus the frame's time, before the offset
+  double time_s = 0.0;               // utime minus the frame's utime, seconds (before the offset)
   const double* velocity = nullptr;  // (w, v): rad/s, m/s
 };
 
@@ -82,7 +84,7 @@ struct ObservationTime {
 // blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each), then the intrinsics
 // (IntrinsicsVector's layout) when `with_intrinsics`, then the time offset (1, seconds) when `with_time`.
 // Jacobians analytic as ReprojectionCost's, with the frame pose moved by dt:
-//   d p_rig / d(dr_frame) = -[p_rig - t(dt)]x Exp(dt w),  d p_rig / d offset = w x (p_rig - t(dt)) + v
+//   d p_rig / d(dr_frame) = -[p_rig - t(dt)]x Exp(dt w),  d p_rig / d offset = -(w x (p_rig - t(dt)) + v)
 //   d pixel / d(fx, fy, cx, cy) = [[xd, 0, 1, 0], [0, yd, 0, 1]],  d pixel / d k_i = diag(fx, fy) d(xd, yd) /
 //   d k_i
 // (the distortion is affine in its coefficients for radtan with 4 or 5 and for fisheye: the central
@@ -111,7 +113,7 @@ struct BundleObservation {
   int frame = 0;
   MarkerCorners2d corners;
   double side = 0.0;
-  double time_s = 0.0;  // capture time minus the frame's time (seconds), before the camera's offset
+  double time_s = 0.0;  // utime minus the frame's utime, seconds (before the camera's offset)
 };
 
 // One camera's intrinsics block when they are refined.
@@ -134,9 +136,9 @@ struct BundleProblem {
   std::vector<BundleObservation> observations;
   std::vector<char> active;  // per observation
   // Self-calibration (empty: the given intrinsics, synchronised clocks).
-  std::vector<BundleIntrinsics> intrinsics;           // per camera
-  std::vector<double> time_offset_s;                  // per camera: true capture time = time - offset
-  std::vector<char> time_offset_fixed;                // per camera (the reference camera's, 0)
+  std::vector<BundleIntrinsics> intrinsics;  // per camera
+  std::vector<double> time_offset_s;         // per camera, seconds: true capture time = utime - offset
+  std::vector<char> time_offset_fixed;       // per camera (the reference camera's, 0)
   std::vector<std::array<double, 6>> frame_velocity;  // per frame, (w, v) in the rig frame
   std::vector<double> frame_time_s;                   // per frame, for the velocities
 

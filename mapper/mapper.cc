@@ -79,7 +79,9 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
                     "refine_intrinsics",
                     "refine_intrinsics_cameras",
                     "intrinsics_sigma",
-                    "observability_ratio"});
+                    "observability_ratio",
+                    "time_offsets",
+                    "max_time_offset_ms"});
   o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
   o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
   o.huber_px = s.GetDouble("huber_px", o.huber_px);
@@ -103,6 +105,8 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.max_pair_events = s.GetInt("max_pair_events", o.max_pair_events);
   o.continuity_gap_s = s.GetDouble("continuity_gap_s", o.continuity_gap_s);
   ReadIntrinsicsSettings(rig, &o.intrinsics);
+  o.estimate_time_offsets = s.GetBool("time_offsets", o.estimate_time_offsets);
+  o.max_time_offset_ms = s.GetPositiveDouble("max_time_offset_ms", o.max_time_offset_ms);
   if (rig.sync.Has("tolerance_ms"))
     o.sync_tolerance_us =
         static_cast<int64_t>(std::llround(rig.sync.GetPositiveDouble("tolerance_ms", 2.0) * 1000));
@@ -335,24 +339,33 @@ std::vector<CameraCollectStats> Mapper::CollectStats() const {
 // ---------------------------------------------------------------------------------------------
 // Solve
 
-MapResult Mapper::Solve() {
+namespace {
+
+// What one pass of the method reads besides the messages.
+struct SolveInputs {
+  const std::vector<std::string>& camera_names;
+  const std::vector<CameraModel>& models;
+  const std::vector<std::string>& warnings;
+  const std::function<void(const MapperProgress&)>& progress;
+};
+
+// The whole method on `messages` (their utimes as the frames' clocks).
+MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s,
+                    const MapperOptions& o) {
   const auto t_total = Clock::now();
-  const Impl& s = *impl_;
-  const MapperOptions& o = options_;
-  if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   MapResult result;
   MapReport& report = result.report;
   report.warnings = s.warnings;
-  report.detections_messages = static_cast<int>(s.messages.size());
+  report.detections_messages = static_cast<int>(messages.size());
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   report.threads = threads;
   StageLog log(s.progress, &report);
 
   log.Begin("frames", "assembling frames");
   const std::vector<Frame> frames =
-      AssembleFrames(s.messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us);
+      AssembleFrames(messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us);
   report.frames_assembled = static_cast<int>(frames.size());
-  Observations observations = CollectObservations(s.messages, frames, s.camera_names, o, &report);
+  Observations observations = CollectObservations(messages, frames, s.camera_names, o, &report);
   log.End("frames");
 
   log.Begin("hypotheses", "square poses of " + std::to_string(observations.obs.size()) + " observations");
@@ -396,6 +409,47 @@ MapResult Mapper::Solve() {
   log.Notify(MapperProgress::kDone, "done", "done");
   report.total_seconds = std::chrono::duration<double>(Clock::now() - t_total).count();
   return result;
+}
+
+// Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
+// clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
+// the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
+// result.
+MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const SolveInputs& s,
+                               const MapperOptions& o) {
+  MapperOptions first_options = o;
+  first_options.sync_tolerance_us =
+      std::max(o.sync_tolerance_us, static_cast<int64_t>(std::llround(o.max_time_offset_ms * 1000)));
+  const MapResult first = SolvePass(messages, s, first_options);
+  std::map<std::string, double> offset_us;
+  for (const MapCamera& c : first.map.cameras) offset_us[c.name] = c.time_offset_us;
+  std::vector<StoredMessage> corrected = messages;
+  for (StoredMessage& m : corrected) {
+    const auto it = offset_us.find(s.camera_names[m.camera]);
+    if (it != offset_us.end()) m.utime -= std::llround(it->second);
+  }
+  MapperOptions second_options = o;
+  second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
+  MapResult result = SolvePass(corrected, s, second_options);
+  for (MapCamera& c : result.map.cameras)
+    c.time_offset_us += offset_us.count(c.name) ? offset_us[c.name] : 0.0;
+  for (MapCamera& c : result.initial_map.cameras)
+    c.time_offset_us = offset_us.count(c.name) ? offset_us[c.name] : 0.0;
+  result.report.stage_seconds.insert(result.report.stage_seconds.begin(),
+                                     {"time offsets (first pass)", first.report.total_seconds});
+  result.report.total_seconds += first.report.total_seconds;
+  return result;
+}
+
+}  // namespace
+
+MapResult Mapper::Solve() {
+  const Impl& s = *impl_;
+  if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
+  const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
+  if (options_.estimate_time_offsets && options_.refine)
+    return SolveWithTimeOffsets(s.messages, inputs, options_);
+  return SolvePass(s.messages, inputs, options_);
 }
 
 }  // namespace mcmt

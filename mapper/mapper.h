@@ -87,6 +87,11 @@ struct MapperOptions {
   bool refine = true;  // false: initialisation only
   // Intrinsics refined in the bundle adjustment (refine_intrinsics, intrinsics_sigma, ...).
   IntrinsicsSettings intrinsics;
+  // Per-camera clock offsets against the reference camera (true capture time = utime - offset),
+  // estimated in the bundle adjustment; frames are first assembled with max_time_offset_ms, then again
+  // with the clocks corrected.
+  bool estimate_time_offsets = false;
+  double max_time_offset_ms = 25.0;
 
   // References: best connected unless named.
   std::string reference_camera;

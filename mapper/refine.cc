@@ -47,11 +47,17 @@ MapperBundle MakeBundleProblem(const Observations& observations, const Observati
     bp.object_from_marker.push_back(BlockFromRigid(layout.object_from_marker[m]));
   bp.marker_fixed.assign(num_markers, 0);
   bp.marker_fixed[layout.reference] = 1;
-  for (int f = 0; f < num_frames; ++f) bp.rig_from_object.push_back(BlockFromRigid(poses.rig_from_object[f]));
+  const std::vector<Frame>& frames = *names.frames;
+  for (int f = 0; f < num_frames; ++f) {
+    bp.rig_from_object.push_back(BlockFromRigid(poses.rig_from_object[f]));
+    bp.frame_time_s.push_back(1e-6 * static_cast<double>(frames[f].utime - frames[0].utime));
+  }
   const std::vector<Observation>& obs = observations.obs;
   for (size_t i = 0; i < obs.size(); ++i) {
     if (!poses.usable[i] || !poses.has_pose[obs[i].frame]) continue;
-    bp.observations.push_back({obs[i].camera, obs[i].marker, obs[i].frame, obs[i].corners, obs[i].side});
+    const double time_s = 1e-6 * static_cast<double>(obs[i].utime - frames[obs[i].frame].utime);
+    bp.observations.push_back(
+        {obs[i].camera, obs[i].marker, obs[i].frame, obs[i].corners, obs[i].side, time_s});
     bundle.observation.push_back(static_cast<int>(i));
   }
   bp.active.assign(bp.observations.size(), 1);
@@ -78,6 +84,9 @@ BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
 }
 
 namespace {
+
+// Frames further apart than this do not give each other a velocity (time offsets), seconds.
+constexpr double kVelocityGapS = 0.1;
 
 // RMS corner error over the active observations.
 double CurrentRms(const BundleProblem& bp) {
@@ -142,25 +151,36 @@ void RefineWithRejection(const Observations& observations, const ObservationName
                          MapperBundle* bundle, MapReport* report) {
   double sigma_px = 0.0;
   BundleSettings solve_settings = settings;
-  if (o.intrinsics.refine != IntrinsicsRefinement::kNone) {
+  BundleProblem& bp = bundle->problem;
+  if (o.intrinsics.refine != IntrinsicsRefinement::kNone || o.estimate_time_offsets) {
     // Poses first at the given intrinsics (no rejection yet: rough intrinsics leave large residuals
     // that are not outliers), then the intrinsics the data can constrain join the unknowns.
     const BundleSummary first = Solve(settings, bundle, report);
     if (!first.usable) throw MapperError("refinement failed: " + first.termination);
     // Corner noise per coordinate: the observations' RMS corner distance / sqrt(2).
     sigma_px = std::max(0.05, CurrentRms(bundle->problem) / std::sqrt(2.0));
-    report->intrinsics = PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px,
-                                                  settings.threads, &bundle->problem);
+    report->intrinsics =
+        PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px, settings.threads, &bp);
+    if (o.estimate_time_offsets) {
+      bp.time_offset_s.assign(bp.cam_from_rig.size(), 0.0);
+      bp.time_offset_fixed = bp.camera_fixed;  // the reference camera's clock is the rig's
+    }
     // An intrinsic trades with the camera's pose and barely moves the RMS per iteration: the paper's
     // stopping rule would end the solve long before the intrinsics arrive (cx 8 px off stayed 7.4 off).
     solve_settings.paper_stop = false;
   }
   for (int round = 0;; ++round) {
+    if (bp.RefinesTime()) UpdateFrameVelocities(kVelocityGapS, &bp);
     const BundleSummary summary = Solve(solve_settings, bundle, report);
     report->linear_solver = summary.linear_solver;
     if (!summary.usable) throw MapperError("refinement failed: " + summary.termination);
     if (round >= o.max_rejection_rounds) break;
     if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
+  }
+  // The velocities the offsets move poses along come from the poses: re-solve with them updated.
+  for (int pass = 0; bp.RefinesTime() && pass < 2; ++pass) {
+    UpdateFrameVelocities(kVelocityGapS, &bp);
+    if (!Solve(solve_settings, bundle, report).usable) throw MapperError("refinement failed (time offsets)");
   }
   if (!report->intrinsics.empty())
     FinishIntrinsicsReports(&bundle->problem, sigma_px, settings.threads, &report->intrinsics);
@@ -320,7 +340,7 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
     const double rms = s.cam_n[c] ? std::sqrt(s.cam_sq[c] / s.cam_n[c]) : 0.0;
     map->cameras.push_back({(*names.camera_names)[c], bp.Model(static_cast<int>(c)),
                             Normalized(Inverse(RigidFromBlock(bp.cam_from_rig[c].data()))), s.cam_n[c], rms,
-                            s.cam_max[c]});
+                            s.cam_max[c], bp.RefinesTime() ? 1e6 * bp.time_offset_s[c] : 0.0});
   }
   std::vector<int> order(ids.size());
   std::iota(order.begin(), order.end(), 0);

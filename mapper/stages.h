@@ -63,8 +63,9 @@ std::vector<Frame> AssembleFrames(const std::vector<StoredMessage>& messages, in
 struct Observation {
   int frame = 0;
   int camera = 0;
-  int marker = 0;  // index into Observations::marker_ids
-  int view = 0;    // (frame, camera) group
+  int marker = 0;     // index into Observations::marker_ids
+  int view = 0;       // (frame, camera) group
+  int64_t utime = 0;  // of the camera's message (its capture time, in its own clock)
   MarkerCorners2d corners;
   double side = 0.0;
   SquarePose pose;  // EstimateHypotheses
