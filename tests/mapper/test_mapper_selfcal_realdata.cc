@@ -118,8 +118,9 @@ TEST(MapperSelfCalRealData, CharucoBoardClockOffsetsFromCaliscopeTimestamps) {
   const BoardCheck b_wide = CheckBoard(wide.map), b_est = CheckBoard(estimated.map);
   std::printf("camera clocks, 25 ms frames: rms %.4f px, grid %.3f mm, spacing/size %.5f\n", wide.map.rms_px,
               b_wide.grid_max_offset_mm, b_wide.spacing_over_size);
-  std::printf("offsets estimated: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n", estimated.map.rms_px,
-              b_est.grid_max_offset_mm, b_est.spacing_over_size, estimated.report.total_seconds);
+  std::printf("offsets estimated: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n",
+              estimated.map.rms_px, b_est.grid_max_offset_mm, b_est.spacing_over_size,
+              estimated.report.total_seconds);
   ASSERT_EQ(estimated.map.cameras.size(), 4u);
   for (const MapCamera& c : estimated.map.cameras) {
     std::printf("  %s: time_offset_us %.1f\n", c.name.c_str(), c.time_offset_us);
