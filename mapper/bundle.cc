@@ -85,48 +85,11 @@ bool LeftPoseManifold::MinusJacobian(const double*, double* jacobian) const {
 }
 
 ReprojectionCost::ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side)
-    : camera_(camera), observed_(observed), corners_(MarkerCornersInMarker(side)) {}
+    : cost_(camera, observed, side, false, nullptr) {}
 
 bool ReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
                                 double** jacobians) const {
-  const Rigid3 cam_from_rig = RigidFromBlock(parameters[0]);
-  const Rigid3 object_from_marker = RigidFromBlock(parameters[1]);
-  const Rigid3 rig_from_object = RigidFromBlock(parameters[2]);
-  const Eigen::Matrix3d& r_cam = cam_from_rig.linear();
-  const Eigen::Matrix3d r_cam_frame = r_cam * rig_from_object.linear();
-  using RowJ = Eigen::Matrix<double, 8, 7, Eigen::RowMajor>;
-  for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d p_obj = object_from_marker * corners_[k];
-    const Eigen::Vector3d p_rig = rig_from_object * p_obj;
-    const Eigen::Vector3d p_cam = cam_from_rig * p_rig;
-    Eigen::Vector2d pixel;
-    Eigen::Matrix<double, 2, 3> dpix;
-    if (!camera_->Project(p_cam, &pixel, jacobians ? &dpix : nullptr)) return false;
-    residuals[2 * k] = pixel.x() - observed_[k].x();
-    residuals[2 * k + 1] = pixel.y() - observed_[k].y();
-    if (!jacobians) continue;
-    if (jacobians[0]) {
-      Eigen::Map<RowJ> j(jacobians[0]);
-      j.block<2, 3>(2 * k, 0) = -dpix * Skew(p_cam - cam_from_rig.translation());
-      j.block<2, 3>(2 * k, 3) = dpix;
-      j.block<2, 1>(2 * k, 6).setZero();
-    }
-    if (jacobians[1]) {
-      Eigen::Map<RowJ> j(jacobians[1]);
-      const Eigen::Matrix<double, 2, 3> d = dpix * r_cam_frame;
-      j.block<2, 3>(2 * k, 0) = -d * Skew(p_obj - object_from_marker.translation());
-      j.block<2, 3>(2 * k, 3) = d;
-      j.block<2, 1>(2 * k, 6).setZero();
-    }
-    if (jacobians[2]) {
-      Eigen::Map<RowJ> j(jacobians[2]);
-      const Eigen::Matrix<double, 2, 3> d = dpix * r_cam;
-      j.block<2, 3>(2 * k, 0) = -d * Skew(p_rig - rig_from_object.translation());
-      j.block<2, 3>(2 * k, 3) = d;
-      j.block<2, 1>(2 * k, 6).setZero();
-    }
-  }
-  return true;
+  return cost_.Evaluate(parameters, residuals, jacobians);
 }
 
 std::vector<double> IntrinsicsVector(const CameraModel& model) {
@@ -194,8 +157,9 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
                                    double** jacobians) const {
   const int intrinsics_block = with_intrinsics_ ? 3 : -1;
   const int time_block = with_time_ ? (with_intrinsics_ ? 4 : 3) : -1;
-  const CameraModel camera =
-      with_intrinsics_ ? ModelWithIntrinsics(*camera_, parameters[intrinsics_block]) : *camera_;
+  CameraModel refined;
+  if (with_intrinsics_) refined = ModelWithIntrinsics(*camera_, parameters[intrinsics_block]);
+  const CameraModel& camera = with_intrinsics_ ? refined : *camera_;
   const Rigid3 cam_from_rig = RigidFromBlock(parameters[0]);
   const Rigid3 object_from_marker = RigidFromBlock(parameters[1]);
   Rigid3 rig_from_object = RigidFromBlock(parameters[2]);

@@ -36,31 +36,6 @@ class LeftPoseManifold : public ceres::Manifold {
   bool MinusJacobian(const double* x, double* jacobian) const override;
 };
 
-// Residual of one marker observation, 8 values:
-//   p_cam(k) = cam_from_rig * rig_from_object * object_from_marker * u_k      (u_k: corner k, ArUco order)
-//   r(2k..2k+1) = Project(p_cam(k)) - observed_k                                (pixels, distorted)
-// Parameter blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each). Analytic
-// Jacobians with respect to the left perturbations:
-//   d p_cam / d(dr_cam, dt_cam)   = [ -[p_cam - t_cam]x , I ]
-//   d p_cam / d(dr_frame, dt_frame) = R_cam [ -[p_rig - t_frame]x , I ]
-//   d p_cam / d(dr_marker, dt_marker) = R_cam R_frame [ -[p_obj - t_marker]x , I ]
-// chained with the camera model's d pixel / d p_cam. Evaluation fails (step rejected) when a corner
-// falls behind the camera.
-class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
- public:
-  ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side);
-  static ceres::CostFunction* Create(const CameraModel* camera, const MarkerCorners2d& observed,
-                                     double side) {
-    return new ReprojectionCost(camera, observed, side);
-  }
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-
- private:
-  const CameraModel* camera_;
-  MarkerCorners2d observed_;
-  MarkerCorners3d corners_;
-};
-
 // A camera's intrinsics as a parameter block: fx, fy, cx, cy (pixels), then its distortion coefficients.
 std::vector<double> IntrinsicsVector(const CameraModel& model);
 // `base` (size, distortion model) with the intrinsics of `values` (IntrinsicsVector's layout).
@@ -102,6 +77,29 @@ class SelfCalibrationCost : public ceres::CostFunction {
   bool with_intrinsics_;
   ObservationTime time_;
   bool with_time_;
+};
+
+// Residual of one marker observation, 8 values:
+//   p_cam(k) = cam_from_rig * rig_from_object * object_from_marker * u_k      (u_k: corner k, ArUco order)
+//   r(2k..2k+1) = Project(p_cam(k)) - observed_k                                (pixels, distorted)
+// Parameter blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each). Analytic
+// Jacobians with respect to the left perturbations:
+//   d p_cam / d(dr_cam, dt_cam)   = [ -[p_cam - t_cam]x , I ]
+//   d p_cam / d(dr_frame, dt_frame) = R_cam [ -[p_rig - t_frame]x , I ]
+//   d p_cam / d(dr_marker, dt_marker) = R_cam R_frame [ -[p_obj - t_marker]x , I ]
+// chained with the camera model's d pixel / d p_cam. Evaluation fails (step rejected) when a corner
+// falls behind the camera.
+class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
+ public:
+  ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side);
+  static ceres::CostFunction* Create(const CameraModel* camera, const MarkerCorners2d& observed,
+                                     double side) {
+    return new ReprojectionCost(camera, observed, side);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  SelfCalibrationCost cost_;  // with the intrinsics given and no clock
 };
 
 // d pixel / d intrinsics (2 x (4 + n), row-major into `out`) at normalised coordinates (x, y).
