@@ -43,15 +43,20 @@ BoardCheck CheckBoard(const RigMap& map) {
   return out;
 }
 
+std::vector<detections_t> DetectAll(const RigConfig& rig) {
+  std::vector<detections_t> all;
+  for (const CameraConfig& c : rig.cameras) {
+    std::vector<detections_t> d = DetectRecording(rig, c.name);
+    all.insert(all.end(), d.begin(), d.end());
+  }
+  return all;
+}
+
 TEST(MapperSelfCalRealData, CharucoBoardRefinedIntrinsicsLowerTheRms) {
   if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"))
     GTEST_SKIP() << "real data not found at " << kData << " (the caliscope sessions of ../shared/data)";
   const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
-  std::vector<detections_t> detections;
-  for (const CameraConfig& c : rig.cameras) {
-    std::vector<detections_t> d = DetectRecording(rig, c.name);
-    detections.insert(detections.end(), d.begin(), d.end());
-  }
+  const std::vector<detections_t> detections = DetectAll(rig);
   auto map = [&](IntrinsicsRefinement refine) {
     MapperOptions options = MapperOptions::FromConfig(rig);
     options.intrinsics.refine = refine;
@@ -100,11 +105,7 @@ TEST(MapperSelfCalRealData, CharucoBoardClockOffsetsFromCaliscopeTimestamps) {
   RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
   YAML::Node detector = rig.detector.node();
   detector["caliscope_time"] = "camera";
-  std::vector<detections_t> detections;
-  for (const CameraConfig& c : rig.cameras) {
-    std::vector<detections_t> d = DetectRecording(rig, c.name);
-    detections.insert(detections.end(), d.begin(), d.end());
-  }
+  const std::vector<detections_t> detections = DetectAll(rig);
   auto map = [&](bool offsets) {
     MapperOptions options = MapperOptions::FromConfig(rig);
     options.estimate_time_offsets = offsets;
