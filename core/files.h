@@ -38,6 +38,9 @@ struct MapCamera {
   int observations = 0;  // marker observations used
   double rms_px = 0.0;   // RMS reprojection error of its corners
   double max_px = 0.0;   // largest corner error
+  // The camera's clock against the reference camera's: its true capture time is utime - time_offset_us
+  // (the mapper's mapper.time_offsets; 0: synchronised, and not written).
+  double time_offset_us = 0.0;
 };
 
 struct MapMarker {

@@ -1,17 +1,18 @@
 #include "mapper/bundle.h"
 
+#include <ceres/normal_prior.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
+
+#include "core/math.h"
 
 namespace mcmt {
 namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
 
 Eigen::Quaterniond QuaternionExp(const Eigen::Vector3d& w) {
   const double angle = w.norm();
@@ -84,15 +85,98 @@ bool LeftPoseManifold::MinusJacobian(const double*, double* jacobian) const {
 }
 
 ReprojectionCost::ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side)
-    : camera_(camera), observed_(observed), corners_(MarkerCornersInMarker(side)) {}
+    : cost_(camera, observed, side, false, nullptr) {}
 
 bool ReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
                                 double** jacobians) const {
+  return cost_.Evaluate(parameters, residuals, jacobians);
+}
+
+std::vector<double> IntrinsicsVector(const CameraModel& model) {
+  std::vector<double> v = {model.fx, model.fy, model.cx, model.cy};
+  v.insert(v.end(), model.distortion.begin(), model.distortion.end());
+  return v;
+}
+
+CameraModel ModelWithIntrinsics(const CameraModel& base, const double* values) {
+  CameraModel m = base;
+  m.fx = values[0];
+  m.fy = values[1];
+  m.cx = values[2];
+  m.cy = values[3];
+  for (size_t i = 0; i < m.distortion.size(); ++i) m.distortion[i] = values[4 + i];
+  return m;
+}
+
+std::vector<std::string> IntrinsicsNames(const CameraModel& model) {
+  std::vector<std::string> names = {"fx", "fy", "cx", "cy"};
+  static const char* radtan[] = {"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"};
+  static const char* fisheye[] = {"k1", "k2", "k3", "k4"};
+  for (size_t i = 0; i < model.distortion.size() && i < 8; ++i)
+    names.push_back(model.model == DistortionModel::kFisheye ? fisheye[i % 4] : radtan[i]);
+  return names;
+}
+
+void IntrinsicsJacobian(const CameraModel& camera, double x, double y, double* out) {
+  const int n = 4 + static_cast<int>(camera.distortion.size());
+  Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>> j(out, 2, n);
+  double xd, yd;
+  camera.Distort(x, y, &xd, &yd);
+  j.leftCols<4>() << xd, 0, 1, 0, 0, yd, 0, 1;
+  if (n == 4) return;
+  CameraModel shifted = camera;
+  const double h = 1e-4;
+  for (int i = 0; i < n - 4; ++i) {
+    double xp = 0, yp = 0, xm = 0, ym = 0;
+    shifted.distortion[i] = camera.distortion[i] + h;
+    shifted.Distort(x, y, &xp, &yp);
+    shifted.distortion[i] = camera.distortion[i] - h;
+    shifted.Distort(x, y, &xm, &ym);
+    shifted.distortion[i] = camera.distortion[i];
+    j(0, 4 + i) = camera.fx * (xp - xm) / (2 * h);
+    j(1, 4 + i) = camera.fy * (yp - ym) / (2 * h);
+  }
+}
+
+SelfCalibrationCost::SelfCalibrationCost(const CameraModel* camera, const MarkerCorners2d& observed,
+                                         double side, bool with_intrinsics, const ObservationTime* time)
+    : camera_(camera),
+      observed_(observed),
+      corners_(MarkerCornersInMarker(side)),
+      with_intrinsics_(with_intrinsics),
+      time_(time ? *time : ObservationTime{}),
+      with_time_(time != nullptr) {
+  set_num_residuals(8);
+  std::vector<int32_t>* sizes = mutable_parameter_block_sizes();
+  *sizes = {7, 7, 7};
+  if (with_intrinsics_) sizes->push_back(4 + static_cast<int>(camera->distortion.size()));
+  if (with_time_) sizes->push_back(1);
+}
+
+bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* residuals,
+                                   double** jacobians) const {
+  const int intrinsics_block = with_intrinsics_ ? 3 : -1;
+  const int time_block = with_time_ ? (with_intrinsics_ ? 4 : 3) : -1;
+  CameraModel refined;
+  if (with_intrinsics_) refined = ModelWithIntrinsics(*camera_, parameters[intrinsics_block]);
+  const CameraModel& camera = with_intrinsics_ ? refined : *camera_;
   const Rigid3 cam_from_rig = RigidFromBlock(parameters[0]);
   const Rigid3 object_from_marker = RigidFromBlock(parameters[1]);
-  const Rigid3 rig_from_object = RigidFromBlock(parameters[2]);
+  Rigid3 rig_from_object = RigidFromBlock(parameters[2]);
+  // The pose at the capture time: rotation Exp(dt w) * R, translation t + dt v.
+  Eigen::Vector3d w = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d r_dt = Eigen::Matrix3d::Identity();
+  if (with_time_ && time_.velocity) {
+    w = Eigen::Vector3d(time_.velocity[0], time_.velocity[1], time_.velocity[2]);
+    v = Eigen::Vector3d(time_.velocity[3], time_.velocity[4], time_.velocity[5]);
+    const double dt = time_.time_s - parameters[time_block][0];  // capture time = utime - offset
+    r_dt = RotationFromVector(dt * w);
+    rig_from_object.linear() = r_dt * rig_from_object.linear();
+    rig_from_object.translation() += dt * v;
+  }
   const Eigen::Matrix3d& r_cam = cam_from_rig.linear();
   const Eigen::Matrix3d r_cam_frame = r_cam * rig_from_object.linear();
+  const int n_intr = 4 + static_cast<int>(camera.distortion.size());
   using RowJ = Eigen::Matrix<double, 8, 7, Eigen::RowMajor>;
   for (int k = 0; k < 4; ++k) {
     const Eigen::Vector3d p_obj = object_from_marker * corners_[k];
@@ -100,7 +184,7 @@ bool ReprojectionCost::Evaluate(double const* const* parameters, double* residua
     const Eigen::Vector3d p_cam = cam_from_rig * p_rig;
     Eigen::Vector2d pixel;
     Eigen::Matrix<double, 2, 3> dpix;
-    if (!camera_->Project(p_cam, &pixel, jacobians ? &dpix : nullptr)) return false;
+    if (!camera.Project(p_cam, &pixel, jacobians ? &dpix : nullptr)) return false;
     residuals[2 * k] = pixel.x() - observed_[k].x();
     residuals[2 * k + 1] = pixel.y() - observed_[k].y();
     if (!jacobians) continue;
@@ -120,12 +204,52 @@ bool ReprojectionCost::Evaluate(double const* const* parameters, double* residua
     if (jacobians[2]) {
       Eigen::Map<RowJ> j(jacobians[2]);
       const Eigen::Matrix<double, 2, 3> d = dpix * r_cam;
-      j.block<2, 3>(2 * k, 0) = -d * Skew(p_rig - rig_from_object.translation());
+      j.block<2, 3>(2 * k, 0) = -d * Skew(p_rig - rig_from_object.translation()) * r_dt;
       j.block<2, 3>(2 * k, 3) = d;
       j.block<2, 1>(2 * k, 6).setZero();
     }
+    if (intrinsics_block >= 0 && jacobians[intrinsics_block]) {
+      const double iz = 1.0 / p_cam.z();
+      IntrinsicsJacobian(camera, p_cam.x() * iz, p_cam.y() * iz,
+                         jacobians[intrinsics_block] + 2 * k * n_intr);
+    }
+    if (time_block >= 0 && jacobians[time_block]) {
+      const Eigen::Vector2d d = -dpix * r_cam * (w.cross(p_rig - rig_from_object.translation()) + v);
+      jacobians[time_block][2 * k] = d.x();
+      jacobians[time_block][2 * k + 1] = d.y();
+    }
   }
   return true;
+}
+
+CameraModel BundleProblem::Model(int camera) const {
+  if (!RefinesIntrinsics(camera)) return *models[camera];
+  return ModelWithIntrinsics(*models[camera], intrinsics[camera].values.data());
+}
+
+double BundleProblem::ObservationDt(size_t k) const {
+  if (!RefinesTime()) return 0.0;
+  return observations[k].time_s - time_offset_s[observations[k].camera];
+}
+
+void UpdateFrameVelocities(double max_gap_s, BundleProblem* bp) {
+  const size_t n = bp->rig_from_object.size();
+  bp->frame_velocity.assign(n, {0, 0, 0, 0, 0, 0});
+  auto usable = [&](size_t a, size_t b) {
+    const double gap = std::abs(bp->frame_time_s[b] - bp->frame_time_s[a]);
+    return gap > 0 && gap <= max_gap_s;
+  };
+  for (size_t f = 0; f < n; ++f) {
+    const size_t lo = f > 0 && usable(f - 1, f) ? f - 1 : f;
+    const size_t hi = f + 1 < n && usable(f, f + 1) ? f + 1 : f;
+    if (lo == hi) continue;
+    const Rigid3 a = RigidFromBlock(bp->rig_from_object[lo].data());
+    const Rigid3 b = RigidFromBlock(bp->rig_from_object[hi].data());
+    const double span = bp->frame_time_s[hi] - bp->frame_time_s[lo];
+    const Eigen::Vector3d w = VectorFromRotation(b.linear() * a.linear().transpose()) / span;
+    const Eigen::Vector3d v = (b.translation() - a.translation()) / span;
+    bp->frame_velocity[f] = {w.x(), w.y(), w.z(), v.x(), v.y(), v.z()};
+  }
 }
 
 namespace {
@@ -152,62 +276,148 @@ class ProgressCallback : public ceres::IterationCallback {
 
 }  // namespace
 
-BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
-  const auto start = std::chrono::steady_clock::now();
-  BundleSummary out;
+namespace {
+
+void AddSelfCalibrationResidual(BundleProblem* bp, size_t i, ceres::LossFunction* loss,
+                                ceres::Problem* problem) {
+  const BundleObservation& o = bp->observations[i];
+  const bool with_intrinsics = bp->RefinesIntrinsics(o.camera);
+  ObservationTime time;
+  time.time_s = o.time_s;
+  if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
+  std::vector<double*> blocks = {bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
+                                 bp->rig_from_object[o.frame].data()};
+  if (with_intrinsics) blocks.push_back(bp->intrinsics[o.camera].values.data());
+  if (bp->RefinesTime()) blocks.push_back(&bp->time_offset_s[o.camera]);
+  problem->AddResidualBlock(new SelfCalibrationCost(bp->models[o.camera], o.corners, o.side, with_intrinsics,
+                                                    bp->RefinesTime() ? &time : nullptr),
+                            loss, blocks);
+}
+
+// Intrinsics blocks (entries held constant through a SubsetManifold, a Gaussian prior on the others) and
+// time offsets of the cameras in use; returns the number of blocks added to the reduced system.
+int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_used,
+                             ceres::ParameterBlockOrdering* ordering,
+                             std::vector<std::unique_ptr<ceres::Manifold>>* subsets,
+                             ceres::Problem* problem) {
+  int added = 0;
+  for (size_t c = 0; c < camera_used.size(); ++c) {
+    if (!camera_used[c]) continue;
+    if (bp->RefinesIntrinsics(static_cast<int>(c))) {
+      BundleIntrinsics& in = bp->intrinsics[c];
+      double* block = in.values.data();
+      const int n = static_cast<int>(in.values.size());
+      if (static_cast<int>(in.constant.size()) >= n) {
+        problem->SetParameterBlockConstant(block);
+      } else if (!in.constant.empty()) {
+        subsets->emplace_back(new ceres::SubsetManifold(n, in.constant));
+        problem->SetManifold(block, subsets->back().get());
+      }
+      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+      for (int k = 0; k < n; ++k)
+        if (in.sigma[k] > 0) a(k, k) = in.prior_scale_px / in.sigma[k];
+      const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(in.prior.data(), n);
+      problem->AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, block);
+      ordering->AddElementToGroup(block, 3);  // intrinsics (see the note on groups in BuildProblem)
+      ++added;
+    }
+    if (bp->RefinesTime()) {
+      double* block = &bp->time_offset_s[c];
+      if (bp->time_offset_fixed[c]) problem->SetParameterBlockConstant(block);
+      ordering->AddElementToGroup(block, 4);  // clock offsets
+      ++added;
+    }
+  }
+  return added;
+}
+
+}  // namespace
+
+namespace {
+
+// The Ceres problem of a BundleProblem: what it points to lives as long as it (members destroyed in
+// reverse order: the problem first).
+struct BuiltProblem {
+  LeftPoseManifold manifold;
+  std::unique_ptr<ceres::LossFunction> loss;
+  std::vector<std::unique_ptr<ceres::Manifold>> subsets;
+  std::unique_ptr<ceres::Problem> problem;
+  ceres::ParameterBlockOrdering* ordering = nullptr;  // owned by the solver options once solved
+  std::vector<char> camera_used, marker_used, frame_used;
+  int num_corners = 0;
+  int num_reduced = 0;
+};
+
+void BuildProblem(BundleProblem* bp, double huber_px, BuiltProblem* out) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  LeftPoseManifold manifold;
+  out->problem.reset(new ceres::Problem(problem_options));
+  ceres::Problem& problem = *out->problem;
   // Huber on the 8-residual block: sqrt(s) = 2 * RMS corner error, so a = 2 * huber_px puts the kink
   // where the observation's RMS corner error reaches huber_px.
-  std::unique_ptr<ceres::LossFunction> loss;
-  if (settings.huber_px > 0) loss.reset(new ceres::HuberLoss(2.0 * settings.huber_px));
-
-  std::vector<char> camera_used(bp->cam_from_rig.size(), 0), marker_used(bp->object_from_marker.size(), 0),
-      frame_used(bp->rig_from_object.size(), 0);
-  int num_corners = 0;
+  if (huber_px > 0) out->loss.reset(new ceres::HuberLoss(2.0 * huber_px));
+  out->camera_used.assign(bp->cam_from_rig.size(), 0);
+  out->marker_used.assign(bp->object_from_marker.size(), 0);
+  out->frame_used.assign(bp->rig_from_object.size(), 0);
   for (size_t i = 0; i < bp->observations.size(); ++i) {
     if (!bp->active[i]) continue;
     const BundleObservation& o = bp->observations[i];
-    problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side), loss.get(),
-                             bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
-                             bp->rig_from_object[o.frame].data());
-    camera_used[o.camera] = marker_used[o.marker] = frame_used[o.frame] = 1;
-    num_corners += 4;
+    if (bp->RefinesIntrinsics(o.camera) || bp->RefinesTime()) {
+      AddSelfCalibrationResidual(bp, i, out->loss.get(), &problem);
+    } else {
+      problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side),
+                               out->loss.get(), bp->cam_from_rig[o.camera].data(),
+                               bp->object_from_marker[o.marker].data(), bp->rig_from_object[o.frame].data());
+    }
+    out->camera_used[o.camera] = out->marker_used[o.marker] = out->frame_used[o.frame] = 1;
+    out->num_corners += 4;
   }
-  if (num_corners == 0) {
+  if (out->num_corners == 0) return;
+  // Ceres orders the blocks of one group by address: cameras, markers, intrinsics and clock offsets (separate
+  // vectors, anywhere on the heap relative to each other) get a group each, so the reduced system's order --
+  // and the last bits of the solution -- do not depend on where the heap put them.
+  out->ordering = new ceres::ParameterBlockOrdering;
+  for (size_t c = 0; c < out->camera_used.size(); ++c) {
+    if (!out->camera_used[c]) continue;
+    double* block = bp->cam_from_rig[c].data();
+    problem.SetManifold(block, &out->manifold);
+    if (bp->camera_fixed[c]) problem.SetParameterBlockConstant(block);
+    out->ordering->AddElementToGroup(block, 1);  // cameras
+    ++out->num_reduced;
+  }
+  for (size_t m = 0; m < out->marker_used.size(); ++m) {
+    if (!out->marker_used[m]) continue;
+    double* block = bp->object_from_marker[m].data();
+    problem.SetManifold(block, &out->manifold);
+    if (bp->marker_fixed[m]) problem.SetParameterBlockConstant(block);
+    out->ordering->AddElementToGroup(block, 2);  // markers
+    ++out->num_reduced;
+  }
+  for (size_t f = 0; f < out->frame_used.size(); ++f) {
+    if (!out->frame_used[f]) continue;
+    double* block = bp->rig_from_object[f].data();
+    problem.SetManifold(block, &out->manifold);
+    out->ordering->AddElementToGroup(block, 0);  // eliminated first
+  }
+  out->num_reduced += AddSelfCalibrationBlocks(bp, out->camera_used, out->ordering, &out->subsets, &problem);
+}
+
+}  // namespace
+
+BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  BundleSummary out;
+  BuiltProblem built;
+  BuildProblem(bp, settings.huber_px, &built);
+  if (built.num_corners == 0) {
     out.termination = "no observations";
     return out;
   }
-  // Ceres orders the blocks of one group by address: cameras and markers (separate vectors, anywhere on the
-  // heap relative to each other) get a group each, so the reduced system's order -- and the last bits of
-  // the solution -- do not depend on where the heap put them.
-  auto* ordering = new ceres::ParameterBlockOrdering;
-  int num_reduced = 0;
-  for (size_t c = 0; c < camera_used.size(); ++c) {
-    if (!camera_used[c]) continue;
-    double* block = bp->cam_from_rig[c].data();
-    problem.SetManifold(block, &manifold);
-    if (bp->camera_fixed[c]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 1);  // cameras
-    ++num_reduced;
-  }
-  for (size_t m = 0; m < marker_used.size(); ++m) {
-    if (!marker_used[m]) continue;
-    double* block = bp->object_from_marker[m].data();
-    problem.SetManifold(block, &manifold);
-    if (bp->marker_fixed[m]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 2);  // markers
-    ++num_reduced;
-  }
-  for (size_t f = 0; f < frame_used.size(); ++f) {
-    if (!frame_used[f]) continue;
-    double* block = bp->rig_from_object[f].data();
-    problem.SetManifold(block, &manifold);
-    ordering->AddElementToGroup(block, 0);  // eliminated first
-  }
+  ceres::Problem& problem = *built.problem;
+  ceres::ParameterBlockOrdering* ordering = built.ordering;
+  const int num_reduced = built.num_reduced;
+  const int num_corners = built.num_corners;
 
   ceres::Solver::Options options;
   std::string solver = settings.linear_solver;
@@ -247,20 +457,81 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   return out;
 }
 
+Rigid3 ObservedFramePose(const BundleProblem& bp, size_t k) {
+  const BundleObservation& o = bp.observations[k];
+  Rigid3 pose = RigidFromBlock(bp.rig_from_object[o.frame].data());
+  if (!bp.RefinesTime() || bp.frame_velocity.size() <= static_cast<size_t>(o.frame)) return pose;
+  const double dt = bp.ObservationDt(k);
+  const std::array<double, 6>& vel = bp.frame_velocity[o.frame];
+  pose.linear() = RotationFromVector(dt * Eigen::Vector3d(vel[0], vel[1], vel[2])) * pose.linear();
+  pose.translation() += dt * Eigen::Vector3d(vel[3], vel[4], vel[5]);
+  return pose;
+}
+
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
+  std::vector<Eigen::MatrixXd> out(bp->cam_from_rig.size());
+  BuiltProblem built;
+  BuildProblem(bp, 0.0, &built);
+  delete built.ordering;
+  if (built.num_corners == 0) return out;
+  ceres::Problem& problem = *built.problem;
+  std::vector<double*> all, blocks;
+  problem.GetParameterBlocks(&all);
+  std::map<const double*, int> column;
+  int cols = 0;
+  for (double* b : all) {
+    if (problem.IsParameterBlockConstant(b)) continue;
+    blocks.push_back(b);
+    column[b] = cols;
+    cols += problem.ParameterBlockTangentSize(b);
+  }
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = blocks;
+  eo.apply_loss_function = false;
+  eo.num_threads = std::max(1, threads);
+  ceres::CRSMatrix crs;
+  if (!problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs)) return out;
+  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> j(
+      crs.num_rows, crs.num_cols, static_cast<int>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+      crs.values.data());
+  const Eigen::SparseMatrix<double> h = (j.transpose() * j).pruned();
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
+  if (ldlt.info() != Eigen::Success) return out;
+  for (size_t c = 0; c < out.size(); ++c) {
+    if (!bp->RefinesIntrinsics(static_cast<int>(c))) continue;
+    const BundleIntrinsics& in = bp->intrinsics[c];
+    const auto it = column.find(in.values.data());
+    const int n = static_cast<int>(in.values.size());
+    out[c] = Eigen::MatrixXd::Zero(n, n);
+    if (it == column.end()) continue;
+    std::vector<int> entries;  // tangent index -> entry
+    for (int k = 0; k < n; ++k)
+      if (std::find(in.constant.begin(), in.constant.end(), k) == in.constant.end()) entries.push_back(k);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(cols, static_cast<int>(entries.size()));
+    for (size_t a = 0; a < entries.size(); ++a) rhs(it->second + static_cast<int>(a), a) = 1.0;
+    const Eigen::MatrixXd x = ldlt.solve(rhs);
+    for (size_t a = 0; a < entries.size(); ++a)
+      for (size_t b = 0; b < entries.size(); ++b)
+        out[c](entries[a], entries[b]) = sigma_px * sigma_px * x(it->second + static_cast<int>(a), b);
+  }
+  return out;
+}
+
 std::vector<double> ObservationRms(const BundleProblem& bp, std::vector<double>* max_corner_px) {
   std::vector<double> out(bp.observations.size(), std::numeric_limits<double>::infinity());
   if (max_corner_px) max_corner_px->assign(bp.observations.size(), std::numeric_limits<double>::infinity());
   for (size_t i = 0; i < bp.observations.size(); ++i) {
     const BundleObservation& o = bp.observations[i];
     const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[o.camera].data()) *
-                                   RigidFromBlock(bp.rig_from_object[o.frame].data()) *
+                                   ObservedFramePose(bp, i) *
                                    RigidFromBlock(bp.object_from_marker[o.marker].data());
     const MarkerCorners3d corners = MarkerCornersInMarker(o.side);
+    const CameraModel model = bp.Model(o.camera);
     double sum = 0.0, max_sq = 0.0;
     bool ok = true;
     for (int k = 0; k < 4 && ok; ++k) {
       Eigen::Vector2d pixel;
-      if (!bp.models[o.camera]->Project(cam_from_marker * corners[k], &pixel, nullptr)) {
+      if (!model.Project(cam_from_marker * corners[k], &pixel, nullptr)) {
         ok = false;
       } else {
         const double sq = (pixel - o.corners[k]).squaredNorm();

@@ -1,6 +1,8 @@
 // Step 5 of the paper: the global refinement with Ceres. Every marker observation (frame t, camera c,
 // marker m) contributes 8 residuals (4 corners x, y) touching one camera block, one marker block and
-// one frame block. Frames are eliminated first by the Schur complement.
+// one frame block, and, when the camera's intrinsics or its clock are refined, its intrinsics block
+// and its time offset block. Frames are eliminated first by the Schur complement (each residual touches
+// exactly one frame block: time offsets move a frame's pose along a velocity held constant in a solve).
 #pragma once
 
 #include <ceres/ceres.h>
@@ -34,6 +36,49 @@ class LeftPoseManifold : public ceres::Manifold {
   bool MinusJacobian(const double* x, double* jacobian) const override;
 };
 
+// A camera's intrinsics as a parameter block: fx, fy, cx, cy (pixels), then its distortion coefficients.
+std::vector<double> IntrinsicsVector(const CameraModel& model);
+// `base` (size, distortion model) with the intrinsics of `values` (IntrinsicsVector's layout).
+CameraModel ModelWithIntrinsics(const CameraModel& base, const double* values);
+// Names of the intrinsics block's entries: fx, fy, cx, cy, k1, k2, p1, p2, k3 (radtan) or k1..k4 (fisheye).
+std::vector<std::string> IntrinsicsNames(const CameraModel& model);
+
+// An observation's capture time relative to its frame: the frame block is the object's pose at the
+// frame's time; the camera's clock reads utime at capture, its true capture time (in the reference
+// camera's clock) is utime - offset, offset being the camera's time offset block (seconds; the reference
+// camera's is 0 and constant): dt = time_s - offset with time_s = (utime - frame utime) / 1e6. The pose
+// seen is the frame pose moved along the frame's velocity (a twist in the rig frame, per second, held
+// constant in a solve):
+//   rig_from_object(dt) = (Exp(dt * w) * R, t + dt * v)
+struct ObservationTime {
+  double time_s = 0.0;               // utime minus the frame's utime, seconds (before the offset)
+  const double* velocity = nullptr;  // (w, v): rad/s, m/s
+};
+
+// Residual of one marker observation with the camera's intrinsics and clock as unknowns. Parameter
+// blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each), then the intrinsics
+// (IntrinsicsVector's layout) when `with_intrinsics`, then the time offset (1, seconds) when `with_time`.
+// Jacobians analytic as ReprojectionCost's, with the frame pose moved by dt:
+//   d p_rig / d(dr_frame) = -[p_rig - t(dt)]x Exp(dt w),  d p_rig / d offset = -(w x (p_rig - t(dt)) + v)
+//   d pixel / d(fx, fy, cx, cy) = [[xd, 0, 1, 0], [0, yd, 0, 1]],  d pixel / d k_i = diag(fx, fy) d(xd, yd) /
+//   d k_i
+// (the distortion is affine in its coefficients for radtan with 4 or 5 and for fisheye: the central
+// difference of the public Distort is exact there; for the rational 8-coefficient model it is O(h^2)).
+class SelfCalibrationCost : public ceres::CostFunction {
+ public:
+  SelfCalibrationCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
+                      bool with_intrinsics, const ObservationTime* time);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  const CameraModel* camera_;  // size and distortion model (and the intrinsics when they are not a block)
+  MarkerCorners2d observed_;
+  MarkerCorners3d corners_;
+  bool with_intrinsics_;
+  ObservationTime time_;
+  bool with_time_;
+};
+
 // Residual of one marker observation, 8 values:
 //   p_cam(k) = cam_from_rig * rig_from_object * object_from_marker * u_k      (u_k: corner k, ArUco order)
 //   r(2k..2k+1) = Project(p_cam(k)) - observed_k                                (pixels, distorted)
@@ -54,10 +99,11 @@ class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
-  const CameraModel* camera_;
-  MarkerCorners2d observed_;
-  MarkerCorners3d corners_;
+  SelfCalibrationCost cost_;  // with the intrinsics given and no clock
 };
+
+// d pixel / d intrinsics (2 x (4 + n), row-major into `out`) at normalised coordinates (x, y).
+void IntrinsicsJacobian(const CameraModel& camera, double x, double y, double* out);
 
 struct BundleObservation {
   int camera = 0;
@@ -65,6 +111,17 @@ struct BundleObservation {
   int frame = 0;
   MarkerCorners2d corners;
   double side = 0.0;
+  double time_s = 0.0;  // utime minus the frame's utime, seconds (before the camera's offset)
+};
+
+// One camera's intrinsics block when they are refined.
+struct BundleIntrinsics {
+  bool refined = false;
+  std::vector<double> values;   // IntrinsicsVector layout
+  std::vector<double> prior;    // the given intrinsics
+  std::vector<double> sigma;    // prior standard deviation per entry (same units); <= 0: no prior
+  std::vector<int> constant;    // entries held at their value (not observable, or not asked for)
+  double prior_scale_px = 1.0;  // residual of the prior = (value - prior) / sigma * prior_scale_px
 };
 
 struct BundleProblem {
@@ -76,7 +133,26 @@ struct BundleProblem {
   std::vector<char> marker_fixed;             // per marker (the reference)
   std::vector<BundleObservation> observations;
   std::vector<char> active;  // per observation
+  // Self-calibration (empty: the given intrinsics, synchronised clocks).
+  std::vector<BundleIntrinsics> intrinsics;  // per camera
+  std::vector<double> time_offset_s;         // per camera, seconds: true capture time = utime - offset
+  std::vector<char> time_offset_fixed;       // per camera (the reference camera's, 0)
+  std::vector<std::array<double, 6>> frame_velocity;  // per frame, (w, v) in the rig frame
+  std::vector<double> frame_time_s;                   // per frame, for the velocities
+
+  bool RefinesIntrinsics(int camera) const {
+    return static_cast<size_t>(camera) < intrinsics.size() && intrinsics[camera].refined;
+  }
+  bool RefinesTime() const { return !time_offset_s.empty(); }
+  // The camera's model at the current intrinsics.
+  CameraModel Model(int camera) const;
+  // Capture time of observation k relative to its frame's pose, seconds (0 without time offsets).
+  double ObservationDt(size_t k) const;
 };
+
+// Frame velocities by differences of neighbouring frame poses (problem->frame_time_s, sorted): frames
+// further apart than max_gap_s are not used (velocity 0 for an isolated frame).
+void UpdateFrameVelocities(double max_gap_s, BundleProblem* problem);
 
 struct BundleSettings {
   double huber_px = 1.0;  // <= 0: no robust loss
@@ -106,6 +182,15 @@ BundleSummary SolveBundle(BundleProblem* problem, const BundleSettings& settings
 // RMS corner error (pixels) of every observation at the current parameters; +inf when a corner is
 // behind the camera.
 // With max_corner_px: also each observation's largest corner error.
+// Covariance of every refined camera's intrinsics (IntrinsicsVector layout; rows and columns of the
+// entries held constant are 0; empty for a camera not refined), marginal over every other unknown: the
+// inverse Gauss-Newton information (J^T J with the priors) at the current parameters, for corners with
+// noise sigma_px. Residuals with intrinsics given or constant do not need a block.
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* problem, double sigma_px, int threads);
+
+// The object's pose observation k saw: its frame's pose moved to the capture time (ObservationTime).
+Rigid3 ObservedFramePose(const BundleProblem& problem, size_t k);
+
 std::vector<double> ObservationRms(const BundleProblem& problem,
                                    std::vector<double>* max_corner_px = nullptr);
 

@@ -11,12 +11,45 @@
 #include <unordered_map>
 
 #include "core/lcm_util.h"
+#include "mapper/intrinsics.h"
 #include "mapper/stages.h"
 
 namespace mcmt {
 
 // ---------------------------------------------------------------------------------------------
 // Options
+
+namespace {
+
+// mapper.refine_intrinsics, refine_intrinsics_cameras, intrinsics_sigma {focal_rel, center_px, radial,
+// tangential}, observability_ratio.
+void ReadIntrinsicsSettings(const RigConfig& rig, IntrinsicsSettings* out) {
+  const YamlSection& s = rig.mapper;
+  try {
+    out->refine = IntrinsicsRefinementFromName(s.GetString("refine_intrinsics", "none"));
+  } catch (const std::invalid_argument& e) {
+    s.Fail("refine_intrinsics", e.what());
+  }
+  if (s.Has("refine_intrinsics_cameras")) {
+    const YAML::Node list = s.node()["refine_intrinsics_cameras"];
+    if (!list.IsSequence()) s.Fail("refine_intrinsics_cameras", "expected a list of camera names");
+    for (const YAML::Node& n : list) {
+      const std::string name = n.as<std::string>();
+      if (!rig.FindCamera(name)) s.Fail("refine_intrinsics_cameras", "no camera named '" + name + "'");
+      out->cameras.push_back(name);
+    }
+  }
+  const YamlSection sigma = s.Child("intrinsics_sigma");
+  sigma.CheckKnownKeys({"focal_rel", "center_px", "radial", "tangential"});
+  out->sigma.focal_rel = sigma.GetPositiveDouble("focal_rel", out->sigma.focal_rel);
+  out->sigma.center_px = sigma.GetPositiveDouble("center_px", out->sigma.center_px);
+  out->sigma.radial = sigma.GetPositiveDouble("radial", out->sigma.radial);
+  out->sigma.tangential = sigma.GetPositiveDouble("tangential", out->sigma.tangential);
+  out->observability_ratio = s.GetPositiveDouble("observability_ratio", out->observability_ratio);
+  if (!(out->observability_ratio <= 1)) s.Fail("observability_ratio", "must be in (0, 1]");
+}
+
+}  // namespace
 
 MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   MapperOptions o;
@@ -42,7 +75,13 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
                     "consistency_rel",
                     "marker_reject_fraction",
                     "max_pair_events",
-                    "continuity_gap_s"});
+                    "continuity_gap_s",
+                    "refine_intrinsics",
+                    "refine_intrinsics_cameras",
+                    "intrinsics_sigma",
+                    "observability_ratio",
+                    "time_offsets",
+                    "max_time_offset_ms"});
   o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
   o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
   o.huber_px = s.GetDouble("huber_px", o.huber_px);
@@ -65,6 +104,9 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.marker_reject_fraction = s.GetDouble("marker_reject_fraction", o.marker_reject_fraction);
   o.max_pair_events = s.GetInt("max_pair_events", o.max_pair_events);
   o.continuity_gap_s = s.GetDouble("continuity_gap_s", o.continuity_gap_s);
+  ReadIntrinsicsSettings(rig, &o.intrinsics);
+  o.estimate_time_offsets = s.GetBool("time_offsets", o.estimate_time_offsets);
+  o.max_time_offset_ms = s.GetPositiveDouble("max_time_offset_ms", o.max_time_offset_ms);
   if (rig.sync.Has("tolerance_ms"))
     o.sync_tolerance_us =
         static_cast<int64_t>(std::llround(rig.sync.GetPositiveDouble("tolerance_ms", 2.0) * 1000));
@@ -300,24 +342,33 @@ std::vector<CameraCollectStats> Mapper::CollectStats() const {
 // ---------------------------------------------------------------------------------------------
 // Solve
 
-MapResult Mapper::Solve() {
+namespace {
+
+// What one pass of the method reads besides the messages.
+struct SolveInputs {
+  const std::vector<std::string>& camera_names;
+  const std::vector<CameraModel>& models;
+  const std::vector<std::string>& warnings;
+  const std::function<void(const MapperProgress&)>& progress;
+};
+
+// The whole method on `messages` (their utimes as the frames' clocks).
+MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s,
+                    const MapperOptions& o) {
   const auto t_total = Clock::now();
-  const Impl& s = *impl_;
-  const MapperOptions& o = options_;
-  if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   MapResult result;
   MapReport& report = result.report;
   report.warnings = s.warnings;
-  report.detections_messages = static_cast<int>(s.messages.size());
+  report.detections_messages = static_cast<int>(messages.size());
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   report.threads = threads;
   StageLog log(s.progress, &report);
 
   log.Begin("frames", "assembling frames");
   const std::vector<Frame> frames =
-      AssembleFrames(s.messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us);
+      AssembleFrames(messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us);
   report.frames_assembled = static_cast<int>(frames.size());
-  Observations observations = CollectObservations(s.messages, frames, s.camera_names, o, &report);
+  Observations observations = CollectObservations(messages, frames, s.camera_names, o, &report);
   log.End("frames");
 
   log.Begin("hypotheses", "square poses of " + std::to_string(observations.obs.size()) + " observations");
@@ -340,8 +391,7 @@ MapResult Mapper::Solve() {
 
   const ObservationNames names{&frames, &s.camera_names, &observations.marker_ids};
   MapperBundle bundle = MakeBundleProblem(observations, names, layout, cameras, poses, s.models, &report);
-  FillMap(bundle, observations, names, layout, cameras, s.models, o, &result.initial_map,
-          &result.initial_trajectory);
+  FillMap(bundle, observations, names, layout, cameras, o, &result.initial_map, &result.initial_trajectory);
   report.initial_rms_px = result.initial_map.rms_px;
   log.End("initial statistics");
 
@@ -352,7 +402,7 @@ MapResult Mapper::Solve() {
     DropUnreliableCameras(observations, names, o, settings, &cameras, &bundle, &report);
     log.End("refine");
   }
-  FillMap(bundle, observations, names, layout, cameras, s.models, o, &result.map, &result.trajectory);
+  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
   report.final_rms_px = result.map.rms_px;
   report.frames_used = result.map.num_frames;
   report.observations_used = result.map.num_observations;
@@ -363,6 +413,47 @@ MapResult Mapper::Solve() {
   log.Notify(MapperProgress::kDone, "done", "done");
   report.total_seconds = std::chrono::duration<double>(Clock::now() - t_total).count();
   return result;
+}
+
+// Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
+// clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
+// the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
+// result.
+MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const SolveInputs& s,
+                               const MapperOptions& o) {
+  MapperOptions first_options = o;
+  first_options.sync_tolerance_us =
+      std::max(o.sync_tolerance_us, static_cast<int64_t>(std::llround(o.max_time_offset_ms * 1000)));
+  const MapResult first = SolvePass(messages, s, first_options);
+  std::map<std::string, double> offset_us;
+  for (const MapCamera& c : first.map.cameras) offset_us[c.name] = c.time_offset_us;
+  std::vector<StoredMessage> corrected = messages;
+  for (StoredMessage& m : corrected) {
+    const auto it = offset_us.find(s.camera_names[m.camera]);
+    if (it != offset_us.end()) m.utime -= std::llround(it->second);
+  }
+  MapperOptions second_options = o;
+  second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
+  MapResult result = SolvePass(corrected, s, second_options);
+  for (MapCamera& c : result.map.cameras)
+    c.time_offset_us += offset_us.count(c.name) ? offset_us[c.name] : 0.0;
+  for (MapCamera& c : result.initial_map.cameras)
+    c.time_offset_us = offset_us.count(c.name) ? offset_us[c.name] : 0.0;
+  result.report.stage_seconds.insert(result.report.stage_seconds.begin(),
+                                     {"time offsets (first pass)", first.report.total_seconds});
+  result.report.total_seconds += first.report.total_seconds;
+  return result;
+}
+
+}  // namespace
+
+MapResult Mapper::Solve() {
+  const Impl& s = *impl_;
+  if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
+  const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
+  if (options_.estimate_time_offsets && options_.refine)
+    return SolveWithTimeOffsets(s.messages, inputs, options_);
+  return SolvePass(s.messages, inputs, options_);
 }
 
 }  // namespace mcmt

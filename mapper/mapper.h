@@ -31,6 +31,40 @@ class MapperError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Self-calibration of the intrinsics (mapper/intrinsics.h has the method).
+enum class IntrinsicsRefinement { kNone, kFocal, kFocalCenter, kAll };
+IntrinsicsRefinement IntrinsicsRefinementFromName(const std::string& name);  // throws std::invalid_argument
+std::string IntrinsicsRefinementName(IntrinsicsRefinement refinement);
+
+// Prior standard deviations of the given intrinsics.
+struct IntrinsicsSigma {
+  double focal_rel = 0.05;    // fx, fy: relative (0.05: 5 % of the focal length)
+  double center_px = 20.0;    // cx, cy, pixels
+  double radial = 0.05;       // k1, k2, k3 (and fisheye k1..k4)
+  double tangential = 0.005;  // p1, p2
+};
+
+struct IntrinsicsSettings {
+  IntrinsicsRefinement refine = IntrinsicsRefinement::kNone;
+  std::vector<std::string> cameras;  // only these (empty: all)
+  IntrinsicsSigma sigma;
+  double observability_ratio = 0.5;  // refined only where posterior sigma < ratio * prior sigma
+};
+
+// What the self-calibration did with one camera (report.json).
+struct IntrinsicsReport {
+  std::string camera;
+  int index = 0;  // camera index in the problem
+  std::vector<std::string> names;
+  std::vector<double> given, refined;
+  std::vector<double> prior_sigma;      // per entry
+  std::vector<double> posterior_sigma;  // per entry (refined entries; 0 for the others)
+  std::vector<char> is_refined;         // per entry
+  std::vector<std::string> held;        // "cx: ..." why an entry asked for stays at its prior
+  double coverage = 0.0;                // fraction of an 8 x 6 grid of image cells holding corners
+  int views = 0;
+};
+
 struct MapperOptions {
   // Step 1: keep both IPPE hypotheses when e2 / e1 < tau_e.
   double tau_e = 2.0;
@@ -51,6 +85,13 @@ struct MapperOptions {
   // "dense_schur", "iterative_schur".
   std::string linear_solver = "auto";
   bool refine = true;  // false: initialisation only
+  // Intrinsics refined in the bundle adjustment (refine_intrinsics, intrinsics_sigma, ...).
+  IntrinsicsSettings intrinsics;
+  // Per-camera clock offsets against the reference camera (true capture time = utime - offset),
+  // estimated in the bundle adjustment; frames are first assembled with max_time_offset_ms, then again
+  // with the clocks corrected.
+  bool estimate_time_offsets = false;
+  double max_time_offset_ms = 25.0;
 
   // References: best connected unless named.
   std::string reference_camera;
@@ -141,6 +182,7 @@ struct MapReport {
   std::string termination;
   std::string linear_solver;
   int threads = 0;
+  std::vector<IntrinsicsReport> intrinsics;  // cameras whose intrinsics were considered for refinement
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order
   double total_seconds = 0.0;
 };

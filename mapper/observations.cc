@@ -87,6 +87,7 @@ bool AddMessage(const StoredMessage& m, int frame, int view, const std::vector<s
     ob.camera = m.camera;
     ob.marker = it->second;
     ob.view = view;
+    ob.utime = m.utime;
     ob.corners = mk.corners;
     ob.side = options.sizes.Get(mk.id);
     out->obs.push_back(ob);

@@ -16,6 +16,7 @@
 #include "core/json.h"
 #include "core/version.h"
 #include "mapper/diagnostics.h"
+#include "mapper/intrinsics.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
@@ -173,6 +174,7 @@ std::string ReportJson(const MapResult& result) {
   for (size_t i = 0; i < r.dropped_cameras.size(); ++i)
     j << (i ? ", " : "") << JsonString(r.dropped_cameras[i]);
   j << "],\n";
+  j << SelfCalibrationJson(r);
   j << "  \"warnings\": [";
   for (size_t i = 0; i < r.warnings.size(); ++i)
     j << (i ? ", " : "") << "\n    " << JsonString(r.warnings[i]);

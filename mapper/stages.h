@@ -63,8 +63,9 @@ std::vector<Frame> AssembleFrames(const std::vector<StoredMessage>& messages, in
 struct Observation {
   int frame = 0;
   int camera = 0;
-  int marker = 0;  // index into Observations::marker_ids
-  int view = 0;    // (frame, camera) group
+  int marker = 0;     // index into Observations::marker_ids
+  int view = 0;       // (frame, camera) group
+  int64_t utime = 0;  // of the camera's message (its capture time, in its own clock)
   MarkerCorners2d corners;
   double side = 0.0;
   SquarePose pose;  // EstimateHypotheses
@@ -194,11 +195,11 @@ void DropUnreliableCameras(const Observations& observations, const ObservationNa
                            const MapperOptions& options, const BundleSettings& settings,
                            CameraPlacement* cameras, MapperBundle* bundle, MapReport* report);
 
-// The map and trajectory at the bundle's current parameters (statistics over active observations).
+// The map and trajectory at the bundle's current parameters, refined intrinsics included (statistics
+// over active observations).
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
-             const MarkerLayout& layout, const CameraPlacement& cameras,
-             const std::vector<CameraModel>& models, const MapperOptions& options, RigMap* map,
-             std::vector<TrajectoryRow>* trajectory);
+             const MarkerLayout& layout, const CameraPlacement& cameras, const MapperOptions& options,
+             RigMap* map, std::vector<TrajectoryRow>* trajectory);
 
 // The options' consistency thresholds (consistency_deg, consistency_m, consistency_rel).
 ConsistencyOptions ConsistencyFor(const MapperOptions& options);

@@ -295,6 +295,7 @@ void WriteMap(const std::string& path, const RigMap& map) {
     out << "    observations: " << c.observations << "\n";
     out << "    rms_px: " << Num(c.rms_px) << "\n";
     out << "    max_px: " << Num(c.max_px) << "\n";
+    if (c.time_offset_us != 0) out << "    time_offset_us: " << Num(c.time_offset_us) << "\n";
   }
   out << "markers:" << (map.markers.empty() ? " []" : "") << "\n";
   for (const auto& m : map.markers) {
@@ -386,6 +387,8 @@ RigMap ReadMap(const std::string& path) {
     cam.observations = r.OptInt(c, key, "observations");
     cam.rms_px = r.OptDouble(c, key, "rms_px");
     cam.max_px = r.OptDouble(c, key, "max_px");
+    cam.time_offset_us = r.OptDouble(c, key, "time_offset_us");
+    if (!std::isfinite(cam.time_offset_us)) r.Fail(key + ".time_offset_us", "expected a finite number");
     if (map.FindCamera(cam.name)) r.Fail(key + ".name", "duplicated camera '" + cam.name + "'");
     map.cameras.push_back(cam);
   }

@@ -1,0 +1,217 @@
+#include "mapper/intrinsics.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/json.h"
+#include "core/math.h"
+
+namespace mcmt {
+
+IntrinsicsRefinement IntrinsicsRefinementFromName(const std::string& name) {
+  if (name == "none") return IntrinsicsRefinement::kNone;
+  if (name == "focal") return IntrinsicsRefinement::kFocal;
+  if (name == "focal_center") return IntrinsicsRefinement::kFocalCenter;
+  if (name == "all") return IntrinsicsRefinement::kAll;
+  throw std::invalid_argument("unknown '" + name + "' (none, focal, focal_center, all)");
+}
+
+std::string IntrinsicsRefinementName(IntrinsicsRefinement refinement) {
+  switch (refinement) {
+    case IntrinsicsRefinement::kNone:
+      return "none";
+    case IntrinsicsRefinement::kFocal:
+      return "focal";
+    case IntrinsicsRefinement::kFocalCenter:
+      return "focal_center";
+    case IntrinsicsRefinement::kAll:
+      return "all";
+  }
+  return "none";
+}
+
+std::vector<int> RequestedIntrinsics(IntrinsicsRefinement refine, const CameraModel& model) {
+  std::vector<int> out;
+  if (refine == IntrinsicsRefinement::kNone) return out;
+  out = {0, 1};
+  if (refine == IntrinsicsRefinement::kFocal) return out;
+  out.push_back(2);
+  out.push_back(3);
+  if (refine == IntrinsicsRefinement::kFocalCenter) return out;
+  const int n = static_cast<int>(model.distortion.size());
+  for (int i = 0; i < std::min(n, 5); ++i) out.push_back(4 + i);
+  return out;
+}
+
+std::vector<double> PriorSigma(const IntrinsicsSigma& sigma, const CameraModel& model) {
+  std::vector<double> s = {sigma.focal_rel * model.fx, sigma.focal_rel * model.fy, sigma.center_px,
+                           sigma.center_px};
+  for (size_t i = 0; i < model.distortion.size(); ++i) {
+    const bool tangential = model.model == DistortionModel::kRadTan && (i == 2 || i == 3);
+    s.push_back(tangential ? sigma.tangential : sigma.radial);
+  }
+  return s;
+}
+
+double ImageCoverage(const BundleProblem& bp, int camera, int* views) {
+  const CameraModel model = bp.Model(camera);
+  const Rigid3 cam_from_rig = RigidFromBlock(bp.cam_from_rig[camera].data());
+  std::vector<char> cells(8 * 6, 0);
+  std::set<int> frames;
+  for (size_t k = 0; k < bp.observations.size(); ++k) {
+    const BundleObservation& o = bp.observations[k];
+    if (!bp.active[k] || o.camera != camera) continue;
+    frames.insert(o.frame);
+    for (const Eigen::Vector2d& pixel : o.corners) {
+      const int cx = std::clamp(static_cast<int>(8 * (pixel.x() + 0.5) / model.width), 0, 7);
+      const int cy = std::clamp(static_cast<int>(6 * (pixel.y() + 0.5) / model.height), 0, 5);
+      cells[cy * 8 + cx] = 1;
+    }
+  }
+  (void)cam_from_rig;
+  if (views) *views = static_cast<int>(frames.size());
+  return std::count(cells.begin(), cells.end(), 1) / 48.0;
+}
+
+namespace {
+
+std::string HeldReason(const std::string& name, double posterior, double prior, double ratio, double coverage,
+                       int views) {
+  std::ostringstream why;
+  why << std::setprecision(3) << name << ": held at the given value: the data would constrain it to +-"
+      << posterior << " against the prior's +-" << prior << " (needs < " << ratio << " x the prior; " << views
+      << " views, markers cover " << std::setprecision(2) << 100.0 * coverage << " % of the image)";
+  return why.str();
+}
+
+// Holds, per camera, the least constrained free entry whose posterior sigma is not below ratio x its
+// prior; returns false when every free entry passes.
+bool HoldWorst(const std::vector<Eigen::MatrixXd>& covariance, double ratio,
+               std::vector<IntrinsicsReport>* reports, BundleProblem* bp) {
+  bool held = false;
+  for (IntrinsicsReport& r : *reports) {
+    BundleIntrinsics& in = bp->intrinsics[r.index];
+    if (!in.refined || covariance[r.index].size() == 0) continue;
+    int worst = -1;
+    double worst_ratio = ratio;
+    for (size_t k = 0; k < r.names.size(); ++k) {
+      if (!r.is_refined[k]) continue;
+      const double q = std::sqrt(std::max(0.0, covariance[r.index](k, k))) / r.prior_sigma[k];
+      if (q >= worst_ratio) {
+        worst_ratio = q;
+        worst = static_cast<int>(k);
+      }
+    }
+    if (worst < 0) continue;
+    r.held.push_back(HeldReason(r.names[worst], worst_ratio * r.prior_sigma[worst], r.prior_sigma[worst],
+                                ratio, r.coverage, r.views));
+    r.is_refined[worst] = 0;
+    in.constant.push_back(worst);
+    std::sort(in.constant.begin(), in.constant.end());
+    in.refined = std::count(r.is_refined.begin(), r.is_refined.end(), 1) > 0;
+    held = true;
+  }
+  return held;
+}
+
+}  // namespace
+
+std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings& settings,
+                                                       const std::vector<std::string>& camera_names,
+                                                       double sigma_px, int threads, BundleProblem* bp) {
+  std::vector<IntrinsicsReport> reports;
+  if (settings.refine == IntrinsicsRefinement::kNone) return reports;
+  const int n_cameras = static_cast<int>(bp->cam_from_rig.size());
+  bp->intrinsics.assign(n_cameras, BundleIntrinsics{});
+  for (int c = 0; c < n_cameras; ++c) {
+    const std::vector<std::string>& only = settings.cameras;
+    if (!only.empty() && std::find(only.begin(), only.end(), camera_names[c]) == only.end()) continue;
+    const CameraModel& model = *bp->models[c];
+    IntrinsicsReport report;
+    report.camera = camera_names[c];
+    report.index = c;
+    report.names = IntrinsicsNames(model);
+    report.given = IntrinsicsVector(model);
+    report.prior_sigma = PriorSigma(settings.sigma, model);
+    report.coverage = ImageCoverage(*bp, c, &report.views);
+    if (report.views == 0) continue;
+    const int n = static_cast<int>(report.given.size());
+    report.is_refined.assign(n, 0);
+    for (int k : RequestedIntrinsics(settings.refine, model)) report.is_refined[k] = 1;
+    BundleIntrinsics& in = bp->intrinsics[c];
+    in.values = report.given;
+    in.prior = report.given;
+    in.sigma = report.prior_sigma;
+    in.prior_scale_px = sigma_px;
+    for (int k = 0; k < n; ++k)
+      if (!report.is_refined[k]) in.constant.push_back(k);
+    in.refined = static_cast<int>(in.constant.size()) < n;
+    reports.push_back(report);
+  }
+  while (HoldWorst(IntrinsicsCovariance(bp, sigma_px, threads), settings.observability_ratio, &reports, bp)) {
+  }
+  return reports;
+}
+
+void FinishIntrinsicsReports(BundleProblem* bp, double sigma_px, int threads,
+                             std::vector<IntrinsicsReport>* reports) {
+  const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(bp, sigma_px, threads);
+  for (IntrinsicsReport& r : *reports) {
+    r.refined = IntrinsicsVector(bp->Model(r.index));
+    r.posterior_sigma.assign(r.given.size(), 0.0);
+    if (covariance[r.index].size() == 0) continue;
+    for (size_t k = 0; k < r.given.size(); ++k)
+      if (r.is_refined[k]) r.posterior_sigma[k] = std::sqrt(std::max(0.0, covariance[r.index](k, k)));
+  }
+}
+
+namespace {
+
+std::string JsonList(const std::vector<double>& values) {
+  std::ostringstream out;
+  out << std::setprecision(10) << "[";
+  for (size_t i = 0; i < values.size(); ++i) {
+    out << (i ? ", " : "");
+    if (std::isfinite(values[i])) {
+      out << values[i];
+    } else {
+      out << "null";
+    }
+  }
+  return out.str() + "]";
+}
+
+}  // namespace
+
+std::string SelfCalibrationJson(const MapReport& report) {
+  if (report.intrinsics.empty()) return "";
+  std::ostringstream j;
+  j << "  \"intrinsics\": [\n";
+  for (size_t i = 0; i < report.intrinsics.size(); ++i) {
+    const IntrinsicsReport& r = report.intrinsics[i];
+    std::vector<std::string> refined, held;
+    for (size_t k = 0; k < r.names.size(); ++k)
+      if (k < r.is_refined.size() && r.is_refined[k]) refined.push_back(JsonString(r.names[k]));
+    for (const std::string& h : r.held) held.push_back(JsonString(h));
+    j << "    {\"camera\": " << JsonString(r.camera) << ", \"views\": " << r.views
+      << ", \"coverage\": " << std::setprecision(4) << r.coverage << ", \"names\": [";
+    for (size_t k = 0; k < r.names.size(); ++k) j << (k ? ", " : "") << JsonString(r.names[k]);
+    j << "], \"given\": " << JsonList(r.given) << ", \"refined\": " << JsonList(r.refined)
+      << ", \"prior_sigma\": " << JsonList(r.prior_sigma)
+      << ", \"posterior_sigma\": " << JsonList(r.posterior_sigma) << ", \"refined_entries\": [";
+    for (size_t k = 0; k < refined.size(); ++k) j << (k ? ", " : "") << refined[k];
+    j << "], \"held\": [";
+    for (size_t k = 0; k < held.size(); ++k) j << (k ? ", " : "") << held[k];
+    j << "]}" << (i + 1 < report.intrinsics.size() ? "," : "") << "\n";
+  }
+  j << "  ],\n";
+  return j.str();
+}
+
+}  // namespace mcmt

@@ -1,0 +1,295 @@
+// Self-calibration in the bundle adjustment (issue 18): intrinsics refined with priors and observability
+// checks. The paper's rig (5 cameras, 300 frames at 30 fps), the simulator's detections with 0.2 px
+// corner noise; the mapper is given wrong intrinsics for two cameras (the corners stay true).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+
+#include "mapper/bundle.h"
+#include "tests/mapper/selfcal_sim.h"
+
+namespace mcmt {
+namespace {
+
+using testing::IntrinsicsError;
+using testing::MapDetections;
+using testing::SelfCalOptions;
+using testing::SelfCalRun;
+using testing::SelfCalSession;
+using testing::SimulateSelfCal;
+
+const sim::SimCamera& TrueCamera(const sim::GroundTruth& truth, const std::string& name) {
+  return *truth.FindCamera(name);
+}
+
+// The quick calibration of the issue: two cameras with focal +3 % / -3 %, principal point 8 px off,
+// k1 off by 0.03.
+void PerturbTwo(SelfCalRun* run) {
+  testing::PerturbIntrinsics("cam1", {0.03, 8.0, -6.0, 0.03}, run);
+  testing::PerturbIntrinsics("cam3", {-0.03, -8.0, 8.0, -0.03}, run);
+}
+
+TEST(MapperSelfCal, QuickCalibrationErrorsAreRecovered) {
+  SelfCalSession session;
+  const SelfCalRun exact = SimulateSelfCal(session);
+  SelfCalRun wrong = exact;
+  PerturbTwo(&wrong);
+  MapperOptions options = SelfCalOptions(exact.truth);
+  const MapResult r_exact = MapDetections(exact.detections, options);
+  const MapResult r_wrong = MapDetections(wrong.detections, options);
+  options.intrinsics.refine = IntrinsicsRefinement::kAll;
+  const MapResult r_refined = MapDetections(wrong.detections, options);
+  const MapResult r_exact_refined = MapDetections(exact.detections, options);
+  auto cam_err = [&](const MapResult& r) {
+    return sim::Evaluate(exact.truth, &r.map, &r.trajectory).camera_position_mm.mean;
+  };
+  std::printf("camera position error (mean mm): exact %.3f, wrong %.3f, refined %.3f, exact+refined %.3f\n",
+              cam_err(r_exact), cam_err(r_wrong), cam_err(r_refined), cam_err(r_exact_refined));
+  std::printf("rms: %.3f %.3f %.3f %.3f, time %.2f %.2f s\n", r_exact.map.rms_px, r_wrong.map.rms_px,
+              r_refined.map.rms_px, r_exact_refined.map.rms_px, r_exact.report.total_seconds,
+              r_refined.report.total_seconds);
+  for (const std::string name : {"cam1", "cam3", "cam0"}) {
+    const CameraModel& t = TrueCamera(exact.truth, name).model;
+    const CameraModel& m = r_refined.map.FindCamera(name)->model;
+    std::printf("%s: fx %+.4f %% fy %+.4f %% cx %+.3f cy %+.3f k1 %+.5f\n", name.c_str(),
+                100 * (m.fx / t.fx - 1), 100 * (m.fy / t.fy - 1), m.cx - t.cx, m.cy - t.cy,
+                m.distortion[0] - t.distortion[0]);
+    EXPECT_NEAR(m.fx / t.fx, 1.0, 0.002) << name;
+    EXPECT_NEAR(m.fy / t.fy, 1.0, 0.002) << name;
+    // The principal point is the weakest: this object (18 cm at 1 m, markers over 15-25 % of the image)
+    // constrains it to +-2-3 px (the covariance); the issue's 1 px is out of reach of these views.
+    EXPECT_NEAR(m.cx, t.cx, 3.0) << name;
+    EXPECT_NEAR(m.cy, t.cy, 3.0) << name;
+    EXPECT_NEAR(m.distortion[0], t.distortion[0], 0.01) << name;
+  }
+  // k2 and k3 are not constrained by markers over a quarter of the image: held at the given values, and
+  // report.json says so with the figures.
+  ASSERT_EQ(r_refined.report.intrinsics.size(), 5u);
+  for (const IntrinsicsReport& ir : r_refined.report.intrinsics) {
+    ASSERT_EQ(ir.names.size(), 9u);
+    EXPECT_FALSE(ir.is_refined[5]) << ir.camera << " k2";
+    EXPECT_FALSE(ir.is_refined[8]) << ir.camera << " k3";
+    EXPECT_EQ(ir.refined[8], ir.given[8]) << ir.camera;
+    EXPECT_TRUE(ir.is_refined[0] && ir.is_refined[2] && ir.is_refined[4]) << ir.camera;
+  }
+  const std::string json = ReportJson(r_refined);
+  EXPECT_NE(json.find("\"intrinsics\": ["), std::string::npos);
+  EXPECT_NE(json.find("k3: held at the given value: the data would constrain it to"), std::string::npos)
+      << json;
+  for (const IntrinsicsReport& ir : r_refined.report.intrinsics) {
+    std::printf("%s posterior:", ir.camera.c_str());
+    for (size_t k = 0; k < ir.names.size(); ++k)
+      std::printf(" %s %.4g", ir.names[k].c_str(), ir.posterior_sigma[k]);
+    std::printf("\n");
+  }
+  // 14.9 mm with the wrong intrinsics; refined about 0.3 mm (2.2x the session with exact intrinsics
+  // given and held: the intrinsics' own noise, 0.05 % in focal, moves a camera 1 m away by 0.5 mm).
+  EXPECT_LT(10.0 * cam_err(r_refined), cam_err(r_wrong));
+  EXPECT_LT(cam_err(r_refined), 3.0 * cam_err(r_exact));
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// Three of five cameras with clocks off by -20 .. +20 ms at 30 fps (the object up to ~1 m/s): the
+// offsets are recovered (against the reference camera's clock) and the map is as good as synchronised.
+TEST(MapperSelfCal, ClockOffsetsAreRecovered) {
+  SelfCalSession session;
+  session.speed = 6.0;
+  const std::map<std::string, int64_t> offsets = {{"cam1", -20000}, {"cam2", 12000}, {"cam4", 20000}};
+  const SelfCalRun synced = SimulateSelfCal(session);
+  const SelfCalRun late = SimulateSelfCal(session, offsets);
+  std::printf("object speed up to %.2f m/s\n", late.max_speed_m_s);
+  MapperOptions options = SelfCalOptions(late.truth);
+  const MapResult r_synced = MapDetections(synced.detections, options);
+  // Offsets ignored: frames assembled over +-25 ms (the default 2 ms joins no camera to another).
+  MapperOptions wide = options;
+  wide.sync_tolerance_us = 25000;
+  const MapResult r_late = MapDetections(late.detections, wide);
+  options.estimate_time_offsets = true;
+  const MapResult r_estimated = MapDetections(late.detections, options);
+  auto errors = [&](const MapResult& r) { return sim::Evaluate(late.truth, &r.map, &r.trajectory); };
+  const sim::EvalResult e_synced = errors(r_synced), e_late = errors(r_late), e_est = errors(r_estimated);
+  std::printf("camera error mean mm: synced %.3f, offsets ignored %.3f, estimated %.3f\n",
+              e_synced.camera_position_mm.mean, e_late.camera_position_mm.mean,
+              e_est.camera_position_mm.mean);
+  std::printf("object error mean mm: synced %.3f, offsets ignored %.3f, estimated %.3f; time %.2f / %.2f s\n",
+              e_synced.object_translation_mm.mean, e_late.object_translation_mm.mean,
+              e_est.object_translation_mm.mean, r_synced.report.total_seconds,
+              r_estimated.report.total_seconds);
+  const std::string reference = r_estimated.map.reference_camera;
+  const double reference_true = offsets.count(reference) ? offsets.at(reference) : 0.0;
+  for (const MapCamera& c : r_estimated.map.cameras) {
+    const double truth = (offsets.count(c.name) ? offsets.at(c.name) : 0.0) - reference_true;
+    std::printf("%s: offset %.1f us (true %.1f)\n", c.name.c_str(), c.time_offset_us, truth);
+    EXPECT_NEAR(c.time_offset_us, truth, 500.0) << c.name;
+  }
+  EXPECT_LT(e_est.camera_position_mm.mean, 1.5 * e_synced.camera_position_mm.mean);
+  EXPECT_LT(e_est.object_translation_mm.mean, 1.5 * e_synced.object_translation_mm.mean);
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// The analytic Jacobians of SelfCalibrationCost (poses, intrinsics, time offset) against central
+// differences, for radtan and fisheye.
+TEST(MapperSelfCal, SelfCalibrationCostJacobiansMatchNumeric) {
+  for (DistortionModel model : {DistortionModel::kRadTan, DistortionModel::kFisheye}) {
+    CameraModel camera;
+    camera.width = 640;
+    camera.height = 480;
+    camera.fx = 520;
+    camera.fy = 515;
+    camera.cx = 322;
+    camera.cy = 241;
+    camera.model = model;
+    camera.distortion = model == DistortionModel::kRadTan
+                            ? std::vector<double>{-0.1, 0.03, 0.001, -0.002, 0.01}
+                            : std::vector<double>{0.05, -0.01, 0.002, -0.001};
+    std::mt19937_64 rng(3);
+    PoseBlock cam = BlockFromRigid(
+        PerturbLeft(Rigid3::Identity(), (Vector6d() << 0.1, -0.05, 0.02, 0.05, -0.02, 0.1).finished()));
+    PoseBlock marker = BlockFromRigid(
+        PerturbLeft(Rigid3::Identity(), (Vector6d() << 0.3, 0.2, -0.1, 0.02, 0.01, 0.0).finished()));
+    Rigid3 frame_pose = Rigid3::Identity();
+    frame_pose.translation() = Eigen::Vector3d(0.05, -0.03, 1.0);
+    PoseBlock frame = BlockFromRigid(frame_pose);
+    std::vector<double> intrinsics = IntrinsicsVector(camera);
+    double offset = 0.004;
+    const double velocity[6] = {0.5, -1.0, 0.3, 0.8, -0.4, 0.2};
+    ObservationTime time{0.01, velocity};
+    MarkerCorners2d observed;
+    for (int k = 0; k < 4; ++k) observed[k] = Eigen::Vector2d(300 + 10 * k, 240 - 5 * k);
+    SelfCalibrationCost cost(&camera, observed, 0.04, true, &time);
+    const int n = static_cast<int>(intrinsics.size());
+    std::vector<double*> params = {cam.data(), marker.data(), frame.data(), intrinsics.data(), &offset};
+    std::vector<std::vector<double>> jac = {std::vector<double>(8 * 7), std::vector<double>(8 * 7),
+                                            std::vector<double>(8 * 7), std::vector<double>(8 * n),
+                                            std::vector<double>(8)};
+    std::vector<double*> jp = {jac[0].data(), jac[1].data(), jac[2].data(), jac[3].data(), jac[4].data()};
+    double r0[8];
+    ASSERT_TRUE(cost.Evaluate(params.data(), r0, jp.data()));
+    LeftPoseManifold manifold;
+    const int sizes[5] = {6, 6, 6, n, 1};
+    for (int b = 0; b < 5; ++b)
+      for (int i = 0; i < sizes[b]; ++i) {
+        double rp[8], rm[8];
+        const double h = b < 3 ? 1e-6 : (b == 3 ? 1e-6 * std::max(1.0, std::abs(intrinsics[i])) : 1e-7);
+        auto shifted = [&](double step, double* r) {
+          std::vector<double> saved(params[b], params[b] + (b < 3 ? 7 : sizes[b]));
+          if (b < 3) {
+            double delta[6] = {0, 0, 0, 0, 0, 0};
+            delta[i] = step;
+            manifold.Plus(saved.data(), delta, params[b]);
+          } else {
+            params[b][i] += step;
+          }
+          ASSERT_TRUE(cost.Evaluate(params.data(), r, nullptr));
+          std::copy(saved.begin(), saved.end(), params[b]);
+        };
+        shifted(h, rp);
+        shifted(-h, rm);
+        const int cols = b < 3 ? 7 : sizes[b];
+        for (int r = 0; r < 8; ++r)
+          EXPECT_NEAR(jac[b][r * cols + i], (rp[r] - rm[r]) / (2 * h),
+                      1e-4 * std::max(1.0, std::abs(jac[b][r * cols + i])))
+              << DistortionModelName(model) << " block " << b << " entry " << i << " residual " << r;
+      }
+  }
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// A camera whose clock reads 8 ms late (utime = capture + 8 ms) sees, at each frame, the object where
+// the reference camera saw it: its offset comes out as +8 ms (true capture time = utime - offset).
+TEST(MapperSelfCal, TimeOffsetSignOnAMovingMarker) {
+  CameraModel camera;
+  camera.width = 640;
+  camera.height = 480;
+  camera.fx = camera.fy = 500;
+  camera.cx = 320;
+  camera.cy = 240;
+  BundleProblem bp;
+  bp.models = {&camera, &camera};
+  Rigid3 cam1_from_rig = Rigid3::Identity();
+  cam1_from_rig.translation() = Eigen::Vector3d(0.2, 0, 0);
+  bp.cam_from_rig = {BlockFromRigid(Rigid3::Identity()), BlockFromRigid(cam1_from_rig)};
+  bp.camera_fixed = {1, 1};
+  bp.object_from_marker = {BlockFromRigid(Rigid3::Identity())};
+  bp.marker_fixed = {1};
+  const double side = 0.1;
+  for (int f = 0; f < 30; ++f) {
+    const double t = f / 30.0;
+    Rigid3 pose = Rigid3::Identity();
+    pose.translation() = Eigen::Vector3d(0.3 * std::sin(2 * t), 0.2 * std::cos(3 * t), 1.0 + 0.1 * t);
+    pose.linear() = RotationFromVector(Eigen::Vector3d(0.3 * t, -0.2 * t, 0.5 * t));
+    bp.rig_from_object.push_back(BlockFromRigid(pose));
+    bp.frame_time_s.push_back(t);
+    for (int c = 0; c < 2; ++c) {
+      BundleObservation o;
+      o.camera = c;
+      o.frame = f;
+      o.side = side;
+      o.time_s = c == 1 ? 0.008 : 0.0;
+      const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[c].data()) * pose;
+      const MarkerCorners3d corners = MarkerCornersInMarker(side);
+      for (int k = 0; k < 4; ++k) o.corners[k] = camera.Project(cam_from_marker * corners[k]);
+      bp.observations.push_back(o);
+    }
+  }
+  bp.active.assign(bp.observations.size(), 1);
+  bp.time_offset_s = {0.0, 0.0};
+  bp.time_offset_fixed = {1, 0};
+  UpdateFrameVelocities(0.1, &bp);
+  BundleSettings settings;
+  settings.paper_stop = false;
+  const BundleSummary summary = SolveBundle(&bp, settings);
+  EXPECT_TRUE(summary.usable);
+  EXPECT_NEAR(bp.time_offset_s[1], 0.008, 2e-4);
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// A focal length given 15 % off (a datasheet's field of view): the initialisation copes, the refinement
+// recovers it (prior sigma 20 %: a rough focal length is declared as such).
+TEST(MapperSelfCal, FocalFifteenPercentOffIsRecovered) {
+  SelfCalSession session;
+  SelfCalRun run = SimulateSelfCal(session);
+  testing::PerturbIntrinsics("cam2", {0.15, 0, 0, 0}, &run);
+  testing::PerturbIntrinsics("cam4", {-0.15, 0, 0, 0}, &run);
+  MapperOptions options = SelfCalOptions(run.truth);
+  options.intrinsics.refine = IntrinsicsRefinement::kFocal;
+  options.intrinsics.sigma.focal_rel = 0.2;
+  const MapResult result = MapDetections(run.detections, options);
+  for (const std::string name : {"cam2", "cam4"}) {
+    const CameraModel& t = run.truth.FindCamera(name)->model;
+    const CameraModel& m = result.map.FindCamera(name)->model;
+    std::printf("%s: fx %+.4f %% fy %+.4f %%\n", name.c_str(), 100 * (m.fx / t.fx - 1),
+                100 * (m.fy / t.fy - 1));
+    EXPECT_NEAR(m.fx / t.fx, 1.0, 0.003) << name;
+    EXPECT_NEAR(m.fy / t.fy, 1.0, 0.003) << name;
+  }
+  const sim::EvalResult e = sim::Evaluate(run.truth, &result.map, &result.trajectory);
+  std::printf("camera error %.3f mm, rms %.3f px\n", e.camera_position_mm.mean, result.map.rms_px);
+  EXPECT_LT(e.camera_position_mm.mean, 1.0);
+}
+
+}  // namespace
+}  // namespace mcmt
