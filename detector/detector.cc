@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/dictionary.h"
+#include "detector/side_model.h"
 
 namespace mcmt {
 namespace {
@@ -170,83 +171,6 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
   return true;
 }
 
-// Least-squares fit of the mean edge profile m(u) (u: signed distance from the fitted line, outward)
-// with a blurred step and a second blurred step for the far side of the quiet zone:
-//   f(u) = D + (W - D) Phi((u - e) / sigma) + (B - W) Phi((u - e - q) / sigma)
-// (D: border, W: quiet zone, B: beyond it at distance q; sigma: blur incl. the pixel footprint).
-// Returns the edge offset e (outward), or NaN when the fit fails. The crossing estimate is biased when
-// the quiet zone is narrow and blurred; e is not.
-double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m, double cell,
-                      double* sigma) {
-  const int n = static_cast<int>(u.size());
-  if (n < 8) return NAN;
-  double p[6];  // e, sigma, D, W, B, q
-  p[0] = 0.0;
-  p[1] = 0.6;
-  p[2] = m.front();
-  p[4] = m.back();
-  p[3] = m.front();
-  for (int j = 0; j < n; ++j)
-    if (u[j] > 0 && u[j] < cell && std::abs(m[j] - m.front()) > std::abs(p[3] - m.front())) p[3] = m[j];
-  p[5] = cell;
-  auto cost_of = [&](const double* q, double* residuals) {
-    double cost = 0;
-    for (int j = 0; j < n; ++j) {
-      const double z1 = (u[j] - q[0]) / q[1], z2 = (u[j] - q[0] - q[5]) / q[1];
-      const double f = q[2] + (q[3] - q[2]) * 0.5 * std::erfc(-z1 * M_SQRT1_2) +
-                       (q[4] - q[3]) * 0.5 * std::erfc(-z2 * M_SQRT1_2);
-      const double r = f - m[j];
-      if (residuals) residuals[j] = r;
-      cost += r * r;
-    }
-    return cost;
-  };
-  std::vector<double> r(n), trial(n);
-  double cost = cost_of(p, r.data());
-  double lambda = 1e-3;
-  for (int iter = 0; iter < 15; ++iter) {
-    Eigen::Matrix<double, 6, 6> jtj = Eigen::Matrix<double, 6, 6>::Zero();
-    Eigen::Matrix<double, 6, 1> jtr = Eigen::Matrix<double, 6, 1>::Zero();
-    for (int j = 0; j < n; ++j) {
-      const double z1 = (u[j] - p[0]) / p[1], z2 = (u[j] - p[0] - p[5]) / p[1];
-      const double phi1 = std::exp(-0.5 * z1 * z1) * 0.3989422804014327;
-      const double phi2 = std::exp(-0.5 * z2 * z2) * 0.3989422804014327;
-      const double c1 = 0.5 * std::erfc(-z1 * M_SQRT1_2), c2 = 0.5 * std::erfc(-z2 * M_SQRT1_2);
-      Eigen::Matrix<double, 6, 1> g;
-      g << -((p[3] - p[2]) * phi1 + (p[4] - p[3]) * phi2) / p[1],
-          -((p[3] - p[2]) * phi1 * z1 + (p[4] - p[3]) * phi2 * z2) / p[1], 1.0 - c1, c1 - c2, c2,
-          -(p[4] - p[3]) * phi2 / p[1];
-      jtj += g * g.transpose();
-      jtr += g * r[j];
-    }
-    bool improved = false, converged = false;
-    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-      Eigen::Matrix<double, 6, 6> a = jtj;
-      for (int k = 0; k < 6; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
-      const Eigen::Matrix<double, 6, 1> step = a.ldlt().solve(-jtr);
-      double q[6];
-      for (int k = 0; k < 6; ++k) q[k] = p[k] + step(k);
-      q[1] = std::clamp(q[1], 0.2, 3.0);
-      q[5] = std::clamp(q[5], 0.4 * cell, 3.0 * cell);
-      const double c = cost_of(q, trial.data());
-      if (c < cost) {
-        converged = std::abs(q[0] - p[0]) < 2e-4 && std::abs(q[1] - p[1]) < 2e-3 && cost - c < 1e-6 * cost;
-        std::copy(q, q + 6, p);
-        cost = c;
-        r.swap(trial);
-        lambda = std::max(1e-7, lambda * 0.3);
-        improved = true;
-      } else {
-        lambda *= 10;
-      }
-    }
-    if (!improved || converged) break;
-  }
-  if (!std::isfinite(p[0]) || std::abs(p[0]) > 0.75 || std::abs(p[3] - p[2]) < 5.0) return NAN;
-  *sigma = p[1];
-  return p[0];
-}
-
 // +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
 // brighter (inverted), 0 when unclear. Samples the border cells and the ring of cells around the quad.
 int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
@@ -272,6 +196,136 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
 }  // namespace
 
 namespace {
+// The cell at depth `row` (0: the border) of column `col` (cells from the side's start corner) of side
+// `side` (as in CleanNeighbour): 1 when it differs from the border's colour.
+int InnerCell(const cv::Mat& bits, int cells, int side, int col, int row) {
+  switch (side) {
+    case 0:
+      return GridCell(bits, cells, row, col);
+    case 1:
+      return GridCell(bits, cells, col, cells - 1 - row);
+    case 2:
+      return GridCell(bits, cells, cells - 1 - row, cells - 1 - col);
+    default:
+      return GridCell(bits, cells, cells - 1 - col, row);
+  }
+}
+
+inline double Phi(double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); }
+
+// Unit-square coordinates of the point `along` the side `side` (0..1 from its start corner) at depth
+// `depth` (inward, in units of the marker's side).
+cv::Vec3d UnitPoint(int side, double along, double depth) {
+  switch (side) {
+    case 0:
+      return {along, depth, 1.0};
+    case 1:
+      return {1.0 - depth, along, 1.0};
+    case 2:
+      return {1.0 - along, 1.0 - depth, 1.0};
+    default:
+      return {depth, 1.0 - along, 1.0};
+  }
+}
+
+// The side model's offset of side `side` (px, outward from `line`), or NaN. The rays (origins and
+// outward normals in raw pixels, ideal origins) are those of the crossing pass; only those in the
+// middle of a code column are used, grouped by the column's code rows.
+double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
+               const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
+               const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
+               const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
+               double sigma_along, SideProfiles* profiles, double* sigma) {
+  if (bits.empty()) return NAN;
+  struct Ray {
+    int index;
+    double delta;  // offset from the ray's origin to the line along its normal, px
+    std::array<uint8_t, SideProfiles::kRows> pattern;
+    std::array<double, SideProfiles::kRows> depths, other;
+  };
+  thread_local std::vector<Ray> rays;
+  rays.clear();
+  double depth_sum = 0;
+  for (size_t i = 0; i < valid.size(); ++i) {
+    if (!valid[i]) continue;
+    const Eigen::Vector2d& q = ideal_origins[i];
+    const cv::Vec3d m = unit_from_ideal * cv::Vec3d(q.x(), q.y(), 1.0);
+    const double ux = m[0] / m[2], uy = m[1] / m[2];
+    const double along = side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+    const double a = along * cells;
+    const int col = static_cast<int>(std::floor(a));
+    const double frac = a - col;
+    // Away from the corners (where the perpendicular side's outer edge is near) and the middle of a
+    // column (but blur along the side is modelled: `other` below).
+    if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
+    if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
+    const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
+    const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
+    Ray ray{static_cast<int>(i), (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
+    // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
+    // right angles, so the ray drifts across columns), and which column it is in within each row.
+    const Eigen::Vector2d dir = (map.ToIdeal(origins[i] - normals[i]) - q).normalized();  // inward
+    double t[SideProfiles::kRows + 2];
+    t[0] = 0.0;
+    for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
+      const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, 0.0, static_cast<double>(r) / cells);
+      const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, 1.0, static_cast<double>(r) / cells);
+      const Eigen::Vector2d a0(p0[0] / p0[2], p0[1] / p0[2]), a1(p1[0] / p1[2], p1[1] / p1[2]);
+      const Eigen::Vector2d nrm(a1.y() - a0.y(), a0.x() - a1.x());
+      const double den = nrm.dot(dir);
+      t[r] = std::abs(den) > 1e-12 ? nrm.dot(a0 - q) / den : NAN;
+    }
+    bool ok = true;
+    for (int r = 1; r <= SideProfiles::kRows && ok; ++r) {
+      ok = std::isfinite(t[r]) && t[r] > t[r - 1];
+      if (!ok) break;
+      // Depth of the boundary between rows r-1 and r, px inward from the ray's origin (raw pixels).
+      ray.depths[r - 1] = (origins[i] - map.ToImage(q + t[r] * dir)).dot(normals[i]);
+      // The row's column at the middle of its stretch of the ray, and the part of the row's level that
+      // comes from cells of the other colour under blur along the side (Gaussian of sigma_along px).
+      const Eigen::Vector2d mid = q + 0.5 * (t[r] + t[r + 1]) * dir;
+      const cv::Vec3d mu = unit_from_ideal * cv::Vec3d(mid.x(), mid.y(), 1.0);
+      const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
+      const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
+      const int c = static_cast<int>(std::floor(at));
+      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? InnerCell(bits, cells, side, c, r) : 0);
+      const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
+      const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
+      const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
+      const double scale = column_px / sigma_along;
+      double other = 0;
+      for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
+        if (r < cells && InnerCell(bits, cells, side, k, r)) other += Phi((k + 1 - at) * scale) - Phi((k - at) * scale);
+      ray.other[r - 1] = other;
+    }
+    if (!ok) continue;
+    depth_sum += ray.depths[0];
+    rays.push_back(ray);
+  }
+  if (rays.size() < 4) return NAN;
+  const double cell = depth_sum / rays.size();
+  if (!(cell > 0.5)) return NAN;
+  const double du = std::clamp(cell / 5.0, 0.1, 0.5);
+  const double u0 = -(SideProfiles::kRows - 0.3) * cell, u1 = 1.6 * cell + 1.0;
+  const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
+  profiles->Reset(u0, du, bins, cell);
+  for (size_t r = 0; r < rays.size(); ++r) {
+    const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
+    const Eigen::Vector2d& o = origins[rays[r].index];
+    const Eigen::Vector2d& nrm = normals[rays[r].index];
+    for (int j = 0; j < bins; ++j) {
+      const double s = rays[r].delta + u0 + j * du;
+      float v;
+      if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+    }
+  }
+  SideFit fit;
+  if (!FitSideProfiles(*profiles, &fit)) return NAN;
+  *sigma = fit.sigma;
+  return fit.e;
+}
+
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width) {
   double sigma_sum = 0;
@@ -289,16 +343,26 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
   std::vector<float> profiles, inside, outside;
   std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
-  std::vector<double> grid_u, grid_sum, grid_mean;
-  std::vector<int> grid_count;
   std::vector<char> clean;
   // Passes of crossing-based line fits until the corners move less than 0.01 px (at least `passes`,
-  // at most `passes` + 4), then a last pass that also fits the blurred-step model to each side.
-  bool final_pass = false, converged = false;
+  // at most `passes` + 4): they find each side's direction and bring the profiles onto the edges. Then
+  // kModelPasses passes that also fit the side model (detector/side_model.h) to each side: its offset
+  // replaces the crossings' (the second one with the cell depths of the first one's corners).
+  constexpr int kModelPasses = 2;
+  bool converged = false;
+  int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
-  for (int pass = 0; !final_pass; ++pass) {
-    final_pass = pass + 1 >= max_passes || (pass + 1 >= std::max(1, passes) && converged);
+  SideProfiles side_profiles;
+  std::array<double, 4> side_sigma = {0.8, 0.8, 0.8, 0.8};  // each side's fitted blur, px
+  for (int pass = 0;; ++pass) {
+    const bool crossings_done = pass >= max_passes || (pass >= std::max(1, passes) && converged);
+    if (crossings_done && (!model_fit || model_passes >= kModelPasses)) break;
+    const bool model_pass = crossings_done && model_fit;
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
+    const cv::Matx33d ideal_from_unit = QuadFromUnitSquare(
+        {cv::Point2d(ideal[0].x(), ideal[0].y()), cv::Point2d(ideal[1].x(), ideal[1].y()),
+         cv::Point2d(ideal[2].x(), ideal[2].y()), cv::Point2d(ideal[3].x(), ideal[3].y())});
+    const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int k = 0; k < 4; ++k) centre += img[k] / 4.0;
     std::array<Line, 4> lines;
@@ -385,45 +449,18 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
       }
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
-      if (final_pass && model_fit) {
-        // Mean profile across the fitted line (outward u), then the blurred-step model's offset.
-        Line& line = lines[side];
-        Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
-        for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
-        const double outward = line.n.dot(ideal_centre) < line.c ? 1.0 : -1.0;
-        const double du = std::clamp(cell / 8.0, 0.08, 0.5);
-        const int lo = -static_cast<int>(std::ceil(1.0 * cell / du)),
-                  hi = static_cast<int>(std::ceil(1.6 * cell / du));
-        const int bins = hi - lo + 1;
-        grid_sum.assign(bins, 0.0);
-        grid_count.assign(bins, 0);
-        for (int i = 0; i < n; ++i) {
-          if (!valid[i] || (use_clean && !clean[i])) continue;
-          const Eigen::Vector2d& q = ideal_origins[i];
-          const Eigen::Vector2d on_line = q - (line.n.dot(q) - line.c) * line.n;
-          const double delta = (map.ToImage(on_line) - origins[i]).dot(normals[i]);
-          for (int j = lo; j <= hi; ++j) {
-            const double s = delta + j * du;
-            float v;
-            if (!Sample(gray, origins[i].x() + s * normals[i].x(), origins[i].y() + s * normals[i].y(), &v))
-              continue;
-            grid_sum[j - lo] += v;
-            ++grid_count[j - lo];
-          }
-        }
-        grid_u.clear();
-        grid_mean.clear();
-        for (int j = lo; j <= hi; ++j) {
-          if (grid_count[j - lo] == 0) continue;
-          grid_u.push_back(j * du);
-          grid_mean.push_back(grid_sum[j - lo] / grid_count[j - lo]);
-        }
+      if (model_pass) {
         double sigma = NAN;
-        const double e = FitEdgeProfile(grid_u, grid_mean, cell, &sigma);
+        const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
+                                 valid, origins, ideal_origins, normals, side_sigma[side], &side_profiles,
+                                 &sigma);
         if (std::isfinite(e)) {
-          line.c += outward * e;
-          sigma_sum += sigma;
-          ++sigma_count;
+          side_sigma[side] = sigma;
+          Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
+          for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
+          const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
+          lines[side].c += outward * e;
+          if (model_passes + 1 == kModelPasses) sigma_sum += sigma, ++sigma_count;
         }
       }
     }
@@ -437,6 +474,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - img[k]).norm());
     converged = moved < 0.01;
     img = next;
+    if (model_pass) ++model_passes;
   }
   const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {
