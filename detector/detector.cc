@@ -235,7 +235,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, SideProfiles* profiles, double* sigma) {
+               double sigma_along, bool fit_gamma, SideProfiles* profiles, SideFit* fit) {
   if (bits.empty()) return NAN;
   struct Ray {
     int index;
@@ -246,6 +246,15 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   thread_local std::vector<Ray> rays;
   rays.clear();
   double depth_sum = 0;
+  // The boundaries between rows r-1 and r (r = 1..kRows + 1) as lines in ideal pixels: a point, a normal.
+  Eigen::Vector2d row_point[SideProfiles::kRows + 2], row_normal[SideProfiles::kRows + 2];
+  for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
+    const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, 0.0, static_cast<double>(r) / cells);
+    const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, 1.0, static_cast<double>(r) / cells);
+    row_point[r] = Eigen::Vector2d(p0[0] / p0[2], p0[1] / p0[2]);
+    const Eigen::Vector2d a1(p1[0] / p1[2], p1[1] / p1[2]);
+    row_normal[r] = Eigen::Vector2d(a1.y() - row_point[r].y(), row_point[r].x() - a1.x());
+  }
   for (size_t i = 0; i < valid.size(); ++i) {
     if (!valid[i]) continue;
     const Eigen::Vector2d& q = ideal_origins[i];
@@ -269,12 +278,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     double t[SideProfiles::kRows + 2];
     t[0] = 0.0;
     for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
-      const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, 0.0, static_cast<double>(r) / cells);
-      const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, 1.0, static_cast<double>(r) / cells);
-      const Eigen::Vector2d a0(p0[0] / p0[2], p0[1] / p0[2]), a1(p1[0] / p1[2], p1[1] / p1[2]);
-      const Eigen::Vector2d nrm(a1.y() - a0.y(), a0.x() - a1.x());
-      const double den = nrm.dot(dir);
-      t[r] = std::abs(den) > 1e-12 ? nrm.dot(a0 - q) / den : NAN;
+      const double den = row_normal[r].dot(dir);
+      t[r] = std::abs(den) > 1e-12 ? row_normal[r].dot(row_point[r] - q) / den : NAN;
     }
     bool ok = true;
     for (int r = 1; r <= SideProfiles::kRows && ok; ++r) {
@@ -307,9 +312,10 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   const double cell = depth_sum / rays.size();
   if (!(cell > 0.5)) return NAN;
   const double du = std::clamp(cell / 5.0, 0.1, 0.5);
-  const double u0 = -(SideProfiles::kRows - 0.3) * cell, u1 = 1.6 * cell + 1.0;
+  const double u0 = -(SideProfiles::kRows - 0.4) * cell, u1 = 1.6 * cell + 1.0;
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
   profiles->Reset(u0, du, bins, cell);
+  profiles->fit_gamma = fit_gamma;
   for (size_t r = 0; r < rays.size(); ++r) {
     const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
     const Eigen::Vector2d& o = origins[rays[r].index];
@@ -320,14 +326,19 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
       if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
     }
   }
-  SideFit fit;
-  if (!FitSideProfiles(*profiles, &fit)) return NAN;
-  *sigma = fit.sigma;
-  return fit.e;
+  // A previous pass's fit warm-starts this one (its edge moved to the line it found: e = 0 here).
+  if (fit->warm) fit->e = 0.0;
+  if (!FitSideProfiles(*profiles, fit)) {
+    fit->warm = false;
+    return NAN;
+  }
+  fit->warm = true;
+  return fit->e;
 }
 
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
-                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width) {
+                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
+                bool fit_gamma) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -344,8 +355,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   std::vector<float> profiles, inside, outside;
   std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
   std::vector<char> clean;
-  // Passes of crossing-based line fits until the corners move less than 0.01 px (at least `passes`,
-  // at most `passes` + 4): they find each side's direction and bring the profiles onto the edges. Then
+  // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
+  // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges. Then
   // kModelPasses passes that also fit the side model (detector/side_model.h) to each side: its offset
   // replaces the crossings' (the second one with the cell depths of the first one's corners).
   constexpr int kModelPasses = 2;
@@ -353,9 +364,12 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
   SideProfiles side_profiles;
-  std::array<double, 4> side_sigma = {0.8, 0.8, 0.8, 0.8};  // each side's fitted blur, px
+  std::array<SideFit, 4> side_fits;  // each side's model fit of the previous model pass
   for (int pass = 0;; ++pass) {
-    const bool crossings_done = pass >= max_passes || (pass >= std::max(1, passes) && converged);
+    // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
+    // onto the edges (the model passes fix the offsets, and their crossings the directions).
+    const bool crossings_done =
+        pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
     if (crossings_done && (!model_fit || model_passes >= kModelPasses)) break;
     const bool model_pass = crossings_done && model_fit;
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
@@ -384,8 +398,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
                                               3.0 * first_width)
                                  : std::clamp(0.5 * cell, 0.75, 3.0);
       const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
-      const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.5), 6, 240);
-      const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.2)));
+      const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
+      const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.25)));
       const int m = 2 * steps + 1;
       const double ds = h / steps;
       profiles.assign(static_cast<size_t>(n) * m, 0.f);
@@ -450,12 +464,12 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
       }
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
       if (model_pass) {
-        double sigma = NAN;
+        const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
         const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
-                                 valid, origins, ideal_origins, normals, side_sigma[side], &side_profiles,
-                                 &sigma);
+                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma, &side_profiles,
+                                 &side_fits[side]);
+        const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) {
-          side_sigma[side] = sigma;
           Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
           for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
           const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
@@ -489,11 +503,11 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit,
-                         double* blur_sigma) {
+                         double* blur_sigma, bool fit_gamma) {
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
-  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0) ||
-         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0);
+  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma) ||
+         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -592,7 +606,7 @@ void DetectorOptions::Validate() const {
     fail("perspective_ignored_margin: must be in [0, 0.5)");
   if (full_search_every < 1) fail("full_search_every: must be >= 1");
   if (!(sharp_smoothing >= 0 && sharp_smoothing <= 3)) fail("sharp_smoothing: must be in [0, 3]");
-  if (!(gamma >= 0.2 && gamma <= 5)) fail("gamma: must be in [0.2, 5]");
+  if (!(gamma == 0 || (gamma >= 0.2 && gamma <= 5))) fail("gamma: must be 0 (estimated) or in [0.2, 5]");
 }
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
@@ -813,7 +827,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       // regions: sqrt(sigma^2 - smoothing^2)), with a raw refinement every 16th marker.
       const bool smooth =
           options_.sharp_smoothing > 0 && blur_estimate_ < 0.55 && (++markers_refined_ % 16) != 0;
-      const bool linearise = options_.gamma != 1.0;
+      const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
       const cv::Mat* source = &gray;
       if (smooth || linearise) {
         double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
@@ -856,7 +870,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
-                                         &r.corners, options_.edge_model, &sigma);
+                                         &r.corners, options_.edge_model, &sigma, options_.gamma == 0);
       if (refined && !reads(r.corners)) refined = false, slid = true;
       if (!refined) r.corners = candidate;
       if (!refined && options_.fast) {

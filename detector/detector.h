@@ -32,16 +32,16 @@ struct DetectorOptions {
   // CORNER_REFINE_CONTOUR.
   std::string corner_refinement = "edges";
   int subpix_window = 2;  // half window of "subpix", pixels
-  int edge_passes = 3;    // refinement passes of "edges"
+  int edge_passes = 1;    // crossing passes of "edges" before its two side-model passes
   // "edges": correct each side's offset with a blurred-step model fitted to its mean profile (removes
   // the bias of narrow quiet zones under blur).
   bool edge_model = true;
   // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
   // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
-  // "edges": the camera's transfer curve. Edges are located on intensities linearised as
-  // 255 * (v / 255)^gamma: 1 for linear images (mcmt-sim renders), about 2.2 for typical video cameras
-  // (sRGB-like encoding), where the encoded half-way crossing of a blurred edge sits on its dark side.
+  // "edges": the camera's transfer curve. 0: estimated with each side's model (the model's
+  // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
+  // is linearised as 255 * (v / 255)^gamma first (1, default: linear images).
   double gamma = 1.0;
 
   // OpenCV candidate search.
@@ -92,7 +92,7 @@ struct DetectorStats {
 // null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
-                         double* blur_sigma = nullptr);
+                         double* blur_sigma = nullptr, bool fit_gamma = false);
 
 class MarkerDetector {
  public:

@@ -23,9 +23,12 @@
 namespace mcmt {
 
 struct SideProfiles {
-  static constexpr int kRows = 4;  // code rows modelled inside the border
+  static constexpr int kRows = 2;  // code rows modelled inside the border
   double u0 = 0, du = 0.25;        // bin j is at u = u0 + j * du
   int bins = 0;
+  // Encoded images (gamma unknown): the model's linear values are encoded as 255 (f / 255)^(1 / gamma)
+  // with gamma fitted too; false: the profiles are linear already.
+  bool fit_gamma = false;
   double cell = 0;  // mean depth of one cell across this side, px
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
@@ -52,6 +55,11 @@ struct SideFit {
   double e = 0;       // outer edge, px outward from the line the profiles were sampled about
   double sigma = 0;   // blur, px
   double contrast = 0;  // |L1 - L0|
+  double gamma = 1;     // fitted encoding gamma (1 unless fit_gamma)
+  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
+  // profiles' line as given in `e`) instead of from the profiles.
+  std::array<double, 8> params{};
+  bool warm = false;
 };
 
 // Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
