@@ -39,10 +39,10 @@ struct DetectorOptions {
   // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
   // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
-  // "edges": the camera's transfer curve. 0: estimated with each side's model (the model's
+  // "edges": the camera's transfer curve. 0 (default): estimated with each side's model (the model's
   // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
-  // is linearised as 255 * (v / 255)^gamma first (1, default: linear images).
-  double gamma = 1.0;
+  // is linearised as 255 * (v / 255)^gamma first (1: linear images).
+  double gamma = 0.0;
 
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)

@@ -50,7 +50,7 @@ inline std::vector<Imaging> ImagingCatalogue() {
   c.push_back(base);
   Imaging x = base;
   x.name = "no margin, grey surface", x.margin_cells = 0, x.surface = 0.35, c.push_back(x);
-  x = base, x.name = "no margin, black tool", x.margin_cells = 0, x.surface = 0.06, c.push_back(x);
+  x = base, x.name = "half-cell margin, black tool", x.margin_cells = 0.5, x.surface = 0.06, c.push_back(x);
   x = base, x.name = "half-cell margin, wood", x.margin_cells = 0.5, x.surface = 0.45;
   x.surface_texture = 0.25, c.push_back(x);
   x = base, x.name = "two-cell margin, white", x.margin_cells = 2, x.surface = 0.8, c.push_back(x);
