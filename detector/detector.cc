@@ -211,7 +211,11 @@ int InnerCell(const cv::Mat& bits, int cells, int side, int col, int row) {
   }
 }
 
-inline double Phi(double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); }
+inline double Phi(double z) {
+  double big, small;
+  PhiAndDensity(z, &big, &small);
+  return big;
+}
 
 // Unit-square coordinates of the point `along` the side `side` (0..1 from its start corner) at depth
 // `depth` (inward, in units of the marker's side).
@@ -311,7 +315,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   if (rays.size() < 4) return NAN;
   const double cell = depth_sum / rays.size();
   if (!(cell > 0.5)) return NAN;
-  const double du = std::clamp(cell / 5.0, 0.1, 0.5);
+  const double du = std::clamp(cell / 4.0, 0.1, 0.5);
   const double u0 = -(SideProfiles::kRows - 0.4) * cell, u1 = 1.6 * cell + 1.0;
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
   profiles->Reset(u0, du, bins, cell);
@@ -357,10 +361,12 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   std::vector<char> clean;
   // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
   // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges. Then
-  // kModelPasses passes that also fit the side model (detector/side_model.h) to each side: its offset
-  // replaces the crossings' (the second one with the cell depths of the first one's corners).
-  constexpr int kModelPasses = 2;
-  bool converged = false;
+  // passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
+  // crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
+  // until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
+  // (the candidate, the previous frame) must not change where the corners end up.
+  constexpr int kMinModelPasses = 2, kMaxModelPasses = 4;
+  bool converged = false, model_converged = false;
   int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
   SideProfiles side_profiles;
@@ -370,7 +376,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     // onto the edges (the model passes fix the offsets, and their crossings the directions).
     const bool crossings_done =
         pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
-    if (crossings_done && (!model_fit || model_passes >= kModelPasses)) break;
+    if (crossings_done && (!model_fit || model_converged || model_passes >= kMaxModelPasses)) break;
+    if (crossings_done) sigma_sum = 0, sigma_count = 0;  // the last model pass's blur is reported
     const bool model_pass = crossings_done && model_fit;
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
     const cv::Matx33d ideal_from_unit = QuadFromUnitSquare(
@@ -398,8 +405,12 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
                                               3.0 * first_width)
                                  : std::clamp(0.5 * cell, 0.75, 3.0);
       const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
-      const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
-      const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.25)));
+      // Model passes sample a fixed number of rays and steps (4 per cell, 5 per half-profile): their
+      // sampling then moves continuously with the estimate, so the passes converge to one place
+      // whatever the start.
+      const int n = model_pass ? 4 * cells
+                               : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
+      const int steps = model_pass ? 5 : std::max(3, static_cast<int>(std::ceil(h / 0.25)));
       const int m = 2 * steps + 1;
       const double ds = h / steps;
       profiles.assign(static_cast<size_t>(n) * m, 0.f);
@@ -474,7 +485,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
           for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
           const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
           lines[side].c += outward * e;
-          if (model_passes + 1 == kModelPasses) sigma_sum += sigma, ++sigma_count;
+          sigma_sum += sigma, ++sigma_count;
         }
       }
     }
@@ -489,6 +500,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     converged = moved < 0.01;
     img = next;
     if (model_pass) ++model_passes;
+    model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
   }
   const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {

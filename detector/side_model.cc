@@ -42,17 +42,6 @@ constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, oute
 constexpr int kRegions = kBoundaries + 1;
 enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
 
-// The standard normal distribution Phi(z) and density phi(z) with one exponential: Abramowitz and
-// Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
-inline void PhiAndDensity(double z, double* big, double* small) {
-  const double e = std::exp(-0.5 * z * z);
-  const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
-  const double tail =
-      0.5 * t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * e;
-  *big = z >= 0 ? 1.0 - tail : tail;
-  *small = 0.3989422804014327 * e;
-}
-
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
 double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kParams, kParams>* jtj,
@@ -66,7 +55,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
   big_phi.resize(static_cast<size_t>(rows_per_group) * n);
   small_phi.resize(big_phi.size());
   zs.resize(big_phi.size());
-  const double inv_sigma = 1.0 / p[kSigma];
+  const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
   auto fill = [&](int row, double bound) {
     for (int j = 0; j < n; ++j) {
       const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
@@ -102,11 +91,12 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
         f += level[k] * indicator[k];
       }
       double scale = 1.0;  // d encoded / d linear
-      if (s.fit_gamma) {
-        const double lin = std::max(f, 0.5) / 255.0, enc = 255.0 * std::pow(lin, 1.0 / p[kGamma]);
-        scale = enc / (p[kGamma] * std::max(f, 0.5));
+      if (s.fit_gamma) {  // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
+        const double clipped = std::max(f, 0.5), log_lin = std::log(clipped * (1.0 / 255.0));
+        const double enc = 255.0 * std::exp(log_lin * inv_gamma);
+        scale = enc * inv_gamma / clipped;
         f = enc;
-          gamma_grad = -enc * std::log(lin) / (p[kGamma] * p[kGamma]);
+        gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
       }
       const double r = f - s.sum[g * n + j] / w;
       cost += w * r * r;
@@ -180,14 +170,18 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
       double q[kParams];
       for (int k = 0; k < kParams; ++k) q[k] = p[k] + step(k);
       q[kSigma] = std::clamp(q[kSigma], 0.15, 4.0);
-      q[kQ] = std::clamp(q[kQ], 0.1 * c, 4.0 * c);
+      q[kQ] = std::clamp(q[kQ], 0.4 * c, 4.0 * c);
       q[kE] = std::clamp(q[kE], -c, c);
       q[kGamma] = s.fit_gamma ? std::clamp(q[kGamma], 0.4, 3.5) : 1.0;
-      const double trial = Evaluate(s, q, nullptr, nullptr);
+      // The trial's normal equations come with its cost: kept when it is accepted.
+      Eigen::Matrix<double, kParams, kParams> trial_jtj;
+      Eigen::Matrix<double, kParams, 1> trial_jtr;
+      const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
       if (trial < cost) {
-        converged = std::abs(q[kE] - p[kE]) < 2e-4 && std::abs(q[kSigma] - p[kSigma]) < 2e-3;
+        converged = std::abs(q[kE] - p[kE]) < 5e-4 && std::abs(q[kSigma] - p[kSigma]) < 5e-3;
         std::copy(q, q + kParams, p);
         cost = trial;
+        jtj = trial_jtj, jtr = trial_jtr;
         lambda = std::max(1e-7, lambda * 0.3);
         improved = true;
       } else {
@@ -195,7 +189,6 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
       }
     }
     if (!improved || converged) break;
-    cost = Evaluate(s, p, &jtj, &jtr);
   }
   const double contrast = std::abs(p[kL1] - p[kL0]);
   if (!std::isfinite(p[kE]) || std::abs(p[kE]) > 0.75 * c || contrast < 5.0) return false;
