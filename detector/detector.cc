@@ -305,7 +305,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
       const double scale = column_px / sigma_along;
       double other = 0;
       for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
-        if (r < cells && InnerCell(bits, cells, side, k, r)) other += Phi((k + 1 - at) * scale) - Phi((k - at) * scale);
+        if (r < cells && InnerCell(bits, cells, side, k, r))
+          other += Phi((k + 1 - at) * scale) - Phi((k - at) * scale);
       ray.other[r - 1] = other;
     }
     if (!ok) continue;
@@ -360,8 +361,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
   std::vector<char> clean;
   // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
-  // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges. Then
-  // passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
+  // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
+  // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
   // crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
   // until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
   // (the candidate, the previous frame) must not change where the corners end up.
@@ -408,8 +409,9 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
       // Model passes sample a fixed number of rays and steps (4 per cell, 5 per half-profile): their
       // sampling then moves continuously with the estimate, so the passes converge to one place
       // whatever the start.
-      const int n = model_pass ? 4 * cells
-                               : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
+      const int n = model_pass
+                        ? 4 * cells
+                        : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
       const int steps = model_pass ? 5 : std::max(3, static_cast<int>(std::ceil(h / 0.25)));
       const int m = 2 * steps + 1;
       const double ds = h / steps;
@@ -477,8 +479,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
       if (model_pass) {
         const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
         const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
-                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma, &side_profiles,
-                                 &side_fits[side]);
+                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma,
+                                 &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) {
           Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
@@ -514,8 +516,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit,
-                         double* blur_sigma, bool fit_gamma) {
+                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
+                         bool fit_gamma) {
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
   return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma) ||

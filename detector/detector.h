@@ -1,15 +1,17 @@
 // Marker detection with unbiased sub-pixel corners.
 //
 // Candidates and ids come from OpenCV's ArUco detector (no corner refinement). The corners are then
-// refined by RefineMarkerCorners(): the marker's outer edge is located to sub-pixel precision at many
-// points along each side (skipping the corners and the places where a bit of the other colour lies
-// next to the border, whose blur would pull the edge), a line is fitted robustly to each side (in
-// undistorted pixels when the camera model is known) and the corners are the intersections of adjacent
-// lines. Two passes: the second samples around the first result, so the window is centred on the edge.
+// refined by RefineMarkerCorners(): a crossing pass locates each side's outer edge at many points and
+// fits a line to each side (in undistorted pixels when the camera model is known); then side-model
+// passes (detector/side_model.h) fit, across each side, blurred steps at the outer edge and at the
+// boundaries between the border and the code rows the decoded marker says are there (edges known on
+// both sides), with the surround's levels and margin, the blur and the gamma fitted, and move each line
+// to the fitted outer edge; the corners are the intersections of adjacent lines. The passes repeat
+// until the corners settle, so the result does not depend on the starting corners.
 //
 // Fast mode (DetectorOptions::fast): after a full-frame search, the next frames are searched only near
 // the markers' last positions, at their last scale; a full search runs every `full_search_every` frames
-// and whenever a marker is lost. Corners are refined the same way in both modes.
+// and whenever a marker is lost. Corners are refined the same way in both modes, to the same place.
 #pragma once
 
 #include <array>

@@ -91,7 +91,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
         f += level[k] * indicator[k];
       }
       double scale = 1.0;  // d encoded / d linear
-      if (s.fit_gamma) {  // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
+      if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
         const double clipped = std::max(f, 0.5), log_lin = std::log(clipped * (1.0 / 255.0));
         const double enc = 255.0 * std::exp(log_lin * inv_gamma);
         scale = enc * inv_gamma / clipped;

@@ -53,8 +53,8 @@ struct SideProfiles {
 };
 
 struct SideFit {
-  double e = 0;       // outer edge, px outward from the line the profiles were sampled about
-  double sigma = 0;   // blur, px
+  double e = 0;         // outer edge, px outward from the line the profiles were sampled about
+  double sigma = 0;     // blur, px
   double contrast = 0;  // |L1 - L0|
   double gamma = 1;     // fitted encoding gamma (1 unless fit_gamma)
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
@@ -63,15 +63,14 @@ struct SideFit {
   bool warm = false;
 };
 
-
-
 // The standard normal distribution Phi(z) and density phi(z) with one exponential: Abramowitz and
 // Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
 inline void PhiAndDensity(double z, double* big, double* small) {
   const double e = std::exp(-0.5 * z * z);
   const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
   const double tail =
-      0.5 * t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * e;
+      0.5 * t *
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * e;
   *big = z >= 0 ? 1.0 - tail : tail;
   *small = 0.3989422804014327 * e;
 }

@@ -14,9 +14,9 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
-#include <random>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 #include <stdexcept>
 
 #include "core/dictionary.h"
@@ -168,7 +168,8 @@ Renderer::Renderer(const SimObject& object, const std::string& dictionary, const
     p.e2 = p.normal.cross(p.e1);
     for (const auto& v : f.vertices) p.outline.emplace_back(p.e1.dot(v - p.origin), p.e2.dot(v - p.origin));
     p.albedo = options.surface_albedo >= 0 ? options.surface_albedo : f.albedo;
-    p.albedo *= 0.114 * options.surface_tint[0] + 0.587 * options.surface_tint[1] + 0.299 * options.surface_tint[2];
+    p.albedo *=
+        0.114 * options.surface_tint[0] + 0.587 * options.surface_tint[1] + 0.299 * options.surface_tint[2];
     impl_->patches.push_back(p);
   }
   for (const SimMarker& m : object.markers) {
@@ -691,12 +692,12 @@ RenderOptions RandomImaging(const RenderOptions& base, int cameras, uint64_t see
 
 std::string DescribeImaging(const RenderOptions& o) {
   char text[512];
-  std::snprintf(text, sizeof(text),
-                "margin %d cells, surface %.2f (grain %.2f), shading %.2f, gradient %.2f, vignetting %.2f, "
-                "blur %.2f px, defocus %.2f px, noise %.1f + shot %.3f/level, gamma %.2f, sharpen %.2f, jpeg %d",
-                o.quiet_zone_cells, o.surface_albedo, o.surface_texture, o.shading, o.lighting_gradient,
-                o.vignetting, o.blur_sigma, o.defocus_radius, o.noise_sigma, o.shot_noise, o.gamma, o.sharpen,
-                o.jpeg_quality);
+  std::snprintf(
+      text, sizeof(text),
+      "margin %d cells, surface %.2f (grain %.2f), shading %.2f, gradient %.2f, vignetting %.2f, "
+      "blur %.2f px, defocus %.2f px, noise %.1f + shot %.3f/level, gamma %.2f, sharpen %.2f, jpeg %d",
+      o.quiet_zone_cells, o.surface_albedo, o.surface_texture, o.shading, o.lighting_gradient, o.vignetting,
+      o.blur_sigma, o.defocus_radius, o.noise_sigma, o.shot_noise, o.gamma, o.sharpen, o.jpeg_quality);
   return text;
 }
 

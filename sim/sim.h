@@ -215,8 +215,9 @@ struct RenderOptions {
 
 // `--imaging random`: a different imaging condition per camera drawn from `seed`, over `base`: per
 // session the print's margin (0-2 cells), the surface (reflectance 0.05-0.9, at least 0.3 without a
-// margin; tint, grain) and the faces' shading; per camera the light gradient, vignetting, Gaussian or defocus blur, noise, gamma,
-// sharpening and JPEG quality. Deterministic for a seed. `summary` (optional) gets one line per camera.
+// margin; tint, grain) and the faces' shading; per camera the light gradient, vignetting, Gaussian or defocus
+// blur, noise, gamma, sharpening and JPEG quality. Deterministic for a seed. `summary` (optional) gets one
+// line per camera.
 RenderOptions RandomImaging(const RenderOptions& base, int cameras, uint64_t seed,
                             std::vector<std::string>* summary = nullptr);
 // One line describing a camera's imaging (units included).

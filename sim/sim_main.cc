@@ -93,7 +93,8 @@ int Main(int argc, char** argv) {
                  "the imaging options below are then ignored)");
   args.AddDouble("surface-albedo", &surface_albedo,
                  "reflectance 0..1 of the surface the markers are glued on (-1: the object's own)");
-  args.AddDouble("surface-texture", &surface_texture, "relative amplitude 0..1 of the surface's grain (0: plain)");
+  args.AddDouble("surface-texture", &surface_texture,
+                 "relative amplitude 0..1 of the surface's grain (0: plain)");
   args.AddDouble("shading", &shading, "relative brightness change between faces by their normal, 0..1");
   args.AddDouble("gradient", &gradient, "relative brightness change of the light across the image, 0..1");
   args.AddDouble("vignetting", &vignetting, "relative fall-off of the light at the image corners, 0..1");
@@ -101,7 +102,8 @@ int Main(int argc, char** argv) {
   args.AddDouble("shot-noise", &shot_noise, "photon noise: variance added per linear gray level (0: none)");
   args.AddDouble("gamma", &gamma, "encoding gamma: written value 255 (v / 255)^(1 / gamma) (1: linear)");
   args.AddDouble("sharpen", &sharpen, "camera sharpening: unsharp mask amount, sigma 1 px (0: none)");
-  args.AddInt("jpeg-quality", &jpeg_quality, "JPEG compression of every frame at this quality 1..100 (0: none)");
+  args.AddInt("jpeg-quality", &jpeg_quality,
+              "JPEG compression of every frame at this quality 1..100 (0: none)");
   args.AddFlag("bgr", &bgr, "write 3-channel images");
   args.AddFlag("video", &video, "write DIR/camK.mp4 instead of PNG folders");
   args.AddInt("still-frames", &still_frames, "length of each of two still segments, frames (0: none)");
@@ -201,7 +203,8 @@ int Main(int argc, char** argv) {
   CheckRate("defocus", defocus, 50.0);
   CheckRate("shot-noise", shot_noise, 10.0);
   CheckRate("sharpen", sharpen, 5.0);
-  if (!(gamma >= 0.2 && gamma <= 5)) throw std::invalid_argument("--gamma: expected 0.2..5, got " + Num(gamma));
+  if (!(gamma >= 0.2 && gamma <= 5))
+    throw std::invalid_argument("--gamma: expected 0.2..5, got " + Num(gamma));
   if (jpeg_quality < 0 || jpeg_quality > 100)
     throw std::invalid_argument("--jpeg-quality: expected 0..100, got " + std::to_string(jpeg_quality));
   o.render.surface_albedo = surface_albedo;

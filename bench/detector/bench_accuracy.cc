@@ -19,8 +19,10 @@ void Row(const char* what, const Accuracy& a, const Accuracy& s) {
   std::fflush(stdout);
 }
 const char* kHeader =
-    "| %s | mcmt mean offset px | mcmt median error px | mcmt recall <60 deg | mcmt recall <75 deg | mcmt wrong ids | "
-    "stock offset px | stock median px | stock recall <60 | stock recall <75 |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    "| %s | mcmt mean offset px | mcmt median error px | mcmt recall <60 deg | mcmt recall <75 deg | mcmt "
+    "wrong ids | "
+    "stock offset px | stock median px | stock recall <60 | stock recall <75 "
+    "|\n|---|---|---|---|---|---|---|---|---|---|\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -29,7 +31,8 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);
   const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};
   const double angles[3][2] = {{0, 40}, {40, 60}, {60, 75}};
-  std::printf("## Corner accuracy on the reference renderer (DICT_6X6_250, 640x480, %d images per cell)\n\n", images);
+  std::printf("## Corner accuracy on the reference renderer (DICT_6X6_250, 640x480, %d images per cell)\n\n",
+              images);
   std::printf(kHeader, "condition");
   Accuracy all, all_stock, by_size[3], by_size_stock[3], by_angle[3], by_angle_stock[3];
   uint64_t seed = 1;
@@ -42,7 +45,8 @@ int main(int argc, char** argv) {
         scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
         scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
         Accuracy stock;
-        const Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images, ++seed, &stock);
+        const Accuracy a =
+            testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images, ++seed, &stock);
         cond.Add(a), cond_stock.Add(stock), by_size[s].Add(a), by_size_stock[s].Add(stock);
         by_angle[g].Add(a), by_angle_stock[g].Add(stock);
       }
@@ -64,6 +68,7 @@ int main(int argc, char** argv) {
     std::snprintf(what, sizeof(what), "%.0f-%.0f deg", angles[g][0], angles[g][1]);
     Row(what, by_angle[g], by_angle_stock[g]);
   }
-  std::printf("\nRecall counts markers of 20 px and more; offsets and errors every marker found (15-60 px).\n");
+  std::printf(
+      "\nRecall counts markers of 20 px and more; offsets and errors every marker found (15-60 px).\n");
   return 0;
 }

@@ -33,7 +33,8 @@ std::vector<Condition> Conditions() {
   c.push_back({"mcmt-sim default (linear, 1-cell margin)", plain});
   sim::RenderOptions webcam = plain;
   webcam.gamma = 2.2, webcam.sharpen = 0.6, webcam.jpeg_quality = 75, webcam.blur_sigma = 0.7;
-  webcam.vignetting = 0.25, webcam.shot_noise = 0.08, webcam.quiet_zone_cells = 1, webcam.surface_albedo = 0.3;
+  webcam.vignetting = 0.25, webcam.shot_noise = 0.08, webcam.quiet_zone_cells = 1,
+  webcam.surface_albedo = 0.3;
   c.push_back({"webcam (gamma 2.2, sharpen 0.6, JPEG 75, blur 0.7)", webcam});
   sim::RenderOptions margin = plain;
   margin.quiet_zone_cells = 0, margin.surface_albedo = 0.45, margin.surface_texture = 0.2;
@@ -53,7 +54,8 @@ double ScaleError(const sim::GroundTruth& truth, const RigMap& map) {
       const sim::SimCamera* b = truth.FindCamera(map.cameras[j].name);
       if (!a || !b) continue;
       const double gt = (a->rig_from_cam.translation() - b->rig_from_cam.translation()).norm();
-      const double est = (map.cameras[i].rig_from_cam.translation() - map.cameras[j].rig_from_cam.translation()).norm();
+      const double est =
+          (map.cameras[i].rig_from_cam.translation() - map.cameras[j].rig_from_cam.translation()).norm();
       dot += est * gt, gt_sq += gt * gt;
     }
   return gt_sq > 0 ? dot / gt_sq - 1.0 : NAN;
@@ -66,8 +68,13 @@ int main(int argc, char** argv) {
   std::vector<double> radii = {1.0, 1.3};
   if (argc > 2) radii = {std::atof(argv[2])};
   cv::setNumThreads(1);
-  std::printf("## Maps under varied imaging (paper's rig, 5 cameras, 640x480, four-sided object, 4 cm markers, %d frames)\n\n", frames);
-  std::printf("| imaging | radius m | scale error %% | camera position mm (mean / max) | configuration mm (mean) | markers detected per frame |\n");
+  std::printf(
+      "## Maps under varied imaging (paper's rig, 5 cameras, 640x480, four-sided object, 4 cm markers, %d "
+      "frames)\n\n",
+      frames);
+  std::printf(
+      "| imaging | radius m | scale error %% | camera position mm (mean / max) | configuration mm (mean) | "
+      "markers detected per frame |\n");
   std::printf("|---|---|---|---|---|---|\n");
   for (double radius : radii)
     for (const Condition& condition : Conditions()) {
@@ -119,8 +126,9 @@ int main(int argc, char** argv) {
         const MapResult result = mapper.Solve();
         const sim::EvalResult e = sim::Evaluate(truth, &result.map, nullptr);
         std::printf("| %s | %.1f | %+.3f | %.2f / %.2f | %.3f | %.2f |\n", condition.name.c_str(), radius,
-                    100.0 * ScaleError(truth, result.map), e.camera_position_mm.mean, e.camera_position_mm.max,
-                    e.configuration_mm.mean, double(detected) / (frames * cameras.size()));
+                    100.0 * ScaleError(truth, result.map), e.camera_position_mm.mean,
+                    e.camera_position_mm.max, e.configuration_mm.mean,
+                    double(detected) / (frames * cameras.size()));
       } catch (const std::exception& ex) {
         std::printf("| %s | %.1f | (no map: %s) | | | %.2f |\n", condition.name.c_str(), radius, ex.what(),
                     double(detected) / (frames * cameras.size()));

@@ -63,16 +63,17 @@ inline std::vector<marker_t> StockDetect(const cv::Mat& image, const cv::Ptr<cv:
   std::vector<marker_t> out(ids.size());
   for (size_t i = 0; i < ids.size(); ++i) {
     out[i].id = ids[i];
-    for (int k = 0; k < 4; ++k) out[i].corners[k][0] = corners[i][k].x, out[i].corners[k][1] = corners[i][k].y;
+    for (int k = 0; k < 4; ++k)
+      out[i].corners[k][0] = corners[i][k].x, out[i].corners[k][1] = corners[i][k].y;
   }
   return out;
 }
 
 // `images` reference renders of `scene` under `imaging`, detected by mcmt (options) and, when `stock`
 // is non-null, by stock OpenCV.
-inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceScene& scene, const Imaging& imaging,
-                                 const DetectorOptions& options, int images, uint64_t seed,
-                                 Accuracy* stock = nullptr) {
+inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceScene& scene,
+                                 const Imaging& imaging, const DetectorOptions& options, int images,
+                                 uint64_t seed, Accuracy* stock = nullptr) {
   auto dict = LoadDictionary(dictionary);
   MarkerConfig mc;
   mc.dictionary = dictionary;

@@ -24,7 +24,7 @@ namespace mcmt::testing {
 // One imaging condition: the print, the surface, the light and the camera.
 struct Imaging {
   std::string name = "plain";
-  double margin_cells = 1.0;  // white margin of the print around the marker, cells (0: none)
+  double margin_cells = 1.0;        // white margin of the print around the marker, cells (0: none)
   double ink = 0.04, paper = 0.85;  // reflectances of the ink and the paper
   double surface = 0.5;             // reflectance of the surface the print is glued on
   double surface_texture = 0.0;     // relative amplitude of the surface's wood-like grain (0: plain)
@@ -97,8 +97,10 @@ inline bool Span(const Quad& q, double y, double* x0, double* x1) {
       continue;
     }
     const double x = -B / A;
-    if (A > 0) lo = std::max(lo, x);
-    else hi = std::min(hi, x);
+    if (A > 0)
+      lo = std::max(lo, x);
+    else
+      hi = std::min(hi, x);
   }
   *x0 = lo, *x1 = hi;
   return hi > lo;
@@ -250,7 +252,8 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
   cv::Mat linear(scene.height, scene.width, CV_64F);
   {  // background: smooth clutter
     cv::Mat small(6, 8, CV_64F);
-    for (int i = 0; i < small.rows * small.cols; ++i) small.at<double>(i) = im.exposure * (0.15 + 0.6 * uni(rng));
+    for (int i = 0; i < small.rows * small.cols; ++i)
+      small.at<double>(i) = im.exposure * (0.15 + 0.6 * uni(rng));
     cv::resize(small, linear, linear.size(), 0, 0, cv::INTER_CUBIC);
   }
   truth->clear();
@@ -262,12 +265,14 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
     for (const auto& t : *truth) dup = dup || t.id == id;
     if (dup) continue;
     const double side_px = scene.min_side_px + (scene.max_side_px - scene.min_side_px) * uni(rng);
-    const double c0 = std::cos(scene.min_angle_deg * M_PI / 180), c1 = std::cos(scene.max_angle_deg * M_PI / 180);
+    const double c0 = std::cos(scene.min_angle_deg * M_PI / 180),
+                 c1 = std::cos(scene.max_angle_deg * M_PI / 180);
     const double tilt = std::acos(c0 - uni(rng) * (c0 - c1));
     const double axis = 2 * M_PI * uni(rng), roll = 2 * M_PI * uni(rng);
     const double z = scene.focal / side_px;  // a unit side at depth z is side_px wide head-on
     const double px = (0.1 + 0.8 * uni(rng)) * scene.width, py = (0.1 + 0.8 * uni(rng)) * scene.height;
-    const cv::Vec3d centre((px - scene.width / 2.0) * z / scene.focal, (py - scene.height / 2.0) * z / scene.focal, z);
+    const cv::Vec3d centre((px - scene.width / 2.0) * z / scene.focal,
+                           (py - scene.height / 2.0) * z / scene.focal, z);
     // Rotation: roll about z, tilt about an in-plane axis, then turn the marker to face its viewing ray.
     cv::Mat r_roll, r_tilt, r_ray = cv::Mat::eye(3, 3, CV_64F);
     cv::Rodrigues(cv::Mat(cv::Vec3d(0, 0, roll)), r_roll);
@@ -278,7 +283,8 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
     const cv::Matx33d R = cv::Matx33d(r_ray) * cv::Matx33d(r_tilt) * cv::Matx33d(r_roll);
     // Plane coordinates in cells ([0, cells]^2, y down) -> marker frame (side 1, centred) -> image.
     const double u = 1.0 / cells;
-    const cv::Matx33d plane(R(0, 0), R(0, 1), centre[0], R(1, 0), R(1, 1), centre[1], R(2, 0), R(2, 1), centre[2]);
+    const cv::Matx33d plane(R(0, 0), R(0, 1), centre[0], R(1, 0), R(1, 1), centre[1], R(2, 0), R(2, 1),
+                            centre[2]);
     const cv::Matx33d image_from_plane = K * plane * cv::Matx33d(u, 0, -0.5, 0, u, -0.5, 0, 0, 1);
     RenderedMarker m;
     m.id = id;
@@ -287,7 +293,8 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
     double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
     for (int k = 0; k < 4; ++k) {
       m.corners[k] = Apply(image_from_plane, tc[k][0], tc[k][1]);
-      const cv::Point2d e = Apply(image_from_plane, tc[k][0] < 1 ? -ext : cells + ext, tc[k][1] < 1 ? -ext : cells + ext);
+      const cv::Point2d e =
+          Apply(image_from_plane, tc[k][0] < 1 ? -ext : cells + ext, tc[k][1] < 1 ? -ext : cells + ext);
       for (const cv::Point2d& p : {m.corners[k], e})
         x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
     }
@@ -300,7 +307,8 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
     m.side_px = 0;
     for (int k = 0; k < 4; ++k) m.side_px += cv::norm(m.corners[(k + 1) % 4] - m.corners[k]) / 4;
     m.view_angle_deg = std::acos(std::abs(cv::Vec3d(R(0, 2), R(1, 2), R(2, 2)).dot(ray))) * 180 / M_PI;
-    const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(id, id + 1), dict.markerSize);
+    const cv::Mat bits =
+        cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(id, id + 1), dict.markerSize);
     const double light = 1.0 - im.face_shading * uni(rng);
     reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light, scene.inverted), box,
                      image_from_plane.inv(), &linear);

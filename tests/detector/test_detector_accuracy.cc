@@ -42,7 +42,8 @@ TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     testing::ReferenceScene scene;
     scene.min_side_px = 15, scene.max_side_px = 60;
-    const testing::Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 11);
+    const testing::Accuracy a =
+        testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 11);
     std::printf("%-30s offset %+.3f px median %.3f px recall60 %.3f recall75 %.3f wrong %d (%zu corners)\n",
                 im.name.c_str(), a.MeanOffset(), a.MedianError(), a.Recall60(), a.Recall75(), a.wrong_ids,
                 a.corners.errors.size());
@@ -75,7 +76,8 @@ TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
       scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
       testing::Imaging im;
       im.blur_sigma = 0.7;
-      const testing::Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 4, 20 + s * 2 + g);
+      const testing::Accuracy a =
+          testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 4, 20 + s * 2 + g);
       std::printf("%2.0f-%2.0f px, %2.0f-%2.0f deg: offset %+.3f median %.3f recall60 %.3f recall75 %.3f\n",
                   sizes[s][0], sizes[s][1], angles[g][0], angles[g][1], a.MeanOffset(), a.MedianError(),
                   a.Recall60(), a.Recall75());
@@ -100,7 +102,8 @@ TEST(DetectorAccuracy, SimRendererAgreesWithReferenceRenderer) {
   testing::Imaging im;
   im.blur_sigma = 0.7;
   const testing::Accuracy ref = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 5);
-  const double sim_offset = testing::MeanOf(sim.corners.offsets), sim_median = testing::MedianOf(sim.corners.errors);
+  const double sim_offset = testing::MeanOf(sim.corners.offsets),
+               sim_median = testing::MedianOf(sim.corners.errors);
   std::printf("mcmt_sim: offset %+.3f median %.3f (%zu corners); reference: offset %+.3f median %.3f (%zu)\n",
               sim_offset, sim_median, sim.corners.errors.size(), ref.MeanOffset(), ref.MedianError(),
               ref.corners.errors.size());
