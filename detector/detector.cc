@@ -838,9 +838,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
       // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under
       // symmetric blur, the locking is gone. The camera's blur is tracked from every fit (on smoothed
-      // regions: sqrt(sigma^2 - smoothing^2)), with a raw refinement every 16th marker.
-      const bool smooth =
-          options_.sharp_smoothing > 0 && blur_estimate_ < 0.55 && (++markers_refined_ % 16) != 0;
+      // regions: sqrt(sigma^2 - smoothing^2)).
+      const bool smooth = options_.sharp_smoothing > 0 && blur_estimate_ < 0.55;
       const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
       const cv::Mat* source = &gray;
       if (smooth || linearise) {
@@ -887,18 +886,6 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
                                          &r.corners, options_.edge_model, &sigma, options_.gamma == 0);
       if (refined && !reads(r.corners)) refined = false, slid = true;
       if (!refined) r.corners = candidate;
-      if (!refined && options_.fast) {
-        // Fast mode: start again from the marker's refined corners of the previous frame.
-        for (const Raw& previous : last_) {
-          if (previous.id != r.id) continue;
-          std::array<cv::Point2d, 4> corners = previous.corners;
-          refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
-                                        options_.edge_model, &sigma) &&
-                    reads(corners);
-          if (refined) r.corners = corners, slid = false;
-          break;
-        }
-      }
       if (!refined) {
         // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner
         // a pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side

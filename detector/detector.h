@@ -132,7 +132,6 @@ class MarkerDetector {
   cv::Mat linear_;              // linearised marker regions (gamma)
   cv::Mat gamma_lut_;           // encoded value -> linear value
   double blur_estimate_ = 1e9;  // camera's edge blur (fitted sigma, px); unknown at first: refine raw
-  long long markers_refined_ = 0;
   DetectorStats stats_;
   // Fast mode state.
   std::vector<Raw> last_;
