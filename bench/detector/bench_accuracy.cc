@@ -1,7 +1,7 @@
 // Corner accuracy of mcmt's detector and of stock OpenCV ArUco on the independent reference renderer
 // (tests/detector/reference_renderer.h): the imaging catalogue x marker sizes x view angles. Prints
 // markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band.
-//   bench_accuracy [images per cell (default 12)] [condition name substring]
+//   bench_accuracy [--quick | images per cell (default 8)] [condition name substring]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -26,7 +26,8 @@ const char* kHeader =
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int images = argc > 1 ? std::atoi(argv[1]) : 12;
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const int images = quick ? 2 : argc > 1 ? std::atoi(argv[1]) : 8;
   const char* only = argc > 2 ? argv[2] : nullptr;
   cv::setNumThreads(1);
   const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};

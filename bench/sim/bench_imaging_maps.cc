@@ -4,11 +4,13 @@
 // evaluated against the ground truth: metric scale error (least-squares ratio of all camera-to-camera
 // distances, estimate over truth), camera position and configuration errors (sim/eval.h). Prints a
 // markdown table.
-//   bench_imaging_maps [frames (default 300)] [radius, m (default: 1.0 and 1.3)]
+//   bench_imaging_maps [--quick | frames (default 300)] [radius, m (default: 1.0 and 1.3)]
+// (--quick: 100 frames at 1.0 m.)
 #include <time.h>
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -64,8 +66,10 @@ double ScaleError(const sim::GroundTruth& truth, const RigMap& map) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int frames = argc > 1 ? std::atoi(argv[1]) : 300;
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const int frames = quick ? 100 : argc > 1 ? std::atoi(argv[1]) : 300;
   std::vector<double> radii = {1.0, 1.3};
+  if (quick) radii = {1.0};
   if (argc > 2) radii = {std::atof(argv[2])};
   cv::setNumThreads(1);
   std::printf(
