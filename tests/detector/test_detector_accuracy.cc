@@ -117,5 +117,24 @@ TEST(DetectorAccuracy, SimRendererAgreesWithReferenceRenderer) {
   EXPECT_EQ(ref.wrong_ids, 0);
 }
 
+// mcmt_sim under --imaging random (margins, surfaces, blur or defocus, noise, gamma, sharpening, JPEG
+// drawn per camera): the corners stay unbiased on the simulator's own varied imaging too.
+TEST(DetectorAccuracy, SimRandomImaging) {
+  for (uint64_t seed : {11, 13}) {
+    testing::SimEvalOptions o;
+    o.radius = 1.0;
+    o.frames = 8;
+    o.random_imaging = seed;
+    const testing::SimEvalResult r = testing::EvaluateOnSim(o);
+    const double offset = testing::MeanOf(r.corners.offsets), median = testing::MedianOf(r.corners.errors);
+    std::printf("random imaging %d: offset %+.3f median %.3f recall60 %.3f (%d/%d) wrong %d\n", int(seed),
+                offset, median, r.Recall60(), r.found60, r.visible60, r.wrong_ids);
+    ASSERT_GT(r.corners.errors.size(), 60u);
+    EXPECT_LE(std::abs(offset), 0.02);
+    EXPECT_LE(median, 0.10);
+    EXPECT_EQ(r.wrong_ids, 0);
+  }
+}
+
 }  // namespace
 }  // namespace mcmt
