@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/dictionary.h"
+#include "detector/side_model.h"
 
 namespace mcmt {
 namespace {
@@ -170,83 +171,6 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
   return true;
 }
 
-// Least-squares fit of the mean edge profile m(u) (u: signed distance from the fitted line, outward)
-// with a blurred step and a second blurred step for the far side of the quiet zone:
-//   f(u) = D + (W - D) Phi((u - e) / sigma) + (B - W) Phi((u - e - q) / sigma)
-// (D: border, W: quiet zone, B: beyond it at distance q; sigma: blur incl. the pixel footprint).
-// Returns the edge offset e (outward), or NaN when the fit fails. The crossing estimate is biased when
-// the quiet zone is narrow and blurred; e is not.
-double FitEdgeProfile(const std::vector<double>& u, const std::vector<double>& m, double cell,
-                      double* sigma) {
-  const int n = static_cast<int>(u.size());
-  if (n < 8) return NAN;
-  double p[6];  // e, sigma, D, W, B, q
-  p[0] = 0.0;
-  p[1] = 0.6;
-  p[2] = m.front();
-  p[4] = m.back();
-  p[3] = m.front();
-  for (int j = 0; j < n; ++j)
-    if (u[j] > 0 && u[j] < cell && std::abs(m[j] - m.front()) > std::abs(p[3] - m.front())) p[3] = m[j];
-  p[5] = cell;
-  auto cost_of = [&](const double* q, double* residuals) {
-    double cost = 0;
-    for (int j = 0; j < n; ++j) {
-      const double z1 = (u[j] - q[0]) / q[1], z2 = (u[j] - q[0] - q[5]) / q[1];
-      const double f = q[2] + (q[3] - q[2]) * 0.5 * std::erfc(-z1 * M_SQRT1_2) +
-                       (q[4] - q[3]) * 0.5 * std::erfc(-z2 * M_SQRT1_2);
-      const double r = f - m[j];
-      if (residuals) residuals[j] = r;
-      cost += r * r;
-    }
-    return cost;
-  };
-  std::vector<double> r(n), trial(n);
-  double cost = cost_of(p, r.data());
-  double lambda = 1e-3;
-  for (int iter = 0; iter < 15; ++iter) {
-    Eigen::Matrix<double, 6, 6> jtj = Eigen::Matrix<double, 6, 6>::Zero();
-    Eigen::Matrix<double, 6, 1> jtr = Eigen::Matrix<double, 6, 1>::Zero();
-    for (int j = 0; j < n; ++j) {
-      const double z1 = (u[j] - p[0]) / p[1], z2 = (u[j] - p[0] - p[5]) / p[1];
-      const double phi1 = std::exp(-0.5 * z1 * z1) * 0.3989422804014327;
-      const double phi2 = std::exp(-0.5 * z2 * z2) * 0.3989422804014327;
-      const double c1 = 0.5 * std::erfc(-z1 * M_SQRT1_2), c2 = 0.5 * std::erfc(-z2 * M_SQRT1_2);
-      Eigen::Matrix<double, 6, 1> g;
-      g << -((p[3] - p[2]) * phi1 + (p[4] - p[3]) * phi2) / p[1],
-          -((p[3] - p[2]) * phi1 * z1 + (p[4] - p[3]) * phi2 * z2) / p[1], 1.0 - c1, c1 - c2, c2,
-          -(p[4] - p[3]) * phi2 / p[1];
-      jtj += g * g.transpose();
-      jtr += g * r[j];
-    }
-    bool improved = false, converged = false;
-    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-      Eigen::Matrix<double, 6, 6> a = jtj;
-      for (int k = 0; k < 6; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
-      const Eigen::Matrix<double, 6, 1> step = a.ldlt().solve(-jtr);
-      double q[6];
-      for (int k = 0; k < 6; ++k) q[k] = p[k] + step(k);
-      q[1] = std::clamp(q[1], 0.2, 3.0);
-      q[5] = std::clamp(q[5], 0.4 * cell, 3.0 * cell);
-      const double c = cost_of(q, trial.data());
-      if (c < cost) {
-        converged = std::abs(q[0] - p[0]) < 2e-4 && std::abs(q[1] - p[1]) < 2e-3 && cost - c < 1e-6 * cost;
-        std::copy(q, q + 6, p);
-        cost = c;
-        r.swap(trial);
-        lambda = std::max(1e-7, lambda * 0.3);
-        improved = true;
-      } else {
-        lambda *= 10;
-      }
-    }
-    if (!improved || converged) break;
-  }
-  if (!std::isfinite(p[0]) || std::abs(p[0]) > 0.75 || std::abs(p[3] - p[2]) < 5.0) return NAN;
-  *sigma = p[1];
-  return p[0];
-}
-
 // +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
 // brighter (inverted), 0 when unclear. Samples the border cells and the ring of cells around the quad.
 int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
@@ -272,8 +196,154 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
 }  // namespace
 
 namespace {
+// The cell at depth `row` (0: the border) of column `col` (cells from the side's start corner) of side
+// `side` (as in CleanNeighbour): 1 when it differs from the border's colour.
+int InnerCell(const cv::Mat& bits, int cells, int side, int col, int row) {
+  switch (side) {
+    case 0:
+      return GridCell(bits, cells, row, col);
+    case 1:
+      return GridCell(bits, cells, col, cells - 1 - row);
+    case 2:
+      return GridCell(bits, cells, cells - 1 - row, cells - 1 - col);
+    default:
+      return GridCell(bits, cells, cells - 1 - col, row);
+  }
+}
+
+inline double Phi(double z) {
+  double big, small;
+  PhiAndDensity(z, &big, &small);
+  return big;
+}
+
+// Unit-square coordinates of the point `along` the side `side` (0..1 from its start corner) at depth
+// `depth` (inward, in units of the marker's side).
+cv::Vec3d UnitPoint(int side, double along, double depth) {
+  switch (side) {
+    case 0:
+      return {along, depth, 1.0};
+    case 1:
+      return {1.0 - depth, along, 1.0};
+    case 2:
+      return {1.0 - along, 1.0 - depth, 1.0};
+    default:
+      return {depth, 1.0 - along, 1.0};
+  }
+}
+
+// The side model's offset of side `side` (px, outward from `line`), or NaN. The rays (origins and
+// outward normals in raw pixels, ideal origins) are those of the crossing pass; only those in the
+// middle of a code column are used, grouped by the column's code rows.
+double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
+               const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
+               const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
+               const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
+               double sigma_along, bool fit_gamma, SideProfiles* profiles, SideFit* fit) {
+  if (bits.empty()) return NAN;
+  struct Ray {
+    int index;
+    double delta;  // offset from the ray's origin to the line along its normal, px
+    std::array<uint8_t, SideProfiles::kRows> pattern;
+    std::array<double, SideProfiles::kRows> depths, other;
+  };
+  thread_local std::vector<Ray> rays;
+  rays.clear();
+  double depth_sum = 0;
+  // The boundaries between rows r-1 and r (r = 1..kRows + 1) as lines in ideal pixels: a point, a normal.
+  Eigen::Vector2d row_point[SideProfiles::kRows + 2], row_normal[SideProfiles::kRows + 2];
+  for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
+    const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, 0.0, static_cast<double>(r) / cells);
+    const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, 1.0, static_cast<double>(r) / cells);
+    row_point[r] = Eigen::Vector2d(p0[0] / p0[2], p0[1] / p0[2]);
+    const Eigen::Vector2d a1(p1[0] / p1[2], p1[1] / p1[2]);
+    row_normal[r] = Eigen::Vector2d(a1.y() - row_point[r].y(), row_point[r].x() - a1.x());
+  }
+  for (size_t i = 0; i < valid.size(); ++i) {
+    if (!valid[i]) continue;
+    const Eigen::Vector2d& q = ideal_origins[i];
+    const cv::Vec3d m = unit_from_ideal * cv::Vec3d(q.x(), q.y(), 1.0);
+    const double ux = m[0] / m[2], uy = m[1] / m[2];
+    const double along = side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+    const double a = along * cells;
+    const int col = static_cast<int>(std::floor(a));
+    const double frac = a - col;
+    // Away from the corners (where the perpendicular side's outer edge is near) and the middle of a
+    // column (but blur along the side is modelled: `other` below).
+    if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
+    if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
+    const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
+    const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
+    Ray ray{static_cast<int>(i), (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
+    // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
+    // right angles, so the ray drifts across columns), and which column it is in within each row.
+    const Eigen::Vector2d dir = (map.ToIdeal(origins[i] - normals[i]) - q).normalized();  // inward
+    double t[SideProfiles::kRows + 2];
+    t[0] = 0.0;
+    for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
+      const double den = row_normal[r].dot(dir);
+      t[r] = std::abs(den) > 1e-12 ? row_normal[r].dot(row_point[r] - q) / den : NAN;
+    }
+    bool ok = true;
+    for (int r = 1; r <= SideProfiles::kRows && ok; ++r) {
+      ok = std::isfinite(t[r]) && t[r] > t[r - 1];
+      if (!ok) break;
+      // Depth of the boundary between rows r-1 and r, px inward from the ray's origin (raw pixels).
+      ray.depths[r - 1] = (origins[i] - map.ToImage(q + t[r] * dir)).dot(normals[i]);
+      // The row's column at the middle of its stretch of the ray, and the part of the row's level that
+      // comes from cells of the other colour under blur along the side (Gaussian of sigma_along px).
+      const Eigen::Vector2d mid = q + 0.5 * (t[r] + t[r + 1]) * dir;
+      const cv::Vec3d mu = unit_from_ideal * cv::Vec3d(mid.x(), mid.y(), 1.0);
+      const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
+      const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
+      const int c = static_cast<int>(std::floor(at));
+      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? InnerCell(bits, cells, side, c, r) : 0);
+      const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
+      const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
+      const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
+      const double scale = column_px / sigma_along;
+      double other = 0;
+      for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
+        if (r < cells && InnerCell(bits, cells, side, k, r))
+          other += Phi((k + 1 - at) * scale) - Phi((k - at) * scale);
+      ray.other[r - 1] = other;
+    }
+    if (!ok) continue;
+    depth_sum += ray.depths[0];
+    rays.push_back(ray);
+  }
+  if (rays.size() < 4) return NAN;
+  const double cell = depth_sum / rays.size();
+  if (!(cell > 0.5)) return NAN;
+  const double du = std::clamp(cell / 4.0, 0.1, 0.5);
+  const double u0 = -(SideProfiles::kRows - 0.4) * cell, u1 = 1.6 * cell + 1.0;
+  const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
+  profiles->Reset(u0, du, bins, cell);
+  profiles->fit_gamma = fit_gamma;
+  for (size_t r = 0; r < rays.size(); ++r) {
+    const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
+    const Eigen::Vector2d& o = origins[rays[r].index];
+    const Eigen::Vector2d& nrm = normals[rays[r].index];
+    for (int j = 0; j < bins; ++j) {
+      const double s = rays[r].delta + u0 + j * du;
+      float v;
+      if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+    }
+  }
+  // A previous pass's fit warm-starts this one (its edge moved to the line it found: e = 0 here).
+  if (fit->warm) fit->e = 0.0;
+  if (!FitSideProfiles(*profiles, fit)) {
+    fit->warm = false;
+    return NAN;
+  }
+  fit->warm = true;
+  return fit->e;
+}
+
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
-                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width) {
+                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
+                bool fit_gamma) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -289,16 +359,32 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
   std::vector<float> profiles, inside, outside;
   std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
-  std::vector<double> grid_u, grid_sum, grid_mean;
-  std::vector<int> grid_count;
   std::vector<char> clean;
-  // Passes of crossing-based line fits until the corners move less than 0.01 px (at least `passes`,
-  // at most `passes` + 4), then a last pass that also fits the blurred-step model to each side.
-  bool final_pass = false, converged = false;
+  // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
+  // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
+  // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
+  // crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
+  // until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
+  // (the candidate, the previous frame) must not change where the corners end up.
+  constexpr int kMinModelPasses = 2, kMaxModelPasses = 4;
+  bool converged = false, model_converged = false;
+  int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
-  for (int pass = 0; !final_pass; ++pass) {
-    final_pass = pass + 1 >= max_passes || (pass + 1 >= std::max(1, passes) && converged);
+  SideProfiles side_profiles;
+  std::array<SideFit, 4> side_fits;  // each side's model fit of the previous model pass
+  for (int pass = 0;; ++pass) {
+    // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
+    // onto the edges (the model passes fix the offsets, and their crossings the directions).
+    const bool crossings_done =
+        pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
+    if (crossings_done && (!model_fit || model_converged || model_passes >= kMaxModelPasses)) break;
+    if (crossings_done) sigma_sum = 0, sigma_count = 0;  // the last model pass's blur is reported
+    const bool model_pass = crossings_done && model_fit;
     for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
+    const cv::Matx33d ideal_from_unit = QuadFromUnitSquare(
+        {cv::Point2d(ideal[0].x(), ideal[0].y()), cv::Point2d(ideal[1].x(), ideal[1].y()),
+         cv::Point2d(ideal[2].x(), ideal[2].y()), cv::Point2d(ideal[3].x(), ideal[3].y())});
+    const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int k = 0; k < 4; ++k) centre += img[k] / 4.0;
     std::array<Line, 4> lines;
@@ -320,8 +406,13 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
                                               3.0 * first_width)
                                  : std::clamp(0.5 * cell, 0.75, 3.0);
       const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
-      const int n = std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.5), 6, 240);
-      const int steps = std::max(3, static_cast<int>(std::ceil(h / 0.2)));
+      // Model passes sample a fixed number of rays and steps (4 per cell, 5 per half-profile): their
+      // sampling then moves continuously with the estimate, so the passes converge to one place
+      // whatever the start.
+      const int n = model_pass
+                        ? 4 * cells
+                        : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
+      const int steps = model_pass ? 5 : std::max(3, static_cast<int>(std::ceil(h / 0.25)));
       const int m = 2 * steps + 1;
       const double ds = h / steps;
       profiles.assign(static_cast<size_t>(n) * m, 0.f);
@@ -385,45 +476,18 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
       }
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
-      if (final_pass && model_fit) {
-        // Mean profile across the fitted line (outward u), then the blurred-step model's offset.
-        Line& line = lines[side];
-        Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
-        for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
-        const double outward = line.n.dot(ideal_centre) < line.c ? 1.0 : -1.0;
-        const double du = std::clamp(cell / 8.0, 0.08, 0.5);
-        const int lo = -static_cast<int>(std::ceil(1.0 * cell / du)),
-                  hi = static_cast<int>(std::ceil(1.6 * cell / du));
-        const int bins = hi - lo + 1;
-        grid_sum.assign(bins, 0.0);
-        grid_count.assign(bins, 0);
-        for (int i = 0; i < n; ++i) {
-          if (!valid[i] || (use_clean && !clean[i])) continue;
-          const Eigen::Vector2d& q = ideal_origins[i];
-          const Eigen::Vector2d on_line = q - (line.n.dot(q) - line.c) * line.n;
-          const double delta = (map.ToImage(on_line) - origins[i]).dot(normals[i]);
-          for (int j = lo; j <= hi; ++j) {
-            const double s = delta + j * du;
-            float v;
-            if (!Sample(gray, origins[i].x() + s * normals[i].x(), origins[i].y() + s * normals[i].y(), &v))
-              continue;
-            grid_sum[j - lo] += v;
-            ++grid_count[j - lo];
-          }
-        }
-        grid_u.clear();
-        grid_mean.clear();
-        for (int j = lo; j <= hi; ++j) {
-          if (grid_count[j - lo] == 0) continue;
-          grid_u.push_back(j * du);
-          grid_mean.push_back(grid_sum[j - lo] / grid_count[j - lo]);
-        }
-        double sigma = NAN;
-        const double e = FitEdgeProfile(grid_u, grid_mean, cell, &sigma);
+      if (model_pass) {
+        const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
+        const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
+                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma,
+                                 &side_profiles, &side_fits[side]);
+        const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) {
-          line.c += outward * e;
-          sigma_sum += sigma;
-          ++sigma_count;
+          Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
+          for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
+          const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
+          lines[side].c += outward * e;
+          sigma_sum += sigma, ++sigma_count;
         }
       }
     }
@@ -437,6 +501,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - img[k]).norm());
     converged = moved < 0.01;
     img = next;
+    if (model_pass) ++model_passes;
+    model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
   }
   const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {
@@ -450,12 +516,12 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit,
-                         double* blur_sigma) {
+                         int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
+                         bool fit_gamma) {
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
-  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0) ||
-         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0);
+  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma) ||
+         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -554,7 +620,7 @@ void DetectorOptions::Validate() const {
     fail("perspective_ignored_margin: must be in [0, 0.5)");
   if (full_search_every < 1) fail("full_search_every: must be >= 1");
   if (!(sharp_smoothing >= 0 && sharp_smoothing <= 3)) fail("sharp_smoothing: must be in [0, 3]");
-  if (!(gamma >= 0.2 && gamma <= 5)) fail("gamma: must be in [0.2, 5]");
+  if (!(gamma == 0 || (gamma >= 0.2 && gamma <= 5))) fail("gamma: must be 0 (estimated) or in [0.2, 5]");
 }
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
@@ -772,10 +838,9 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
       // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under
       // symmetric blur, the locking is gone. The camera's blur is tracked from every fit (on smoothed
-      // regions: sqrt(sigma^2 - smoothing^2)), with a raw refinement every 16th marker.
-      const bool smooth =
-          options_.sharp_smoothing > 0 && blur_estimate_ < 0.55 && (++markers_refined_ % 16) != 0;
-      const bool linearise = options_.gamma != 1.0;
+      // regions: sqrt(sigma^2 - smoothing^2)).
+      const bool smooth = options_.sharp_smoothing > 0 && blur_estimate_ < 0.55;
+      const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
       const cv::Mat* source = &gray;
       if (smooth || linearise) {
         double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
@@ -818,21 +883,9 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
-                                         &r.corners, options_.edge_model, &sigma);
+                                         &r.corners, options_.edge_model, &sigma, options_.gamma == 0);
       if (refined && !reads(r.corners)) refined = false, slid = true;
       if (!refined) r.corners = candidate;
-      if (!refined && options_.fast) {
-        // Fast mode: start again from the marker's refined corners of the previous frame.
-        for (const Raw& previous : last_) {
-          if (previous.id != r.id) continue;
-          std::array<cv::Point2d, 4> corners = previous.corners;
-          refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &corners,
-                                        options_.edge_model, &sigma) &&
-                    reads(corners);
-          if (refined) r.corners = corners, slid = false;
-          break;
-        }
-      }
       if (!refined) {
         // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner
         // a pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side

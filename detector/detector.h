@@ -1,15 +1,17 @@
 // Marker detection with unbiased sub-pixel corners.
 //
 // Candidates and ids come from OpenCV's ArUco detector (no corner refinement). The corners are then
-// refined by RefineMarkerCorners(): the marker's outer edge is located to sub-pixel precision at many
-// points along each side (skipping the corners and the places where a bit of the other colour lies
-// next to the border, whose blur would pull the edge), a line is fitted robustly to each side (in
-// undistorted pixels when the camera model is known) and the corners are the intersections of adjacent
-// lines. Two passes: the second samples around the first result, so the window is centred on the edge.
+// refined by RefineMarkerCorners(): a crossing pass locates each side's outer edge at many points and
+// fits a line to each side (in undistorted pixels when the camera model is known); then side-model
+// passes (detector/side_model.h) fit, across each side, blurred steps at the outer edge and at the
+// boundaries between the border and the code rows the decoded marker says are there (edges known on
+// both sides), with the surround's levels and margin, the blur and the gamma fitted, and move each line
+// to the fitted outer edge; the corners are the intersections of adjacent lines. The passes repeat
+// until the corners settle, so the result does not depend on the starting corners.
 //
 // Fast mode (DetectorOptions::fast): after a full-frame search, the next frames are searched only near
 // the markers' last positions, at their last scale; a full search runs every `full_search_every` frames
-// and whenever a marker is lost. Corners are refined the same way in both modes.
+// and whenever a marker is lost. Corners are refined the same way in both modes, to the same place.
 #pragma once
 
 #include <array>
@@ -32,17 +34,17 @@ struct DetectorOptions {
   // CORNER_REFINE_CONTOUR.
   std::string corner_refinement = "edges";
   int subpix_window = 2;  // half window of "subpix", pixels
-  int edge_passes = 3;    // refinement passes of "edges"
+  int edge_passes = 1;    // crossing passes of "edges" before its two side-model passes
   // "edges": correct each side's offset with a blurred-step model fitted to its mean profile (removes
   // the bias of narrow quiet zones under blur).
   bool edge_model = true;
   // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
   // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
-  // "edges": the camera's transfer curve. Edges are located on intensities linearised as
-  // 255 * (v / 255)^gamma: 1 for linear images (mcmt-sim renders), about 2.2 for typical video cameras
-  // (sRGB-like encoding), where the encoded half-way crossing of a blurred edge sits on its dark side.
-  double gamma = 1.0;
+  // "edges": the camera's transfer curve. 0 (default): estimated with each side's model (the model's
+  // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
+  // is linearised as 255 * (v / 255)^gamma first (1: linear images).
+  double gamma = 0.0;
 
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
@@ -92,7 +94,7 @@ struct DetectorStats {
 // null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
-                         double* blur_sigma = nullptr);
+                         double* blur_sigma = nullptr, bool fit_gamma = false);
 
 class MarkerDetector {
  public:
@@ -130,7 +132,6 @@ class MarkerDetector {
   cv::Mat linear_;              // linearised marker regions (gamma)
   cv::Mat gamma_lut_;           // encoded value -> linear value
   double blur_estimate_ = 1e9;  // camera's edge blur (fitted sigma, px); unknown at first: refine raw
-  long long markers_refined_ = 0;
   DetectorStats stats_;
   // Fast mode state.
   std::vector<Raw> last_;

@@ -12,8 +12,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 #include <stdexcept>
 
 #include "core/dictionary.h"
@@ -81,6 +84,13 @@ uint64_t Mix(uint64_t x) {  // splitmix64
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
+}
+
+// The surface's wood-like grain at a point of a face (patch coordinates, metres): a brightness factor.
+inline double Grain(const RenderOptions& o, const Vec2& c) {
+  if (o.surface_texture <= 0) return 1.0;
+  const double k = 2.0 * M_PI / o.surface_texture_period;
+  return 1.0 + o.surface_texture * std::sin(k * c.x() + 1.5 * std::sin(0.37 * k * c.y()));
 }
 
 // A planar convex patch in the object frame.
@@ -157,7 +167,9 @@ Renderer::Renderer(const SimObject& object, const std::string& dictionary, const
     p.normal = (f.vertices[1] - f.vertices[0]).cross(f.vertices[2] - f.vertices[0]).normalized();
     p.e2 = p.normal.cross(p.e1);
     for (const auto& v : f.vertices) p.outline.emplace_back(p.e1.dot(v - p.origin), p.e2.dot(v - p.origin));
-    p.albedo = f.albedo;
+    p.albedo = options.surface_albedo >= 0 ? options.surface_albedo : f.albedo;
+    p.albedo *=
+        0.114 * options.surface_tint[0] + 0.587 * options.surface_tint[1] + 0.299 * options.surface_tint[2];
     impl_->patches.push_back(p);
   }
   for (const SimMarker& m : object.markers) {
@@ -284,18 +296,12 @@ const CameraCache& Renderer::Impl::Cache(const SimCamera& camera, int index, con
           continue;
         }
         ray[u] = cv::Vec2d(x, y);
-        // d(distorted normalised)/d(undistorted) by central differences, then invert and scale.
-        const double e = 1e-6;
-        double xa, ya, xb, yb, xc, yc, xe, ye;
-        m.Distort(x + e, y, &xa, &ya);
-        m.Distort(x - e, y, &xb, &yb);
-        m.Distort(x, y + e, &xc, &yc);
-        m.Distort(x, y - e, &xe, &ye);
-        Eigen::Matrix2d d;
-        d << (xa - xb) / (2 * e), (xc - xe) / (2 * e), (ya - yb) / (2 * e), (yc - ye) / (2 * e);
-        Eigen::Matrix2d inv = d.inverse();
-        inv.col(0) /= m.fx;
-        inv.col(1) /= m.fy;
+        // d(pixel)/d(undistorted normalised) from the camera model's analytic projection Jacobian at
+        // z = 1 (its first two columns), inverted.
+        Eigen::Vector2d pixel;
+        Eigen::Matrix<double, 2, 3> d_pixel;
+        m.Project(Eigen::Vector3d(x, y, 1.0), &pixel, &d_pixel);
+        const Eigen::Matrix2d inv = d_pixel.leftCols<2>().inverse();
         jac[u] = cv::Vec4d(inv(0, 0), inv(0, 1), inv(1, 0), inv(1, 1));
       }
     }
@@ -422,7 +428,7 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
                     std::clamp(static_cast<int>(std::floor((p.half - q.y()) / p.cell)), 0, p.grid - 1);
                 value = lit * vp->shade * (p.cells[row * p.grid + col] ? white : black);
               } else {
-                value = lit * vp->shade * 255.0 * p.albedo;
+                value = lit * vp->shade * 255.0 * p.albedo * Grain(o, q);
               }
             }
             sum += value;
@@ -510,7 +516,7 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
             if (!(area > 0)) continue;
             coverage = std::min(1.0, area / det);
           }
-          value = 255.0 * p.albedo;
+          value = 255.0 * p.albedo * Grain(o, c);
         }
         hits.push_back({t - (p.is_marker ? 1e-5 : 0.0), coverage, lit * vp->shade * value});
       }
@@ -531,15 +537,80 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
 
 cv::Mat Renderer::RenderIdeal(const SimCamera& camera, int camera_index,
                               const Rigid3& rig_from_object) const {
-  const CameraCache& cache = impl_->Cache(camera, camera_index, options_);
+  const RenderOptions& o = options_.ForCamera(camera_index);
+  const CameraCache& cache = impl_->Cache(camera, camera_index, o);
   cv::Mat image = cache.background.clone();
-  impl_->RenderInto(camera, cache, rig_from_object, options_, &image);
+  impl_->RenderInto(camera, cache, rig_from_object, o, &image);
   return image;
 }
 
+namespace {
+
+// The optics on the scene's linear image: Gaussian blur, defocus disc (its area per kernel cell),
+// vignetting.
+void Optics(const RenderOptions& o, cv::Mat* image) {
+  if (o.blur_sigma > 0) cv::GaussianBlur(*image, *image, cv::Size(0, 0), o.blur_sigma);
+  if (o.defocus_radius > 0) {
+    const double radius = o.defocus_radius;
+    const int r = static_cast<int>(std::ceil(radius)) + 1;
+    cv::Mat kernel(2 * r + 1, 2 * r + 1, CV_32F, cv::Scalar(0));
+    for (int y = 0; y < kernel.rows; ++y)
+      for (int x = 0; x < kernel.cols; ++x) {
+        int inside = 0;
+        for (int a = 0; a < 8; ++a)
+          for (int b = 0; b < 8; ++b) {
+            const double dx = x - r - 0.5 + (b + 0.5) / 8, dy = y - r - 0.5 + (a + 0.5) / 8;
+            inside += dx * dx + dy * dy <= radius * radius;
+          }
+        kernel.at<float>(y, x) = static_cast<float>(inside);
+      }
+    kernel /= cv::sum(kernel)[0];
+    cv::filter2D(*image, *image, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  }
+  if (o.vignetting > 0) {
+    const double cx = 0.5 * (image->cols - 1), cy = 0.5 * (image->rows - 1), r2 = cx * cx + cy * cy;
+    for (int y = 0; y < image->rows; ++y) {
+      float* row = image->ptr<float>(y);
+      for (int x = 0; x < image->cols; ++x)
+        row[x] *= static_cast<float>(1.0 - o.vignetting * ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2);
+    }
+  }
+}
+
+// The sensor and the camera's processing on one linear channel: read and shot noise, gamma encoding,
+// sharpening (the result is still float; quantisation and JPEG follow).
+void Sensor(const RenderOptions& o, cv::RNG* rng, cv::Mat* c) {
+  if (o.noise_sigma > 0) {
+    cv::Mat noise(c->size(), CV_32F);
+    rng->fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
+    *c += noise;
+  }
+  if (o.shot_noise > 0) {  // variance shot_noise * level: unit normal noise scaled per pixel
+    cv::Mat noise(c->size(), CV_32F), level;
+    rng->fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+    cv::max(*c, 0.0, level);
+    cv::sqrt(level * o.shot_noise, level);
+    *c += noise.mul(level);
+  }
+  if (o.gamma != 1.0) {
+    cv::max(*c, 0.0, *c);
+    cv::min(*c, 255.0, *c);
+    *c *= 1.0 / 255.0;
+    cv::pow(*c, 1.0 / o.gamma, *c);
+    *c *= 255.0;
+  }
+  if (o.sharpen > 0) {
+    cv::Mat smooth;
+    cv::GaussianBlur(*c, smooth, cv::Size(0, 0), 1.0);
+    *c += o.sharpen * (*c - smooth);
+  }
+}
+
+}  // namespace
+
 cv::Mat Renderer::Render(const SimCamera& camera, int camera_index, int64_t frame,
                          const Rigid3& rig_from_object, const Rigid3* previous_rig_from_object) const {
-  const RenderOptions& o = options_;
+  const RenderOptions& o = options_.ForCamera(camera_index);
   const CameraCache& cache = impl_->Cache(camera, camera_index, o);
   cv::Mat image;
   if (o.motion_blur_samples > 1 && previous_rig_from_object != nullptr) {
@@ -563,31 +634,71 @@ cv::Mat Renderer::Render(const SimCamera& camera, int camera_index, int64_t fram
     image = cache.background.clone();
     impl_->RenderInto(camera, cache, rig_from_object, o, &image);
   }
-  if (o.blur_sigma > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), o.blur_sigma);
+  Optics(o, &image);
   cv::RNG rng(Mix(Mix(o.seed) ^ (static_cast<uint64_t>(camera_index) * 0x51ed27ULL) ^
                   (static_cast<uint64_t>(frame) * 0x2545f4914f6cdd1dULL)));
   cv::Mat result;
   if (o.bgr) {
     std::vector<cv::Mat> channels = {image * 0.96, image.clone(), image * 1.03};
-    for (cv::Mat& c : channels) {
-      if (o.noise_sigma > 0) {
-        cv::Mat noise(c.size(), CV_32F);
-        rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
-        c += noise;
-      }
-    }
+    for (cv::Mat& c : channels) Sensor(o, &rng, &c);
     cv::Mat merged;
     cv::merge(channels, merged);
     merged.convertTo(result, CV_8UC3);
   } else {
-    if (o.noise_sigma > 0) {
-      cv::Mat noise(image.size(), CV_32F);
-      rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
-      image += noise;
-    }
+    Sensor(o, &rng, &image);
     image.convertTo(result, CV_8U);
   }
+  if (o.jpeg_quality > 0) {
+    std::vector<uint8_t> buffer;
+    cv::imencode(".jpg", result, buffer, {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality});
+    result = cv::imdecode(buffer, o.bgr ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
+  }
   return result;
+}
+
+RenderOptions RandomImaging(const RenderOptions& base, int cameras, uint64_t seed,
+                            std::vector<std::string>* summary) {
+  std::mt19937_64 rng(Mix(seed ^ 0x1a2b3c4d5e6fULL));
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  auto range = [&](double lo, double hi) { return lo + (hi - lo) * uni(rng); };
+  RenderOptions session = base;
+  session.cameras.clear();
+  // The print and the surface, shared by every camera of the session.
+  session.quiet_zone_cells = static_cast<int>(std::floor(range(0.0, 2.999)));
+  // A dark surface needs a margin: markers glued on black without one have no outer edge to find.
+  session.surface_albedo = session.quiet_zone_cells == 0 ? range(0.3, 0.9) : range(0.05, 0.9);
+  session.surface_texture = uni(rng) < 0.5 ? 0.0 : range(0.05, 0.3);
+  for (double& t : session.surface_tint) t = range(0.8, 1.2);
+  session.shading = range(0.0, 0.5);
+  for (int k = 0; k < cameras; ++k) {
+    RenderOptions c = session;
+    c.lighting_gradient = range(0.0, 0.4);
+    c.vignetting = range(0.0, 0.35);
+    c.blur_sigma = 0.0, c.defocus_radius = 0.0;
+    if (uni(rng) < 0.5)
+      c.blur_sigma = range(0.3, 1.2);
+    else
+      c.defocus_radius = range(0.5, 1.6);
+    c.noise_sigma = range(1.0, 3.0);
+    c.shot_noise = range(0.0, 0.12);
+    c.gamma = uni(rng) < 0.25 ? 1.0 : range(1.8, 2.4);
+    c.sharpen = uni(rng) < 0.4 ? 0.0 : range(0.2, 0.8);
+    c.jpeg_quality = uni(rng) < 0.3 ? 0 : static_cast<int>(std::lround(range(60, 95)));
+    if (summary) summary->push_back(DescribeImaging(c));
+    session.cameras.push_back(c);
+  }
+  return session;
+}
+
+std::string DescribeImaging(const RenderOptions& o) {
+  char text[512];
+  std::snprintf(
+      text, sizeof(text),
+      "margin %d cells, surface %.2f (grain %.2f), shading %.2f, gradient %.2f, vignetting %.2f, "
+      "blur %.2f px, defocus %.2f px, noise %.1f + shot %.3f/level, gamma %.2f, sharpen %.2f, jpeg %d",
+      o.quiet_zone_cells, o.surface_albedo, o.surface_texture, o.shading, o.lighting_gradient, o.vignetting,
+      o.blur_sigma, o.defocus_radius, o.noise_sigma, o.shot_noise, o.gamma, o.sharpen, o.jpeg_quality);
+  return text;
 }
 
 namespace internal {
@@ -598,28 +709,13 @@ bool UndistortNormalized(const CameraModel& model, const ValidRegion& region, do
     *x = xd, *y = yd;
     return true;
   }
-  double ux = xd, uy = yd;
-  for (int it = 0; it < 100; ++it) {
-    double fx, fy;
-    model.Distort(ux, uy, &fx, &fy);
-    const double rx = fx - xd, ry = fy - yd;
-    if (std::abs(rx) < 1e-14 && std::abs(ry) < 1e-14) break;
-    const double e = 1e-7;
-    double ax, ay, bx, by;
-    model.Distort(ux + e, uy, &ax, &ay);
-    model.Distort(ux, uy + e, &bx, &by);
-    Eigen::Matrix2d j;
-    j << (ax - fx) / e, (bx - fx) / e, (ay - fy) / e, (by - fy) / e;
-    const Eigen::Vector2d step = j.inverse() * Eigen::Vector2d(rx, ry);
-    if (!(step.allFinite())) return false;
-    ux -= step.x();
-    uy -= step.y();
-  }
-  double fx, fy;
-  model.Distort(ux, uy, &fx, &fy);
-  if (!(std::abs(fx - xd) < 1e-10 && std::abs(fy - yd) < 1e-10)) return false;
-  if (!region.Contains(ux, uy)) return false;
-  *x = ux, *y = uy;
+  // The camera model's own unprojection (core/camera), checked by projecting back.
+  const Eigen::Vector2d pixel(model.fx * xd + model.cx, model.fy * yd + model.cy);
+  const Eigen::Vector2d u = model.Unproject(pixel);
+  if (!u.allFinite() || !region.Contains(u.x(), u.y())) return false;
+  const Eigen::Vector2d back = model.Project(Eigen::Vector3d(u.x(), u.y(), 1.0));
+  if (!((back - pixel).norm() < 1e-7 * std::max(1.0, model.fx))) return false;
+  *x = u.x(), *y = u.y();
   return true;
 }
 

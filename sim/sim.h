@@ -186,7 +186,43 @@ struct RenderOptions {
   bool bgr = false;                 // 3-channel output (gray replicated with a slight tint)
   bool inverted = false;            // white-on-black markers
   uint64_t seed = 1;                // background texture and noise (noise also varies with frame and camera)
+
+  // The surface the prints are glued on (the body's faces): reflectance (< 0: each face's own albedo),
+  // the relative amplitude of a wood-like grain (0: plain) and its period (metres), and a colour tint
+  // (B, G, R factors of the reflectance; the gray image is their Rec. 601 mean).
+  double surface_albedo = -1.0;
+  double surface_texture = 0.0;
+  double surface_texture_period = 0.012;
+  double surface_tint[3] = {1.0, 1.0, 1.0};
+  // The camera pipeline, after the scene's image in linear light (exact area coverage per pixel):
+  // optics blur (blur_sigma, then a defocus disc of this radius, px), vignetting (relative fall-off of
+  // the light at the image corners, r^2 law), sensor noise (noise_sigma: read noise in linear gray
+  // levels; shot_noise: variance added per linear gray level), gamma encoding 255 (v / 255)^(1 / gamma),
+  // sharpening (unsharp mask of this amount, sigma 1 px, on encoded values), 8-bit quantisation and JPEG
+  // compression at jpeg_quality (0: none).
+  double defocus_radius = 0.0;
+  double vignetting = 0.0;
+  double shot_noise = 0.0;
+  double gamma = 1.0;
+  double sharpen = 0.0;
+  int jpeg_quality = 0;
+  // Per-camera imaging (index = camera index): where present it replaces these options for that camera
+  // (RandomImaging fills it).
+  std::vector<RenderOptions> cameras;
+  const RenderOptions& ForCamera(int index) const {
+    return index >= 0 && index < static_cast<int>(cameras.size()) ? cameras[index] : *this;
+  }
 };
+
+// `--imaging random`: a different imaging condition per camera drawn from `seed`, over `base`: per
+// session the print's margin (0-2 cells), the surface (reflectance 0.05-0.9, at least 0.3 without a
+// margin; tint, grain) and the faces' shading; per camera the light gradient, vignetting, Gaussian or defocus
+// blur, noise, gamma, sharpening and JPEG quality. Deterministic for a seed. `summary` (optional) gets one
+// line per camera.
+RenderOptions RandomImaging(const RenderOptions& base, int cameras, uint64_t seed,
+                            std::vector<std::string>* summary = nullptr);
+// One line describing a camera's imaging (units included).
+std::string DescribeImaging(const RenderOptions& o);
 
 // Renders marker images of one dictionary. Thread-compatible (const methods are thread-safe).
 class Renderer {

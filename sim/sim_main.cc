@@ -7,6 +7,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/cli.h"
@@ -50,6 +51,10 @@ int Main(int argc, char** argv) {
          blur = 0.0;
   double corner_noise = 0.1, miss_rate = 0.0, false_rate = 0.0, drop_rate = 0.0, intrinsics_spread = 0.0;
   double max_tilt = 35.0, turns = 1.5;
+  std::string imaging = "default";
+  double surface_albedo = -1.0, surface_texture = 0.0, shading = 0.3, gradient = 0.3, vignetting = 0.0,
+         defocus = 0.0, shot_noise = 0.0, gamma = 1.0, sharpen = 0.0;
+  int jpeg_quality = 0;
   bool motion_blur = false, video = false, detections_only = false, bgr = false, quiet = false,
        plain_bg = false;
 
@@ -83,8 +88,25 @@ int Main(int argc, char** argv) {
   args.AddDouble("blur", &blur, "Gaussian blur sigma, pixels (0: none)");
   args.AddFlag("motion-blur", &motion_blur, "average 5 poses over half a frame interval (5x slower)");
   args.AddInt("supersampling", &supersampling, "0: exact area anti-aliasing; S: SxS point samples per pixel");
-  args.AddInt("quiet-zone", &quiet_zone, "white margin around each marker, in marker cells");
+  args.AddInt("quiet-zone", &quiet_zone, "white margin around each marker, in marker cells (0..2 typical)");
   args.AddFlag("plain-background", &plain_bg, "uniform gray background instead of a textured one");
+  args.AddString("imaging", &imaging,
+                 "default | random: a different imaging condition per camera drawn from --seed (margin, "
+                 "surface, shading, gradient, vignetting, blur or defocus, noise, gamma, sharpening, JPEG; "
+                 "the imaging options below are then ignored)");
+  args.AddDouble("surface-albedo", &surface_albedo,
+                 "reflectance 0..1 of the surface the markers are glued on (-1: the object's own)");
+  args.AddDouble("surface-texture", &surface_texture,
+                 "relative amplitude 0..1 of the surface's grain (0: plain)");
+  args.AddDouble("shading", &shading, "relative brightness change between faces by their normal, 0..1");
+  args.AddDouble("gradient", &gradient, "relative brightness change of the light across the image, 0..1");
+  args.AddDouble("vignetting", &vignetting, "relative fall-off of the light at the image corners, 0..1");
+  args.AddDouble("defocus", &defocus, "defocus blur: disc radius, pixels (0: none)");
+  args.AddDouble("shot-noise", &shot_noise, "photon noise: variance added per linear gray level (0: none)");
+  args.AddDouble("gamma", &gamma, "encoding gamma: written value 255 (v / 255)^(1 / gamma) (1: linear)");
+  args.AddDouble("sharpen", &sharpen, "camera sharpening: unsharp mask amount, sigma 1 px (0: none)");
+  args.AddInt("jpeg-quality", &jpeg_quality,
+              "JPEG compression of every frame at this quality 1..100 (0: none)");
   args.AddFlag("bgr", &bgr, "write 3-channel images");
   args.AddFlag("video", &video, "write DIR/camK.mp4 instead of PNG folders");
   args.AddInt("still-frames", &still_frames, "length of each of two still segments, frames (0: none)");
@@ -175,6 +197,34 @@ int Main(int argc, char** argv) {
   o.render.textured_background = !plain_bg;
   o.render.bgr = bgr;
   o.render.seed = static_cast<uint64_t>(seed);
+  if (!(surface_albedo == -1.0 || (surface_albedo >= 0 && surface_albedo <= 1)))
+    throw std::invalid_argument("--surface-albedo: expected 0..1 or -1, got " + Num(surface_albedo));
+  CheckRate("surface-texture", surface_texture, 1.0);
+  CheckRate("shading", shading, 1.0);
+  CheckRate("gradient", gradient, 1.0);
+  CheckRate("vignetting", vignetting, 1.0);
+  CheckRate("defocus", defocus, 50.0);
+  CheckRate("shot-noise", shot_noise, 10.0);
+  CheckRate("sharpen", sharpen, 5.0);
+  if (!(gamma >= 0.2 && gamma <= 5))
+    throw std::invalid_argument("--gamma: expected 0.2..5, got " + Num(gamma));
+  if (jpeg_quality < 0 || jpeg_quality > 100)
+    throw std::invalid_argument("--jpeg-quality: expected 0..100, got " + std::to_string(jpeg_quality));
+  o.render.surface_albedo = surface_albedo;
+  o.render.surface_texture = surface_texture;
+  o.render.shading = shading;
+  o.render.lighting_gradient = gradient;
+  o.render.vignetting = vignetting;
+  o.render.defocus_radius = defocus;
+  o.render.shot_noise = shot_noise;
+  o.render.gamma = gamma;
+  o.render.sharpen = sharpen;
+  o.render.jpeg_quality = jpeg_quality;
+  std::vector<std::string> imaging_summary;
+  if (imaging == "random")
+    o.render = sim::RandomImaging(o.render, cameras, static_cast<uint64_t>(seed), &imaging_summary);
+  else if (imaging != "default")
+    throw std::invalid_argument("--imaging: expected default or random, got '" + imaging + "'");
   if (!(corner_noise >= 0 && corner_noise <= 100))
     throw std::invalid_argument("--corner-noise-px: expected 0..100");
   CheckRate("miss-rate", miss_rate, 1.0);
@@ -209,6 +259,9 @@ int Main(int argc, char** argv) {
     };
   const sim::DatasetSummary s = sim::GenerateDataset(o);
   if (progress) progress->Finish();
+  if (!quiet)
+    for (size_t k = 0; k < imaging_summary.size(); ++k)
+      std::printf("mcmt-sim: cam%zu imaging: %s\n", k, imaging_summary[k].c_str());
   if (!quiet) {
     std::printf(
         "mcmt-sim: %s, %zu cameras, %zu markers, %zu frames -> %s (%s, %.2f s)\n", s.truth.object.c_str(),

@@ -22,7 +22,8 @@ struct SimEvalOptions {
   DistortionModel distortion = DistortionModel::kNone;
   double noise = 2.0, blur = 0.0;
   bool inverted = false;
-  double min_size_px = 15.0;  // markers smaller than this are not counted
+  double min_size_px = 15.0;    // markers smaller than this are not counted
+  uint64_t random_imaging = 0;  // > 0: sim::RandomImaging with this seed (a condition per camera)
   uint64_t seed = 3;
   DetectorOptions detector;
 };
@@ -60,6 +61,7 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
   ro.blur_sigma = o.blur;
   ro.inverted = o.inverted;
   ro.seed = o.seed;
+  if (o.random_imaging > 0) ro = sim::RandomImaging(ro, o.cameras, o.random_imaging);
   sim::Renderer renderer(object, o.dictionary, ro);
   MarkerConfig mc;
   mc.dictionary = o.dictionary;

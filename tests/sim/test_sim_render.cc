@@ -9,6 +9,7 @@
 #include <cmath>
 #include <iostream>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -771,3 +772,72 @@ TEST(BoxLayout, EverySeedPlacesEightMarkersWithoutOverlap) {
   EXPECT_TRUE(a.markers[3].object_from_marker.isApprox(b.markers[3].object_from_marker, 0.0));
   EXPECT_FALSE(a.markers[3].object_from_marker.isApprox(c.markers[3].object_from_marker, 1e-6));
 }
+
+namespace mcmt {
+namespace {
+
+// The camera pipeline on the scene's linear image: gamma encodes every level as 255 (v / 255)^(1 / g),
+// vignetting darkens the corners by its fraction, shot noise grows with the level, JPEG changes the
+// bytes by a few levels, sharpening overshoots at edges; --imaging random draws per camera, reproducibly.
+TEST(RenderPipeline, EachImagingParameterActsAsDocumented) {
+  const sim::SimCamera cam = PinholeCamera(160, 120, 150, 79.5, 59.5);
+  const sim::SimObject obj = SingleMarker(0.04);
+  const Rigid3 pose = FacingPose(Vec3(0, 0, 0.5), 0, 0, 0);
+  sim::RenderOptions base = ExactOptions();
+  auto render = [&](const sim::RenderOptions& o) {
+    cv::Mat f;
+    sim::Renderer(obj, "DICT_6X6_250", o).Render(cam, 0, 0, pose).convertTo(f, CV_64F);
+    return f;
+  };
+  const cv::Mat linear = render(base);
+  sim::RenderOptions g = base;
+  g.gamma = 2.2;
+  const cv::Mat encoded = render(g);
+  const double bg = linear.at<double>(2, 2), bg_encoded = encoded.at<double>(2, 2);
+  EXPECT_NEAR(bg_encoded, 255.0 * std::pow(bg / 255.0, 1.0 / 2.2), 1.0);
+  sim::RenderOptions v = base;
+  v.vignetting = 0.3;
+  const cv::Mat vignetted = render(v);
+  EXPECT_NEAR(vignetted.at<double>(0, 0), 0.7 * linear.at<double>(0, 0), 1.0);
+  EXPECT_NEAR(vignetted.at<double>(60, 2),
+              linear.at<double>(60, 2) * (1 - 0.3 * (77.5 * 77.5 + 0.25) / (79.5 * 79.5 + 59.5 * 59.5)), 1.0);
+  sim::RenderOptions s = base;
+  s.shot_noise = 0.5;
+  const cv::Mat shot = render(s);
+  cv::Mat diff = shot - linear;
+  const cv::Rect corner(0, 0, 20, 20);  // background, level kBackground
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(diff(corner), mean, stddev);
+  EXPECT_NEAR(stddev[0], std::sqrt(0.5 * bg), 0.25 * std::sqrt(0.5 * bg));
+  sim::RenderOptions j = base;
+  j.jpeg_quality = 70;
+  const cv::Mat jpeg = render(j);
+  const double jpeg_change = cv::norm(jpeg, linear, cv::NORM_L1) / linear.total();
+  EXPECT_GT(jpeg_change, 0.05);
+  EXPECT_LT(jpeg_change, 4.0);
+  sim::RenderOptions sh = base;
+  sh.sharpen = 0.8;
+  double min_sharp, max_sharp, min_plain, max_plain;
+  cv::minMaxLoc(render(sh), &min_sharp, &max_sharp);
+  cv::minMaxLoc(linear, &min_plain, &max_plain);
+  EXPECT_LT(min_sharp, min_plain - 5);  // undershoot on the dark side of the marker's edges
+
+  std::vector<std::string> a_lines, b_lines;
+  const sim::RenderOptions a = sim::RandomImaging(sim::RenderOptions(), 5, 7, &a_lines);
+  const sim::RenderOptions b = sim::RandomImaging(sim::RenderOptions(), 5, 7, &b_lines);
+  ASSERT_EQ(a.cameras.size(), 5u);
+  EXPECT_EQ(a_lines, b_lines);
+  std::set<std::string> distinct(a_lines.begin(), a_lines.end());
+  EXPECT_EQ(distinct.size(), 5u);
+  for (const auto& c : a.cameras) {
+    EXPECT_EQ(c.quiet_zone_cells, a.quiet_zone_cells);  // the print is the session's
+    EXPECT_GE(c.quiet_zone_cells, 0);
+    EXPECT_LE(c.quiet_zone_cells, 2);
+    EXPECT_TRUE(c.gamma == 1.0 || (c.gamma >= 1.8 && c.gamma <= 2.4));
+    EXPECT_TRUE(c.jpeg_quality == 0 || (c.jpeg_quality >= 60 && c.jpeg_quality <= 95));
+  }
+  EXPECT_NE(sim::RandomImaging(sim::RenderOptions(), 5, 8).cameras[0].noise_sigma, a.cameras[0].noise_sigma);
+}
+
+}  // namespace
+}  // namespace mcmt

