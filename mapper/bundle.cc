@@ -4,14 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "core/math.h"
+
 namespace mcmt {
 namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
 
 Eigen::Quaterniond QuaternionExp(const Eigen::Vector3d& w) {
   const double angle = w.norm();
@@ -152,6 +148,67 @@ class ProgressCallback : public ceres::IterationCallback {
 
 }  // namespace
 
+namespace {
+
+// Residual blocks of the active observations; returns the number of corners. *used flags the blocks.
+int AddObservations(BundleProblem* bp, ceres::LossFunction* loss, ceres::Problem* problem,
+                    std::vector<char>* camera_used, std::vector<char>* marker_used,
+                    std::vector<char>* frame_used) {
+  int num_corners = 0;
+  for (size_t i = 0; i < bp->observations.size(); ++i) {
+    if (!bp->active[i]) continue;
+    const BundleObservation& o = bp->observations[i];
+    problem->AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side), loss,
+                              bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
+                              bp->rig_from_object[o.frame].data());
+    (*camera_used)[o.camera] = (*marker_used)[o.marker] = (*frame_used)[o.frame] = 1;
+    num_corners += 4;
+  }
+  return num_corners;
+}
+
+// Manifold, constness and elimination group (`group`) of every used block of one kind; returns how many.
+int SetBlocks(std::vector<PoseBlock>* blocks, const std::vector<char>& used, const std::vector<char>& fixed,
+              int group, ceres::Manifold* manifold, ceres::Problem* problem,
+              ceres::ParameterBlockOrdering* ordering) {
+  int n = 0;
+  for (size_t k = 0; k < used.size(); ++k) {
+    if (!used[k]) continue;
+    double* block = (*blocks)[k].data();
+    problem->SetManifold(block, manifold);
+    if (k < fixed.size() && fixed[k]) problem->SetParameterBlockConstant(block);
+    ordering->AddElementToGroup(block, group);
+    ++n;
+  }
+  return n;
+}
+
+// The linear solver ("auto": dense Schur for small reduced systems) and stopping rules.
+ceres::Solver::Options SolverOptions(const BundleSettings& settings, int num_reduced, std::string* solver) {
+  ceres::Solver::Options options;
+  *solver = settings.linear_solver;
+  if (*solver == "auto") *solver = num_reduced <= 200 ? "dense_schur" : "sparse_schur";
+  if (*solver == "dense_schur") {
+    options.linear_solver_type = ceres::DENSE_SCHUR;
+  } else if (*solver == "iterative_schur") {
+    options.linear_solver_type = ceres::ITERATIVE_SCHUR;
+    options.preconditioner_type = ceres::SCHUR_JACOBI;
+  } else {
+    *solver = "sparse_schur";
+    options.linear_solver_type = ceres::SPARSE_SCHUR;
+  }
+  options.num_threads = std::max(1, settings.threads);
+  options.max_num_iterations = settings.max_iterations;
+  options.function_tolerance = 1e-10;
+  options.gradient_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-10;
+  options.logging_type = ceres::SILENT;
+  options.update_state_every_iteration = false;
+  return options;
+}
+
+}  // namespace
+
 BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   const auto start = std::chrono::steady_clock::now();
   BundleSummary out;
@@ -164,71 +221,24 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   // where the observation's RMS corner error reaches huber_px.
   std::unique_ptr<ceres::LossFunction> loss;
   if (settings.huber_px > 0) loss.reset(new ceres::HuberLoss(2.0 * settings.huber_px));
-
   std::vector<char> camera_used(bp->cam_from_rig.size(), 0), marker_used(bp->object_from_marker.size(), 0),
       frame_used(bp->rig_from_object.size(), 0);
-  int num_corners = 0;
-  for (size_t i = 0; i < bp->observations.size(); ++i) {
-    if (!bp->active[i]) continue;
-    const BundleObservation& o = bp->observations[i];
-    problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side), loss.get(),
-                             bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
-                             bp->rig_from_object[o.frame].data());
-    camera_used[o.camera] = marker_used[o.marker] = frame_used[o.frame] = 1;
-    num_corners += 4;
-  }
+  const int num_corners = AddObservations(bp, loss.get(), &problem, &camera_used, &marker_used, &frame_used);
   if (num_corners == 0) {
     out.termination = "no observations";
     return out;
   }
   auto* ordering = new ceres::ParameterBlockOrdering;
-  int num_reduced = 0;
-  for (size_t c = 0; c < camera_used.size(); ++c) {
-    if (!camera_used[c]) continue;
-    double* block = bp->cam_from_rig[c].data();
-    problem.SetManifold(block, &manifold);
-    if (bp->camera_fixed[c]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 1);
-    ++num_reduced;
-  }
-  for (size_t m = 0; m < marker_used.size(); ++m) {
-    if (!marker_used[m]) continue;
-    double* block = bp->object_from_marker[m].data();
-    problem.SetManifold(block, &manifold);
-    if (bp->marker_fixed[m]) problem.SetParameterBlockConstant(block);
-    ordering->AddElementToGroup(block, 1);
-    ++num_reduced;
-  }
-  for (size_t f = 0; f < frame_used.size(); ++f) {
-    if (!frame_used[f]) continue;
-    double* block = bp->rig_from_object[f].data();
-    problem.SetManifold(block, &manifold);
-    ordering->AddElementToGroup(block, 0);  // eliminated first
-  }
-
-  ceres::Solver::Options options;
-  std::string solver = settings.linear_solver;
-  if (solver == "auto") solver = num_reduced <= 200 ? "dense_schur" : "sparse_schur";
-  if (solver == "dense_schur") {
-    options.linear_solver_type = ceres::DENSE_SCHUR;
-  } else if (solver == "iterative_schur") {
-    options.linear_solver_type = ceres::ITERATIVE_SCHUR;
-    options.preconditioner_type = ceres::SCHUR_JACOBI;
-  } else {
-    solver = "sparse_schur";
-    options.linear_solver_type = ceres::SPARSE_SCHUR;
-  }
-  out.linear_solver = solver;
+  int num_reduced =
+      SetBlocks(&bp->cam_from_rig, camera_used, bp->camera_fixed, 1, &manifold, &problem, ordering);
+  num_reduced +=
+      SetBlocks(&bp->object_from_marker, marker_used, bp->marker_fixed, 1, &manifold, &problem, ordering);
+  SetBlocks(&bp->rig_from_object, frame_used, bp->frame_fixed, 0, &manifold, &problem,
+            ordering);  // eliminated first
+  ceres::Solver::Options options = SolverOptions(settings, num_reduced, &out.linear_solver);
   options.linear_solver_ordering.reset(ordering);
-  options.num_threads = std::max(1, settings.threads);
-  options.max_num_iterations = settings.max_iterations;
-  options.function_tolerance = 1e-10;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-10;
-  options.logging_type = ceres::SILENT;
   ProgressCallback callback(settings, num_corners);
   options.callbacks.push_back(&callback);
-  options.update_state_every_iteration = false;
 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
