@@ -228,13 +228,15 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
     out.termination = "no observations";
     return out;
   }
+  // Ceres orders the blocks of one group by address: cameras and markers (separate vectors, anywhere on the
+  // heap relative to each other) get a group each, so the reduced system's order -- and the last bits of
+  // the solution -- do not depend on where the heap put them. Frames (group 0) are eliminated first.
   auto* ordering = new ceres::ParameterBlockOrdering;
   int num_reduced =
       SetBlocks(&bp->cam_from_rig, camera_used, bp->camera_fixed, 1, &manifold, &problem, ordering);
   num_reduced +=
-      SetBlocks(&bp->object_from_marker, marker_used, bp->marker_fixed, 1, &manifold, &problem, ordering);
-  SetBlocks(&bp->rig_from_object, frame_used, bp->frame_fixed, 0, &manifold, &problem,
-            ordering);  // eliminated first
+      SetBlocks(&bp->object_from_marker, marker_used, bp->marker_fixed, 2, &manifold, &problem, ordering);
+  SetBlocks(&bp->rig_from_object, frame_used, bp->frame_fixed, 0, &manifold, &problem, ordering);
   ceres::Solver::Options options = SolverOptions(settings, num_reduced, &out.linear_solver);
   options.linear_solver_ordering.reset(ordering);
   ProgressCallback callback(settings, num_corners);
