@@ -1,4 +1,5 @@
-// A small command-line parser for the mcmt programs (--name value, --name=value, --flag, --help)
+// A small command-line parser for the mcmt programs (--name value, --name=value, --flag, --help,
+// --version)
 // and RunMain, which turns exceptions into a one-line "program: error: ..." and exit code 1.
 #pragma once
 
@@ -24,7 +25,8 @@ class ArgParser {
   void AddEpilog(const std::string& text);
 
   // Returns true to go on. Returns false when the program should exit with *exit_code:
-  // 0 after --help, 2 after a usage error (printed as one line on stderr, naming the option).
+  // 0 after --help or --version ("<program> <mcmt::Version()>" on stdout), 2 after a usage error (printed as
+  // one line on stderr, naming the option).
   bool Parse(int argc, char** argv, int* exit_code);
   // Was the option given on the command line?
   bool Given(const std::string& name) const;

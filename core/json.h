@@ -10,4 +10,7 @@ namespace mcmt {
 // JSON. Other bytes (UTF-8) pass through unchanged.
 std::string JsonString(const std::string& s);
 
+// A finite number with 10 significant digits; `null` for NaN and infinities (JSON has no such numbers).
+std::string JsonNumber(double v);
+
 }  // namespace mcmt

@@ -4,12 +4,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "core/progress.h"
 
 namespace mcmt {
 namespace {
@@ -187,6 +189,9 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
   double status_ms = 0, status_max_ms = 0;
   detections_t d;
   cv::Mat image;
+  std::unique_ptr<Progress> progress;  // recordings: a bar on a terminal, a line every 5 s otherwise
+  if (!options_.quiet && !source.live())
+    progress = std::make_unique<Progress>("camera " + options_.camera, std::max<int64_t>(0, source.size()));
   while (!stop && (options_.max_frames < 0 || stats_.frames < options_.max_frames)) {
     if (!pipeline_.Next(&d, options_.images ? &image : nullptr)) break;
     if (realtime) {
@@ -216,6 +221,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
     lcm_.publish(channel_, bytes.data(), static_cast<unsigned int>(bytes.size()));
     if (options_.images) PublishImage(image, d);
     ++stats_.frames;
+    if (progress) progress->Update(stats_.frames);
     stats_.markers += d.num_markers;
     stats_.detection_ms_total += d.detection_ms;
     ++status_frames;
@@ -231,6 +237,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
                     options_.camera.c_str(), static_cast<long long>(stats_.frames), status_frames / elapsed,
                     static_cast<double>(status_markers) / status_frames, status_ms / status_frames,
                     status_max_ms, static_cast<long long>(source.skipped()));
+      if (progress && progress->terminal()) std::cerr << "\r\033[K" << std::flush;  // the bar redraws after
       std::cout << line << std::endl;
       status_start = Clock::now();
       status_frames = status_markers = 0;
@@ -238,6 +245,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
     }
   }
   stats_.skipped = source.skipped();
+  if (progress) progress->Finish();
   if (!options_.quiet) {
     const MarkerDetector& detector = pipeline_.detector();
     const long long dropped = detector.stats().dropped;

@@ -112,13 +112,15 @@ std::vector<std::string> SplitCsv(const std::string& line) {
   return fields;
 }
 
-Eigen::Matrix4d Matrix(const Rigid3& t) { return t.matrix(); }
+const char kTumHeader[] = "# timestamp tx ty tz qx qy qz qw (rig_from_object, seconds, metres)\n";
 
-cv::Mat ToCvMat(const Eigen::Matrix4d& m) {
-  cv::Mat out(4, 4, CV_64F);
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) out.at<double>(r, c) = m(r, c);
-  return out;
+// One TUM line: seconds with microseconds, position, quaternion x y z w (q_wxyz is w, x, y, z).
+std::string TumLine(int64_t utime, const double* p, const double* q_wxyz) {
+  char seconds[48];
+  std::snprintf(seconds, sizeof(seconds), "%lld.%06lld", static_cast<long long>(utime / 1000000),
+                static_cast<long long>(utime % 1000000));
+  return std::string(seconds) + " " + G17(p[0]) + " " + G17(p[1]) + " " + G17(p[2]) + " " + G17(q_wxyz[1]) +
+         " " + G17(q_wxyz[2]) + " " + G17(q_wxyz[3]) + " " + G17(q_wxyz[0]) + "\n";
 }
 
 bool Exists(const std::string& path) {
@@ -135,7 +137,7 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
   LogExportResult result;
   std::string det_csv = std::string(kDetectionsCsvHeader) + "\n";
   std::string poses_csv = std::string(kTrajectoryHeader) + "\n";
-  std::string tum = "# timestamp tx ty tz qx qy qz qw (rig_from_object, seconds, metres)\n";
+  std::string tum = kTumHeader;
   const bool want_det = !request.detections_csv.empty();
   const bool want_poses = !request.poses_csv.empty() || !request.tum.empty();
   ForEachEvent(log, [&](const LogEvent& e, int64_t index, const std::string& part) {
@@ -171,11 +173,7 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
       poses_csv += std::to_string(pose.utime) + "," + std::to_string(pose.seq);
       for (double v : {p[0], p[1], p[2], q[0], q[1], q[2], q[3], pose.rms_px}) poses_csv += "," + G17(v);
       poses_csv += "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) + "\n";
-      char seconds[48];
-      std::snprintf(seconds, sizeof(seconds), "%lld.%06lld", static_cast<long long>(pose.utime / 1000000),
-                    static_cast<long long>(pose.utime % 1000000));
-      tum += std::string(seconds) + " " + G17(p[0]) + " " + G17(p[1]) + " " + G17(p[2]) + " " + G17(q[1]) +
-             " " + G17(q[2]) + " " + G17(q[3]) + " " + G17(q[0]) + "\n";
+      tum += TumLine(pose.utime, p, q);
       ++result.pose_rows;
     }
   });
@@ -183,6 +181,48 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
   if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, poses_csv);
   if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
   return result;
+}
+
+bool IsTrajectoryCsv(const std::string& path) {
+  std::ifstream in(path);
+  std::string first;
+  return std::getline(in, first) &&
+         (first == kTrajectoryHeader || first == std::string(kTrajectoryHeader) + "\r");
+}
+
+LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request) {
+  LogExportResult result;
+  std::string poses_csv = std::string(kTrajectoryHeader) + "\n", tum = kTumHeader;
+  for (const TrajectoryRow& row : ReadTrajectory(csv)) {
+    poses_csv += TrajectoryCsvLine(row) + "\n";
+    const Eigen::Vector3d p = row.rig_from_object.translation();
+    tum += TumLine(row.utime, p.data(), QuaternionWxyz(row.rig_from_object).data());
+    ++result.pose_rows;
+  }
+  if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, poses_csv);
+  if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
+  return result;
+}
+
+std::string WhyPosesEmpty(const std::string& source, bool from_trajectory, const LogExportResult& r,
+                          const std::string& pose_channel) {
+  if (r.pose_rows > 0) return "";
+  if (from_trajectory) return source + " has no rows: no frame had a pose";
+  if (r.poses_skipped > 0)
+    return "all " + std::to_string(r.poses_skipped) + " object_pose_t on " + pose_channel + " in " + source +
+           " are LOST (no pose)";
+  return "no object_pose_t on " + pose_channel + " in " + source +
+         " (mcmt-tracker was not running while it was recorded); the mapper's poses are in "
+         "OUTDIR/trajectory.csv: "
+         "give it as --trajectory OUTDIR/trajectory.csv";
+}
+
+std::string WhyDetectionsEmpty(const std::string& log, const LogExportResult& r) {
+  if (r.detection_rows > 0) return "";
+  if (r.detection_messages == 0)
+    return "no detections_t on " + std::string(kDetectionsChannelPrefix) + "* in " + log;
+  return "none of the " + std::to_string(r.detection_messages) + " detections_t in " + log +
+         " holds a marker";
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -470,51 +510,7 @@ CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& 
 }
 
 // ---------------------------------------------------------------------------------------------------------
-// Map exports
-
-namespace {
-
-void EmitMatrixRows(YAML::Emitter& y, const Eigen::Matrix4d& m) {
-  y << YAML::BeginSeq;
-  for (int r = 0; r < 4; ++r) {
-    y << YAML::Flow << YAML::BeginSeq;
-    for (int c = 0; c < 4; ++c) y << m(r, c);
-    y << YAML::EndSeq;
-  }
-  y << YAML::EndSeq;
-}
-
-void EmitFlowList(YAML::Emitter& y, const std::vector<double>& values) {
-  y << YAML::Flow << YAML::BeginSeq;
-  for (double v : values) y << v;
-  y << YAML::EndSeq;
-}
-
-// ROS camera_info distortion model name and coefficients.
-std::pair<std::string, std::vector<double>> RosDistortion(const CameraModel& m) {
-  switch (m.model) {
-    case DistortionModel::kNone:
-      return {"plumb_bob", std::vector<double>(5, 0.0)};
-    case DistortionModel::kFisheye:
-      return {"equidistant", m.distortion};
-    case DistortionModel::kRadTan:
-      break;
-  }
-  std::vector<double> d = m.distortion;
-  if (d.size() > 5) {
-    d.resize(8, 0.0);
-    return {"rational_polynomial", d};
-  }
-  d.resize(5, 0.0);
-  return {"plumb_bob", d};
-}
-
-std::string FinishYaml(const YAML::Emitter& y, const std::string& what) {
-  if (!y.good()) throw std::runtime_error(what + ": cannot emit YAML: " + y.GetLastError());
-  return std::string(y.c_str()) + "\n";
-}
-
-}  // namespace
+// Map from a log (the exports of a map are in core/map_export.h)
 
 RigMap ReadMapOrLog(const std::string& path) {
   bool is_log = false;
@@ -536,229 +532,6 @@ RigMap ReadMapOrLog(const std::string& path) {
   });
   if (!found) throw LogFormatError(path + ": no rig_map_t on " + std::string(kMapChannel) + " in this log");
   return FromRigMapMsg(last);
-}
-
-std::string KalibrCamchain(const RigMap& map) {
-  YAML::Emitter y;
-  y.SetDoublePrecision(17);
-  y << YAML::BeginMap;
-  for (size_t i = 0; i < map.cameras.size(); ++i) {
-    const MapCamera& cam = map.cameras[i];
-    const CameraModel& m = cam.model;
-    std::string model = "radtan";
-    std::vector<double> d(4, 0.0);
-    if (m.model == DistortionModel::kFisheye) {
-      model = "equidistant";
-      d = m.distortion;
-    } else if (m.model == DistortionModel::kRadTan) {
-      for (size_t k = 0; k < 4 && k < m.distortion.size(); ++k) d[k] = m.distortion[k];
-      for (size_t k = 4; k < m.distortion.size(); ++k)
-        if (m.distortion[k] != 0.0)
-          throw std::runtime_error("camera " + cam.name + ": radtan coefficient k" + std::to_string(k - 1) +
-                                   " = " + G17(m.distortion[k]) +
-                                   " cannot be written to a Kalibr camchain (radtan has k1 k2 p1 p2 only)");
-    }
-    y << YAML::Key << ("cam" + std::to_string(i)) << YAML::Value << YAML::BeginMap;
-    if (i > 0) {
-      const Rigid3 cn_from_cnm1 = Inverse(cam.rig_from_cam) * map.cameras[i - 1].rig_from_cam;
-      y << YAML::Key << "T_cn_cnm1" << YAML::Value;
-      EmitMatrixRows(y, Matrix(cn_from_cnm1));
-    }
-    y << YAML::Key << "camera_model" << YAML::Value << "pinhole";
-    y << YAML::Key << "intrinsics" << YAML::Value;
-    EmitFlowList(y, {m.fx, m.fy, m.cx, m.cy});
-    y << YAML::Key << "distortion_model" << YAML::Value << model;
-    y << YAML::Key << "distortion_coeffs" << YAML::Value;
-    EmitFlowList(y, d);
-    y << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << m.width << m.height
-      << YAML::EndSeq;
-    y << YAML::Key << "rostopic" << YAML::Value << ("/" + cam.name + "/image_raw");
-    y << YAML::EndMap;
-  }
-  y << YAML::EndMap;
-  return FinishYaml(y, "Kalibr camchain");
-}
-
-std::string RosCameraInfo(const MapCamera& camera) {
-  const CameraModel& m = camera.model;
-  auto [model, d] = RosDistortion(m);
-  YAML::Emitter y;
-  y.SetDoublePrecision(17);
-  auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& data) {
-    y << YAML::Key << key << YAML::Value << YAML::BeginMap;
-    y << YAML::Key << "rows" << YAML::Value << rows;
-    y << YAML::Key << "cols" << YAML::Value << cols;
-    y << YAML::Key << "data" << YAML::Value;
-    EmitFlowList(y, data);
-    y << YAML::EndMap;
-  };
-  y << YAML::BeginMap;
-  y << YAML::Key << "image_width" << YAML::Value << m.width;
-  y << YAML::Key << "image_height" << YAML::Value << m.height;
-  y << YAML::Key << "camera_name" << YAML::Value << camera.name;
-  matrix("camera_matrix", 3, 3, {m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1});
-  y << YAML::Key << "distortion_model" << YAML::Value << model;
-  matrix("distortion_coefficients", 1, static_cast<int>(d.size()), d);
-  matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
-  matrix("projection_matrix", 3, 4, {m.fx, 0, m.cx, 0, 0, m.fy, m.cy, 0, 0, 0, 1, 0});
-  y << YAML::EndMap;
-  return FinishYaml(y, "camera_info " + camera.name);
-}
-
-namespace {
-struct NamedTransform {
-  std::string parent, child;
-  Rigid3 parent_from_child;
-};
-std::vector<NamedTransform> StaticTransforms(const RigMap& map, const std::string& rig_frame,
-                                             const std::string& object_frame) {
-  std::vector<NamedTransform> out;
-  for (const MapCamera& c : map.cameras)
-    out.push_back({rig_frame, c.name + "_optical_frame", c.rig_from_cam});
-  for (const MapMarker& m : map.markers)
-    out.push_back({object_frame, "marker_" + std::to_string(m.id), m.object_from_marker});
-  return out;
-}
-}  // namespace
-
-std::string RosStaticTransformsYaml(const RigMap& map, const std::string& rig_frame,
-                                    const std::string& object_frame) {
-  YAML::Emitter y;
-  y.SetDoublePrecision(17);
-  y << YAML::Comment(
-      "mcmt map as static transforms. Camera frames are optical frames (x right, y down, z forward); the rig "
-      "frame is the reference camera's optical frame; the object frame is the reference marker's frame. "
-      "rig -> object is dynamic (MCMT_POSE).");
-  y << YAML::BeginMap;
-  y << YAML::Key << "rig_frame" << YAML::Value << rig_frame;
-  y << YAML::Key << "object_frame" << YAML::Value << object_frame;
-  y << YAML::Key << "reference_camera" << YAML::Value << map.reference_camera;
-  y << YAML::Key << "reference_marker" << YAML::Value << map.reference_marker;
-  y << YAML::Key << "transforms" << YAML::Value << YAML::BeginSeq;
-  for (const NamedTransform& t : StaticTransforms(map, rig_frame, object_frame)) {
-    const auto q = QuaternionWxyz(t.parent_from_child);
-    const Eigen::Vector3d p = t.parent_from_child.translation();
-    y << YAML::BeginMap;
-    y << YAML::Key << "frame_id" << YAML::Value << t.parent;
-    y << YAML::Key << "child_frame_id" << YAML::Value << t.child;
-    y << YAML::Key << "translation" << YAML::Value;
-    EmitFlowList(y, {p.x(), p.y(), p.z()});
-    y << YAML::Key << "rotation_xyzw" << YAML::Value;
-    EmitFlowList(y, {q[1], q[2], q[3], q[0]});
-    y << YAML::EndMap;
-  }
-  y << YAML::EndSeq << YAML::EndMap;
-  return FinishYaml(y, "static_transforms.yaml");
-}
-
-std::string RosStaticTransformsTxt(const RigMap& map, const std::string& rig_frame,
-                                   const std::string& object_frame) {
-  std::string out =
-      "# ROS 2 static_transform_publisher commands (one per transform) for the mcmt map; camera frames are\n"
-      "# optical frames. ROS 1: rosrun tf2_ros static_transform_publisher x y z qx qy qz qw frame_id "
-      "child_frame_id\n";
-  for (const NamedTransform& t : StaticTransforms(map, rig_frame, object_frame)) {
-    const auto q = QuaternionWxyz(t.parent_from_child);
-    const Eigen::Vector3d p = t.parent_from_child.translation();
-    out += "ros2 run tf2_ros static_transform_publisher --x " + G17(p.x()) + " --y " + G17(p.y()) + " --z " +
-           G17(p.z()) + " --qx " + G17(q[1]) + " --qy " + G17(q[2]) + " --qz " + G17(q[3]) + " --qw " +
-           G17(q[0]) + " --frame-id " + t.parent + " --child-frame-id " + t.child + "\n";
-  }
-  return out;
-}
-
-void WriteRosDir(const RigMap& map, const std::string& dir, const std::string& rig_frame,
-                 const std::string& object_frame) {
-  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
-    throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
-  for (const MapCamera& c : map.cameras) WriteFileAtomic(dir + "/" + c.name + ".yaml", RosCameraInfo(c));
-  WriteFileAtomic(dir + "/static_transforms.yaml", RosStaticTransformsYaml(map, rig_frame, object_frame));
-  WriteFileAtomic(dir + "/static_transforms.txt", RosStaticTransformsTxt(map, rig_frame, object_frame));
-}
-
-std::string OpenCvMapYaml(const RigMap& map) {
-  cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
-  fs << "mcmt_map_version" << map.version;
-  fs << "dictionary" << map.dictionary;
-  fs << "reference_camera" << map.reference_camera;
-  fs << "reference_marker" << map.reference_marker;
-  fs << "rms_px" << map.rms_px;
-  fs << "cameras"
-     << "[";
-  for (const MapCamera& c : map.cameras) {
-    const CameraModel& m = c.model;
-    cv::Mat k = (cv::Mat_<double>(3, 3) << m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1);
-    std::string model = DistortionModelName(m.model);
-    std::vector<double> d = m.distortion;
-    if (m.model == DistortionModel::kNone) {  // same pixels, and a matrix every reader can load
-      model = "radtan";
-      d.assign(5, 0.0);
-    }
-    cv::Mat dist(1, static_cast<int>(d.size()), CV_64F);
-    for (size_t i = 0; i < d.size(); ++i) dist.at<double>(0, static_cast<int>(i)) = d[i];
-    fs << "{";
-    fs << "name" << c.name;
-    fs << "image_width" << m.width;
-    fs << "image_height" << m.height;
-    fs << "camera_matrix" << k;
-    fs << "distortion_model" << model;
-    fs << "distortion_coefficients" << dist;
-    fs << "rig_from_cam" << ToCvMat(Matrix(c.rig_from_cam));
-    fs << "}";
-  }
-  fs << "]";
-  fs << "markers"
-     << "[";
-  for (const MapMarker& mk : map.markers) {
-    fs << "{";
-    fs << "id" << mk.id;
-    fs << "size" << mk.size;
-    fs << "object_from_marker" << ToCvMat(Matrix(mk.object_from_marker));
-    fs << "}";
-  }
-  fs << "]";
-  return fs.releaseAndGetString();
-}
-
-namespace {
-// Corners in the object frame, wound counter-clockwise seen from the marker's +z: BL, BR, TR, TL.
-std::array<Eigen::Vector3d, 4> FaceCorners(const MapMarker& m) {
-  const MarkerCorners3d c = MarkerCornersInMarker(m.size);
-  return {m.object_from_marker * c[3], m.object_from_marker * c[2], m.object_from_marker * c[1],
-          m.object_from_marker * c[0]};
-}
-}  // namespace
-
-std::string MarkersPly(const RigMap& map) {
-  std::string out =
-      "ply\nformat ascii 1.0\ncomment mcmt object: marker squares in the object frame, metres\n";
-  out += "element vertex " + std::to_string(4 * map.markers.size()) + "\n";
-  out += "property double x\nproperty double y\nproperty double z\n";
-  out += "element face " + std::to_string(map.markers.size()) + "\n";
-  out += "property list uchar int vertex_indices\nproperty int marker_id\nend_header\n";
-  for (const MapMarker& m : map.markers)
-    for (const Eigen::Vector3d& p : FaceCorners(m))
-      out += G17(p.x()) + " " + G17(p.y()) + " " + G17(p.z()) + "\n";
-  for (size_t i = 0; i < map.markers.size(); ++i) {
-    const size_t b = 4 * i;
-    out += "4 " + std::to_string(b) + " " + std::to_string(b + 1) + " " + std::to_string(b + 2) + " " +
-           std::to_string(b + 3) + " " + std::to_string(map.markers[i].id) + "\n";
-  }
-  return out;
-}
-
-std::string MarkersObj(const RigMap& map) {
-  std::string out = "# mcmt object: marker squares in the object frame, metres\n";
-  for (size_t i = 0; i < map.markers.size(); ++i) {
-    const MapMarker& m = map.markers[i];
-    out += "o marker_" + std::to_string(m.id) + "\n";
-    for (const Eigen::Vector3d& p : FaceCorners(m))
-      out += "v " + G17(p.x()) + " " + G17(p.y()) + " " + G17(p.z()) + "\n";
-    const size_t b = 4 * i + 1;
-    out += "f " + std::to_string(b) + " " + std::to_string(b + 1) + " " + std::to_string(b + 2) + " " +
-           std::to_string(b + 3) + "\n";
-  }
-  return out;
 }
 
 }  // namespace mcmt

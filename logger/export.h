@@ -1,5 +1,6 @@
-// mcmt-export's engine: logs -> CSV / TUM / summary, detections CSV -> log, map -> Kalibr / ROS / OpenCV /
-// PLY / OBJ. Output files are written atomically (temporary name, then rename).
+// mcmt-export's engine: logs -> CSV / TUM / summary, trajectory CSV -> poses CSV / TUM, detections CSV ->
+// log, the map of a log (its exports: core/map_export.h). Output files are written atomically (temporary
+// name, then rename).
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 
 #include "core/config.h"
 #include "core/files.h"
+#include "core/map_export.h"
 #include "logger/event_log.h"
 
 namespace mcmt {
@@ -36,6 +38,17 @@ struct LogExportResult {
 // channel an export needs that is not of the expected type throws LogFormatError naming the file,
 // event, byte offset and channel. Channels nobody asked for are ignored.
 LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request);
+
+// Is this file a trajectory CSV (first line kTrajectoryHeader: mcmt-mapper's trajectory.csv, mcmt-tracker's
+// or mcmt-export's poses.csv)?
+bool IsTrajectoryCsv(const std::string& path);
+// request.poses_csv / request.tum from a trajectory CSV (pose_rows counts its rows). Throws
+// FileFormatError naming the file and line.
+LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request);
+// Why an export came out empty (one line, naming the source and what to do), "" when it has rows.
+std::string WhyPosesEmpty(const std::string& source, bool from_trajectory, const LogExportResult& result,
+                          const std::string& pose_channel);
+std::string WhyDetectionsEmpty(const std::string& log, const LogExportResult& result);
 
 // What --summary reports. Tolerant: garbage is skipped (and reported), foreign types are listed.
 struct ChannelSummary {
@@ -95,27 +108,6 @@ CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& 
 // map.yaml, or an LCM log: then the last rig_map_t on MCMT_MAP (throws naming the log when it has none).
 RigMap ReadMapOrLog(const std::string& path);
 
-// Kalibr camchain YAML: cam0..camN-1 in map order, pinhole-radtan or pinhole-equidistant, with
-// T_cn_cnm1 = cam_n_from_cam_(n-1) for n >= 1. Throws if a camera's model cannot be written exactly
-// (radtan with non-zero k3..k6).
-std::string KalibrCamchain(const RigMap& map);
-// ROS camera_info YAML of one camera (camera_calibration_parsers format).
-std::string RosCameraInfo(const MapCamera& camera);
-// static_transforms.yaml (and .txt: ROS 2 static_transform_publisher commands): rig -> <cam>_optical_frame
-// per camera, object -> marker_<id> per marker. Frame names given.
-std::string RosStaticTransformsYaml(const RigMap& map, const std::string& rig_frame,
-                                    const std::string& object_frame);
-std::string RosStaticTransformsTxt(const RigMap& map, const std::string& rig_frame,
-                                   const std::string& object_frame);
-// Writes DIR/<camera>.yaml per camera, DIR/static_transforms.yaml and .txt (creates DIR).
-void WriteRosDir(const RigMap& map, const std::string& dir, const std::string& rig_frame = "mcmt_rig",
-                 const std::string& object_frame = "mcmt_object");
-// OpenCV FileStorage YAML: cameras (name, camera_matrix, distortion_coefficients, distortion_model,
-// image_width, image_height, rig_from_cam 4x4), markers (id, size, object_from_marker 4x4).
-std::string OpenCvMapYaml(const RigMap& map);
-// The object's marker squares in the object frame; faces wound counter-clockwise seen from the marker's
-// +z (its printed face), so face normals point out of the markers.
-std::string MarkersPly(const RigMap& map);
-std::string MarkersObj(const RigMap& map);
+// The map exports (Kalibr, ROS, OpenCV, PLY, OBJ) are in core/map_export.h.
 
 }  // namespace mcmt

@@ -10,6 +10,7 @@
 #include "core/lcm_util.h"
 #include "mapper/mapper.h"
 #include "mapper/node.h"
+#include "mapper/out_folder.h"
 
 namespace {
 
@@ -19,7 +20,7 @@ int Run(int argc, char** argv) {
   std::string config, log, out, lcm_url, reference_camera;
   int frames = 0;
   double seconds = 0.0;
-  bool allow_partial = false, publish = false, no_refine = false;
+  bool allow_partial = false, publish = false, no_refine = false, force = false;
   int threads = -1;
   mcmt::ArgParser args("mcmt-mapper",
                        "Maps a rig from marker detections: camera poses, marker layout, object trajectory "
@@ -43,6 +44,7 @@ int Run(int argc, char** argv) {
                  "else the best connected)");
   args.AddInt("threads", &threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)");
   args.AddFlag("no-refine", &no_refine, "initialisation only (no bundle adjustment)");
+  args.AddFlag("force", &force, "overwrite the results of another session in --out");
   args.AddEpilog(
       "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
       "mapper_command_t\n"
@@ -72,6 +74,8 @@ int Run(int argc, char** argv) {
   mcmt::Mapper mapper(options);
   mcmt::MapperNodeOptions node_options;
   node_options.outdir = out;
+  node_options.session = mcmt::MapperSession(log);
+  node_options.force = force;
   node_options.max_frames = frames;
   node_options.max_seconds = seconds;
   std::unique_ptr<lcm::LCM> input, output;

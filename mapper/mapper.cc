@@ -179,6 +179,7 @@ struct Mapper::Impl {
   std::function<void(const MapperProgress&)> progress;
   std::vector<int> messages_per_camera;
   int max_messages_per_camera = 0;
+  std::vector<detections_t> inputs;  // as given to Add(), for MapResult::detections (diagnostics)
 };
 
 Mapper::Mapper(MapperOptions options) : options_(std::move(options)), impl_(new Impl) {
@@ -199,6 +200,7 @@ void Mapper::SetProgressCallback(std::function<void(const MapperProgress&)> call
 
 void Mapper::Reset() {
   impl_->messages.clear();
+  impl_->inputs.clear();
   impl_->messages_per_camera.clear();
   impl_->max_messages_per_camera = 0;
   impl_->warnings.clear();
@@ -244,6 +246,7 @@ void Mapper::Add(const detections_t& d) {
   m.markers.reserve(d.markers.size());
   for (const marker_t& mk : d.markers) m.markers.push_back({mk.id, CornersOf(mk)});
   s.messages.push_back(std::move(m));
+  s.inputs.push_back(d);
   if (s.messages_per_camera.size() <= static_cast<size_t>(camera))
     s.messages_per_camera.resize(camera + 1, 0);
   s.max_messages_per_camera = std::max(s.max_messages_per_camera, ++s.messages_per_camera[camera]);
@@ -356,6 +359,7 @@ MapResult Mapper::Solve() {
   for (const MapCamera& c : result.map.cameras)
     if (c.observations == 0)
       report.warnings.push_back("camera '" + c.name + "' kept no observation after outlier rejection");
+  result.detections = s.inputs;
   log.Notify(MapperProgress::kDone, "done", "done");
   report.total_seconds = std::chrono::duration<double>(Clock::now() - t_total).count();
   return result;

@@ -151,6 +151,7 @@ struct MapResult {
   std::vector<TrajectoryRow> trajectory;          // refined rig_from_object per frame
   std::vector<TrajectoryRow> initial_trajectory;  // initial
   MapReport report;
+  std::vector<detections_t> detections;  // the input, as given to Add() (for mapper/diagnostics.h)
 };
 
 // Per-camera counts while collecting (live progress).
@@ -189,9 +190,9 @@ class Mapper {
   std::unique_ptr<Impl> impl_;
 };
 
-// OUTDIR/map.yaml, trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv (atomic each;
-// creates OUTDIR).
-void WriteMapOutputs(const std::string& outdir, const MapResult& result);
+// OUTDIR/map.yaml, trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv, residuals.csv
+// (atomic each; creates OUTDIR). Returns the per-camera verdict lines (mapper/diagnostics.h).
+std::string WriteMapOutputs(const std::string& outdir, const MapResult& result);
 std::string ReportJson(const MapResult& result);
 
 }  // namespace mcmt

@@ -6,11 +6,14 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "core/lcm_util.h"
+#include "core/progress.h"
+#include "mapper/out_folder.h"
 
 namespace mcmt {
 
@@ -26,6 +29,7 @@ MapperNode::MapperNode(lcm::LCM& input, lcm::LCM* output, Mapper& mapper, Mapper
   if (!options_.from_log)
     subscriptions_.push_back(input_.subscribe(kMapperCommandChannel, &MapperNode::OnCommand, this));
   tty_ = (&log_ == &std::cerr) && isatty(STDERR_FILENO);
+  CheckOutFolder(options_.outdir, options_.session, options_.force);  // before hours of collecting
 }
 
 MapperNode::~MapperNode() {
@@ -115,6 +119,9 @@ std::string MapperNode::Collect() {
   const auto start = Clock::now();
   auto last_progress = start;
   std::string reason;
+  std::unique_ptr<Progress> reading;  // a long log takes minutes: messages read and rate
+  if (options_.from_log && &log_ == &std::cerr)
+    reading = std::make_unique<Progress>("reading the log", 0, "messages");
   for (;;) {
     if (StopFlag().load()) {
       reason = "signal";
@@ -142,6 +149,7 @@ std::string MapperNode::Collect() {
         reason = "end of log";
         break;
       }
+      if (reading) reading->Update(mapper_.NumMessages());
     } else {
       if (input_.handleTimeout(50) < 0) {
         // A signal (SIGINT/SIGTERM/SIGUSR1: solve) interrupts the wait: the loop's top decides.
@@ -155,6 +163,7 @@ std::string MapperNode::Collect() {
       }
     }
   }
+  if (reading) reading->Finish();
   if (!options_.from_log) ShowProgress(true);
   if (bad_messages_ > 0)
     log_ << "warning: ignored " << bad_messages_
@@ -194,7 +203,8 @@ MapResult MapperNode::SolveWriteAndPublish() {
   }
   mapper_.SetProgressCallback(nullptr);
   if (tty_) log_ << "\r\033[K";
-  WriteMapOutputs(options_.outdir, result);
+  const std::string verdicts = WriteMapOutputs(options_.outdir, result);
+  RecordSession(options_.outdir, options_.session);
   const MapReport& r = result.report;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(3) << "mapped " << result.map.cameras.size() << " cameras, "
@@ -211,8 +221,9 @@ MapResult MapperNode::SolveWriteAndPublish() {
   if (r.duplicates > 0)
     log_ << "dropped " << r.duplicates << " duplicate detections (same id twice in one frame)\n";
   for (const std::string& w : r.warnings) log_ << "warning: " << w << "\n";
-  log_ << "wrote " << options_.outdir << "/map.yaml, trajectory.csv, report.json, map_initial.yaml, "
-       << "trajectory_initial.csv\n";
+  log_ << "wrote " << (std::filesystem::path(options_.outdir) / "map.yaml").string()
+       << ", trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv, residuals.csv\n"
+       << verdicts;
   if (options_.publish && output_) {
     const rig_map_t msg = ToRigMapMsg(result.map, NowUtime());
     output_->publish(kMapChannel, &msg);

@@ -18,6 +18,8 @@ namespace mcmt {
 
 struct MapperNodeOptions {
   std::string outdir;        // where the files go (required)
+  std::string session;       // MapperSession(log): another session's results in outdir are refused
+  bool force = false;        // ... unless force (mapper/out_folder.h)
   bool from_log = false;     // input is a file:// log: collect until its end
   int max_frames = 0;        // > 0: stop collecting after this many frames (max over cameras)
   double max_seconds = 0.0;  // > 0: stop after this long (live: wall time; log: message utime span)

@@ -9,17 +9,12 @@
 #include <sstream>
 
 #include "core/json.h"
+#include "mapper/diagnostics.h"
+#include "core/version.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
 namespace {
-
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream out;
-  out << std::setprecision(10) << v;
-  return out.str();
-}
 
 void MakeDirs(const std::string& dir) {
   std::string path;
@@ -41,6 +36,7 @@ std::string ReportJson(const MapResult& result) {
   const RigMap& map = result.map;
   std::ostringstream j;
   j << "{\n";
+  j << "  \"mcmt_version\": " << JsonString(Version()) << ",\n";
   j << "  \"reference_camera\": " << JsonString(map.reference_camera) << ",\n";
   j << "  \"reference_marker\": " << map.reference_marker << ",\n";
   j << "  \"detections_messages\": " << r.detections_messages << ",\n";
@@ -118,14 +114,17 @@ std::string ReportJson(const MapResult& result) {
   return j.str();
 }
 
-void WriteMapOutputs(const std::string& outdir, const MapResult& result) {
+std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) {
   MakeDirs(outdir);
   const std::string dir = outdir.back() == '/' ? outdir : outdir + "/";
   WriteMap(dir + "map_initial.yaml", result.initial_map);
   WriteTrajectory(dir + "trajectory_initial.csv", result.initial_trajectory);
   WriteTrajectory(dir + "trajectory.csv", result.trajectory);
-  WriteFileAtomic(dir + "report.json", ReportJson(result));
+  const Diagnostics diagnostics = ComputeDiagnostics(result);  // mapper/diagnostics.h
+  WriteFileAtomic(dir + "residuals.csv", ResidualsCsv(diagnostics));
+  WriteFileAtomic(dir + "report.json", WithDiagnostics(ReportJson(result), diagnostics));
   WriteMap(dir + "map.yaml", result.map);  // last: its presence means the rest is there
+  return VerdictLines(diagnostics);
 }
 
 }  // namespace mcmt

@@ -230,9 +230,8 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
               throw std::runtime_error("cannot encode PNG");
             WriteImageFile((dir / cam.name / name).string(), bytes);
           }
-          ++written;
-          if (!o.quiet && k == 0 && (i + 1) % 50 == 0)
-            std::cerr << "mcmt-sim: frame " << (i + 1) << " / " << frames.size() << "\n";
+          const int64_t done = ++written;
+          if (o.progress) o.progress(done, static_cast<int64_t>(frames.size()) * n_cams);
         }
         if (o.video) {
           video.release();

@@ -37,17 +37,10 @@ std::string Fmt(double v, int digits = 3) {
   return b;
 }
 
-std::string JsonNum(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[64];
-  std::snprintf(b, sizeof(b), "%.9g", v);
-  return b;
-}
-
 std::string JsonStats(const Stats& s) {
-  return "{\"count\": " + std::to_string(s.count) + ", \"mean\": " + JsonNum(s.mean) +
-         ", \"median\": " + JsonNum(s.median) + ", \"max\": " + JsonNum(s.max) +
-         ", \"rms\": " + JsonNum(s.rms) + "}";
+  return "{\"count\": " + std::to_string(s.count) + ", \"mean\": " + JsonNumber(s.mean) +
+         ", \"median\": " + JsonNumber(s.median) + ", \"max\": " + JsonNumber(s.max) +
+         ", \"rms\": " + JsonNumber(s.rms) + "}";
 }
 
 }  // namespace
@@ -333,8 +326,8 @@ std::string FormatJson(const EvalResult& r) {
     << ",\n    \"rotation_deg\": " << JsonStats(r.camera_rotation_deg) << ",\n    \"per_camera\": [";
   for (size_t i = 0; i < r.cameras.size(); ++i)
     s << (i ? ", " : "") << "{\"name\": " << JsonString(r.cameras[i].name)
-      << ", \"position_mm\": " << JsonNum(r.cameras[i].position_mm)
-      << ", \"rotation_deg\": " << JsonNum(r.cameras[i].rotation_deg) << "}";
+      << ", \"position_mm\": " << JsonNumber(r.cameras[i].position_mm)
+      << ", \"rotation_deg\": " << JsonNumber(r.cameras[i].rotation_deg) << "}";
   s << "]},\n";
   s << "  \"markers\": {\"ground_truth\": " << r.gt_markers << ", \"mapped\": " << r.mapped_markers
     << ", \"missing\": [";
@@ -342,14 +335,14 @@ std::string FormatJson(const EvalResult& r) {
   s << "],\n    \"configuration_mm\": " << JsonStats(r.configuration_mm) << ",\n    \"per_marker\": [";
   for (size_t i = 0; i < r.markers.size(); ++i)
     s << (i ? ", " : "") << "{\"id\": " << r.markers[i].id
-      << ", \"corner_mm\": " << JsonNum(r.markers[i].corner_mm)
-      << ", \"size_mm\": " << JsonNum(r.markers[i].size_mm) << "}";
+      << ", \"corner_mm\": " << JsonNumber(r.markers[i].corner_mm)
+      << ", \"size_mm\": " << JsonNumber(r.markers[i].size_mm) << "}";
   s << "]},\n";
-  s << "  \"map_rms_px\": " << JsonNum(r.map_rms_px) << ",\n";
+  s << "  \"map_rms_px\": " << JsonNumber(r.map_rms_px) << ",\n";
   if (r.has_trajectory) {
     s << "  \"object\": {\"ground_truth_frames\": " << r.gt_frames
       << ", \"frames_with_pose\": " << r.frames_with_pose
-      << ", \"fraction_with_pose\": " << JsonNum(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
+      << ", \"fraction_with_pose\": " << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
       << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
       << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
       << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm)

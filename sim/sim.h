@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -284,7 +285,9 @@ struct DatasetOptions {
   bool detections_only = false;
   bool video = false;  // per-camera MP4 instead of PNG folders
   bool quiet = true;   // no progress on stderr
-  int threads = 1;     // cameras rendered in parallel (results do not depend on it)
+  // Called after each image with (images written, images in all), from the rendering threads.
+  std::function<void(int64_t, int64_t)> progress;
+  int threads = 1;  // cameras rendered in parallel (results do not depend on it)
 };
 
 struct DatasetSummary {

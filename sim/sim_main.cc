@@ -3,12 +3,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
 #include "core/camera.h"
 #include "core/cli.h"
 #include "core/dictionary.h"
+#include "core/progress.h"
 #include "sim/sim.h"
 
 namespace {
@@ -195,7 +198,17 @@ int Main(int argc, char** argv) {
       throw std::runtime_error("--out: cannot create folder '" + out + "'" + (ec ? ": " + ec.message() : ""));
   }
 
+  std::mutex progress_mutex;  // images: a bar on a terminal, a line every 5 s otherwise
+  std::unique_ptr<Progress> progress;
+  if (!quiet && !detections_only) progress = std::make_unique<Progress>("mcmt-sim", 0, "images");
+  if (progress)
+    o.progress = [&](int64_t done, int64_t total) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      progress->SetTotal(total);
+      progress->Update(done);
+    };
   const sim::DatasetSummary s = sim::GenerateDataset(o);
+  if (progress) progress->Finish();
   if (!quiet) {
     std::printf(
         "mcmt-sim: %s, %zu cameras, %zu markers, %zu frames -> %s (%s, %.2f s)\n", s.truth.object.c_str(),

@@ -292,12 +292,15 @@ std::string TrackerNode::StatusLine() const {
     s << ", latency p50 " << Percentile(latencies_ms_, 0.5) << " ms p99 " << Percentile(latencies_ms_, 0.99)
       << " ms";
     s.precision(1);
-    s << ", tracked " << 100.0 * status_tracked_ / status_frames_ << "%";
+    s << ", tracked " << 100.0 * status_tracked_ / status_frames_ << " % of the last " << status_frames_
+      << " frames";
   } else {
     s << "no frame";
   }
-  s << " (total: " << stats_.frames << " frames, " << stats_.tracked << " tracked, " << stats_.ambiguous
-    << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected << " outliers rejected)";
+  s << " (total: " << stats_.frames << " frames, " << stats_.tracked
+    << " tracked = " << (stats_.frames > 0 ? 100.0 * stats_.tracked / stats_.frames : 0.0) << " %, "
+    << stats_.ambiguous << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected
+    << " outliers rejected)";
   if (!late_views_.empty()) {
     s << ", late views dropped:";
     for (const auto& kv : late_views_) s << " " << kv.first << " " << kv.second;

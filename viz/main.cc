@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
     args.AddFlag("no-legend", &no_legend, "do not draw the residual colour legend");
     args.AddFlag("no-grid", &no_grid, "do not draw the ground grid");
     args.AddDouble("residual-scale", &o.scene.residual_scale_px,
-                   "residual (px) drawn red; 0: the largest per-camera/marker RMS");
+                   "residual (px) drawn red, green at and below a quarter of it (an absolute scale: a map "
+                   "keeps its colours); 0: the largest per-camera/marker RMS shown");
     args.AddInt("max-poses", &o.max_poses, "live headless: render after this many poses (and a map) arrived");
     args.AddDouble("timeout", &o.timeout_s, "live headless: seconds to wait for the map and poses");
     args.AddDouble("redraw-hz", &o.redraw_hz, "live window: redraws per second at most");

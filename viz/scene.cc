@@ -81,7 +81,8 @@ cv::Vec3b BackgroundBgr() {
 }
 
 Eigen::Vector3d ResidualColor(double rms_px, double scale_px) {
-  double t = scale_px > 0 ? rms_px / scale_px : 0.0;
+  const double green_px = 0.25 * scale_px;
+  double t = scale_px > 0 ? (rms_px - green_px) / (scale_px - green_px) : 0.0;
   if (!std::isfinite(t)) t = 1.0;
   t = std::clamp(t, 0.0, 1.0);
   // Green (t = 0) -> yellow (t = 1/2) -> red (t = 1), linear in each half.
@@ -266,7 +267,8 @@ void VizScene::BuildPanel(Panel* panel) {
   // Rig axes (x red, y green, z blue) at the reference camera.
   panel->root->insert(stock_objects::CornerXYZSimple(static_cast<float>(0.6 * frustum_length_), 3.0f));
 
-  // Cameras: a frustum sized by the field of view, a small body and the name, coloured by residual.
+  // Cameras: a wireframe frustum sized by the field of view (no faces: the object, inside several
+  // frustums, stays visible), a small body and the name, coloured by residual.
   for (const auto& cam : map.cameras) {
     auto set = CSetOfObjects::Create();
     set->setPose(ToCPose(cam.rig_from_cam));
@@ -276,12 +278,9 @@ void VizScene::BuildPanel(Panel* panel) {
     auto frustum =
         CFrustum::Create(static_cast<float>(0.05 * frustum_length_), static_cast<float>(frustum_length_),
                          static_cast<float>(std::min(179.0, hfov * 180.0 / M_PI)),
-                         static_cast<float>(std::min(179.0, vfov * 180.0 / M_PI)), 2.0f, true, true);
+                         static_cast<float>(std::min(179.0, vfov * 180.0 / M_PI)), 2.0f, true, false);
     frustum->setPose(ToCPose(CamFromFrustum()));
     frustum->setColor(ToColor(color));
-    frustum->setPlaneColor(mrpt::img::TColor(static_cast<uint8_t>(255 * color.x()),
-                                             static_cast<uint8_t>(255 * color.y()),
-                                             static_cast<uint8_t>(255 * color.z()), 60));
     set->insert(frustum);
     const float b = static_cast<float>(0.08 * frustum_length_);
     auto body = CBox::Create(mrpt::math::TPoint3D(-b, -b, -b), mrpt::math::TPoint3D(b, b, b));
@@ -337,7 +336,6 @@ void VizScene::BuildPanel(Panel* panel) {
     panel->object->insert(set);
   }
   panel->object->setVisibility(false);
-  scene_->insert(panel->object, panel->viewport);  // posed in the world frame directly
 
   panel->trail = CSetOfLines::Create();
   panel->trail->setColor(1.0f, 0.6f, 0.15f, 1.0f);
@@ -349,6 +347,7 @@ void VizScene::BuildPanel(Panel* panel) {
   panel->rays->setVisibility(options_.rays);
   panel->root->insert(panel->rays);
   scene_->insert(panel->root, panel->viewport);
+  scene_->insert(panel->object, panel->viewport);  // after the rig: drawn last; posed in the world frame
 
   char title[160];
   std::snprintf(title, sizeof(title), "%s: %zu cameras, %zu markers, RMS %.3f px", panel->input.title.c_str(),
@@ -397,6 +396,10 @@ void VizScene::BuildLegend() {
   auto lo = CText::Create("0");
   lo->setLocation(-0.01, -0.09, 0);
   vp->insert(lo);
+  std::snprintf(text, sizeof(text), "%.2f", 0.25 * residual_scale_);  // green up to here
+  auto green = CText::Create(text);
+  green->setLocation(0.2, -0.09, 0);
+  vp->insert(green);
   std::snprintf(text, sizeof(text), ">= %.2f px", residual_scale_);
   auto hi = CText::Create(text);
   hi->setLocation(0.78, -0.09, 0);
@@ -668,6 +671,8 @@ void VizScene::DrawLegend(cv::Mat* bgr) const {
   cv::putText(*bgr, "residual RMS (px)", {x0, y0 - 6}, font, 0.4, white, 1, cv::LINE_AA);
   cv::putText(*bgr, "0", {x0 - 3, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
   char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", 0.25 * residual_scale_);  // green up to here
+  cv::putText(*bgr, text, {x0 + bar_w / 4 - 12, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
   std::snprintf(text, sizeof(text), ">= %.2f", residual_scale_);
   cv::putText(*bgr, text, {x0 + bar_w - 30, y0 + bar_h + 14}, font, 0.4, white, 1, cv::LINE_AA);
 }

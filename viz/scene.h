@@ -28,8 +28,11 @@ namespace mcmt::viz {
 // The viewports' background colour, as 8-bit B, G, R.
 cv::Vec3b BackgroundBgr();
 
-// Residual colour: green at 0, yellow at scale/2, red at and above scale. RGB in [0, 1].
+// Residual colour on an absolute scale, the same for every map and snapshot: green at and below
+// scale/4, yellow half-way, red at and above scale (the default scale, 2 px: green <= 0.5 px, red >= 2 px).
+// RGB in [0, 1].
 Eigen::Vector3d ResidualColor(double rms_px, double scale_px);
+constexpr double kDefaultResidualScalePx = 2.0;
 
 // MRPT frustums look along their +X (Y left, Z up); OpenCV cameras along +Z (X right, Y down).
 // cam_from_frustum maps the frustum's axes onto the camera's: X_f -> +Z_c, Y_f -> -X_c, Z_f -> -Y_c.
@@ -44,10 +47,12 @@ struct SceneOptions {
   int height = 720;
   bool rays = true;  // rays camera -> markers detected in the current frame
   bool legend = true;
-  bool grid = true;                // ground grid
-  double residual_scale_px = 0.0;  // residual colour scale (red at and above); 0: automatic
-  int trail_max = 20000;           // newest poses kept in the trail
-  double azimuth_deg = -120.0;     // automatic view direction (see ViewCamera)
+  bool grid = true;  // ground grid
+  // Residual colour scale (red at and above, green at and below a quarter of it), px; 0: the largest
+  // per-camera/marker RMS of the maps shown (colours then change from map to map).
+  double residual_scale_px = kDefaultResidualScalePx;
+  int trail_max = 20000;        // newest poses kept in the trail
+  double azimuth_deg = -120.0;  // automatic view direction (see ViewCamera)
   double elevation_deg = 30.0;
   double fov_deg = 45.0;   // vertical field of view of the viewer's camera
   std::string dictionary;  // marker bitmaps; empty: the map's dictionary

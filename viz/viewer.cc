@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "core/progress.h"
 
 namespace mcmt::viz {
 namespace {
@@ -116,6 +117,13 @@ Viewer::Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log)
   }
 }
 
+std::string Viewer::NoPosesInLog() const {
+  return options_.log_path +
+         " has no MCMT_POSE (mcmt-tracker was not running while it was recorded), so the object is not "
+         "drawn: "
+         "add --trajectory OUTDIR/trajectory.csv (the mapper's)";
+}
+
 std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
   PanelInput refined;
   refined.title = have_initial_ ? "refined" : "map";
@@ -151,6 +159,10 @@ int Viewer::Run() {
     collector->DrainLog();
     if (!have_file_map_ && !collector->has_map())
       throw std::runtime_error(options_.log_path + ": no MCMT_MAP message in the log (give --map map.yaml)");
+    if (!have_file_trajectory_ && collector->total_poses() == 0) {
+      if (!options_.video_dir.empty()) throw std::runtime_error("--video: " + NoPosesInLog());
+      std::cerr << "mcmt-viz: note: " << NoPosesInLog() << "\n";
+    }
   }
   if (!lcm_ && !have_file_map_) throw std::runtime_error("nothing to show: give --map, --log or --lcm-url");
   return options_.Headless() ? RunHeadless(collector.get()) : RunWindow(collector.get());
@@ -226,6 +238,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     fs::create_directories(options_.video_dir, ec);
     if (ec) throw std::runtime_error(options_.video_dir + ": cannot create the folder: " + ec.message());
     const int n = static_cast<int>(rows.size());
+    Progress progress("mcmt-viz --video", n);
     for (int i = 0; i < n; ++i) {
       scene.SetCurrentFrame(i);
       scene.SetDetections(detections_at(i));
@@ -234,7 +247,9 @@ int Viewer::RunHeadless(LcmCollector* collector) {
       char name[32];
       std::snprintf(name, sizeof(name), "frame_%06d.png", i);
       WritePng((fs::path(options_.video_dir) / name).string(), scene.Render(&render));
+      progress.Update(i + 1);
     }
+    progress.Finish();
     std::cout << "mcmt-viz: wrote " << n << " frames to " << options_.video_dir << "\n";
   }
   return 0;

@@ -57,6 +57,7 @@ class Viewer {
 
  private:
   std::vector<PanelInput> Panels(const LcmCollector* collector) const;
+  std::string NoPosesInLog() const;  // why a log shows no object, and what to add
   int RunHeadless(LcmCollector* collector);
   int RunWindow(LcmCollector* collector);
 

@@ -5,6 +5,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "core/version.h"
+
 namespace mcmt {
 
 ArgParser::ArgParser(std::string program, std::string summary)
@@ -67,6 +69,7 @@ std::string ArgParser::Help() const {
     s << "\n";
   }
   s << "  --help                    print this help and exit\n";
+  s << "  --version                 print the version and exit\n";
   if (!epilog_.empty()) s << "\n" << epilog_ << (epilog_.back() == '\n' ? "" : "\n");
   return s.str();
 }
@@ -101,6 +104,11 @@ bool ArgParser::Parse(int argc, char** argv, int* exit_code) {
     std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
       std::cout << Help();
+      *exit_code = 0;
+      return false;
+    }
+    if (arg == "--version") {
+      std::cout << program_ << " " << Version() << "\n";
       *exit_code = 0;
       return false;
     }

@@ -12,6 +12,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/version.h"
+
 namespace mcmt {
 
 std::string YamlNumber(double v) {
@@ -263,6 +265,7 @@ void WriteMap(const std::string& path, const RigMap& map) {
   out << "# the object frame. Quaternions w, x, y, z; rotation_matrix row-major (exact copy of the "
          "rotation).\n";
   out << "version: " << map.version << "\n";
+  out << "written_by: " << Quoted(std::string("mcmt ") + Version()) << "\n";
   out << "dictionary: " << Quoted(map.dictionary) << "\n";
   out << "reference_camera: " << Quoted(map.reference_camera) << "\n";
   out << "reference_marker: " << map.reference_marker << "\n";

@@ -1,6 +1,9 @@
 #include "core/json.h"
 
+#include <cmath>
 #include <cstdio>
+#include <iomanip>
+#include <sstream>
 
 namespace mcmt {
 
@@ -42,6 +45,13 @@ std::string JsonString(const std::string& s) {
     }
   }
   return out + "\"";
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream out;
+  out << std::setprecision(10) << v;
+  return out.str();
 }
 
 }  // namespace mcmt

@@ -2,11 +2,13 @@
 // damage handling, exports from logs (CSV, TUM, summary), CSV -> log round trip, map exports.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "core/config.h"
@@ -660,4 +662,127 @@ TEST_F(ExportTest, MapFromALogIsTheLastRigMapOnMcmtMap) {
   // A map.yaml still reads as a map.
   WriteMap(dir_ + "/map.yaml", first);
   EXPECT_EQ(ReadMapOrLog(dir_ + "/map.yaml").reference_camera, "cam0");
+}
+
+// ---- every output that can be written is written -----------------------------------------------------
+
+// The caliscope intrinsics have a non-zero k3: --kalibr aborted the whole command, so --opencv, --ply and
+// --ros-dir asked together were not written either.
+TEST_F(ExportTest, AnInexpressibleModelRefusesOnlyItsOutputAndTheOthersAreWritten) {
+  const RigMap map = MakeMap();
+  ASSERT_NE(map.cameras[0].model.distortion[4], 0.0);  // radtan k3
+  const std::string map_yaml = dir_ + "/map.yaml";
+  WriteMap(map_yaml, map);
+  std::string out, err;
+  const int code =
+      RunProgram({Bin("mcmt-export"), "--map", map_yaml, "--kalibr", dir_ + "/camchain.yaml", "--opencv",
+                  dir_ + "/map.yml", "--ply", dir_ + "/object.ply", "--ros-dir", dir_ + "/ros"},
+                 &out, &err);
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_FALSE(FileExists(dir_ + "/camchain.yaml"));
+  EXPECT_TRUE(FileExists(dir_ + "/map.yml"));
+  EXPECT_TRUE(FileExists(dir_ + "/object.ply"));
+  EXPECT_TRUE(FileExists(dir_ + "/ros/cam0.yaml"));
+  EXPECT_TRUE(FileExists(dir_ + "/ros/static_transforms.yaml"));
+  // One line, naming the output, the camera, the coefficient and why.
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("--kalibr " + dir_ +
+                     "/camchain.yaml: not written: Kalibr camchain: camera cam0: radtan "
+                     "coefficient k3 = "),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("Kalibr's radtan has 4 coefficients"), std::string::npos) << err;
+}
+
+TEST_F(ExportTest, RosCameraInfoRefusesCoefficientsBeyondRationalPolynomialAndWritesNothing) {
+  RigMap map = MakeMap();
+  map.cameras[2].model.model = DistortionModel::kRadTan;
+  map.cameras[2].model.distortion = {0.1, 0.01, 0, 0, 0.001, 0, 0, 0, 0.0005, 0, 0, 0};  // thin prism s1
+  try {
+    WriteRosDir(map, dir_ + "/ros");
+    FAIL() << "expected a refusal";
+  } catch (const MapExportRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("camera cam2: radtan coefficient s1 = 0.0005"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(FileExists(dir_ + "/ros"));  // refused before the first file
+  // Every format of the table is reachable by its option name.
+  std::set<std::string> options;
+  for (const MapExportFormat& f : MapExportFormats()) options.insert(f.option);
+  EXPECT_EQ(options, (std::set<std::string>{"kalibr", "ros-dir", "opencv", "ply", "obj"}));
+}
+
+// TUM and poses exports worked only on logs holding MCMT_POSE; the mapper's trajectory.csv was refused.
+TEST_F(ExportTest, TumAndPosesFromATrajectoryCsv) {
+  std::vector<TrajectoryRow> rows;
+  for (int i = 0; i < 5; ++i) {
+    TrajectoryRow r;
+    r.utime = 1700000000000000 + i * 33333;
+    r.seq = i;
+    r.rig_from_object = FromPose3d(MakePose(i, 0).rig_from_object);
+    r.rms_px = 0.1 * i;
+    r.cameras = 2;
+    r.markers = 4;
+    rows.push_back(r);
+  }
+  const std::string traj = dir_ + "/trajectory.csv";
+  WriteTrajectory(traj, rows);
+  std::string out, err;
+  // --log given the CSV is read as --trajectory.
+  ASSERT_EQ(
+      RunProgram({Bin("mcmt-export"), "--log", traj, "--tum", dir_ + "/t.tum", "--poses", dir_ + "/p.csv"},
+                 &out, &err),
+      0)
+      << err;
+  EXPECT_EQ(ReadText(dir_ + "/p.csv"), ReadText(traj));
+  std::istringstream tum(ReadText(dir_ + "/t.tum"));
+  std::string line;
+  std::getline(tum, line);
+  EXPECT_EQ(line[0], '#');
+  for (const TrajectoryRow& r : rows) {
+    ASSERT_TRUE(std::getline(tum, line));
+    std::istringstream s(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    ASSERT_TRUE(static_cast<bool>(s >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) << line;
+    EXPECT_NEAR(t, r.utime * 1e-6, 1e-6);
+    EXPECT_EQ(x, r.rig_from_object.translation().x());
+    const auto q = QuaternionWxyz(r.rig_from_object);
+    EXPECT_EQ(qw, q[0]);
+    EXPECT_EQ(qz, q[3]);
+  }
+  EXPECT_FALSE(std::getline(tum, line));
+}
+
+// A log without MCMT_POSE gave an empty TUM file and no word why.
+TEST_F(ExportTest, AnEmptyPosesExportSaysWhyAndWhereThePosesAre) {
+  std::vector<Msg> msgs;
+  for (int64_t seq = 0; seq < 3; ++seq)
+    msgs.push_back({DetectionsChannel("cam0"), Encode(MakeDetections("cam0", seq, 2)), 1000 + seq});
+  const std::string log = WriteLog(dir_ + "/d.lcmlog", msgs);
+  std::string out, err;
+  ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--log", log, "--tum", dir_ + "/t.tum"}, &out, &err), 0) << err;
+  EXPECT_NE(err.find("t.tum is empty: no object_pose_t on MCMT_POSE in " + log), std::string::npos) << err;
+  EXPECT_NE(err.find("--trajectory OUTDIR/trajectory.csv"), std::string::npos) << err;
+}
+
+// The caliscope recordings' own intrinsics (configs/caliscope, k3 = -0.0037): Kalibr refuses them
+// naming k3; ROS (plumb_bob, 5 coefficients) and OpenCV hold them exactly.
+TEST_F(ExportTest, CaliscopeIntrinsicsHaveNoKalibrCamchainButRosAndOpenCvHoldThem) {
+  RigMap map = MakeMap();
+  map.cameras.resize(1);
+  map.cameras[0].model = LoadIntrinsics(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope/4cam_cam0.yml");
+  ASSERT_EQ(map.cameras[0].model.distortion.size(), 5u);
+  try {
+    KalibrCamchain(map);
+    FAIL() << "expected a refusal";
+  } catch (const MapExportRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("camera cam0: radtan coefficient k3 = -0.0037489346582201062"),
+              std::string::npos)
+        << e.what();
+  }
+  const YAML::Node ros = YAML::Load(RosCameraInfo(map.cameras[0]));
+  EXPECT_EQ(ros["distortion_model"].as<std::string>(), "plumb_bob");
+  for (int k = 0; k < 5; ++k)
+    EXPECT_EQ(ros["distortion_coefficients"]["data"][k].as<double>(), map.cameras[0].model.distortion[k]);
+  EXPECT_NO_THROW(OpenCvMapYaml(map));
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
+#include <regex>
 
 #include "core/lcm_util.h"
 #include "tests/tracker/synthetic_rig.h"
@@ -295,6 +296,40 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
     }
   }
   EXPECT_EQ(node.stats().lost, 10);
+}
+
+}  // namespace
+}  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// "tracked 100.0 %" was the last status interval's figure, shown beside the totals as if it were theirs:
+// the line now says which is which and gives the total's percentage too.
+TEST(TrackerNode, StatusLineLabelsTheIntervalAndTheTotalTrackedShares) {
+  Fixture fx;
+  lcm::LCM in("memq://");
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  const size_t lost_from = fx.session.views.size() * 2 / 3;
+  for (size_t f = 0; f < fx.session.views.size(); ++f)
+    for (detections_t d : fx.session.views[f]) {
+      if (f >= lost_from) {  // the object out of view: frames without markers
+        d.markers.clear();
+        d.num_markers = 0;
+      }
+      Feed(node, d);
+    }
+  node.Flush();
+  const std::string line = node.StatusLine();
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(line, m,
+                        std::regex(R"(tracked ([0-9.]+) % of the last ([0-9]+) frames.*\(total: ([0-9]+) )"
+                                   R"(frames, ([0-9]+) tracked = ([0-9.]+) %)")))
+      << line;
+  const double total_frames = std::stod(m[3]), tracked = std::stod(m[4]);
+  EXPECT_NEAR(std::stod(m[5]), 100.0 * tracked / total_frames, 0.05) << line;
+  EXPECT_LT(std::stod(m[5]), 70.0) << line;  // a third of the frames had no markers
 }
 
 }  // namespace

@@ -153,7 +153,8 @@ TEST(VizProcess, VideoWritesOneImagePerFrame) {
 }
 
 // Writes a log with LCM's own file provider: the map, poses and detections.
-void WriteLog(const std::string& path, const testing::TestRig& rig) {
+// A log of the rig: its map, detections and (with_poses) the object's poses.
+void WriteLog(const std::string& path, const testing::TestRig& rig, bool with_poses = true) {
   lcm::LCM log("file://" + path + "?mode=w");
   ASSERT_TRUE(log.good());
   rig_map_t map = ToRigMapMsg(rig.map, 1);
@@ -182,7 +183,7 @@ void WriteLog(const std::string& path, const testing::TestRig& rig) {
     p.rig_from_object = ToPose3d(row.rig_from_object);
     p.rms_px = row.rms_px;
     p.status = object_pose_t::STATUS_TRACKING;
-    log.publish(kPoseChannel, &p);
+    if (with_poses) log.publish(kPoseChannel, &p);
   }
 }
 
@@ -215,6 +216,29 @@ TEST(VizProcess, ReadsALogWithRays) {
     differ += NotBackgroundNear(with, px, bg, 1, 20);
   }
   EXPECT_GE(differ, 2);
+}
+
+// A log recorded without mcmt-tracker has no poses: the snapshot showed no object and said nothing.
+TEST(VizProcess, ALogWithoutPosesSaysToAddTheTrajectory) {
+  TempDir dir("noposes");
+  const auto rig = MakeTestRig(3, 6);
+  WriteLog(dir / "session.lcmlog", rig, false);
+  const std::string hint = "session.lcmlog has no MCMT_POSE";
+  auto r = RunCommand(VizBin() + " --log " + (dir / "session.lcmlog") + " --snapshot " + (dir / "a.png") +
+                      " --size 320x180");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(hint), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("add --trajectory OUTDIR/trajectory.csv"), std::string::npos) << r.output;
+  r = RunCommand(VizBin() + " --log " + (dir / "session.lcmlog") + " --video " + (dir / "frames"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(hint), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  // With the trajectory: no note.
+  WriteTrajectory(dir / "trajectory.csv", rig.trajectory);
+  r = RunCommand(VizBin() + " --log " + (dir / "session.lcmlog") + " --trajectory " +
+                 (dir / "trajectory.csv") + " --snapshot " + (dir / "b.png") + " --size 320x180");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find(hint), std::string::npos) << r.output;
 }
 
 TEST(VizProcess, LiveLcmOverUdpmWritesASnapshotAfterNPoses) {

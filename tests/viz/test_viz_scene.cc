@@ -31,6 +31,16 @@ void Dump(const cv::Mat& img, const std::string& name) {
   if (const char* dir = std::getenv("MCMT_VIZ_DUMP")) cv::imwrite(std::string(dir) + "/" + name, img);
 }
 
+// w x h, no grid and no legend: only the rig and the object.
+SceneOptions BareOptions(int w, int h) {
+  SceneOptions o;
+  o.width = w;
+  o.height = h;
+  o.grid = false;
+  o.legend = false;
+  return o;
+}
+
 // The colour of the background: a render of a scene with nothing in it.
 cv::Vec3b Background(int w, int h) {
   SceneOptions o;
@@ -43,8 +53,10 @@ cv::Vec3b Background(int w, int h) {
 }
 
 TEST(VizColors, ResidualColourGoesFromGreenToRed) {
-  const Eigen::Vector3d low = ResidualColor(0.0, 2.0), mid = ResidualColor(1.0, 2.0),
+  // Scale 2 px: green at and below 0.5 px, yellow half-way (1.25 px), red at and above 2 px.
+  const Eigen::Vector3d low = ResidualColor(0.5, 2.0), mid = ResidualColor(1.25, 2.0),
                         high = ResidualColor(2.0, 2.0);
+  EXPECT_EQ(ResidualColor(0.0, 2.0), low);
   EXPECT_LT(low.x(), 0.05);
   EXPECT_GT(low.y(), 0.8);
   EXPECT_GT(mid.x(), 0.9);
@@ -57,6 +69,27 @@ TEST(VizColors, ResidualColourGoesFromGreenToRed) {
     const Eigen::Vector3d c = ResidualColor(v, 2.0);
     EXPECT_GE(c.x(), prev_red);
     prev_red = c.x();
+  }
+}
+
+// The worst camera was red whatever its value, so a map changed colour with what it was shown beside.
+TEST(VizColors, AMapKeepsItsColoursOnTheAbsoluteScale) {
+  const auto rig = MakeTestRig(3, 8);
+  RigMap good = rig.map, bad = rig.map;
+  for (size_t i = 0; i < good.cameras.size(); ++i) good.cameras[i].rms_px = 0.1 + 0.1 * i;  // <= 0.3 px
+  for (auto& c : bad.cameras) c.rms_px += 3.0;
+  SceneOptions o;
+  o.width = 320;
+  o.height = 180;
+  VizScene alone(o), beside(o);
+  alone.SetPanels({PanelInput{"map", good, rig.trajectory}});
+  beside.SetPanels({PanelInput{"initial", bad, rig.trajectory}, PanelInput{"refined", good, rig.trajectory}});
+  EXPECT_EQ(alone.residual_scale_px(), kDefaultResidualScalePx);
+  EXPECT_EQ(beside.residual_scale_px(), kDefaultResidualScalePx);
+  // Every camera of the good map is green (its worst one was drawn red).
+  for (const auto& c : good.cameras) {
+    const Eigen::Vector3d color = ResidualColor(c.rms_px, alone.residual_scale_px());
+    EXPECT_LT(color.x(), 0.05) << c.name << " " << c.rms_px << " px";
   }
 }
 
@@ -113,11 +146,7 @@ TEST(VizViewCamera, FramingKeepsEveryPointInside) {
 TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
   const int w = 800, h = 450;
   const auto rig = MakeTestRig(4, 12);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
   scene.SetCurrentFrame(5);
@@ -152,43 +181,108 @@ TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
 TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
   const int w = 640, h = 480;
   auto rig = MakeTestRig(2, 0);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, {}}});
   cv::Mat img = scene.Render(&Renderer(w, h));
   Dump(img, "frustum.png");
   const cv::Vec3b bg = Background(w, h);
-  // Camera 1 (not the reference, so no rig axes there). The frustum is drawn to 0.3 x the
-  // distance between the cameras (no trajectory): points well inside it along +Z are covered by
-  // its translucent faces; the same distance along +X or -Z is empty space.
+  // Camera 1 (not the reference, so no rig axes there). The frustum is a wireframe drawn to 0.3 x the
+  // distance between the cameras (no trajectory): its four edges open along +Z at the camera's field
+  // of view; the same distance along -Z is empty space, and so is its axis (no faces).
   const Rigid3& rig_from_cam = rig.map.cameras[1].rig_from_cam;
+  const CameraModel& m = rig.map.cameras[1].model;
   const double length =
       0.3 * (rig.map.cameras[0].rig_from_cam.translation() - rig_from_cam.translation()).norm();
-  int inside_hits = 0, outside_hits = 0;
+  const double tx = 0.5 * m.width / m.fx, ty = 0.5 * m.height / m.fy;
+  int edge_hits = 0, edge_points = 0, empty_hits = 0;
   for (double f : {0.5, 0.7, 0.9}) {
-    Eigen::Vector2d in, out_x, out_back;
-    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, f * length), &in));
-    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(f * length, 0, 0), &out_x));
-    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, -f * length), &out_back));
-    inside_hits += NotBackgroundNear(img, in, bg, 0, 6);
-    outside_hits += NotBackgroundNear(img, out_x, bg, 0, 6) + NotBackgroundNear(img, out_back, bg, 0, 6);
+    const double d = f * length;
+    for (int sx : {-1, 1})
+      for (int sy : {-1, 1}) {
+        Eigen::Vector2d edge;
+        ASSERT_TRUE(
+            scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(sx * tx * d, sy * ty * d, d), &edge));
+        edge_hits += NotBackgroundNear(img, edge, bg, 2, 6);
+        ++edge_points;
+      }
+    Eigen::Vector2d axis, back;
+    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, d), &axis));
+    ASSERT_TRUE(scene.ProjectRigPoint(0, rig_from_cam * Eigen::Vector3d(0, 0, -d), &back));
+    empty_hits += NotBackgroundNear(img, axis, bg, 0, 6) + NotBackgroundNear(img, back, bg, 0, 6);
   }
-  EXPECT_EQ(inside_hits, 3);
-  EXPECT_EQ(outside_hits, 0);
+  EXPECT_EQ(edge_hits, edge_points);
+  EXPECT_EQ(empty_hits, 0);
+}
+
+// The object sits inside every camera's field of view: translucent frustum faces drawn over it hid the
+// board of the caliscope rig view. The object's pixels are the same with and without the cameras'
+// frustums, but for the few their edges cross.
+TEST(VizRender, FrustumsDoNotCoverTheObject) {
+  const int w = 800, h = 450;
+  const auto rig = MakeTestRig(4, 12);
+  SceneOptions o = BareOptions(w, h);
+  o.rays = false;
+  VizScene scene(o);
+  scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
+  scene.SetCurrentFrame(5);
+  // Seen from behind camera 0 (a little above it): its frustum lies between the eye and the object.
+  const Rigid3 world_from_rig = WorldFromRig(rig.map);
+  const Eigen::Vector3d object = world_from_rig * rig.trajectory[5].rig_from_object.translation();
+  const Eigen::Vector3d cam = world_from_rig * rig.map.cameras[0].rig_from_cam.translation();
+  const double d = (cam - object).norm();
+  const Eigen::Vector3d eye = cam + 0.4 * (cam - object) + Eigen::Vector3d(0, 0, 0.15 * d);
+  ViewCamera view = scene.view(0);
+  const Eigen::Vector3d dir = (eye - object).normalized();
+  view.pointing = object;
+  view.distance = (eye - object).norm();
+  view.azimuth_deg = std::atan2(dir.y(), dir.x()) * 180.0 / M_PI;
+  view.elevation_deg = std::asin(dir.z()) * 180.0 / M_PI;
+  view.fov_deg = 20;
+  scene.SetView(view);
+  const cv::Mat with = scene.Render(&Renderer(w, h)).clone();
+  Dump(with, "object_in_frustums.png");
+  // Control: the cameras 50 m back along their axes, the same view.
+  RigMap far = rig.map;
+  for (auto& c : far.cameras) c.rig_from_cam = c.rig_from_cam * Rigid3(Eigen::Translation3d(0, 0, -50));
+  VizScene control(o);
+  control.SetPanels({PanelInput{"map", far, rig.trajectory}});
+  control.SetView(scene.view(0));
+  control.SetCurrentFrame(5);
+  const cv::Mat without = control.Render(&Renderer(w, h)).clone();
+  Dump(without, "object_alone.png");
+  // The object's region: the bounding box of its marker corners in the image, where the control draws
+  // something (the object).
+  cv::Rect2d box(w, h, 0, 0);
+  for (const auto& m : rig.map.markers)
+    for (const Eigen::Vector3d& c : MarkerCornersInMarker(m.size)) {
+      Eigen::Vector2d px;
+      const Eigen::Vector3d p =
+          world_from_rig * (rig.trajectory[5].rig_from_object * (m.object_from_marker * c));
+      ASSERT_TRUE(view.Project(p, &px));
+      box |= cv::Rect2d(px.x(), px.y(), 1, 1);
+    }
+  const cv::Vec3b bg = Background(w, h);
+  int object_pixels = 0, changed = 0;
+  for (int y = std::max(0, int(box.y)); y < std::min(h, int(box.br().y)); ++y)
+    for (int x = std::max(0, int(box.x)); x < std::min(w, int(box.br().x)); ++x) {
+      const cv::Vec3b a = with.at<cv::Vec3b>(y, x), b = without.at<cv::Vec3b>(y, x);
+      bool is_object = false, differs = false;
+      for (int c = 0; c < 3; ++c) {
+        is_object = is_object || std::abs(int(b[c]) - int(bg[c])) > 20;
+        differs = differs || std::abs(int(a[c]) - int(b[c])) > 24;
+      }
+      object_pixels += is_object;
+      changed += is_object && differs;
+    }
+  ASSERT_GT(object_pixels, 1000) << "the object should be in view";
+  EXPECT_LT(changed, object_pixels / 20) << changed << " of " << object_pixels << " object pixels covered";
 }
 
 TEST(VizRender, MarkerTextureIsUprightWithArucoTopLeftAtMinusXPlusY) {
   const int w = 640, h = 640;
   auto rig = MakeTestRig(4, 1);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   o.rays = false;
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});
@@ -263,7 +357,7 @@ TEST(VizRender, BeforeAfterPanelsSitSideBySide) {
   ASSERT_EQ(scene.num_panels(), 2);
   EXPECT_EQ(scene.view(0).viewport_width, w / 2);
   EXPECT_EQ(scene.view(1).viewport_x, w / 2);
-  EXPECT_GE(scene.residual_scale_px(), 3.0);
+  EXPECT_EQ(scene.residual_scale_px(), kDefaultResidualScalePx);  // absolute, whatever the maps
   cv::Mat img = scene.Render(&Renderer(w, h));
   Dump(img, "before_after.png");
   const cv::Vec3b bg = Background(w, h);
@@ -281,11 +375,7 @@ TEST(VizRender, BeforeAfterPanelsSitSideBySide) {
 TEST(VizRender, ObjectCloseUpFillsTheView) {
   const int w = 640, h = 400;
   const auto rig = MakeTestRig(4, 6);
-  SceneOptions o;
-  o.width = w;
-  o.height = h;
-  o.grid = false;
-  o.legend = false;
+  SceneOptions o = BareOptions(w, h);
   o.rays = false;
   VizScene scene(o);
   scene.SetPanels({PanelInput{"map", rig.map, rig.trajectory}});

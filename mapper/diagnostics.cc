@@ -1,0 +1,466 @@
+// Calibration diagnostics from a MapResult: residuals, verdicts, pose covariance (see diagnostics.h).
+#include "mapper/diagnostics.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "core/json.h"
+#include "core/lcm_util.h"
+#include "core/math.h"
+#include "mapper/bundle.h"
+
+namespace mcmt {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The final estimates as a bundle problem, with one bundle observation per usable input observation.
+struct Rebuilt {
+  BundleProblem bp;
+  std::vector<int> row_of_observation;  // bundle observation -> Diagnostics::observations index
+  int reference_camera = -1, reference_marker = -1;
+};
+
+// Index of the trajectory row of the frame a detection at `utime` belongs to, -1 if none: the
+// latest row at or before it, within half the median frame interval (at least 2 ms, the default
+// sync tolerance).
+class FrameLookup {
+ public:
+  explicit FrameLookup(const std::vector<TrajectoryRow>& rows) {
+    for (size_t i = 0; i < rows.size(); ++i) order_.emplace_back(rows[i].utime, static_cast<int>(i));
+    std::sort(order_.begin(), order_.end());
+    std::vector<int64_t> gaps;
+    for (size_t i = 1; i < order_.size(); ++i) gaps.push_back(order_[i].first - order_[i - 1].first);
+    if (!gaps.empty()) {
+      std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+      tolerance_ = std::max<int64_t>(tolerance_, gaps[gaps.size() / 2] / 2);
+    }
+  }
+  int Find(int64_t utime) const {
+    auto it = std::upper_bound(order_.begin(), order_.end(), std::make_pair(utime, INT32_MAX));
+    if (it == order_.begin()) return -1;
+    --it;
+    return utime - it->first <= tolerance_ ? it->second : -1;
+  }
+
+ private:
+  std::vector<std::pair<int64_t, int>> order_;
+  int64_t tolerance_ = 2000;
+};
+
+// Reasons the mapper gave, by (camera, id), with the frame utime they name.
+using RejectionIndex = std::map<std::pair<std::string, int>, std::vector<std::pair<int64_t, std::string>>>;
+
+std::string FindRejection(const RejectionIndex& index, const std::string& camera, int id, int64_t frame_utime,
+                          int64_t utime) {
+  auto it = index.find({camera, id});
+  if (it == index.end()) return "";
+  for (const auto& [u, reason] : it->second)
+    if (u == frame_utime || u == utime) return reason;
+  return "";
+}
+
+// The map's and trajectory's poses as the bundle problem's blocks; name / id -> block index.
+void InitialBlocks(const MapResult& result, Rebuilt* rebuilt, std::map<std::string, int>* camera_index,
+                   std::map<int, int>* marker_index) {
+  const RigMap& map = result.map;
+  Rebuilt& r = *rebuilt;
+  for (size_t c = 0; c < map.cameras.size(); ++c) {
+    (*camera_index)[map.cameras[c].name] = static_cast<int>(c);
+    r.bp.cam_from_rig.push_back(BlockFromRigid(Inverse(map.cameras[c].rig_from_cam)));
+    r.bp.models.push_back(&map.cameras[c].model);
+    r.bp.camera_fixed.push_back(map.cameras[c].name == map.reference_camera);
+    if (r.bp.camera_fixed.back()) r.reference_camera = static_cast<int>(c);
+  }
+  for (size_t m = 0; m < map.markers.size(); ++m) {
+    (*marker_index)[map.markers[m].id] = static_cast<int>(m);
+    r.bp.object_from_marker.push_back(BlockFromRigid(map.markers[m].object_from_marker));
+    r.bp.marker_fixed.push_back(map.markers[m].id == map.reference_marker);
+    if (r.bp.marker_fixed.back()) r.reference_marker = static_cast<int>(m);
+  }
+  for (const TrajectoryRow& t : result.trajectory)
+    r.bp.rig_from_object.push_back(BlockFromRigid(t.rig_from_object));
+}
+
+// Observations of the input, classified, and the bundle problem of the usable ones.
+Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows) {
+  const RigMap& map = result.map;
+  Rebuilt r;
+  std::map<std::string, int> camera_index;
+  std::map<int, int> marker_index;
+  InitialBlocks(result, &r, &camera_index, &marker_index);
+  RejectionIndex rejections;
+  for (const RejectedObservation& o : result.report.rejected_observations)
+    rejections[{o.camera, o.id}].emplace_back(o.utime, o.reason);
+  std::map<int, std::string> rejected_markers;
+  for (const RejectedMarker& m : result.report.rejected_markers) rejected_markers[m.id] = m.reason;
+  const FrameLookup frames(result.trajectory);
+  for (const detections_t& d : result.detections) {
+    std::map<int, int> count;
+    for (const marker_t& mk : d.markers) ++count[mk.id];
+    const auto cam = camera_index.find(d.camera);
+    const int frame = frames.Find(d.utime);
+    for (const marker_t& mk : d.markers) {
+      ObservationResidual o;
+      o.utime = d.utime;
+      o.seq = d.seq;
+      o.camera = d.camera;
+      o.id = mk.id;
+      o.observed = CornersOf(mk);
+      o.residual.fill(Eigen::Vector2d(kNaN, kNaN));
+      o.rms_px = kNaN;
+      const auto marker = marker_index.find(mk.id);
+      if (cam == camera_index.end())
+        o.reason = "camera not in the map";
+      else if (rejected_markers.count(mk.id))
+        o.reason = "marker rejected: " + rejected_markers[mk.id];
+      else if (marker == marker_index.end())
+        o.reason = "marker not in the map";
+      else if (count[mk.id] > 1)
+        o.reason = "same id twice in one image (dropped)";
+      else if (frame < 0)
+        o.reason = "no object pose for its frame";
+      if (o.reason.empty()) {
+        o.reason = FindRejection(rejections, d.camera, mk.id, result.trajectory[frame].utime, d.utime);
+        BundleObservation b;
+        b.camera = cam->second;
+        b.marker = marker->second;
+        b.frame = frame;
+        b.corners = o.observed;
+        b.side = map.markers[marker->second].size;
+        r.bp.observations.push_back(b);
+        r.bp.active.push_back(o.reason.empty());
+        r.row_of_observation.push_back(static_cast<int>(rows->size()));
+      }
+      o.inlier = o.reason.empty();
+      rows->push_back(o);
+    }
+  }
+  return r;
+}
+
+// Corner residuals with the mapper's own cost function.
+void FillResiduals(const Rebuilt& r, std::vector<ObservationResidual>* rows) {
+  const std::vector<double> rms = ObservationRms(r.bp);
+  for (size_t k = 0; k < r.bp.observations.size(); ++k) {
+    const BundleObservation& b = r.bp.observations[k];
+    ObservationResidual& o = (*rows)[r.row_of_observation[k]];
+    ReprojectionCost cost(r.bp.models[b.camera], b.corners, b.side);
+    const double* params[3] = {r.bp.cam_from_rig[b.camera].data(), r.bp.object_from_marker[b.marker].data(),
+                               r.bp.rig_from_object[b.frame].data()};
+    double res[8];
+    if (!cost.Evaluate(params, res, nullptr)) {
+      if (o.inlier) o.reason = "behind the camera";
+      o.inlier = false;
+      continue;
+    }
+    for (int c = 0; c < 4; ++c) o.residual[c] = Eigen::Vector2d(res[2 * c], res[2 * c + 1]);
+    o.rms_px = rms[k];
+  }
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+void Judge(const DiagnosticsOptions& o, CameraDiagnostics* c) {
+  const double share = c->observations ? double(c->rejected) / c->observations : 0.0;
+  const double ratio = c->predicted_rms_px > 0 ? c->rms_px / c->predicted_rms_px : 0.0;
+  std::vector<std::string> poor, fair;
+  const std::string rms_text = "rms " + Fixed(c->rms_px, 2) + " px is " + Fixed(ratio, 1) + "x the " +
+                               Fixed(c->predicted_rms_px, 2) + " px its noise and marker sizes predict";
+  if (ratio > o.poor_rms_ratio)
+    poor.push_back(rms_text);
+  else if (ratio > o.fair_rms_ratio)
+    fair.push_back(rms_text);
+  const std::string share_text = Fixed(100 * share, 1) + "% of its observations rejected";
+  if (share > o.poor_rejected)
+    poor.push_back(share_text);
+  else if (share > o.fair_rejected)
+    fair.push_back(share_text);
+  const std::string cover_text = "markers seen in only " + Fixed(100 * c->coverage, 0) +
+                                 "% of the image (move the object into the empty parts)";
+  if (c->coverage < o.poor_coverage)
+    poor.push_back(cover_text);
+  else if (c->coverage < o.fair_coverage)
+    fair.push_back(cover_text);
+  const std::string obs_text = "only " + std::to_string(c->inliers) + " observations kept";
+  if (c->inliers < o.poor_observations)
+    poor.push_back(obs_text);
+  else if (c->inliers < o.fair_observations)
+    fair.push_back(obs_text);
+  auto join = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v) s += (s.empty() ? "" : "; ") + x;
+    return s;
+  };
+  if (!poor.empty()) {
+    c->verdict = "poor";
+    c->reason = join(poor) + (fair.empty() ? "" : "; also " + join(fair));
+  } else if (!fair.empty()) {
+    c->verdict = "fair";
+    c->reason = join(fair);
+  } else {
+    c->verdict = "good";
+    c->reason = "rms " + Fixed(c->rms_px, 2) + " px within " + Fixed(o.fair_rms_ratio, 1) + "x of the " +
+                Fixed(c->predicted_rms_px, 2) + " px predicted, " + Fixed(100 * c->coverage, 0) +
+                "% of the image covered, " + std::to_string(c->inliers) + " observations, " +
+                Fixed(100 * share, 1) + "% rejected";
+  }
+}
+
+void CameraStatistics(const MapResult& result, const std::vector<ObservationResidual>& rows, Diagnostics* d) {
+  const DiagnosticsOptions& o = d->options;
+  for (const MapCamera& mc : result.map.cameras) {
+    CameraDiagnostics c;
+    c.name = mc.name;
+    c.reference = mc.name == result.map.reference_camera;
+    const int cells = std::max(1, o.coverage_cells);
+    std::vector<char> covered(cells * cells, 0);
+    std::vector<double> sides;
+    double sq = 0;
+    for (const ObservationResidual& r : rows) {
+      if (r.camera != mc.name) continue;
+      ++c.observations;
+      if (!r.inlier) continue;
+      ++c.inliers;
+      sq += r.rms_px * r.rms_px;
+      double side = 0;
+      for (int k = 0; k < 4; ++k) {
+        side += 0.25 * (r.observed[k] - r.observed[(k + 1) % 4]).norm();
+        const int cx = std::clamp(int(r.observed[k].x() * cells / mc.model.width), 0, cells - 1);
+        const int cy = std::clamp(int(r.observed[k].y() * cells / mc.model.height), 0, cells - 1);
+        covered[cy * cells + cx] = 1;
+      }
+      sides.push_back(side);
+    }
+    c.rejected = c.observations - c.inliers;
+    c.rms_px = c.inliers ? std::sqrt(sq / c.inliers) : 0.0;
+    c.median_side_px = Median(sides);
+    const double print = o.print_tolerance * c.median_side_px / 2;
+    c.predicted_rms_px = std::sqrt(2 * o.corner_noise_px * o.corner_noise_px + print * print);
+    c.coverage = double(std::count(covered.begin(), covered.end(), 1)) / covered.size();
+    Judge(o, &c);
+    d->cameras.push_back(c);
+  }
+}
+
+// Gauss-Newton information of the camera and marker poses with every frame pose eliminated (Schur
+// complement: frames are independent given cameras and markers), from the inlier observations at the
+// solution, without robust loss. Parameters are the 6-dof left perturbations of the mapper's blocks.
+struct ReducedSystem {
+  std::vector<int> camera_slot, marker_slot;  // -1: fixed or unobserved
+  Eigen::MatrixXd information;                // 6 slots x 6 slots
+  int residuals = 0, parameters = 0;
+  double sum_sq = 0.0;
+};
+
+using Block6 = Eigen::Matrix<double, 6, 6>;
+using Jacobian8x6 = Eigen::Matrix<double, 8, 6>;
+
+// One frame's share: its observations' Jacobians (slots of camera and marker, J_slot, J_frame).
+struct FrameTerms {
+  Block6 c = Block6::Zero();
+  std::map<int, Block6> b;  // slot -> J_slot^T J_frame
+};
+
+void EliminateFrame(const FrameTerms& f, Eigen::MatrixXd* h) {
+  const Eigen::LDLT<Block6> c(f.c);
+  if (c.info() != Eigen::Success) return;
+  for (const auto& [i, bi] : f.b) {
+    const Block6 ki = c.solve(bi.transpose());
+    for (const auto& [j, bj] : f.b) h->block<6, 6>(6 * j, 6 * i) -= bj * ki;  // S_ji -= B_j C^-1 B_i^T
+  }
+}
+
+ReducedSystem BuildReducedSystem(const Rebuilt& r, const std::vector<ObservationResidual>& rows) {
+  const BundleProblem& bp = r.bp;
+  ReducedSystem sys;
+  sys.camera_slot.assign(bp.cam_from_rig.size(), -1);
+  sys.marker_slot.assign(bp.object_from_marker.size(), -1);
+  std::vector<std::vector<size_t>> by_frame(bp.rig_from_object.size());
+  int slots = 0;
+  for (size_t k = 0; k < bp.observations.size(); ++k) {
+    if (!rows[r.row_of_observation[k]].inlier) continue;
+    const BundleObservation& b = bp.observations[k];
+    if (!bp.camera_fixed[b.camera] && sys.camera_slot[b.camera] < 0) sys.camera_slot[b.camera] = slots++;
+    if (!bp.marker_fixed[b.marker] && sys.marker_slot[b.marker] < 0) sys.marker_slot[b.marker] = slots++;
+    by_frame[b.frame].push_back(k);
+  }
+  sys.information = Eigen::MatrixXd::Zero(6 * slots, 6 * slots);
+  for (const std::vector<size_t>& obs : by_frame) {
+    if (obs.empty()) continue;
+    FrameTerms f;
+    for (size_t k : obs) {
+      const BundleObservation& b = bp.observations[k];
+      ReprojectionCost cost(bp.models[b.camera], b.corners, b.side);
+      const double* params[3] = {bp.cam_from_rig[b.camera].data(), bp.object_from_marker[b.marker].data(),
+                                 bp.rig_from_object[b.frame].data()};
+      double res[8];
+      Eigen::Matrix<double, 8, 7, Eigen::RowMajor> jac[3];
+      double* jacs[3] = {jac[0].data(), jac[1].data(), jac[2].data()};
+      if (!cost.Evaluate(params, res, jacs)) continue;
+      const Jacobian8x6 jf = jac[2].leftCols<6>();
+      f.c += jf.transpose() * jf;
+      const int slot[2] = {sys.camera_slot[b.camera], sys.marker_slot[b.marker]};
+      for (int a = 0; a < 2; ++a) {
+        if (slot[a] < 0) continue;
+        const Jacobian8x6 ja = jac[a].leftCols<6>();
+        auto it = f.b.emplace(slot[a], Block6::Zero()).first;
+        it->second += ja.transpose() * jf;
+        for (int e = 0; e < 2; ++e)
+          if (slot[e] >= 0)
+            sys.information.block<6, 6>(6 * slot[a], 6 * slot[e]) += ja.transpose() * jac[e].leftCols<6>();
+      }
+      sys.residuals += 8;
+      sys.sum_sq += Eigen::Map<const Eigen::Matrix<double, 8, 1>>(res).squaredNorm();
+    }
+    sys.parameters += 6;
+    EliminateFrame(f, &sys.information);
+  }
+  sys.parameters += 6 * slots;
+  return sys;
+}
+
+// Camera centre c = -R^T t of cam_from_rig (R, t) under the left perturbation: dc = -R^T ([t]x dr + dt).
+void FillPoseSigmas(const PoseBlock& cam_from_rig_block, CameraDiagnostics* cam) {
+  const Rigid3 cam_from_rig = RigidFromBlock(cam_from_rig_block.data());
+  const Eigen::Matrix3d rt = cam_from_rig.linear().transpose();
+  const Eigen::Vector3d t = cam_from_rig.translation();
+  Eigen::Matrix3d tx;
+  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Eigen::Matrix<double, 3, 6> j;
+  j << -rt * tx, -rt;
+  const Eigen::Matrix3d cov_c = j * cam->covariance * j.transpose();
+  cam->sigma_position_mm = 1000.0 * cov_c.diagonal().cwiseMax(0).cwiseSqrt();
+  cam->sigma_rotation_deg =
+      (180.0 / M_PI) * cam->covariance.topLeftCorner<3, 3>().diagonal().cwiseMax(0).cwiseSqrt();
+  cam->has_covariance = true;
+}
+
+// Marginal covariance of every non-reference camera pose, scaled by the residuals' variance.
+void PoseCovariance(const Rebuilt& r, Diagnostics* d) {
+  const ReducedSystem sys = BuildReducedSystem(r, d->observations);
+  d->residual_sigma_px =
+      sys.residuals > sys.parameters ? std::sqrt(sys.sum_sq / (sys.residuals - sys.parameters)) : 0.0;
+  const Eigen::LDLT<Eigen::MatrixXd> h(sys.information);
+  const bool ok = sys.information.size() > 0 && h.info() == Eigen::Success && h.isPositive() &&
+                  h.vectorD().minCoeff() > 1e-12 * h.vectorD().maxCoeff();
+  const Eigen::MatrixXd cov =
+      ok ? Eigen::MatrixXd(h.solve(Eigen::MatrixXd::Identity(sys.information.rows(), sys.information.cols())))
+         : Eigen::MatrixXd();
+  const double s2 = d->residual_sigma_px * d->residual_sigma_px;
+  for (size_t c = 0; c < d->cameras.size(); ++c) {
+    CameraDiagnostics& cam = d->cameras[c];
+    const int slot = sys.camera_slot[c];
+    if (cam.reference) {
+      cam.covariance_note = "reference camera (defines the rig frame)";
+    } else if (slot < 0) {
+      cam.covariance_note = "no inlier observation";
+    } else if (!ok) {
+      cam.covariance_note = "the poses are not determined by the observations (rank-deficient)";
+    } else {
+      cam.covariance = s2 * cov.block<6, 6>(6 * slot, 6 * slot);
+      FillPoseSigmas(r.bp.cam_from_rig[c], &cam);
+    }
+  }
+}
+
+
+}  // namespace
+
+Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions& options) {
+  Diagnostics d;
+  d.options = options;
+  Rebuilt r = Rebuild(result, &d.observations);
+  FillResiduals(r, &d.observations);
+  CameraStatistics(result, d.observations, &d);
+  if (options.covariance) PoseCovariance(r, &d);
+  return d;
+}
+
+const char kResidualsHeader[] = "utime,seq,camera,id,corner,x,y,dx,dy,status,reason";
+
+std::string ResidualsCsv(const Diagnostics& d) {
+  std::ostringstream o;
+  o << kResidualsHeader << "\n" << std::setprecision(10);
+  for (const ObservationResidual& r : d.observations) {
+    std::string reason = r.reason;
+    std::replace(reason.begin(), reason.end(), ',', ';');
+    for (int k = 0; k < 4; ++k) {
+      o << r.utime << ',' << r.seq << ',' << r.camera << ',' << r.id << ',' << k << ',' << r.observed[k].x()
+        << ',' << r.observed[k].y() << ',';
+      if (std::isfinite(r.residual[k].x()))
+        o << r.residual[k].x() << ',' << r.residual[k].y();
+      else
+        o << ',';
+      o << ',' << (r.inlier ? "inlier" : "rejected") << ',' << reason << "\n";
+    }
+  }
+  return o.str();
+}
+
+std::string DiagnosticsJson(const Diagnostics& d) {
+  const DiagnosticsOptions& o = d.options;
+  std::ostringstream j;
+  j << "{\n    \"corner_noise_px\": " << JsonNumber(d.options.corner_noise_px)
+    << ",\n    \"print_tolerance\": " << JsonNumber(d.options.print_tolerance)
+    << ",\n    \"residual_sigma_px\": " << JsonNumber(d.residual_sigma_px)
+    << ",\n    \"rules\": {\"fair_rms_ratio\": " << JsonNumber(o.fair_rms_ratio)
+    << ", \"poor_rms_ratio\": " << JsonNumber(o.poor_rms_ratio) << ", \"fair_rejected\": " << JsonNumber(o.fair_rejected)
+    << ", \"poor_rejected\": " << JsonNumber(o.poor_rejected) << ", \"fair_coverage\": " << JsonNumber(o.fair_coverage)
+    << ", \"poor_coverage\": " << JsonNumber(o.poor_coverage) << ", \"fair_observations\": " << o.fair_observations
+    << ", \"poor_observations\": " << o.poor_observations << ", \"coverage_cells\": " << o.coverage_cells
+    << "},\n    \"cameras\": [\n";
+  for (size_t i = 0; i < d.cameras.size(); ++i) {
+    const CameraDiagnostics& c = d.cameras[i];
+    j << "      {\"name\": " << JsonString(c.name) << ", \"verdict\": " << JsonString(c.verdict)
+      << ", \"reason\": " << JsonString(c.reason) << ", \"observations\": " << c.observations
+      << ", \"inliers\": " << c.inliers << ", \"rejected\": " << c.rejected
+      << ", \"rms_px\": " << JsonNumber(c.rms_px) << ", \"predicted_rms_px\": " << JsonNumber(c.predicted_rms_px)
+      << ", \"median_side_px\": " << JsonNumber(c.median_side_px) << ", \"coverage\": " << JsonNumber(c.coverage)
+      << ", \"reference\": " << (c.reference ? "true" : "false");
+    if (c.has_covariance) {
+      j << ", \"sigma_position_mm\": [" << JsonNumber(c.sigma_position_mm.x()) << ", "
+        << JsonNumber(c.sigma_position_mm.y()) << ", " << JsonNumber(c.sigma_position_mm.z())
+        << "], \"sigma_rotation_deg\": [" << JsonNumber(c.sigma_rotation_deg.x()) << ", "
+        << JsonNumber(c.sigma_rotation_deg.y()) << ", " << JsonNumber(c.sigma_rotation_deg.z()) << "], \"covariance\": [";
+      for (int k = 0; k < 36; ++k) j << (k ? ", " : "") << JsonNumber(c.covariance(k / 6, k % 6));
+      j << "]";
+    } else {
+      j << ", \"covariance_note\": " << JsonString(c.covariance_note);
+    }
+    j << "}" << (i + 1 < d.cameras.size() ? "," : "") << "\n";
+  }
+  j << "    ]\n  }";
+  return j.str();
+}
+
+std::string VerdictLines(const Diagnostics& d) {
+  std::ostringstream o;
+  for (const CameraDiagnostics& c : d.cameras) {
+    o << "camera " << c.name << ": " << c.verdict << " (" << c.reason << ")";
+    if (c.has_covariance)
+      o << "; pose 1-sigma " << Fixed(c.sigma_position_mm.norm(), 2) << " mm, "
+        << Fixed(c.sigma_rotation_deg.norm(), 3) << " deg";
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::string WithDiagnostics(const std::string& report_json, const Diagnostics& d) {
+  const size_t end = report_json.find_last_of('}');
+  if (end == std::string::npos) return report_json;
+  size_t body_end = report_json.find_last_not_of(" \n", end - 1);
+  return report_json.substr(0, body_end + 1) + ",\n  \"diagnostics\": " + DiagnosticsJson(d) + "\n}\n";
+}
+
+}  // namespace mcmt

@@ -1,0 +1,116 @@
+// mapper/diagnostics on synthetic scenes with known corner noise: residuals agree with the mapper's own
+// statistics, verdicts follow the noise, and the pose covariance predicts the spread of camera poses over
+// noise draws.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mapper/diagnostics.h"
+#include "tests/mapper/synth.h"
+
+namespace mcmt {
+namespace {
+
+testing::SynthOptions Options(double noise_px, uint64_t seed, int frames = 60) {
+  testing::SynthOptions o;
+  o.cameras = 4;
+  o.frames = frames;
+  o.noise_px = noise_px;
+  o.seed = seed;
+  return o;
+}
+
+// The synthetic object stays near the image centres: judge by noise here (coverage has its own test).
+DiagnosticsOptions NoCoverageRule() {
+  DiagnosticsOptions o;
+  o.poor_coverage = o.fair_coverage = 0.0;
+  return o;
+}
+
+MapResult Map(const testing::SynthScene& scene) {
+  MapperOptions mo = testing::SceneMapperOptions(scene);
+  mo.reference_camera = scene.names[0];
+  mo.threads = 1;
+  Mapper mapper(mo);
+  for (const detections_t& d : scene.detections) mapper.Add(d);
+  return mapper.Solve();
+}
+
+TEST(Diagnostics, ResidualsAgreeWithTheMapperAndVerdictsFollowTheNoise) {
+  const MapResult result = Map(testing::MakeScene(Options(0.3, 3)));
+  const Diagnostics d = ComputeDiagnostics(result, NoCoverageRule());
+  EXPECT_NEAR(d.residual_sigma_px, 0.3, 0.03);
+  ASSERT_EQ(d.cameras.size(), result.map.cameras.size());
+  for (size_t c = 0; c < d.cameras.size(); ++c) {
+    EXPECT_EQ(d.cameras[c].inliers, result.map.cameras[c].observations) << d.cameras[c].name;
+    EXPECT_NEAR(d.cameras[c].rms_px, result.map.cameras[c].rms_px, 1e-9) << d.cameras[c].name;
+    EXPECT_EQ(d.cameras[c].verdict, "good") << d.cameras[c].reason;
+  }
+  for (const ObservationResidual& o : d.observations) {
+    ASSERT_TRUE(o.inlier) << o.reason;
+    double sq = 0;
+    for (const Eigen::Vector2d& r : o.residual) sq += r.squaredNorm();
+    EXPECT_NEAR(std::sqrt(sq / 4), o.rms_px, 1e-9);
+  }
+  const std::string csv = ResidualsCsv(d);
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), kResidualsHeader);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 * static_cast<long>(d.observations.size()));
+  EXPECT_NE(WithDiagnostics(ReportJson(result), d).find("\"diagnostics\": {"), std::string::npos);
+}
+
+TEST(Diagnostics, ANoisyCameraIsJudgedPoorWithTheReason) {
+  testing::SynthScene scene = testing::MakeScene(Options(0.2, 4));
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> noise(0.0, 2.0);
+  for (detections_t& det : scene.detections)
+    if (det.camera == scene.names[2])
+      for (marker_t& m : det.markers)
+        for (auto& c : m.corners) c[0] += noise(rng), c[1] += noise(rng);
+  const MapResult result = Map(scene);
+  const Diagnostics d = ComputeDiagnostics(result, NoCoverageRule());
+  for (const CameraDiagnostics& c : d.cameras) {
+    if (c.name == scene.names[2]) {
+      EXPECT_EQ(c.verdict, "poor") << c.reason;
+      EXPECT_NE(c.reason.find("x the"), std::string::npos) << c.reason;
+    } else {
+      EXPECT_NE(c.verdict, "poor") << c.name << ": " << c.reason;
+    }
+  }
+  EXPECT_NE(VerdictLines(d).find("camera " + scene.names[2] + ": poor ("), std::string::npos);
+  // With the default rules the small image area the object sweeps is itself a reason.
+  for (const CameraDiagnostics& c : ComputeDiagnostics(result).cameras) {
+    EXPECT_LT(c.coverage, 0.3) << c.name;
+    EXPECT_NE(c.verdict, "good") << c.name;
+    EXPECT_NE(c.reason.find("% of the image (move the object into the empty parts)"), std::string::npos)
+        << c.reason;
+  }
+}
+
+TEST(Diagnostics, PoseCovariancePredictsTheSpreadOverNoiseDraws) {
+  constexpr int kDraws = 10;
+  Eigen::Vector3d predicted = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero();
+  for (int k = 0; k < kDraws; ++k) {
+    const testing::SynthScene scene = testing::MakeScene(Options(0.5, 100 + k, 40));
+    const MapResult result = Map(scene);
+    const Diagnostics d = ComputeDiagnostics(result);
+    const MapCamera* cam = result.map.FindCamera(scene.names[1]);
+    ASSERT_NE(cam, nullptr);
+    const Rigid3 truth = Inverse(scene.rig_from_cam[0]) * scene.rig_from_cam[1];
+    const Eigen::Vector3d error_mm = 1000 * (cam->rig_from_cam.translation() - truth.translation());
+    squared += error_mm.cwiseProduct(error_mm);
+    ASSERT_TRUE(d.cameras[1].has_covariance) << d.cameras[1].covariance_note;
+    predicted += d.cameras[1].sigma_position_mm / kDraws;
+    EXPECT_TRUE(d.cameras[0].reference);
+    EXPECT_FALSE(d.cameras[0].has_covariance);
+  }
+  const Eigen::Vector3d measured = (squared / kDraws).cwiseSqrt();
+  std::printf(
+      "camera position 1-sigma (mm): predicted %.3f %.3f %.3f, measured over %d draws %.3f %.3f %.3f\n",
+      predicted.x(), predicted.y(), predicted.z(), kDraws, measured.x(), measured.y(), measured.z());
+  // Ten draws estimate a standard deviation to about +-25%; allow a factor 2.
+  EXPECT_LT(measured.norm(), 2.0 * predicted.norm());
+  EXPECT_GT(measured.norm(), 0.5 * predicted.norm());
+}
+
+}  // namespace
+}  // namespace mcmt
