@@ -1,6 +1,22 @@
 // Pinhole camera with OpenCV "radtan" (k1 k2 p1 p2 [k3 [k4 k5 k6]]) or Kannala-Brandt "fisheye"
 // (k1..k4, OpenCV fisheye) distortion. Same formulas as cv::projectPoints / cv::fisheye::projectPoints.
 // Pixel centres at integer coordinates (OpenCV's convention).
+//
+// Each distortion model is written once, in CameraModel::Distort below, templated on the scalar. Everything
+// else follows from that one formula:
+//   - Project (pixels) evaluates it on doubles, Ceres' Jets go through the templated Project;
+//   - the Jacobian d pixel / d p_cam differentiates it with a small forward-mode dual number (DistortDual);
+//   - Unproject inverts it by Newton's method with that Jacobian (fisheye: on FisheyeThetaD, its radial
+//   part).
+// To add a model:
+//   1. add an enumerator to DistortionModel, its names to DistortionModelName / DistortionModelFromName
+//      (core/src/camera.cc) and its coefficient count to Validate;
+//   2. add its case to Distort (only +, -, *, /, sqrt, atan and comparisons on T, coefficients as T(d[i]));
+//   3. if Newton on the 2-D formula does not converge over the image (strong radial models), give
+//      Unproject a 1-D radial inversion as for fisheye;
+//   4. add it to TestCameras() in tests/core/test_camera.cc (OpenCV agreement where OpenCV has it,
+//      Jacobian against numeric and Jet derivatives, unprojection round trip over the whole image);
+//   5. the file formats (core/src/config.cc, core/src/files.cc, lcmtypes camera_model_t) name it.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,6 +32,30 @@ enum class DistortionModel { kNone, kRadTan, kFisheye };
 std::string DistortionModelName(DistortionModel model);            // "none", "radtan", "fisheye"
 DistortionModel DistortionModelFromName(const std::string& name);  // throws std::invalid_argument
 
+// A value and its derivatives with respect to two variables (x, y): the forward-mode differentiation
+// that turns each Distort formula into its Jacobian. Only what the formulas use.
+struct DistortDual {
+  double v = 0.0;
+  Eigen::Vector2d d = Eigen::Vector2d::Zero();
+  DistortDual() = default;
+  explicit DistortDual(double value) : v(value) {}
+  DistortDual(double value, const Eigen::Vector2d& derivative) : v(value), d(derivative) {}
+};
+inline DistortDual operator+(const DistortDual& a, const DistortDual& b) { return {a.v + b.v, a.d + b.d}; }
+inline DistortDual operator-(const DistortDual& a, const DistortDual& b) { return {a.v - b.v, a.d - b.d}; }
+inline DistortDual operator*(const DistortDual& a, const DistortDual& b) {
+  return {a.v * b.v, b.v * a.d + a.v * b.d};
+}
+inline DistortDual operator/(const DistortDual& a, const DistortDual& b) {
+  return {a.v / b.v, (b.v * a.d - a.v * b.d) / (b.v * b.v)};
+}
+inline bool operator>(const DistortDual& a, const DistortDual& b) { return a.v > b.v; }
+inline DistortDual sqrt(const DistortDual& a) {
+  const double s = std::sqrt(a.v);
+  return {s, a.d / (2.0 * s)};
+}
+inline DistortDual atan(const DistortDual& a) { return {std::atan(a.v), a.d / (1.0 + a.v * a.v)}; }
+
 struct CameraModel {
   int width = 0;
   int height = 0;
@@ -26,10 +66,15 @@ struct CameraModel {
   // Throws std::invalid_argument naming the problem (non-positive focal length, wrong count...).
   void Validate() const;
 
-  // Normalised image coordinates (x/z, y/z) -> distorted normalised coordinates.
-  // Templated so that Ceres' Jets go through it (automatic differentiation).
+  // Normalised image coordinates (x/z, y/z) -> distorted normalised coordinates: THE formula of each
+  // model. Templated so that Ceres' Jets and DistortDual go through it.
   template <typename T>
   void Distort(const T& x, const T& y, T* xd, T* yd) const;
+  // Fisheye's radial part: theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8).
+  template <typename T>
+  T FisheyeThetaD(const T& theta) const;
+  // Distort with its 2x2 Jacobian d(xd, yd) / d(x, y), differentiated from Distort.
+  void DistortWithJacobian(double x, double y, double* xd, double* yd, Eigen::Matrix2d* jacobian) const;
 
   // Camera-frame point -> pixel. Returns false when the point is behind the camera (z <= 0).
   template <typename T>
@@ -93,15 +138,19 @@ void CameraModel::Distort(const T& x, const T& y, T* xd, T* yd) const {
         return;
       }
       const T r = sqrt(r2);
-      const T theta = atan(r);
-      const T t2 = theta * theta, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
-      const T theta_d = theta * (T(1) + T(d[0]) * t2 + T(d[1]) * t4 + T(d[2]) * t6 + T(d[3]) * t8);
-      const T scale = theta_d / r;
+      const T scale = FisheyeThetaD(atan(r)) / r;
       *xd = x * scale;
       *yd = y * scale;
       return;
     }
   }
+}
+
+template <typename T>
+T CameraModel::FisheyeThetaD(const T& theta) const {
+  const std::vector<double>& d = distortion;
+  const T t2 = theta * theta, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
+  return theta * (T(1) + T(d[0]) * t2 + T(d[1]) * t4 + T(d[2]) * t6 + T(d[3]) * t8);
 }
 
 }  // namespace mcmt

@@ -9,6 +9,7 @@
 
 #include "core/dictionary.h"
 #include "detector/side_model.h"
+#include "core/math.h"
 
 namespace mcmt {
 namespace {
@@ -40,13 +41,6 @@ struct PixelMap {
   Eigen::Vector2d ToIdeal(const Eigen::Vector2d& p) const { return camera ? camera->Undistort(p) : p; }
 };
 
-double Median(std::vector<float>* v) {
-  if (v->empty()) return 0.0;
-  auto mid = v->begin() + v->size() / 2;
-  std::nth_element(v->begin(), mid, v->end());
-  return *mid;
-}
-
 // A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
 struct Line {
   Eigen::Vector2d n;
@@ -73,8 +67,7 @@ bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
     std::vector<float> abs_res(points.size());
     for (size_t i = 0; i < points.size(); ++i)
       abs_res[i] = static_cast<float>(std::abs(line->n.dot(points[i]) - line->c));
-    std::vector<float> tmp = abs_res;
-    const double threshold = std::max(0.25, 3.0 * 1.4826 * Median(&tmp));
+    const double threshold = std::max(0.25, 3.0 * 1.4826 * Median(abs_res));
     std::vector<Eigen::Vector2d> kept;
     kept.reserve(points.size());
     for (size_t i = 0; i < points.size(); ++i)
@@ -189,7 +182,7 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
     }
   }
   if (border.size() < 4 || ring.size() < 4) return 0;
-  const double b = Median(&border), r = Median(&ring);
+  const double b = Median(std::move(border)), r = Median(std::move(ring));
   if (std::abs(b - r) < 5.0) return 0;
   return b < r ? 1 : -1;
 }
@@ -455,7 +448,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         inside.push_back(profiles[static_cast<size_t>(i) * m]);
         outside.push_back(profiles[static_cast<size_t>(i) * m + m - 1]);
       }
-      const double level_in = Median(&inside), level_out = Median(&outside);
+      const double level_in = Median(inside), level_out = Median(outside);
       if (std::abs(level_out - level_in) < 8.0) return false;  // no edge
       const float mid = static_cast<float>(0.5 * (level_in + level_out));
       const float sign = level_out > level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward

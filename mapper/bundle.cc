@@ -331,6 +331,46 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
   return added;
 }
 
+// Manifold, constness and elimination group (`group`) of every used block of one kind; returns how many.
+int SetBlocks(std::vector<PoseBlock>* blocks, const std::vector<char>& used, const std::vector<char>& fixed,
+              int group, ceres::Manifold* manifold, ceres::Problem* problem,
+              ceres::ParameterBlockOrdering* ordering) {
+  int n = 0;
+  for (size_t k = 0; k < used.size(); ++k) {
+    if (!used[k]) continue;
+    double* block = (*blocks)[k].data();
+    problem->SetManifold(block, manifold);
+    if (k < fixed.size() && fixed[k]) problem->SetParameterBlockConstant(block);
+    ordering->AddElementToGroup(block, group);
+    ++n;
+  }
+  return n;
+}
+
+// The linear solver ("auto": dense Schur for small reduced systems) and stopping rules.
+ceres::Solver::Options SolverOptions(const BundleSettings& settings, int num_reduced, std::string* solver) {
+  ceres::Solver::Options options;
+  *solver = settings.linear_solver;
+  if (*solver == "auto") *solver = num_reduced <= 200 ? "dense_schur" : "sparse_schur";
+  if (*solver == "dense_schur") {
+    options.linear_solver_type = ceres::DENSE_SCHUR;
+  } else if (*solver == "iterative_schur") {
+    options.linear_solver_type = ceres::ITERATIVE_SCHUR;
+    options.preconditioner_type = ceres::SCHUR_JACOBI;
+  } else {
+    *solver = "sparse_schur";
+    options.linear_solver_type = ceres::SPARSE_SCHUR;
+  }
+  options.num_threads = std::max(1, settings.threads);
+  options.max_num_iterations = settings.max_iterations;
+  options.function_tolerance = 1e-10;
+  options.gradient_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-10;
+  options.logging_type = ceres::SILENT;
+  options.update_state_every_iteration = false;
+  return options;
+}
+
 }  // namespace
 
 namespace {
@@ -376,30 +416,14 @@ void BuildProblem(BundleProblem* bp, double huber_px, BuiltProblem* out) {
   if (out->num_corners == 0) return;
   // Ceres orders the blocks of one group by address: cameras, markers, intrinsics and clock offsets (separate
   // vectors, anywhere on the heap relative to each other) get a group each, so the reduced system's order --
-  // and the last bits of the solution -- do not depend on where the heap put them.
+  // and the last bits of the solution -- do not depend on where the heap put them. Frames (group 0) are
+  // eliminated first.
   out->ordering = new ceres::ParameterBlockOrdering;
-  for (size_t c = 0; c < out->camera_used.size(); ++c) {
-    if (!out->camera_used[c]) continue;
-    double* block = bp->cam_from_rig[c].data();
-    problem.SetManifold(block, &out->manifold);
-    if (bp->camera_fixed[c]) problem.SetParameterBlockConstant(block);
-    out->ordering->AddElementToGroup(block, 1);  // cameras
-    ++out->num_reduced;
-  }
-  for (size_t m = 0; m < out->marker_used.size(); ++m) {
-    if (!out->marker_used[m]) continue;
-    double* block = bp->object_from_marker[m].data();
-    problem.SetManifold(block, &out->manifold);
-    if (bp->marker_fixed[m]) problem.SetParameterBlockConstant(block);
-    out->ordering->AddElementToGroup(block, 2);  // markers
-    ++out->num_reduced;
-  }
-  for (size_t f = 0; f < out->frame_used.size(); ++f) {
-    if (!out->frame_used[f]) continue;
-    double* block = bp->rig_from_object[f].data();
-    problem.SetManifold(block, &out->manifold);
-    out->ordering->AddElementToGroup(block, 0);  // eliminated first
-  }
+  out->num_reduced = SetBlocks(&bp->cam_from_rig, out->camera_used, bp->camera_fixed, 1, &out->manifold,
+                               &problem, out->ordering);
+  out->num_reduced += SetBlocks(&bp->object_from_marker, out->marker_used, bp->marker_fixed, 2, &out->manifold,
+                                &problem, out->ordering);
+  SetBlocks(&bp->rig_from_object, out->frame_used, bp->frame_fixed, 0, &out->manifold, &problem, out->ordering);
   out->num_reduced += AddSelfCalibrationBlocks(bp, out->camera_used, out->ordering, &out->subsets, &problem);
 }
 
@@ -419,29 +443,10 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   const int num_reduced = built.num_reduced;
   const int num_corners = built.num_corners;
 
-  ceres::Solver::Options options;
-  std::string solver = settings.linear_solver;
-  if (solver == "auto") solver = num_reduced <= 200 ? "dense_schur" : "sparse_schur";
-  if (solver == "dense_schur") {
-    options.linear_solver_type = ceres::DENSE_SCHUR;
-  } else if (solver == "iterative_schur") {
-    options.linear_solver_type = ceres::ITERATIVE_SCHUR;
-    options.preconditioner_type = ceres::SCHUR_JACOBI;
-  } else {
-    solver = "sparse_schur";
-    options.linear_solver_type = ceres::SPARSE_SCHUR;
-  }
-  out.linear_solver = solver;
+  ceres::Solver::Options options = SolverOptions(settings, num_reduced, &out.linear_solver);
   options.linear_solver_ordering.reset(ordering);
-  options.num_threads = std::max(1, settings.threads);
-  options.max_num_iterations = settings.max_iterations;
-  options.function_tolerance = 1e-10;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-10;
-  options.logging_type = ceres::SILENT;
   ProgressCallback callback(settings, num_corners);
   options.callbacks.push_back(&callback);
-  options.update_state_every_iteration = false;
 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);

@@ -129,8 +129,11 @@ struct BundleProblem {
   std::vector<PoseBlock> object_from_marker;  // per marker
   std::vector<PoseBlock> rig_from_object;     // per frame
   std::vector<const CameraModel*> models;     // per camera
-  std::vector<char> camera_fixed;             // per camera (the reference)
-  std::vector<char> marker_fixed;             // per marker (the reference)
+  // Blocks held constant (the gauge: the reference camera and marker; later, e.g., a layout held fixed
+  // while cameras are re-estimated). Shorter than its block list (or empty): the rest vary.
+  std::vector<char> camera_fixed;  // per camera
+  std::vector<char> marker_fixed;  // per marker
+  std::vector<char> frame_fixed;   // per frame
   std::vector<BundleObservation> observations;
   std::vector<char> active;  // per observation
   // Self-calibration (empty: the given intrinsics, synchronised clocks).

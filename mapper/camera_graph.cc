@@ -1,10 +1,12 @@
 // Stages: each camera frame's pose relative to the object, then the camera graph (the paper's step 2;
 // same-marker candidates are the paper's, other placed markers of the frame add candidates through
 // object_from_marker).
+#include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "core/math.h"
+#include "core/rigid_pose.h"
 #include "mapper/parallel.h"
 #include "mapper/stages.h"
 
@@ -20,8 +22,7 @@ bool FitView(const Observations& observations, std::pair<int, int> range, const 
   view->frame = obs[range.first].frame;
   view->camera = obs[range.first].camera;
   std::vector<Rigid3> cands;
-  std::vector<Eigen::Vector3d> points;
-  std::vector<Eigen::Vector2d> pixels;
+  std::vector<PosePoint> points;  // world = the camera, body = the object
   int used_markers = 0;
   for (int i = range.first; i < range.second; ++i) {
     if (!layout.placed[obs[i].marker] || obs[i].kept == 0) continue;
@@ -29,10 +30,9 @@ bool FitView(const Observations& observations, std::pair<int, int> range, const 
     for (int h = 0; h < obs[i].kept; ++h)
       cands.push_back(obs[i].pose.hypotheses[h].cam_from_marker * marker_from_object[obs[i].marker]);
     const MarkerCorners3d corners = MarkerCornersInMarker(obs[i].side);
-    for (int c = 0; c < 4; ++c) {
-      points.push_back(layout.object_from_marker[obs[i].marker] * corners[c]);
-      pixels.push_back(obs[i].corners[c]);
-    }
+    for (int c = 0; c < 4; ++c)
+      points.push_back({&models[view->camera], nullptr, layout.object_from_marker[obs[i].marker] * corners[c],
+                        obs[i].corners[c]});
   }
   if (cands.empty()) return false;
   if (used_markers == 1) {
@@ -43,8 +43,11 @@ bool FitView(const Observations& observations, std::pair<int, int> range, const 
   for (size_t c = 0; c < cands.size() && starts.size() < 4; c += 2) starts.push_back(cands[c]);
   double best = std::numeric_limits<double>::infinity();
   Rigid3 best_pose = starts[0];
+  RigidPoseOptions options;
+  options.max_iterations = 15;
   for (Rigid3 start : starts) {
-    const double e = RefinePose(models[view->camera], points, pixels, &start);
+    RefineRigidPose(points, options, &start);
+    const double e = std::sqrt(PoseSquaredError(points, start) / points.size());
     if (e < best) {
       best = e;
       best_pose = start;

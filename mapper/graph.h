@@ -90,13 +90,6 @@ struct TreePoses {
 };
 TreePoses PosesFromTree(int n, int root, const std::vector<GraphEdge>& tree);
 
-// Pose of a camera relative to a rigid set of points (e.g. all the corners of the markers one camera
-// sees in one frame, in the object frame): Levenberg-Marquardt on the pixel reprojection error from
-// *cam_from_points. Returns the RMS pixel error at the end (+inf when a point falls behind the camera).
-double RefinePose(const CameraModel& camera, const std::vector<Eigen::Vector3d>& points,
-                  const std::vector<Eigen::Vector2d>& pixels, Rigid3* cam_from_points,
-                  int max_iterations = 15);
-
 // Index of the medoid among candidates (core's TransformMedoid), -1 when empty.
 int MedoidIndex(const std::vector<Rigid3>& candidates, double point_scale);
 

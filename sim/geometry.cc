@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/math.h"
 #include "sim/sim.h"
 #include "sim/sim_internal.h"
 
@@ -153,16 +154,7 @@ std::vector<SimCamera> MakeRig(const RigOptions& o) {
     cam.name = "cam" + std::to_string(k);
     const double a = 2 * kPi * k / o.num_cameras;
     const Eigen::Vector3d centre(o.radius * std::cos(a), o.radius * std::sin(a), height);
-    const Eigen::Vector3d forward = (target - centre).normalized();
-    Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
-    if (right.norm() < 1e-9) right = Eigen::Vector3d::UnitY();  // looking straight down
-    right.normalize();
-    const Eigen::Vector3d down = forward.cross(right);
-    Eigen::Matrix3d r;
-    r.col(0) = right;
-    r.col(1) = down;
-    r.col(2) = forward;
-    cam.rig_from_cam = MakePose(r, centre);
+    cam.rig_from_cam = LookAt(centre, target);
     CameraModel& m = cam.model;
     m.width = o.width;
     m.height = o.height;

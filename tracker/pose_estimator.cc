@@ -9,52 +9,13 @@
 #include <stdexcept>
 
 #include "core/ippe.h"
+#include "core/rigid_pose.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Added to the cost for every corner that falls behind its camera, so that a step leading there is
-// refused by Levenberg-Marquardt.
-constexpr double kBehindPenalty = 1e12;
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-Eigen::Matrix3d ExpRotation(const Eigen::Vector3d& w) {
-  const double angle = w.norm();
-  if (angle < 1e-12) return Eigen::Matrix3d::Identity() + Skew(w);
-  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
-}
-
-// rig_from_object <- a rotation about `pivot` (rig frame) then a translation, delta = (rotation vector w,
-// translation v) in rig axes: p_rig -> R(w) (p_rig - pivot) + pivot + v. The optimiser pivots about the
-// object's origin, so rotation and translation steps stay decoupled however far the rig origin (the
-// reference camera) is from the object.
-Rigid3 ApplyAbout(const Rigid3& pose, const Vector6d& delta, const Eigen::Vector3d& pivot) {
-  const Eigen::Matrix3d dr = ExpRotation(delta.head<3>());
-  Rigid3 out = Rigid3::Identity();
-  Eigen::Matrix3d r = dr * pose.linear();
-  // Keep the rotation orthonormal over thousands of frames of incremental updates.
-  r = Eigen::Quaterniond(r).normalized().toRotationMatrix();
-  out.linear() = r;
-  out.translation() = dr * (pose.translation() - pivot) + pivot + delta.tail<3>();
-  return out;
-}
-
-double Huber(double squared, double k, double* weight) {
-  if (squared <= k * k) {
-    *weight = 1.0;
-    return squared;
-  }
-  const double d = std::sqrt(squared);
-  *weight = k / d;
-  return 2.0 * k * d - k * k;
-}
 
 }  // namespace
 
@@ -105,8 +66,8 @@ PoseEstimator::PoseEstimator(const RigMap& map, const TrackerOptions& options)
     cam.model = c.model;
     cam.rig_from_cam = c.rig_from_cam;
     const Eigen::Matrix3d r = c.rig_from_cam.linear();
-    cam.cam_R_rig = r.transpose();
-    cam.cam_t_rig = -r.transpose() * c.rig_from_cam.translation();
+    cam.cam_from_rig.linear() = r.transpose();
+    cam.cam_from_rig.translation() = -r.transpose() * c.rig_from_cam.translation();
     camera_index_[c.name] = static_cast<int>(cameras_.size());
     cameras_.push_back(cam);
   }
@@ -132,7 +93,8 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
   const Marker& mk = markers_[obs.marker];
   double sum = 0.0;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d p_cam = cam.cam_R_rig * (pose * mk.corners_object[k]) + cam.cam_t_rig;
+    const Eigen::Vector3d p_cam =
+        cam.cam_from_rig.linear() * (pose * mk.corners_object[k]) + cam.cam_from_rig.translation();
     Eigen::Vector2d px;
     if (!cam.model.Project(p_cam, &px, nullptr)) return kInf;
     sum += (px - (*obs.pixels)[k]).squaredNorm();
@@ -140,93 +102,28 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
   return std::sqrt(sum / 4.0);
 }
 
-// Cost (Huber on each corner's pixel distance d, k = huber_px):
-//   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
-// with T = rig_from_object perturbed by a rotation about the pivot c (rig frame) and a translation,
-// p_rig <- R(w) (p_rig - c) + c + v, delta = (w, v); the optimiser takes c = the object's origin:
-//   d p_rig / d delta = [-[p_rig - c]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig - c]x | I],
-//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig - c]x | I]   (analytic, 2x6 per corner).
-// Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
-double PoseEstimator::Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active,
-                               const Rigid3& pose, const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h,
-                               Vector6d* g, double* plain_cost) const {
-  h->setZero();
-  g->setZero();
-  double cost = 0.0, plain = 0.0;
-  const Eigen::Matrix3d r = pose.linear();
-  const Eigen::Vector3d tr = pose.translation();
+// The corners of the active observations for core's rigid-pose solver (world = rig, body = object).
+std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
+                                             const std::vector<char>& active) const {
+  std::vector<PosePoint> points;
   for (size_t i = 0; i < obs.size(); ++i) {
     if (!active[i]) continue;
     const Camera& cam = cameras_[obs[i].camera];
     const Marker& mk = markers_[obs[i].marker];
-    for (int c = 0; c < 4; ++c) {
-      const Eigen::Vector3d p_rig = r * mk.corners_object[c] + tr;
-      const Eigen::Vector3d p_cam = cam.cam_R_rig * p_rig + cam.cam_t_rig;
-      Eigen::Vector2d px;
-      Eigen::Matrix<double, 2, 3> jp;
-      if (!cam.model.Project(p_cam, &px, &jp)) {
-        cost += kBehindPenalty;
-        plain += kBehindPenalty;
-        continue;
-      }
-      const Eigen::Vector2d res = px - (*obs[i].pixels)[c];
-      const double sq = res.squaredNorm();
-      double w = 1.0;
-      cost += huber_px > 0 ? Huber(sq, huber_px, &w) : sq;
-      plain += sq;
-      const Eigen::Matrix<double, 2, 3> a = jp * cam.cam_R_rig;
-      Eigen::Matrix<double, 2, 6> j;
-      j.leftCols<3>() = -a * Skew(p_rig - pivot);
-      j.rightCols<3>() = a;
-      h->noalias() += w * j.transpose() * j;
-      g->noalias() += w * j.transpose() * res;
-    }
+    for (int c = 0; c < 4; ++c)
+      points.push_back({&cam.model, &cam.cam_from_rig, mk.corners_object[c], (*obs[i].pixels)[c]});
   }
-  if (plain_cost) *plain_cost = plain;
-  return cost;
+  return points;
 }
 
-// Cost (Huber on each corner's pixel distance d, k = huber_px):
-//   E(T) = sum_obs sum_corners rho(|pi_c(cam_from_rig * T * object_from_marker * u_k) - x_k|^2)
-// with T = rig_from_object perturbed by a rotation about the pivot c (rig frame) and a translation,
-// p_rig <- R(w) (p_rig - c) + c + v, delta = (w, v); the optimiser takes c = the object's origin:
-//   d p_rig / d delta = [-[p_rig - c]x | I],  d p_cam / d delta = cam_R_rig * [-[p_rig - c]x | I],
-//   d pixel / d delta = (d pixel / d p_cam) * cam_R_rig * [-[p_rig - c]x | I]   (analytic, 2x6 per corner).
-// Solved by Levenberg-Marquardt on the IRLS-weighted normal equations (H + lambda diag(H)) dx = -g.
+// Levenberg-Marquardt on the active observations (core's RefineRigidPose: Huber, rotation about the
+// object's origin).
 void PoseEstimator::Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
                              int* iterations) const {
-  Matrix6d h;
-  Vector6d g;
-  double cost = Evaluate(obs, active, *pose, pose->translation(), options_.huber_px, &h, &g, nullptr);
-  double lambda = 1e-4;
-  int it = 0;
-  for (; it < options_.max_iterations && cost > 1e-24; ++it) {
-    Matrix6d a = h;
-    a.diagonal() += lambda * h.diagonal() + Vector6d::Constant(1e-12);
-    const Vector6d dx = a.ldlt().solve(-g);
-    if (!dx.allFinite()) break;
-    const Rigid3 candidate = ApplyAbout(*pose, dx, pose->translation());
-    Matrix6d h_new;
-    Vector6d g_new;
-    const double cost_new =
-        Evaluate(obs, active, candidate, candidate.translation(), options_.huber_px, &h_new, &g_new, nullptr);
-    if (cost_new < cost) {
-      const double decrease = cost - cost_new;
-      *pose = candidate;
-      h = h_new;
-      g = g_new;
-      cost = cost_new;
-      lambda = std::max(lambda * 0.1, 1e-10);
-      // Converged: a step below 1e-9 (rad, m) or a negligible decrease.
-      if (dx.norm() < 1e-9 || decrease < 1e-10 * cost_new) {
-        ++it;
-        break;
-      }
-    } else {
-      lambda *= 10.0;
-      if (lambda > 1e10) break;
-    }
-  }
+  RigidPoseOptions options;
+  options.max_iterations = options_.max_iterations;
+  options.huber_px = options_.huber_px;
+  const int it = RefineRigidPose(Points(obs, active), options, pose);
   if (iterations) *iterations += it;
 }
 
@@ -390,7 +287,7 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
   double rss = 0.0;
   const std::vector<char>& active = best.inlier;
   // Unweighted J^T J and residual sum of squares; rotations about the rig origin, as the message documents.
-  Evaluate(obs, active, best.pose, Eigen::Vector3d::Zero(), 0.0, &h, &g, &rss);
+  PoseNormalEquations(Points(obs, active), best.pose, Eigen::Vector3d::Zero(), 0.0, &h, &g, &rss);
   const int n_inliers = static_cast<int>(std::count(active.begin(), active.end(), 1));
   const int n_residuals = 8 * n_inliers;
   double sigma2 = n_residuals > 6 ? rss / (n_residuals - 6) : rss;

@@ -28,6 +28,7 @@
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
 #include "core/marker.h"
+#include "core/rigid_pose.h"
 #include "core/se3.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
@@ -111,8 +112,7 @@ class PoseEstimator {
     std::string name;
     CameraModel model;
     Rigid3 rig_from_cam;
-    Eigen::Matrix3d cam_R_rig;
-    Eigen::Vector3d cam_t_rig;
+    Rigid3 cam_from_rig = Rigid3::Identity();
   };
   struct Marker {
     int id = 0;
@@ -136,12 +136,8 @@ class PoseEstimator {
 
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
-  // Robust cost (Huber, huber_px <= 0: plain squares) of the active observations at `pose`, with the
-  // IRLS-weighted Gauss-Newton matrix J^T W J in *h and gradient J^T W r in *g for a perturbation that
-  // rotates about `pivot` (rig frame) and translates; *plain_cost gets the unweighted sum of squares.
-  double Evaluate(const std::vector<Obs>& obs, const std::vector<char>& active, const Rigid3& pose,
-                  const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h, Vector6d* g,
-                  double* plain_cost) const;
+  // The corners of the active observations, for core's rigid-pose solver (core/rigid_pose.h).
+  std::vector<PosePoint> Points(const std::vector<Obs>& obs, const std::vector<char>& active) const;
   // Levenberg-Marquardt on the active observations.
   void Optimise(const std::vector<Obs>& obs, const std::vector<char>& active, Rigid3* pose,
                 int* iterations) const;

@@ -22,6 +22,7 @@
 
 #include "core/dictionary.h"
 #include "core/marker.h"
+#include "core/math.h"
 
 namespace mcmt::viz {
 namespace {
@@ -55,12 +56,6 @@ double NiceStep(double approx) {
   const double p = std::pow(10.0, std::floor(std::log10(std::max(approx, 1e-6))));
   const double f = approx / p;
   return (f < 1.5 ? 1.0 : f < 3.5 ? 2.0 : f < 7.5 ? 5.0 : 10.0) * p;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // The marker's bitmap as a texture: row 0 of an MRPT texture lands at the plane's yMin, so the

@@ -7,79 +7,15 @@
 #include <string>
 
 namespace mcmt {
-namespace {
-
-// Distorted normalised coordinates and their 2x2 Jacobian d(xd, yd) / d(x, y).
-void DistortWithJacobian(const CameraModel& cam, double x, double y, double* xd, double* yd,
-                         Eigen::Matrix2d* j) {
-  const std::vector<double>& d = cam.distortion;
-  switch (cam.model) {
-    case DistortionModel::kNone:
-      *xd = x;
-      *yd = y;
-      j->setIdentity();
-      return;
-    case DistortionModel::kRadTan: {
-      const double k1 = d.size() > 0 ? d[0] : 0, k2 = d.size() > 1 ? d[1] : 0;
-      const double p1 = d.size() > 2 ? d[2] : 0, p2 = d.size() > 3 ? d[3] : 0;
-      const double k3 = d.size() > 4 ? d[4] : 0;
-      const double k4 = d.size() >= 8 ? d[5] : 0, k5 = d.size() >= 8 ? d[6] : 0,
-                   k6 = d.size() >= 8 ? d[7] : 0;
-      const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
-      // radial = num / den with num = 1 + k1 r2 + k2 r4 + k3 r6, den = 1 + k4 r2 + k5 r4 + k6 r6.
-      const double num = 1 + k1 * r2 + k2 * r4 + k3 * r6;
-      const double den = 1 + k4 * r2 + k5 * r4 + k6 * r6;
-      const double dnum = k1 + 2 * k2 * r2 + 3 * k3 * r4;  // d num / d r2
-      const double dden = k4 + 2 * k5 * r2 + 3 * k6 * r4;  // d den / d r2
-      const double radial = num / den;
-      const double dradial = (dnum * den - num * dden) / (den * den);  // d radial / d r2
-      // xd = x radial + 2 p1 x y + p2 (r2 + 2 x^2); yd = y radial + p1 (r2 + 2 y^2) + 2 p2 x y.
-      *xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
-      *yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
-      (*j)(0, 0) = radial + 2 * x * x * dradial + 2 * p1 * y + 6 * p2 * x;
-      (*j)(0, 1) = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y;
-      (*j)(1, 0) = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y;
-      (*j)(1, 1) = radial + 2 * y * y * dradial + 6 * p1 * y + 2 * p2 * x;
-      return;
-    }
-    case DistortionModel::kFisheye: {
-      const double k1 = d[0], k2 = d[1], k3 = d[2], k4 = d[3];
-      const double r2 = x * x + y * y;
-      if (!(r2 > 1e-30)) {
-        *xd = x;
-        *yd = y;
-        j->setIdentity();
-        return;
-      }
-      // xd = x s(r), s = theta_d / r, theta = atan r, theta_d = theta (1 + k1 t^2 + k2 t^4 + k3 t^6 + k4
-      // t^8).
-      const double r = std::sqrt(r2);
-      const double theta = std::atan(r);
-      const double t2 = theta * theta, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
-      const double theta_d = theta * (1 + k1 * t2 + k2 * t4 + k3 * t6 + k4 * t8);
-      const double dtheta_d =
-          1 + 3 * k1 * t2 + 5 * k2 * t4 + 7 * k3 * t6 + 9 * k4 * t8;  // d theta_d / d theta
-      const double dtheta = 1.0 / (1.0 + r2);                         // d theta / d r
-      const double s = theta_d / r;
-      // d s / d r divided by r (so that d s / d x = x * ds_over_r).
-      double ds_over_r;
-      if (r2 < 1e-12) {
-        ds_over_r = 2.0 * (k1 - 1.0 / 3.0);  // s = 1 + (k1 - 1/3) r^2 + O(r^4)
-      } else {
-        ds_over_r = (dtheta_d * dtheta * r - theta_d) / (r2 * r);
-      }
-      *xd = x * s;
-      *yd = y * s;
-      (*j)(0, 0) = s + x * x * ds_over_r;
-      (*j)(0, 1) = x * y * ds_over_r;
-      (*j)(1, 0) = x * y * ds_over_r;
-      (*j)(1, 1) = s + y * y * ds_over_r;
-      return;
-    }
-  }
+void CameraModel::DistortWithJacobian(double x, double y, double* xd, double* yd,
+                                      Eigen::Matrix2d* jacobian) const {
+  DistortDual dx, dy;
+  Distort(DistortDual(x, Eigen::Vector2d(1, 0)), DistortDual(y, Eigen::Vector2d(0, 1)), &dx, &dy);
+  *xd = dx.v;
+  *yd = dy.v;
+  jacobian->row(0) = dx.d.transpose();
+  jacobian->row(1) = dy.d.transpose();
 }
-
-}  // namespace
 
 std::string DistortionModelName(DistortionModel model) {
   switch (model) {
@@ -137,7 +73,7 @@ bool CameraModel::Project(const Eigen::Vector3d& p_cam, Eigen::Vector2d* pixel,
   const double x = p_cam.x() * iz, y = p_cam.y() * iz;
   double xd, yd;
   Eigen::Matrix2d jd;
-  DistortWithJacobian(*this, x, y, &xd, &yd, &jd);
+  DistortWithJacobian(x, y, &xd, &yd, &jd);
   if (pixel) *pixel = Eigen::Vector2d(fx * xd + cx, fy * yd + cy);
   if (jacobian) {
     // d(x, y) / d p = [[1/z, 0, -x/z], [0, 1/z, -y/z]]; pixel = diag(fx, fy) * (xd, yd) + c.
@@ -163,12 +99,11 @@ Eigen::Vector2d CameraModel::Unproject(const Eigen::Vector2d& pixel) const {
     // Radial only: solve theta_d(theta) = |target| for theta by Newton, then r = tan(theta).
     const double rd = target.norm();
     if (rd < 1e-30) return target;
-    const double k1 = distortion[0], k2 = distortion[1], k3 = distortion[2], k4 = distortion[3];
     double theta = std::min(rd, 1.5);
     for (int it = 0; it < 50; ++it) {
-      const double t2 = theta * theta, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
-      const double f = theta * (1 + k1 * t2 + k2 * t4 + k3 * t6 + k4 * t8) - rd;
-      const double df = 1 + 3 * k1 * t2 + 5 * k2 * t4 + 7 * k3 * t6 + 9 * k4 * t8;
+      const DistortDual theta_d = FisheyeThetaD(DistortDual(theta, Eigen::Vector2d(1, 0)));
+      const double f = theta_d.v - rd;
+      const double df = theta_d.d[0];
       if (df == 0) break;
       double step = f / df;
       double next = theta - step;
@@ -186,7 +121,7 @@ Eigen::Vector2d CameraModel::Unproject(const Eigen::Vector2d& pixel) const {
   for (int it = 0; it < 100; ++it) {
     double xd, yd;
     Eigen::Matrix2d j;
-    DistortWithJacobian(*this, u.x(), u.y(), &xd, &yd, &j);
+    DistortWithJacobian(u.x(), u.y(), &xd, &yd, &j);
     const Eigen::Vector2d residual(xd - target.x(), yd - target.y());
     const double det = j.determinant();
     if (!(std::abs(det) > 1e-300)) break;

@@ -5,14 +5,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/math.h"
+
 namespace mcmt {
 
 Eigen::Matrix3d RotationFromVector(const Eigen::Vector3d& rotation_vector) {
   const double theta2 = rotation_vector.squaredNorm();
-  Eigen::Matrix3d k;
-  k << 0, -rotation_vector.z(), rotation_vector.y(),  //
-      rotation_vector.z(), 0, -rotation_vector.x(),   //
-      -rotation_vector.y(), rotation_vector.x(), 0;
+  const Eigen::Matrix3d k = Skew(rotation_vector);
   if (theta2 < 1e-16) {
     // Taylor: R = I + K + K^2 / 2 (exact to machine precision at this size).
     return Eigen::Matrix3d::Identity() + k + 0.5 * k * k;

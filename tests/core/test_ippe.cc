@@ -3,23 +3,14 @@
 #include <random>
 
 #include "core/ippe.h"
+#include "tests/core/test_util.h"
 
 namespace mcmt {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-CameraModel TestCamera() {
-  CameraModel c;
-  c.width = 1280;
-  c.height = 960;
-  c.fx = c.fy = 1000;
-  c.cx = 639.5;
-  c.cy = 479.5;
-  c.model = DistortionModel::kRadTan;
-  c.distortion = {-0.25, 0.09, 0.001, -0.0007, -0.015};
-  return c;
-}
+using testing_util::TestCamera;
 
 MarkerCorners2d ProjectSquare(const CameraModel& cam, const Rigid3& cam_from_marker, double side,
                               double noise_px, std::mt19937_64* rng) {

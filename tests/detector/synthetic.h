@@ -12,6 +12,8 @@
 #include <random>
 #include <vector>
 
+#include "core/math.h"
+
 namespace mcmt::testing {
 
 struct RenderedMarker {
@@ -201,11 +203,7 @@ inline void AddCornerErrors(const RenderedMarker& truth, const std::array<cv::Po
   }
 }
 
-inline double MedianOf(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
+inline double MedianOf(std::vector<double> v) { return Median(std::move(v), NAN); }
 inline double MeanOf(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;

@@ -8,23 +8,12 @@
 #include "core/config.h"
 #include "core/lcm_util.h"
 #include "core/marker.h"
+#include "core/math.h"
 #include "mcmt/mapper_command_t.hpp"
 
 namespace mcmt {
 namespace testing {
 namespace {
-
-Rigid3 LookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Rigid3 pose = Rigid3::Identity();
-  pose.linear().col(0) = x;
-  pose.linear().col(1) = y;
-  pose.linear().col(2) = z;
-  pose.translation() = position;
-  return pose;
-}
 
 Rigid3 FacePose(const Eigen::Vector3d& normal, const Eigen::Vector3d& centre) {
   Rigid3 pose = Rigid3::Identity();

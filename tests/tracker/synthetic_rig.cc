@@ -11,24 +11,11 @@
 #include <stdexcept>
 
 #include "core/lcm_util.h"
+#include "core/math.h"
 
 namespace mcmt {
 namespace tracker_test {
 namespace {
-
-// world_from_cam of a camera at `position` looking at `target` (z forward, x right, y down, image x
-// horizontal).
-Rigid3 LookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Rigid3 t = Rigid3::Identity();
-  t.linear().col(0) = x;
-  t.linear().col(1) = y;
-  t.linear().col(2) = z;
-  t.translation() = position;
-  return t;
-}
 
 // Marker frame on a cube face with outward normal n (object = cube centre).
 Rigid3 FaceMarker(const Eigen::Vector3d& n, const Eigen::Vector3d& up_hint, double half_side) {

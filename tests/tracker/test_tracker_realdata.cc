@@ -10,6 +10,7 @@
 
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/math.h"
 #include "detector/detector.h"
 #include "mapper/mapper.h"
 #include "tracker/tracker.h"
@@ -18,12 +19,6 @@ namespace mcmt {
 namespace {
 
 const std::string kData = std::string(MCMT_SOURCE_DIR) + "/../shared/data/caliscope";
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 TEST(TrackerRealData, CharucoSessionAgreesWithTheMappersTrajectory) {
   if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"))

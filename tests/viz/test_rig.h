@@ -11,22 +11,10 @@
 #include <vector>
 
 #include "core/files.h"
+#include "core/math.h"
 #include "core/se3.h"
 
 namespace mcmt::viz::testing {
-
-// Camera at `eye` looking at `target` (world z up), OpenCV axes: x right, y down, z forward.
-inline Rigid3 WorldFromCamLookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Rigid3 t = Rigid3::Identity();
-  t.linear().col(0) = x;
-  t.linear().col(1) = y;
-  t.linear().col(2) = z;
-  t.translation() = eye;
-  return t;
-}
 
 inline CameraModel TestCameraModel() {
   CameraModel m;
@@ -51,8 +39,8 @@ inline TestRig MakeTestRig(int num_cameras = 4, int frames = 12, double camera_r
   std::vector<Rigid3> world_from_cam;
   for (int i = 0; i < num_cameras; ++i) {
     const double a = 2.0 * M_PI * i / num_cameras + 0.3;
-    world_from_cam.push_back(WorldFromCamLookAt(Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 1.2),
-                                                Eigen::Vector3d(0, 0, 0.1)));
+    world_from_cam.push_back(
+        LookAt(Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 1.2), Eigen::Vector3d(0, 0, 0.1)));
   }
   const Rigid3 rig_from_world = Inverse(world_from_cam[0]);
   rig.world_from_rig = world_from_cam[0];

@@ -1,0 +1,262 @@
+// Each stage of the mapper's pipeline (mapper/stages.h) alone, on hand-made inputs or on the synthetic
+// scene of tests/mapper/synth.h, against ground truth.
+#include <gtest/gtest.h>
+
+#include "core/lcm_util.h"
+#include "mapper/stages.h"
+#include "tests/mapper/synth.h"
+
+namespace mcmt {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+StoredMessage Message(int64_t utime, int camera, std::vector<int> ids) {
+  StoredMessage m;
+  m.utime = utime;
+  m.seq = utime / 1000;
+  m.camera = camera;
+  for (int id : ids) m.markers.push_back({id, MarkerCorners2d()});
+  return m;
+}
+
+std::vector<StoredMessage> MessagesOf(const testing::SynthScene& scene) {
+  std::vector<StoredMessage> out;
+  for (const detections_t& d : scene.detections) {
+    StoredMessage m;
+    m.utime = d.utime;
+    m.seq = d.seq;
+    m.camera =
+        static_cast<int>(std::find(scene.names.begin(), scene.names.end(), d.camera) - scene.names.begin());
+    for (const marker_t& mk : d.markers) m.markers.push_back({mk.id, CornersOf(mk)});
+    out.push_back(m);
+  }
+  return out;
+}
+
+// The scene carried through the stages up to `last` (0 frames .. 4 object poses).
+struct Pipeline {
+  testing::SynthScene scene;
+  MapperOptions options;
+  std::vector<StoredMessage> messages;
+  std::vector<Frame> frames;
+  Observations observations;
+  MapReport report;
+  MarkerLayout layout;
+  std::vector<ViewPose> views;
+  CameraPlacement cameras;
+  ObjectPoses poses;
+
+  explicit Pipeline(const testing::SynthOptions& so) : scene(testing::MakeScene(so)) {
+    options = testing::SceneMapperOptions(scene);
+    messages = MessagesOf(scene);
+    frames = AssembleFrames(messages, static_cast<int>(scene.names.size()), options.sync_tolerance_us);
+    observations = CollectObservations(messages, frames, scene.names, options, &report);
+    EstimateHypotheses(scene.models, options.tau_e, 2, &observations.obs);
+    layout = BuildMarkerGraph(observations, options, 2, &report);
+    views = FitViews(observations, layout, scene.models, 2);
+    cameras = BuildCameraGraph(views, observations, scene.names, options, 2, &report);
+    poses = InitialObjectPoses(observations, frames, layout, cameras, options, 2, &report);
+  }
+  ObservationNames Names() const { return {&frames, &scene.names, &observations.marker_ids}; }
+  int MarkerOf(int id) const { return observations.marker_index.at(id); }
+  int TruthIndexOf(int id) const {
+    return static_cast<int>(std::find(scene.ids.begin(), scene.ids.end(), id) - scene.ids.begin());
+  }
+};
+
+testing::SynthOptions Scene(int frames = 80) {
+  testing::SynthOptions so;
+  so.frames = frames;
+  so.noise_px = 0.2;
+  return so;
+}
+
+TEST(MapperStages, AssembleFramesJoinsWithinToleranceOneMessagePerCamera) {
+  const std::vector<StoredMessage> messages = {Message(1000, 0, {1}), Message(1500, 1, {1}),
+                                               Message(1800, 0, {2}),  // camera 0 again: a new frame
+                                               Message(9000, 1, {1})};
+  const std::vector<Frame> frames = AssembleFrames(messages, 2, 2000);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].messages, (std::vector<int>{0, 1}));
+  EXPECT_EQ(frames[1].messages, (std::vector<int>{2}));
+  EXPECT_EQ(frames[2].messages, (std::vector<int>{3}));
+  EXPECT_EQ(frames[2].utime, 9000);
+}
+
+TEST(MapperStages, CollectObservationsCountsIgnoredAndDuplicateIdsAndGroupsViews) {
+  const std::vector<StoredMessage> messages = {Message(1000, 0, {1, 2, 2, 9}), Message(1000, 1, {1, 3})};
+  const std::vector<Frame> frames = AssembleFrames(messages, 2, 2000);
+  MapperOptions options;
+  options.marker_ids = {1, 2, 3};
+  options.sizes.default_size = 0.04;
+  MapReport report;
+  const Observations o = CollectObservations(messages, frames, {"a", "b"}, options, &report);
+  EXPECT_EQ(report.ignored_ids, 1);  // 9
+  EXPECT_EQ(report.duplicates, 2);   // both 2s
+  ASSERT_EQ(o.obs.size(), 3u);       // 1 (a), 1 and 3 (b)
+  EXPECT_EQ(o.marker_ids, (std::vector<int>{1, 3}));
+  EXPECT_EQ(o.views, (std::vector<std::pair<int, int>>{{0, 1}, {1, 3}}));
+  EXPECT_EQ(o.camera_messages, (std::vector<int>{1, 1}));
+  options.marker_ids = {7};
+  EXPECT_THROW(CollectObservations(messages, frames, {"a", "b"}, options, &report), MapperError);
+}
+
+TEST(MapperStages, OneEdgeBuilderForBothGraphsFindsTheRelativePose) {
+  // Nodes 0 and 1 seen together in 40 events; node 0's items carry a wrong second hypothesis. With at most
+  // 10 stored events the medoid is still the truth, and every event is counted.
+  std::mt19937_64 rng(11);
+  const Rigid3 zero_from_one = RandomRigid(rng, 0.2);
+  const Rigid3 wrong = RandomRigid(rng, 0.2);
+  std::vector<GraphItem> items;
+  for (int e = 0; e < 40; ++e) {
+    const Rigid3 zero_from_common = RandomRigid(rng, 1.0);
+    const Rigid3 one_from_common = Inverse(zero_from_one) * zero_from_common;
+    GraphItem a{e, 0, {zero_from_common, wrong}, {Inverse(zero_from_common), Inverse(wrong)}};
+    GraphItem b{e, 1, {one_from_common}, {Inverse(one_from_common)}};
+    if (e % 2) std::swap(a, b);  // order within a group does not matter
+    items.push_back(a);
+    items.push_back(b);
+  }
+  EdgeOptions options;
+  options.max_events = 10;
+  options.medoid.point_scale = 0.1;
+  const std::vector<GraphEdge> edges = BuildGraphEdges(items, 2, options, 2);
+  ASSERT_EQ(edges.size(), 1u);
+  EXPECT_EQ(edges[0].a, 0);
+  EXPECT_EQ(edges[0].b, 1);
+  EXPECT_EQ(edges[0].events, 40);
+  EXPECT_EQ(edges[0].candidates, 80);
+  EXPECT_LE(edges[0].stored_events, 10);
+  EXPECT_LT(RotationAngle(edges[0].a_from_b, zero_from_one), 1e-9);
+  EXPECT_LT(TranslationDistance(edges[0].a_from_b, zero_from_one), 1e-9);
+}
+
+TEST(MapperStages, MarkerGraphRecoversTheLayoutAndRejectsAStaticMarker) {
+  testing::SynthOptions so = Scene();
+  so.static_false_id = 40;
+  const Pipeline p(so);
+  const int ref = p.layout.reference;
+  const Rigid3 truth_ref = p.scene.object_from_marker[p.TruthIndexOf(p.observations.marker_ids[ref])];
+  for (int id : p.scene.ids) {
+    const int m = p.MarkerOf(id);
+    ASSERT_TRUE(p.layout.placed[m]) << id;
+    const Rigid3 truth = Inverse(truth_ref) * p.scene.object_from_marker[p.TruthIndexOf(id)];
+    // Medoids of single-square poses: millimetres and degrees (a wrong hypothesis is tens of degrees).
+    EXPECT_LT(TranslationDistance(p.layout.object_from_marker[m], truth), 0.015) << id;
+    EXPECT_LT(RotationAngle(p.layout.object_from_marker[m], truth), 4 * kDeg) << id;
+  }
+  ASSERT_TRUE(p.observations.marker_index.count(40));
+  EXPECT_FALSE(p.layout.placed[p.MarkerOf(40)]);
+  bool rejected = false;
+  for (const RejectedMarker& r : p.report.rejected_markers) rejected = rejected || r.id == 40;
+  EXPECT_TRUE(rejected);
+}
+
+TEST(MapperStages, CameraGraphPlacesEveryCameraRelativeToTheReference) {
+  const Pipeline p(Scene());
+  const int ref = p.cameras.reference;
+  EXPECT_GT(p.views.size(), 200u);
+  for (size_t c = 0; c < p.scene.names.size(); ++c) {
+    ASSERT_TRUE(p.cameras.placed[c]) << c;
+    EXPECT_GT(p.cameras.views[c], 0);
+    const Rigid3 truth = Inverse(p.scene.rig_from_cam[ref]) * p.scene.rig_from_cam[c];
+    EXPECT_LT(TranslationDistance(p.cameras.rig_from_cam[c], truth), 0.05) << c;
+    EXPECT_LT(RotationAngle(p.cameras.rig_from_cam[c], truth), 3 * kDeg) << c;
+  }
+}
+
+TEST(MapperStages, ObjectPosesFollowTheTruthInTheReferenceFrames) {
+  const Pipeline p(Scene());
+  const Rigid3 ref_from_world = Inverse(p.scene.rig_from_cam[p.cameras.reference]);
+  const int ref_marker_truth = p.TruthIndexOf(p.observations.marker_ids[p.layout.reference]);
+  int compared = 0;
+  double sum_deg = 0, sum_m = 0;
+  for (size_t f = 0; f < p.frames.size(); ++f) {
+    if (!p.poses.has_pose[f]) continue;
+    const size_t k =
+        std::find(p.scene.utimes.begin(), p.scene.utimes.end(), p.frames[f].utime) - p.scene.utimes.begin();
+    if (k >= p.scene.utimes.size()) continue;
+    const Rigid3 truth =
+        ref_from_world * p.scene.rig_from_object[k] * p.scene.object_from_marker[ref_marker_truth];
+    sum_deg += RotationAngle(p.poses.rig_from_object[f], truth) / kDeg;
+    sum_m += TranslationDistance(p.poses.rig_from_object[f], truth);
+    ++compared;
+  }
+  ASSERT_GT(compared, 70);
+  EXPECT_LT(sum_deg / compared, 5.0);
+  EXPECT_LT(sum_m / compared, 0.01);
+}
+
+TEST(MapperStages, RefinementKeepsTheReferencesAndRejectsAGrossObservation) {
+  Pipeline p(Scene(60));
+  // One observation 20 px off.
+  const size_t gross = p.observations.obs.size() / 2;
+  for (auto& c : p.observations.obs[gross].corners) c += Eigen::Vector2d(20, -15);
+  MapperBundle bundle =
+      MakeBundleProblem(p.observations, p.Names(), p.layout, p.cameras, p.poses, p.scene.models, &p.report);
+  const PoseBlock ref_block = bundle.problem.cam_from_rig[p.cameras.reference];
+  const BundleSettings settings = BundleSettingsFor(p.options, 2);
+  RefineWithRejection(p.observations, p.Names(), p.layout, p.options, settings, &bundle, &p.report);
+  EXPECT_EQ(bundle.problem.cam_from_rig[p.cameras.reference], ref_block);
+  bool rejected = false;
+  for (size_t k = 0; k < bundle.observation.size(); ++k)
+    if (bundle.observation[k] == static_cast<int>(gross)) rejected = !bundle.problem.active[k];
+  EXPECT_TRUE(rejected);
+  RigMap map;
+  std::vector<TrajectoryRow> trajectory;
+  FillMap(bundle, p.observations, p.Names(), p.layout, p.cameras, p.scene.models, p.options, &map,
+          &trajectory);
+  const testing::MapErrors e = testing::CompareToTruth(p.scene, map, trajectory);
+  EXPECT_LT(e.camera_position_m, 0.002);
+  EXPECT_LT(e.configuration_m, 0.0005);
+  EXPECT_LT(map.rms_px, 0.4);
+}
+
+// --allow-partial with a reference that does not fit: the best-connected camera that fits becomes the
+// reference, the map re-expressed in its frame; without it, the error says which camera is the reference.
+TEST(MapperStages, UnreliableReferenceCameraIsReplacedOrNamed) {
+  Pipeline p(Scene(60));
+  MapperBundle bundle =
+      MakeBundleProblem(p.observations, p.Names(), p.layout, p.cameras, p.poses, p.scene.models, &p.report);
+  const BundleSettings settings = BundleSettingsFor(p.options, 2);
+  RefineWithRejection(p.observations, p.Names(), p.layout, p.options, settings, &bundle, &p.report);
+  const int old_ref = p.cameras.reference;
+  for (size_t k = 0; k < bundle.problem.observations.size(); ++k)
+    if (bundle.problem.observations[k].camera == old_ref && k % 3) bundle.problem.active[k] = 0;
+  {
+    CameraPlacement cameras = p.cameras;
+    MapperBundle copy = bundle;
+    MapReport report;
+    try {
+      DropUnreliableCameras(p.observations, p.Names(), p.options, settings, &cameras, &copy, &report);
+      ADD_FAILURE() << "no error";
+    } catch (const MapperError& e) {
+      EXPECT_NE(std::string(e.what()).find("'" + p.scene.names[old_ref] + "' (the reference camera)"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  MapperOptions partial = p.options;
+  partial.allow_partial = true;
+  CameraPlacement cameras = p.cameras;
+  MapReport report;
+  DropUnreliableCameras(p.observations, p.Names(), partial, settings, &cameras, &bundle, &report);
+  EXPECT_NE(cameras.reference, old_ref);
+  EXPECT_FALSE(cameras.placed[old_ref]);
+  EXPECT_EQ(report.dropped_cameras, std::vector<std::string>{p.scene.names[old_ref]});
+  EXPECT_EQ(bundle.problem.camera_fixed[cameras.reference], 1);
+  EXPECT_EQ(bundle.problem.camera_fixed[old_ref], 0);
+  RigMap map;
+  std::vector<TrajectoryRow> trajectory;
+  FillMap(bundle, p.observations, p.Names(), p.layout, cameras, p.scene.models, p.options, &map, &trajectory);
+  EXPECT_EQ(map.reference_camera, p.scene.names[cameras.reference]);
+  EXPECT_EQ(map.cameras.size(), p.scene.names.size() - 1);
+  EXPECT_LT(map.FindCamera(map.reference_camera)->rig_from_cam.translation().norm(), 1e-12);
+  const testing::MapErrors e = testing::CompareToTruth(p.scene, map, trajectory);
+  EXPECT_LT(e.camera_position_m, 0.003);
+  EXPECT_LT(e.object_translation_m, 0.002);
+}
+
+}  // namespace
+}  // namespace mcmt
