@@ -421,9 +421,10 @@ void BuildProblem(BundleProblem* bp, double huber_px, BuiltProblem* out) {
   out->ordering = new ceres::ParameterBlockOrdering;
   out->num_reduced = SetBlocks(&bp->cam_from_rig, out->camera_used, bp->camera_fixed, 1, &out->manifold,
                                &problem, out->ordering);
-  out->num_reduced += SetBlocks(&bp->object_from_marker, out->marker_used, bp->marker_fixed, 2, &out->manifold,
-                                &problem, out->ordering);
-  SetBlocks(&bp->rig_from_object, out->frame_used, bp->frame_fixed, 0, &out->manifold, &problem, out->ordering);
+  out->num_reduced += SetBlocks(&bp->object_from_marker, out->marker_used, bp->marker_fixed, 2,
+                                &out->manifold, &problem, out->ordering);
+  SetBlocks(&bp->rig_from_object, out->frame_used, bp->frame_fixed, 0, &out->manifold, &problem,
+            out->ordering);
   out->num_reduced += AddSelfCalibrationBlocks(bp, out->camera_used, out->ordering, &out->subsets, &problem);
 }
 

@@ -374,7 +374,6 @@ void PoseCovariance(const Rebuilt& r, Diagnostics* d) {
   }
 }
 
-
 }  // namespace
 
 Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions& options) {
@@ -415,9 +414,12 @@ std::string DiagnosticsJson(const Diagnostics& d) {
     << ",\n    \"print_tolerance\": " << JsonNumber(d.options.print_tolerance)
     << ",\n    \"residual_sigma_px\": " << JsonNumber(d.residual_sigma_px)
     << ",\n    \"rules\": {\"fair_rms_ratio\": " << JsonNumber(o.fair_rms_ratio)
-    << ", \"poor_rms_ratio\": " << JsonNumber(o.poor_rms_ratio) << ", \"fair_rejected\": " << JsonNumber(o.fair_rejected)
-    << ", \"poor_rejected\": " << JsonNumber(o.poor_rejected) << ", \"fair_coverage\": " << JsonNumber(o.fair_coverage)
-    << ", \"poor_coverage\": " << JsonNumber(o.poor_coverage) << ", \"fair_observations\": " << o.fair_observations
+    << ", \"poor_rms_ratio\": " << JsonNumber(o.poor_rms_ratio)
+    << ", \"fair_rejected\": " << JsonNumber(o.fair_rejected)
+    << ", \"poor_rejected\": " << JsonNumber(o.poor_rejected)
+    << ", \"fair_coverage\": " << JsonNumber(o.fair_coverage)
+    << ", \"poor_coverage\": " << JsonNumber(o.poor_coverage)
+    << ", \"fair_observations\": " << o.fair_observations
     << ", \"poor_observations\": " << o.poor_observations << ", \"coverage_cells\": " << o.coverage_cells
     << "},\n    \"cameras\": [\n";
   for (size_t i = 0; i < d.cameras.size(); ++i) {
@@ -425,14 +427,17 @@ std::string DiagnosticsJson(const Diagnostics& d) {
     j << "      {\"name\": " << JsonString(c.name) << ", \"verdict\": " << JsonString(c.verdict)
       << ", \"reason\": " << JsonString(c.reason) << ", \"observations\": " << c.observations
       << ", \"inliers\": " << c.inliers << ", \"rejected\": " << c.rejected
-      << ", \"rms_px\": " << JsonNumber(c.rms_px) << ", \"predicted_rms_px\": " << JsonNumber(c.predicted_rms_px)
-      << ", \"median_side_px\": " << JsonNumber(c.median_side_px) << ", \"coverage\": " << JsonNumber(c.coverage)
+      << ", \"rms_px\": " << JsonNumber(c.rms_px)
+      << ", \"predicted_rms_px\": " << JsonNumber(c.predicted_rms_px)
+      << ", \"median_side_px\": " << JsonNumber(c.median_side_px)
+      << ", \"coverage\": " << JsonNumber(c.coverage)
       << ", \"reference\": " << (c.reference ? "true" : "false");
     if (c.has_covariance) {
       j << ", \"sigma_position_mm\": [" << JsonNumber(c.sigma_position_mm.x()) << ", "
         << JsonNumber(c.sigma_position_mm.y()) << ", " << JsonNumber(c.sigma_position_mm.z())
         << "], \"sigma_rotation_deg\": [" << JsonNumber(c.sigma_rotation_deg.x()) << ", "
-        << JsonNumber(c.sigma_rotation_deg.y()) << ", " << JsonNumber(c.sigma_rotation_deg.z()) << "], \"covariance\": [";
+        << JsonNumber(c.sigma_rotation_deg.y()) << ", " << JsonNumber(c.sigma_rotation_deg.z())
+        << "], \"covariance\": [";
       for (int k = 0; k < 36; ++k) j << (k ? ", " : "") << JsonNumber(c.covariance(k / 6, k % 6));
       j << "]";
     } else {

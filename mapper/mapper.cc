@@ -409,7 +409,6 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   for (const MapCamera& c : result.map.cameras)
     if (c.observations == 0)
       report.warnings.push_back("camera '" + c.name + "' kept no observation after outlier rejection");
-  result.detections = s.inputs;
   log.Notify(MapperProgress::kDone, "done", "done");
   report.total_seconds = std::chrono::duration<double>(Clock::now() - t_total).count();
   return result;
@@ -451,9 +450,11 @@ MapResult Mapper::Solve() {
   const Impl& s = *impl_;
   if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
-  if (options_.estimate_time_offsets && options_.refine)
-    return SolveWithTimeOffsets(s.messages, inputs, options_);
-  return SolvePass(s.messages, inputs, options_);
+  MapResult result = options_.estimate_time_offsets && options_.refine
+                         ? SolveWithTimeOffsets(s.messages, inputs, options_)
+                         : SolvePass(s.messages, inputs, options_);
+  result.detections = s.inputs;  // for the diagnostics (mapper/diagnostics.h)
+  return result;
 }
 
 }  // namespace mcmt

@@ -24,8 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* const kOutputFiles[] = {"map.yaml", "trajectory.csv", "report.json", "map_initial.yaml",
-                                    "trajectory_initial.csv", "residuals.csv"};
+const char* const kOutputFiles[] = {"map.yaml",         "trajectory.csv",         "report.json",
+                                    "map_initial.yaml", "trajectory_initial.csv", "residuals.csv"};
 constexpr char kStagingMarker[] = ".mcmt-staging-";
 
 bool ProcessAlive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }

@@ -205,8 +205,7 @@ TEST(MapperStages, RefinementKeepsTheReferencesAndRejectsAGrossObservation) {
   EXPECT_TRUE(rejected);
   RigMap map;
   std::vector<TrajectoryRow> trajectory;
-  FillMap(bundle, p.observations, p.Names(), p.layout, p.cameras, p.scene.models, p.options, &map,
-          &trajectory);
+  FillMap(bundle, p.observations, p.Names(), p.layout, p.cameras, p.options, &map, &trajectory);
   const testing::MapErrors e = testing::CompareToTruth(p.scene, map, trajectory);
   EXPECT_LT(e.camera_position_m, 0.002);
   EXPECT_LT(e.configuration_m, 0.0005);
@@ -249,7 +248,7 @@ TEST(MapperStages, UnreliableReferenceCameraIsReplacedOrNamed) {
   EXPECT_EQ(bundle.problem.camera_fixed[old_ref], 0);
   RigMap map;
   std::vector<TrajectoryRow> trajectory;
-  FillMap(bundle, p.observations, p.Names(), p.layout, cameras, p.scene.models, p.options, &map, &trajectory);
+  FillMap(bundle, p.observations, p.Names(), p.layout, cameras, p.options, &map, &trajectory);
   EXPECT_EQ(map.reference_camera, p.scene.names[cameras.reference]);
   EXPECT_EQ(map.cameras.size(), p.scene.names.size() - 1);
   EXPECT_LT(map.FindCamera(map.reference_camera)->rig_from_cam.translation().norm(), 1e-12);
