@@ -268,13 +268,14 @@ TEST(MapperProcess, OutputSetIsReplacedWholeAndLeftoversAreCleaned) {
   WriteFileAtomic(out + "/trajectory.csv.tmp.99999999", "half-written\n");  // of a dead process
   fs::create_directories(dir + "/.out.mcmt-staging-99999999");
   const CommandResult r =
-      RunCommand(kMapper + " --config " + rig + " --log " + dir + "/s.lcmlog --out " + out);
-  ASSERT_EQ(r.code, 0) << r.output;
+      RunCommand(kMapper + " --config " + rig + " --log " + dir + "/s.lcmlog --out " + out + " --force");
+  ASSERT_EQ(r.code, 0) << r.output;  // --force: the old set is of an unrecorded session
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
-  EXPECT_EQ(names, (std::vector<std::string>{"map.yaml", "map_initial.yaml", "notes.txt", "report.json",
-                                             "trajectory.csv", "trajectory_initial.csv"}));
+  EXPECT_EQ(names, (std::vector<std::string>{".mcmt-session", "map.yaml", "map_initial.yaml", "notes.txt",
+                                             "report.json", "residuals.csv", "trajectory.csv",
+                                             "trajectory_initial.csv"}));
   for (const std::string& n : names)
     if (n != "notes.txt") {
       EXPECT_NE(ReadFile(out + "/" + n), "old\n") << n;
