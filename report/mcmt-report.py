@@ -21,6 +21,9 @@ import subprocess
 import sys
 import tempfile
 
+# Filled in by CMake when the script is copied into the build tree (report/CMakeLists.txt).
+VERSION = "@PROJECT_VERSION@"
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -459,6 +462,7 @@ def main(argv):
     ap = argparse.ArgumentParser(prog=PROGRAM, description="Writes OUTDIR/report.html: a self-contained "
                                  "calibration report (verdicts, residuals, coverage, uncertainty) of a mapper "
                                  "output folder.")
+    ap.add_argument("--version", action="version", version=PROGRAM + " " + VERSION)
     ap.add_argument("outdir", help="the folder mcmt-mapper --out wrote")
     ap.add_argument("--viz", help="mcmt-viz to draw the rig picture with (default: beside mcmt-report, or PATH)")
     ap.add_argument("--no-rig-picture", action="store_true", help="do not run mcmt-viz")
