@@ -35,26 +35,33 @@ DistortionModel DistortionModelFromName(const std::string& name);  // throws std
 // A value and its derivatives with respect to two variables (x, y): the forward-mode differentiation
 // that turns each Distort formula into its Jacobian. Only what the formulas use.
 struct DistortDual {
-  double v = 0.0;
-  Eigen::Vector2d d = Eigen::Vector2d::Zero();
+  double v = 0.0, dx = 0.0, dy = 0.0;  // value, d/dx, d/dy
   DistortDual() = default;
   explicit DistortDual(double value) : v(value) {}
-  DistortDual(double value, const Eigen::Vector2d& derivative) : v(value), d(derivative) {}
+  DistortDual(double value, double d_dx, double d_dy) : v(value), dx(d_dx), dy(d_dy) {}
 };
-inline DistortDual operator+(const DistortDual& a, const DistortDual& b) { return {a.v + b.v, a.d + b.d}; }
-inline DistortDual operator-(const DistortDual& a, const DistortDual& b) { return {a.v - b.v, a.d - b.d}; }
+inline DistortDual operator+(const DistortDual& a, const DistortDual& b) {
+  return {a.v + b.v, a.dx + b.dx, a.dy + b.dy};
+}
+inline DistortDual operator-(const DistortDual& a, const DistortDual& b) {
+  return {a.v - b.v, a.dx - b.dx, a.dy - b.dy};
+}
 inline DistortDual operator*(const DistortDual& a, const DistortDual& b) {
-  return {a.v * b.v, b.v * a.d + a.v * b.d};
+  return {a.v * b.v, b.v * a.dx + a.v * b.dx, b.v * a.dy + a.v * b.dy};
 }
 inline DistortDual operator/(const DistortDual& a, const DistortDual& b) {
-  return {a.v / b.v, (b.v * a.d - a.v * b.d) / (b.v * b.v)};
+  const double q = 1.0 / (b.v * b.v);
+  return {a.v / b.v, (b.v * a.dx - a.v * b.dx) * q, (b.v * a.dy - a.v * b.dy) * q};
 }
 inline bool operator>(const DistortDual& a, const DistortDual& b) { return a.v > b.v; }
 inline DistortDual sqrt(const DistortDual& a) {
-  const double s = std::sqrt(a.v);
-  return {s, a.d / (2.0 * s)};
+  const double s = std::sqrt(a.v), h = 0.5 / s;
+  return {s, a.dx * h, a.dy * h};
 }
-inline DistortDual atan(const DistortDual& a) { return {std::atan(a.v), a.d / (1.0 + a.v * a.v)}; }
+inline DistortDual atan(const DistortDual& a) {
+  const double h = 1.0 / (1.0 + a.v * a.v);
+  return {std::atan(a.v), a.dx * h, a.dy * h};
+}
 
 struct CameraModel {
   int width = 0;

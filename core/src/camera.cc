@@ -10,11 +10,10 @@ namespace mcmt {
 void CameraModel::DistortWithJacobian(double x, double y, double* xd, double* yd,
                                       Eigen::Matrix2d* jacobian) const {
   DistortDual dx, dy;
-  Distort(DistortDual(x, Eigen::Vector2d(1, 0)), DistortDual(y, Eigen::Vector2d(0, 1)), &dx, &dy);
+  Distort(DistortDual(x, 1, 0), DistortDual(y, 0, 1), &dx, &dy);
   *xd = dx.v;
   *yd = dy.v;
-  jacobian->row(0) = dx.d.transpose();
-  jacobian->row(1) = dy.d.transpose();
+  *jacobian << dx.dx, dx.dy, dy.dx, dy.dy;
 }
 
 std::string DistortionModelName(DistortionModel model) {
@@ -73,7 +72,10 @@ bool CameraModel::Project(const Eigen::Vector3d& p_cam, Eigen::Vector2d* pixel,
   const double x = p_cam.x() * iz, y = p_cam.y() * iz;
   double xd, yd;
   Eigen::Matrix2d jd;
-  DistortWithJacobian(x, y, &xd, &yd, &jd);
+  if (jacobian)
+    DistortWithJacobian(x, y, &xd, &yd, &jd);
+  else
+    Distort(x, y, &xd, &yd);  // the same values, without the derivatives
   if (pixel) *pixel = Eigen::Vector2d(fx * xd + cx, fy * yd + cy);
   if (jacobian) {
     // d(x, y) / d p = [[1/z, 0, -x/z], [0, 1/z, -y/z]]; pixel = diag(fx, fy) * (xd, yd) + c.
@@ -101,9 +103,9 @@ Eigen::Vector2d CameraModel::Unproject(const Eigen::Vector2d& pixel) const {
     if (rd < 1e-30) return target;
     double theta = std::min(rd, 1.5);
     for (int it = 0; it < 50; ++it) {
-      const DistortDual theta_d = FisheyeThetaD(DistortDual(theta, Eigen::Vector2d(1, 0)));
+      const DistortDual theta_d = FisheyeThetaD(DistortDual(theta, 1, 0));
       const double f = theta_d.v - rd;
-      const double df = theta_d.d[0];
+      const double df = theta_d.dx;
       if (df == 0) break;
       double step = f / df;
       double next = theta - step;
