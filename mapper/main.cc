@@ -71,7 +71,6 @@ int Run(int argc, char** argv) {
   if (seconds < 0) throw std::runtime_error("--seconds must be >= 0");
   if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
 
-  mcmt::CheckOutputFolder(out);  // before collecting: a bad path must not lose the session
   mcmt::Mapper mapper(options);
   mcmt::MapperNodeOptions node_options;
   node_options.outdir = out;

@@ -30,7 +30,9 @@ MapperNode::MapperNode(lcm::LCM& input, lcm::LCM* output, Mapper& mapper, Mapper
   if (options_.log_path.empty())
     subscriptions_.push_back(input_.subscribe(kMapperCommandChannel, &MapperNode::OnCommand, this));
   tty_ = (&log_ == &std::cerr) && isatty(STDERR_FILENO);
-  CheckOutFolder(options_.outdir, options_.session, options_.force);  // before hours of collecting
+  // Before hours of collecting: a bad path or another session's results must not lose this session.
+  CheckOutputFolder(options_.outdir);
+  CheckOutFolder(options_.outdir, options_.session, options_.force);
 }
 
 MapperNode::~MapperNode() {

@@ -25,10 +25,6 @@
 
 namespace mcmt {
 
-// Creates the output folder when missing and checks that files can be written in it; throws one line
-// naming --out otherwise. Called before collecting, so that a bad path loses no session.
-void CheckOutputFolder(const std::string& outdir);
-
 struct MapperNodeOptions {
   std::string outdir;        // where the files go (required)
   std::string session;       // MapperSession(log): another session's results in outdir are refused

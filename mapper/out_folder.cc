@@ -1,5 +1,10 @@
 #include "mapper/out_folder.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -27,6 +32,19 @@ std::string MapperSession(const std::string& log) {
   std::error_code ec;
   const fs::path abs = fs::weakly_canonical(fs::absolute(log), ec);
   return "log " + (ec ? log : abs.string());
+}
+
+void CheckOutputFolder(const std::string& outdir) {
+  std::error_code ec;
+  fs::create_directories(outdir, ec);
+  if (ec || !fs::is_directory(outdir))
+    throw std::runtime_error("--out " + outdir + ": cannot create the output folder" +
+                             (ec ? ": " + ec.message() : std::string(": not a folder")));
+  const std::string probe = (fs::path(outdir) / (".mcmt-probe.tmp." + std::to_string(::getpid()))).string();
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("--out " + outdir + ": cannot write there: " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
 }
 
 void CheckOutFolder(const std::string& outdir, const std::string& session, bool force) {

@@ -227,17 +227,4 @@ std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) 
   return verdicts;
 }
 
-void CheckOutputFolder(const std::string& outdir) {
-  std::error_code ec;
-  fs::create_directories(outdir, ec);
-  if (ec || !fs::is_directory(outdir))
-    throw std::runtime_error("--out " + outdir + ": cannot create the output folder" +
-                             (ec ? ": " + ec.message() : std::string(": not a folder")));
-  const std::string probe = (fs::path(outdir) / (".mcmt-probe.tmp." + std::to_string(::getpid()))).string();
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("--out " + outdir + ": cannot write there: " + std::strerror(errno));
-  ::close(fd);
-  ::unlink(probe.c_str());
-}
-
 }  // namespace mcmt
