@@ -14,6 +14,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -120,6 +121,14 @@ struct LogReadReport {
 // Reads every event of every part of the log at `path` (see LogParts) in file order, skipping damage
 // (resync mode), and calls fn for each; fn returns false to stop reading. Throws LogFormatError naming the
 // file when it cannot be opened, or when it is not an LCM log at all (no event anywhere).
+// The order in which a program reading a log takes its detections: capture time, then camera, seq and the
+// message bytes, so that its results never depend on the order of the log's events (mapper and tracker).
+inline std::tuple<const int64_t&, const std::string&, const int64_t&, const std::vector<uint8_t>&>
+CaptureOrderKey(const int64_t& utime, const std::string& camera, const int64_t& seq,
+                const std::vector<uint8_t>& bytes) {
+  return {utime, camera, seq, bytes};
+}
+
 LogReadReport ForEachLogEvent(const std::string& path, const std::function<bool(const LogEvent&)>& fn);
 
 }  // namespace mcmt

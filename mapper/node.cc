@@ -141,10 +141,8 @@ std::string MapperNode::CollectFromLog() {
   if (reading) reading->Finish();
   // Capture-time order (then camera, seq, bytes): the same result whatever the order of the events.
   std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-    if (a.msg.utime != b.msg.utime) return a.msg.utime < b.msg.utime;
-    if (a.msg.camera != b.msg.camera) return a.msg.camera < b.msg.camera;
-    if (a.msg.seq != b.msg.seq) return a.msg.seq < b.msg.seq;
-    return a.bytes < b.bytes;
+    return CaptureOrderKey(a.msg.utime, a.msg.camera, a.msg.seq, a.bytes) <
+           CaptureOrderKey(b.msg.utime, b.msg.camera, b.msg.seq, b.bytes);
   });
   std::string reason = "end of log";
   for (Item& item : items) {

@@ -371,7 +371,8 @@ LogReadReport TrackerNode::RunLog(const std::string& path, const volatile bool* 
   std::vector<Item> segment;  // detections since the last map event
   auto track_segment = [&] {
     std::sort(segment.begin(), segment.end(), [](const Item& a, const Item& b) {
-      return std::tie(a.utime, a.camera, a.seq, a.bytes) < std::tie(b.utime, b.camera, b.seq, b.bytes);
+      return CaptureOrderKey(a.utime, a.camera, a.seq, a.bytes) <
+             CaptureOrderKey(b.utime, b.camera, b.seq, b.bytes);
     });
     for (const Item& item : segment) OnDetections(item.channel, item.bytes.data(), item.bytes.size());
     segment.clear();
