@@ -58,12 +58,15 @@ ip netns exec "$NB" "$BIN/mcmt-tracker" --config "$RIG" --lcm-url "$URL" --out "
 TRACKER=$!
 sleep 1
 
+# Each pass stamps its frames with the wall clock at which they are published, as live cameras do (the
+# tracker drops views older than the frames it has already published, so a second pass of the same video
+# with the same stamps would be late).
 run_detectors() {
   local pids=()
   local start=$(( $(date +%s%N) / 1000 + 1000000 ))
   for cam in $CAMS; do
     ip netns exec "$NA" "$BIN/mcmt-detector" --config "$RIG" --camera "$cam" --lcm-url "$URL" --rate realtime \
-      --start-wall-utime "$start" \
+      --start-utime "$start" --start-wall-utime "$start" \
       >>"$WORK/detector_$cam.out" 2>&1 &
     pids+=("$!")
   done
