@@ -7,7 +7,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/dictionary.h"
+#include "core/options.h"
 #include "detector/detector.h"
+#include "detector/node.h"
 #include "detector/source.h"
 #include "tests/detector/synthetic.h"
 
@@ -158,12 +160,66 @@ TEST(DetectorOptions, ValidateNamesTheField) {
   try {
     o.Validate();
     FAIL() << "no exception";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("corner_refinement"), std::string::npos);
+  } catch (const OptionError& e) {
+    EXPECT_STREQ(e.what(),
+                 "detector.corner_refinement: expected one of edges, none, subpix, contour, got 'magic'");
+  }
+  o = DetectorOptions();
+  o.adaptive_window_max = 4;
+  try {
+    o.Validate();
+    FAIL() << "no exception";
+  } catch (const OptionError& e) {
+    EXPECT_STREQ(e.what(), "detector.adaptive_window_max: must be >= adaptive_window_min (5), got 4");
   }
   MarkerConfig mc;
   mc.dictionary = "DICT_9X9_1";
   EXPECT_THROW(MarkerDetector(mc, DetectorOptions()), std::invalid_argument);
+}
+
+// One `detector:` section, two declared tables (detector and process): each loads its keys, knows the
+// other's, and names file and key on a bad value or an unknown key.
+TEST(DetectorOptions, SectionLoadsBothTablesAndNamesFileAndKey) {
+  auto rig_with = [](const std::string& yaml) {
+    RigConfig rig;
+    rig.path = "rig.yaml";
+    rig.detector = YamlSection(YAML::Load(yaml), "rig.yaml", "detector");
+    return rig;
+  };
+  const RigConfig rig = rig_with("{edge_passes: 3, gamma: 1, image_rate: 5, caliscope_time: camera}");
+  const DetectorOptions o = DetectorOptions::FromConfig(rig);
+  DetectorNodeOptions node;
+  node.LoadFromConfig(rig);
+  EXPECT_EQ(o.edge_passes, 3);
+  EXPECT_EQ(o.gamma, 1.0);
+  EXPECT_EQ(node.image_rate_hz, 5.0);
+  EXPECT_EQ(node.caliscope_time, "camera");
+  auto error = [&](const std::string& yaml, bool process) {
+    try {
+      if (process) {
+        DetectorNodeOptions n;
+        n.LoadFromConfig(rig_with(yaml));
+      } else {
+        DetectorOptions::FromConfig(rig_with(yaml));
+      }
+    } catch (const OptionError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(error("{gamma: 0.1}", false),
+            "rig.yaml: detector.gamma: must be 0 (estimated) or in [0.2, 5], got 0.1");
+  EXPECT_EQ(error("{edge_passes: 11}", false), "rig.yaml: detector.edge_passes: must be in [1, 10], got 11");
+  EXPECT_EQ(error("{image_quality: 0}", true),
+            "rig.yaml: detector.image_quality: must be in [1, 100], got 0");
+  EXPECT_EQ(error("{caliscope_time: wall}", true),
+            "rig.yaml: detector.caliscope_time: expected one of sync, camera, got 'wall'");
+  EXPECT_NE(error("{edge_pass: 2}", false).find("rig.yaml: detector.edge_pass: unknown key"),
+            std::string::npos)
+      << error("{edge_pass: 2}", false);
+  EXPECT_NE(error("{edge_pass: 2}", true).find("rig.yaml: detector.edge_pass: unknown key"),
+            std::string::npos)
+      << error("{edge_pass: 2}", true);
 }
 
 // ----------------------------------------------------------------------------------------------------

@@ -194,8 +194,8 @@ LogReadReport ReadEverywhere(const Base& base, const RigConfig& rig, const RigMa
     o.log_mode = true;
     o.quiet = true;
     TrackerNode node(none, rig, o, map);
-    const volatile bool stop = false;
-    EXPECT_EQ(node.RunLog(path, &stop).damaged(), report.damaged()) << m.what;
+    const StopToken stop;
+    EXPECT_EQ(node.RunLog(path, stop).damaged(), report.damaged()) << m.what;
   }
   {  // the viewer's
     lcm::LCM none("memq://");
