@@ -26,8 +26,8 @@
 #include <vector>
 
 #include "core/config.h"
+#include "core/log_writer.h"
 #include "core/stop.h"
-#include "logger/event_log.h"
 
 namespace mcmt {
 
