@@ -12,6 +12,7 @@
 #include "detector/node.h"
 #include "detector/source.h"
 #include "tests/detector/synthetic.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -227,11 +228,7 @@ TEST(DetectorOptions, SectionLoadsBothTablesAndNamesFileAndKey) {
 
 class SourceTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("mcmt_detector_source_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::MakeTempDir("detector_source"); }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
 };

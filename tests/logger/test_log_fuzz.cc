@@ -25,6 +25,7 @@
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "sim/eval.h"
+#include "tests/support/temp_dir.h"
 #include "tests/tracker/process_util.h"
 #include "tracker/tracker.h"
 #include "viz/collector.h"
@@ -48,9 +49,7 @@ struct Base {
 // pose per frame (every channel some reader reads).
 Base MakeBase() {
   Base b;
-  b.dir = (fs::temp_directory_path() / ("mcmt_log_fuzz_" + std::to_string(getpid()))).string();
-  fs::remove_all(b.dir);
-  fs::create_directories(b.dir);
+  b.dir = test::MakeTempDir("log_fuzz");
   std::string out;
   EXPECT_EQ(RunProgram({kBin + "/mcmt-sim", "--out", b.dir, "--object", "four_sided", "--frames", "60",
                         "--seed", "3", "--detections-only", "--quiet"},

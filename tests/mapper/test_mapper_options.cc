@@ -7,6 +7,7 @@
 
 #include "core/options.h"
 #include "mapper/mapper.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -16,9 +17,7 @@ namespace fs = std::filesystem;
 // The pinned test's rig (five cameras) with `extra` appended, in a fresh folder.
 std::string PinnedRigWith(const std::string& name, const std::string& extra) {
   const fs::path src = fs::path(MCMT_SOURCE_DIR) / "tests/data/mapper_pin";
-  const fs::path dir = fs::temp_directory_path() / ("mcmt_mapper_options_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = test::MakeTempDir("mapper_options_" + name);
   for (int c = 0; c < 5; ++c)
     fs::copy_file(src / ("cam" + std::to_string(c) + ".yml"), dir / ("cam" + std::to_string(c) + ".yml"));
   std::ifstream in(src / "rig.yaml");

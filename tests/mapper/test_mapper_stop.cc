@@ -7,6 +7,7 @@
 
 #include "core/stop.h"
 #include "mapper/node.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -20,16 +21,14 @@ std::string CollectReason(const StopToken& stop, const std::string& name, double
   options.sizes.default_size = 0.05;
   Mapper mapper(options);
   MapperNodeOptions node_options;
-  node_options.outdir = (fs::temp_directory_path() / ("mcmt_mapper_stop_" + name)).string();
-  fs::remove_all(node_options.outdir);
+  const test::TempDir tmp("mapper_stop_" + name);
+  node_options.outdir = tmp / "out";
   node_options.publish = false;
   node_options.max_seconds = max_seconds;
   node_options.stop = stop;
   std::ostringstream log;
   MapperNode node(lcm, nullptr, mapper, node_options, log);
-  const std::string reason = node.Collect();
-  fs::remove_all(node_options.outdir);
-  return reason;
+  return node.Collect();
 }
 
 TEST(MapperNodeStop, EachNodeStopsOnItsOwnToken) {
