@@ -61,7 +61,11 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
       const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
       const size_t i = static_cast<size_t>(row) * n + j;
       zs[i] = z;
-      PhiAndDensity(z, &big_phi[i], &small_phi[i]);
+      // Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential.
+      if (std::abs(z) > 7.0)
+        big_phi[i] = z > 0 ? 1.0 : 0.0, small_phi[i] = 0.0;
+      else
+        PhiAndDensity(z, &big_phi[i], &small_phi[i]);
     }
   };
   fill(0, p[kE] + p[kQ]);
@@ -134,6 +138,37 @@ double LevelNear(const SideProfiles& s, double u, int row, int colour) {
   return count > 0 ? sum / count : NAN;
 }
 
+using Normal = Eigen::Matrix<double, kParams, kParams>;
+using Vector = Eigen::Matrix<double, kParams, 1>;
+
+// The damped Gauss-Newton step from p that stays within [lo, hi]: a parameter whose step would cross
+// its bound is held at the bound and the others are solved again (a plain clamp after the solve would
+// leave the free parameters compensating for a move that did not happen, and the fit crawls along the
+// bound for many iterations).
+Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const double* lo, const double* hi) {
+  bool fixed[kParams] = {};
+  Vector held = Vector::Zero(), step;
+  for (int round = 0; round < 4; ++round) {
+    Normal m = a;
+    Vector rhs = -jtr;
+    for (int k = 0; k < kParams; ++k) {
+      if (!fixed[k]) continue;
+      rhs -= a.col(k) * held[k];
+      m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
+    }
+    step = m.ldlt().solve(rhs);
+    bool changed = false;
+    for (int k = 0; k < kParams; ++k) {
+      if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;
+      fixed[k] = changed = true;
+      held[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
+    }
+    if (!changed) break;
+  }
+  for (int k = 0; k < kParams; ++k) step[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
+  return step;
+}
+
 }  // namespace
 
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
@@ -157,28 +192,42 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
     p[kE] = fit->e;
     if (!s.fit_gamma) p[kGamma] = 1.0;
   }
-  Eigen::Matrix<double, kParams, kParams> jtj;
-  Eigen::Matrix<double, kParams, 1> jtr;
+  // Bounds: blur and margin width within what the profiles can show, levels within the 8-bit range
+  // (with some room for noise: a level far outside it is a valley of the fit, e.g. a code level and
+  // the gamma traded for each other on small cells, not a solution).
+  double lo[kParams], hi[kParams];
+  lo[kE] = -c, hi[kE] = c;
+  lo[kSigma] = 0.15, hi[kSigma] = 4.0;
+  for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
+  lo[kQ] = 0.4 * c, hi[kQ] = 4.0 * c;
+  lo[kGamma] = s.fit_gamma ? 0.4 : 1.0, hi[kGamma] = s.fit_gamma ? 3.5 : 1.0;
+  for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
+  Normal jtj;
+  Vector jtr;
   double cost = Evaluate(s, p, &jtj, &jtr);
   double lambda = 1e-3;
-  for (int iter = 0; iter < 12; ++iter) {
-    bool improved = false, converged = false;
-    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-      Eigen::Matrix<double, kParams, kParams> a = jtj;
+  // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
+  // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
+  // overshoot).
+  bool done = false;
+  for (int iter = 0; iter < 12 && !done; ++iter) {
+    bool improved = false;
+    for (int attempt = 0; attempt < 6 && !improved && !done; ++attempt) {
+      Normal a = jtj;
       for (int k = 0; k < kParams; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
-      const Eigen::Matrix<double, kParams, 1> step = a.ldlt().solve(-jtr);
+      const Vector step = BoundedStep(a, jtr, p, lo, hi);
       double q[kParams];
       for (int k = 0; k < kParams; ++k) q[k] = p[k] + step(k);
-      q[kSigma] = std::clamp(q[kSigma], 0.15, 4.0);
-      q[kQ] = std::clamp(q[kQ], 0.4 * c, 4.0 * c);
-      q[kE] = std::clamp(q[kE], -c, c);
-      q[kGamma] = s.fit_gamma ? std::clamp(q[kGamma], 0.4, 3.5) : 1.0;
+      if (attempt == 0 && std::abs(step[kE]) < 5e-4 && std::abs(step[kSigma]) < 5e-3) {
+        std::copy(q, q + kParams, p);
+        done = true;
+        break;
+      }
       // The trial's normal equations come with its cost: kept when it is accepted.
-      Eigen::Matrix<double, kParams, kParams> trial_jtj;
-      Eigen::Matrix<double, kParams, 1> trial_jtr;
+      Normal trial_jtj;
+      Vector trial_jtr;
       const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
       if (trial < cost) {
-        converged = std::abs(q[kE] - p[kE]) < 5e-4 && std::abs(q[kSigma] - p[kSigma]) < 5e-3;
         std::copy(q, q + kParams, p);
         cost = trial;
         jtj = trial_jtj, jtr = trial_jtr;
@@ -188,7 +237,7 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
         lambda *= 10;
       }
     }
-    if (!improved || converged) break;
+    if (!improved) break;
   }
   const double contrast = std::abs(p[kL1] - p[kL0]);
   if (!std::isfinite(p[kE]) || std::abs(p[kE]) > 0.75 * c || contrast < 5.0) return false;
