@@ -9,6 +9,7 @@ namespace mcmt {
 void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   u0 = u0_, du = du_, bins = bins_, cell = cell_;
   fit_gamma = false;
+  gamma_hint = 1.0;
   patterns.clear();
   sum.reserve(static_cast<size_t>(16) * bins);
   count.reserve(static_cast<size_t>(16) * bins);
@@ -96,11 +97,19 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
       }
       double scale = 1.0;  // d encoded / d linear
       if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
-        const double clipped = std::max(f, 0.5), log_lin = std::log(clipped * (1.0 / 255.0));
+        // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
+        // model at 0.5 where an image's black is 0, push the dark level below 0 and with it the edge
+        // towards the dark side (0.09 px on a sharp printed sheet).
+        const double at = std::max(f, 0.5), log_lin = std::log(at * (1.0 / 255.0));
         const double enc = 255.0 * std::exp(log_lin * inv_gamma);
-        scale = enc * inv_gamma / clipped;
-        f = enc;
+        scale = enc * inv_gamma / at;
         gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
+        if (f < at) {
+          gamma_grad += (gamma_grad * inv_gamma / at - scale * inv_gamma) * (f - at);
+          f = enc + scale * (f - at);
+        } else {
+          f = enc;
+        }
       }
       const double r = f - s.sum[g * n + j] / w;
       cost += w * r * r;
@@ -200,7 +209,16 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   lo[kSigma] = 0.15, hi[kSigma] = 4.0;
   for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
   lo[kQ] = 0.4 * c, hi[kQ] = 4.0 * c;
-  lo[kGamma] = s.fit_gamma ? 0.4 : 1.0, hi[kGamma] = s.fit_gamma ? 3.5 : 1.0;
+  // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
+  // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
+  bool code_contrast = false;
+  for (size_t g = 0; g < s.patterns.size(); ++g)
+    for (int r = 0; r < SideProfiles::kRows; ++r)
+      code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
+                                        (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g]));
+  const bool free_gamma = s.fit_gamma && code_contrast;
+  const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
+  lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
   Normal jtj;
   Vector jtr;
@@ -245,6 +263,7 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->sigma = p[kSigma];
   fit->contrast = contrast;
   fit->gamma = p[kGamma];
+  fit->gamma_fitted = free_gamma;
   std::copy(p, p + kParams, fit->params.begin());
   return true;
 }
