@@ -178,9 +178,8 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
   return step;
 }
 
-}  // namespace
-
-bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
+bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -216,7 +215,8 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
     for (int r = 0; r < SideProfiles::kRows; ++r)
       code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
                                         (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g]));
-  const bool free_gamma = s.fit_gamma && code_contrast;
+  *code_contrast_out = code_contrast;
+  const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
@@ -266,6 +266,19 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->gamma_fitted = free_gamma;
   std::copy(p, p + kParams, fit->params.begin());
   return true;
+}
+
+}  // namespace
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  // Gamma is fitted freely; on a side without code contrast a gamma at its bound is the valley of a
+  // single step (SideProfiles::gamma_hint), and the side is fitted again with the hint.
+  const SideFit start = *fit;
+  bool code_contrast = true;
+  const bool ok = FitOnce(s, false, fit, &code_contrast);
+  if (code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
+  *fit = start;
+  return FitOnce(s, true, fit, &code_contrast);
 }
 
 }  // namespace mcmt
