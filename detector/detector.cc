@@ -8,8 +8,8 @@
 #include <stdexcept>
 
 #include "core/dictionary.h"
-#include "detector/side_model.h"
 #include "core/math.h"
+#include "detector/side_model.h"
 
 namespace mcmt {
 namespace {
@@ -232,7 +232,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, SideProfiles* profiles, SideFit* fit) {
+               double sigma_along, bool fit_gamma, double gamma_hint, SideProfiles* profiles, SideFit* fit) {
   if (bits.empty()) return NAN;
   struct Ray {
     int index;
@@ -314,6 +314,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
   profiles->Reset(u0, du, bins, cell);
   profiles->fit_gamma = fit_gamma;
+  profiles->gamma_hint = gamma_hint;
   for (size_t r = 0; r < rays.size(); ++r) {
     const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
     const Eigen::Vector2d& o = origins[rays[r].index];
@@ -471,8 +472,16 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
       if (model_pass) {
         const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
+        // The gamma of the marker's other sides (their latest fits with gamma free), for a side whose
+        // code shows no contrast in its first rows.
+        double gamma_sum = 0;
+        int gamma_count = 0;
+        for (int other = 0; other < 4; ++other)
+          if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
+            gamma_sum += side_fits[other].gamma, ++gamma_count;
+        const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
         const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
-                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma,
+                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint,
                                  &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) {

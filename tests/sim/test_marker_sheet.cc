@@ -196,9 +196,9 @@ TEST(MarkerSheet, PngFromTheRigIsDetectedAsConfiguredAndMeasuresTheRigSize) {
     const cv::Mat gray = cv::imread(png, cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(gray.empty());
     // Whole pixels per cell at the stored dpi: exact to the pHYs rounding (1 px/m) plus detection.
-    // 0.02 mm = 0.05 % of 40.5 mm, 0.47 px over a 954 px marker: the side-model corners sit up to 0.15 px
-    // inside a perfectly sharp (unblurred) edge, which only such a sheet shows (issue 15's open point).
-    ExpectRigMarkersAtSize(gray, ppm / 1000.0, rig, 0.02);
+    // 0.01 mm = 0.025 % of 40.5 mm, 0.24 px over a 954 px marker (measured: within 0.001 mm; a side
+    // whose first code row is of the border's colour sat 0.5 px inside the edge before issue 15's fix).
+    ExpectRigMarkersAtSize(gray, ppm / 1000.0, rig, 0.01);
     EXPECT_NEAR(ScaleBarMm(gray, ppm / 1000.0), 100.0, 0.1);
   }
 }
