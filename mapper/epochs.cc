@@ -172,8 +172,22 @@ int BestSplit(const PoseEvidence& e, int min_segment, double* score, Vector6d* b
 std::vector<EpochSplit> FindCameraMoves(const BundleProblem& bp, const std::vector<Frame>& frames,
                                         const MapperOptions& options, const std::vector<char>& skip) {
   std::vector<EpochSplit> splits;
+  // A moved camera stands out: its RMS with one pose is well above the other cameras' (systematic
+  // residual patterns of real lenses split every camera a little, and alike).
+  const std::vector<double> rms = ObservationRms(bp);
+  std::vector<double> sq(bp.cam_from_rig.size(), 0.0), camera_rms;
+  std::vector<int> n(bp.cam_from_rig.size(), 0);
+  for (size_t k = 0; k < rms.size(); ++k)
+    if (bp.active[k] && std::isfinite(rms[k])) {
+      sq[bp.observations[k].camera] += rms[k] * rms[k];
+      ++n[bp.observations[k].camera];
+    }
+  for (size_t c = 0; c < sq.size(); ++c)
+    if (n[c]) camera_rms.push_back(std::sqrt(sq[c] / n[c]));
+  const double typical_rms = Median(camera_rms);
   for (size_t c = 0; c < bp.cam_from_rig.size(); ++c) {
     if (c < skip.size() && skip[c]) continue;
+    if (!(n[c] && std::sqrt(sq[c] / n[c]) > options.move_min_rms_ratio * typical_rms)) continue;
     const PoseEvidence e = CameraPoseEvidence(bp, static_cast<int>(c), 4 * options.outlier_px);
     double score = 0;
     Vector6d before, after;

@@ -87,7 +87,8 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
                     "detect_moves",
                     "move_min_score",
                     "move_min_deg",
-                    "move_min_mm"});
+                    "move_min_mm",
+                    "move_min_rms_ratio"});
   o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
   o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
   o.huber_px = s.GetDouble("huber_px", o.huber_px);
@@ -114,6 +115,7 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.move_min_score = s.GetPositiveDouble("move_min_score", o.move_min_score);
   o.move_min_deg = s.GetPositiveDouble("move_min_deg", o.move_min_deg);
   o.move_min_mm = s.GetPositiveDouble("move_min_mm", o.move_min_mm);
+  o.move_min_rms_ratio = s.GetPositiveDouble("move_min_rms_ratio", o.move_min_rms_ratio);
   ReadIntrinsicsSettings(rig, &o.intrinsics);
   o.estimate_time_offsets = s.GetBool("time_offsets", o.estimate_time_offsets);
   o.max_time_offset_ms = s.GetPositiveDouble("max_time_offset_ms", o.max_time_offset_ms);

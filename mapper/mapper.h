@@ -125,6 +125,8 @@ struct MapperOptions {
   double move_min_score = 200.0;
   double move_min_deg = 0.15;
   double move_min_mm = 1.5;
+  double move_min_rms_ratio =
+      2.0;  // ... and its RMS with one pose exceeds this multiple of the median camera's
 
   // From the rig: expected cameras (empty: whatever sends detections), marker id whitelist, sizes.
   std::vector<std::string> cameras;
