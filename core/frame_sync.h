@@ -113,6 +113,8 @@ class FrameSynchronizer {
   std::map<std::string, int64_t> last_emitted_;       // per camera, newest emitted frame with its view
   std::map<std::string, std::vector<int64_t>> lags_;  // per camera, recent arrival - utime (ring)
   std::map<std::string, size_t> lag_next_;
+  std::map<std::string, std::vector<int64_t>> gaps_;  // per camera, recent gaps between arrivals (ring)
+  std::map<std::string, size_t> gap_next_;
   // Wall time at which the pending frame `key` (first arrival first_arrival_us) is due.
   int64_t DueTime(int64_t key, int64_t first_arrival_us, const std::set<std::string>& alive) const;
   void RecordLag(const std::string& camera, int64_t lag_us);

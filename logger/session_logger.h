@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 
 namespace mcmt {
 

@@ -211,6 +211,8 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
         last_arrival_[camera] = run.arrival;
         lags_.erase(camera);
         lag_next_.erase(camera);
+        gaps_.erase(camera);
+        gap_next_.erase(camera);
       }
   for (const auto& [camera, t] : clocks) {
     jumps_.erase(camera);
@@ -226,6 +228,8 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
     last_arrival_.erase(camera);
     lags_.erase(camera);
     lag_next_.erase(camera);
+    gaps_.erase(camera);
+    gap_next_.erase(camera);
     it = last_utime_.erase(it);
   }
   for (auto it = pending_.begin(); it != pending_.end();) {
@@ -287,6 +291,14 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   const std::string& camera = detections.camera;
   now_us_ = std::max(now_us_, arrival_us);
   first_arrival_any_ = std::min(first_arrival_any_, arrival_us);
+  if (const auto previous = last_arrival_.find(camera); previous != last_arrival_.end()) {
+    std::vector<int64_t>& ring = gaps_[camera];
+    if (ring.size() < kLagWindow)
+      ring.push_back(arrival_us - previous->second);
+    else
+      ring[gap_next_[camera]] = arrival_us - previous->second;
+    gap_next_[camera] = (gap_next_[camera] + 1) % kLagWindow;
+  }
   last_arrival_[camera] = arrival_us;
   auto last = last_utime_.find(camera);
   if (last == last_utime_.end()) {
@@ -369,6 +381,15 @@ int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
     // An expected camera not heard of yet: its lag is unknown, wait as long as allowed (the first second).
     due = std::max(due, lag == INT64_MIN ? first_arrival_us + options_.max_wait_us
                                          : key + lag + options_.deadline_us);  // when it usually arrives
+    // A camera that has not reached this capture yet but keeps reporting at its pace (its lag may grow:
+    // a detector slower through a video than the others) is waited for until one of its usual gaps
+    // between messages has passed without news.
+    const auto last = last_utime_.find(camera);
+    const auto gaps = gaps_.find(camera);
+    if (last != last_utime_.end() && last->second < key && gaps != gaps_.end() && !gaps->second.empty())
+      due = std::max(due, last_arrival_.at(camera) +
+                              *std::max_element(gaps->second.begin(), gaps->second.end()) +
+                              options_.deadline_us);
   }
   return std::min(due, first_arrival_us + options_.max_wait_us);
 }

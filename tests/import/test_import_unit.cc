@@ -9,7 +9,7 @@
 #include "core/lcm_util.h"
 #include "core/marker.h"
 #include "import/import.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "tests/import/bag_writer.h"
 #include "tests/sim/temp_dir.h"
 #include "tests/tracker/process_util.h"

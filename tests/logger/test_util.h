@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 
