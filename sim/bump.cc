@@ -75,6 +75,20 @@ GroundTruth TruthAtEnd(const GroundTruth& truth) {
   return end;
 }
 
+DatasetOptions DetectionsOnlySession(const std::string& dir, int frames, uint64_t seed) {
+  DatasetOptions o;
+  o.out_dir = dir;
+  o.detections_only = true;
+  o.rig.camera_height = 0.5 * o.rig.radius;
+  o.rig.seed = seed;
+  o.object.seed = seed;
+  o.trajectory.frames = frames;
+  o.trajectory.seed = seed;
+  o.trajectory.position_radius = 0.15 * o.rig.radius;
+  o.trajectory.vertical_range = 0.08 * o.rig.radius;
+  return o;
+}
+
 void AddCameraChanges(const DatasetOptions& o, GroundTruth* truth) {
   if (o.add_camera_frame >= 0) {
     if (o.add_camera_frame >= o.trajectory.frames)

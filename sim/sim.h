@@ -384,6 +384,10 @@ struct DatasetSummary {
   double seconds = 0.0;
 };
 
+// A detections-only session as `mcmt-sim --detections-only --out dir --frames N --seed S` sets it up
+// with its other options at their defaults (5 cameras at 1.0 m, the motion's extent from the radius).
+DatasetOptions DetectionsOnlySession(const std::string& dir, int frames, uint64_t seed);
+
 // The extra camera and the moves of `options` added to the truth (its cameras and frames filled); throws
 // std::invalid_argument naming the option.
 void AddCameraChanges(const DatasetOptions& options, GroundTruth* truth);

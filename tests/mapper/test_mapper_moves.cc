@@ -24,16 +24,7 @@ struct Session {
 // The paper's rig at 1.0 m, 5 cameras, 30 fps, the four-sided object (as mcmt-sim's defaults).
 Session Generate(const std::string& dir, int frames, uint64_t seed,
                  std::vector<sim::CameraMoveOptions> moves = {}, int64_t add_camera_frame = -1) {
-  sim::DatasetOptions o;
-  o.out_dir = dir;
-  o.detections_only = true;
-  o.rig.camera_height = 0.5;
-  o.trajectory.frames = frames;
-  o.trajectory.seed = seed;
-  o.trajectory.position_radius = 0.15;
-  o.trajectory.vertical_range = 0.08;
-  o.object.seed = seed;
-  o.rig.seed = seed;
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir, frames, seed);
   o.moves = std::move(moves);
   o.add_camera_frame = add_camera_frame;
   Session s;

@@ -29,18 +29,6 @@ struct TrackedRun {
   int64_t frames = 0;
 };
 
-sim::DatasetOptions SessionOptions(const std::string& dir, int frames, uint64_t seed) {
-  sim::DatasetOptions o;
-  o.out_dir = dir;
-  o.detections_only = true;
-  o.rig.camera_height = 0.5;
-  o.trajectory.frames = frames;
-  o.trajectory.seed = seed;
-  o.trajectory.position_radius = 0.15;
-  o.trajectory.vertical_range = 0.08;
-  return o;
-}
-
 // Drops marker `id` from every message of the session's log.
 void HideMarker(const std::string& log, int id) {
   std::string bytes;
@@ -100,7 +88,7 @@ class TrackerHealthBump : public ::testing::TestWithParam<Bump> {};
 TEST_P(TrackerHealthBump, SuspectWithin30FramesExcludedAndNoPoseCorrupted) {
   const Bump bump = GetParam();
   sim::testing::TempDir dir("health_bump");
-  sim::DatasetOptions o = SessionOptions(dir.str(), 900, 5);
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), 900, 5);
   o.moves = {{"cam2", 450, bump.rotation_deg, bump.translation_mm}};
   const sim::GroundTruth truth = sim::GenerateDataset(o).truth;
   const TrackedRun run = Track(dir.str(), truth);
@@ -130,7 +118,7 @@ INSTANTIATE_TEST_SUITE_P(Bumps, TrackerHealthBump, ::testing::Values(Bump{0.3, 0
 
 TEST(TrackerHealth, NoFalseAlarmWithNoiseOnlyFastMotionAndAHiddenMarker) {
   sim::testing::TempDir dir("health_quiet");
-  sim::DatasetOptions o = SessionOptions(dir.str(), 30000, 6);
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), 30000, 6);
   o.trajectory.turns = 200.0;  // 2 turns a second about the vertical (30 000 frames, 1000 s)
   const sim::GroundTruth truth = sim::GenerateDataset(o).truth;
   HideMarker(dir / "detections.lcmlog", 1);
