@@ -16,7 +16,8 @@
 namespace {
 
 int Run(int argc, char** argv) {
-  std::string config, log, out, lcm_url, reference_camera;
+  std::string config, log, out, lcm_url, reference_camera, old_map;
+  bool refine_layout = false;
   int frames = 0;
   double seconds = 0.0;
   bool allow_partial = false, publish = false, no_refine = false, force = false;
@@ -44,6 +45,12 @@ int Run(int argc, char** argv) {
   args.AddInt("threads", &threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)");
   args.AddFlag("no-refine", &no_refine, "initialisation only (no bundle adjustment)");
   args.AddFlag("force", &force, "overwrite the results of another session in --out");
+  args.AddString(
+      "map", &old_map,
+      "offline update: start from this map.yaml, re-estimate the cameras that moved, add the rig's "
+      "cameras it lacks (report.json moved_cameras, added_cameras)");
+  args.AddFlag("refine-layout", &refine_layout,
+               "with --map: refine the marker layout too (default: held fixed)");
   args.AddEpilog(
       "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
       "mapper_command_t\n"
@@ -73,6 +80,16 @@ int Run(int argc, char** argv) {
   if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
 
   mcmt::Mapper mapper(options);
+  if (!old_map.empty()) {
+    mcmt::RigMap base = mcmt::ReadMap(old_map);
+    if (!out.empty() && std::filesystem::exists(old_map) && std::filesystem::exists(out + "/map.yaml") &&
+        std::filesystem::equivalent(old_map, out + "/map.yaml"))
+      throw std::runtime_error("--out: " + out +
+                               " holds the old map given with --map; write the update elsewhere");
+    mapper.SetBaseMap(base, refine_layout);
+  } else if (refine_layout) {
+    throw std::runtime_error("--refine-layout: only with --map (an offline update)");
+  }
   mcmt::MapperNodeOptions node_options;
   node_options.outdir = out;
   node_options.session = mcmt::MapperSession(log);

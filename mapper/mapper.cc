@@ -11,8 +11,10 @@
 #include <unordered_map>
 
 #include "core/lcm_util.h"
+#include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
 #include "mapper/stages.h"
+#include "mapper/update.h"
 
 namespace mcmt {
 
@@ -84,6 +86,8 @@ struct Mapper::Impl {
   std::vector<int> messages_per_camera;
   int max_messages_per_camera = 0;
   std::vector<detections_t> inputs;  // as given to Add(), for MapResult::detections (diagnostics)
+  std::unique_ptr<RigMap> base_map;  // offline update
+  UpdateSettings update;
 };
 
 Mapper::Mapper(MapperOptions options) : options_(std::move(options)), impl_(new Impl) {
@@ -214,9 +218,12 @@ struct SolveInputs {
   const std::function<void(const MapperProgress&)>& progress;
 };
 
-// The whole method on `messages` (their utimes as the frames' clocks).
-MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s,
-                    const MapperOptions& o) {
+// The whole method on `messages` (their utimes as the frames' clocks). With `moves`, cameras that moved
+// are looked for after the first refinement: when there are any, the pass stops there with them and the
+// reference camera's name in *reference.
+MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s, const MapperOptions& o,
+                    std::vector<EpochSplit>* moves = nullptr, std::string* reference = nullptr,
+                    const std::vector<char>& split = {}) {
   const auto t_total = Clock::now();
   MapResult result;
   MapReport& report = result.report;
@@ -261,6 +268,15 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
     const BundleSettings settings =
         WithProgress(BundleSettingsFor(o, threads), s.progress, o.max_iterations, &report.solves);
     RefineWithRejection(observations, names, layout, o, settings, &bundle, &report);
+    if (moves && o.detect_moves) {
+      *moves = FindCameraMoves(bundle.problem, frames, o, split);
+      log.End("moved cameras");
+      if (!moves->empty()) {
+        *reference = s.camera_names[cameras.reference];
+        report.total_seconds = std::chrono::duration<double>(Clock::now() - t_total).count();
+        return result;
+      }
+    }
     DropUnreliableCameras(observations, names, o, settings, &cameras, &bundle, &report);
     log.End("refine");
   }
@@ -305,16 +321,58 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   return result;
 }
 
+// Cameras that moved (mapper/epochs.h): a pass up to the first refinement looks for them; the strongest
+// move found has the camera's earlier epoch become a camera of its own, and the method runs again, until
+// no camera splits (one move per camera). The splits in the order made (*splits).
+MapResult SolveWithEpochs(const std::vector<StoredMessage>& messages, const SolveInputs& s,
+                          const MapperOptions& o, std::vector<EpochSplit>* splits) {
+  std::vector<StoredMessage> split_messages = messages;
+  std::vector<std::string> names = s.camera_names;
+  std::vector<CameraModel> models = s.models;
+  MapperOptions options = o;
+  std::vector<char> split(names.size(), 0);
+  double seconds = 0.0;
+  for (;;) {
+    const SolveInputs inputs{names, models, s.warnings, s.progress};
+    std::vector<EpochSplit> found;
+    std::string reference;
+    MapResult result = SolvePass(split_messages, inputs, options, &found, &reference, split);
+    if (found.empty()) {
+      if (seconds > 0)
+        result.report.stage_seconds.insert(result.report.stage_seconds.begin(),
+                                           {"moved cameras (earlier passes)", seconds});
+      result.report.total_seconds += seconds;
+      return result;
+    }
+    seconds += result.report.total_seconds;
+    found.resize(1);
+    SplitCameraEpochs(found, &split_messages, &names, &models);
+    split[found[0].camera] = 1;
+    split.push_back(1);                    // the earlier epoch
+    options.reference_camera = reference;  // its later epoch when it moved
+    splits->push_back(found[0]);
+  }
+}
+
 }  // namespace
+
+void Mapper::SetBaseMap(const RigMap& old_map, bool refine_layout) {
+  impl_->base_map = std::make_unique<RigMap>(old_map);
+  impl_->update.refine_layout = refine_layout;
+}
 
 MapResult Mapper::Solve() {
   const Impl& s = *impl_;
   if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
-  MapResult result = options_.estimate_time_offsets && options_.refine
+  std::vector<EpochSplit> splits;
+  MapResult result = s.base_map ? SolveUpdate(s.messages, s.camera_names, s.models, s.warnings, options_,
+                                              *s.base_map, s.update)
+                     : options_.estimate_time_offsets && options_.refine
                          ? SolveWithTimeOffsets(s.messages, inputs, options_)
-                         : SolvePass(s.messages, inputs, options_);
+                         : SolveWithEpochs(s.messages, inputs, options_, &splits);
   result.detections = s.inputs;  // for the diagnostics (mapper/diagnostics.h)
+  MergeCameraEpochs(splits, s.camera_names, &result);
   return result;
 }
 

@@ -122,6 +122,14 @@ struct MapperOptions {
   // each of its markers, the pose nearest in rotation to the nearest decided frame at most this far away
   // in time (0: the paper's rule alone).
   double continuity_gap_s = 0.5;
+  // Cameras that moved during the session (mapper/epochs.h): split into two epochs when the change-point
+  // statistic exceeds move_min_score and the epochs differ by move_min_deg or move_min_mm.
+  bool detect_moves = true;
+  double move_min_score = 200.0;
+  double move_min_deg = 0.15;
+  double move_min_mm = 1.5;
+  double move_min_rms_ratio =
+      2.0;  // ... and its RMS with one pose exceeds this multiple of the median camera's
 
   // From the rig: expected cameras (empty: whatever sends detections), marker id whitelist, sizes.
   std::vector<std::string> cameras;
@@ -168,6 +176,17 @@ struct RejectedObservation {
   std::string reason;
 };
 
+// A camera that moved during the session (mapper/epochs.h), or since the old map (mapper/update.h).
+struct MovedCamera {
+  std::string camera;
+  int64_t seq = 0;              // first frame seq after the move (offline update: -1, moved before the log)
+  int64_t utime = 0;            // that frame's utime
+  double translation_mm = 0.0;  // camera centre, latest pose against the earlier one
+  double rotation_deg = 0.0;
+  Rigid3 rig_from_cam_before = Rigid3::Identity();
+  int observations_before = 0;  // observations the earlier pose kept (in one session)
+};
+
 struct MapReport {
   int detections_messages = 0;
   int frames_assembled = 0;
@@ -183,6 +202,8 @@ struct MapReport {
   std::vector<RejectedMarker> rejected_markers;
   std::vector<RejectedObservation> rejected_observations;
   std::vector<std::string> dropped_cameras;  // --allow-partial: cameras that could not be placed
+  std::vector<MovedCamera> moved_cameras;    // solved with one pose per epoch; the map holds the latest
+  std::vector<std::string> added_cameras;    // offline update: cameras the old map lacked
   std::vector<std::string> warnings;
   double initial_rms_px = 0.0;
   double final_rms_px = 0.0;
@@ -232,6 +253,10 @@ class Mapper {
 
   // Runs the whole method. Throws MapperError with a one-line reason (disconnected camera, no data...).
   MapResult Solve();
+
+  // The offline update (mapper/update.h): Solve() starts from this map (its layout held fixed unless
+  // refine_layout), re-estimates the cameras that moved and adds the rig's cameras it lacks.
+  void SetBaseMap(const RigMap& old_map, bool refine_layout);
 
   const MapperOptions& options() const { return options_; }
 

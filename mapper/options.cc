@@ -74,7 +74,15 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
            .Add("time_offsets", &O::estimate_time_offsets,
                 "estimate per-camera clock offsets against the reference camera in the bundle adjustment")
            .Add("max_time_offset_ms", &O::max_time_offset_ms, "ms",
-                "time_offsets: frames are first assembled over this tolerance", Above(0));
+                "time_offsets: frames are first assembled over this tolerance", Above(0))
+           .Add("detect_moves", &O::detect_moves,
+                "find cameras that moved within the session and solve one pose per epoch")
+           .Add("move_min_score", &O::move_min_score, "",
+                "a camera is split into two epochs where its split statistic exceeds this", Above(0))
+           .Add("move_min_deg", &O::move_min_deg, "deg", "smallest rotation reported as a move", Above(0))
+           .Add("move_min_mm", &O::move_min_mm, "mm", "smallest translation reported as a move", Above(0))
+           .Add("move_min_rms_ratio", &O::move_min_rms_ratio, "",
+                "a moved camera's RMS must exceed the others' median by this factor", Above(0));
   return *table;
 }
 

@@ -16,6 +16,7 @@
 #include "core/json.h"
 #include "core/version.h"
 #include "mapper/diagnostics.h"
+#include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
 #include "mapper/mapper.h"
 
@@ -175,6 +176,7 @@ std::string ReportJson(const MapResult& result) {
     j << (i ? ", " : "") << JsonString(r.dropped_cameras[i]);
   j << "],\n";
   j << SelfCalibrationJson(r);
+  j << CameraChangesJson(r);
   j << "  \"warnings\": [";
   for (size_t i = 0; i < r.warnings.size(); ++i)
     j << (i ? ", " : "") << "\n    " << JsonString(r.warnings[i]);

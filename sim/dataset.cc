@@ -126,8 +126,9 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
     throw std::runtime_error("out: cannot create folder '" + o.out_dir + "': " + ec.message());
   const fs::path dir(o.out_dir);
 
+  if (o.video && o.add_camera_frame > 0)
+    throw std::invalid_argument("--add-camera: a camera that starts late needs PNG folders, not --video");
   const SimObject object = MakeObject(o.object);
-  const std::vector<SimCamera> cameras = MakeRig(o.rig);
   const std::vector<SimFrame> frames = MakeTrajectory(o.trajectory);
 
   DatasetSummary summary;
@@ -138,9 +139,11 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
   truth.marker_size = sizes.default_size;
   for (const auto& m : object.markers) truth.marker_sizes[m.id] = m.size;
   truth.fps = o.trajectory.fps;
-  truth.cameras = cameras;
+  truth.cameras = MakeRig(o.rig);
   truth.markers = object.markers;
   truth.frames = frames;
+  AddCameraChanges(o, &truth);
+  const std::vector<SimCamera>& cameras = truth.cameras;
 
   // Check the dictionary and the ids before writing anything.
   cv::Ptr<cv::aruco::Dictionary> dict = LoadDictionary(o.dictionary);
@@ -175,7 +178,9 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
       int64_t eventnum = 0;
       for (const SimFrame& f : frames) {
         for (size_t k = 0; k < cameras.size(); ++k) {
-          if (!SimulateDetections(cameras[k], object, f, d, rngs[k], &msg)) continue;
+          if (!CameraActive(cameras[k].name, truth, f.seq)) continue;
+          if (!SimulateDetections(CameraAtFrame(cameras[k], truth, f.seq), object, f, d, rngs[k], &msg))
+            continue;
           buffer.resize(msg.getEncodedSize());
           msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
           lcm::LogEvent ev;
@@ -214,8 +219,13 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
         }
         const std::vector<int> png_params = {cv::IMWRITE_PNG_COMPRESSION, 1};
         for (size_t i = 0; i < frames.size(); ++i) {
+          if (!CameraActive(cam.name, truth, frames[i].seq)) {
+            if (o.progress) o.progress(++written, static_cast<int64_t>(frames.size()) * n_cams);
+            continue;  // a late camera's folder starts at its first frame (no video frames either)
+          }
           const Rigid3* previous = i > 0 ? &frames[i - 1].rig_from_object : nullptr;
-          cv::Mat image = renderer.Render(cam, k, frames[i].seq, frames[i].rig_from_object, previous);
+          cv::Mat image = renderer.Render(CameraAtFrame(cam, truth, frames[i].seq), k, frames[i].seq,
+                                          frames[i].rig_from_object, previous);
           if (o.video) {
             cv::Mat bgr;
             if (image.channels() == 1)

@@ -63,8 +63,9 @@ Stats ComputeStats(std::vector<double> values) {
   return s;
 }
 
-EvalResult Evaluate(const GroundTruth& truth, const RigMap* map,
+EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
                     const std::vector<TrajectoryRow>* trajectory) {
+  const GroundTruth truth = TruthAtEnd(session_truth);  // a map holds every camera's latest pose
   EvalResult r;
   r.gt_cameras = static_cast<int>(truth.cameras.size());
   r.gt_markers = static_cast<int>(truth.markers.size());
@@ -341,8 +342,8 @@ std::string FormatJson(const EvalResult& r) {
   s << "  \"map_rms_px\": " << JsonNumber(r.map_rms_px) << ",\n";
   if (r.has_trajectory) {
     s << "  \"object\": {\"ground_truth_frames\": " << r.gt_frames
-      << ", \"frames_with_pose\": " << r.frames_with_pose
-      << ", \"fraction_with_pose\": " << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
+      << ", \"frames_with_pose\": " << r.frames_with_pose << ", \"fraction_with_pose\": "
+      << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
       << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
       << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
       << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm)

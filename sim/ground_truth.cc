@@ -67,6 +67,33 @@ Rigid3 GetPose(const YAML::Node& node, const std::string& file, const std::strin
   return pose;
 }
 
+// moves: and late_cameras: (optional), naming cameras of the truth.
+void ReadCameraChanges(const YAML::Node& root, const std::string& path, GroundTruth* truth) {
+  auto camera = [&](const YAML::Node& n, const std::string& key) {
+    if (!n || !n.IsScalar() || !truth->FindCamera(n.Scalar())) Fail(path, key, "missing or not a camera");
+    return n.Scalar();
+  };
+  const YAML::Node moves = root["moves"];
+  if (moves && !moves.IsSequence()) Fail(path, "moves", "expected a list");
+  for (size_t i = 0; moves && i < moves.size(); ++i) {
+    const std::string key = "moves[" + std::to_string(i) + "]";
+    CameraMove m;
+    m.camera = camera(moves[i]["camera"], key + ".camera");
+    m.frame = GetInt64(moves[i]["frame"], path, key + ".frame");
+    m.rotation_deg = GetNumber(moves[i]["rotation_deg"], path, key + ".rotation_deg");
+    m.translation_mm = GetNumber(moves[i]["translation_mm"], path, key + ".translation_mm");
+    m.rig_from_cam_after = GetPose(moves[i]["rig_from_cam_after"], path, key + ".rig_from_cam_after");
+    truth->moves.push_back(m);
+  }
+  const YAML::Node late = root["late_cameras"];
+  if (late && !late.IsSequence()) Fail(path, "late_cameras", "expected a list");
+  for (size_t i = 0; late && i < late.size(); ++i) {
+    const std::string key = "late_cameras[" + std::to_string(i) + "]";
+    truth->late_cameras.push_back(
+        {camera(late[i]["camera"], key + ".camera"), GetInt64(late[i]["frame"], path, key + ".frame")});
+  }
+}
+
 }  // namespace
 
 const SimCamera* GroundTruth::FindCamera(const std::string& name) const {
@@ -113,6 +140,14 @@ void WriteGroundTruth(const std::string& path, const GroundTruth& truth) {
   for (const SimFrame& f : truth.frames)
     s << "  - {seq: " << f.seq << ", utime: " << f.utime << ", rig_from_object: " << Pose(f.rig_from_object)
       << "}\n";
+  if (!truth.moves.empty()) s << "moves:\n";
+  for (const CameraMove& m : truth.moves)
+    s << "  - {camera: " << m.camera << ", frame: " << m.frame << ", rotation_deg: " << Num(m.rotation_deg)
+      << ", translation_mm: " << Num(m.translation_mm)
+      << ", rig_from_cam_after: " << Pose(m.rig_from_cam_after) << "}\n";
+  if (!truth.late_cameras.empty()) s << "late_cameras:\n";
+  for (const LateCamera& l : truth.late_cameras)
+    s << "  - {camera: " << l.camera << ", frame: " << l.frame << "}\n";
   WriteFileAtomic(path, s.str());
 }
 
@@ -189,6 +224,7 @@ GroundTruth ReadGroundTruth(const std::string& path) {
       truth.frames.push_back(f);
     }
   }
+  ReadCameraChanges(root, path, &truth);
   return truth;
 }
 

@@ -259,6 +259,23 @@ double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double
 // ---------------------------------------------------------------------------------------------
 // Ground truth file (ground_truth.yaml)
 
+// A camera that moves during the session (a bumped tripod): from `frame` on it sits at rig_from_cam_after
+// = rig_from_cam * [rotation by rotation_deg about the camera's y axis (a pan), translation_mm along its x
+// axis].
+struct CameraMove {
+  std::string camera;
+  int64_t frame = 0;  // first frame at the new pose
+  double rotation_deg = 0.0;
+  double translation_mm = 0.0;
+  Rigid3 rig_from_cam_after = Rigid3::Identity();
+};
+
+// A camera that only publishes from `frame` on (one added to a running rig).
+struct LateCamera {
+  std::string camera;
+  int64_t frame = 0;
+};
+
 struct GroundTruth {
   std::string object;  // object kind name
   std::string dictionary = "DICT_6X6_250";
@@ -268,6 +285,8 @@ struct GroundTruth {
   std::vector<SimCamera> cameras;  // name, model, rig_from_cam
   std::vector<SimMarker> markers;  // id, size, object_from_marker
   std::vector<SimFrame> frames;    // seq, utime, rig_from_object
+  std::vector<CameraMove> moves;   // cameras[].rig_from_cam is the pose before a move (sim/bump.cc)
+  std::vector<LateCamera> late_cameras;
   const SimCamera* FindCamera(const std::string& name) const;
   const SimMarker* FindMarker(int id) const;
 };
@@ -284,6 +303,9 @@ struct GroundTruth {
 //                      distortion_model: none, distortion: []}, ...}
 //   markers:   {0: {size: 0.04, object_from_marker: POSE}, ...}
 //   frames:    - {seq: 0, utime: 1000000000000, rig_from_object: POSE}
+//   moves:     - {camera: cam2, frame: 150, rotation_deg: 0.5, translation_mm: 3, rig_from_cam_after: POSE}
+//   late_cameras: - {camera: cam5, frame: 300}
+// (the last two only when there are moves / late cameras).
 void WriteGroundTruth(const std::string& path, const GroundTruth& truth);
 // Throws std::runtime_error naming the file and key.
 GroundTruth ReadGroundTruth(const std::string& path);
@@ -310,6 +332,33 @@ bool SimulateDetections(const SimCamera& camera, const SimObject& object, const 
 // ---------------------------------------------------------------------------------------------
 // A whole dataset (what mcmt-sim does), usable from tests and benchmarks without the process.
 
+// ---------------------------------------------------------------------------------------------
+// Cameras that move or start late (sim/bump.cc)
+
+struct CameraMoveOptions {
+  std::string camera;
+  int64_t frame = 0;
+  double rotation_deg = 0.0;
+  double translation_mm = 0.0;
+};
+
+// "CAM,FRAME,ROT_DEG,TRANS_MM" (e.g. "cam2,150,0.5,3"); throws std::invalid_argument naming the option.
+CameraMoveOptions ParseCameraMove(const std::string& text);
+
+// The moved pose of CameraMove (rotation about the camera's y axis, translation along its x axis).
+Rigid3 MovedRigFromCam(const Rigid3& rig_from_cam, double rotation_deg, double translation_mm);
+
+// An extra camera for a rig of `rig.num_cameras` cameras: named cam<N>, on the circle halfway between cam0
+// and cam1, looking at the look-at point (the first N cameras are unchanged).
+SimCamera MakeExtraCamera(const RigOptions& rig);
+
+// The camera as it is at frame `seq` (its moved pose from the move's frame on).
+SimCamera CameraAtFrame(const SimCamera& camera, const GroundTruth& truth, int64_t seq);
+// Whether the camera publishes at frame `seq` (late cameras only from their frame on).
+bool CameraActive(const std::string& camera, const GroundTruth& truth, int64_t seq);
+// The truth with every camera at its pose at the end of the session (what a map should hold).
+GroundTruth TruthAtEnd(const GroundTruth& truth);
+
 struct DatasetOptions {
   std::string out_dir;
   ObjectOptions object;
@@ -317,6 +366,8 @@ struct DatasetOptions {
   TrajectoryOptions trajectory;
   RenderOptions render;
   DetectionSimOptions detections;
+  std::vector<CameraMoveOptions> moves;  // cameras bumped during the session
+  int64_t add_camera_frame = -1;         // >= 0: one extra camera (MakeExtraCamera) from this frame on
   std::string dictionary = "DICT_6X6_250";
   bool detections_only = false;
   bool video = false;  // per-camera MP4 instead of PNG folders
@@ -332,6 +383,14 @@ struct DatasetSummary {
   int64_t messages_written = 0;  // detections-only
   double seconds = 0.0;
 };
+
+// A detections-only session as `mcmt-sim --detections-only --out dir --frames N --seed S` sets it up
+// with its other options at their defaults (5 cameras at 1.0 m, the motion's extent from the radius).
+DatasetOptions DetectionsOnlySession(const std::string& dir, int frames, uint64_t seed);
+
+// The extra camera and the moves of `options` added to the truth (its cameras and frames filled); throws
+// std::invalid_argument naming the option.
+void AddCameraChanges(const DatasetOptions& options, GroundTruth* truth);
 
 // Writes out_dir/rig.yaml, out_dir/camK.yml, out_dir/ground_truth.yaml and either images
 // (out_dir/camK/000000.png ... or out_dir/camK.mp4) or out_dir/detections.lcmlog.

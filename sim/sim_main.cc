@@ -55,6 +55,8 @@ int Main(int argc, char** argv) {
   double surface_albedo = -1.0, surface_texture = 0.0, shading = 0.3, gradient = 0.3, vignetting = 0.0,
          defocus = 0.0, shot_noise = 0.0, gamma = 1.0, sharpen = 0.0;
   int jpeg_quality = 0;
+  std::vector<std::string> move_camera;
+  int add_camera = -1;
   bool motion_blur = false, video = false, detections_only = false, bgr = false, quiet = false,
        plain_bg = false;
 
@@ -122,6 +124,13 @@ int Main(int argc, char** argv) {
   args.AddDouble("false-rate", &false_rate,
                  "detections-only: mean number of false detections (ids not on the object) per camera frame");
   args.AddDouble("drop-rate", &drop_rate, "detections-only: probability a camera frame is not published");
+  args.AddList("move-camera", &move_camera,
+               "CAM,FRAME,ROT_DEG,TRANS_MM: the camera is bumped at FRAME: turned by ROT_DEG degrees about "
+               "its y axis and shifted by TRANS_MM millimetres along its x axis (repeatable; "
+               "ground_truth.yaml moves:)");
+  args.AddInt("add-camera", &add_camera,
+              "FRAME: one more camera (cam<N>, on the circle halfway between cam0 and cam1) that publishes "
+              "from FRAME on (-1: none; ground_truth.yaml late_cameras:)");
   args.AddFlag("quiet", &quiet, "no progress or summary output");
   args.AddEpilog(
       "\nA marker is detected (detections-only) when all 4 corners are in the image, it faces the camera "
@@ -235,6 +244,9 @@ int Main(int argc, char** argv) {
   o.detections.false_rate = false_rate;
   o.detections.drop_rate = drop_rate;
   o.detections_only = detections_only;
+  for (const std::string& m : move_camera) o.moves.push_back(sim::ParseCameraMove(m));
+  if (add_camera < -1) throw std::invalid_argument("--add-camera: expected a frame >= 0 (-1: none)");
+  o.add_camera_frame = add_camera;
   if (video && detections_only)
     throw std::invalid_argument("--video and --detections-only exclude each other");
   o.video = video;

@@ -102,6 +102,20 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
   return std::sqrt(sum / 4.0);
 }
 
+double PoseEstimator::RmsAt(const std::vector<MarkerObservation>& observations, const Rigid3& pose) const {
+  double sum = 0.0;
+  int n = 0;
+  for (const MarkerObservation& o : observations) {
+    const auto c = camera_index_.find(o.camera);
+    const auto m = marker_index_.find(o.id);
+    if (c == camera_index_.end() || m == marker_index_.end()) continue;
+    const double rms = ObservationRms(Obs{c->second, m->second, &o.corners}, pose);
+    sum += rms * rms;
+    ++n;
+  }
+  return n ? std::sqrt(sum / n) : -1.0;
+}
+
 // The corners of the active observations for core's rigid-pose solver (world = rig, body = object).
 std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
                                              const std::vector<char>& active) const {

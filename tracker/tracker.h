@@ -34,6 +34,7 @@
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/rig_map_t.hpp"
+#include "tracker/health.h"
 
 namespace mcmt {
 
@@ -112,6 +113,10 @@ class PoseEstimator {
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
 
   const RigMap& map() const { return map_; }
+
+  // RMS corner error of the mapped observations at `pose` (-1 when none is mapped; +inf when a corner
+  // falls behind its camera).
+  double RmsAt(const std::vector<MarkerObservation>& observations, const Rigid3& pose) const;
 
  private:
   struct Camera {
@@ -204,6 +209,9 @@ struct TrackerNodeOptions {
   // truncated) by the constructor, which throws naming the file when it cannot be written.
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)
+  // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
+  bool camera_health = true;
+  HealthOptions health;
 };
 
 class TrackerNode {
@@ -233,6 +241,7 @@ class TrackerNode {
   void OnMap(const void* data, size_t size);
 
   bool has_map() const { return estimator_ != nullptr; }
+  const HealthMonitor* health() const { return health_.get(); }  // null without a map or health
   const TrackerStats& stats() const { return stats_; }
   const std::vector<TrajectoryRow>& trajectory() const { return trajectory_; }
   std::string StatusLine() const;
@@ -246,12 +255,23 @@ class TrackerNode {
   void CheckStaleCameras();
   void WarnOnce(const std::string& key, const std::string& text);
   void MaybePrintStatus();
+  // The frame's pose without excluded and gated cameras, every camera judged (tracker/health.cc).
+  PoseSolution SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
+                                   int64_t utime);
+  void PublishHealth(int64_t utime, const std::string& message);
+  double CameraRms(const std::vector<MarkerObservation>& mine, const Rigid3& pose) const;
+  std::map<std::string, double> JudgeCameras(const std::vector<MarkerObservation>& obs,
+                                             const std::set<std::string>& cameras,
+                                             const std::set<std::string>& left_out,
+                                             const Rigid3* start) const;
 
   lcm::LCM& lcm_;
   lcm::LCM* output_;
   const RigConfig& rig_;
   TrackerNodeOptions options_;
   std::unique_ptr<PoseEstimator> estimator_;
+  std::unique_ptr<HealthMonitor> health_;  // per camera of the map
+  int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   MotionModel motion_;

@@ -88,6 +88,11 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
   sync_ = std::make_unique<FrameSynchronizer>(sync);
   reported_stale_.clear();
+  if (options_.camera_health) {
+    std::vector<std::string> names;
+    for (const auto& c : map.cameras) names.push_back(c.name);
+    health_ = std::make_unique<HealthMonitor>(names, options_.health);  // a new map: every camera ok
+  }
   if (switching) stats_.map_switches++;
   if (!rig_.markers.dictionary.empty() && !map.dictionary.empty() &&
       map.dictionary != rig_.markers.dictionary)
@@ -260,7 +265,9 @@ void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wa
   Rigid3 predicted;
   const bool have_prior = motion_.Predict(frame.utime, &predicted);
   const std::vector<MarkerObservation> obs = ObservationsFromViews(frame.views);
-  const PoseSolution sol = estimator_->Solve(obs, have_prior ? &predicted : nullptr);
+  const Rigid3* prior = have_prior ? &predicted : nullptr;
+  const PoseSolution sol =
+      health_ ? SolveJudgingCameras(obs, prior, frame.utime) : estimator_->Solve(obs, prior);
 
   stats_.frames++;
   stats_.rejected += sol.num_rejected;
