@@ -13,6 +13,7 @@
 
 #include "core/camera.h"
 #include "core/marker.h"
+#include "core/objects.h"
 
 namespace mcmt {
 
@@ -43,6 +44,7 @@ class YamlSection {
   void CheckKnownKeys(const std::set<std::string>& known) const;
 
   const YAML::Node& node() const { return node_; }
+  const std::string& file() const { return file_; }
   std::string KeyName(const std::string& key) const;  // "prefix.key"
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const;
 
@@ -74,6 +76,7 @@ struct RigConfig {
   std::string path;  // the YAML file
   std::string dir;   // its folder (relative paths are relative to it)
   MarkerConfig markers;
+  ObjectsConfig objects;  // objects: and rig_frame: (core/objects.h); without them, one object
   std::vector<CameraConfig> cameras;
   std::string lcm_url;           // lcm.url, empty: LCM's default
   std::string reference_camera;  // mapper.reference_camera, optional
