@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/lcm_util.h"
+#include "mapper/bodies.h"
 #include "mapper/intrinsics.h"
 #include "mapper/stages.h"
 
@@ -114,6 +115,8 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.marker_ids = rig.markers.ids;
   o.sizes = rig.markers.Sizes();
   o.dictionary = rig.markers.dictionary;
+  o.bodies = BodiesFromRig(rig);
+  o.rig_frame = rig.objects.rig_frame;
   auto fail = [&](const std::string& key, const std::string& what) { s.Fail(key, what); };
   if (o.max_iterations < 1) fail("max_iterations", "must be at least 1");
   if (o.threads < 0) fail("threads", "must be >= 0 (0: all cores)");
@@ -146,7 +149,7 @@ void MapperOptions::Validate() const {
   if (max_iterations < 1) bad("max_iterations must be at least 1");
   if (sync_tolerance_us < 0) bad("sync tolerance must be >= 0");
   if (!(continuity_gap_s >= 0)) bad("continuity_gap_s must be >= 0");
-  if (!(sizes.default_size > 0)) {
+  if (bodies.empty() && !(sizes.default_size > 0)) {
     bool all_overridden = !marker_ids.empty();
     for (int id : marker_ids)
       if (!(sizes.Get(id) > 0)) all_overridden = false;
@@ -450,6 +453,11 @@ MapResult Mapper::Solve() {
   const Impl& s = *impl_;
   if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
+  if (!options_.bodies.empty()) {
+    MapResult result = SolveBodies(s.messages, {s.camera_names, s.models, s.warnings, s.progress}, options_);
+    result.detections = s.inputs;
+    return result;
+  }
   MapResult result = options_.estimate_time_offsets && options_.refine
                          ? SolveWithTimeOffsets(s.messages, inputs, options_)
                          : SolvePass(s.messages, inputs, options_);
