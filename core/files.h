@@ -77,7 +77,8 @@ struct RigMap {
   int num_frames = 0;
   int num_observations = 0;
 
-  // Version 2 (several bodies): every body; `markers` and `reference_marker` are the first body's. Empty
+  // Version 2 (several bodies): every body; `markers` and `reference_marker` are the first moving body's
+  // (FirstMovingObject). Empty
   // in a version 1 map. rig_frame: the static body whose frame is the rig frame (empty: the reference
   // camera's).
   std::vector<MapObject> objects;
@@ -89,6 +90,9 @@ struct RigMap {
   // The map of body k alone, as a version 1 map (the cameras and its markers).
   RigMap ObjectMap(size_t k) const;
 };
+
+// The first moving body of a version 2 map (0 when all are static): the one `markers` holds.
+size_t FirstMovingObject(const RigMap& map);
 
 void WriteMap(const std::string& path, const RigMap& map);
 RigMap ReadMap(const std::string& path);  // throws FileFormatError naming file and key; checks version

@@ -278,6 +278,12 @@ void WriteMarkers(std::ostringstream& out, const std::string& indent, const std:
 
 }  // namespace
 
+size_t FirstMovingObject(const RigMap& map) {
+  for (size_t k = 0; k < map.objects.size(); ++k)
+    if (!map.objects[k].is_static) return k;
+  return 0;
+}
+
 const MapObject* RigMap::FindObject(const std::string& name) const {
   for (const auto& o : objects)
     if (o.name == name) return &o;
@@ -430,8 +436,9 @@ void ReadObjects(const MapReader& r, const YAML::Node& root, RigMap* map) {
   }
   if (!map->rig_frame.empty() && !map->FindObject(map->rig_frame))
     r.Fail("rig_frame", "no object named '" + map->rig_frame + "'");
-  map->markers = map->objects[0].markers;
-  map->reference_marker = map->objects[0].reference_marker;
+  const MapObject& first = map->objects[FirstMovingObject(*map)];
+  map->markers = first.markers;
+  map->reference_marker = first.reference_marker;
 }
 
 }  // namespace
