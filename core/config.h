@@ -46,6 +46,7 @@ class YamlSection {
   const YAML::Node& node() const { return node_; }
   const std::string& file() const { return file_; }
   std::string KeyName(const std::string& key) const;  // "prefix.key"
+  // Throws OptionError (core/options.h, a ConfigError) naming the file and the key.
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const;
 
  private:
@@ -78,8 +79,7 @@ struct RigConfig {
   MarkerConfig markers;
   ObjectsConfig objects;  // objects: and rig_frame: (core/objects.h); without them, one object
   std::vector<CameraConfig> cameras;
-  std::string lcm_url;           // lcm.url, empty: LCM's default
-  std::string reference_camera;  // mapper.reference_camera, optional
+  std::string lcm_url;  // lcm.url, empty: LCM's default
   // Raw per-process sections (absent: empty nodes); components parse them with YamlSection.
   YamlSection detector, mapper, tracker, sync, lcm, logger, viz;
   YAML::Node root;

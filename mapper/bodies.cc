@@ -339,7 +339,7 @@ MapResult SolveBodies(const std::vector<StoredMessage>& messages, const BodiesIn
       o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   report.threads = threads;
   const std::vector<Frame> frames =
-      AssembleFrames(messages, static_cast<int>(in.camera_names.size()), o.sync_tolerance_us);
+      AssembleFrames(messages, static_cast<int>(in.camera_names.size()), o.sync_tolerance_us());
   report.frames_assembled = static_cast<int>(frames.size());
 
   std::vector<BodyStages> bodies(o.bodies.size());

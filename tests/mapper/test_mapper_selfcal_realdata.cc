@@ -117,7 +117,7 @@ TEST(MapperSelfCalRealData, DISABLED_CharucoBoardClockOffsetsFromCaliscopeTimest
   auto map = [&](bool offsets) {
     MapperOptions options = MapperOptions::FromConfig(rig);
     options.estimate_time_offsets = offsets;
-    options.sync_tolerance_us = offsets ? options.sync_tolerance_us : 25000;
+    options.sync_tolerance_ms = offsets ? options.sync_tolerance_ms : 25.0;
     Mapper mapper(options);
     for (const auto& d : detections) mapper.Add(d);
     return mapper.Solve();
