@@ -26,7 +26,7 @@ std::vector<MapperBody> BodiesFromRig(const RigConfig& rig);
 std::vector<int> BodyIds(const std::vector<MapperBody>& bodies, size_t b,
                          const std::vector<StoredMessage>& messages);
 
-// What one pass reads besides the messages (as SolvePass in mapper/mapper.cc).
+// What one pass of the method reads besides the messages (SolvePass in mapper/mapper.cc takes it too).
 struct BodiesInputs {
   const std::vector<std::string>& camera_names;
   const std::vector<CameraModel>& models;

@@ -207,13 +207,8 @@ std::vector<CameraCollectStats> Mapper::CollectStats() const {
 
 namespace {
 
-// What one pass of the method reads besides the messages.
-struct SolveInputs {
-  const std::vector<std::string>& camera_names;
-  const std::vector<CameraModel>& models;
-  const std::vector<std::string>& warnings;
-  const std::function<void(const MapperProgress&)>& progress;
-};
+// What one pass of the method reads besides the messages (the same for one object and for several).
+using SolveInputs = BodiesInputs;
 
 // The whole method on `messages` (their utimes as the frames' clocks).
 MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s,
@@ -313,7 +308,7 @@ MapResult Mapper::Solve() {
   if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
   if (!options_.bodies.empty()) {
-    MapResult result = SolveBodies(s.messages, {s.camera_names, s.models, s.warnings, s.progress}, options_);
+    MapResult result = SolveBodies(s.messages, inputs, options_);
     result.detections = s.inputs;
     return result;
   }
