@@ -13,6 +13,7 @@
 
 #include "core/camera.h"
 #include "core/marker.h"
+#include "core/objects.h"
 
 namespace mcmt {
 
@@ -76,6 +77,7 @@ struct RigConfig {
   std::string path;  // the YAML file
   std::string dir;   // its folder (relative paths are relative to it)
   MarkerConfig markers;
+  ObjectsConfig objects;  // objects: and rig_frame: (core/objects.h); without them, one object
   std::vector<CameraConfig> cameras;
   std::string lcm_url;  // lcm.url, empty: LCM's default
   // Raw per-process sections (absent: empty nodes); components parse them with YamlSection.

@@ -29,7 +29,8 @@ std::string YamlNumber(double v);
 
 std::string ReadFile(const std::string& path);  // throws FileFormatError naming the file
 
-constexpr int kMapVersion = 1;
+constexpr int kMapVersion = 1;        // one object
+constexpr int kMapVersionBodies = 2;  // several bodies: objects: (written when RigMap::objects is not empty)
 
 struct MapCamera {
   std::string name;
@@ -52,6 +53,19 @@ struct MapMarker {
   double max_px = 0.0;
 };
 
+// One rigid body of a version 2 map: its layout in its own frame (the reference marker's), and for a
+// static body its one pose for the whole session.
+struct MapObject {
+  std::string name;
+  bool is_static = false;
+  int reference_marker = 0;
+  std::vector<MapMarker> markers;
+  Rigid3 rig_from_object = Rigid3::Identity();  // static bodies
+  double rms_px = 0.0;
+  int num_frames = 0;  // moving bodies: frames with a pose
+  int num_observations = 0;
+};
+
 struct RigMap {
   int version = kMapVersion;
   std::string dictionary;
@@ -63,9 +77,22 @@ struct RigMap {
   int num_frames = 0;
   int num_observations = 0;
 
+  // Version 2 (several bodies): every body; `markers` and `reference_marker` are the first moving body's
+  // (FirstMovingObject). Empty
+  // in a version 1 map. rig_frame: the static body whose frame is the rig frame (empty: the reference
+  // camera's).
+  std::vector<MapObject> objects;
+  std::string rig_frame;
+
   const MapCamera* FindCamera(const std::string& name) const;
   const MapMarker* FindMarker(int id) const;
+  const MapObject* FindObject(const std::string& name) const;
+  // The map of body k alone, as a version 1 map (the cameras and its markers).
+  RigMap ObjectMap(size_t k) const;
 };
+
+// The first moving body of a version 2 map (0 when all are static): the one `markers` holds.
+size_t FirstMovingObject(const RigMap& map);
 
 void WriteMap(const std::string& path, const RigMap& map);
 RigMap ReadMap(const std::string& path);  // throws FileFormatError naming file and key; checks version

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/lcm_util.h"
+#include "mapper/bodies.h"
 #include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
 #include "mapper/stages.h"
@@ -210,13 +211,8 @@ std::vector<CameraCollectStats> Mapper::CollectStats() const {
 
 namespace {
 
-// What one pass of the method reads besides the messages.
-struct SolveInputs {
-  const std::vector<std::string>& camera_names;
-  const std::vector<CameraModel>& models;
-  const std::vector<std::string>& warnings;
-  const std::function<void(const MapperProgress&)>& progress;
-};
+// What one pass of the method reads besides the messages (the same for one object and for several).
+using SolveInputs = BodiesInputs;
 
 // The whole method on `messages` (their utimes as the frames' clocks). With `moves`, cameras that moved
 // are looked for after the first refinement: when there are any, the pass stops there with them and the
@@ -365,6 +361,11 @@ MapResult Mapper::Solve() {
   const Impl& s = *impl_;
   if (s.messages.empty()) throw MapperError("no detections received (channels MCMT_DETECTIONS_*)");
   const SolveInputs inputs{s.camera_names, s.models, s.warnings, s.progress};
+  if (!options_.bodies.empty()) {
+    MapResult result = SolveBodies(s.messages, inputs, options_);
+    result.detections = s.inputs;
+    return result;
+  }
   std::vector<EpochSplit> splits;
   MapResult result = s.base_map ? SolveUpdate(s.messages, s.camera_names, s.models, s.warnings, options_,
                                               *s.base_map, s.update)

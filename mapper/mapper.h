@@ -66,6 +66,15 @@ struct IntrinsicsReport {
   int views = 0;
 };
 
+// One rigid body of a rig with several (the rig's objects:; core/objects.h).
+struct MapperBody {
+  std::string name;
+  bool is_static = false;
+  std::vector<int> ids;  // explicit ids
+  bool other = false;    // every id no other body claims
+  MarkerSizes sizes;
+};
+
 struct MapperOptions {
   // Step 1: keep both IPPE hypotheses when e2 / e1 < tau_e.
   double tau_e = 2.0;
@@ -136,6 +145,10 @@ struct MapperOptions {
   std::vector<int> marker_ids;
   MarkerSizes sizes;
   std::string dictionary;
+  // Several bodies (the rig's objects:, more than one; mapper/bodies.h): empty for a single object.
+  // rig_frame: a static body whose frame becomes the rig frame (empty: the reference camera's).
+  std::vector<MapperBody> bodies;
+  std::string rig_frame;
 
   // Reads the rig's `mapper:` section (keys as the fields above, declared in mapper/options.cc) and
   // `sync: {tolerance_ms}`; throws OptionError naming the file and key.
@@ -222,6 +235,9 @@ struct MapResult {
   RigMap initial_map;                             // after the graph initialisation, before refinement
   std::vector<TrajectoryRow> trajectory;          // refined rig_from_object per frame
   std::vector<TrajectoryRow> initial_trajectory;  // initial
+  // Several bodies: per body of map.objects, its refined and initial trajectories (empty for a static
+  // body); `trajectory` is then the first moving body's.
+  std::vector<std::vector<TrajectoryRow>> object_trajectories, initial_object_trajectories;
   MapReport report;
   std::vector<detections_t> detections;  // the input, as given to Add() (for mapper/diagnostics.h)
 };

@@ -14,6 +14,7 @@
 
 #include "core/lcm_util.h"
 #include "core/progress.h"
+#include "mapper/bodies.h"
 #include "mapper/out_folder.h"
 
 namespace mcmt {
@@ -343,9 +344,13 @@ MapResult MapperNode::SolveWriteAndPublish() {
     log_ << "dropped " << r.duplicates - duplicates_.count()
          << " duplicate detections (same id twice in one frame)\n";
   for (const std::string& w : r.warnings) log_ << "warning: " << w << "\n";
-  log_ << "wrote " << (std::filesystem::path(options_.outdir) / "map.yaml").string()
-       << ", trajectory.csv, report.json, map_initial.yaml, trajectory_initial.csv, residuals.csv\n"
+  log_ << "wrote " << (std::filesystem::path(options_.outdir) / "map.yaml").string() << ", "
+       << TrajectoryFileNames(result.map) << ", report.json, map_initial.yaml, residuals.csv\n"
        << verdicts;
+  for (const MapObject& o : result.map.objects)
+    log_ << "object " << o.name << (o.is_static ? " (static)" : "") << ": " << o.markers.size()
+         << " markers, " << (o.is_static ? "" : std::to_string(o.num_frames) + " frames, ")
+         << o.num_observations << " observations, rms " << o.rms_px << " px\n";
   if (options_.publish && output_) {
     const rig_map_t msg = ToRigMapMsg(result.map, NowUtime());
     output_->publish(kMapChannel, &msg);

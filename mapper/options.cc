@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mapper/bodies.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
@@ -128,6 +129,8 @@ MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
   o.marker_ids = rig.markers.ids;
   o.sizes = rig.markers.Sizes();
   o.dictionary = rig.markers.dictionary;
+  o.bodies = BodiesFromRig(rig);  // several objects (mapper/bodies.h)
+  o.rig_frame = rig.objects.rig_frame;
   MapperOptionTable().Load(rig.mapper, &o);
   ReadIntrinsicsSettings(rig, &o.intrinsics);
   o.Validate(rig.path);
@@ -154,7 +157,7 @@ void MapperOptions::Validate(const std::string& file) const {
                                {"tangential", sigma.tangential}})
     if (!(v > 0))
       table.Fail(file, std::string("intrinsics_sigma.") + key, "must be > 0, got " + FormatOptionNumber(v));
-  if (!(sizes.default_size > 0)) {
+  if (bodies.empty() && !(sizes.default_size > 0)) {
     bool all_overridden = !marker_ids.empty();
     for (int id : marker_ids)
       if (!(sizes.Get(id) > 0)) all_overridden = false;

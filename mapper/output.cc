@@ -15,6 +15,7 @@
 
 #include "core/json.h"
 #include "core/version.h"
+#include "mapper/bodies.h"
 #include "mapper/diagnostics.h"
 #include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
@@ -60,8 +61,16 @@ void RemoveLeftovers(const fs::path& out) {
 
 void WriteSet(const std::string& dir, const MapResult& result, const Diagnostics& diagnostics) {
   WriteMap(dir + "/map_initial.yaml", result.initial_map);
-  WriteTrajectory(dir + "/trajectory_initial.csv", result.initial_trajectory);
-  WriteTrajectory(dir + "/trajectory.csv", result.trajectory);
+  if (result.map.objects.empty()) {
+    WriteTrajectory(dir + "/trajectory_initial.csv", result.initial_trajectory);
+    WriteTrajectory(dir + "/trajectory.csv", result.trajectory);
+  }
+  for (size_t k = 0; k < result.map.objects.size(); ++k) {  // several bodies: one per moving body
+    if (result.map.objects[k].is_static) continue;
+    const std::string& name = result.map.objects[k].name;
+    WriteTrajectory(dir + "/trajectory_initial_" + name + ".csv", result.initial_object_trajectories.at(k));
+    WriteTrajectory(dir + "/trajectory_" + name + ".csv", result.object_trajectories.at(k));
+  }
   WriteFileAtomic(dir + "/residuals.csv", ResidualsCsv(diagnostics));
   WriteFileAtomic(dir + "/report.json", WithDiagnostics(ReportJson(result), diagnostics));
   WriteMap(dir + "/map.yaml", result.map);  // last: its presence means the rest is there
@@ -70,7 +79,27 @@ void WriteSet(const std::string& dir, const MapResult& result, const Diagnostics
 bool IsOutputFile(const std::string& name) {
   for (const char* f : kOutputFiles)
     if (name == f) return true;
-  return false;
+  const bool body_trajectory = name.rfind("trajectory_", 0) == 0 && name.size() > 15 &&
+                               name.compare(name.size() - 4, 4, ".csv") == 0;  // trajectory_<body>.csv
+  return body_trajectory;
+}
+
+// Several bodies: what each body's layout and poses came to (map.objects).
+std::string ObjectsJson(const RigMap& map) {
+  if (map.objects.empty()) return "";
+  std::ostringstream j;
+  j << "  \"objects\": [\n";
+  for (size_t i = 0; i < map.objects.size(); ++i) {
+    const MapObject& o = map.objects[i];
+    j << "    {\"name\": " << JsonString(o.name) << ", \"static\": " << (o.is_static ? "true" : "false")
+      << ", \"reference_marker\": " << o.reference_marker << ", \"markers\": [";
+    for (size_t m = 0; m < o.markers.size(); ++m) j << (m ? ", " : "") << o.markers[m].id;
+    j << "], \"observations\": " << o.num_observations << ", \"rms_px\": " << JsonNumber(o.rms_px)
+      << ", \"frames\": " << o.num_frames << (o.name == map.rig_frame ? ", \"rig_frame\": true" : "") << "}"
+      << (i + 1 < map.objects.size() ? "," : "") << "\n";
+  }
+  j << "  ],\n";
+  return j.str();
 }
 
 // Can `out` be replaced as a whole? Not when it holds folders that are not ours, or holds the current
@@ -150,6 +179,7 @@ std::string ReportJson(const MapResult& result) {
       << (i + 1 < map.markers.size() ? "," : "") << "\n";
   }
   j << "  ],\n";
+  j << ObjectsJson(map);
   j << "  \"rejected_markers\": [\n";
   for (size_t i = 0; i < r.rejected_markers.size(); ++i) {
     const RejectedMarker& m = r.rejected_markers[i];
@@ -186,7 +216,9 @@ std::string ReportJson(const MapResult& result) {
 }
 
 std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) {
-  const Diagnostics diagnostics = ComputeDiagnostics(result);  // mapper/diagnostics.h
+  // mapper/diagnostics.h (several bodies: the first moving body's)
+  const Diagnostics diagnostics =
+      result.map.objects.empty() ? ComputeDiagnostics(result) : ComputeDiagnostics(DiagnosticsView(result));
   const std::string verdicts = VerdictLines(diagnostics);
   fs::path out = fs::absolute(outdir).lexically_normal();
   if (!out.has_filename()) out = out.parent_path();

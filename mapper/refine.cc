@@ -327,7 +327,7 @@ ResidualStats StatsOf(const BundleProblem& bp) {
 
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
              const MarkerLayout& layout, const CameraPlacement& cameras, const MapperOptions& o, RigMap* map,
-             std::vector<TrajectoryRow>* trajectory) {
+             std::vector<TrajectoryRow>* trajectory, std::vector<int>* row_frames) {
   const BundleProblem& bp = bundle.problem;
   const ResidualStats s = StatsOf(bp);
   const std::vector<int>& ids = observations.marker_ids;
@@ -356,6 +356,7 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
   map->rms_px = s.total_n ? std::sqrt(s.total_sq / s.total_n) : 0.0;
   map->num_observations = s.total_n;
   trajectory->clear();
+  if (row_frames) row_frames->clear();
   for (size_t f = 0; f < bp.rig_from_object.size(); ++f) {
     if (s.fr_n[f] == 0) continue;
     TrajectoryRow row;
@@ -366,6 +367,7 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
     row.cameras = static_cast<int>(s.fr_cams[f].size());
     row.markers = static_cast<int>(s.fr_markers[f].size());
     trajectory->push_back(row);
+    if (row_frames) row_frames->push_back(static_cast<int>(f));
   }
   map->num_frames = static_cast<int>(trajectory->size());
 }

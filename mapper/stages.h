@@ -196,10 +196,10 @@ void DropUnreliableCameras(const Observations& observations, const ObservationNa
                            CameraPlacement* cameras, MapperBundle* bundle, MapReport* report);
 
 // The map and trajectory at the bundle's current parameters, refined intrinsics included (statistics
-// over active observations).
+// over active observations). row_frames (optional): the frame index of each trajectory row.
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
              const MarkerLayout& layout, const CameraPlacement& cameras, const MapperOptions& options,
-             RigMap* map, std::vector<TrajectoryRow>* trajectory);
+             RigMap* map, std::vector<TrajectoryRow>* trajectory, std::vector<int>* row_frames = nullptr);
 
 // The options' consistency thresholds (consistency_deg, consistency_m, consistency_rel).
 ConsistencyOptions ConsistencyFor(const MapperOptions& options);

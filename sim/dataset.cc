@@ -22,6 +22,7 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "sim/sim.h"
+#include "sim/sim_internal.h"
 
 namespace fs = std::filesystem;
 
@@ -117,6 +118,56 @@ void RemoveStaleFrames(const fs::path& folder, const std::vector<SimFrame>& fram
 
 }  // namespace
 
+namespace internal {
+
+int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
+                           const std::vector<SimFrame>& frames, const DetectionSimOptions& d, uint64_t seed,
+                           const std::function<const SimObject&(size_t, SimFrame*)>& scene,
+                           const CameraAtFrameFn& camera_at) {
+  const std::string tmp = TempName(path);
+  int64_t written = 0;
+  {
+    lcm::LogFile log(tmp, "w");
+    if (!log.good()) throw std::runtime_error("cannot write '" + tmp + "'");
+    std::vector<std::mt19937_64> rngs;
+    std::vector<std::string> channels;
+    for (size_t k = 0; k < cameras.size(); ++k) {
+      std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
+                        static_cast<uint32_t>(k), 0x5eedu};
+      rngs.emplace_back(seq);
+      channels.push_back(DetectionsChannel(cameras[k].name));
+    }
+    detections_t msg;
+    std::vector<uint8_t> buffer;
+    int64_t eventnum = 0;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      SimFrame f;
+      const SimObject& object = scene(i, &f);
+      for (size_t k = 0; k < cameras.size(); ++k) {
+        SimCamera moved;
+        if (camera_at && !camera_at(k, f, &moved)) continue;  // not publishing yet
+        if (!SimulateDetections(camera_at ? moved : cameras[k], object, f, d, rngs[k], &msg)) continue;
+        buffer.resize(msg.getEncodedSize());
+        msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+        lcm::LogEvent ev;
+        ev.eventnum = eventnum++;
+        ev.timestamp = f.utime;
+        ev.channel = channels[k];
+        ev.datalen = static_cast<int32_t>(buffer.size());
+        ev.data = buffer.data();
+        if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
+        ++written;
+      }
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+  return written;
+}
+
+}  // namespace internal
+
 DatasetSummary GenerateDataset(const DatasetOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   if (o.out_dir.empty()) throw std::invalid_argument("out: an output folder is required");
@@ -157,45 +208,20 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
   WriteGroundTruth((dir / "ground_truth.yaml").string(), truth);
 
   if (o.detections_only) {
-    const std::string path = (dir / "detections.lcmlog").string();
-    const std::string tmp = TempName(path);
-    {
-      lcm::LogFile log(tmp, "w");
-      if (!log.good()) throw std::runtime_error("cannot write '" + tmp + "'");
-      DetectionSimOptions d = o.detections;
-      d.dictionary = o.dictionary;
-      d.dictionary_size = dict->bytesList.rows;
-      std::vector<std::mt19937_64> rngs;
-      std::vector<std::string> channels;
-      for (size_t k = 0; k < cameras.size(); ++k) {
-        std::seed_seq seq{static_cast<uint32_t>(o.trajectory.seed),
-                          static_cast<uint32_t>(o.trajectory.seed >> 32), static_cast<uint32_t>(k), 0x5eedu};
-        rngs.emplace_back(seq);
-        channels.push_back(DetectionsChannel(cameras[k].name));
-      }
-      detections_t msg;
-      std::vector<uint8_t> buffer;
-      int64_t eventnum = 0;
-      for (const SimFrame& f : frames) {
-        for (size_t k = 0; k < cameras.size(); ++k) {
-          if (!CameraActive(cameras[k].name, truth, f.seq)) continue;
-          if (!SimulateDetections(CameraAtFrame(cameras[k], truth, f.seq), object, f, d, rngs[k], &msg))
-            continue;
-          buffer.resize(msg.getEncodedSize());
-          msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-          lcm::LogEvent ev;
-          ev.eventnum = eventnum++;
-          ev.timestamp = f.utime;
-          ev.channel = channels[k];
-          ev.datalen = static_cast<int32_t>(buffer.size());
-          ev.data = buffer.data();
-          if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
-          ++summary.messages_written;
-        }
-      }
-    }
-    fs::rename(tmp, path, ec);
-    if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+    DetectionSimOptions d = o.detections;
+    d.dictionary = o.dictionary;
+    d.dictionary_size = dict->bytesList.rows;
+    summary.messages_written = internal::WriteDetectionsLog(
+        (dir / "detections.lcmlog").string(), cameras, frames, d, o.trajectory.seed,
+        [&](size_t k, SimFrame* frame) -> const SimObject& {
+          *frame = frames[k];
+          return object;
+        },
+        [&](size_t k, const SimFrame& f, SimCamera* camera) {
+          if (!CameraActive(cameras[k].name, truth, f.seq)) return false;
+          *camera = CameraAtFrame(cameras[k], truth, f.seq);
+          return true;
+        });
   } else {
     Renderer renderer(object, o.dictionary, o.render);
     const int n_cams = static_cast<int>(cameras.size());

@@ -267,6 +267,30 @@ std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path) {
   return rows;
 }
 
+RigMap SelectObject(const RigMap& map, const std::string& object, const GroundTruth& truth,
+                    std::vector<TrajectoryRow>* trajectory) {
+  if (map.objects.empty()) {
+    if (!object.empty())
+      throw EvalInputError("--object " + object + ": the map holds one object (version 1)");
+    return map;
+  }
+  std::string names;
+  for (const MapObject& o : map.objects) names += (names.empty() ? "" : ", ") + o.name;
+  if (object.empty())
+    throw EvalInputError("the map holds several objects (" + names + "): name one with --object");
+  const MapObject* found = map.FindObject(object);
+  if (!found) throw EvalInputError("--object " + object + ": not in the map (objects: " + names + ")");
+  if (found->is_static && trajectory->empty())
+    for (const SimFrame& f : truth.frames) {
+      TrajectoryRow row;
+      row.utime = f.utime;
+      row.seq = f.seq;
+      row.rig_from_object = found->rig_from_object;
+      trajectory->push_back(row);
+    }
+  return map.ObjectMap(static_cast<size_t>(found - map.objects.data()));
+}
+
 std::string FormatTable(const EvalResult& r) {
   std::ostringstream s;
   s << "| metric (after rigid alignment)   | mean    | median  | max     |\n";

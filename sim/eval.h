@@ -84,6 +84,13 @@ RigMap MapFromGroundTruth(const GroundTruth& truth, size_t ref_camera = 0, size_
 // (poses with status TRACKING or AMBIGUOUS), recognised by content.
 std::vector<TrajectoryRow> ReadTrajectoryAny(const std::string& path);
 
+// The map of one body of a map with several (`object`, mcmt-eval --object): its cameras and layout; for a
+// static body, `trajectory` (when empty) gets its one pose at every ground-truth frame. A version 1 map is
+// returned as it is (`object` must then be empty or its only object). Throws EvalInputError naming the
+// map's objects when `object` is missing or unknown.
+RigMap SelectObject(const RigMap& map, const std::string& object, const GroundTruth& truth,
+                    std::vector<TrajectoryRow>* trajectory);
+
 std::string FormatTable(const EvalResult& result);
 std::string FormatJson(const EvalResult& result);
 

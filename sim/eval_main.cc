@@ -11,7 +11,7 @@ namespace {
 
 int Main(int argc, char** argv) {
   using namespace mcmt;
-  std::string ground_truth, caliscope, map_path, trajectory_path;
+  std::string ground_truth, caliscope, map_path, trajectory_path, object;
   bool json = false;
   ArgParser args(
       "mcmt-eval",
@@ -26,6 +26,10 @@ int Main(int argc, char** argv) {
   args.AddString("map", &map_path, "map.yaml written by mcmt-mapper", true);
   args.AddString("trajectory", &trajectory_path,
                  "trajectory.csv / poses.csv, or an LCM log with object_pose_t on MCMT_POSE");
+  args.AddString("object", &object,
+                 "a map with several bodies (version 2): the body to evaluate, against its own ground truth "
+                 "(mcmt-sim --scene bodies writes ground_truth_<body>.yaml); a static body's one pose is "
+                 "compared in every ground-truth frame");
   args.AddFlag("json", &json, "print the figures as JSON instead of a table");
   args.AddEpilog(
       "\nFigures: object rotation (deg) and translation (mm) errors per frame, camera position (mm) and "
@@ -53,10 +57,12 @@ int Main(int argc, char** argv) {
     return 0;
   }
   const sim::GroundTruth truth = sim::ReadGroundTruth(ground_truth);
-  const RigMap map = ReadMap(map_path);
+  const RigMap full = ReadMap(map_path);
   std::vector<TrajectoryRow> trajectory;
   if (!trajectory_path.empty()) trajectory = sim::ReadTrajectoryAny(trajectory_path);
-  const sim::EvalResult result = sim::Evaluate(truth, &map, trajectory_path.empty() ? nullptr : &trajectory);
+  const RigMap map = sim::SelectObject(full, object, truth, &trajectory);
+  const bool with_poses = !trajectory_path.empty() || !trajectory.empty();
+  const sim::EvalResult result = sim::Evaluate(truth, &map, with_poses ? &trajectory : nullptr);
   if (json) {
     std::cout << sim::FormatJson(result);
   } else {

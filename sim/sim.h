@@ -396,5 +396,32 @@ void AddCameraChanges(const DatasetOptions& options, GroundTruth* truth);
 // (out_dir/camK/000000.png ... or out_dir/camK.mp4) or out_dir/detections.lcmlog.
 DatasetSummary GenerateDataset(const DatasetOptions& options);
 
+// ---------------------------------------------------------------------------------------------
+// Scenes with several rigid bodies (sim/scene_bodies.cc)
+
+struct SceneBody {
+  std::string name;  // as in the rig's objects: list
+  bool is_static = false;
+  SimObject object;
+  std::vector<SimFrame> frames;  // rig_from_object per frame (constant for a static body)
+};
+
+// `bodies`: a static floor board (8 markers of 8 cm, ids 20-27, on a ring of radius 0.25 * radius at
+// z = -0.25 * radius) and two moving objects, "tool" (four_sided, ids 0-3) and "patient" (cube, ids
+// 10-15), on independent trajectories (seeds `seed` and `seed + 1`) pushed apart along x by
+// +-0.09 * radius * cos(2 pi s), s = frame / (frames - 1): they swap sides twice, crossing (and occluding
+// each other) at s = 1/4 and 3/4. `with_static`: false leaves the floor out.
+std::vector<SceneBody> MakeBodiesScene(const DatasetOptions& options, bool with_static = true);
+
+// The scene's bodies at frame k as one object in the rig frame (markers and faces of all bodies): a
+// marker of one body hidden by another body is occluded.
+SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k);
+
+// mcmt-sim --scene bodies (detections only): DIR/rig.yaml (objects: tool, patient, floor static and the
+// rig frame), DIR/rig_moving.yaml (the same without the floor: its ids ignored), camK.yml,
+// DIR/ground_truth_<body>.yaml per body (its markers in its own frame, rig_from_object per frame),
+// DIR/ground_truth.yaml (= the tool's) and DIR/detections.lcmlog.
+DatasetSummary GenerateBodiesDataset(const DatasetOptions& options);
+
 }  // namespace sim
 }  // namespace mcmt

@@ -2,6 +2,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/se3.h"
@@ -26,6 +29,18 @@ bool SegmentHitsBody(const SimObject& object, const Eigen::Vector3d& from, const
 // or outside the valid region).
 bool UndistortNormalized(const CameraModel& model, const ValidRegion& region, double xd, double yd, double* x,
                          double* y);
+
+// Writes `path` (atomically) with every camera's simulated detections (detections_t on
+// MCMT_DETECTIONS_<CAMERA>, event time = utime) of frame i's scene: `scene(i, &frame)` returns the object and
+// sets the frame (seq, utime, rig_from_object). One random generator per camera, seeded by `seed` and the
+// camera index. With `camera_at`, camera k at a frame is the one it gives (a camera moved during the
+// session), and a camera it returns false for does not publish that frame (one that starts late).
+// Returns the messages written.
+using CameraAtFrameFn = std::function<bool(size_t k, const SimFrame& frame, SimCamera* camera)>;
+int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
+                           const std::vector<SimFrame>& frames, const DetectionSimOptions& options,
+                           uint64_t seed, const std::function<const SimObject&(size_t, SimFrame*)>& scene,
+                           const CameraAtFrameFn& camera_at = nullptr);
 
 }  // namespace internal
 }  // namespace sim

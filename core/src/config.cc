@@ -351,13 +351,18 @@ namespace {
 
 constexpr double kMaxMarkerSize_m = 10.0;
 
+// Number of ids of the dictionary (-1 when it does not load: reported by the dictionary check).
+int DictionarySize(const std::string& dictionary) {
+  try {
+    return LoadDictionary(dictionary)->bytesList.rows;
+  } catch (const std::exception&) {
+    return -1;
+  }
+}
+
 // ids: non-negative, no repeats, and (with `sizes` keys) within the dictionary.
 void CheckMarkerIds(const YamlSection& m, const MarkerConfig& mc) {
-  int dictionary_size = -1;
-  try {
-    dictionary_size = LoadDictionary(mc.dictionary)->bytesList.rows;
-  } catch (const std::exception&) {  // already reported by the dictionary check
-  }
+  const int dictionary_size = DictionarySize(mc.dictionary);
   std::set<int> seen;
   for (int id : mc.ids) {
     if (id < 0) m.Fail("ids", "marker ids must be non-negative, got " + std::to_string(id));
@@ -385,7 +390,8 @@ RigConfig LoadRigConfig(const std::string& path) {
   if (!rig.root.IsMap()) throw ConfigError(path + ": expected a YAML mapping with markers: and cameras:");
   const YamlSection top(rig.root, path, "");
   top.CheckKnownKeys({"markers", "cameras", "detector", "mapper", "tracker", "sync", "lcm", "logger", "viz",
-                      "sim", "eval", "export", "launch", "object", "name", "description"});
+                      "sim", "eval", "export", "launch", "object", "name", "description", "objects",
+                      "rig_frame"});
 
   // markers
   if (!top.Has("markers")) top.Fail("markers", "missing");
@@ -411,7 +417,7 @@ RigConfig LoadRigConfig(const std::string& path) {
       mc.dictionary = resolved;
     }
   }
-  if (!m.Has("size")) m.Fail("size", "missing");
+  if (!m.Has("size") && !top.Has("objects")) m.Fail("size", "missing");
   mc.size = m.GetPositiveDouble("size", 0.0);
   if (mc.size > kMaxMarkerSize_m)
     m.Fail("size", "absurd marker side length " + ScalarText(m.node()["size"]) + " m (at most " +
@@ -437,6 +443,9 @@ RigConfig LoadRigConfig(const std::string& path) {
   mc.ids = m.GetIntList("ids");
   CheckMarkerIds(m, mc);
   mc.inverted = m.GetBool("inverted", false);
+  rig.objects =
+      ParseObjects(top, mc.size, mc.Sizes(), mc.ids, top.Child("tracker").GetString("object", "object"),
+                   DictionarySize(mc.dictionary));
 
   // cameras
   if (!top.Has("cameras")) top.Fail("cameras", "missing");

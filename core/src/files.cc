@@ -262,17 +262,55 @@ const MapMarker* RigMap::FindMarker(int id) const {
   return nullptr;
 }
 
+namespace {
+
+void WriteMarkers(std::ostringstream& out, const std::string& indent, const std::vector<MapMarker>& markers) {
+  out << indent << "markers:" << (markers.empty() ? " []" : "") << "\n";
+  for (const auto& m : markers) {
+    out << indent << "  - id: " << m.id << "\n";
+    out << indent << "    size: " << Num(m.size) << "\n";
+    WritePose(out, indent + "    ", "object_from_marker", m.object_from_marker);
+    out << indent << "    observations: " << m.observations << "\n";
+    out << indent << "    rms_px: " << Num(m.rms_px) << "\n";
+    out << indent << "    max_px: " << Num(m.max_px) << "\n";
+  }
+}
+
+}  // namespace
+
+size_t FirstMovingObject(const RigMap& map) {
+  for (size_t k = 0; k < map.objects.size(); ++k)
+    if (!map.objects[k].is_static) return k;
+  return 0;
+}
+
+const MapObject* RigMap::FindObject(const std::string& name) const {
+  for (const auto& o : objects)
+    if (o.name == name) return &o;
+  return nullptr;
+}
+
+RigMap RigMap::ObjectMap(size_t k) const {
+  RigMap out = *this;
+  out.version = kMapVersion;
+  out.objects.clear();
+  out.markers = objects.at(k).markers;
+  out.reference_marker = objects.at(k).reference_marker;
+  return out;
+}
+
 void WriteMap(const std::string& path, const RigMap& map) {
   std::ostringstream out;
   out << "# mcmt map: rig frame = reference camera, object frame = reference marker.\n";
   out << "# rig_from_cam maps camera points into the rig frame; object_from_marker maps marker points into\n";
   out << "# the object frame. Quaternions w, x, y, z; rotation_matrix row-major (exact copy of the "
          "rotation).\n";
-  out << "version: " << map.version << "\n";
+  out << "version: " << (map.objects.empty() ? kMapVersion : kMapVersionBodies) << "\n";
   out << "written_by: " << Quoted(std::string("mcmt ") + Version()) << "\n";
   out << "dictionary: " << Quoted(map.dictionary) << "\n";
   out << "reference_camera: " << Quoted(map.reference_camera) << "\n";
-  out << "reference_marker: " << map.reference_marker << "\n";
+  if (map.objects.empty()) out << "reference_marker: " << map.reference_marker << "\n";
+  if (!map.rig_frame.empty()) out << "rig_frame: " << Quoted(map.rig_frame) << "\n";
   out << "rms_px: " << Num(map.rms_px) << "\n";
   out << "num_frames: " << map.num_frames << "\n";
   out << "num_observations: " << map.num_observations << "\n";
@@ -297,14 +335,20 @@ void WriteMap(const std::string& path, const RigMap& map) {
     out << "    max_px: " << Num(c.max_px) << "\n";
     if (c.time_offset_us != 0) out << "    time_offset_us: " << Num(c.time_offset_us) << "\n";
   }
-  out << "markers:" << (map.markers.empty() ? " []" : "") << "\n";
-  for (const auto& m : map.markers) {
-    out << "  - id: " << m.id << "\n";
-    out << "    size: " << Num(m.size) << "\n";
-    WritePose(out, "    ", "object_from_marker", m.object_from_marker);
-    out << "    observations: " << m.observations << "\n";
-    out << "    rms_px: " << Num(m.rms_px) << "\n";
-    out << "    max_px: " << Num(m.max_px) << "\n";
+  if (map.objects.empty()) {
+    WriteMarkers(out, "", map.markers);
+  } else {
+    out << "objects:\n";
+    for (const MapObject& o : map.objects) {
+      out << "  - name: " << Quoted(o.name) << "\n";
+      out << "    static: " << (o.is_static ? "true" : "false") << "\n";
+      out << "    reference_marker: " << o.reference_marker << "\n";
+      if (o.is_static) WritePose(out, "    ", "rig_from_object", o.rig_from_object);
+      out << "    rms_px: " << Num(o.rms_px) << "\n";
+      out << "    num_frames: " << o.num_frames << "\n";
+      out << "    num_observations: " << o.num_observations << "\n";
+      WriteMarkers(out, "    ", o.markers);
+    }
   }
   WriteFileAtomic(path, out.str());
 }
@@ -332,6 +376,73 @@ std::string DuplicateYamlKey(const YAML::Node& root) {
   return "";
 }
 
+namespace {
+
+// A marker list at `parent_key` + "markers" (ids unique within it).
+std::vector<MapMarker> ReadMarkers(const MapReader& r, const YAML::Node& parent,
+                                   const std::string& parent_key) {
+  const std::string list_key = parent_key.empty() ? "markers" : parent_key + ".markers";
+  const YAML::Node markers = r.Get(parent, parent_key, "markers");
+  if (!markers.IsSequence()) r.Fail(list_key, "expected a list");
+  std::vector<MapMarker> out;
+  for (size_t i = 0; i < markers.size(); ++i) {
+    const std::string key = list_key + "[" + std::to_string(i) + "]";
+    const YAML::Node m = markers[i];
+    if (!m.IsMap()) r.Fail(key, "expected a mapping");
+    MapMarker marker;
+    marker.id = r.Int(m, key, "id");
+    marker.size = r.Double(m, key, "size");
+    if (!(marker.size > 0)) r.Fail(key + ".size", "must be positive");
+    marker.object_from_marker = r.Pose(m, key, "object_from_marker");
+    marker.observations = r.OptInt(m, key, "observations");
+    marker.rms_px = r.OptDouble(m, key, "rms_px");
+    marker.max_px = r.OptDouble(m, key, "max_px");
+    for (const MapMarker& seen : out)
+      if (seen.id == marker.id) r.Fail(key + ".id", "duplicated marker id " + std::to_string(marker.id));
+    out.push_back(marker);
+  }
+  return out;
+}
+
+// Version 2: objects: [{name, static, reference_marker, rig_from_object (static), markers}]; the first
+// object's markers are also map.markers (what a single-object reader uses).
+void ReadObjects(const MapReader& r, const YAML::Node& root, RigMap* map) {
+  const YAML::Node objects = r.Get(root, "", "objects");
+  if (!objects.IsSequence() || objects.size() == 0) r.Fail("objects", "expected a non-empty list");
+  std::map<int, std::string> owner;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const std::string key = "objects[" + std::to_string(i) + "]";
+    const YAML::Node n = objects[i];
+    if (!n.IsMap()) r.Fail(key, "expected a mapping");
+    MapObject o;
+    o.name = r.String(n, key, "name");
+    if (map->FindObject(o.name)) r.Fail(key + ".name", "duplicated object '" + o.name + "'");
+    const std::string is_static = r.String(n, key, "static");
+    if (is_static != "true" && is_static != "false") r.Fail(key + ".static", "expected true or false");
+    o.is_static = is_static == "true";
+    o.reference_marker = r.Int(n, key, "reference_marker");
+    if (o.is_static) o.rig_from_object = r.Pose(n, key, "rig_from_object");
+    o.rms_px = r.OptDouble(n, key, "rms_px");
+    o.num_frames = r.OptInt(n, key, "num_frames");
+    o.num_observations = r.OptInt(n, key, "num_observations");
+    o.markers = ReadMarkers(r, n, key);
+    for (const MapMarker& m : o.markers) {
+      const auto [it, fresh] = owner.emplace(m.id, o.name);
+      if (!fresh)
+        r.Fail(key + ".markers",
+               "marker id " + std::to_string(m.id) + " is in both '" + it->second + "' and '" + o.name + "'");
+    }
+    map->objects.push_back(o);
+  }
+  if (!map->rig_frame.empty() && !map->FindObject(map->rig_frame))
+    r.Fail("rig_frame", "no object named '" + map->rig_frame + "'");
+  const MapObject& first = map->objects[FirstMovingObject(*map)];
+  map->markers = first.markers;
+  map->reference_marker = first.reference_marker;
+}
+
+}  // namespace
+
 RigMap ReadMap(const std::string& path) {
   const std::string text = ReadFile(path);
   YAML::Node root;
@@ -346,12 +457,13 @@ RigMap ReadMap(const std::string& path) {
   if (!root.IsMap()) throw FileFormatError(path + ": not a map file (expected a YAML mapping)");
   RigMap map;
   map.version = r.Int(root, "", "version");
-  if (map.version != kMapVersion)
+  if (map.version != kMapVersion && map.version != kMapVersionBodies)
     r.Fail("version", "unsupported map version " + std::to_string(map.version) + " (this build reads " +
-                          std::to_string(kMapVersion) + ")");
+                          std::to_string(kMapVersion) + " and " + std::to_string(kMapVersionBodies) + ")");
   map.dictionary = r.String(root, "", "dictionary");
   map.reference_camera = r.String(root, "", "reference_camera");
-  map.reference_marker = r.Int(root, "", "reference_marker");
+  if (map.version == kMapVersion) map.reference_marker = r.Int(root, "", "reference_marker");
+  if (root["rig_frame"]) map.rig_frame = r.String(root, "", "rig_frame");
   map.rms_px = r.OptDouble(root, "", "rms_px");
   map.num_frames = r.OptInt(root, "", "num_frames");
   map.num_observations = r.OptInt(root, "", "num_observations");
@@ -392,22 +504,10 @@ RigMap ReadMap(const std::string& path) {
     if (map.FindCamera(cam.name)) r.Fail(key + ".name", "duplicated camera '" + cam.name + "'");
     map.cameras.push_back(cam);
   }
-  const YAML::Node markers = r.Get(root, "", "markers");
-  if (!markers.IsSequence()) r.Fail("markers", "expected a list");
-  for (size_t i = 0; i < markers.size(); ++i) {
-    const std::string key = "markers[" + std::to_string(i) + "]";
-    const YAML::Node m = markers[i];
-    if (!m.IsMap()) r.Fail(key, "expected a mapping");
-    MapMarker marker;
-    marker.id = r.Int(m, key, "id");
-    marker.size = r.Double(m, key, "size");
-    if (!(marker.size > 0)) r.Fail(key + ".size", "must be positive");
-    marker.object_from_marker = r.Pose(m, key, "object_from_marker");
-    marker.observations = r.OptInt(m, key, "observations");
-    marker.rms_px = r.OptDouble(m, key, "rms_px");
-    marker.max_px = r.OptDouble(m, key, "max_px");
-    if (map.FindMarker(marker.id)) r.Fail(key + ".id", "duplicated marker id " + std::to_string(marker.id));
-    map.markers.push_back(marker);
+  if (map.version == kMapVersion) {
+    map.markers = ReadMarkers(r, root, "");
+  } else {
+    ReadObjects(r, root, &map);
   }
   if (!map.reference_camera.empty() && !map.cameras.empty() && !map.FindCamera(map.reference_camera))
     r.Fail("reference_camera", "'" + map.reference_camera + "' is not among the cameras");

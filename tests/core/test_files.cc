@@ -156,7 +156,7 @@ TEST(Files, MapErrorsNameTheKey) {
   TempDir dir;
   WriteMap(dir.File("m.yaml"), RandomMap(5));
   const std::string good = ReadFile(dir.File("m.yaml"));
-  EXPECT_CONTAINS(MapError(Replace(good, "version: 1", "version: 2")), "version: unsupported map version 2");
+  EXPECT_CONTAINS(MapError(Replace(good, "version: 1", "version: 3")), "version: unsupported map version 3");
   EXPECT_CONTAINS(MapError(Replace(good, "version: 1\n", "")), "version: missing");
   EXPECT_CONTAINS(MapError(Replace(good, "      fx: ", "      fxx: ")), "cameras[0].intrinsics.fx: missing");
   EXPECT_CONTAINS(MapError(Replace(good, "distortion_model: fisheye", "distortion_model: fish")),
