@@ -414,6 +414,30 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   return result;
 }
 
+// The window the second pass assembles frames over: the capture-time spread left inside the first pass's
+// frames once the offsets are subtracted (95th percentile, x1.5), at least the sync tolerance, at most the
+// first pass's window. Clocks that differ by a constant come together within the sync tolerance; clocks
+// that also jitter frame to frame (caliscope's per-camera times: 5-6 ms RMS, up to 36 ms) keep their frames
+// whole instead of splitting each into one frame per camera, and the residual is each observation's dt.
+int64_t ResidualWindowUs(const std::vector<StoredMessage>& corrected, int num_cameras,
+                         int64_t first_window_us, int64_t sync_tolerance_us) {
+  std::vector<double> spreads;
+  for (const Frame& f : AssembleFrames(corrected, num_cameras, first_window_us)) {
+    if (f.messages.size() < 2) continue;
+    int64_t lo = corrected[f.messages[0]].utime, hi = lo;
+    for (int i : f.messages) {
+      lo = std::min(lo, corrected[i].utime);
+      hi = std::max(hi, corrected[i].utime);
+    }
+    spreads.push_back(static_cast<double>(hi - lo));
+  }
+  if (spreads.empty()) return sync_tolerance_us;
+  std::sort(spreads.begin(), spreads.end());
+  const double p95 = spreads[static_cast<size_t>(0.95 * static_cast<double>(spreads.size() - 1))];
+  return std::clamp(static_cast<int64_t>(std::llround(1.5 * p95)), sync_tolerance_us,
+                    std::max(sync_tolerance_us, first_window_us));
+}
+
 // Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
 // clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
 // the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
@@ -433,7 +457,26 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   }
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
-  MapResult result = SolvePass(corrected, s, second_options);
+  second_options.sync_tolerance_us = ResidualWindowUs(corrected, static_cast<int>(s.camera_names.size()),
+                                                      first_options.sync_tolerance_us, o.sync_tolerance_us);
+  std::ostringstream worse;
+  MapResult result;
+  try {
+    result = SolvePass(corrected, s, second_options);
+    if (!(result.map.rms_px <= first.map.rms_px))
+      worse << "fit worse (rms " << result.map.rms_px << " px against " << first.map.rms_px << " px)";
+  } catch (const MapperError& e) {
+    worse << "cannot be mapped (" << e.what() << ")";
+  }
+  if (!worse.str().empty()) {
+    // An offset near the frame interval puts a camera's images between two frames of the others: the
+    // first pass's frames (and its offsets) are the result.
+    MapResult kept = first;
+    kept.report.total_seconds += result.report.total_seconds;
+    kept.report.warnings.push_back("time offsets: frames re-assembled on the corrected clocks " +
+                                   worse.str() + ": the first pass's frames are kept");
+    return kept;
+  }
   for (MapCamera& c : result.map.cameras)
     c.time_offset_us += offset_us.count(c.name) ? offset_us[c.name] : 0.0;
   for (MapCamera& c : result.initial_map.cameras)
