@@ -414,27 +414,46 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   return result;
 }
 
-// The window the second pass assembles frames over: the capture-time spread left inside the first pass's
-// frames once the offsets are subtracted (95th percentile, x1.5), at least the sync tolerance, at most the
-// first pass's window. Clocks that differ by a constant come together within the sync tolerance; clocks
-// that also jitter frame to frame (caliscope's per-camera times: 5-6 ms RMS, up to 36 ms) keep their frames
-// whole instead of splitting each into one frame per camera, and the residual is each observation's dt.
-int64_t ResidualWindowUs(const std::vector<StoredMessage>& corrected, int num_cameras,
-                         int64_t first_window_us, int64_t sync_tolerance_us) {
+// Frames assembled over `window_us` on the messages' times: the 95th percentile of their capture-time
+// spread (microseconds) and how many messages are alone in their frame.
+struct FrameSpread {
+  double p95_us = 0.0;
+  int alone = 0;
+};
+
+FrameSpread SpreadOf(const std::vector<StoredMessage>& messages, int num_cameras, int64_t window_us) {
+  FrameSpread out;
   std::vector<double> spreads;
-  for (const Frame& f : AssembleFrames(corrected, num_cameras, first_window_us)) {
-    if (f.messages.size() < 2) continue;
-    int64_t lo = corrected[f.messages[0]].utime, hi = lo;
+  for (const Frame& f : AssembleFrames(messages, num_cameras, window_us)) {
+    int64_t lo = messages[f.messages[0]].utime, hi = lo;
     for (int i : f.messages) {
-      lo = std::min(lo, corrected[i].utime);
-      hi = std::max(hi, corrected[i].utime);
+      lo = std::min(lo, messages[i].utime);
+      hi = std::max(hi, messages[i].utime);
     }
-    spreads.push_back(static_cast<double>(hi - lo));
+    if (f.messages.size() < 2)
+      ++out.alone;
+    else
+      spreads.push_back(static_cast<double>(hi - lo));
   }
-  if (spreads.empty()) return sync_tolerance_us;
   std::sort(spreads.begin(), spreads.end());
-  const double p95 = spreads[static_cast<size_t>(0.95 * static_cast<double>(spreads.size() - 1))];
-  return std::clamp(static_cast<int64_t>(std::llround(1.5 * p95)), sync_tolerance_us,
+  if (!spreads.empty())
+    out.p95_us = spreads[static_cast<size_t>(0.95 * static_cast<double>(spreads.size() - 1))];
+  return out;
+}
+
+// The window the second pass assembles frames over, or 0 when it is not worth running. Offsets that bring
+// the cameras' frames together (clocks that differ by a constant: the spread falls to the noise) re-assemble
+// them over 1.5 x the spread left (at least the sync tolerance, at most the first window): clocks that also
+// jitter frame to frame (caliscope's per-camera times, 5-6 ms RMS) keep their frames whole, the rest being
+// each observation's dt. Offsets that leave the frames as spread or leave more images alone (a camera's
+// capture latency that its timestamps do not show, e.g. 120 ms at 6 fps, puts its images between the
+// others' frames) keep the first pass's frames.
+int64_t SecondPassWindowUs(const std::vector<StoredMessage>& raw, const std::vector<StoredMessage>& corrected,
+                           int num_cameras, int64_t first_window_us, int64_t sync_tolerance_us) {
+  const FrameSpread before = SpreadOf(raw, num_cameras, first_window_us);
+  const FrameSpread after = SpreadOf(corrected, num_cameras, first_window_us);
+  if (!(after.p95_us < before.p95_us) || after.alone > before.alone) return 0;
+  return std::clamp(static_cast<int64_t>(std::llround(1.5 * after.p95_us)), sync_tolerance_us,
                     std::max(sync_tolerance_us, first_window_us));
 }
 
@@ -457,20 +476,24 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   }
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
-  second_options.sync_tolerance_us = ResidualWindowUs(corrected, static_cast<int>(s.camera_names.size()),
-                                                      first_options.sync_tolerance_us, o.sync_tolerance_us);
+  second_options.sync_tolerance_us =
+      SecondPassWindowUs(messages, corrected, static_cast<int>(s.camera_names.size()),
+                         first_options.sync_tolerance_us, o.sync_tolerance_us);
   std::ostringstream worse;
   MapResult result;
-  try {
-    result = SolvePass(corrected, s, second_options);
-    if (!(result.map.rms_px <= first.map.rms_px))
-      worse << "fit worse (rms " << result.map.rms_px << " px against " << first.map.rms_px << " px)";
-  } catch (const MapperError& e) {
-    worse << "cannot be mapped (" << e.what() << ")";
+  if (second_options.sync_tolerance_us == 0) {
+    worse << "would spread the frames further";
+  } else {
+    try {
+      result = SolvePass(corrected, s, second_options);
+      if (!(result.map.rms_px <= first.map.rms_px))
+        worse << "fit worse (rms " << result.map.rms_px << " px against " << first.map.rms_px << " px)";
+    } catch (const MapperError& e) {
+      worse << "cannot be mapped (" << e.what() << ")";
+    }
   }
   if (!worse.str().empty()) {
-    // An offset near the frame interval puts a camera's images between two frames of the others: the
-    // first pass's frames (and its offsets) are the result.
+    // The first pass's frames (and its offsets) are the result.
     MapResult kept = first;
     kept.report.total_seconds += result.report.total_seconds;
     kept.report.warnings.push_back("time offsets: frames re-assembled on the corrected clocks " +
