@@ -38,8 +38,12 @@ struct FrameSyncOptions {
   // predicts (its newest accepted utime, plus the wall time elapsed since it arrived when arrivals are
   // wall times), or -- for a camera's first messages -- of what the other cameras' clocks predict, is
   // rejected (counted in clock_jumps) and moves no clock: one message stamped +100 s must not make every
-  // later frame late. A camera whose messages keep coming on the new clock (kClockJumpConfirm in a row,
-  // consistent with each other) is followed (a restarted source); a camera ahead of the others is not.
+  // later frame late. A camera whose messages keep coming on another clock, ahead or behind
+  // (kClockJumpConfirm in a row, consistent with each other), calls a vote among the cameras heard of
+  // within camera_timeout_us: the clock most cameras agree on wins (a tie keeps the established clock,
+  // unless that one is ahead of the wall time the messages arrive at). A restarted source, or all
+  // cameras restarted, are followed; a camera ahead of or behind the others is rejected, named, even when
+  // it happened to report first and set the clock.
   int64_t max_clock_jump_us = 5000000;
   bool arrival_is_wall_time = true;  // false: arrivals are message times (a log)
 };
@@ -98,11 +102,14 @@ class FrameSynchronizer {
   int64_t oldest_utime_ = INT64_MAX;            // first message utime overall
   bool settled_ = false;                        // the camera set is known (see options.cameras)
   struct Jump {
-    int64_t utime = 0;  // last rejected utime
-    int count = 0;      // consistent rejections in a row
+    int64_t utime = 0;    // last utime on the other clock
+    int64_t arrival = 0;  // its arrival
+    int count = 0;        // consistent messages in a row
   };
-  std::map<std::string, int64_t> last_arrival_;  // per camera, arrival of its newest accepted message
-  std::map<std::string, Jump> jumps_;
+  std::map<std::string, int64_t> last_arrival_;       // per camera, arrival of its newest accepted message
+  std::map<std::string, Jump> jumps_;                 // runs of messages ahead of the clock
+  std::map<std::string, Jump> behind_;                // runs of messages far behind the clock
+  std::map<std::string, int64_t> last_emitted_;       // per camera, newest emitted frame with its view
   std::map<std::string, std::vector<int64_t>> lags_;  // per camera, recent arrival - utime (ring)
   std::map<std::string, size_t> lag_next_;
   // Wall time at which the pending frame `key` (first arrival first_arrival_us) is due.
@@ -110,6 +117,11 @@ class FrameSynchronizer {
   void RecordLag(const std::string& camera, int64_t lag_us);
   std::string clock_rejection_;
   bool ClockPlausible(const detections_t& detections, int64_t arrival_us);
+  bool FarBehindAndOutvoted(const detections_t& detections, int64_t arrival_us);
+  int64_t RunsOn(int64_t utime, int64_t since_arrival_us, int64_t arrival_us) const;
+  std::map<std::string, int64_t> VoterClocks(int64_t arrival_us) const;
+  bool WinsVote(const std::string& camera, int64_t arrival_us);
+  void FollowClock(int64_t clock, int64_t arrival_us);
   std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
   std::set<std::string> AliveCameras() const;
 };

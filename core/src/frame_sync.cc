@@ -62,42 +62,45 @@ std::vector<SyncedFrame> FrameSynchronizer::EmitUpTo(int64_t utime_inclusive) {
     ++stats_.frames_emitted;
     if (!frame.complete) ++stats_.frames_incomplete;
     emitted_until_utime_ = std::max(emitted_until_utime_, key);
+    for (const detections_t& v : frame.views) {
+      const auto [it, added] = last_emitted_.emplace(v.camera, key);
+      if (!added) it->second = std::max(it->second, key);
+    }
     out.push_back(std::move(frame));
   }
   return out;
+}
+
+int64_t FrameSynchronizer::RunsOn(int64_t utime, int64_t since_arrival_us, int64_t arrival_us) const {
+  return options_.arrival_is_wall_time ? utime + (arrival_us - since_arrival_us) : utime;
 }
 
 bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us) {
   clock_rejection_.clear();
   const int64_t jump = options_.max_clock_jump_us;
   if (jump <= 0) return true;
-  auto elapsed = [&](int64_t since) { return options_.arrival_is_wall_time ? arrival_us - since : 0; };
   std::string against;
   int64_t predicted = INT64_MIN;
   const auto own = last_utime_.find(d.camera);
   if (own != last_utime_.end()) {
-    predicted = own->second + elapsed(last_arrival_[d.camera]);
+    predicted = RunsOn(own->second, last_arrival_[d.camera], arrival_us);
     against = "its own clock";
   } else {
-    for (const auto& [camera, utime] : last_utime_) {  // the other cameras' newest, as they run on
-      const int64_t p = utime + elapsed(last_arrival_[camera]);
-      if (p > predicted) predicted = p;
-    }
+    for (const auto& [camera, utime] : last_utime_)  // the other cameras' newest, as they run on
+      predicted = std::max(predicted, RunsOn(utime, last_arrival_[camera], arrival_us));
     against = "the other cameras' clocks";
   }
   if (predicted == INT64_MIN || d.utime - predicted <= jump) {
     jumps_.erase(d.camera);
     return true;
   }
-  // A restarted source: its messages keep coming on the new clock, consistent with each other.
+  // Messages that keep coming on the new clock, consistent with each other: a restarted source, or the
+  // clock was set by a camera ahead of the others. The cameras vote.
   Jump& j = jumps_[d.camera];
   j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
   j.utime = d.utime;
-  if (own != last_utime_.end() && j.count >= kClockJumpConfirm) {
-    jumps_.erase(d.camera);
-    own->second = d.utime;  // follow it from here on
-    return true;
-  }
+  j.arrival = arrival_us;
+  if (j.count >= kClockJumpConfirm && WinsVote(d.camera, arrival_us)) return true;
   ++stats_.clock_jumps;
   clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
                      std::to_string((d.utime - predicted) / 1000) + " ms ahead of " + against +
@@ -105,9 +108,126 @@ bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us
   return false;
 }
 
+bool FrameSynchronizer::FarBehindAndOutvoted(const detections_t& d, int64_t arrival_us) {
+  const int64_t jump = options_.max_clock_jump_us;
+  if (jump <= 0) return false;
+  int64_t clock = INT64_MIN;  // the other cameras' newest, as they run on
+  for (const auto& [camera, utime] : last_utime_)
+    if (camera != d.camera) clock = std::max(clock, RunsOn(utime, last_arrival_[camera], arrival_us));
+  if (clock == INT64_MIN || clock - d.utime <= jump) {
+    behind_.erase(d.camera);
+    return false;
+  }
+  Jump& j = behind_[d.camera];
+  j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
+  j.utime = d.utime;
+  j.arrival = arrival_us;
+  // Fewer in a row: an ordinary late view as far as anyone can tell yet (the caller drops it as such).
+  if (j.count < kClockJumpConfirm || WinsVote(d.camera, arrival_us)) return false;
+  ++stats_.clock_jumps;
+  clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
+                     std::to_string((clock - d.utime) / 1000) + " ms behind the other cameras' clocks" +
+                     " (more than " + std::to_string(jump / 1000) + " ms): message rejected";
+  return true;
+}
+
+std::map<std::string, int64_t> FrameSynchronizer::VoterClocks(int64_t arrival_us) const {
+  std::map<std::string, int64_t> clocks;
+  auto heard = [&](int64_t at) {
+    return !options_.arrival_is_wall_time || arrival_us - at <= options_.camera_timeout_us;
+  };
+  for (const auto& [camera, utime] : last_utime_)
+    if (heard(last_arrival_.at(camera))) clocks[camera] = RunsOn(utime, last_arrival_.at(camera), arrival_us);
+  for (const auto* runs : {&jumps_, &behind_})
+    for (const auto& [camera, run] : *runs)
+      if (run.count >= kClockJumpConfirm && heard(run.arrival))
+        clocks[camera] = RunsOn(run.utime, run.arrival, arrival_us);
+  return clocks;
+}
+
+// The camera's run (a confirmed one in jumps_ or behind_) against the clocks of every camera heard of:
+// the clock with the most cameras within max_clock_jump_us wins; on a tie the established clock stays,
+// unless it is ahead of the arrival wall time (impossible for stamps of the capture). When the run wins,
+// the synchronizer follows it (FollowClock).
+bool FrameSynchronizer::WinsVote(const std::string& camera, int64_t arrival_us) {
+  const int64_t jump = options_.max_clock_jump_us;
+  const std::map<std::string, int64_t> clocks = VoterClocks(arrival_us);
+  const int64_t mine = clocks.at(camera);
+  auto support = [&](int64_t t) {
+    int n = 0;
+    for (const auto& kv : clocks) n += std::llabs(kv.second - t) <= jump;
+    return n;
+  };
+  const int my_support = support(mine);
+  for (const auto& [other, t] : clocks) {
+    if (std::llabs(t - mine) <= jump) continue;
+    const int s = support(t);
+    const bool impossible = options_.arrival_is_wall_time && t - arrival_us > jump;
+    if (s > my_support || (s == my_support && !impossible)) return false;
+  }
+  FollowClock(mine, arrival_us);
+  return true;
+}
+
+// The cameras on `clock` (within max_clock_jump_us) go on from their runs; the others are forgotten (their
+// later messages are judged against this clock), with their pending views; frames emitted on the old
+// clock no longer make the new clock's views late.
+void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
+  const int64_t jump = options_.max_clock_jump_us;
+  const std::map<std::string, int64_t> clocks = VoterClocks(arrival_us);
+  for (const auto* runs : {&jumps_, &behind_})
+    for (const auto& [camera, run] : *runs)
+      if (run.count >= kClockJumpConfirm && std::llabs(clocks.at(camera) - clock) <= jump) {
+        last_utime_[camera] = first_utime_[camera] = run.utime;
+        last_arrival_[camera] = run.arrival;
+        lags_.erase(camera);
+        lag_next_.erase(camera);
+      }
+  for (const auto& [camera, t] : clocks) {
+    jumps_.erase(camera);
+    behind_.erase(camera);
+  }
+  for (auto it = last_utime_.begin(); it != last_utime_.end();) {
+    if (std::llabs(RunsOn(it->second, last_arrival_[it->first], arrival_us) - clock) <= jump) {
+      ++it;
+      continue;
+    }
+    const std::string camera = it->first;
+    first_utime_.erase(camera);
+    last_arrival_.erase(camera);
+    lags_.erase(camera);
+    lag_next_.erase(camera);
+    it = last_utime_.erase(it);
+  }
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (std::llabs(it->first - clock) <= jump + options_.camera_timeout_us) {
+      ++it;
+      continue;
+    }
+    first_arrival_.erase(it->first);
+    it = pending_.erase(it);
+  }
+  newest_utime_ = INT64_MIN;
+  oldest_utime_ = INT64_MAX;
+  for (const auto& [camera, utime] : last_utime_) {
+    newest_utime_ = std::max(newest_utime_, utime);
+    oldest_utime_ = std::min(oldest_utime_, first_utime_[camera]);
+  }
+  emitted_until_utime_ = INT64_MIN;
+  for (auto it = last_emitted_.begin(); it != last_emitted_.end();) {
+    if (!last_utime_.count(it->first) || std::llabs(it->second - clock) > jump + options_.camera_timeout_us) {
+      it = last_emitted_.erase(it);
+      continue;
+    }
+    emitted_until_utime_ = std::max(emitted_until_utime_, it->second);
+    ++it;
+  }
+}
+
 std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, int64_t arrival_us) {
   const int64_t utime = detections.utime;
   if (!ClockPlausible(detections, arrival_us)) return {};
+  if (FarBehindAndOutvoted(detections, arrival_us)) return {};
   // Measured before the late-view check: a camera whose views all come late must get its wait.
   if (options_.max_wait_us > 0 && options_.arrival_is_wall_time)
     RecordLag(detections.camera, arrival_us - utime);

@@ -280,17 +280,101 @@ TEST(FrameSync, ACameraAheadOfTheOthersIsRejectedARestartedOneFollowed) {
     sync.Add(c, wall);
     ahead_rejected += sync.clock_rejection().find("the other cameras' clocks") != std::string::npos;
   }
-  EXPECT_EQ(ahead_rejected, 20);  // every one: the others reported first
-  // cam0 restarts 50 s later (a new recording): followed after kClockJumpConfirm messages.
+  EXPECT_EQ(ahead_rejected, 20);  // every one: the others reported first, and outvote it
+  // cam0 alone jumps 50 s while cam1 goes on: outvoted, every message rejected.
   int accepted = 0;
-  for (int f = 0; f < 10; ++f) {
+  for (int f = 20; f < 30; ++f) {
     wall += kPeriod;
-    detections_t d = View("cam0", 20 + f);
+    detections_t d = View("cam0", f);
     d.utime += 50000000;
     sync.Add(d, wall);
     accepted += sync.clock_rejection().empty();
+    sync.Add(View("cam1", f), wall);
+  }
+  EXPECT_EQ(accepted, 0);
+  // Then cam0 and cam1 both restart 50 s later (a new recording): followed once both runs are confirmed,
+  // and their frames complete again.
+  std::vector<SyncedFrame> frames;
+  for (int f = 30; f < 50; ++f) {
+    wall += kPeriod;
+    for (const char* camera : {"cam0", "cam1"}) {
+      detections_t d = View(camera, f);
+      d.utime += 50000000;
+      Append(&frames, sync.Add(d, wall));
+    }
+  }
+  int both = 0;
+  for (const SyncedFrame& f : frames) both += f.views.size() == 2 && f.utime > 50000000;
+  EXPECT_GE(both, 20 - FrameSynchronizer::kClockJumpConfirm - 1);
+}
+
+// One camera alone (nothing to vote against) that restarts on a new clock is followed.
+TEST(FrameSync, ASingleCameraThatRestartsIsFollowed) {
+  FrameSynchronizer sync;
+  int64_t wall = 5000000000;
+  for (int f = 0; f < 10; ++f) sync.Add(View("cam0", f), wall += kPeriod);
+  int accepted = 0;
+  for (int f = 10; f < 20; ++f) {
+    detections_t d = View("cam0", f);
+    d.utime += 50000000;
+    sync.Add(d, wall += kPeriod);
+    accepted += sync.clock_rejection().empty();
   }
   EXPECT_EQ(accepted, 10 - FrameSynchronizer::kClockJumpConfirm + 1);
+}
+
+// Issue 14: a camera whose clock runs 100 s ahead and that happens to report first (live) set the clock:
+// the others' views were all late and every frame had that one camera. When the cameras that came later
+// agree with each other, they outvote it: it is rejected from then on, and the others' frames complete.
+TEST(FrameSync, ACameraAheadThatReportsFirstIsOutvotedByTheOthers) {
+  FrameSyncOptions o;
+  o.cameras = {"cam0", "cam1", "cam2"};
+  o.deadline_us = 15000;
+  FrameSynchronizer sync(o);
+  std::vector<SyncedFrame> frames;
+  int64_t wall = 5000000000;
+  std::string rejection;
+  for (int f = 0; f < 40; ++f) {
+    wall += kPeriod;
+    detections_t c = View("cam2", f);
+    c.utime += 100000000;
+    Append(&frames, sync.Add(c, wall));
+    if (!sync.clock_rejection().empty()) rejection = sync.clock_rejection();
+    if (f >= 3) {  // the others start a tenth of a second later
+      Append(&frames, sync.Add(View("cam0", f), wall + 100));
+      Append(&frames, sync.Add(View("cam1", f), wall + 200));
+    }
+    Append(&frames, sync.Poll(wall + 20000));
+  }
+  Append(&frames, sync.Flush());
+  EXPECT_NE(rejection.find("camera 'cam2'"), std::string::npos) << rejection;
+  EXPECT_NE(rejection.find("ahead"), std::string::npos) << rejection;
+  int both = 0;
+  for (const SyncedFrame& f : frames) {
+    const std::vector<std::string> cams = CamerasOf(f);
+    both += cams == std::vector<std::string>{"cam0", "cam1"};
+  }
+  // Only the views that came before the vote (kClockJumpConfirm - 1 per camera) are lost.
+  EXPECT_GE(both, 37 - FrameSynchronizer::kClockJumpConfirm) << frames.size();
+  EXPECT_FALSE(sync.StaleCameras().count("cam0"));
+}
+
+// A camera 100 s behind the others is named (not taken for a lagging camera, whose wait would adapt).
+TEST(FrameSync, ACameraFarBehindTheOthersIsNamed) {
+  FrameSynchronizer sync;
+  int64_t wall = 5000000000;
+  std::string rejection;
+  for (int f = 0; f < 20; ++f) {
+    wall += kPeriod;
+    sync.Add(View("cam0", f), wall);
+    sync.Add(View("cam1", f), wall);
+    detections_t c = View("cam2", f);
+    c.utime -= 100000000;
+    sync.Add(c, wall);
+    if (!sync.clock_rejection().empty()) rejection = sync.clock_rejection();
+  }
+  EXPECT_NE(rejection.find("camera 'cam2'"), std::string::npos) << rejection;
+  EXPECT_NE(rejection.find("behind"), std::string::npos) << rejection;
 }
 
 // Issue 14: detectors that drift apart lost views (declared late) whatever the deadline. The lag of each

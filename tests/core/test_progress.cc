@@ -65,8 +65,7 @@ TEST(Progress, OnATerminalABarWithRateAndEtaRedrawnInPlace) {
 TEST(Progress, ElsewherePlainLinesAtThePeriodWithoutEscapeCodes) {
   const auto start = std::chrono::steady_clock::now();
   const std::string out = ChildOutput(false);
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(out.find('\r'), std::string::npos) << out;
   EXPECT_EQ(out.find('\033'), std::string::npos) << out;
   EXPECT_EQ(out.find('['), std::string::npos) << out;
