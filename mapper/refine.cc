@@ -188,6 +188,13 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     if (round >= o.max_rejection_rounds) break;
     if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
   }
+  if (!report->intrinsics.empty() &&
+      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp))
+  {
+    BundleSettings full = solve_settings;
+    full.paper_stop = false;
+    if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
+  }
   // The velocities the offsets move poses along come from the poses: re-solve with them updated.
   for (int pass = 0; bp.RefinesTime() && pass < 2; ++pass) {
     UpdateFrameVelocities(VelocityGapS(bp), &bp);
