@@ -23,6 +23,9 @@ class ArgParser {
   void AddList(const std::string& name, std::vector<std::string>* out, const std::string& help);
   // Free text appended to --help (examples, notes).
   void AddEpilog(const std::string& text);
+  // --help-config prints this (the Markdown tables of the rig YAML sections the program reads, from their
+  // OptionTable declarations) and exits 0.
+  void SetConfigHelp(const std::string& markdown) { config_help_ = markdown; }
 
   // Returns true to go on. Returns false when the program should exit with *exit_code:
   // 0 after --help or --version ("<program> <mcmt::Version()>" on stdout), 2 after a usage error (printed as
@@ -41,7 +44,7 @@ class ArgParser {
     bool given = false;
     std::string default_text;
   };
-  std::string program_, summary_, epilog_;
+  std::string program_, summary_, epilog_, config_help_;
   std::vector<Option> options_;
   Option* Find(const std::string& name);
 };

@@ -43,7 +43,9 @@ class YamlSection {
   void CheckKnownKeys(const std::set<std::string>& known) const;
 
   const YAML::Node& node() const { return node_; }
+  const std::string& file() const { return file_; }
   std::string KeyName(const std::string& key) const;  // "prefix.key"
+  // Throws OptionError (core/options.h, a ConfigError) naming the file and the key.
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const;
 
  private:
@@ -75,8 +77,7 @@ struct RigConfig {
   std::string dir;   // its folder (relative paths are relative to it)
   MarkerConfig markers;
   std::vector<CameraConfig> cameras;
-  std::string lcm_url;           // lcm.url, empty: LCM's default
-  std::string reference_camera;  // mapper.reference_camera, optional
+  std::string lcm_url;  // lcm.url, empty: LCM's default
   // Raw per-process sections (absent: empty nodes); components parse them with YamlSection.
   YamlSection detector, mapper, tracker, sync, lcm, logger, viz;
   YAML::Node root;

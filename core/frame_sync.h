@@ -28,9 +28,10 @@ struct FrameSyncOptions {
   // view; a dead camera costs at most max_wait_us per frame until camera_timeout_us declares it stale.
   // An expected camera (options.cameras) not heard of yet is waited for max_wait_us. Wall-time arrivals only.
   int64_t max_wait_us = 0;
-  int64_t camera_timeout_us = 1000000;  // a camera silent this long (message time) is not waited for
+  // A camera silent this long (wall time of arrivals when live, message time in a log) is not waited for.
+  int64_t camera_timeout_us = 1000000;
   // Cameras expected (e.g. the rig's). Optional. A listed camera not heard of yet is waited for until
-  // camera_timeout_us of message time has passed since the first message. Without the list, no frame
+  // camera_timeout_us has passed since the first message. Without the list, no frame
   // completes before the camera set has settled (some camera reported a second frame), so the first
   // frame is not emitted with only the first camera that happened to report.
   std::vector<std::string> cameras;
@@ -112,6 +113,8 @@ class FrameSynchronizer {
   std::map<std::string, int64_t> last_emitted_;       // per camera, newest emitted frame with its view
   std::map<std::string, std::vector<int64_t>> lags_;  // per camera, recent arrival - utime (ring)
   std::map<std::string, size_t> lag_next_;
+  std::map<std::string, std::vector<int64_t>> gaps_;  // per camera, recent gaps between arrivals (ring)
+  std::map<std::string, size_t> gap_next_;
   // Wall time at which the pending frame `key` (first arrival first_arrival_us) is due.
   int64_t DueTime(int64_t key, int64_t first_arrival_us, const std::set<std::string>& alive) const;
   void RecordLag(const std::string& camera, int64_t lag_us);
@@ -124,6 +127,9 @@ class FrameSynchronizer {
   void FollowClock(int64_t clock, int64_t arrival_us);
   std::vector<SyncedFrame> EmitUpTo(int64_t utime_inclusive);
   std::set<std::string> AliveCameras() const;
+  bool Alive(const std::string& camera) const;
+  int64_t now_us_ = INT64_MIN;             // newest arrival or poll (wall time when live)
+  int64_t first_arrival_any_ = INT64_MAX;  // arrival of the first accepted message
 };
 
 }  // namespace mcmt

@@ -8,8 +8,8 @@
 #include <stdexcept>
 
 #include "core/dictionary.h"
-#include "detector/side_model.h"
 #include "core/math.h"
+#include "detector/side_model.h"
 
 namespace mcmt {
 namespace {
@@ -232,7 +232,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, SideProfiles* profiles, SideFit* fit) {
+               double sigma_along, bool fit_gamma, double gamma_hint, SideProfiles* profiles, SideFit* fit) {
   if (bits.empty()) return NAN;
   struct Ray {
     int index;
@@ -314,6 +314,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
   profiles->Reset(u0, du, bins, cell);
   profiles->fit_gamma = fit_gamma;
+  profiles->gamma_hint = gamma_hint;
   for (size_t r = 0; r < rays.size(); ++r) {
     const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
     const Eigen::Vector2d& o = origins[rays[r].index];
@@ -471,8 +472,16 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
       if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
       if (model_pass) {
         const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
+        // The gamma of the marker's other sides (their latest fits with gamma free), for a side whose
+        // code shows no contrast in its first rows.
+        double gamma_sum = 0;
+        int gamma_count = 0;
+        for (int other = 0; other < 4; ++other)
+          if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
+            gamma_sum += side_fits[other].gamma, ++gamma_count;
+        const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
         const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
-                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma,
+                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint,
                                  &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) {
@@ -518,103 +527,6 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
 }
 
 // ---------------------------------------------------------------------------------------------------
-
-DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
-  DetectorOptions o;
-  o.inverted = rig.markers.inverted;
-  const YamlSection& s = rig.detector;
-  s.CheckKnownKeys({"corner_refinement",
-                    "subpix_window",
-                    "edge_passes",
-                    "edge_model",
-                    "sharp_smoothing",
-                    "gamma",
-                    "adaptive_window_min",
-                    "adaptive_window_max",
-                    "adaptive_window_step",
-                    "adaptive_constant",
-                    "min_perimeter_px",
-                    "max_perimeter_rate",
-                    "polygonal_approx_rate",
-                    "min_corner_distance_rate",
-                    "min_distance_to_border",
-                    "error_correction_rate",
-                    "perspective_pixels_per_cell",
-                    "perspective_ignored_margin",
-                    "inverted",
-                    "aruco3",
-                    "aruco3_min_side",
-                    "fast",
-                    "full_search_every",
-                    "drop_duplicate_ids",
-                    "drop_unrefined",
-                    "fps",
-                    "images",
-                    "image_rate",
-                    "image_quality",
-                    "image_scale",
-                    "status_period_s",
-                    "caliscope_time"});
-  o.corner_refinement = s.GetString("corner_refinement", o.corner_refinement);
-  if (o.corner_refinement != "edges" && o.corner_refinement != "none" && o.corner_refinement != "subpix" &&
-      o.corner_refinement != "contour")
-    s.Fail("corner_refinement",
-           "expected one of edges, none, subpix, contour, got '" + o.corner_refinement + "'");
-  o.subpix_window = s.GetInt("subpix_window", o.subpix_window);
-  o.edge_passes = s.GetInt("edge_passes", o.edge_passes);
-  o.edge_model = s.GetBool("edge_model", o.edge_model);
-  o.sharp_smoothing = s.GetDouble("sharp_smoothing", o.sharp_smoothing);
-  o.gamma = s.GetDouble("gamma", o.gamma);
-  o.adaptive_window_min = s.GetInt("adaptive_window_min", o.adaptive_window_min);
-  o.adaptive_window_max = s.GetInt("adaptive_window_max", o.adaptive_window_max);
-  o.adaptive_window_step = s.GetInt("adaptive_window_step", o.adaptive_window_step);
-  o.adaptive_constant = s.GetDouble("adaptive_constant", o.adaptive_constant);
-  o.min_perimeter_px = s.GetDouble("min_perimeter_px", o.min_perimeter_px);
-  o.max_perimeter_rate = s.GetDouble("max_perimeter_rate", o.max_perimeter_rate);
-  o.polygonal_approx_rate = s.GetDouble("polygonal_approx_rate", o.polygonal_approx_rate);
-  o.min_corner_distance_rate = s.GetDouble("min_corner_distance_rate", o.min_corner_distance_rate);
-  o.min_distance_to_border = s.GetInt("min_distance_to_border", o.min_distance_to_border);
-  o.error_correction_rate = s.GetDouble("error_correction_rate", o.error_correction_rate);
-  o.perspective_pixels_per_cell = s.GetInt("perspective_pixels_per_cell", o.perspective_pixels_per_cell);
-  o.perspective_ignored_margin = s.GetDouble("perspective_ignored_margin", o.perspective_ignored_margin);
-  o.inverted = s.GetBool("inverted", o.inverted);
-  o.aruco3 = s.GetBool("aruco3", o.aruco3);
-  o.aruco3_min_side = s.GetInt("aruco3_min_side", o.aruco3_min_side);
-  o.fast = s.GetBool("fast", o.fast);
-  o.full_search_every = s.GetInt("full_search_every", o.full_search_every);
-  o.drop_duplicate_ids = s.GetBool("drop_duplicate_ids", o.drop_duplicate_ids);
-  o.drop_unrefined = s.GetBool("drop_unrefined", o.drop_unrefined);
-  try {
-    o.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(rig.path + ": detector." + e.what());
-  }
-  return o;
-}
-
-void DetectorOptions::Validate() const {
-  auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
-  if (corner_refinement != "edges" && corner_refinement != "none" && corner_refinement != "subpix" &&
-      corner_refinement != "contour")
-    fail("corner_refinement: expected edges, none, subpix or contour, got '" + corner_refinement + "'");
-  if (subpix_window < 1) fail("subpix_window: must be >= 1");
-  if (edge_passes < 1 || edge_passes > 10) fail("edge_passes: must be in 1..10");
-  if (adaptive_window_min < 3) fail("adaptive_window_min: must be >= 3");
-  if (adaptive_window_max < adaptive_window_min) fail("adaptive_window_max: must be >= adaptive_window_min");
-  if (adaptive_window_step < 1) fail("adaptive_window_step: must be >= 1");
-  if (!(min_perimeter_px > 0)) fail("min_perimeter_px: must be positive");
-  if (!(max_perimeter_rate > 0)) fail("max_perimeter_rate: must be positive");
-  if (!(polygonal_approx_rate > 0 && polygonal_approx_rate < 1))
-    fail("polygonal_approx_rate: must be in (0, 1)");
-  if (!(error_correction_rate >= 0 && error_correction_rate <= 1))
-    fail("error_correction_rate: must be in [0, 1]");
-  if (perspective_pixels_per_cell < 1) fail("perspective_pixels_per_cell: must be >= 1");
-  if (!(perspective_ignored_margin >= 0 && perspective_ignored_margin < 0.5))
-    fail("perspective_ignored_margin: must be in [0, 0.5)");
-  if (full_search_every < 1) fail("full_search_every: must be >= 1");
-  if (!(sharp_smoothing >= 0 && sharp_smoothing <= 3)) fail("sharp_smoothing: must be in [0, 3]");
-  if (!(gamma == 0 || (gamma >= 0.2 && gamma <= 5))) fail("gamma: must be 0 (estimated) or in [0.2, 5]");
-}
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
     : markers_(markers), options_(options) {

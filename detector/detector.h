@@ -72,11 +72,18 @@ struct DetectorOptions {
   // no longer read the code) is always dropped.
   bool drop_unrefined = false;
 
-  // From the rig YAML `detector:` section (keys as the field names), markers.inverted as the default
-  // of `inverted`. Unknown keys and bad values throw ConfigError naming the file and key.
+  // From the rig YAML `detector:` section (keys as the field names, declared in detector/options.cc),
+  // markers.inverted as the default of `inverted`. Unknown keys and bad values throw OptionError naming
+  // the file and key.
   static DetectorOptions FromConfig(const RigConfig& rig);
-  void Validate() const;  // throws std::invalid_argument naming the field
+  // The same checks for options built in code (file empty) or read from `file`; throws OptionError.
+  void Validate(const std::string& file = "") const;
 };
+
+// Every `detector:` key of the marker detector: name, member, unit, check, help (loading, checks, docs).
+template <class T>
+class OptionTable;
+const OptionTable<DetectorOptions>& DetectorOptionTable();
 
 struct DetectorStats {
   long long frames = 0;

@@ -1,5 +1,4 @@
 // mcmt-detector: one camera's frames -> marker detections on LCM channel MCMT_DETECTIONS_<CAMERA>.
-#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -7,12 +6,8 @@
 #include "core/cli.h"
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "detector/node.h"
-
-namespace {
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
-}  // namespace
 
 int main(int argc, char** argv) {
   // FFmpeg's own log lines would break the one-line error contract; errors are reported by us.
@@ -56,6 +51,8 @@ int main(int argc, char** argv) {
         "Settings come from the rig YAML's markers: and detector: sections (see docs). Exits 0 at the end of "
         "a\n"
         "recording after publishing every frame; SIGINT/SIGTERM stop it cleanly.");
+    args.SetConfigHelp("### detector\n\n" + mcmt::DetectorOptionTable().Markdown() + "\n" +
+                       mcmt::DetectorNodeOptionTable().Markdown());
     int exit_code = 0;
     if (!args.Parse(argc, argv, &exit_code)) return exit_code;
 
@@ -79,12 +76,7 @@ int main(int argc, char** argv) {
 
     std::unique_ptr<lcm::LCM> lcm = mcmt::OpenLcm(lcm_url);
     mcmt::DetectorNode node(rig, options, *lcm);
-    struct sigaction action {};
-    action.sa_handler = OnSignal;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, nullptr);
-    sigaction(SIGTERM, &action, nullptr);
-    node.Run(g_stop);
+    node.Run(mcmt::StopOnSignals());
     return 0;
   });
 }

@@ -24,23 +24,6 @@ double MsSince(Clock::time_point t0) {
 
 }  // namespace
 
-void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {
-  const YamlSection& s = rig.detector;
-  fps = s.GetDouble("fps", fps);
-  images = s.GetBool("images", images);
-  image_rate_hz = s.GetDouble("image_rate", image_rate_hz);
-  image_quality = s.GetInt("image_quality", image_quality);
-  image_scale = s.GetDouble("image_scale", image_scale);
-  status_period_s = s.GetDouble("status_period_s", status_period_s);
-  caliscope_time = s.GetString("caliscope_time", caliscope_time);
-  if (fps < 0) s.Fail("fps", "must be >= 0");
-  if (!(image_rate_hz > 0)) s.Fail("image_rate", "must be positive");
-  if (image_quality < 1 || image_quality > 100) s.Fail("image_quality", "must be in 1..100");
-  if (!(image_scale > 0 && image_scale <= 1)) s.Fail("image_scale", "must be in (0, 1]");
-  if (caliscope_time != "sync" && caliscope_time != "camera")
-    s.Fail("caliscope_time", "expected sync or camera, got '" + caliscope_time + "'");
-}
-
 CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options) {
   const CameraConfig* cam = rig.FindCamera(options.camera);
   if (!cam) {
@@ -178,7 +161,7 @@ void DetectorNode::PublishImage(const cv::Mat& image, const detections_t& d) {
   ++stats_.images;
 }
 
-void DetectorNode::Run(const std::atomic<bool>& stop) {
+void DetectorNode::Run(const StopToken& stop) {
   FrameSource& source = pipeline_.source();
   if (!options_.quiet)
     std::cout << "camera " << options_.camera << ": " << source.description() << " -> " << channel_
@@ -194,7 +177,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
   std::unique_ptr<Progress> progress;  // recordings: a bar on a terminal, a line every 5 s otherwise
   if (!options_.quiet && !source.live())
     progress = std::make_unique<Progress>("camera " + options_.camera, std::max<int64_t>(0, source.size()));
-  while (!stop && (options_.max_frames < 0 || stats_.frames < options_.max_frames)) {
+  while (!stop.stop_requested() && (options_.max_frames < 0 || stats_.frames < options_.max_frames)) {
     if (!pipeline_.Next(&d, options_.images ? &image : nullptr)) break;
     if (realtime) {
       if (stats_.frames == 0) {
@@ -205,18 +188,18 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
           const int64_t wait_us = options_.start_wall_utime - NowUtime();
           if (wait_us > 0) {
             wall_start += std::chrono::microseconds(wait_us);
-            while (!stop && Clock::now() < wall_start)
+            while (!stop.stop_requested() && Clock::now() < wall_start)
               std::this_thread::sleep_for(
                   std::min<Clock::duration>(wall_start - Clock::now(), std::chrono::milliseconds(50)));
-            if (stop) break;
+            if (stop.stop_requested()) break;
           }
         }
       } else {
         const auto due = wall_start + std::chrono::microseconds(d.utime - first_utime);
-        while (!stop && Clock::now() < due)
+        while (!stop.stop_requested() && Clock::now() < due)
           std::this_thread::sleep_for(
               std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
-        if (stop) break;
+        if (stop.stop_requested()) break;
       }
     }
     const std::vector<uint8_t> bytes = Encode(d);
@@ -264,7 +247,7 @@ void DetectorNode::Run(const std::atomic<bool>& stop) {
         static_cast<long long>(stats_.markers),
         stats_.frames ? static_cast<double>(stats_.markers) / stats_.frames : 0.0, unrefined_text.c_str(),
         stats_.frames ? stats_.detection_ms_total / stats_.frames : 0.0,
-        static_cast<long long>(stats_.skipped), stop ? " (stopped)" : "");
+        static_cast<long long>(stats_.skipped), stop.stop_requested() ? " (stopped)" : "");
     std::cout << line << std::endl;
   }
 }

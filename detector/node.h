@@ -14,6 +14,7 @@
 #include <string>
 
 #include "core/config.h"
+#include "core/stop.h"
 #include "detector/detector.h"
 #include "detector/source.h"
 #include "mcmt/detections_t.hpp"
@@ -41,9 +42,12 @@ struct DetectorNodeOptions {
   bool quiet = false;                   // no status lines
 
   // Reads the process settings of the rig YAML `detector:` section (fps, images, image_rate,
-  // image_quality, image_scale, status_period_s, caliscope_time) over the defaults above.
+  // image_quality, image_scale, status_period_s, caliscope_time; declared in detector/options.cc) over
+  // the defaults above. Throws OptionError naming the file and key.
   void LoadFromConfig(const RigConfig& rig);
 };
+// The process keys of the `detector:` section (DetectorOptionTable has the detector's).
+const OptionTable<DetectorNodeOptions>& DetectorNodeOptionTable();
 
 // The camera's detector and source, opened and checked (shared by DetectorNode and DetectRecording).
 class CameraPipeline {
@@ -84,7 +88,7 @@ class DetectorNode {
   DetectorNode(const RigConfig& rig, const DetectorNodeOptions& options, lcm::LCM& lcm);
   // Publishes until the recording ends (after publishing everything), max_frames, or `stop` becomes
   // true. Returns normally in all three cases; throws on fatal errors (frame size mismatch...).
-  void Run(const std::atomic<bool>& stop);
+  void Run(const StopToken& stop);
   const DetectorNodeStats& stats() const { return stats_; }
   std::string channel() const { return channel_; }
 

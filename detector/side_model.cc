@@ -9,6 +9,7 @@ namespace mcmt {
 void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   u0 = u0_, du = du_, bins = bins_, cell = cell_;
   fit_gamma = false;
+  gamma_hint = 1.0;
   patterns.clear();
   sum.reserve(static_cast<size_t>(16) * bins);
   count.reserve(static_cast<size_t>(16) * bins);
@@ -61,7 +62,11 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
       const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
       const size_t i = static_cast<size_t>(row) * n + j;
       zs[i] = z;
-      PhiAndDensity(z, &big_phi[i], &small_phi[i]);
+      // Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential.
+      if (std::abs(z) > 7.0)
+        big_phi[i] = z > 0 ? 1.0 : 0.0, small_phi[i] = 0.0;
+      else
+        PhiAndDensity(z, &big_phi[i], &small_phi[i]);
     }
   };
   fill(0, p[kE] + p[kQ]);
@@ -92,11 +97,19 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
       }
       double scale = 1.0;  // d encoded / d linear
       if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
-        const double clipped = std::max(f, 0.5), log_lin = std::log(clipped * (1.0 / 255.0));
+        // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
+        // model at 0.5 where an image's black is 0, push the dark level below 0 and with it the edge
+        // towards the dark side (0.09 px on a sharp printed sheet).
+        const double at = std::max(f, 0.5), log_lin = std::log(at * (1.0 / 255.0));
         const double enc = 255.0 * std::exp(log_lin * inv_gamma);
-        scale = enc * inv_gamma / clipped;
-        f = enc;
+        scale = enc * inv_gamma / at;
         gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
+        if (f < at) {
+          gamma_grad += (gamma_grad * inv_gamma / at - scale * inv_gamma) * (f - at);
+          f = enc + scale * (f - at);
+        } else {
+          f = enc;
+        }
       }
       const double r = f - s.sum[g * n + j] / w;
       cost += w * r * r;
@@ -134,9 +147,39 @@ double LevelNear(const SideProfiles& s, double u, int row, int colour) {
   return count > 0 ? sum / count : NAN;
 }
 
-}  // namespace
+using Normal = Eigen::Matrix<double, kParams, kParams>;
+using Vector = Eigen::Matrix<double, kParams, 1>;
 
-bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+// The damped Gauss-Newton step from p that stays within [lo, hi]: a parameter whose step would cross
+// its bound is held at the bound and the others are solved again (a plain clamp after the solve would
+// leave the free parameters compensating for a move that did not happen, and the fit crawls along the
+// bound for many iterations).
+Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const double* lo, const double* hi) {
+  bool fixed[kParams] = {};
+  Vector held = Vector::Zero(), step;
+  for (int round = 0; round < 4; ++round) {
+    Normal m = a;
+    Vector rhs = -jtr;
+    for (int k = 0; k < kParams; ++k) {
+      if (!fixed[k]) continue;
+      rhs -= a.col(k) * held[k];
+      m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
+    }
+    step = m.ldlt().solve(rhs);
+    bool changed = false;
+    for (int k = 0; k < kParams; ++k) {
+      if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;
+      fixed[k] = changed = true;
+      held[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
+    }
+    if (!changed) break;
+  }
+  for (int k = 0; k < kParams; ++k) step[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
+  return step;
+}
+
+// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
+bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -157,28 +200,52 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
     p[kE] = fit->e;
     if (!s.fit_gamma) p[kGamma] = 1.0;
   }
-  Eigen::Matrix<double, kParams, kParams> jtj;
-  Eigen::Matrix<double, kParams, 1> jtr;
+  // Bounds: blur and margin width within what the profiles can show, levels within the 8-bit range
+  // (with some room for noise: a level far outside it is a valley of the fit, e.g. a code level and
+  // the gamma traded for each other on small cells, not a solution).
+  double lo[kParams], hi[kParams];
+  lo[kE] = -c, hi[kE] = c;
+  lo[kSigma] = 0.15, hi[kSigma] = 4.0;
+  for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
+  lo[kQ] = 0.4 * c, hi[kQ] = 4.0 * c;
+  // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
+  // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
+  bool code_contrast = false;
+  for (size_t g = 0; g < s.patterns.size(); ++g)
+    for (int r = 0; r < SideProfiles::kRows; ++r)
+      code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
+                                        (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g]));
+  *code_contrast_out = code_contrast;
+  const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
+  const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
+  lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
+  for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
+  Normal jtj;
+  Vector jtr;
   double cost = Evaluate(s, p, &jtj, &jtr);
   double lambda = 1e-3;
-  for (int iter = 0; iter < 12; ++iter) {
-    bool improved = false, converged = false;
-    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-      Eigen::Matrix<double, kParams, kParams> a = jtj;
+  // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
+  // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
+  // overshoot).
+  bool done = false;
+  for (int iter = 0; iter < 12 && !done; ++iter) {
+    bool improved = false;
+    for (int attempt = 0; attempt < 6 && !improved && !done; ++attempt) {
+      Normal a = jtj;
       for (int k = 0; k < kParams; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
-      const Eigen::Matrix<double, kParams, 1> step = a.ldlt().solve(-jtr);
+      const Vector step = BoundedStep(a, jtr, p, lo, hi);
       double q[kParams];
       for (int k = 0; k < kParams; ++k) q[k] = p[k] + step(k);
-      q[kSigma] = std::clamp(q[kSigma], 0.15, 4.0);
-      q[kQ] = std::clamp(q[kQ], 0.4 * c, 4.0 * c);
-      q[kE] = std::clamp(q[kE], -c, c);
-      q[kGamma] = s.fit_gamma ? std::clamp(q[kGamma], 0.4, 3.5) : 1.0;
+      if (attempt == 0 && std::abs(step[kE]) < 5e-4 && std::abs(step[kSigma]) < 5e-3) {
+        std::copy(q, q + kParams, p);
+        done = true;
+        break;
+      }
       // The trial's normal equations come with its cost: kept when it is accepted.
-      Eigen::Matrix<double, kParams, kParams> trial_jtj;
-      Eigen::Matrix<double, kParams, 1> trial_jtr;
+      Normal trial_jtj;
+      Vector trial_jtr;
       const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
       if (trial < cost) {
-        converged = std::abs(q[kE] - p[kE]) < 5e-4 && std::abs(q[kSigma] - p[kSigma]) < 5e-3;
         std::copy(q, q + kParams, p);
         cost = trial;
         jtj = trial_jtj, jtr = trial_jtr;
@@ -188,7 +255,7 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
         lambda *= 10;
       }
     }
-    if (!improved || converged) break;
+    if (!improved) break;
   }
   const double contrast = std::abs(p[kL1] - p[kL0]);
   if (!std::isfinite(p[kE]) || std::abs(p[kE]) > 0.75 * c || contrast < 5.0) return false;
@@ -196,8 +263,22 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->sigma = p[kSigma];
   fit->contrast = contrast;
   fit->gamma = p[kGamma];
+  fit->gamma_fitted = free_gamma;
   std::copy(p, p + kParams, fit->params.begin());
   return true;
+}
+
+}  // namespace
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  // Gamma is fitted freely; on a side without code contrast a gamma at its bound is the valley of a
+  // single step (SideProfiles::gamma_hint), and the side is fitted again with the hint.
+  const SideFit start = *fit;
+  bool code_contrast = true;
+  const bool ok = FitOnce(s, false, fit, &code_contrast);
+  if (code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
+  *fit = start;
+  return FitOnce(s, true, fit, &code_contrast);
 }
 
 }  // namespace mcmt

@@ -30,6 +30,11 @@ struct SideProfiles {
   // Encoded images (gamma unknown): the model's linear values are encoded as 255 (f / 255)^(1 / gamma)
   // with gamma fitted too; false: the profiles are linear already.
   bool fit_gamma = false;
+  // With fit_gamma, the gamma used where this side cannot show it: when no code cell of the other colour
+  // lies in the modelled rows (a code row of the border's colour along the whole side), the profile is
+  // one step between two free levels, and gamma, blur and edge trade for each other (a sharp edge
+  // moved half a pixel with gamma at its bound). The caller gives the marker's other sides' estimate.
+  double gamma_hint = 1.0;
   double cell = 0;  // mean depth of one cell across this side, px
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
@@ -53,10 +58,11 @@ struct SideProfiles {
 };
 
 struct SideFit {
-  double e = 0;         // outer edge, px outward from the line the profiles were sampled about
-  double sigma = 0;     // blur, px
-  double contrast = 0;  // |L1 - L0|
-  double gamma = 1;     // fitted encoding gamma (1 unless fit_gamma)
+  double e = 0;               // outer edge, px outward from the line the profiles were sampled about
+  double sigma = 0;           // blur, px
+  double contrast = 0;        // |L1 - L0|
+  double gamma = 1;           // fitted encoding gamma (1 unless fit_gamma)
+  bool gamma_fitted = false;  // gamma was free (fit_gamma and the side shows code contrast)
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};

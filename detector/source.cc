@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/detections_csv.h"
+
 namespace mcmt {
 namespace fs = std::filesystem;
 
@@ -39,18 +41,6 @@ long long LastNumber(const std::string& s) {
   const std::string digits = s.substr(begin, end - begin + 1);
   if (digits.size() > 17) return -1;
   return std::stoll(digits);
-}
-
-std::vector<std::string> SplitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    item.erase(0, item.find_first_not_of(" \t\r"));
-    item.erase(item.find_last_not_of(" \t\r") + 1);
-    out.push_back(item);
-  }
-  return out;
 }
 
 bool ParseDouble(const std::string& s, double* v) {

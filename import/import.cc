@@ -9,10 +9,10 @@
 #include <sstream>
 
 #include "core/config.h"
+#include "core/detections_csv.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
-#include "logger/event_log.h"
-#include "logger/export.h"
+#include "core/log_writer.h"
 
 namespace mcmt {
 namespace fs = std::filesystem;

@@ -10,15 +10,14 @@
 #include <vector>
 
 #include "core/config.h"
+#include "core/detections_csv.h"
 #include "core/files.h"
+#include "core/log_writer.h"
 #include "core/map_export.h"
-#include "logger/event_log.h"
 
 namespace mcmt {
 
 // ---- from a log ----------------------------------------------------------------------------------------
-
-extern const char kDetectionsCsvHeader[];  // "utime,seq,camera,id,x0,y0,x1,y1,x2,y2,x3,y3"
 
 struct LogExportRequest {
   std::string detections_csv;  // one row per marker of every detections_t on MCMT_DETECTIONS_*
@@ -88,20 +87,6 @@ struct LogSummary {
 
 LogSummary SummarizeLog(const std::string& log);
 std::string FormatSummary(const LogSummary& summary);
-
-// ---- detections CSV -> log ------------------------------------------------------------------------------
-
-struct CsvToLogResult {
-  int64_t rows = 0;
-  int64_t messages = 0;
-};
-
-// Rows of one (camera, utime, seq) in a row become one detections_t with the camera model and dictionary
-// of the rig config, published on MCMT_DETECTIONS_<CAMERA> with the event timestamp = utime. Frames
-// without markers have no rows, so they do not come back. Refuses to overwrite `out_log`. Errors name
-// the CSV file, line and column.
-CsvToLogResult DetectionsCsvToLog(const std::string& csv_path, const RigConfig& rig,
-                                  const std::string& out_log);
 
 // ---- from a map -----------------------------------------------------------------------------------------
 

@@ -1,16 +1,11 @@
 // mcmt-logger: records mcmt LCM channels into a standard LCM event log (lcm-logplayer plays it).
-#include <csignal>
 #include <iostream>
 
 #include "core/cli.h"
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "logger/session_logger.h"
-
-namespace {
-std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
-}  // namespace
 
 int main(int argc, char** argv) {
   return mcmt::RunMain("mcmt-logger", [&]() {
@@ -44,9 +39,10 @@ int main(int argc, char** argv) {
         "while recording. An existing log, part or sidecar is never overwritten: the logger refuses to "
         "start.\n"
         "SIGINT/SIGTERM close the log cleanly; after kill -9 every event up to the last flush is readable.\n"
-        "Settings may also come from the rig YAML's logger: section (channels, split_mb, split_minutes,\n"
-        "flush_ms, fsync, queue_capacity, max_unwritten_mb, status_seconds); the command line wins.\n\n"
+        "Settings may also come from the rig YAML's logger: section (--help-config lists its keys); the\n"
+        "command line wins.\n\n"
         "example: mcmt-logger --out session.lcmlog --config rig.yaml --split-mb 500\n");
+    args.SetConfigHelp("### logger\n\n" + mcmt::LoggerOptionTable().Markdown());
     int code = 0;
     if (!args.Parse(argc, argv, &code)) return code;
 
@@ -85,15 +81,11 @@ int main(int argc, char** argv) {
 
     std::unique_ptr<lcm::LCM> lcm = mcmt::OpenLcm(url);
     mcmt::SessionLogger logger(*lcm, options);
-    struct sigaction sa {};
-    sa.sa_handler = OnSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
-    sigaction(SIGTERM, &sa, nullptr);
+    const mcmt::StopToken stop = mcmt::StopOnSignals();
     if (!note.empty()) std::cerr << note << std::endl;
     std::cerr << "mcmt-logger: recording " << options.channels << " into " << logger.current_part()
               << " (sidecar " << logger.sidecar_path() << ")" << std::endl;
-    logger.Run(&g_stop);
+    logger.Run(stop);
     return 0;
   });
 }

@@ -16,6 +16,7 @@
 
 #include "core/files.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "mcmt/detections_t.hpp"
 
 namespace mcmt {
@@ -65,17 +66,27 @@ void LoggerOptions::Validate() const {
     throw std::invalid_argument("--out: '" + out + "' would be its own sidecar; use .lcmlog");
 }
 
+const OptionTable<LoggerOptions>& LoggerOptionTable() {
+  using O = LoggerOptions;
+  static const OptionTable<O>* table =
+      &(*new OptionTable<O>("logger"))
+           .Add("channels", &O::channels, "LCM channel regex recorded (--channels overrides)", NotEmpty())
+           .Add("split_mb", &O::split_mb, "MB", "start a new part at this size (0: never)", AtLeast(0))
+           .Add("split_minutes", &O::split_minutes, "min", "start a new part after this long (0: never)",
+                AtLeast(0))
+           .Add("flush_ms", &O::flush_ms, "ms", "write + fdatasync interval", InRange(1, 60000))
+           .Add("fsync", &O::fsync, "fdatasync at every flush (survives power loss, not only a crash)")
+           .Add("queue_capacity", &O::queue_capacity, "messages", "LCM subscription queue (0: unlimited)",
+                AtLeast(0))
+           .Add("max_unwritten_mb", &O::max_unwritten_mb, "MB",
+                "writer backlog above which messages are dropped", Above(0))
+           .Add("status_seconds", &O::status_seconds, "s", "status line interval on stderr (0: none)",
+                AtLeast(0));
+  return *table;
+}
+
 void LoadLoggerOptions(const YamlSection& section, LoggerOptions* options) {
-  section.CheckKnownKeys({"channels", "split_mb", "split_minutes", "flush_ms", "fsync", "queue_capacity",
-                          "max_unwritten_mb", "status_seconds"});
-  options->channels = section.GetString("channels", options->channels);
-  options->split_mb = section.GetDouble("split_mb", options->split_mb);
-  options->split_minutes = section.GetDouble("split_minutes", options->split_minutes);
-  options->flush_ms = section.GetInt("flush_ms", options->flush_ms);
-  options->fsync = section.GetBool("fsync", options->fsync);
-  options->queue_capacity = section.GetInt("queue_capacity", options->queue_capacity);
-  options->max_unwritten_mb = section.GetDouble("max_unwritten_mb", options->max_unwritten_mb);
-  options->status_seconds = section.GetDouble("status_seconds", options->status_seconds);
+  LoggerOptionTable().Load(section, options);
 }
 
 std::string WithReceiveBuffer(const std::string& url, long long bytes) {
@@ -321,7 +332,7 @@ std::string SessionLogger::StatusLine(double rate) const {
   return line;
 }
 
-SessionStats SessionLogger::Run(const std::atomic<bool>* stop) {
+SessionStats SessionLogger::Run(const StopToken& stop) {
   writer_thread_ = std::thread(&SessionLogger::WriterLoop, this);
   const bool from_file = options_.lcm_url.rfind("file://", 0) == 0;
   const int64_t start = SteadyUs();
@@ -331,7 +342,7 @@ SessionStats SessionLogger::Run(const std::atomic<bool>* stop) {
   int consecutive_errors = 0;
   std::string error;
   for (;;) {
-    if (stop && stop->load()) break;
+    if (stop.stop_requested()) break;
     const int64_t now = SteadyUs();
     if (options_.max_seconds > 0 && static_cast<double>(now - start) >= options_.max_seconds * 1e6) break;
     {
@@ -358,7 +369,7 @@ SessionStats SessionLogger::Run(const std::atomic<bool>* stop) {
     const int r = lcm_.handleTimeout(50);
     if (r < 0) {
       if (from_file) break;
-      if (stop && stop->load()) break;
+      if (stop.stop_requested()) break;
       if (++consecutive_errors > 200) {
         error = "LCM stopped delivering messages (handle failed repeatedly)";
         break;

@@ -26,7 +26,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
+#include "core/stop.h"
 
 namespace mcmt {
 
@@ -49,9 +50,12 @@ struct LoggerOptions {
   void Validate() const;  // throws std::invalid_argument naming the option
 };
 
-// Reads the optional `logger:` section of a rig YAML (keys: channels, split_mb, split_minutes, flush_ms,
-// fsync, queue_capacity, max_unwritten_mb, status_seconds). Unknown keys throw naming file and key.
+// Reads the optional `logger:` section of a rig YAML (keys declared in LoggerOptionTable). Unknown keys and
+// bad values throw OptionError naming file and key.
 void LoadLoggerOptions(const YamlSection& section, LoggerOptions* options);
+template <class T>
+class OptionTable;
+const OptionTable<LoggerOptions>& LoggerOptionTable();
 
 // A udpm URL (empty: $LCM_DEFAULT_URL, else LCM's default udpm URL) with recv_buf_size=bytes added when it
 // has none: the kernel's default socket buffer (~200 kB) overflows within milliseconds at image rates.
@@ -106,7 +110,7 @@ class SessionLogger {
 
   // Handles LCM traffic until *stop becomes true, max_seconds pass or max_messages were recorded; then
   // drains the queue, closes the log and writes the final sidecar. Returns the final statistics.
-  SessionStats Run(const std::atomic<bool>* stop);
+  SessionStats Run(const StopToken& stop);
 
   const LoggerOptions& options() const { return options_; }
   std::string sidecar_path() const { return SidecarPath(options_.out); }

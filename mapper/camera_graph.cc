@@ -107,7 +107,7 @@ std::string WhyNotPlaced(int c, const CameraPlacement& placement, const Observat
     msg << "camera '" << name << "' cannot be placed: in none of the " << placement.views[c]
         << " frames where it sees the object does a camera connected to the reference '"
         << names[placement.reference] << "' (" << JoinNames(placed_names) << ") see it too (sync tolerance "
-        << o.sync_tolerance_us / 1000.0 << " ms); record frames where '" << name
+        << o.sync_tolerance_ms << " ms); record frames where '" << name
         << "' and one of those cameras see the object at the same time";
   }
   return msg.str();

@@ -8,13 +8,12 @@
 #include "core/cli.h"
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "mapper/out_folder.h"
 
 namespace {
-
-void OnSignal(int) { mcmt::MapperNode::StopFlag().store(true); }
 
 int Run(int argc, char** argv) {
   std::string config, log, out, lcm_url, reference_camera;
@@ -54,6 +53,8 @@ int Run(int argc, char** argv) {
       "examples:\n"
       "  mcmt-mapper --config rig.yaml --log session.lcmlog --out map/\n"
       "  mcmt-mapper --config rig.yaml --out map/ --seconds 60\n");
+  args.SetConfigHelp("### mapper\n\n" + mcmt::MapperOptionTable().Markdown() + "\n### sync\n\n" +
+                     mcmt::SyncOptionTable().Markdown());
   int code = 0;
   if (!args.Parse(argc, argv, &code)) return code;
 
@@ -80,6 +81,7 @@ int Run(int argc, char** argv) {
     node_options.rig_image_sizes[c.name] = {c.model.width, c.model.height};
   node_options.max_frames = frames;
   node_options.max_seconds = seconds;
+  node_options.stop = mcmt::StopOnSignals({SIGINT, SIGTERM, SIGUSR1});
   std::unique_ptr<lcm::LCM> input, output;
   if (!log.empty()) {
     if (access(log.c_str(), R_OK) != 0) throw std::runtime_error("cannot read log " + log);
@@ -96,16 +98,8 @@ int Run(int argc, char** argv) {
   lcm::LCM* out_lcm = output ? output.get() : (log.empty() ? input.get() : nullptr);
   mcmt::MapperNode node(*input, out_lcm, mapper, node_options, std::cerr);
 
-  struct sigaction action = {};
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-  sigaction(SIGUSR1, &action, nullptr);
   const std::string reason = node.Collect();
-  // A second Ctrl-C during the solve ends the process.
-  signal(SIGINT, SIG_DFL);
-  signal(SIGTERM, SIG_DFL);
+  mcmt::DefaultSignals();  // a second Ctrl-C during the solve ends the process
   std::cerr << "collected " << mapper.NumMessages() << " detections messages (" << reason << ")\n";
   if (mapper.NumMessages() == 0)
     throw std::runtime_error(log.empty() ? "no detections received on MCMT_DETECTIONS_*"

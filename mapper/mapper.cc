@@ -17,144 +17,6 @@
 namespace mcmt {
 
 // ---------------------------------------------------------------------------------------------
-// Options
-
-namespace {
-
-// mapper.refine_intrinsics, refine_intrinsics_cameras, intrinsics_sigma {focal_rel, center_px, radial,
-// tangential}, observability_ratio.
-void ReadIntrinsicsSettings(const RigConfig& rig, IntrinsicsSettings* out) {
-  const YamlSection& s = rig.mapper;
-  try {
-    out->refine = IntrinsicsRefinementFromName(s.GetString("refine_intrinsics", "none"));
-  } catch (const std::invalid_argument& e) {
-    s.Fail("refine_intrinsics", e.what());
-  }
-  if (s.Has("refine_intrinsics_cameras")) {
-    const YAML::Node list = s.node()["refine_intrinsics_cameras"];
-    if (!list.IsSequence()) s.Fail("refine_intrinsics_cameras", "expected a list of camera names");
-    for (const YAML::Node& n : list) {
-      const std::string name = n.as<std::string>();
-      if (!rig.FindCamera(name)) s.Fail("refine_intrinsics_cameras", "no camera named '" + name + "'");
-      out->cameras.push_back(name);
-    }
-  }
-  const YamlSection sigma = s.Child("intrinsics_sigma");
-  sigma.CheckKnownKeys({"focal_rel", "center_px", "radial", "tangential"});
-  out->sigma.focal_rel = sigma.GetPositiveDouble("focal_rel", out->sigma.focal_rel);
-  out->sigma.center_px = sigma.GetPositiveDouble("center_px", out->sigma.center_px);
-  out->sigma.radial = sigma.GetPositiveDouble("radial", out->sigma.radial);
-  out->sigma.tangential = sigma.GetPositiveDouble("tangential", out->sigma.tangential);
-  out->observability_ratio = s.GetPositiveDouble("observability_ratio", out->observability_ratio);
-  if (!(out->observability_ratio <= 1)) s.Fail("observability_ratio", "must be in (0, 1]");
-}
-
-}  // namespace
-
-MapperOptions MapperOptions::FromConfig(const RigConfig& rig) {
-  MapperOptions o;
-  const YamlSection& s = rig.mapper;
-  s.CheckKnownKeys({"tau_e",
-                    "tau_n",
-                    "huber_px",
-                    "outlier_px",
-                    "max_rejection_rounds",
-                    "max_iterations",
-                    "paper_stop",
-                    "paper_stop_px",
-                    "threads",
-                    "linear_solver",
-                    "refine",
-                    "reference_camera",
-                    "reference_marker",
-                    "allow_partial",
-                    "min_marker_support",
-                    "marker_inlier_fraction",
-                    "consistency_deg",
-                    "consistency_m",
-                    "consistency_rel",
-                    "marker_reject_fraction",
-                    "max_pair_events",
-                    "continuity_gap_s",
-                    "refine_intrinsics",
-                    "refine_intrinsics_cameras",
-                    "intrinsics_sigma",
-                    "observability_ratio",
-                    "time_offsets",
-                    "max_time_offset_ms"});
-  o.tau_e = s.GetPositiveDouble("tau_e", o.tau_e);
-  o.tau_n = s.GetPositiveDouble("tau_n", o.tau_n);
-  o.huber_px = s.GetDouble("huber_px", o.huber_px);
-  o.outlier_px = s.GetPositiveDouble("outlier_px", o.outlier_px);
-  o.max_rejection_rounds = s.GetInt("max_rejection_rounds", o.max_rejection_rounds);
-  o.max_iterations = s.GetInt("max_iterations", o.max_iterations);
-  o.paper_stop = s.GetBool("paper_stop", o.paper_stop);
-  o.paper_stop_px = s.GetPositiveDouble("paper_stop_px", o.paper_stop_px);
-  o.threads = s.GetInt("threads", o.threads);
-  o.linear_solver = s.GetString("linear_solver", o.linear_solver);
-  o.refine = s.GetBool("refine", o.refine);
-  o.reference_camera = rig.reference_camera;
-  o.reference_marker = s.GetInt("reference_marker", o.reference_marker);
-  o.allow_partial = s.GetBool("allow_partial", o.allow_partial);
-  o.min_marker_support = s.GetInt("min_marker_support", o.min_marker_support);
-  o.marker_inlier_fraction = s.GetDouble("marker_inlier_fraction", o.marker_inlier_fraction);
-  o.consistency_deg = s.GetPositiveDouble("consistency_deg", o.consistency_deg);
-  o.consistency_m = s.GetDouble("consistency_m", o.consistency_m);
-  o.consistency_rel = s.GetDouble("consistency_rel", o.consistency_rel);
-  o.marker_reject_fraction = s.GetDouble("marker_reject_fraction", o.marker_reject_fraction);
-  o.max_pair_events = s.GetInt("max_pair_events", o.max_pair_events);
-  o.continuity_gap_s = s.GetDouble("continuity_gap_s", o.continuity_gap_s);
-  ReadIntrinsicsSettings(rig, &o.intrinsics);
-  o.estimate_time_offsets = s.GetBool("time_offsets", o.estimate_time_offsets);
-  o.max_time_offset_ms = s.GetPositiveDouble("max_time_offset_ms", o.max_time_offset_ms);
-  if (rig.sync.Has("tolerance_ms"))
-    o.sync_tolerance_us =
-        static_cast<int64_t>(std::llround(rig.sync.GetPositiveDouble("tolerance_ms", 2.0) * 1000));
-  for (const CameraConfig& c : rig.cameras) o.cameras.push_back(c.name);
-  o.marker_ids = rig.markers.ids;
-  o.sizes = rig.markers.Sizes();
-  o.dictionary = rig.markers.dictionary;
-  auto fail = [&](const std::string& key, const std::string& what) { s.Fail(key, what); };
-  if (o.max_iterations < 1) fail("max_iterations", "must be at least 1");
-  if (o.threads < 0) fail("threads", "must be >= 0 (0: all cores)");
-  if (o.max_rejection_rounds < 0) fail("max_rejection_rounds", "must be >= 0");
-  if (o.min_marker_support < 1) fail("min_marker_support", "must be at least 1");
-  if (o.max_pair_events < 10) fail("max_pair_events", "must be at least 10");
-  if (!(o.continuity_gap_s >= 0)) fail("continuity_gap_s", "must be >= 0 (0: no continuity)");
-  if (!(o.marker_inlier_fraction >= 0 && o.marker_inlier_fraction <= 1))
-    fail("marker_inlier_fraction", "must be in [0, 1]");
-  if (!(o.marker_reject_fraction > 0 && o.marker_reject_fraction <= 1))
-    fail("marker_reject_fraction", "must be in (0, 1]");
-  static const std::set<std::string> solvers = {"auto", "sparse_schur", "dense_schur", "iterative_schur"};
-  if (!solvers.count(o.linear_solver))
-    fail("linear_solver",
-         "unknown '" + o.linear_solver + "' (auto, sparse_schur, dense_schur, iterative_schur)");
-  if (!o.reference_camera.empty() && !rig.FindCamera(o.reference_camera))
-    fail("reference_camera", "no camera named '" + o.reference_camera + "'");
-  if (o.reference_marker >= 0 && !o.marker_ids.empty() &&
-      std::find(o.marker_ids.begin(), o.marker_ids.end(), o.reference_marker) == o.marker_ids.end())
-    fail("reference_marker", std::to_string(o.reference_marker) + " is not in markers.ids");
-  o.Validate();
-  return o;
-}
-
-void MapperOptions::Validate() const {
-  auto bad = [](const std::string& what) { throw ConfigError("mapper options: " + what); };
-  if (!(tau_e >= 1.0)) bad("tau_e must be >= 1");
-  if (!(tau_n > 0)) bad("tau_n must be positive");
-  if (!(outlier_px > 0)) bad("outlier_px must be positive");
-  if (max_iterations < 1) bad("max_iterations must be at least 1");
-  if (sync_tolerance_us < 0) bad("sync tolerance must be >= 0");
-  if (!(continuity_gap_s >= 0)) bad("continuity_gap_s must be >= 0");
-  if (!(sizes.default_size > 0)) {
-    bool all_overridden = !marker_ids.empty();
-    for (int id : marker_ids)
-      if (!(sizes.Get(id) > 0)) all_overridden = false;
-    if (!all_overridden) bad("markers.size must be positive");
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
 // Internals
 
 namespace {
@@ -312,7 +174,7 @@ std::vector<CameraCollectStats> Mapper::CollectStats() const {
   // Cameras joined by frames in which both see a marker of the object.
   std::vector<GraphEdge> edges;
   std::set<std::pair<int, int>> joined;
-  for (const Frame& f : AssembleFrames(s.messages, n, options_.sync_tolerance_us)) {
+  for (const Frame& f : AssembleFrames(s.messages, n, options_.sync_tolerance_us())) {
     std::vector<int> seeing;
     for (int i : f.messages) {
       bool any = false;
@@ -366,7 +228,7 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
 
   log.Begin("frames", "assembling frames");
   const std::vector<Frame> frames =
-      AssembleFrames(messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us);
+      AssembleFrames(messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us());
   report.frames_assembled = static_cast<int>(frames.size());
   Observations observations = CollectObservations(messages, frames, s.camera_names, o, &report);
   log.End("frames");
@@ -464,8 +326,7 @@ int64_t SecondPassWindowUs(const std::vector<StoredMessage>& raw, const std::vec
 MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const SolveInputs& s,
                                const MapperOptions& o) {
   MapperOptions first_options = o;
-  first_options.sync_tolerance_us =
-      std::max(o.sync_tolerance_us, static_cast<int64_t>(std::llround(o.max_time_offset_ms * 1000)));
+  first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   const MapResult first = SolvePass(messages, s, first_options);
   std::map<std::string, double> offset_us;
   for (const MapCamera& c : first.map.cameras) offset_us[c.name] = c.time_offset_us;
@@ -476,12 +337,13 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   }
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
-  second_options.sync_tolerance_us =
+  const int64_t second_window_us =
       SecondPassWindowUs(messages, corrected, static_cast<int>(s.camera_names.size()),
-                         first_options.sync_tolerance_us, o.sync_tolerance_us);
+                         first_options.sync_tolerance_us(), o.sync_tolerance_us());
+  second_options.sync_tolerance_ms = 1e-3 * static_cast<double>(second_window_us);
   std::ostringstream worse;
   MapResult result;
-  if (second_options.sync_tolerance_us == 0) {
+  if (second_window_us == 0) {
     worse << "would spread the frames further";
   } else {
     try {

@@ -9,6 +9,7 @@
 //   mcmt::WriteMapOutputs("out", result);          // map.yaml, trajectory.csv, report.json, *_initial
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -97,8 +98,10 @@ struct MapperOptions {
   std::string reference_camera;
   int reference_marker = -1;
 
-  // Frames: detections whose utime lies within this of a frame's first detection join it.
-  int64_t sync_tolerance_us = 2000;
+  // Frames: detections whose utime lies within this of a frame's first detection join it (the rig's
+  // sync.tolerance_ms).
+  double sync_tolerance_ms = 2.0;
+  int64_t sync_tolerance_us() const { return static_cast<int64_t>(std::llround(sync_tolerance_ms * 1000.0)); }
   // Map the connected part instead of failing on a camera or marker that cannot be connected.
   bool allow_partial = false;
 
@@ -126,11 +129,17 @@ struct MapperOptions {
   MarkerSizes sizes;
   std::string dictionary;
 
-  // Reads the rig's `mapper:` section (keys as the fields above) and `sync: {tolerance_ms}`; throws
-  // ConfigError naming the file and key.
+  // Reads the rig's `mapper:` section (keys as the fields above, declared in mapper/options.cc) and
+  // `sync: {tolerance_ms}`; throws OptionError naming the file and key.
   static MapperOptions FromConfig(const RigConfig& rig);
-  void Validate() const;  // throws ConfigError
+  // The same checks as FromConfig, for options built in code (file empty) or read from `file`.
+  void Validate(const std::string& file = "") const;  // throws OptionError
 };
+
+// Every `mapper:` key: name, member, unit, check, help (loading, validation and docs).
+template <class T>
+class OptionTable;
+const OptionTable<MapperOptions>& MapperOptionTable();
 
 // Progress for status messages and terminal bars.
 struct MapperProgress {

@@ -18,11 +18,6 @@
 
 namespace mcmt {
 
-std::atomic<bool>& MapperNode::StopFlag() {
-  static std::atomic<bool> flag{false};
-  return flag;
-}
-
 MapperNode::MapperNode(lcm::LCM& input, lcm::LCM* output, Mapper& mapper, MapperNodeOptions options,
                        std::ostream& log)
     : input_(input), output_(output), mapper_(mapper), options_(std::move(options)), log_(log) {
@@ -136,7 +131,7 @@ std::string MapperNode::CollectFromLog() {
     item.channel = e.channel;
     item.bytes = e.data;
     if (Decode(e.channel, e.data.data(), e.data.size(), &item.msg)) items.push_back(std::move(item));
-    return !StopFlag().load();
+    return !options_.stop.stop_requested();
   });
   if (reading) reading->Finish();
   // Capture-time order (then camera, seq, bytes): the same result whatever the order of the events.
@@ -147,7 +142,7 @@ std::string MapperNode::CollectFromLog() {
   std::string reason = "end of log";
   for (Item& item : items) {
     if (LimitReached(&reason, first_utime_ == INT64_MIN ? 0.0 : (last_utime_ - first_utime_) * 1e-6)) break;
-    if (StopFlag().load()) {
+    if (options_.stop.stop_requested()) {
       reason = "signal";
       break;
     }
@@ -243,7 +238,7 @@ std::string MapperNode::Collect() {
     const auto start = Clock::now();
     auto last_progress = start;
     for (;;) {
-      if (StopFlag().load()) {
+      if (options_.stop.stop_requested()) {
         reason = "signal";
         break;
       }
@@ -254,7 +249,7 @@ std::string MapperNode::Collect() {
       if (LimitReached(&reason, std::chrono::duration<double>(Clock::now() - start).count())) break;
       if (input_.handleTimeout(50) < 0) {
         // A signal (SIGINT/SIGTERM/SIGUSR1: solve) interrupts the wait: the loop's top decides.
-        if (errno == EINTR || StopFlag().load()) continue;
+        if (errno == EINTR || options_.stop.stop_requested()) continue;
         throw std::runtime_error(std::string("LCM receive failed: ") + std::strerror(errno));
       }
       const auto now = Clock::now();

@@ -8,7 +8,6 @@
 // so the result never depends on it.
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <iosfwd>
 #include <lcm/lcm-cpp.hpp>
@@ -19,6 +18,7 @@
 
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "core/stop.h"
 #include "mapper/mapper.h"
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
@@ -36,6 +36,7 @@ struct MapperNodeOptions {
   double progress_period_s = 1.0;
   // Image size per camera from the rig's intrinsics files: detections of another size are warned about.
   std::map<std::string, std::pair<int, int>> rig_image_sizes;
+  StopToken stop;  // stop collecting and solve when requested (mcmt-mapper: SIGINT, SIGTERM, SIGUSR1)
 };
 
 class MapperNode {
@@ -50,9 +51,6 @@ class MapperNode {
   std::string Collect();
   // Solves, writes the files, publishes the map. Throws MapperError (after publishing STATE_FAILED).
   MapResult SolveWriteAndPublish();
-
-  // Set from signal handlers (SIGINT, SIGTERM, SIGUSR1): stop collecting and solve.
-  static std::atomic<bool>& StopFlag();
 
   int bad_messages() const { return bad_messages_; }
   int64_t duplicates() const { return duplicates_.count(); }

@@ -1,6 +1,5 @@
 // mcmt-tracker: publishes the object's pose (object_pose_t on MCMT_POSE) from the detections of the
 // mapped cameras, live or from a log.
-#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -11,21 +10,10 @@
 #include "core/config.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "tracker/tracker.h"
 
 namespace {
-
-volatile bool g_stop = false;
-void OnSignal(int) { g_stop = true; }
-
-void InstallSignalHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = OnSignal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;  // no SA_RESTART: a blocking receive returns on the signal
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
 
 int Main(int argc, char** argv) {
   std::string config, map_path, log_path, out_path, lcm_url, channel;
@@ -61,6 +49,8 @@ int Main(int argc, char** argv) {
       "  mcmt-tracker --config rig.yaml --map out/map.yaml --log session.lcmlog --out poses.csv\n"
       "  mcmt-tracker --config rig.yaml --lcm-url 'udpm://239.255.76.67:7667?ttl=1'   # waits for "
       "MCMT_MAP\n");
+  args.SetConfigHelp("### tracker\n\n" + mcmt::TrackerOptionTable().Markdown() + "\n### sync\n\n" +
+                     mcmt::SyncOptionTable().Markdown());
   int exit_code = 0;
   if (!args.Parse(argc, argv, &exit_code)) return exit_code;
 
@@ -90,7 +80,7 @@ int Main(int argc, char** argv) {
   } else {
     input = mcmt::OpenLcm(live_url);
   }
-  InstallSignalHandlers();
+  const mcmt::StopToken stop = mcmt::StopOnSignals();
   mcmt::TrackerNode node(*input, rig, options, map, output.get());
   if (!quiet)  // subscribed from here on (tests wait for this line)
     std::cerr << "mcmt-tracker: ready, " << (map ? "" : "waiting for MCMT_MAP, ") << "poses on "
@@ -99,9 +89,9 @@ int Main(int argc, char** argv) {
               << std::endl;
   mcmt::LogReadReport report;
   if (options.log_mode)
-    report = node.RunLog(log_path, &g_stop);
+    report = node.RunLog(log_path, stop);
   else
-    node.Run(&g_stop);
+    node.Run(stop);
   if (!out_path.empty()) {
     mcmt::WriteTrajectory(out_path, node.trajectory());
     std::remove(options.partial_path.c_str());

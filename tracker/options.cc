@@ -1,4 +1,6 @@
 // TrackerOptions from the rig YAML, map/rig consistency, constant-velocity motion model.
+#include "core/options.h"
+
 #include <sstream>
 #include <stdexcept>
 
@@ -6,61 +8,58 @@
 
 namespace mcmt {
 
+const OptionTable<TrackerOptions>& TrackerOptionTable() {
+  using O = TrackerOptions;
+  static const OptionTable<O>* table =
+      &(*new OptionTable<O>("tracker"))
+           .Add("channel", &O::channel, "output channel of object_pose_t", NotEmpty())
+           .Add("object", &O::object, "object name put in object_pose_t")
+           .Add("deadline_ms", &O::deadline_ms, "ms",
+                "solve a frame at the latest this long after its first detection "
+                "(default: sync.deadline_ms)",
+                Above(0))
+           .Add("sync_tolerance_ms", &O::sync_tolerance_ms, "ms",
+                "detections this close in utime form one frame (default: sync.tolerance_ms)", AtLeast(0))
+           .Add("camera_timeout_s", &O::camera_timeout_s, "s",
+                "a camera silent this long is not waited for (default: sync.camera_timeout_s)", Above(0))
+           .Add("max_wait_ms", &O::max_wait_ms, "ms",
+                "live: a frame missing a lagging camera waits for it up to this long (0: only deadline_ms)",
+                AtLeast(0))
+           .Add("max_clock_jump_s", &O::max_clock_jump_s, "s",
+                "a message this far ahead of its camera's clock is rejected (0: no check)", AtLeast(0))
+           .Add("max_iterations", &O::max_iterations, "", "Levenberg-Marquardt iterations per start",
+                AtLeast(1))
+           .Add("huber_px", &O::huber_px, "px", "Huber threshold of the robust loss (corner distance)",
+                Above(0))
+           .Add("outlier_px", &O::outlier_px, "px",
+                "a marker observation whose RMS corner error exceeds this is dropped", Above(0))
+           .Add("ambiguity_ratio", &O::ambiguity_ratio, "",
+                "tau_e: a single square with IPPE ratio below it is ambiguous", AtLeast(1))
+           .Add("max_gap_s", &O::max_gap_s, "s", "no prediction across a longer gap (re-initialise)",
+                Above(0))
+           .Add("min_sigma_px", &O::min_sigma_px, "px",
+                "floor of the residual standard deviation of the covariance", AtLeast(0))
+           .Add("max_start_markers", &O::max_start_markers, "",
+                "when lost: IPPE hypotheses of at most this many "
+                "observations",
+                AtLeast(1))
+           .Add("status_period_s", &O::status_period_s, "s", "status line period, wall time (0: none)",
+                AtLeast(0));
+  return *table;
+}
+
 TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   TrackerOptions o;
-  const YamlSection& s = rig.tracker;
-  s.CheckKnownKeys({"channel", "object", "deadline_ms", "sync_tolerance_ms", "camera_timeout_s",
-                    "max_iterations", "huber_px", "outlier_px", "ambiguity_ratio", "max_gap_s",
-                    "min_sigma_px", "max_start_markers", "status_period_s", "max_clock_jump_s",
-                    "max_wait_ms"});
-  o.channel = s.GetString("channel", o.channel);
-  o.object = s.GetString("object", o.object);
-  // The shared sync: section (also read by the mapper) gives the defaults; tracker: keys override.
-  if (rig.sync.Has("tolerance_ms"))
-    o.sync_tolerance_ms = rig.sync.GetDouble("tolerance_ms", o.sync_tolerance_ms);
-  if (rig.sync.Has("deadline_ms")) o.deadline_ms = rig.sync.GetPositiveDouble("deadline_ms", o.deadline_ms);
-  if (rig.sync.Has("camera_timeout_s"))
-    o.camera_timeout_s = rig.sync.GetPositiveDouble("camera_timeout_s", o.camera_timeout_s);
-  o.sync_tolerance_ms = s.GetDouble("sync_tolerance_ms", o.sync_tolerance_ms);
-  o.deadline_ms = s.GetPositiveDouble("deadline_ms", o.deadline_ms);
-  o.camera_timeout_s = s.GetPositiveDouble("camera_timeout_s", o.camera_timeout_s);
-  o.max_wait_ms = s.GetDouble("max_wait_ms", o.max_wait_ms);
-  o.max_clock_jump_s = s.GetDouble("max_clock_jump_s", o.max_clock_jump_s);
-  o.max_iterations = s.GetInt("max_iterations", o.max_iterations);
-  o.huber_px = s.GetPositiveDouble("huber_px", o.huber_px);
-  o.outlier_px = s.GetPositiveDouble("outlier_px", o.outlier_px);
-  o.ambiguity_ratio = s.GetDouble("ambiguity_ratio", o.ambiguity_ratio);
-  o.max_gap_s = s.GetPositiveDouble("max_gap_s", o.max_gap_s);
-  o.min_sigma_px = s.GetDouble("min_sigma_px", o.min_sigma_px);
-  o.max_start_markers = s.GetInt("max_start_markers", o.max_start_markers);
-  o.status_period_s = s.GetDouble("status_period_s", o.status_period_s);
-  try {
-    o.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(rig.path + ": tracker." + e.what());
-  }
+  // The shared sync: section gives the defaults; tracker: keys override.
+  const SyncOptions sync = LoadSyncOptions(rig);
+  o.sync_tolerance_ms = sync.tolerance_ms;
+  o.deadline_ms = sync.deadline_ms;
+  o.camera_timeout_s = sync.camera_timeout_s;
+  TrackerOptionTable().Load(rig.tracker, &o);
   return o;
 }
 
-void TrackerOptions::Validate() const {
-  auto fail = [](const std::string& key, const std::string& what) {
-    throw std::invalid_argument(key + ": " + what);
-  };
-  if (channel.empty()) fail("channel", "must not be empty");
-  if (!(deadline_ms > 0)) fail("deadline_ms", "must be > 0");
-  if (!(sync_tolerance_ms >= 0)) fail("sync_tolerance_ms", "must be >= 0");
-  if (!(camera_timeout_s > 0)) fail("camera_timeout_s", "must be > 0");
-  if (!(max_wait_ms >= 0)) fail("max_wait_ms", "must be >= 0 (0: only deadline_ms)");
-  if (!(max_clock_jump_s >= 0)) fail("max_clock_jump_s", "must be >= 0 (0: no clock check)");
-  if (max_iterations < 1) fail("max_iterations", "must be >= 1");
-  if (!(huber_px > 0)) fail("huber_px", "must be > 0");
-  if (!(outlier_px > 0)) fail("outlier_px", "must be > 0");
-  if (!(ambiguity_ratio >= 1)) fail("ambiguity_ratio", "must be >= 1");
-  if (!(max_gap_s > 0)) fail("max_gap_s", "must be > 0");
-  if (!(min_sigma_px >= 0)) fail("min_sigma_px", "must be >= 0");
-  if (max_start_markers < 1) fail("max_start_markers", "must be >= 1");
-  if (!(status_period_s >= 0)) fail("status_period_s", "must be >= 0");
-}
+void TrackerOptions::Validate() const { TrackerOptionTable().Check(*this); }
 
 void CheckMapMatchesRig(const RigMap& map, const RigConfig& rig, const std::string& map_name) {
   for (const auto& c : map.cameras) {

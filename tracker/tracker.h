@@ -30,6 +30,7 @@
 #include "core/marker.h"
 #include "core/rigid_pose.h"
 #include "core/se3.h"
+#include "core/stop.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/rig_map_t.hpp"
@@ -61,9 +62,14 @@ struct TrackerOptions {
   int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
   double status_period_s = 5.0;  // status line period (wall time); 0: none
 
-  static TrackerOptions FromConfig(const RigConfig& rig);  // throws ConfigError naming file and key
-  void Validate() const;                                   // throws std::invalid_argument
+  // Keys declared once in tracker/options.cc (TrackerOptionTable); the sync: section gives the defaults of
+  // deadline_ms, sync_tolerance_ms and camera_timeout_s.
+  static TrackerOptions FromConfig(const RigConfig& rig);  // throws OptionError naming file and key
+  void Validate() const;  // the same checks for options built in code; throws OptionError naming the key
 };
+template <class T>
+class OptionTable;
+const OptionTable<TrackerOptions>& TrackerOptionTable();
 
 // One marker seen by one camera in the frame being solved.
 struct MarkerObservation {
@@ -211,12 +217,12 @@ class TrackerNode {
   TrackerNode(const TrackerNode&) = delete;
   TrackerNode& operator=(const TrackerNode&) = delete;
 
-  // Handles messages until *stop is set or (log mode) the log ends; then solves what is pending.
-  void Run(const volatile bool* stop);
+  // Handles messages until stop is requested or (log mode) the log ends; then solves what is pending.
+  void Run(const StopToken& stop);
   // Log mode: reads the log with core's reader (damage skipped and reported) and tracks its frames in
   // capture-time order whatever the order of the events (the detections between two maps of the log
   // are sorted by utime, camera, seq); then solves what is pending.
-  LogReadReport RunLog(const std::string& path, const volatile bool* stop);
+  LogReadReport RunLog(const std::string& path, const StopToken& stop);
   // Solves and publishes every pending frame (end of a log, or shutdown).
   void Flush();
   // Solves frames whose deadline passed (live mode; called by Run).

@@ -362,7 +362,7 @@ void TrackerNode::MaybePrintStatus() {
   status_frames_ = status_tracked_ = 0;
 }
 
-LogReadReport TrackerNode::RunLog(const std::string& path, const volatile bool* stop) {
+LogReadReport TrackerNode::RunLog(const std::string& path, const StopToken& stop) {
   struct Item {
     int64_t utime = 0, seq = 0;
     std::string camera, channel;
@@ -394,7 +394,7 @@ LogReadReport TrackerNode::RunLog(const std::string& path, const volatile bool* 
       track_segment();
       OnMap(e.data.data(), e.data.size());
     }
-    return !*stop;
+    return !stop.stop_requested();
   });
   track_segment();
   Flush();
@@ -403,16 +403,16 @@ LogReadReport TrackerNode::RunLog(const std::string& path, const volatile bool* 
   return report;
 }
 
-void TrackerNode::Run(const volatile bool* stop) {
+void TrackerNode::Run(const StopToken& stop) {
   if (options_.log_mode) {
-    while (!*stop) {
+    while (!stop.stop_requested()) {
       if (lcm_.handle() < 0) break;  // end of the log
     }
   } else {
-    while (!*stop) {
+    while (!stop.stop_requested()) {
       const int r = lcm_.handleTimeout(2);
       if (r < 0) {
-        if (*stop) break;
+        if (stop.stop_requested()) break;
         throw std::runtime_error("LCM receive failed");
       }
       Poll();

@@ -7,6 +7,7 @@
 #include "core/cli.h"
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "viz/viewer.h"
 
 int main(int argc, char** argv) {
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
         "  mcmt-viz --log session.lcmlog --video frames/   (then: ffmpeg -framerate 30 -i "
         "frames/frame_%06d.png session.mp4)\n"
         "  mcmt-viz --lcm-url udpm://239.255.76.67:7667?ttl=0          (live window)\n");
+    args.SetConfigHelp("### viz\n\n" + mcmt::viz::VizOptionTable().Markdown());
     int exit_code = 0;
     if (!args.Parse(argc, argv, &exit_code)) return exit_code;
     // Defaults from the rig YAML, then the command line again on top.

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "core/options.h"
 #include "core/progress.h"
 
 namespace mcmt::viz {
@@ -55,21 +56,31 @@ void ViewerOptions::Validate() const {
     throw std::invalid_argument("--initial-trajectory needs --initial-map");
 }
 
-void LoadVizSection(const YamlSection& s, ViewerOptions* o) {
-  s.CheckKnownKeys({"width", "height", "rays", "legend", "residual_scale_px", "trail_max", "azimuth_deg",
-                    "elevation_deg", "fov_deg", "redraw_hz", "follow"});
-  o->scene.width = s.GetInt("width", o->scene.width);
-  o->scene.height = s.GetInt("height", o->scene.height);
-  o->scene.rays = s.GetBool("rays", o->scene.rays);
-  o->scene.legend = s.GetBool("legend", o->scene.legend);
-  o->scene.residual_scale_px = s.GetDouble("residual_scale_px", o->scene.residual_scale_px);
-  o->scene.trail_max = s.GetInt("trail_max", o->scene.trail_max);
-  o->scene.azimuth_deg = s.GetDouble("azimuth_deg", o->scene.azimuth_deg);
-  o->scene.elevation_deg = s.GetDouble("elevation_deg", o->scene.elevation_deg);
-  o->scene.fov_deg = s.GetDouble("fov_deg", o->scene.fov_deg);
-  o->redraw_hz = s.GetPositiveDouble("redraw_hz", o->redraw_hz);
-  o->follow = s.GetBool("follow", o->follow);
+const OptionTable<ViewerOptions>& VizOptionTable() {
+  using O = ViewerOptions;
+  using S = SceneOptions;
+  using T = OptionTable<O>;
+  static const T* table =
+      &(*new T("viz"))
+           .Add("width", T::Of(&O::scene, &S::width), "px", "window / image width", InRange(16, 16384))
+           .Add("height", T::Of(&O::scene, &S::height), "px", "window / image height", InRange(16, 16384))
+           .Add("rays", T::Of(&O::scene, &S::rays), "rays camera -> markers seen in the current frame")
+           .Add("legend", T::Of(&O::scene, &S::legend), "the legend")
+           .Add("residual_scale_px", T::Of(&O::scene, &S::residual_scale_px), "px",
+                "residual colours: red at and above, green at and below a quarter (0: the largest RMS shown)",
+                AtLeast(0))
+           .Add("trail_max", T::Of(&O::scene, &S::trail_max), "poses", "newest poses kept in the trail",
+                AtLeast(0))
+           .Add("azimuth_deg", T::Of(&O::scene, &S::azimuth_deg), "deg", "automatic view direction")
+           .Add("elevation_deg", T::Of(&O::scene, &S::elevation_deg), "deg", "automatic view elevation")
+           .Add("fov_deg", T::Of(&O::scene, &S::fov_deg), "deg",
+                "vertical field of view of the viewer's camera", InRange(1, 170, true, true))
+           .Add("redraw_hz", &O::redraw_hz, "Hz", "live redraw rate", InRange(0, 240, true))
+           .Add("follow", &O::follow, "the view follows the object");
+  return *table;
 }
+
+void LoadVizSection(const YamlSection& s, ViewerOptions* o) { VizOptionTable().Load(s, o); }
 
 std::string NoDisplayReason() {
   const char* x = std::getenv("DISPLAY");

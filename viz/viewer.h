@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/config.h"
+#include "core/options.h"
 #include "viz/collector.h"
 #include "viz/scene.h"
 
@@ -36,9 +37,9 @@ struct ViewerOptions {
   void Validate() const;  // throws std::invalid_argument naming the option
 };
 
-// Reads the optional "viz:" section of a rig YAML into the options (keys: width, height, rays,
-// legend, residual_scale_px, trail_max, azimuth_deg, elevation_deg, fov_deg, redraw_hz, follow).
-void LoadVizSection(const YamlSection& section, ViewerOptions* options);
+// Reads the optional "viz:" section of a rig YAML into the options (keys declared in VizOptionTable).
+void LoadVizSection(const YamlSection& section, ViewerOptions* options);  // throws OptionError
+const mcmt::OptionTable<ViewerOptions>& VizOptionTable();  // every viz: key (loading, checks, docs)
 
 // Why the live window cannot open here, or empty when a display is available.
 std::string NoDisplayReason();

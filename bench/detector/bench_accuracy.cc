@@ -2,9 +2,12 @@
 // (tests/detector/reference_renderer.h): the imaging catalogue x marker sizes x view angles. Prints
 // markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band.
 //   bench_accuracy [--quick | images per cell (default 8)] [condition name substring]
+// With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
+// compare two builds' corners marker by marker.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 
 #include "tests/detector/accuracy.h"
 
@@ -37,6 +40,9 @@ int main(int argc, char** argv) {
   std::printf(kHeader, "condition");
   Accuracy all, all_stock, by_size[3], by_size_stock[3], by_angle[3], by_angle_stock[3];
   uint64_t seed = 1;
+  std::ofstream dump;
+  if (const char* path = std::getenv("MCMT_CORNER_DUMP")) dump.open(path);
+  dump.precision(10);
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     if (only && !std::strstr(im.name.c_str(), only)) continue;
     Accuracy cond, cond_stock;
@@ -46,8 +52,14 @@ int main(int argc, char** argv) {
         scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
         scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
         Accuracy stock;
-        const Accuracy a =
-            testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images, ++seed, &stock);
+        std::vector<marker_t> found;
+        const Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images,
+                                                     ++seed, &stock, &found);
+        for (const marker_t& m : found) {
+          dump << m.id;
+          for (int k = 0; k < 4; ++k) dump << ' ' << m.corners[k][0] << ' ' << m.corners[k][1];
+          dump << '\n';
+        }
         cond.Add(a), cond_stock.Add(stock), by_size[s].Add(a), by_size_stock[s].Add(stock);
         by_angle[g].Add(a), by_angle_stock[g].Add(stock);
       }

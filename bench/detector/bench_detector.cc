@@ -1,7 +1,7 @@
 // Detection time per image on one thread (cv::setNumThreads(1)) at the paper's resolutions, in the
 // accurate default mode and the fast mode (search near the previous frame's markers), on mcmt_sim
 // sequences (30 fps, box object: 2-8 markers in view), plus peak memory. Prints markdown tables.
-//   bench_detector [frames per camera (default 60)] [cameras (default 2)]
+//   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
 #include <sys/resource.h>
 #include <time.h>
 
@@ -34,6 +34,7 @@ double PeakRssMb() {
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 60;
   const int num_cameras = argc > 2 ? std::atoi(argv[2]) : 2;
+  const int only_width = argc > 3 ? std::atoi(argv[3]) : 0;
   cv::setNumThreads(1);
   sim::ObjectOptions oo;
   oo.kind = sim::ObjectKind::kBox;
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {
+    if (only_width > 0 && size[0] != only_width) continue;
     sim::RigOptions ro2;
     ro2.num_cameras = std::max(num_cameras, 3);
     ro2.radius = 1.0;

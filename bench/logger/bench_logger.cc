@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "core/lcm_util.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "logger/session_logger.h"
 
 using namespace mcmt;

@@ -70,6 +70,8 @@ std::string ArgParser::Help() const {
   }
   s << "  --help                    print this help and exit\n";
   s << "  --version                 print the version and exit\n";
+  if (!config_help_.empty())
+    s << "  --help-config             print the rig YAML keys this program reads (Markdown) and exit\n";
   if (!epilog_.empty()) s << "\n" << epilog_ << (epilog_.back() == '\n' ? "" : "\n");
   return s.str();
 }
@@ -104,6 +106,11 @@ bool ArgParser::Parse(int argc, char** argv, int* exit_code) {
     std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
       std::cout << Help();
+      *exit_code = 0;
+      return false;
+    }
+    if (arg == "--help-config" && !config_help_.empty()) {
+      std::cout << config_help_;
       *exit_code = 0;
       return false;
     }

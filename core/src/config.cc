@@ -10,6 +10,7 @@
 
 #include "core/dictionary.h"
 #include "core/files.h"
+#include "core/options.h"
 
 namespace mcmt {
 namespace fs = std::filesystem;
@@ -82,7 +83,7 @@ std::string YamlSection::KeyName(const std::string& key) const {
 }
 
 void YamlSection::Fail(const std::string& key, const std::string& what) const {
-  throw ConfigError(file_ + ": " + KeyName(key) + ": " + what);
+  throw OptionError(file_, KeyName(key), what);
 }
 
 bool YamlSection::Has(const std::string& key) const {
@@ -517,14 +518,9 @@ RigConfig LoadRigConfig(const std::string& path) {
   rig.lcm = top.Child("lcm");
   rig.logger = top.Child("logger");
   rig.viz = top.Child("viz");
-  rig.lcm_url = rig.lcm.GetString("url", "");
-  rig.reference_camera = rig.mapper.GetString("reference_camera", "");
-  if (!rig.reference_camera.empty() && !rig.FindCamera(rig.reference_camera)) {
-    std::vector<std::string> names;
-    for (const auto& cam : rig.cameras) names.push_back(cam.name);
-    rig.mapper.Fail("reference_camera",
-                    "no camera named '" + rig.reference_camera + "' (cameras: " + Join(names) + ")");
-  }
+  LcmOptions lcm;
+  LcmOptionTable().Load(rig.lcm, &lcm);
+  rig.lcm_url = lcm.url;
   return rig;
 }
 

@@ -13,14 +13,26 @@ std::set<std::string> FrameSynchronizer::Cameras() const {
   return out;
 }
 
+// Live (arrivals are wall times) a camera is alive while it was heard of within camera_timeout_us of
+// wall time: detectors that drift apart in message time (videos at --rate max in parallel, a camera whose
+// messages lag) are waited for, not declared dead. In a log, message time decides.
+bool FrameSynchronizer::Alive(const std::string& camera) const {
+  const auto last = last_utime_.find(camera);
+  if (options_.arrival_is_wall_time) {
+    if (last == last_utime_.end()) return now_us_ - first_arrival_any_ <= options_.camera_timeout_us;
+    return now_us_ - last_arrival_.at(camera) <= options_.camera_timeout_us;
+  }
+  if (last == last_utime_.end()) return newest_utime_ - oldest_utime_ <= options_.camera_timeout_us;
+  return last->second >= newest_utime_ - options_.camera_timeout_us;
+}
+
 std::set<std::string> FrameSynchronizer::StaleCameras() const {
   std::set<std::string> out;
   if (newest_utime_ == INT64_MIN) return out;
   for (const auto& kv : last_utime_)
-    if (kv.second < newest_utime_ - options_.camera_timeout_us) out.insert(kv.first);
-  if (newest_utime_ - oldest_utime_ > options_.camera_timeout_us)
-    for (const auto& cam : options_.cameras)
-      if (!last_utime_.count(cam)) out.insert(cam);
+    if (!Alive(kv.first)) out.insert(kv.first);
+  for (const auto& cam : options_.cameras)
+    if (!last_utime_.count(cam) && !Alive(cam)) out.insert(cam);
   return out;
 }
 
@@ -28,9 +40,9 @@ std::set<std::string> FrameSynchronizer::AliveCameras() const {
   std::set<std::string> out;
   if (newest_utime_ == INT64_MIN) return out;
   for (const auto& kv : last_utime_)
-    if (kv.second >= newest_utime_ - options_.camera_timeout_us) out.insert(kv.first);
-  if (newest_utime_ - oldest_utime_ <= options_.camera_timeout_us)
-    for (const auto& cam : options_.cameras) out.insert(cam);  // expected, not yet heard of
+    if (Alive(kv.first)) out.insert(kv.first);
+  for (const auto& cam : options_.cameras)  // expected, not yet heard of
+    if (!last_utime_.count(cam) && Alive(cam)) out.insert(cam);
   return out;
 }
 
@@ -111,9 +123,20 @@ bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us
 bool FrameSynchronizer::FarBehindAndOutvoted(const detections_t& d, int64_t arrival_us) {
   const int64_t jump = options_.max_clock_jump_us;
   if (jump <= 0) return false;
-  int64_t clock = INT64_MIN;  // the other cameras' newest, as they run on
-  for (const auto& [camera, utime] : last_utime_)
-    if (camera != d.camera) clock = std::max(clock, RunsOn(utime, last_arrival_[camera], arrival_us));
+  // A camera's own clock going back (a restarted recording), or its first messages far behind the other
+  // cameras' clocks (one of them set the clock ahead). Not a gradual drift between cameras (detectors
+  // going through videos at different speeds): that is lag, waited for within max_wait_us.
+  int64_t clock = INT64_MIN;
+  const auto own = last_utime_.find(d.camera);
+  const bool own_clock = own != last_utime_.end();
+  std::string against = "its own clock";
+  if (own_clock) {
+    clock = own->second;
+  } else {
+    against = "the other cameras' clocks";
+    for (const auto& [camera, utime] : last_utime_)
+      clock = std::max(clock, RunsOn(utime, last_arrival_[camera], arrival_us));
+  }
   if (clock == INT64_MIN || clock - d.utime <= jump) {
     behind_.erase(d.camera);
     return false;
@@ -122,12 +145,18 @@ bool FrameSynchronizer::FarBehindAndOutvoted(const detections_t& d, int64_t arri
   j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
   j.utime = d.utime;
   j.arrival = arrival_us;
-  // Fewer in a row: an ordinary late view as far as anyone can tell yet (the caller drops it as such).
-  if (j.count < kClockJumpConfirm || WinsVote(d.camera, arrival_us)) return false;
+  // Fewer in a row: a late view as far as anyone can tell yet. A camera's first messages are held back
+  // (they would set its clock); others go on to the late-view check.
+  if (j.count < kClockJumpConfirm) {
+    if (own_clock) return false;
+    ++stats_.out_of_order;
+    return true;
+  }
+  if (WinsVote(d.camera, arrival_us)) return false;
   ++stats_.clock_jumps;
   clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
-                     std::to_string((clock - d.utime) / 1000) + " ms behind the other cameras' clocks" +
-                     " (more than " + std::to_string(jump / 1000) + " ms): message rejected";
+                     std::to_string((clock - d.utime) / 1000) + " ms behind " + against + " (more than " +
+                     std::to_string(jump / 1000) + " ms): message rejected";
   return true;
 }
 
@@ -182,6 +211,8 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
         last_arrival_[camera] = run.arrival;
         lags_.erase(camera);
         lag_next_.erase(camera);
+        gaps_.erase(camera);
+        gap_next_.erase(camera);
       }
   for (const auto& [camera, t] : clocks) {
     jumps_.erase(camera);
@@ -197,6 +228,8 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
     last_arrival_.erase(camera);
     lags_.erase(camera);
     lag_next_.erase(camera);
+    gaps_.erase(camera);
+    gap_next_.erase(camera);
     it = last_utime_.erase(it);
   }
   for (auto it = pending_.begin(); it != pending_.end();) {
@@ -256,6 +289,16 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
 
   // Accepted: liveness and the camera set.
   const std::string& camera = detections.camera;
+  now_us_ = std::max(now_us_, arrival_us);
+  first_arrival_any_ = std::min(first_arrival_any_, arrival_us);
+  if (const auto previous = last_arrival_.find(camera); previous != last_arrival_.end()) {
+    std::vector<int64_t>& ring = gaps_[camera];
+    if (ring.size() < kLagWindow)
+      ring.push_back(arrival_us - previous->second);
+    else
+      ring[gap_next_[camera]] = arrival_us - previous->second;
+    gap_next_[camera] = (gap_next_[camera] + 1) % kLagWindow;
+  }
   last_arrival_[camera] = arrival_us;
   auto last = last_utime_.find(camera);
   if (last == last_utime_.end()) {
@@ -338,11 +381,21 @@ int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
     // An expected camera not heard of yet: its lag is unknown, wait as long as allowed (the first second).
     due = std::max(due, lag == INT64_MIN ? first_arrival_us + options_.max_wait_us
                                          : key + lag + options_.deadline_us);  // when it usually arrives
+    // A camera that has not reached this capture yet but keeps reporting at its pace (its lag may grow:
+    // a detector slower through a video than the others) is waited for until one of its usual gaps
+    // between messages has passed without news.
+    const auto last = last_utime_.find(camera);
+    const auto gaps = gaps_.find(camera);
+    if (last != last_utime_.end() && last->second < key && gaps != gaps_.end() && !gaps->second.empty())
+      due = std::max(due, last_arrival_.at(camera) +
+                              *std::max_element(gaps->second.begin(), gaps->second.end()) +
+                              options_.deadline_us);
   }
   return std::min(due, first_arrival_us + options_.max_wait_us);
 }
 
 std::vector<SyncedFrame> FrameSynchronizer::Poll(int64_t now_us) {
+  now_us_ = std::max(now_us_, now_us);
   int64_t newest_due = INT64_MIN;
   const std::set<std::string> alive = AliveCameras();
   for (const auto& kv : first_arrival_)

@@ -142,10 +142,11 @@ TEST(FrameSync, DeadCameraStopsBeingWaitedFor) {
   options.camera_timeout_us = 10 * kPeriod;
   FrameSynchronizer sync(options);
   std::vector<SyncedFrame> frames;
+  auto wall = [](int f) { return 5000000000 + f * kPeriod; };  // live: arrivals as the frames are taken
   for (int f = 0; f < 40; ++f) {
-    Append(&frames, sync.Add(View("a", f), 0));
-    Append(&frames, sync.Add(View("b", f), 0));
-    if (f < 10) Append(&frames, sync.Add(View("c", f), 0));  // c dies after frame 9
+    Append(&frames, sync.Add(View("a", f), wall(f)));
+    Append(&frames, sync.Add(View("b", f), wall(f)));
+    if (f < 10) Append(&frames, sync.Add(View("c", f), wall(f)));  // c dies after frame 9
   }
   Append(&frames, sync.Flush());
   // No frame is lost or duplicated; frames are in order.
@@ -157,9 +158,9 @@ TEST(FrameSync, DeadCameraStopsBeingWaitedFor) {
   // Once c is stale, frames complete with a and b alone, as soon as b reports.
   FrameSynchronizer again(options);
   for (int f = 0; f < 40; ++f) {
-    again.Add(View("a", f), 0);
-    const auto out = again.Add(View("b", f), 0);
-    if (f < 10) again.Add(View("c", f), 0);
+    again.Add(View("a", f), wall(f));
+    const auto out = again.Add(View("b", f), wall(f));
+    if (f < 10) again.Add(View("c", f), wall(f));
     if (f >= 25) {
       ASSERT_EQ(out.size(), 1u) << f;
       EXPECT_EQ(out[0].seq, f);
@@ -168,13 +169,43 @@ TEST(FrameSync, DeadCameraStopsBeingWaitedFor) {
   }
 }
 
+// Issue 14: detectors that drift apart in message time (videos at --rate max in parallel) made the slow
+// one "stale" by message time, and its views were dropped. Live, a camera is alive while it is heard
+// of; the slow camera's views join their frames within max_wait_us.
+TEST(FrameSync, DetectorsThatDriftApartStayAliveLive) {
+  FrameSyncOptions options;
+  options.cameras = {"fast", "slow"};
+  options.camera_timeout_us = 1000000;
+  options.deadline_us = 15000;
+  options.max_wait_us = 5000000;
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  int64_t wall = 5000000000;
+  // fast runs through its video at 3x real time; slow at 0.8x, then 0.55x halfway (a harder part of its
+  // video): slow's lag grows all the time, and fast ends seconds ahead.
+  int slow_frame = 0;
+  for (int step = 0; step < 310; ++step) {
+    wall += 10000;
+    Append(&frames, sync.Add(View("fast", step), wall));
+    const int pace = slow_frame < 30 ? 4 : 6;
+    if (step % pace == pace - 1 && slow_frame < 60)
+      Append(&frames, sync.Add(View("slow", slow_frame++), wall + 100));
+    Append(&frames, sync.Poll(wall + 200));
+  }
+  EXPECT_FALSE(sync.StaleCameras().count("slow"));
+  int both = 0;
+  for (const SyncedFrame& f : frames) both += f.views.size() == 2;
+  // Frames wait up to 5 s of wall time (the whole run is 3.1 s): every slow view meets its fast one.
+  EXPECT_EQ(both, 60);
+}
+
 TEST(FrameSync, NeverSeenListedCameraTimesOut) {
   FrameSyncOptions options;
   options.cameras = {"a", "ghost"};
   options.camera_timeout_us = 5 * kPeriod;
   FrameSynchronizer sync(options);
   std::vector<SyncedFrame> frames;
-  for (int f = 0; f < 20; ++f) Append(&frames, sync.Add(View("a", f), 0));
+  for (int f = 0; f < 20; ++f) Append(&frames, sync.Add(View("a", f), 5000000000 + f * kPeriod));
   // Waited for ghost for 5 periods, then frames flow (the held ones emitted in order).
   ASSERT_GE(frames.size(), 19u);
   for (size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].seq, static_cast<int64_t>(i));

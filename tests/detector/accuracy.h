@@ -70,10 +70,11 @@ inline std::vector<marker_t> StockDetect(const cv::Mat& image, const cv::Ptr<cv:
 }
 
 // `images` reference renders of `scene` under `imaging`, detected by mcmt (options) and, when `stock`
-// is non-null, by stock OpenCV.
+// is non-null, by stock OpenCV; `found` (optional) collects mcmt's markers of every image.
 inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceScene& scene,
                                  const Imaging& imaging, const DetectorOptions& options, int images,
-                                 uint64_t seed, Accuracy* stock = nullptr) {
+                                 uint64_t seed, Accuracy* stock = nullptr,
+                                 std::vector<marker_t>* found = nullptr) {
   auto dict = LoadDictionary(dictionary);
   MarkerConfig mc;
   mc.dictionary = dictionary;
@@ -86,7 +87,9 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
   for (int i = 0; i < images; ++i) {
     std::vector<RenderedMarker> truth;
     const cv::Mat image = RenderReference(*dict, scene, imaging, rng, &truth);
-    Score(truth, detector.Detect(image), &a);
+    const std::vector<marker_t> markers = detector.Detect(image);
+    Score(truth, markers, &a);
+    if (found) found->insert(found->end(), markers.begin(), markers.end());
     if (stock) Score(truth, StockDetect(image, dict, scene.inverted), stock);
   }
   return a;

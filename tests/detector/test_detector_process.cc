@@ -4,7 +4,6 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,8 +22,8 @@
 #include "core/lcm_util.h"
 #include "mcmt/detections_t.hpp"
 #include "tests/detector/synthetic.h"
-
-extern char** environ;
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -37,43 +36,18 @@ struct Child {
   std::string out_path;
 };
 
-// Starts argv with stdout+stderr into out_path.
+// Starts argv with stdout+stderr into out_path (tests/support's runner; waited for by pid).
 Child Spawn(const std::vector<std::string>& argv, const std::string& out_path) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
   Child c;
   c.out_path = out_path;
-  const int rc = posix_spawn(&c.pid, args[0], &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) c.pid = -1;
+  c.pid = test::Child(argv, out_path).Release();
   return c;
 }
 
 // Exit code, or -1 on timeout (the child is killed).
-int WaitExit(const Child& c, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(int(timeout_s * 1000));
-  while (std::chrono::steady_clock::now() < end) {
-    int status = 0;
-    const pid_t r = waitpid(c.pid, &status, WNOHANG);
-    if (r == c.pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  kill(c.pid, SIGKILL);
-  waitpid(c.pid, nullptr, 0);
-  return -1;
-}
+int WaitExit(const Child& c, double timeout_s) { return test::WaitForExit(c.pid, timeout_s); }
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string Slurp(const std::string& path) { return test::ReadText(path); }
 
 // A 3-camera recording rendered with tests/detector/synthetic.h: PNG folders, intrinsics, rig.yaml.
 class Recording {
@@ -81,9 +55,7 @@ class Recording {
   static constexpr int kFrames = 12;
   static constexpr int kCameras = 3;
   explicit Recording(const std::string& name) {
-    dir = fs::temp_directory_path() / ("mcmt_detector_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = test::MakeTempDir("detector_" + name);
     auto dict = LoadDictionary("DICT_6X6_250");
     std::mt19937_64 rng(11);
     testing::SceneOptions scene;

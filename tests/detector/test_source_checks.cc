@@ -9,18 +9,14 @@
 #include <opencv2/videoio.hpp>
 
 #include "detector/source.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempFolder(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("mcmt_source_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempFolder(const std::string& name) { return test::MakeTempDir("source_" + name); }
 
 TEST(SourceChecks, FramesOfAnotherSizeAreRefusedPerFrame) {
   const fs::path dir = TempFolder("size");

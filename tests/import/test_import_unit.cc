@@ -9,7 +9,7 @@
 #include "core/lcm_util.h"
 #include "core/marker.h"
 #include "import/import.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "tests/import/bag_writer.h"
 #include "tests/sim/temp_dir.h"
 #include "tests/tracker/process_util.h"
@@ -200,7 +200,7 @@ TEST(ImportRosbag, FramesAreGroupedByHeaderStampAcrossCameras) {
   EXPECT_DOUBLE_EQ(rig.cameras[1].model.distortion[2], 0.0121);
   EXPECT_DOUBLE_EQ(rig.markers.size, 0.1);
   EXPECT_EQ(rig.markers.dictionary, "DICT_APRILTAG_36h11");
-  EXPECT_EQ(rig.reference_camera, "cam0");
+  EXPECT_EQ(rig.mapper.GetString("reference_camera", ""), "cam0");
   // Never overwritten.
   try {
     ImportRosbag({dir / "tags.bag", dir / "cameras.yaml", dir / "session", 0.1, "", ""});

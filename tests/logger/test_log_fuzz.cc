@@ -25,6 +25,7 @@
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "sim/eval.h"
+#include "tests/support/temp_dir.h"
 #include "tests/tracker/process_util.h"
 #include "tracker/tracker.h"
 #include "viz/collector.h"
@@ -48,9 +49,7 @@ struct Base {
 // pose per frame (every channel some reader reads).
 Base MakeBase() {
   Base b;
-  b.dir = (fs::temp_directory_path() / ("mcmt_log_fuzz_" + std::to_string(getpid()))).string();
-  fs::remove_all(b.dir);
-  fs::create_directories(b.dir);
+  b.dir = test::MakeTempDir("log_fuzz");
   std::string out;
   EXPECT_EQ(RunProgram({kBin + "/mcmt-sim", "--out", b.dir, "--object", "four_sided", "--frames", "60",
                         "--seed", "3", "--detections-only", "--quiet"},
@@ -194,8 +193,8 @@ LogReadReport ReadEverywhere(const Base& base, const RigConfig& rig, const RigMa
     o.log_mode = true;
     o.quiet = true;
     TrackerNode node(none, rig, o, map);
-    const volatile bool stop = false;
-    EXPECT_EQ(node.RunLog(path, &stop).damaged(), report.damaged()) << m.what;
+    const StopToken stop;
+    EXPECT_EQ(node.RunLog(path, stop).damaged(), report.damaged()) << m.what;
   }
   {  // the viewer's
     lcm::LCM none("memq://");

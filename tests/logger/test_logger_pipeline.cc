@@ -8,7 +8,7 @@
 
 #include "core/files.h"
 #include "core/lcm_util.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "test_util.h"
 
 using namespace mcmt;

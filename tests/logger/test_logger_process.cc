@@ -8,7 +8,7 @@
 
 #include "core/config.h"
 #include "core/lcm_util.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "logger/export.h"
 #include "test_util.h"
 

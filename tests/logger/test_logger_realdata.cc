@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "test_util.h"
 
 using namespace mcmt;

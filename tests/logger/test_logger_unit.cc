@@ -16,7 +16,7 @@
 #include "core/lcm_util.h"
 #include "core/marker.h"
 #include "core/se3.h"
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "logger/export.h"
 #include "logger/session_logger.h"
 #include "test_util.h"

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <sstream>
@@ -16,25 +17,20 @@
 #include <thread>
 #include <vector>
 
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt_test {
 
-inline std::string MakeTempDir(const std::string& tag) {
-  std::string pattern = "/tmp/mcmt_logger_" + tag + "_XXXXXX";
-  std::vector<char> buf(pattern.begin(), pattern.end());
-  buf.push_back('\0');
-  if (!mkdtemp(buf.data())) std::abort();
-  return buf.data();
-}
+inline std::string MakeTempDir(const std::string& tag) { return mcmt::test::MakeTempDir("logger_" + tag); }
 
 inline void RemoveTree(const std::string& dir) {
-  if (dir.rfind("/tmp/mcmt_logger_", 0) != 0) return;
-  std::string cmd = "rm -rf '" + dir + "'";
-  if (std::system(cmd.c_str()) != 0) {
-  }
+  if (dir.find("/mcmt_logger_") == std::string::npos) return;
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
 }
 
 inline bool FileExists(const std::string& path) {
@@ -47,86 +43,18 @@ inline long long FileSize(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 ? static_cast<long long>(st.st_size) : -1;
 }
 
-inline std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using mcmt::test::ReadText;
 
 inline void WriteText(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
 }
 
-inline std::string Bin(const std::string& name) { return std::string(MCMT_BIN_DIR) + "/" + name; }
+using mcmt::test::Bin;
 
 inline std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 
-// A child process with stdout and stderr redirected to files.
-class Child {
- public:
-  Child() = default;
-  Child(const std::vector<std::string>& argv, const std::string& out_path, const std::string& err_path) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      int out = open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (out >= 0) dup2(out, 1);
-      if (err >= 0) dup2(err, 2);
-      std::vector<char*> args;
-      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      execv(args[0], args.data());
-      _exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !done_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-
-  bool Running() {
-    if (done_) return false;
-    int status = 0;
-    pid_t r = waitpid(pid_, &status, WNOHANG);
-    if (r == pid_) {
-      done_ = true;
-      status_ = status;
-      return false;
-    }
-    return true;
-  }
-  // Exit code, 128+signal when killed, or -1 on timeout (the child is then killed).
-  int Wait(double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Running()) {
-      if (std::chrono::steady_clock::now() > end) {
-        kill(pid_, SIGKILL);
-        waitpid(pid_, nullptr, 0);
-        done_ = true;
-        return -1;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (WIFEXITED(status_)) return WEXITSTATUS(status_);
-    if (WIFSIGNALED(status_)) return 128 + WTERMSIG(status_);
-    return -2;
-  }
-  void Signal(int sig) {
-    if (pid_ > 0 && !done_) kill(pid_, sig);
-  }
-  pid_t pid() const { return pid_; }
-
- private:
-  pid_t pid_ = -1;
-  bool done_ = false;
-  int status_ = 0;
-};
+using mcmt::test::Child;  // stdout and stderr into files (tests/support)
 
 // Runs a program to completion; returns its exit code (-1 on timeout).
 inline int RunProgram(const std::vector<std::string>& argv, std::string* out = nullptr,

@@ -171,7 +171,7 @@ MapperOptions SceneMapperOptions(const SynthScene& scene, double marker_size) {
   options.cameras = scene.names;
   options.sizes.default_size = marker_size;
   options.dictionary = "DICT_6X6_250";
-  options.sync_tolerance_us = 5000;
+  options.sync_tolerance_ms = 5.0;
   return options;
 }
 

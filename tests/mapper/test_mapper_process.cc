@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -24,8 +23,8 @@
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/rig_map_t.hpp"
 #include "tests/mapper/synth.h"
-
-extern char** environ;
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -39,23 +38,11 @@ struct CommandResult {
 };
 
 CommandResult RunCommand(const std::string& command) {
-  CommandResult r;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) r.output.append(buffer, n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const mcmt::test::ProcessResult r = mcmt::test::RunCommand(command);
+  return {r.exit_code, r.output};
 }
 
-std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("mcmt_mapper_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
+std::string TempDir(const std::string& name) { return mcmt::test::MakeTempDir("mapper_" + name); }
 
 std::string WriteRig(const std::string& dir, const testing::SynthScene& scene,
                      const std::string& extra = "") {
@@ -174,18 +161,8 @@ class LiveListener {
 // Starts a live mcmt-mapper (stdout and stderr into log_path); returns its pid (-1 on failure).
 pid_t SpawnLiveMapper(const std::string& rig, const std::string& out, const std::string& url,
                       const std::string& log_path) {
-  std::vector<std::string> args = {kMapper, "--config", rig, "--out", out, "--lcm-url", url};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  pid_t pid = -1;
-  if (posix_spawn(&pid, kMapper.c_str(), &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&actions);
-  return pid;
+  mcmt::test::Child child({kMapper, "--config", rig, "--out", out, "--lcm-url", url}, log_path);
+  return child.Release();  // the caller signals and waits by pid
 }
 
 TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
@@ -203,8 +180,7 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
 
   const std::string log_path = dir + "/mapper.out";
-  const pid_t pid = SpawnLiveMapper(rig, dir + "/out", url, log_path);
-  ASSERT_GT(pid, 0);
+  mcmt::test::Child mapper({kMapper, "--config", rig, "--out", dir + "/out", "--lcm-url", url}, log_path);
   auto handle_for = [&](double seconds, const std::function<bool()>& done) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
@@ -225,13 +201,12 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
     lcm.publish(kMapperCommandChannel, &command);
     handle_for(60, [&] { return listener.got_map; });
   }
-  int status = 0;
-  if (!listener.got_map) kill(pid, SIGKILL);
-  waitpid(pid, &status, 0);
+  if (!listener.got_map) mapper.Signal(SIGKILL);
+  const int exit_code = mapper.Wait(60);
   const std::string output = ReadFile(log_path);
   ASSERT_TRUE(listening) << output;
   ASSERT_TRUE(listener.got_map) << output;
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
+  EXPECT_EQ(exit_code, 0) << output;
   EXPECT_NE(output.find("solve command"), std::string::npos) << output;
   EXPECT_EQ(listener.map.num_cameras, 5);
   EXPECT_EQ(listener.map.num_markers, 4);

@@ -10,6 +10,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -31,10 +32,8 @@ class MapperRendered : public ::testing::TestWithParam<RenderedCase> {};
 TEST_P(MapperRendered, WithinTheIssueBounds) {
   const RenderedCase c = GetParam();
   const std::string name = sim::ObjectKindNames()[static_cast<int>(c.object)];
-  const std::string dir =
-      (fs::temp_directory_path() / ("mcmt_mapper_rendered_" + name + "_" + std::to_string(getpid())))
-          .string();
-  fs::remove_all(dir);
+  const test::TempDir tmp("mapper_rendered_" + name);
+  const std::string dir = tmp / "session";
   sim::DatasetOptions options;
   options.out_dir = dir;
   options.object.kind = c.object;
@@ -63,7 +62,6 @@ TEST_P(MapperRendered, WithinTheIssueBounds) {
                                std::to_string(e.camera_position_mm.mean) + " mm, config " +
                                std::to_string(e.configuration_mm.mean) + " mm, rms " +
                                std::to_string(result.map.rms_px) + " px");
-  fs::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(PapersObjectsAndRadii, MapperRendered,

@@ -132,7 +132,7 @@ TEST(MapperSelfCal, ClockOffsetsAreRecovered) {
   const MapResult r_synced = MapDetections(synced.detections, options);
   // Offsets ignored: frames assembled over +-25 ms (the default 2 ms joins no camera to another).
   MapperOptions wide = options;
-  wide.sync_tolerance_us = 25000;
+  wide.sync_tolerance_ms = 25.0;
   const MapResult r_late = MapDetections(late.detections, wide);
   options.estimate_time_offsets = true;
   const MapResult r_estimated = MapDetections(late.detections, options);

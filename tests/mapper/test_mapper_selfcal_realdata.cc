@@ -66,7 +66,7 @@ MapResult MapSession(const RigConfig& rig, IntrinsicsRefinement refine, bool off
   MapperOptions options = MapperOptions::FromConfig(rig);
   options.intrinsics.refine = refine;
   options.estimate_time_offsets = offsets;
-  if (tolerance_us > 0) options.sync_tolerance_us = tolerance_us;
+  if (tolerance_us > 0) options.sync_tolerance_ms = 1e-3 * static_cast<double>(tolerance_us);
   Mapper mapper(options);
   for (const auto& d : CameraTimeDetections(rig)) mapper.Add(d);
   return mapper.Solve();

@@ -50,7 +50,7 @@ struct Pipeline {
   explicit Pipeline(const testing::SynthOptions& so) : scene(testing::MakeScene(so)) {
     options = testing::SceneMapperOptions(scene);
     messages = MessagesOf(scene);
-    frames = AssembleFrames(messages, static_cast<int>(scene.names.size()), options.sync_tolerance_us);
+    frames = AssembleFrames(messages, static_cast<int>(scene.names.size()), options.sync_tolerance_us());
     observations = CollectObservations(messages, frames, scene.names, options, &report);
     EstimateHypotheses(scene.models, options.tau_e, 2, &observations.obs);
     layout = BuildMarkerGraph(observations, options, 2, &report);

@@ -20,6 +20,7 @@
 #include "detector/detector.h"
 #include "sim/marker_sheet.h"
 #include "tests/sim/temp_dir.h"
+#include "tests/support/process.h"
 
 namespace fs = std::filesystem;
 using mcmt::sim::MarkerSheetOptions;
@@ -30,21 +31,8 @@ fs::path Dir() {
   return dir.str();
 }
 
-struct CommandResult {
-  int code = -1;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult RunCommand(const std::string& command) {
-  CommandResult r;
-  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  for (size_t n; (n = std::fread(buf, 1, sizeof(buf), p)) > 0;) r.output.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using mcmt::test::RunCommand;
+using CommandResult = mcmt::test::ProcessResult;
 
 const std::string kMarkers = std::string(MCMT_BIN_DIR) + "/mcmt-markers";
 const std::string kCaliscopeRig = std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_4cam.yaml";
@@ -201,29 +189,29 @@ TEST(MarkerSheet, PngFromTheRigIsDetectedAsConfiguredAndMeasuresTheRigSize) {
   for (const std::string& rig : {kCaliscopeRig, RigWithInverted(false)}) {
     const std::string png = (Dir() / "rig_sheet.png").string();
     const CommandResult r = RunCommand(kMarkers + " --config " + rig + " --out " + png);
-    ASSERT_EQ(r.code, 0) << r.output;
+    ASSERT_EQ(r.exit_code, 0) << r.output;
     const double ppm = PngPixelsPerMetre(png);
     ASSERT_GT(ppm, 0) << png << ": no pHYs (dpi) chunk";
     EXPECT_NE(r.output.find(" dpi"), std::string::npos) << r.output;
     const cv::Mat gray = cv::imread(png, cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(gray.empty());
     // Whole pixels per cell at the stored dpi: exact to the pHYs rounding (1 px/m) plus detection.
-    // 0.02 mm = 0.05 % of 40.5 mm, 0.47 px over a 954 px marker: the side-model corners sit up to 0.15 px
-    // inside a perfectly sharp (unblurred) edge, which only such a sheet shows (issue 15's open point).
-    ExpectRigMarkersAtSize(gray, ppm / 1000.0, rig, 0.02);
+    // 0.01 mm = 0.025 % of 40.5 mm, 0.24 px over a 954 px marker (measured: within 0.001 mm; a side
+    // whose first code row is of the border's colour sat 0.5 px inside the edge before issue 15's fix).
+    ExpectRigMarkersAtSize(gray, ppm / 1000.0, rig, 0.01);
     EXPECT_NEAR(ScaleBarMm(gray, ppm / 1000.0), 100.0, 0.1);
   }
 }
 
 TEST(MarkerSheet, PdfFromTheRigRasterisedIsDetectedAsConfiguredAndMeasuresTheRigSize) {
-  if (RunCommand("pdftoppm -v").code != 0) GTEST_SKIP() << "pdftoppm (poppler-utils) not installed";
+  if (RunCommand("pdftoppm -v").exit_code != 0) GTEST_SKIP() << "pdftoppm (poppler-utils) not installed";
   for (const std::string& rig : {kCaliscopeRig, RigWithInverted(false)}) {
     const std::string pdf = (Dir() / "rig_sheet.pdf").string(), raster = (Dir() / "raster").string();
     CommandResult r = RunCommand(kMarkers + " --config " + rig + " --out " + pdf);
-    ASSERT_EQ(r.code, 0) << r.output;
+    ASSERT_EQ(r.exit_code, 0) << r.output;
     const double dpi = 300;
     r = RunCommand("pdftoppm -r 300 -gray -png -singlefile " + pdf + " " + raster);
-    ASSERT_EQ(r.code, 0) << r.output;
+    ASSERT_EQ(r.exit_code, 0) << r.output;
     const cv::Mat gray = cv::imread(raster + ".png", cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(gray.empty());
     // Rasterised at 0.085 mm per pixel, edges snapped to pixels.
@@ -239,11 +227,11 @@ TEST(MarkerSheet, PngAtADpiThatCannotBeExactIsRefusedWithTheNearestExactDpi) {
   const std::string png = (Dir() / "refused.png").string();
   const CommandResult r =
       RunCommand(kMarkers + " --config " + kCaliscopeRig + " --out " + png + " --dpi 600");
-  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("nearest exact dpi is 598.3111"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(png));
   // The dpi it names is accepted.
   const CommandResult ok =
       RunCommand(kMarkers + " --config " + kCaliscopeRig + " --out " + png + " --dpi 598.3111");
-  EXPECT_EQ(ok.code, 0) << ok.output;
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
 }

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "sim/peer_calibration.h"
+#include "tests/support/temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -54,7 +55,8 @@ TEST(PeerCalibration, ShowsAKnownDisplacement) {
 }
 
 TEST(PeerCalibration, MalformedFileNamesTheKey) {
-  const fs::path f = fs::temp_directory_path() / ("peer_" + std::to_string(::getpid()) + ".toml");
+  const mcmt::test::TempDir dir("peer");
+  const fs::path f = dir / "peer.toml";
   std::ofstream(f) << "[cameras.0]\nrotation = [[1,0,0],[0,1,0]]\ntranslation = [0,0,0]\n";
   try {
     mcmt::sim::ReadCaliscopeCameras(f.string());

@@ -29,6 +29,7 @@
 #include "sim/eval.h"
 #include "sim/sim.h"
 #include "tests/sim/temp_dir.h"
+#include "tests/support/process.h"
 
 namespace fs = std::filesystem;
 using namespace mcmt;
@@ -51,21 +52,14 @@ struct Result {
   std::string out, err;
 };
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string Slurp(const std::string& path) { return mcmt::test::ReadText(path); }
 
 // Runs `program args` with stdout and stderr captured.
 Result RunProgram(const std::string& program, const std::string& args) {
   static int counter = 0;
   const std::string base = Tmp() / ("run" + std::to_string(counter++));
-  const std::string cmd = program + " " + args + " >" + base + ".out 2>" + base + ".err";
-  const int status = std::system(cmd.c_str());
   Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.code = mcmt::test::Child({"/bin/sh", "-c", program + " " + args}, base + ".out", base + ".err").Wait(600);
   r.out = Slurp(base + ".out");
   r.err = Slurp(base + ".err");
   fs::remove(base + ".out");

@@ -12,6 +12,7 @@
 
 #include "core/lcm_util.h"
 #include "core/math.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace tracker_test {
@@ -192,13 +193,7 @@ void WriteLog(const std::string& path, const SyntheticSession& session, int kill
   }
 }
 
-std::string MakeTempDir(const std::string& name) {
-  std::string tmpl = "/tmp/mcmt_tracker_" + name + "_XXXXXX";
-  std::vector<char> buf(tmpl.begin(), tmpl.end());
-  buf.push_back('\0');
-  if (!mkdtemp(buf.data())) throw std::runtime_error("mkdtemp failed");
-  return std::string(buf.data());
-}
+std::string MakeTempDir(const std::string& name) { return mcmt::test::MakeTempDir("tracker_" + name); }
 
 }  // namespace tracker_test
 }  // namespace mcmt

@@ -22,51 +22,22 @@
 
 #include "core/files.h"
 #include "core/se3.h"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 #include "tests/viz/test_rig.h"
 
 namespace mcmt::viz::testing {
 
-// A fresh folder under the system temp dir, removed at destruction unless MCMT_VIZ_KEEP is set.
-class TempDir {
+// The tests/support helpers; path() as a std::filesystem::path for the viewer tests.
+class TempDir : public mcmt::test::TempDir {
  public:
-  explicit TempDir(const std::string& tag) {
-    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-    path_ = std::filesystem::temp_directory_path() /
-            ("mcmt_viz_" + tag + "_" + std::to_string(::getpid()) + "_" + std::to_string(stamp));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    if (!std::getenv("MCMT_VIZ_KEEP")) {
-      std::error_code ec;
-      std::filesystem::remove_all(path_, ec);
-    } else {
-      std::fprintf(stderr, "kept %s\n", path_.c_str());
-    }
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
+  explicit TempDir(const std::string& tag) : mcmt::test::TempDir("viz_" + tag) {}
+  std::filesystem::path path() const { return mcmt::test::TempDir::path(); }
 };
 
-struct ProcessResult {
-  int exit_code = -1;
-  std::string output;  // stdout + stderr
-};
-
-// Runs a shell command line with a time limit (coreutils timeout), capturing its output.
+using mcmt::test::ProcessResult;
 inline ProcessResult RunCommand(const std::string& command, int timeout_s = 60) {
-  const std::string full = "timeout -k 5 " + std::to_string(timeout_s) + " " + command + " 2>&1";
-  ProcessResult r;
-  FILE* pipe = ::popen(full.c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) r.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return mcmt::test::RunCommand(command, timeout_s);
 }
 
 inline std::string VizBin() { return std::string(MCMT_BIN_DIR) + "/mcmt-viz"; }

@@ -1,4 +1,4 @@
-// LCM event logs: the writer of mcmt-logger. Reading (for every program) is core's (core/log_reader.h).
+// LCM event logs: the one writer (mcmt-logger, mcmt-import, the CSV import). Reading is core/log_reader.h.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "logger/event_log.h"
+#include "core/log_writer.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,0 +1,107 @@
+// The rig's `detector:` section declared once: DetectorOptions (the marker detector) and
+// DetectorNodeOptions (the process: frame rate, images, status) share it, each table knowing the other's
+// keys; FromConfig / LoadFromConfig load and check, Validate checks options built in code the same way.
+#include "core/options.h"
+
+#include "detector/detector.h"
+#include "detector/node.h"
+
+namespace mcmt {
+
+const OptionTable<DetectorOptions>& DetectorOptionTable() {
+  using O = DetectorOptions;
+  static const OptionTable<O>* table =
+      &(*new OptionTable<O>("detector"))
+           .Add("corner_refinement", &O::corner_refinement,
+                "edges (this project's unbiased line fit), none (OpenCV's contour corners), subpix "
+                "(cv::cornerSubPix), contour (OpenCV's CORNER_REFINE_CONTOUR)",
+                OneOf({"edges", "none", "subpix", "contour"}))
+           .Add("subpix_window", &O::subpix_window, "px", "half window of subpix", AtLeast(1))
+           .Add("edge_passes", &O::edge_passes, "", "edges: crossing passes before the two side-model passes",
+                InRange(1, 10))
+           .Add("edge_model", &O::edge_model, "edges: correct each side with a fitted blurred-step model")
+           .Add("sharp_smoothing", &O::sharp_smoothing, "px",
+                "edges on sharp images (blur < 0.55 px): Gaussian sigma the marker region is smoothed with "
+                "(0: off)",
+                InRange(0, 3))
+           .Add("gamma", &O::gamma, "",
+                "edges: the camera's transfer curve, 0: estimated per side, > 0: known (1: linear images)",
+                NumberCheck{"must be 0 (estimated) or in [0.2, 5]",
+                            [](const double& v) { return v == 0 || (v >= 0.2 && v <= 5); }})
+           .Add("adaptive_window_min", &O::adaptive_window_min, "px", "adaptive threshold window: smallest",
+                AtLeast(3))
+           .Add("adaptive_window_max", &O::adaptive_window_max, "px",
+                "adaptive threshold window: largest (>= adaptive_window_min)")
+           .Add("adaptive_window_step", &O::adaptive_window_step, "px", "adaptive threshold window: step",
+                AtLeast(1))
+           .Add("adaptive_constant", &O::adaptive_constant, "grey levels", "subtracted from the local mean")
+           .Add("min_perimeter_px", &O::min_perimeter_px, "px", "smallest marker perimeter searched",
+                Above(0))
+           .Add("max_perimeter_rate", &O::max_perimeter_rate, "",
+                "largest marker perimeter, relative to the image's larger side", Above(0))
+           .Add("polygonal_approx_rate", &O::polygonal_approx_rate, "",
+                "contour -> quadrilateral tolerance, relative to the perimeter", InRange(0, 1, true, true))
+           .Add("min_corner_distance_rate", &O::min_corner_distance_rate, "",
+                "smallest corner distance, relative to the perimeter")
+           .Add("min_distance_to_border", &O::min_distance_to_border, "px",
+                "smallest distance of a candidate to the image border")
+           .Add("error_correction_rate", &O::error_correction_rate, "",
+                "part of the dictionary's correction capacity used", InRange(0, 1))
+           .Add("perspective_pixels_per_cell", &O::perspective_pixels_per_cell, "px",
+                "bit sampling resolution", AtLeast(1))
+           .Add("perspective_ignored_margin", &O::perspective_ignored_margin, "",
+                "part of each cell ignored when reading its bit", InRange(0, 0.5, false, true))
+           .Add("inverted", &O::inverted, "also look for white-on-black markers (default: markers.inverted)")
+           .Add("aruco3", &O::aruco3, "OpenCV's ArUco3 fast search (downsampled candidate search)")
+           .Add("aruco3_min_side", &O::aruco3_min_side, "px", "ArUco3's minSideLengthCanonicalImg")
+           .Add("fast", &O::fast, "fast mode: full searches only every full_search_every frames")
+           .Add("full_search_every", &O::full_search_every, "frames",
+                "fast mode: frames between full searches", AtLeast(1))
+           .Add("drop_duplicate_ids", &O::drop_duplicate_ids,
+                "drop every marker whose id is detected twice in one image")
+           .Add("drop_unrefined", &O::drop_unrefined,
+                "drop a marker whose edges cannot be fitted (false: it keeps cornerSubPix corners)");
+  return *table;
+}
+
+const OptionTable<DetectorNodeOptions>& DetectorNodeOptionTable() {
+  using O = DetectorNodeOptions;
+  static const OptionTable<O>* table =
+      &(*new OptionTable<O>("detector"))
+           .Add("fps", &O::fps, "Hz", "recordings: frame rate (0: the video's own, image folders 30)",
+                AtLeast(0))
+           .Add("images", &O::images, "publish JPEG images on MCMT_IMAGE_<CAMERA>")
+           .Add("image_rate", &O::image_rate_hz, "Hz", "at most this many images per second (message time)",
+                Above(0))
+           .Add("image_quality", &O::image_quality, "", "JPEG quality", InRange(1, 100))
+           .Add("image_scale", &O::image_scale, "", "images downscaled by this factor", InRange(0, 1, true))
+           .Add("status_period_s", &O::status_period_s, "s", "status line period, wall time (<= 0: none)")
+           .Add("caliscope_time", &O::caliscope_time,
+                "Caliscope recordings: sync (one shared time per synchronised frame) or camera (each "
+                "camera's own times)",
+                OneOf({"sync", "camera"}));
+  return *table;
+}
+
+DetectorOptions DetectorOptions::FromConfig(const RigConfig& rig) {
+  DetectorOptions o;
+  o.inverted = rig.markers.inverted;
+  DetectorOptionTable().Load(rig.detector, &o, DetectorNodeOptionTable().Keys());
+  o.Validate(rig.path);
+  return o;
+}
+
+void DetectorOptions::Validate(const std::string& file) const {
+  const OptionTable<DetectorOptions>& table = DetectorOptionTable();
+  table.Check(*this, file);
+  if (adaptive_window_max < adaptive_window_min)
+    table.Fail(file, "adaptive_window_max",
+               "must be >= adaptive_window_min (" + std::to_string(adaptive_window_min) + "), got " +
+                   std::to_string(adaptive_window_max));
+}
+
+void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {
+  DetectorNodeOptionTable().Load(rig.detector, this, DetectorOptionTable().Keys());
+}
+
+}  // namespace mcmt
