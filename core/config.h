@@ -94,8 +94,11 @@ RigConfig LoadRigConfig(const std::string& path);
 // OpenCV calibration YAML (camera_matrix, distortion_coefficients, image_width, image_height,
 // optional distortion_model: radtan|fisheye|none, or OpenCV sample's fisheye_model: 1) or ROS camera_info
 // YAML (image_width, image_height, camera_matrix.data, distortion_model
-// plumb_bob|rational_polynomial|equidistant, distortion_coefficients.data). Throws ConfigError naming the
-// file and key.
+// plumb_bob|rational_polynomial|equidistant, distortion_coefficients.data). Without camera_matrix, rough
+// intrinsics: `hfov_deg` (a datasheet's horizontal field of view; kDefaultHfovDeg when absent too), square
+// pixels, principal point at the centre, to be refined by the mapper (mapper.refine_intrinsics). Throws
+// ConfigError naming the file and key.
+constexpr double kDefaultHfovDeg = 60.0;
 CameraModel LoadIntrinsics(const std::string& path);
 // Writes OpenCV calibration YAML (with the %YAML:1.0 header cv::FileStorage needs), atomically.
 void WriteIntrinsicsOpenCv(const std::string& path, const CameraModel& model);

@@ -159,6 +159,42 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
   return reports;
 }
 
+namespace {
+
+// 95 % two-sided level of a normal deviate: a change within 1.96 posterior sigmas agrees with the given
+// value.
+constexpr double kAgreeSigmas = 1.96;
+
+}  // namespace
+
+bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
+                            BundleProblem* bp) {
+  const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(bp, sigma_px, threads);
+  bool held = false;
+  for (IntrinsicsReport& r : *reports) {
+    BundleIntrinsics& in = bp->intrinsics[r.index];
+    if (!in.refined || covariance[r.index].size() == 0) continue;
+    for (size_t k = 0; k < r.given.size(); ++k) {
+      if (!r.is_refined[k]) continue;
+      const double sigma = std::sqrt(std::max(0.0, covariance[r.index](k, k)));
+      const double change = in.values[k] - r.given[k];
+      if (!(std::abs(change) < kAgreeSigmas * sigma)) continue;
+      std::ostringstream why;
+      why << std::setprecision(3) << r.names[k]
+          << ": kept at the given value: the data agree with it (refined " << change << " from it, within "
+          << kAgreeSigmas << " x its posterior sigma " << sigma << ")";
+      r.held.push_back(why.str());
+      in.values[k] = r.given[k];
+      r.is_refined[k] = 0;
+      in.constant.push_back(static_cast<int>(k));
+      held = true;
+    }
+    std::sort(in.constant.begin(), in.constant.end());
+    in.refined = std::count(r.is_refined.begin(), r.is_refined.end(), 1) > 0;
+  }
+  return held;
+}
+
 void FinishIntrinsicsReports(BundleProblem* bp, double sigma_px, int threads,
                              std::vector<IntrinsicsReport>* reports) {
   const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(bp, sigma_px, threads);

@@ -33,6 +33,13 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
                                                        const std::vector<std::string>& camera_names,
                                                        double sigma_px, int threads, BundleProblem* problem);
 
+// After a solve with the intrinsics free: per camera and entry, a change from the given value that the
+// data do not call for -- within 1.96 posterior sigmas (95 %) -- is undone and the entry held at the given
+// value (a calibration the data agree with is not traded for the data's own
+// noise). Returns true when a group was held (the caller re-solves).
+bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
+                            BundleProblem* problem);
+
 // After the solve: the refined values and posterior sigmas into the reports.
 void FinishIntrinsicsReports(BundleProblem* problem, double sigma_px, int threads,
                              std::vector<IntrinsicsReport>* reports);

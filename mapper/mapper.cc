@@ -288,6 +288,49 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   return result;
 }
 
+// Frames assembled over `window_us` on the messages' times: the 95th percentile of their capture-time
+// spread (microseconds) and how many messages are alone in their frame.
+struct FrameSpread {
+  double p95_us = 0.0;
+  int alone = 0;
+};
+
+FrameSpread SpreadOf(const std::vector<StoredMessage>& messages, int num_cameras, int64_t window_us) {
+  FrameSpread out;
+  std::vector<double> spreads;
+  for (const Frame& f : AssembleFrames(messages, num_cameras, window_us)) {
+    int64_t lo = messages[f.messages[0]].utime, hi = lo;
+    for (int i : f.messages) {
+      lo = std::min(lo, messages[i].utime);
+      hi = std::max(hi, messages[i].utime);
+    }
+    if (f.messages.size() < 2)
+      ++out.alone;
+    else
+      spreads.push_back(static_cast<double>(hi - lo));
+  }
+  std::sort(spreads.begin(), spreads.end());
+  if (!spreads.empty())
+    out.p95_us = spreads[static_cast<size_t>(0.95 * static_cast<double>(spreads.size() - 1))];
+  return out;
+}
+
+// The window the second pass assembles frames over, or 0 when it is not worth running. Offsets that bring
+// the cameras' frames together (clocks that differ by a constant: the spread falls to the noise) re-assemble
+// them over 1.5 x the spread left (at least the sync tolerance, at most the first window): clocks that also
+// jitter frame to frame (caliscope's per-camera times, 5-6 ms RMS) keep their frames whole, the rest being
+// each observation's dt. Offsets that leave the frames as spread or leave more images alone (a camera's
+// capture latency that its timestamps do not show, e.g. 120 ms at 6 fps, puts its images between the
+// others' frames) keep the first pass's frames.
+int64_t SecondPassWindowUs(const std::vector<StoredMessage>& raw, const std::vector<StoredMessage>& corrected,
+                           int num_cameras, int64_t first_window_us, int64_t sync_tolerance_us) {
+  const FrameSpread before = SpreadOf(raw, num_cameras, first_window_us);
+  const FrameSpread after = SpreadOf(corrected, num_cameras, first_window_us);
+  if (!(after.p95_us < before.p95_us) || after.alone > before.alone) return 0;
+  return std::clamp(static_cast<int64_t>(std::llround(1.5 * after.p95_us)), sync_tolerance_us,
+                    std::max(sync_tolerance_us, first_window_us));
+}
+
 // Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
 // clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
 // the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
@@ -306,7 +349,31 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   }
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
-  MapResult result = SolvePass(corrected, s, second_options);
+  const int64_t second_window_us =
+      SecondPassWindowUs(messages, corrected, static_cast<int>(s.camera_names.size()),
+                         first_options.sync_tolerance_us(), o.sync_tolerance_us());
+  second_options.sync_tolerance_ms = 1e-3 * static_cast<double>(second_window_us);
+  std::ostringstream worse;
+  MapResult result;
+  if (second_window_us == 0) {
+    worse << "would spread the frames further";
+  } else {
+    try {
+      result = SolvePass(corrected, s, second_options);
+      if (!(result.map.rms_px <= first.map.rms_px))
+        worse << "fit worse (rms " << result.map.rms_px << " px against " << first.map.rms_px << " px)";
+    } catch (const MapperError& e) {
+      worse << "cannot be mapped (" << e.what() << ")";
+    }
+  }
+  if (!worse.str().empty()) {
+    // The first pass's frames (and its offsets) are the result.
+    MapResult kept = first;
+    kept.report.total_seconds += result.report.total_seconds;
+    kept.report.warnings.push_back("time offsets: frames re-assembled on the corrected clocks " +
+                                   worse.str() + ": the first pass's frames are kept");
+    return kept;
+  }
   for (MapCamera& c : result.map.cameras)
     c.time_offset_us += offset_us.count(c.name) ? offset_us[c.name] : 0.0;
   for (MapCamera& c : result.initial_map.cameras)

@@ -85,8 +85,18 @@ BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
 
 namespace {
 
-// Frames further apart than this do not give each other a velocity (time offsets), seconds.
-constexpr double kVelocityGapS = 0.1;
+// Frames further apart than this many typical frame intervals do not give each other a velocity (time
+// offsets): a dropped frame or two is bridged, a pause is not. Relative to the session's own frame rate (a
+// fixed 0.1 s left every frame of a 6 fps recording without a velocity, so its offsets were unobservable).
+constexpr double kVelocityGapFrames = 2.5;
+
+double VelocityGapS(const BundleProblem& bp) {
+  std::vector<double> intervals;
+  for (size_t f = 1; f < bp.frame_time_s.size(); ++f)
+    if (bp.frame_time_s[f] > bp.frame_time_s[f - 1])
+      intervals.push_back(bp.frame_time_s[f] - bp.frame_time_s[f - 1]);
+  return kVelocityGapFrames * Median(intervals, 0.0);
+}
 
 // RMS corner error over the active observations.
 double CurrentRms(const BundleProblem& bp) {
@@ -171,16 +181,23 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     solve_settings.paper_stop_px = 0.01 * settings.paper_stop_px;
   }
   for (int round = 0;; ++round) {
-    if (bp.RefinesTime()) UpdateFrameVelocities(kVelocityGapS, &bp);
+    if (bp.RefinesTime()) UpdateFrameVelocities(VelocityGapS(bp), &bp);
     const BundleSummary summary = Solve(solve_settings, bundle, report);
     report->linear_solver = summary.linear_solver;
     if (!summary.usable) throw MapperError("refinement failed: " + summary.termination);
     if (round >= o.max_rejection_rounds) break;
     if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
   }
+  if (!report->intrinsics.empty() &&
+      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp))
+  {
+    BundleSettings full = solve_settings;
+    full.paper_stop = false;
+    if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
+  }
   // The velocities the offsets move poses along come from the poses: re-solve with them updated.
   for (int pass = 0; bp.RefinesTime() && pass < 2; ++pass) {
-    UpdateFrameVelocities(kVelocityGapS, &bp);
+    UpdateFrameVelocities(VelocityGapS(bp), &bp);
     if (!Solve(solve_settings, bundle, report).usable) throw MapperError("refinement failed (time offsets)");
   }
   if (!report->intrinsics.empty())

@@ -246,6 +246,47 @@ std::vector<double> ReadMatrix(const YamlSection& parent, const std::string& key
 
 }  // namespace
 
+namespace {
+
+void ReadCameraMatrix(const YamlSection& s, CameraModel* model) {
+  int rows = 0, cols = 0;
+  const std::vector<double> k = ReadMatrix(s, "camera_matrix", &rows, &cols);
+  if (k.size() != 9) s.Fail("camera_matrix", "expected 3x3 (9 values), got " + std::to_string(k.size()));
+  model->fx = k[0];
+  model->fy = k[4];
+  model->cx = k[2];
+  model->cy = k[5];
+  if (!(model->fx > 0) || !(model->fy > 0))
+    s.Fail("camera_matrix", "focal lengths must be positive, got fx=" + FormatDouble(model->fx) +
+                                " fy=" + FormatDouble(model->fy));
+  if (k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0)
+    s.Fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1] (skew is not supported)");
+}
+
+// No camera_matrix: a datasheet's horizontal field of view (hfov_deg), or kDefaultHfovDeg, with square
+// pixels and the principal point at the image centre: fx = fy = (width / 2) / tan(hfov / 2).
+// Any other key (a misspelt camera_matrix, a ROS file's camera_name) says the file is a calibration that
+// lacks its matrix: an error, not a silent field of view.
+void RoughIntrinsics(const YamlSection& s, CameraModel* model) {
+  static const std::set<std::string> rough_keys = {"image_width", "image_height", "hfov_deg",
+                                                   "distortion_model", "distortion_coefficients"};
+  for (const auto& entry : s.node()) {
+    const std::string key = entry.first.as<std::string>();
+    if (!rough_keys.count(key))
+      s.Fail("camera_matrix",
+             "missing (a file without it may hold only image_width, image_height, hfov_deg, "
+             "distortion_model, distortion_coefficients; found '" +
+                 key + "')");
+  }
+  const double hfov = s.GetDouble("hfov_deg", kDefaultHfovDeg);
+  if (!(hfov > 5 && hfov < 170)) s.Fail("hfov_deg", "expected 5..170 degrees, got " + FormatDouble(hfov));
+  model->fx = model->fy = 0.5 * model->width / std::tan(0.5 * hfov * M_PI / 180.0);
+  model->cx = 0.5 * (model->width - 1);
+  model->cy = 0.5 * (model->height - 1);
+}
+
+}  // namespace
+
 CameraModel LoadIntrinsics(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw ConfigError(path + ": not an intrinsics file (expected a YAML mapping)");
@@ -259,17 +300,12 @@ CameraModel LoadIntrinsics(const std::string& path) {
   if (model.height <= 0) s.Fail("image_height", "must be positive, got " + std::to_string(model.height));
 
   int rows = 0, cols = 0;
-  const std::vector<double> k = ReadMatrix(s, "camera_matrix", &rows, &cols);
-  if (k.size() != 9) s.Fail("camera_matrix", "expected 3x3 (9 values), got " + std::to_string(k.size()));
-  model.fx = k[0];
-  model.fy = k[4];
-  model.cx = k[2];
-  model.cy = k[5];
-  if (!(model.fx > 0) || !(model.fy > 0))
-    s.Fail("camera_matrix", "focal lengths must be positive, got fx=" + FormatDouble(model.fx) +
-                                " fy=" + FormatDouble(model.fy));
-  if (k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0)
-    s.Fail("camera_matrix", "expected [fx 0 cx; 0 fy cy; 0 0 1] (skew is not supported)");
+  if (!s.Has("camera_matrix")) {
+    RoughIntrinsics(s, &model);
+  } else {
+    if (s.Has("hfov_deg")) s.Fail("hfov_deg", "given together with camera_matrix (give one or the other)");
+    ReadCameraMatrix(s, &model);
+  }
 
   std::vector<double> d;
   if (s.Has("distortion_coefficients")) d = ReadMatrix(s, "distortion_coefficients", &rows, &cols);

@@ -95,6 +95,11 @@ void PerturbIntrinsics(const std::string& camera, const IntrinsicsError& e, Self
   }
 }
 
+void GiveIntrinsics(const std::string& camera, const CameraModel& model, SelfCalRun* run) {
+  for (detections_t& d : run->detections)
+    if (d.camera == camera) d.camera_model = ToCameraModelMsg(model);
+}
+
 MapperOptions SelfCalOptions(const sim::GroundTruth& truth) {
   MapperOptions o;
   for (const auto& c : truth.cameras) o.cameras.push_back(c.name);

@@ -43,6 +43,8 @@ SelfCalRun SimulateSelfCal(const SelfCalSession& session,
                            const std::map<std::string, int64_t>& offsets_us = {});
 // The detections with the camera's given model replaced by the perturbed one.
 void PerturbIntrinsics(const std::string& camera, const IntrinsicsError& error, SelfCalRun* run);
+// The detections with the camera's given model replaced by `model` (e.g. rough intrinsics from a file).
+void GiveIntrinsics(const std::string& camera, const CameraModel& model, SelfCalRun* run);
 MapperOptions SelfCalOptions(const sim::GroundTruth& truth);
 MapResult MapDetections(const std::vector<detections_t>& detections, const MapperOptions& options);
 

@@ -1,10 +1,12 @@
-// Self-calibration on real footage (caliscope's ChArUco session, ../shared/data/caliscope): with the
-// intrinsics refined the RMS must fall below the given intrinsics' and the board's known geometry
-// (coplanar markers on a 5.4 cm diagonal grid, spacing / size 1.8856) must hold or improve.
+// Self-calibration on real footage (caliscope's ChArUco session, ../shared/data/caliscope, detected with each
+// camera's own frame times): the clock offsets estimated, and with the intrinsics refined the RMS must fall
+// below the given intrinsics' and the board's known geometry (coplanar markers on a 5.4 cm diagonal grid,
+// spacing / size 1.8856) must hold or improve.
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
 #include "core/config.h"
 #include "detector/detector.h"
@@ -43,38 +45,89 @@ BoardCheck CheckBoard(const RigMap& map) {
   return out;
 }
 
-std::vector<detections_t> DetectAll(const RigConfig& rig) {
-  std::vector<detections_t> all;
-  for (const CameraConfig& c : rig.cameras) {
-    std::vector<detections_t> d = DetectRecording(rig, c.name);
-    all.insert(all.end(), d.begin(), d.end());
-  }
+// The session detected once per test program with each camera's own frame times (caliscope_time: camera).
+const std::vector<detections_t>& CameraTimeDetections(const RigConfig& rig) {
+  static const std::vector<detections_t> all = [&] {
+    RigConfig copy = rig;
+    YAML::Node detector = copy.detector.node();
+    detector["caliscope_time"] = "camera";
+    std::vector<detections_t> out;
+    for (const CameraConfig& c : copy.cameras) {
+      std::vector<detections_t> d = DetectRecording(copy, c.name);
+      out.insert(out.end(), d.begin(), d.end());
+    }
+    return out;
+  }();
   return all;
 }
 
-// DISABLED: with the side-model corners (issue 15) the board's given intrinsics already map it within
-// 0.39 mm of a plane and +0.15 % of its spacing; refining then moves focal lengths by 3-6 % (a planar board
-// does not separate focal length from distance) and the board checks get worse (1.01-1.06 mm, +0.31-0.34 %).
-// Kept, to be enabled again once the refinement is made to respect that (issue 18 stays open).
-TEST(MapperSelfCalRealData, DISABLED_CharucoBoardRefinedIntrinsicsLowerTheRms) {
-  if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"))
-    GTEST_SKIP() << "real data not found at " << kData << " (the caliscope sessions of ../shared/data)";
-  const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
-  const std::vector<detections_t> detections = DetectAll(rig);
-  auto map = [&](IntrinsicsRefinement refine) {
-    MapperOptions options = MapperOptions::FromConfig(rig);
-    options.intrinsics.refine = refine;
-    Mapper mapper(options);
-    for (const auto& d : detections) mapper.Add(d);
-    return mapper.Solve();
-  };
-  const MapResult given = map(IntrinsicsRefinement::kNone);
+MapResult MapSession(const RigConfig& rig, IntrinsicsRefinement refine, bool offsets,
+                     int64_t tolerance_us = 0) {
+  MapperOptions options = MapperOptions::FromConfig(rig);
+  options.intrinsics.refine = refine;
+  options.estimate_time_offsets = offsets;
+  if (tolerance_us > 0) options.sync_tolerance_ms = 1e-3 * static_cast<double>(tolerance_us);
+  Mapper mapper(options);
+  for (const auto& d : CameraTimeDetections(rig)) mapper.Add(d);
+  return mapper.Solve();
+}
+
+bool HaveData() { return std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"); }
+#define SKIP_WITHOUT_DATA() \
+  if (!HaveData())          \
+  GTEST_SKIP() << "real data not found at " << kData << " (the caliscope sessions of ../shared/data)"
+
+const std::string kRig = std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml";
+
+// The caliscope per-camera frame times: the offsets are estimated and reported. Their timestamps agree to
+// about 1 ms on average (5-6 ms RMS jitter), but the images do not: with a velocity per frame (6 fps: the
+// neighbours 167 ms apart) cam1 is found 122 ms late and cam2, cam3 24-27 ms early against cam0 -- capture
+// latencies the timestamps do not show. The same offsets (within 1 ms, less the timestamps' mean
+// differences) come out of the shared sync-index times. Modelled, they take the RMS from 1.33 px to 0.79
+// px and cam1's from 1.9 to 0.83 px; the board stays within 0.56 mm of a plane.
+TEST(MapperSelfCalRealData, CharucoBoardClockOffsetsFromCaliscopeTimestamps) {
+  SKIP_WITHOUT_DATA();
+  const RigConfig rig = LoadRigConfig(kRig);
+  const MapResult wide = MapSession(rig, IntrinsicsRefinement::kNone, false, 25000);
+  const MapResult estimated = MapSession(rig, IntrinsicsRefinement::kNone, true);
+  const BoardCheck b_wide = CheckBoard(wide.map), b_est = CheckBoard(estimated.map);
+  std::printf("camera clocks, 25 ms frames: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n",
+              wide.map.rms_px, b_wide.grid_max_offset_mm, b_wide.spacing_over_size,
+              wide.report.total_seconds);
+  std::printf("offsets estimated: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n",
+              estimated.map.rms_px, b_est.grid_max_offset_mm, b_est.spacing_over_size,
+              estimated.report.total_seconds);
+  ASSERT_EQ(estimated.map.cameras.size(), 4u);
+  const std::map<std::string, std::pair<double, double>> measured = {
+      {"cam0", {0, 0}}, {"cam1", {110e3, 135e3}}, {"cam2", {-35e3, -15e3}}, {"cam3", {-35e3, -15e3}}};
+  for (const MapCamera& c : estimated.map.cameras) {
+    std::printf("  %s: time_offset_us %.1f, rms %.3f px\n", c.name.c_str(), c.time_offset_us, c.rms_px);
+    EXPECT_GE(c.time_offset_us, measured.at(c.name).first) << c.name;
+    EXPECT_LE(c.time_offset_us, measured.at(c.name).second) << c.name;
+    RecordProperty(c.name + "_time_offset_us", std::to_string(c.time_offset_us));
+  }
+  EXPECT_LT(estimated.map.rms_px, 0.85);
+  EXPECT_LT(estimated.map.rms_px, 0.7 * wide.map.rms_px);
+  EXPECT_LT(b_est.grid_max_offset_mm, 0.7);
+  EXPECT_LT(std::abs(b_est.spacing_over_size / 1.885618 - 1), 0.0025);
+}
+
+// Intrinsics refined together with the clocks: the RMS falls below the given intrinsics' and the board's
+// checks hold or improve. Without the offsets (one time per sync index) the refinement absorbed the
+// cameras' unmodelled 24-122 ms latencies with the moving board into the focal lengths (-5 % .. +5 %)
+// and the board checks got worse (1.01-1.06 mm, +0.31-0.34 %); with them focal lengths move 0.2-2.4 %
+// (entries the data agree with are kept at the given values).
+TEST(MapperSelfCalRealData, CharucoBoardRefinedIntrinsicsLowerTheRms) {
+  SKIP_WITHOUT_DATA();
+  const RigConfig rig = LoadRigConfig(kRig);
+  const MapResult given = MapSession(rig, IntrinsicsRefinement::kNone, true);
   const BoardCheck board_given = CheckBoard(given.map);
+  const double spacing_given = std::abs(board_given.spacing_over_size / 1.885618 - 1);
   std::printf("given intrinsics: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n", given.map.rms_px,
               board_given.grid_max_offset_mm, board_given.spacing_over_size, given.report.total_seconds);
   for (IntrinsicsRefinement refine :
        {IntrinsicsRefinement::kFocal, IntrinsicsRefinement::kFocalCenter, IntrinsicsRefinement::kAll}) {
-    const MapResult refined = map(refine);
+    const MapResult refined = MapSession(rig, refine, true);
     const BoardCheck board = CheckBoard(refined.map);
     const std::string name = IntrinsicsRefinementName(refine);
     std::printf("%s: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n", name.c_str(),
@@ -87,57 +140,16 @@ TEST(MapperSelfCalRealData, DISABLED_CharucoBoardRefinedIntrinsicsLowerTheRms) {
           std::printf(" %s %.4g -> %.4g (+-%.2g)", r.names[k].c_str(), r.given[k], r.refined[k],
                       r.posterior_sigma[k]);
       std::printf("\n");
-      for (const std::string& h : r.held) std::printf("    %s\n", h.c_str());
     }
+    EXPECT_LT(refined.map.rms_px, 1.37) << name;
     EXPECT_LT(refined.map.rms_px, given.map.rms_px) << name;
-    // The board's coplanarity check (1 mm): focal and all keep it (0.89, 0.97 mm against 0.81 mm given);
-    // focal_center reached 1.07 mm (reported, not asserted).
-    if (refine != IntrinsicsRefinement::kFocalCenter) {
-      EXPECT_LT(board.grid_max_offset_mm, std::max(1.0, board_given.grid_max_offset_mm)) << name;
-    }
-    EXPECT_LE(std::abs(board.spacing_over_size / 1.885618 - 1),
-              std::max(0.001, std::abs(board_given.spacing_over_size / 1.885618 - 1)))
-        << name;
+    EXPECT_LE(board.grid_max_offset_mm, board_given.grid_max_offset_mm) << name;
+    // Spacing / size holds: within 0.05 % of the given intrinsics' (+0.19 %; measured focal +0.20 %,
+    // focal_center +0.16 %, all +0.20 %), the board's spacing being known no better than its print.
+    const double spacing = std::abs(board.spacing_over_size / 1.885618 - 1);
+    EXPECT_LE(spacing, spacing_given + 0.0005) << name;
     RecordProperty(name + "_rms_px", std::to_string(refined.map.rms_px));
   }
-}
-
-// The caliscope per-camera frame times (detector.caliscope_time: camera) instead of one shared time per
-// synchronised frame: the offsets are estimated and reported; the map stays as good.
-// DISABLED: with the side-model corners the estimated offsets (+1.35, -1.20, -1.10 ms) come with an RMS of
-// 2.13 px against 1.33 px for 25 ms frames; with the previous corners it fell from 1.37 to 1.22 px. To be
-// found out before this is enabled again (issue 18 stays open).
-TEST(MapperSelfCalRealData, DISABLED_CharucoBoardClockOffsetsFromCaliscopeTimestamps) {
-  if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"))
-    GTEST_SKIP() << "real data not found at " << kData << " (the caliscope sessions of ../shared/data)";
-  RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
-  YAML::Node detector = rig.detector.node();
-  detector["caliscope_time"] = "camera";
-  const std::vector<detections_t> detections = DetectAll(rig);
-  auto map = [&](bool offsets) {
-    MapperOptions options = MapperOptions::FromConfig(rig);
-    options.estimate_time_offsets = offsets;
-    options.sync_tolerance_ms = offsets ? options.sync_tolerance_ms : 25.0;
-    Mapper mapper(options);
-    for (const auto& d : detections) mapper.Add(d);
-    return mapper.Solve();
-  };
-  const MapResult wide = map(false);
-  const MapResult estimated = map(true);
-  const BoardCheck b_wide = CheckBoard(wide.map), b_est = CheckBoard(estimated.map);
-  std::printf("camera clocks, 25 ms frames: rms %.4f px, grid %.3f mm, spacing/size %.5f\n", wide.map.rms_px,
-              b_wide.grid_max_offset_mm, b_wide.spacing_over_size);
-  std::printf("offsets estimated: rms %.4f px, grid %.3f mm, spacing/size %.5f, %.2f s\n",
-              estimated.map.rms_px, b_est.grid_max_offset_mm, b_est.spacing_over_size,
-              estimated.report.total_seconds);
-  ASSERT_EQ(estimated.map.cameras.size(), 4u);
-  for (const MapCamera& c : estimated.map.cameras) {
-    std::printf("  %s: time_offset_us %.1f\n", c.name.c_str(), c.time_offset_us);
-    EXPECT_LT(std::abs(c.time_offset_us), 20000.0) << c.name;
-    RecordProperty(c.name + "_time_offset_us", std::to_string(c.time_offset_us));
-  }
-  EXPECT_LE(estimated.map.rms_px, wide.map.rms_px * 1.01);
-  EXPECT_LT(b_est.grid_max_offset_mm, 1.0);
 }
 
 }  // namespace
