@@ -107,21 +107,28 @@ class FrameSynchronizer {
     int64_t arrival = 0;  // its arrival
     int count = 0;        // consistent messages in a row
   };
-  std::map<std::string, int64_t> last_arrival_;       // per camera, arrival of its newest accepted message
-  std::map<std::string, Jump> jumps_;                 // runs of messages ahead of the clock
-  std::map<std::string, Jump> behind_;                // runs of messages far behind the clock
-  std::map<std::string, int64_t> last_emitted_;       // per camera, newest emitted frame with its view
-  std::map<std::string, std::vector<int64_t>> lags_;  // per camera, recent arrival - utime (ring)
-  std::map<std::string, size_t> lag_next_;
-  std::map<std::string, std::vector<int64_t>> gaps_;  // per camera, recent gaps between arrivals (ring)
-  std::map<std::string, size_t> gap_next_;
+  std::map<std::string, int64_t> last_arrival_;  // per camera, arrival of its newest accepted message
+  std::map<std::string, Jump> jumps_;            // runs of messages ahead of the clock
+  std::map<std::string, Jump> behind_;           // runs of messages far behind the clock
+  std::map<std::string, int64_t> last_emitted_;  // per camera, newest emitted frame with its view
+  // The largest of the last kLagWindow values (a ring).
+  struct RecentMax {
+    std::vector<int64_t> values;
+    size_t next = 0;
+    void Push(int64_t v);
+    int64_t Max() const;  // INT64_MIN when empty
+  };
+  std::map<std::string, RecentMax> lags_;      // per camera, recent arrival - utime
+  std::map<std::string, RecentMax> gaps_;      // per camera, recent gaps between arrivals
+  void ForgetPace(const std::string& camera);  // its lags and gaps (its clock changed)
   // Wall time at which the pending frame `key` (first arrival first_arrival_us) is due.
   int64_t DueTime(int64_t key, int64_t first_arrival_us, const std::set<std::string>& alive) const;
-  void RecordLag(const std::string& camera, int64_t lag_us);
   std::string clock_rejection_;
   bool ClockPlausible(const detections_t& detections, int64_t arrival_us);
   bool FarBehindAndOutvoted(const detections_t& detections, int64_t arrival_us);
   int64_t RunsOn(int64_t utime, int64_t since_arrival_us, int64_t arrival_us) const;
+  int64_t OtherCamerasClock(int64_t arrival_us) const;  // the newest, as they run on (INT64_MIN: none)
+  int ExtendRun(Jump* run, int64_t utime, int64_t arrival_us) const;  // its length, this message included
   std::map<std::string, int64_t> VoterClocks(int64_t arrival_us) const;
   bool WinsVote(const std::string& camera, int64_t arrival_us);
   void FollowClock(int64_t clock, int64_t arrival_us);

@@ -87,6 +87,39 @@ int64_t FrameSynchronizer::RunsOn(int64_t utime, int64_t since_arrival_us, int64
   return options_.arrival_is_wall_time ? utime + (arrival_us - since_arrival_us) : utime;
 }
 
+int64_t FrameSynchronizer::OtherCamerasClock(int64_t arrival_us) const {
+  int64_t clock = INT64_MIN;
+  for (const auto& [camera, utime] : last_utime_)
+    clock = std::max(clock, RunsOn(utime, last_arrival_.at(camera), arrival_us));
+  return clock;
+}
+
+// Messages on another clock count as one run while each is within max_clock_jump_us of the one before.
+int FrameSynchronizer::ExtendRun(Jump* run, int64_t utime, int64_t arrival_us) const {
+  run->count =
+      (run->count > 0 && std::llabs(utime - run->utime) <= options_.max_clock_jump_us) ? run->count + 1 : 1;
+  run->utime = utime;
+  run->arrival = arrival_us;
+  return run->count;
+}
+
+void FrameSynchronizer::ForgetPace(const std::string& camera) {
+  lags_.erase(camera);
+  gaps_.erase(camera);
+}
+
+void FrameSynchronizer::RecentMax::Push(int64_t v) {
+  if (values.size() < kLagWindow)
+    values.push_back(v);
+  else
+    values[next] = v;
+  next = (next + 1) % kLagWindow;
+}
+
+int64_t FrameSynchronizer::RecentMax::Max() const {
+  return values.empty() ? INT64_MIN : *std::max_element(values.begin(), values.end());
+}
+
 bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us) {
   clock_rejection_.clear();
   const int64_t jump = options_.max_clock_jump_us;
@@ -98,8 +131,7 @@ bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us
     predicted = RunsOn(own->second, last_arrival_[d.camera], arrival_us);
     against = "its own clock";
   } else {
-    for (const auto& [camera, utime] : last_utime_)  // the other cameras' newest, as they run on
-      predicted = std::max(predicted, RunsOn(utime, last_arrival_[camera], arrival_us));
+    predicted = OtherCamerasClock(arrival_us);
     against = "the other cameras' clocks";
   }
   if (predicted == INT64_MIN || d.utime - predicted <= jump) {
@@ -108,11 +140,9 @@ bool FrameSynchronizer::ClockPlausible(const detections_t& d, int64_t arrival_us
   }
   // Messages that keep coming on the new clock, consistent with each other: a restarted source, or the
   // clock was set by a camera ahead of the others. The cameras vote.
-  Jump& j = jumps_[d.camera];
-  j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
-  j.utime = d.utime;
-  j.arrival = arrival_us;
-  if (j.count >= kClockJumpConfirm && WinsVote(d.camera, arrival_us)) return true;
+  if (ExtendRun(&jumps_[d.camera], d.utime, arrival_us) >= kClockJumpConfirm &&
+      WinsVote(d.camera, arrival_us))
+    return true;
   ++stats_.clock_jumps;
   clock_rejection_ = "camera '" + d.camera + "': utime " + std::to_string(d.utime) + " is " +
                      std::to_string((d.utime - predicted) / 1000) + " ms ahead of " + against +
@@ -134,20 +164,15 @@ bool FrameSynchronizer::FarBehindAndOutvoted(const detections_t& d, int64_t arri
     clock = own->second;
   } else {
     against = "the other cameras' clocks";
-    for (const auto& [camera, utime] : last_utime_)
-      clock = std::max(clock, RunsOn(utime, last_arrival_[camera], arrival_us));
+    clock = OtherCamerasClock(arrival_us);
   }
   if (clock == INT64_MIN || clock - d.utime <= jump) {
     behind_.erase(d.camera);
     return false;
   }
-  Jump& j = behind_[d.camera];
-  j.count = (j.count > 0 && std::llabs(d.utime - j.utime) <= jump) ? j.count + 1 : 1;
-  j.utime = d.utime;
-  j.arrival = arrival_us;
   // Fewer in a row: a late view as far as anyone can tell yet. A camera's first messages are held back
   // (they would set its clock); others go on to the late-view check.
-  if (j.count < kClockJumpConfirm) {
+  if (ExtendRun(&behind_[d.camera], d.utime, arrival_us) < kClockJumpConfirm) {
     if (own_clock) return false;
     ++stats_.out_of_order;
     return true;
@@ -209,10 +234,7 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
       if (run.count >= kClockJumpConfirm && std::llabs(clocks.at(camera) - clock) <= jump) {
         last_utime_[camera] = first_utime_[camera] = run.utime;
         last_arrival_[camera] = run.arrival;
-        lags_.erase(camera);
-        lag_next_.erase(camera);
-        gaps_.erase(camera);
-        gap_next_.erase(camera);
+        ForgetPace(camera);
       }
   for (const auto& [camera, t] : clocks) {
     jumps_.erase(camera);
@@ -226,10 +248,7 @@ void FrameSynchronizer::FollowClock(int64_t clock, int64_t arrival_us) {
     const std::string camera = it->first;
     first_utime_.erase(camera);
     last_arrival_.erase(camera);
-    lags_.erase(camera);
-    lag_next_.erase(camera);
-    gaps_.erase(camera);
-    gap_next_.erase(camera);
+    ForgetPace(camera);
     it = last_utime_.erase(it);
   }
   for (auto it = pending_.begin(); it != pending_.end();) {
@@ -263,7 +282,7 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   if (FarBehindAndOutvoted(detections, arrival_us)) return {};
   // Measured before the late-view check: a camera whose views all come late must get its wait.
   if (options_.max_wait_us > 0 && options_.arrival_is_wall_time)
-    RecordLag(detections.camera, arrival_us - utime);
+    lags_[detections.camera].Push(arrival_us - utime);
   // The nearest pending frame within tolerance.
   auto best = pending_.end();
   int64_t best_gap = 0;
@@ -291,14 +310,8 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   const std::string& camera = detections.camera;
   now_us_ = std::max(now_us_, arrival_us);
   first_arrival_any_ = std::min(first_arrival_any_, arrival_us);
-  if (const auto previous = last_arrival_.find(camera); previous != last_arrival_.end()) {
-    std::vector<int64_t>& ring = gaps_[camera];
-    if (ring.size() < kLagWindow)
-      ring.push_back(arrival_us - previous->second);
-    else
-      ring[gap_next_[camera]] = arrival_us - previous->second;
-    gap_next_[camera] = (gap_next_[camera] + 1) % kLagWindow;
-  }
+  if (const auto previous = last_arrival_.find(camera); previous != last_arrival_.end())
+    gaps_[camera].Push(arrival_us - previous->second);
   last_arrival_[camera] = arrival_us;
   auto last = last_utime_.find(camera);
   if (last == last_utime_.end()) {
@@ -354,20 +367,9 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   return EmitUpTo(emit_until);
 }
 
-void FrameSynchronizer::RecordLag(const std::string& camera, int64_t lag_us) {
-  std::vector<int64_t>& ring = lags_[camera];
-  size_t& next = lag_next_[camera];
-  if (ring.size() < kLagWindow)
-    ring.push_back(lag_us);
-  else
-    ring[next] = lag_us;
-  next = (next + 1) % kLagWindow;
-}
-
 int64_t FrameSynchronizer::Lag(const std::string& camera) const {
   const auto it = lags_.find(camera);
-  if (it == lags_.end() || it->second.empty()) return INT64_MIN;
-  return *std::max_element(it->second.begin(), it->second.end());
+  return it == lags_.end() ? INT64_MIN : it->second.Max();
 }
 
 int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
@@ -386,10 +388,9 @@ int64_t FrameSynchronizer::DueTime(int64_t key, int64_t first_arrival_us,
     // between messages has passed without news.
     const auto last = last_utime_.find(camera);
     const auto gaps = gaps_.find(camera);
-    if (last != last_utime_.end() && last->second < key && gaps != gaps_.end() && !gaps->second.empty())
-      due = std::max(due, last_arrival_.at(camera) +
-                              *std::max_element(gaps->second.begin(), gaps->second.end()) +
-                              options_.deadline_us);
+    if (last != last_utime_.end() && last->second < key && gaps != gaps_.end() &&
+        !gaps->second.values.empty())
+      due = std::max(due, last_arrival_.at(camera) + gaps->second.Max() + options_.deadline_us);
   }
   return std::min(due, first_arrival_us + options_.max_wait_us);
 }
