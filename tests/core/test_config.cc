@@ -9,6 +9,7 @@
 namespace mcmt {
 namespace {
 
+using testing_util::Replace;
 using testing_util::TempDir;
 
 // As OpenCV's calibration sample (and cv::FileStorage) writes it.
@@ -119,17 +120,6 @@ std::string LoadError(const std::string& rig) {
   ADD_FAILURE() << "no error for:\n" << rig;
   return "";
 }
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
-
-#define EXPECT_CONTAINS(haystack, needle)                          \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
-      << "'" << (haystack) << "' lacks '" << (needle) << "'"
 
 std::string LoadError2(const std::string& path) {
   try {

@@ -8,11 +8,8 @@
 namespace mcmt {
 namespace {
 
+using testing_util::Replace;
 using testing_util::TempDir;
-
-#define EXPECT_CONTAINS(haystack, needle)                          \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
-      << "'" << (haystack) << "' lacks '" << (needle) << "'"
 
 bool SameRigid(const Rigid3& a, const Rigid3& b) { return a.matrix() == b.matrix(); }
 
@@ -143,13 +140,6 @@ std::string MapError(const std::string& text) {
   }
   ADD_FAILURE() << "no error";
   return "";
-}
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
 }
 
 TEST(Files, MapErrorsNameTheKey) {

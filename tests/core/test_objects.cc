@@ -9,6 +9,7 @@
 namespace mcmt {
 namespace {
 
+using testing_util::Replace;
 using testing_util::TempDir;
 
 const char kIntrinsics[] = R"(image_width: 640
@@ -53,16 +54,6 @@ std::string Error(const std::string& text) {
   return "";
 }
 
-std::string With(std::string text, const std::string& from, const std::string& to) {
-  const size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
-
-#define EXPECT_HAS(text, part) \
-  EXPECT_NE(std::string(text).find(part), std::string::npos) << "'" << (text) << "' lacks '" << (part) << "'"
-
 TEST(Objects, IdsRangesOtherSizesStaticAndRigFrame) {
   TempDir dir;
   const ObjectsConfig o = Load(dir, kObjects).objects;
@@ -100,35 +91,36 @@ TEST(Objects, MarkersAloneAreOneObjectNamedByTracker) {
 }
 
 TEST(Objects, BadInputNamesFileKeyIdAndObjects) {
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "[\"18-22\"]")),
-             "rig.yaml: objects[1].ids: marker id 18 is claimed by both 'tool' and 'patient'");
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "other")),
-             "objects[2].ids: 'other' is claimed by both 'patient' and 'room'");
-  EXPECT_HAS(Error(With(kObjects, "name: patient", "name: tool")),
-             "objects[1].name: object name 'tool' is used twice");
-  EXPECT_HAS(Error(With(kObjects, "name: patient", "name: pa-tient")),
-             "objects[1].name: 'pa-tient' is not a valid");
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "[\"22-20\"]")),
-             "objects[1].ids: item 0: empty range '22-20'");
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "[\"20-x\"]")), "objects[1].ids: item 0: expected a range");
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "[\"20-60\"]")),
-             "objects[1].ids: marker id 60 is not in the dictionary");
-  EXPECT_HAS(Error(With(kObjects, "[\"20-22\"]", "[20, 20]")),
-             "objects[1].ids: marker id 20 is listed twice");
-  EXPECT_HAS(Error(With(kObjects, "{12: 0.03}", "{30: 0.03}")),
-             "objects[0].sizes.30: marker id 30 is not one of 'tool'");
-  EXPECT_HAS(Error(With(kObjects, "rig_frame: room", "rig_frame: tool")),
-             "rig.yaml: rig_frame: object 'tool' is not static");
-  EXPECT_HAS(Error(With(kObjects, "rig_frame: room", "rig_frame: wall")),
-             "rig_frame: no object named 'wall'");
-  EXPECT_HAS(Error(With(kObjects, "static: true", "statc: true")), "objects[2].statc: unknown key");
-  EXPECT_HAS(Error(With(With(kObjects, ", size: 0.05", ""), "    size: 0.12\n", "")),
-             "objects[1].size: missing (and no markers.size");
-  EXPECT_HAS(Error("markers: {size: 0.04}\nobjects: auto\n"), "objects: 'auto'");
-  EXPECT_HAS(Error("markers: {size: 0.04}\nobjects: []\n"), "objects: expected a non-empty list");
-  EXPECT_HAS(Error("markers: {size: 0.04, ids: [1]}\nobjects: [{name: a, ids: [1]}]\n"),
-             "objects: markers.ids and objects: exclude each other");
-  EXPECT_HAS(Error("markers: {size: 0.04}\nrig_frame: room\n"), "rig_frame: needs an objects: list");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "[\"18-22\"]")),
+                  "rig.yaml: objects[1].ids: marker id 18 is claimed by both 'tool' and 'patient'");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "other")),
+                  "objects[2].ids: 'other' is claimed by both 'patient' and 'room'");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "name: patient", "name: tool")),
+                  "objects[1].name: object name 'tool' is used twice");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "name: patient", "name: pa-tient")),
+                  "objects[1].name: 'pa-tient' is not a valid");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "[\"22-20\"]")),
+                  "objects[1].ids: item 0: empty range '22-20'");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "[\"20-x\"]")),
+                  "objects[1].ids: item 0: expected a range");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "[\"20-60\"]")),
+                  "objects[1].ids: marker id 60 is not in the dictionary");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "[\"20-22\"]", "[20, 20]")),
+                  "objects[1].ids: marker id 20 is listed twice");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "{12: 0.03}", "{30: 0.03}")),
+                  "objects[0].sizes.30: marker id 30 is not one of 'tool'");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "rig_frame: room", "rig_frame: tool")),
+                  "rig.yaml: rig_frame: object 'tool' is not static");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "rig_frame: room", "rig_frame: wall")),
+                  "rig_frame: no object named 'wall'");
+  EXPECT_CONTAINS(Error(Replace(kObjects, "static: true", "statc: true")), "objects[2].statc: unknown key");
+  EXPECT_CONTAINS(Error(Replace(Replace(kObjects, ", size: 0.05", ""), "    size: 0.12\n", "")),
+                  "objects[1].size: missing (and no markers.size");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04}\nobjects: auto\n"), "objects: 'auto'");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04}\nobjects: []\n"), "objects: expected a non-empty list");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04, ids: [1]}\nobjects: [{name: a, ids: [1]}]\n"),
+                  "objects: markers.ids and objects: exclude each other");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04}\nrig_frame: room\n"), "rig_frame: needs an objects: list");
 }
 
 }  // namespace
@@ -170,7 +162,7 @@ TEST(Objects, MapVersion2RoundTripsAndNamesBadObjects) {
   const RigMap map = TwoBodyMap();
   WriteMap(dir.File("map.yaml"), map);
   const std::string text = ReadFile(dir.File("map.yaml"));
-  EXPECT_HAS(text, "version: 2\n");
+  EXPECT_CONTAINS(text, "version: 2\n");
   const RigMap back = ReadMap(dir.File("map.yaml"));
   ASSERT_EQ(back.objects.size(), 2u);
   EXPECT_EQ(back.rig_frame, "floor");
@@ -186,11 +178,11 @@ TEST(Objects, MapVersion2RoundTripsAndNamesBadObjects) {
   EXPECT_EQ(floor_alone.reference_marker, 20);
   // A version 1 map (no objects) is still written and read as before.
   WriteMap(dir.File("v1.yaml"), floor_alone);
-  EXPECT_HAS(ReadFile(dir.File("v1.yaml")), "version: 1\n");
+  EXPECT_CONTAINS(ReadFile(dir.File("v1.yaml")), "version: 1\n");
   EXPECT_TRUE(ReadMap(dir.File("v1.yaml")).objects.empty());
   // Bad version 2 maps name the key.
   auto error = [&](const std::string& from, const std::string& to) {
-    dir.Write("bad.yaml", With(text, from, to));
+    dir.Write("bad.yaml", Replace(text, from, to));
     try {
       ReadMap(dir.File("bad.yaml"));
     } catch (const FileFormatError& e) {
@@ -198,11 +190,11 @@ TEST(Objects, MapVersion2RoundTripsAndNamesBadObjects) {
     }
     return std::string("no error");
   };
-  EXPECT_HAS(error("  - id: 20", "  - id: 2"),
-             "objects[1].markers: marker id 2 is in both 'tool' and 'floor'");
-  EXPECT_HAS(error("name: \"floor\"", "name: \"tool\""), "objects[1].name: duplicated object 'tool'");
-  EXPECT_HAS(error("rig_frame: \"floor\"", "rig_frame: \"wall\""), "rig_frame: no object named 'wall'");
-  EXPECT_HAS(error("static: true", "static: maybe"), "objects[1].static: expected true or false");
+  EXPECT_CONTAINS(error("  - id: 20", "  - id: 2"),
+                  "objects[1].markers: marker id 2 is in both 'tool' and 'floor'");
+  EXPECT_CONTAINS(error("name: \"floor\"", "name: \"tool\""), "objects[1].name: duplicated object 'tool'");
+  EXPECT_CONTAINS(error("rig_frame: \"floor\"", "rig_frame: \"wall\""), "rig_frame: no object named 'wall'");
+  EXPECT_CONTAINS(error("static: true", "static: maybe"), "objects[1].static: expected true or false");
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
-// Helpers shared by the core tests: a test camera, a temporary folder removed at the end, file writing.
+// Helpers shared by the core tests: a test camera, a temporary folder removed at the end, file writing,
+// text edits and a contains-check for error messages.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,6 +11,11 @@
 
 #include "core/camera.h"
 #include "tests/support/temp_dir.h"
+
+// A string that must contain a part, and says which when it does not.
+#define EXPECT_CONTAINS(haystack, needle)                          \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
+      << "'" << (haystack) << "' lacks '" << (needle) << "'"
 
 namespace mcmt {
 namespace testing_util {
@@ -27,6 +34,14 @@ inline CameraModel TestCamera() {
 }
 
 using TempDir = mcmt::test::TempDir;  // tests/support
+
+// `text` with the first `from` replaced by `to` (a test failure when `from` is not there).
+inline std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
 
 }  // namespace testing_util
 }  // namespace mcmt
