@@ -273,8 +273,7 @@ void MergeCameraEpochs(const std::vector<EpochSplit>& splits, const std::vector<
     m.rig_from_cam_before = earlier.rig_from_cam;
     m.observations_before = earlier.observations;
     m.rotation_deg = RotationAngle(earlier.rig_from_cam, latest->rig_from_cam) * 180.0 / kPi;
-    m.translation_mm =
-        1000.0 * (earlier.rig_from_cam.translation() - latest->rig_from_cam.translation()).norm();
+    m.translation_mm = 1000.0 * TranslationDistance(earlier.rig_from_cam, latest->rig_from_cam);
     report.moved_cameras.push_back(m);
     std::ostringstream w;
     w.setf(std::ios::fixed);

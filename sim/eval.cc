@@ -114,7 +114,7 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
     const Rigid3 est = A * est_cams[i]->rig_from_cam;
     CameraError e;
     e.name = gt_cams[i]->name;
-    e.position_mm = 1000.0 * (est.translation() - gt_cams[i]->rig_from_cam.translation()).norm();
+    e.position_mm = 1000.0 * TranslationDistance(est, gt_cams[i]->rig_from_cam);
     e.rotation_deg = AngleDeg(est.linear(), gt_cams[i]->rig_from_cam.linear());
     cam_pos.push_back(e.position_mm);
     cam_rot.push_back(e.rotation_deg);
@@ -186,7 +186,7 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
       if (!seen.insert(row.seq).second) continue;  // duplicate: first one counts
       const Rigid3& gt = it->second->rig_from_object;
       const Rigid3 est = A * row.rig_from_object * B_inv;
-      trans.push_back(1000.0 * (est.translation() - gt.translation()).norm());
+      trans.push_back(1000.0 * TranslationDistance(est, gt));
       rot.push_back(AngleDeg(est.linear(), gt.linear()));
       est_pos.push_back((row.rig_from_object * B_inv).translation());
       gt_pos.push_back(gt.translation());
