@@ -120,45 +120,50 @@ void RemoveStaleFrames(const fs::path& folder, const std::vector<SimFrame>& fram
 
 namespace internal {
 
+void SimulateFrames(const std::vector<SimCamera>& cameras, size_t frames, const DetectionSimOptions& d,
+                    uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at,
+                    const std::function<void(size_t k, const detections_t& message)>& publish) {
+  std::vector<std::mt19937_64> rngs;
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
+                      static_cast<uint32_t>(k), 0x5eedu};
+    rngs.emplace_back(seq);
+  }
+  detections_t msg;
+  for (size_t i = 0; i < frames; ++i) {
+    SimFrame f;
+    const SimObject& object = scene(i, &f);
+    for (size_t k = 0; k < cameras.size(); ++k) {
+      SimCamera moved;
+      if (camera_at && !camera_at(k, f, &moved)) continue;  // not publishing yet
+      if (SimulateDetections(camera_at ? moved : cameras[k], object, f, d, rngs[k], &msg)) publish(k, msg);
+    }
+  }
+}
+
 int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
                            const std::vector<SimFrame>& frames, const DetectionSimOptions& d, uint64_t seed,
-                           const std::function<const SimObject&(size_t, SimFrame*)>& scene,
-                           const CameraAtFrameFn& camera_at) {
+                           const SceneFn& scene, const CameraAtFrameFn& camera_at) {
   const std::string tmp = TempName(path);
   int64_t written = 0;
   {
     lcm::LogFile log(tmp, "w");
     if (!log.good()) throw std::runtime_error("cannot write '" + tmp + "'");
-    std::vector<std::mt19937_64> rngs;
     std::vector<std::string> channels;
-    for (size_t k = 0; k < cameras.size(); ++k) {
-      std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
-                        static_cast<uint32_t>(k), 0x5eedu};
-      rngs.emplace_back(seq);
-      channels.push_back(DetectionsChannel(cameras[k].name));
-    }
-    detections_t msg;
+    for (const SimCamera& c : cameras) channels.push_back(DetectionsChannel(c.name));
     std::vector<uint8_t> buffer;
-    int64_t eventnum = 0;
-    for (size_t i = 0; i < frames.size(); ++i) {
-      SimFrame f;
-      const SimObject& object = scene(i, &f);
-      for (size_t k = 0; k < cameras.size(); ++k) {
-        SimCamera moved;
-        if (camera_at && !camera_at(k, f, &moved)) continue;  // not publishing yet
-        if (!SimulateDetections(camera_at ? moved : cameras[k], object, f, d, rngs[k], &msg)) continue;
-        buffer.resize(msg.getEncodedSize());
-        msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-        lcm::LogEvent ev;
-        ev.eventnum = eventnum++;
-        ev.timestamp = f.utime;
-        ev.channel = channels[k];
-        ev.datalen = static_cast<int32_t>(buffer.size());
-        ev.data = buffer.data();
-        if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
-        ++written;
-      }
-    }
+    SimulateFrames(cameras, frames.size(), d, seed, scene, camera_at, [&](size_t k, const detections_t& msg) {
+      buffer.resize(msg.getEncodedSize());
+      msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+      lcm::LogEvent ev;
+      ev.eventnum = written;
+      ev.timestamp = msg.utime;
+      ev.channel = channels[k];
+      ev.datalen = static_cast<int32_t>(buffer.size());
+      ev.data = buffer.data();
+      if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
+      ++written;
+    });
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);

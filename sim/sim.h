@@ -423,5 +423,53 @@ SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k);
 // DIR/ground_truth.yaml (= the tool's) and DIR/detections.lcmlog.
 DatasetSummary GenerateBodiesDataset(const DatasetOptions& options);
 
+// ---------------------------------------------------------------------------------------------
+// Detections-only sessions in memory (sim/session.cc): a rig, bodies moving in front of it and every
+// camera's detections, for tests and benchmarks that want them without files. The same simulation as a
+// detections-only dataset: a session from SessionOptions holds the messages GenerateDataset would log for
+// the same rig, object, trajectory and detection options.
+
+struct Session {
+  std::vector<SimCamera> cameras;
+  std::vector<SceneBody> bodies;  // bodies[0]: the object; every body has one pose per frame
+  std::string dictionary = "DICT_6X6_250";
+  double fps = 30.0;
+  std::vector<std::vector<detections_t>> views;  // per frame: the cameras' published messages, camera order
+
+  const SimObject& object() const { return bodies.at(0).object; }
+  const std::vector<SimFrame>& frames() const { return bodies.at(0).frames; }
+  // A body's ground truth (the cameras, its markers and poses), for Evaluate and MapFromGroundTruth.
+  GroundTruth Truth(size_t body = 0) const;
+  // Every message, frame by frame (what a log of the session holds, in its order).
+  std::vector<detections_t> Messages() const;
+};
+
+struct SessionOptions {
+  RigOptions rig;
+  ObjectOptions object;
+  TrajectoryOptions trajectory;  // its seed also seeds the detections (as GenerateDataset)
+  DetectionSimOptions detections;
+  // Camera k's messages are stamped k * camera_stagger_us after the frame (cameras not triggered together).
+  int64_t camera_stagger_us = 0;
+};
+
+// The rig, the object and its trajectory made from the options (MakeRig, MakeObject, MakeTrajectory).
+Session SimulateSession(const SessionOptions& options);
+// Given cameras and bodies (the same number of frames each; frame times and seqs are bodies[0]'s): the
+// detections of every body's markers, a body hiding markers of the others. Throws std::invalid_argument
+// when there is no body or the bodies' frames differ in number.
+Session SimulateSession(const std::vector<SimCamera>& cameras, const std::vector<SceneBody>& bodies,
+                        const DetectionSimOptions& options, uint64_t seed, int64_t camera_stagger_us = 0);
+
+// DIR/rig.yaml and DIR/camK.yml for the session's cameras (markers: the dictionary and the object's sizes;
+// cameras: name and intrinsics), `extra` appended verbatim (sync:, mapper: ...). Returns the rig's path.
+std::string WriteSessionRig(const std::string& dir, const Session& session, const std::string& extra = "");
+
+// Writes `messages` in their order as an LCM log (detections_t on MCMT_DETECTIONS_<CAMERA>), atomically; an
+// event's time is its message's utime plus `arrival_delay_us(message)` when given (a detector that takes
+// longer). Returns the events written; throws std::runtime_error naming the file.
+int64_t WriteMessagesLog(const std::string& path, const std::vector<detections_t>& messages,
+                         const std::function<int64_t(const detections_t&)>& arrival_delay_us = nullptr);
+
 }  // namespace sim
 }  // namespace mcmt

@@ -30,17 +30,26 @@ bool SegmentHitsBody(const SimObject& object, const Eigen::Vector3d& from, const
 bool UndistortNormalized(const CameraModel& model, const ValidRegion& region, double xd, double yd, double* x,
                          double* y);
 
+// Every camera's simulated detections of every frame, frame by frame and cameras in order (a log's order):
+// `scene(i, &frame)` returns frame i's object and sets the frame (seq, utime, rig_from_object); with
+// `camera_at`, camera k at a frame is the one it gives, and a camera it returns false for does not publish
+// that frame. `publish(k, message)` gets each published message of camera k. One random generator per camera,
+// seeded by `seed` and the camera index (the outcome does not depend on what `publish` does).
+using SceneFn = std::function<const SimObject&(size_t, SimFrame*)>;
+using CameraAtFrameFn = std::function<bool(size_t k, const SimFrame& frame, SimCamera* camera)>;
+void SimulateFrames(const std::vector<SimCamera>& cameras, size_t frames, const DetectionSimOptions& options,
+                    uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at,
+                    const std::function<void(size_t k, const detections_t& message)>& publish);
+
 // Writes `path` (atomically) with every camera's simulated detections (detections_t on
 // MCMT_DETECTIONS_<CAMERA>, event time = utime) of frame i's scene: `scene(i, &frame)` returns the object and
 // sets the frame (seq, utime, rig_from_object). One random generator per camera, seeded by `seed` and the
 // camera index. With `camera_at`, camera k at a frame is the one it gives (a camera moved during the
 // session), and a camera it returns false for does not publish that frame (one that starts late).
 // Returns the messages written.
-using CameraAtFrameFn = std::function<bool(size_t k, const SimFrame& frame, SimCamera* camera)>;
 int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
                            const std::vector<SimFrame>& frames, const DetectionSimOptions& options,
-                           uint64_t seed, const std::function<const SimObject&(size_t, SimFrame*)>& scene,
-                           const CameraAtFrameFn& camera_at = nullptr);
+                           uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at = nullptr);
 
 }  // namespace internal
 }  // namespace sim
