@@ -34,7 +34,7 @@ Run Timed(const std::vector<std::string>& argv, const std::string& log) {
   rusage usage{};
   if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::fprintf(stderr, "bench_import: %s failed:\n%s\n", argv[0].c_str(),
-                 mcmt::tracker_test::Slurp(log).c_str());
+                 mcmt::test::ReadText(log).c_str());
     std::exit(1);
   }
   return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),

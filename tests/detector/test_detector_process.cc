@@ -47,8 +47,6 @@ Child Spawn(const std::vector<std::string>& argv, const std::string& out_path) {
 // Exit code, or -1 on timeout (the child is killed).
 int WaitExit(const Child& c, double timeout_s) { return test::WaitForExit(c.pid, timeout_s); }
 
-std::string Slurp(const std::string& path) { return test::ReadText(path); }
-
 // A 3-camera recording rendered with tests/detector/synthetic.h: PNG folders, intrinsics, rig.yaml.
 class Recording {
  public:
@@ -167,8 +165,9 @@ TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
   }
   rx.Receive(Recording::kCameras, Recording::kFrames, 30.0);
   for (const auto& c : children) {
-    EXPECT_EQ(WaitExit(c, 20.0), 0) << Slurp(c.out_path);
-    EXPECT_NE(Slurp(c.out_path).find("done: 12 frames"), std::string::npos) << Slurp(c.out_path);
+    EXPECT_EQ(WaitExit(c, 20.0), 0) << test::ReadText(c.out_path);
+    EXPECT_NE(test::ReadText(c.out_path).find("done: 12 frames"), std::string::npos)
+        << test::ReadText(c.out_path);
   }
   ExpectEveryFrameInOrder(rx, rec);
 }
@@ -182,11 +181,11 @@ TEST(DetectorProcess, SigintStopsALoopingDetectorCleanly) {
                   (rec.dir / "out.txt").string());
   rx.Receive(1, Recording::kFrames + 3, 30.0);  // more frames than the recording: it loops
   kill(c.pid, SIGINT);
-  EXPECT_EQ(WaitExit(c, 10.0), 0) << Slurp(c.out_path);
+  EXPECT_EQ(WaitExit(c, 10.0), 0) << test::ReadText(c.out_path);
   const auto& frames = rx.by_camera["cam1"];
   ASSERT_GE(static_cast<int>(frames.size()), Recording::kFrames + 3);
   for (size_t k = 0; k < frames.size(); ++k) EXPECT_EQ(frames[k].seq, static_cast<int64_t>(k));
-  EXPECT_NE(Slurp(c.out_path).find("(stopped)"), std::string::npos);
+  EXPECT_NE(test::ReadText(c.out_path).find("(stopped)"), std::string::npos);
 }
 
 // Runs mcmt-detector expecting failure; returns its output (one line).
@@ -195,7 +194,7 @@ std::string RunFailing(const std::vector<std::string>& args, const fs::path& dir
   argv.insert(argv.end(), args.begin(), args.end());
   Child c = Spawn(argv, (dir / "fail.txt").string());
   const int rc = WaitExit(c, 20.0);
-  const std::string out = Slurp(c.out_path);
+  const std::string out = test::ReadText(c.out_path);
   EXPECT_NE(rc, 0) << out;
   EXPECT_NE(rc, -1) << "timeout";
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
@@ -233,7 +232,7 @@ TEST(DetectorProcess, BadInputGivesOneLineNamingCameraAndFile) {
     EXPECT_NE(out.find("320x240"), std::string::npos) << out;
   }
   {
-    std::string yaml = Slurp(rec.rig);
+    std::string yaml = test::ReadText(rec.rig);
     yaml.replace(yaml.find("DICT_6X6_250"), 12, "DICT_6X6_999");
     const std::string bad_rig = (rec.dir / "bad_dict.yaml").string();
     std::ofstream(bad_rig) << yaml;
@@ -262,7 +261,7 @@ TEST(DetectorProcess, LaunchDetectMode) {
                   (rec.dir / "launch.txt").string());
   rx.Receive(Recording::kCameras, Recording::kFrames, 40.0);
   const int rc = WaitExit(c, 30.0);
-  const std::string out = Slurp(c.out_path);
+  const std::string out = test::ReadText(c.out_path);
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("[detector cam0] camera cam0: done: 12 frames"), std::string::npos) << out;
   EXPECT_NE(out.find("[detector cam2] "), std::string::npos) << out;
@@ -282,7 +281,7 @@ TEST(DetectorProcess, LaunchStopsEveryoneWhenOneFails) {
                    "--lcm-url", Url(7706), "--loop"},
                   (rec.dir / "launch.txt").string());
   const int rc = WaitExit(c, 40.0);
-  const std::string out = Slurp(c.out_path);
+  const std::string out = test::ReadText(c.out_path);
   EXPECT_NE(rc, 0) << out;
   EXPECT_NE(rc, -1) << out;
   EXPECT_NE(out.find("detector cam1 failed"), std::string::npos) << out;
@@ -299,7 +298,7 @@ TEST(DetectorProcess, LaunchRecordMode) {
                    "--out", log, "--lcm-url", Url(7708)},
                   (rec.dir / "launch.txt").string());
   const int rc = WaitExit(c, 60.0);
-  const std::string out = Slurp(c.out_path);
+  const std::string out = test::ReadText(c.out_path);
   ASSERT_EQ(rc, 0) << out;
   lcm::LogFile file(log, "r");
   ASSERT_TRUE(file.good()) << log;
@@ -328,14 +327,14 @@ TEST(DetectorProcess, ImagesAreRateLimitedJpegsNamingTheirFrame) {
   ImageReceiver rx(Url(7710));
   ASSERT_TRUE(rx.lcm_.good());
   // 12 frames at 30 fps = 0.4 s of message time, at most 10 images/s: frames 0, 3, 6, 9.
-  std::string yaml = Slurp(rec.rig) + "detector:\n  image_rate: 10\n";
+  std::string yaml = test::ReadText(rec.rig) + "detector:\n  image_rate: 10\n";
   std::ofstream(rec.rig) << yaml;
   Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7710), "--images",
                    "--rate", "realtime"},
                   (rec.dir / "out.txt").string());
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (rx.images.size() < 4 && std::chrono::steady_clock::now() < end) rx.lcm_.handleTimeout(50);
-  EXPECT_EQ(WaitExit(c, 20.0), 0) << Slurp(c.out_path);
+  EXPECT_EQ(WaitExit(c, 20.0), 0) << test::ReadText(c.out_path);
   for (int i = 0; i < 10; ++i) rx.lcm_.handleTimeout(20);
   ASSERT_EQ(rx.images.size(), 4u);
   for (size_t i = 0; i < rx.images.size(); ++i) {

@@ -11,7 +11,7 @@
 #include "core/files.h"
 #include "core/se3.h"
 #include "import/rosbag.h"
-#include "tests/sim/temp_dir.h"
+#include "tests/support/temp_dir.h"
 #include "tests/tracker/process_util.h"
 
 namespace mcmt {
@@ -117,7 +117,7 @@ void RunSession(const std::string& name, Limits limits) {
   const std::string src = kData + name + "/";
   if (!std::filesystem::exists(src + "tag_detections.bag.bz2"))
     GTEST_SKIP() << "no " << src << " (real data absent)";
-  sim::testing::TempDir dir("import_" + name);
+  test::TempDir dir("import_" + name);
   std::string out;
   ASSERT_EQ(tracker_test::RunProgram({kBin + "mcmt-import", "--rosbag", src + "tag_detections.bag.bz2",
                                       "--cameras", src + "cameras.yaml", "--out", dir / "session"},

@@ -7,11 +7,11 @@
 
 #include "core/config.h"
 #include "core/lcm_util.h"
+#include "core/log_writer.h"
 #include "core/marker.h"
 #include "import/import.h"
-#include "core/log_writer.h"
 #include "tests/import/bag_writer.h"
-#include "tests/sim/temp_dir.h"
+#include "tests/support/temp_dir.h"
 #include "tests/tracker/process_util.h"
 
 namespace mcmt {
@@ -22,7 +22,7 @@ using import_test::AprilTagDefinition;
 using import_test::TestConnection;
 using import_test::TestMessage;
 using import_test::TestTag;
-using sim::testing::TempDir;
+using test::TempDir;
 
 std::vector<detections_t> ReadSession(const std::string& log) {
   std::vector<detections_t> out;
@@ -111,10 +111,7 @@ TEST(ImportBag, DecodesTheSameMessagesFromEveryChunkCompressionAndAWholeFileBz2)
   EXPECT_EQ(dumps[0], dumps[2]);
   EXPECT_NE(dumps[0].find("49 149 5000 cam 3 tf36h11 69"), std::string::npos) << dumps[0].substr(0, 200);
   // The whole file bzip2-compressed (tag_detections.bag.bz2) opens the same.
-  std::ifstream in(dir / "lz4.bag", std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  std::ofstream(dir / "whole.bag.bz2", std::ios::binary) << Bz2Compress(s.str());
+  std::ofstream(dir / "whole.bag.bz2", std::ios::binary) << Bz2Compress(test::ReadText(dir / "lz4.bag"));
   EXPECT_EQ(RosBag::Open(dir / "whole.bag.bz2").messages().size(), 50u);
 }
 
@@ -123,8 +120,7 @@ TEST(ImportBag, DamageNamesTheFileAndByte) {
   const std::string path = dir / "cut.bag";
   import_test::WriteBag(path, {{"/t", "apriltag_msgs/ApriltagArrayStamped", AprilTagDefinition()}},
                         {{0, 1, 0, AprilTagArray(0, 1, 0, {Tag(1, 0)})}}, "none");
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = test::ReadText(path);
   std::ofstream(path, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   try {
     RosBag::Open(path);

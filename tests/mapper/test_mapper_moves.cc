@@ -11,7 +11,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
-#include "tests/sim/temp_dir.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
@@ -58,7 +58,7 @@ std::pair<double, double> WorstCamera(const Session& s, const MapResult& r) {
 }
 
 TEST(MapperMoves, CameraBumpedWithinASessionIsSplitAtTheMove) {
-  sim::testing::TempDir dir("moves_bump");
+  test::TempDir dir("moves_bump");
   const Session s = Generate(dir.str(), 600, 1, {{"cam2", 300, 0.5, 3.0}});
   const MapResult r = Map(s, OptionsFor(s.truth));
   ASSERT_EQ(r.report.moved_cameras.size(), 1u);
@@ -87,7 +87,7 @@ TEST(MapperMoves, CameraBumpedWithinASessionIsSplitAtTheMove) {
 }
 
 TEST(MapperMoves, NoMoveNoSplit) {
-  sim::testing::TempDir dir("moves_still");
+  test::TempDir dir("moves_still");
   const Session s = Generate(dir.str(), 600, 4);
   const MapResult r = Map(s, OptionsFor(s.truth));
   EXPECT_TRUE(r.report.moved_cameras.empty());
@@ -97,7 +97,7 @@ TEST(MapperMoves, NoMoveNoSplit) {
 class MapperUpdate : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new sim::testing::TempDir("update");
+    dir_ = new test::TempDir("update");
     old_ = new Session(Generate(*dir_ / "old", 600, 1));
     old_map_ = new RigMap(Map(*old_, OptionsFor(old_->truth)).map);
   }
@@ -106,11 +106,11 @@ class MapperUpdate : public ::testing::Test {
     delete old_;
     delete dir_;
   }
-  static sim::testing::TempDir* dir_;
+  static test::TempDir* dir_;
   static Session* old_;
   static RigMap* old_map_;
 };
-sim::testing::TempDir* MapperUpdate::dir_ = nullptr;
+test::TempDir* MapperUpdate::dir_ = nullptr;
 Session* MapperUpdate::old_ = nullptr;
 RigMap* MapperUpdate::old_map_ = nullptr;
 

@@ -20,9 +20,7 @@ std::string PinnedRigWith(const std::string& name, const std::string& extra) {
   const fs::path dir = test::MakeTempDir("mapper_options_" + name);
   for (int c = 0; c < 5; ++c)
     fs::copy_file(src / ("cam" + std::to_string(c) + ".yml"), dir / ("cam" + std::to_string(c) + ".yml"));
-  std::ifstream in(src / "rig.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::ofstream(dir / "rig.yaml") << text << extra;
+  std::ofstream(dir / "rig.yaml") << ReadFile((src / "rig.yaml").string()) << extra;
   return (dir / "rig.yaml").string();
 }
 

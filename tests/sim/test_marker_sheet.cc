@@ -19,15 +19,15 @@
 #include "core/dictionary.h"
 #include "detector/detector.h"
 #include "sim/marker_sheet.h"
-#include "tests/sim/temp_dir.h"
 #include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using mcmt::sim::MarkerSheetOptions;
 
 namespace {
 fs::path Dir() {
-  static const mcmt::sim::testing::TempDir dir("sheet");
+  static const mcmt::test::TempDir dir("sheet");
   return dir.str();
 }
 
@@ -67,8 +67,7 @@ std::map<int, double> DetectSides(const cv::Mat& gray, const mcmt::RigConfig& ri
 
 // The PNG's stored resolution (pHYs chunk, pixels per metre), 0 when absent.
 double PngPixelsPerMetre(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = mcmt::test::ReadText(file);
   const size_t at = bytes.find("pHYs");
   if (at == std::string::npos || at + 13 > bytes.size() || bytes[at + 12] != 1) return 0;
   uint32_t v = 0;
@@ -143,10 +142,7 @@ TEST(MarkerSheet, PdfPlacesEachMarkerAtExactSize) {
   o.sizes.default_size = 0.06;
   const fs::path pdf = Dir() / "sheet.pdf";
   mcmt::sim::WriteMarkerSheet(pdf.string(), o);
-  std::ifstream in(pdf, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  const std::string text = mcmt::test::ReadText(pdf.string());
   ASSERT_EQ(text.rfind("%PDF-1.4", 0), 0u);
   ASSERT_NE(text.find("%%EOF"), std::string::npos);
   // Every marker is drawn with "s 0 0 s x y cm /Mi Do": s must be 60 mm in points.

@@ -16,7 +16,7 @@
 #include "mcmt/object_pose_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
-#include "tests/sim/temp_dir.h"
+#include "tests/support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace mcmt;
@@ -27,7 +27,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kTol = 1e-9;
 
-using mcmt::sim::testing::TempDir;
+using mcmt::test::TempDir;
 
 GroundTruth MakeTruth(int cameras, int frames, ObjectKind kind = ObjectKind::kFourSided, uint64_t seed = 3) {
   RigOptions ro;

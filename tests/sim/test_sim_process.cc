@@ -28,8 +28,8 @@
 #include "mcmt/detections_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
-#include "tests/sim/temp_dir.h"
 #include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace mcmt;
@@ -40,7 +40,7 @@ const std::string kSim = MCMT_BIN_DIR "/mcmt-sim";
 const std::string kEval = MCMT_BIN_DIR "/mcmt-eval";
 const std::string kMarkers = MCMT_BIN_DIR "/mcmt-markers";
 
-using mcmt::sim::testing::TempDir;
+using mcmt::test::TempDir;
 
 TempDir& Tmp() {
   static TempDir dir("process");
@@ -52,16 +52,14 @@ struct Result {
   std::string out, err;
 };
 
-std::string Slurp(const std::string& path) { return mcmt::test::ReadText(path); }
-
 // Runs `program args` with stdout and stderr captured.
 Result RunProgram(const std::string& program, const std::string& args) {
   static int counter = 0;
   const std::string base = Tmp() / ("run" + std::to_string(counter++));
   Result r;
   r.code = mcmt::test::Child({"/bin/sh", "-c", program + " " + args}, base + ".out", base + ".err").Wait(600);
-  r.out = Slurp(base + ".out");
-  r.err = Slurp(base + ".err");
+  r.out = mcmt::test::ReadText(base + ".out");
+  r.err = mcmt::test::ReadText(base + ".err");
   fs::remove(base + ".out");
   fs::remove(base + ".err");
   return r;
@@ -73,7 +71,8 @@ int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 std::map<std::string, std::string> Files(const std::string& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = Slurp(e.path().string());
+    if (e.is_regular_file())
+      files[fs::relative(e.path(), dir).string()] = mcmt::test::ReadText(e.path().string());
   return files;
 }
 
@@ -130,7 +129,7 @@ TEST(SimProcess, HelpDocumentsEveryOption) {
   EXPECT_EQ(r.code, 0);
   EXPECT_EQ(r.err, "");
   // Every option the program declares (read from its source) appears in --help.
-  const std::string source = Slurp(MCMT_SOURCE_DIR "/sim/sim_main.cc");
+  const std::string source = mcmt::test::ReadText(MCMT_SOURCE_DIR "/sim/sim_main.cc");
   const std::regex re("args\\.Add(String|Int|Int64|Double|Flag|List)\\(\\s*\"([a-z0-9-]+)\"");
   int count = 0;
   for (auto it = std::sregex_iterator(source.begin(), source.end(), re); it != std::sregex_iterator(); ++it) {
@@ -523,7 +522,7 @@ TEST(SimProcess, ExplicitDefaultsAreTheDefaults) {
     const std::string dir = Tmp() / name;
     const Result r = RunProgram(kSim, "--out " + dir + base + extra);
     EXPECT_EQ(r.code, 0) << extra << ": " << r.err;
-    return Slurp(dir + "/ground_truth.yaml");
+    return mcmt::test::ReadText(dir + "/ground_truth.yaml");
   };
   const std::string plain = truth_text("defaults", "");
   EXPECT_EQ(truth_text("explicit_defaults", " --camera-height -1 --marker-size -1"), plain);

@@ -25,8 +25,6 @@ inline bool ProgramsBuilt(const std::vector<std::string>& names) {
   return true;
 }
 
-inline std::string Slurp(const std::string& path) { return mcmt::test::ReadText(path); }
-
 // Starts argv[0] with its stdout and stderr into output_path. Returns the pid.
 inline pid_t Spawn(const std::vector<std::string>& argv, const std::string& output_path) {
   return mcmt::test::Child(argv, output_path).Release();
@@ -43,7 +41,7 @@ inline int RunProgram(const std::vector<std::string>& argv, const std::string& o
                       std::string* output,
                       std::chrono::milliseconds timeout = std::chrono::milliseconds(120000)) {
   const int code = WaitExit(Spawn(argv, output_path), timeout);
-  if (output) *output = Slurp(output_path);
+  if (output) *output = mcmt::test::ReadText(output_path);
   return code;
 }
 

@@ -17,7 +17,7 @@
 #include "mcmt/tracker_status_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
-#include "tests/sim/temp_dir.h"
+#include "tests/support/temp_dir.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
@@ -87,7 +87,7 @@ class TrackerHealthBump : public ::testing::TestWithParam<Bump> {};
 
 TEST_P(TrackerHealthBump, SuspectWithin30FramesExcludedAndNoPoseCorrupted) {
   const Bump bump = GetParam();
-  sim::testing::TempDir dir("health_bump");
+  test::TempDir dir("health_bump");
   sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), 900, 5);
   o.moves = {{"cam2", 450, bump.rotation_deg, bump.translation_mm}};
   const sim::GroundTruth truth = sim::GenerateDataset(o).truth;
@@ -117,7 +117,7 @@ TEST_P(TrackerHealthBump, SuspectWithin30FramesExcludedAndNoPoseCorrupted) {
 INSTANTIATE_TEST_SUITE_P(Bumps, TrackerHealthBump, ::testing::Values(Bump{0.3, 0.0}, Bump{0.0, 3.0}));
 
 TEST(TrackerHealth, NoFalseAlarmWithNoiseOnlyFastMotionAndAHiddenMarker) {
-  sim::testing::TempDir dir("health_quiet");
+  test::TempDir dir("health_quiet");
   sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), 30000, 6);
   o.trajectory.turns = 200.0;  // 2 turns a second about the vertical (30 000 frames, 1000 s)
   const sim::GroundTruth truth = sim::GenerateDataset(o).truth;

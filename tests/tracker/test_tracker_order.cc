@@ -22,8 +22,8 @@
 namespace mcmt {
 namespace {
 
+using mcmt::test::ReadText;
 using tracker_test::RunProgram;
-using tracker_test::Slurp;
 
 const std::string kBin = MCMT_BIN_DIR;
 
@@ -115,7 +115,7 @@ TEST(TrackerOrder, CameraByCameraLogTracksWithinFiveHundredthsOfAMillimetreOfThe
             << " deg over " << mapper.size() << " frames" << std::endl;
   EXPECT_LE(worst_mm, 0.05);
   EXPECT_LE(worst_deg, 0.01);
-  EXPECT_EQ(Slurp(s.dir + "/by_camera.csv"), Slurp(s.dir + "/ordered.csv"));
+  EXPECT_EQ(ReadText(s.dir + "/by_camera.csv"), ReadText(s.dir + "/ordered.csv"));
 }
 
 TEST(TrackerOrder, ShuffledEventsGiveByteEqualOutputs) {
@@ -130,19 +130,19 @@ TEST(TrackerOrder, ShuffledEventsGiveByteEqualOutputs) {
   ASSERT_EQ(Map(s, s.dir + "/shuffled.lcmlog", "init_shuffled", &out, false), 0) << out;
   // The mapper's initialisation: byte-equal.
   for (const char* f : {"/map.yaml", "/trajectory.csv"})
-    EXPECT_EQ(Slurp(s.dir + "/init" + f), Slurp(s.dir + "/init_shuffled" + f)) << f;
+    EXPECT_EQ(ReadText(s.dir + "/init" + f), ReadText(s.dir + "/init_shuffled" + f)) << f;
   // The refined map too, with one solver thread (several threads sum the Schur complement in varying
   // order): the bundle adjustment's blocks are ordered by what they are, not by their addresses.
   ASSERT_EQ(Map(s, s.log, "one", &out, true, true), 0) << out;
   ASSERT_EQ(Map(s, s.dir + "/shuffled.lcmlog", "one_shuffled", &out, true, true), 0) << out;
   for (const char* f : {"/map.yaml", "/trajectory.csv", "/residuals.csv"}) {
-    EXPECT_FALSE(Slurp(s.dir + "/one" + f).empty()) << f;
-    EXPECT_EQ(Slurp(s.dir + "/one" + f), Slurp(s.dir + "/one_shuffled" + f)) << f;
+    EXPECT_FALSE(ReadText(s.dir + "/one" + f).empty()) << f;
+    EXPECT_EQ(ReadText(s.dir + "/one" + f), ReadText(s.dir + "/one_shuffled" + f)) << f;
   }
   ASSERT_EQ(Track(s, s.dir + "/map/map.yaml", s.log, "ordered", &out), 0) << out;
   ASSERT_EQ(Track(s, s.dir + "/map/map.yaml", s.dir + "/shuffled.lcmlog", "shuffled", &out), 0) << out;
   EXPECT_EQ(ReadTrajectory(s.dir + "/ordered.csv").size(), 300u);
-  EXPECT_EQ(Slurp(s.dir + "/ordered.csv"), Slurp(s.dir + "/shuffled.csv"));
+  EXPECT_EQ(ReadText(s.dir + "/ordered.csv"), ReadText(s.dir + "/shuffled.csv"));
 }
 
 TEST(TrackerOrder, RepeatedMessagesAreDroppedAndCounted) {
@@ -155,16 +155,16 @@ TEST(TrackerOrder, RepeatedMessagesAreDroppedAndCounted) {
   ASSERT_EQ(Map(s, s.log, "init", &out, false), 0) << out;
   ASSERT_EQ(Map(s, s.dir + "/twice.lcmlog", "init_twice", &out, false), 0) << out;
   EXPECT_NE(out.find("dropped 1500 repeated detections messages"), std::string::npos) << out;
-  EXPECT_EQ(Slurp(s.dir + "/init/trajectory.csv"), Slurp(s.dir + "/init_twice/trajectory.csv"));
-  EXPECT_EQ(Slurp(s.dir + "/init/map.yaml"), Slurp(s.dir + "/init_twice/map.yaml"));
-  EXPECT_NE(Slurp(s.dir + "/init_twice/report.json").find("\"duplicates\": 1500,"), std::string::npos);
-  EXPECT_NE(Slurp(s.dir + "/init/report.json").find("\"duplicates\": 0,"), std::string::npos);
+  EXPECT_EQ(ReadText(s.dir + "/init/trajectory.csv"), ReadText(s.dir + "/init_twice/trajectory.csv"));
+  EXPECT_EQ(ReadText(s.dir + "/init/map.yaml"), ReadText(s.dir + "/init_twice/map.yaml"));
+  EXPECT_NE(ReadText(s.dir + "/init_twice/report.json").find("\"duplicates\": 1500,"), std::string::npos);
+  EXPECT_NE(ReadText(s.dir + "/init/report.json").find("\"duplicates\": 0,"), std::string::npos);
 
   ASSERT_EQ(Map(s, s.log, "map", &out), 0) << out;
   ASSERT_EQ(Track(s, s.dir + "/map/map.yaml", s.log, "once", &out), 0) << out;
   ASSERT_EQ(Track(s, s.dir + "/map/map.yaml", s.dir + "/twice.lcmlog", "twice", &out), 0) << out;
   EXPECT_NE(out.find("1500 repeated messages dropped"), std::string::npos) << out;
-  EXPECT_EQ(Slurp(s.dir + "/once.csv"), Slurp(s.dir + "/twice.csv"));
+  EXPECT_EQ(ReadText(s.dir + "/once.csv"), ReadText(s.dir + "/twice.csv"));
 }
 
 TEST(TrackerOrder, AFarOffUtimeIsRejectedNamingTheCameraAndMovesNoClock) {

@@ -17,8 +17,8 @@ namespace mcmt {
 namespace {
 
 using namespace std::chrono_literals;
+using mcmt::test::ReadText;
 using tracker_test::RunProgram;
-using tracker_test::Slurp;
 using tracker_test::Spawn;
 using tracker_test::WaitExit;
 using tracker_test::WaitForText;
@@ -122,7 +122,7 @@ TEST(TrackerProcess, LogModeIsAccurateAndDeterministic) {
   }
   EXPECT_LT(mean_t / rows.size(), 0.5e-3);
   EXPECT_LT(mean_r / rows.size(), 0.3 * M_PI / 180);
-  EXPECT_EQ(Slurp(poses1), Slurp(poses2));  // byte-equal
+  EXPECT_EQ(ReadText(poses1), ReadText(poses2));  // byte-equal
 }
 
 // Live: the real tracker over udpm, fed by a publisher (with garbage and a stranger camera mixed in); a
@@ -132,7 +132,7 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   const int port = 7741;
   const std::string err = x.dir + "/live.txt", out_csv = x.dir + "/poses_live.csv";
   const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << Slurp(err);
+  ASSERT_GT(pid, 0) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -148,8 +148,8 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   Receive(
       lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 10s);
   kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
-  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << Slurp(err);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << ReadText(err);
   for (size_t f = 0; f < collector.poses.size(); ++f) {
     EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
     EXPECT_EQ(collector.poses[f].status, object_pose_t::STATUS_TRACKING);
@@ -157,7 +157,7 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
                                              x.s.rig_from_object[f]),
               2e-3);
   }
-  const std::string log = Slurp(err);
+  const std::string log = ReadText(err);
   auto count = [&](const std::string& needle) {
     size_t n = 0;
     for (size_t p = log.find(needle); p != std::string::npos; p = log.find(needle, p + 1)) ++n;
@@ -170,7 +170,7 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   ASSERT_EQ(live.size(), x.s.views.size());
   const std::string log_csv = LogModePoses(x, "poses_log_for_live");
   ASSERT_FALSE(log_csv.empty());
-  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
+  EXPECT_EQ(ReadText(out_csv), ReadText(log_csv));
   EXPECT_FALSE(std::ifstream(out_csv + ".partial")) << "a clean exit removes the partial trajectory";
 }
 
@@ -182,7 +182,7 @@ TEST(TrackerProcess, LiveWaitsForALaggingCameraAndIgnoresAFutureUtime) {
   const int port = 7747;
   const std::string err = x.dir + "/lagging.txt", out_csv = x.dir + "/poses_lagging.csv";
   const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << Slurp(err);
+  ASSERT_GT(pid, 0) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -207,13 +207,13 @@ TEST(TrackerProcess, LiveWaitsForALaggingCameraAndIgnoresAFutureUtime) {
   Receive(
       lcm, [&] { return collector.poses.size() >= frames; }, 10s);
   kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
-  const std::string log = Slurp(err);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  const std::string log = ReadText(err);
   EXPECT_NE(log.find("camera '" + x.s.views[40][0].camera + "': utime"), std::string::npos) << log;
   ASSERT_EQ(collector.poses.size(), frames) << log;
   const std::string log_csv = LogModePoses(x, "poses_log_for_lagging");
   ASSERT_FALSE(log_csv.empty());
-  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv)) << log;
+  EXPECT_EQ(ReadText(out_csv), ReadText(log_csv)) << log;
 }
 
 // kill -9 mid-run: every pose published before the kill is in OUT.partial (appended and flushed as it is
@@ -223,7 +223,7 @@ TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
   const int port = 7746;
   const std::string err = x.dir + "/killed.txt", out_csv = x.dir + "/poses_killed.csv";
   const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << Slurp(err);
+  ASSERT_GT(pid, 0) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -234,7 +234,7 @@ TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
   }
   Receive(
       lcm, [&] { return collector.poses.size() >= half; }, 10s);
-  ASSERT_EQ(collector.poses.size(), half) << Slurp(err);
+  ASSERT_EQ(collector.poses.size(), half) << ReadText(err);
   kill(pid, SIGKILL);
   WaitExit(pid, 20s);
   EXPECT_FALSE(std::ifstream(out_csv));
@@ -252,7 +252,7 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   const int port = 7742;
   const std::string err = x.dir + "/replay.txt", out_csv = x.dir + "/poses_replay.csv";
   const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << Slurp(err);
+  ASSERT_GT(pid, 0) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -262,13 +262,13 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
       Spawn({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + Url(port), x.log}, x.dir + "/player.txt");
   Receive(
       lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
-  EXPECT_EQ(WaitExit(player, 20s), 0) << Slurp(x.dir + "/player.txt");
+  EXPECT_EQ(WaitExit(player, 20s), 0) << ReadText(x.dir + "/player.txt");
   kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
   EXPECT_EQ(collector.poses.size(), x.s.views.size());
   const std::string log_csv = LogModePoses(x, "poses_log_for_replay");
   ASSERT_FALSE(log_csv.empty());
-  EXPECT_EQ(Slurp(out_csv), Slurp(log_csv));
+  EXPECT_EQ(ReadText(out_csv), ReadText(log_csv));
 }
 
 TEST(TrackerProcess, BadInputGivesOneLineErrors) {
@@ -324,8 +324,8 @@ TEST(TrackerProcess, LogModePublishesWithLcmUrl) {
       Spawn({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", Url(port)}, err);
   Receive(
       lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
-  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << Slurp(err);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << ReadText(err);
   for (size_t f = 0; f < collector.poses.size(); ++f)
     EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
 }
@@ -336,12 +336,12 @@ TEST(TrackerProcess, LiveWaitsForMapMessage) {
   const int port = 7743;
   const std::string err = x.dir + "/waitmap.txt";
   const pid_t pid = Spawn({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
-  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << Slurp(err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   PoseCollector collector(lcm);
   const rig_map_t map_msg = ToRigMapMsg(x.s.map, 42);
   lcm.publish(kMapChannel, &map_msg);
-  ASSERT_TRUE(WaitForText(err, "using map from MCMT_MAP", 10s)) << Slurp(err);
+  ASSERT_TRUE(WaitForText(err, "using map from MCMT_MAP", 10s)) << ReadText(err);
   for (size_t f = 0; f < 30; ++f) {
     for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
     lcm.handleTimeout(3);
@@ -349,8 +349,8 @@ TEST(TrackerProcess, LiveWaitsForMapMessage) {
   Receive(
       lcm, [&] { return collector.poses.size() >= 30; }, 10s);
   kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << Slurp(err);
-  ASSERT_EQ(collector.poses.size(), 30u) << Slurp(err);
+  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  ASSERT_EQ(collector.poses.size(), 30u) << ReadText(err);
   for (size_t f = 0; f < 30; ++f) EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
 }
 

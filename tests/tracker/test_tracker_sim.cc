@@ -135,7 +135,7 @@ TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
   const auto killed = Track(r, killed_log, "killed");
   EXPECT_EQ(Seqs(killed), FramesWithMappedMarker(killed_log, r.rig_map));
   ExpectAccurate(r, killed, "cam2 killed at frame 120");
-  const std::string killed_err = tracker_test::Slurp(r.dir + "/killed.txt");
+  const std::string killed_err = mcmt::test::ReadText(r.dir + "/killed.txt");
   EXPECT_NE(killed_err.find("camera 'cam2' stopped reporting"), std::string::npos) << killed_err;
 
   // False markers: in every message of cam1 and cam3 with a marker, a copy of that marker's corners
@@ -169,7 +169,7 @@ TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
     EXPECT_LT(tracker_test::RotationError(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-5)
         << "seq " << clean[i].seq;
   }
-  const std::string err = tracker_test::Slurp(r.dir + "/false.txt");
+  const std::string err = mcmt::test::ReadText(r.dir + "/false.txt");
   EXPECT_NE(err.find("outliers rejected"), std::string::npos);
   EXPECT_EQ(err.find(" 0 outliers rejected"), std::string::npos) << err;
 }
@@ -225,7 +225,7 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
       {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url,
        "--deadline-ms", "3000"},
       tracker_err);
-  ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << tracker_test::Slurp(tracker_err);
+  ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << mcmt::test::ReadText(tracker_err);
   lcm::LCM lcm(url + "&recv_buf_size=4194304");  // sees every message on the group
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
@@ -240,10 +240,10 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
     lcm.handleTimeout(20);
   for (size_t i = 0; i < detectors.size(); ++i)
     EXPECT_EQ(tracker_test::WaitExit(detectors[i], 30s), 0)
-        << tracker_test::Slurp(dir + "/detector_" + truth.cameras[i].name + ".txt");
+        << mcmt::test::ReadText(dir + "/detector_" + truth.cameras[i].name + ".txt");
   kill(tracker, SIGINT);
-  EXPECT_EQ(tracker_test::WaitExit(tracker, 20s), 0) << tracker_test::Slurp(tracker_err);
-  ASSERT_EQ(collector.poses.size(), static_cast<size_t>(frames)) << tracker_test::Slurp(tracker_err);
+  EXPECT_EQ(tracker_test::WaitExit(tracker, 20s), 0) << mcmt::test::ReadText(tracker_err);
+  ASSERT_EQ(collector.poses.size(), static_cast<size_t>(frames)) << mcmt::test::ReadText(tracker_err);
   double mean_t = 0;
   int max_cams = 0;
   for (int f = 0; f < frames; ++f) {
