@@ -131,19 +131,40 @@ AutoBodies GroupIntoBodies(const std::vector<StoredMessage>& messages,
   const std::vector<GraphEdge> rigid = RigidPairs(observations, options, threads);
   const std::vector<MarkerMotion> motion = StaticInCameras(observations, options);
 
-  // Groups, judged: foreign ids out, static or moving.
-  std::vector<int> group(n, -1);
-  std::vector<FoundBody> found;
+  // Foreign markers first (they join no group): too rarely seen, or static in one camera's view only
+  // (rigid with everything static in that view, so it would otherwise join the room).
   const int min_views = std::max(10, o.min_marker_support);
+  std::vector<char> foreign(n, 0);
   for (int m = 0; m < n; ++m) {
-    if (group[m] >= 0) continue;
-    const std::vector<bool> component = ComponentOf(n, m, rigid);
+    const MarkerMotion& mm = motion[m];
+    std::string why;
+    if (mm.views < min_views) {
+      why = "seen in only " + std::to_string(mm.views) + " camera frames (fewer than " +
+            std::to_string(min_views) + "): too few to tell which body it is on";
+    } else if (mm.judged > 0 && mm.still == mm.judged && mm.cameras.size() < 2) {
+      why = "static in the view of one camera only (" + in.camera_names[*mm.cameras.begin()] +
+            "): constrains nothing, and a false detection stuck in the image looks the same";
+    }
+    if (why.empty()) continue;
+    foreign[m] = 1;
+    out.foreign.push_back({observations.marker_ids[m], mm.views, why});
+  }
+  std::vector<GraphEdge> kept;
+  for (const GraphEdge& e : rigid)
+    if (!foreign[e.a] && !foreign[e.b]) kept.push_back(e);
+
+  // Groups: connected by rigid pairs; static when every marker is.
+  std::vector<char> grouped = foreign;
+  std::vector<FoundBody> found;
+  for (int m = 0; m < n; ++m) {
+    if (grouped[m]) continue;
+    const std::vector<bool> component = ComponentOf(n, m, kept);
     FoundBody body;
     std::set<int> cameras;
     bool all_still = true, any_judged = false;
     for (int k = 0; k < n; ++k) {
-      if (!component[k] && k != m) continue;
-      group[k] = static_cast<int>(found.size());
+      if ((!component[k] && k != m) || grouped[k]) continue;
+      grouped[k] = 1;
       body.ids.push_back(observations.marker_ids[k]);
       body.observations += motion[k].views;
       cameras.insert(motion[k].cameras.begin(), motion[k].cameras.end());
@@ -153,23 +174,6 @@ AutoBodies GroupIntoBodies(const std::vector<StoredMessage>& messages,
     std::sort(body.ids.begin(), body.ids.end());
     body.is_static = any_judged && all_still;
     for (int c : cameras) body.cameras.push_back(in.camera_names[c]);
-    std::string why;
-    if (body.observations < min_views) {
-      why = "seen in only " + std::to_string(body.observations) + " camera frames (fewer than " +
-            std::to_string(min_views) + "): too few to tell which body it is on";
-    } else if (body.is_static && cameras.size() < 2) {
-      why = "static in the view of one camera only (" + JoinNames(body.cameras) +
-            "): constrains nothing, and a false detection stuck in the image looks the same";
-    }
-    if (!why.empty()) {
-      for (int k = 0; k < n; ++k)
-        if (group[k] == static_cast<int>(found.size()))
-          out.foreign.push_back({observations.marker_ids[k], motion[k].views, why});
-      group[m] = n;  // (any value >= 0 that no body has)
-      for (int k = 0; k < n; ++k)
-        if (group[k] == static_cast<int>(found.size())) group[k] = n;
-      continue;
-    }
     found.push_back(std::move(body));
   }
   std::stable_sort(found.begin(), found.end(),

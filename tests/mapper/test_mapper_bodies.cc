@@ -5,7 +5,9 @@
 // bad input (a body never seen, an id claimed twice, a static body that moves).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "core/config.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "core/objects.h"
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
@@ -295,6 +298,184 @@ TEST_F(MapperBodies, AnIdClaimedByTwoObjectsIsOneLineNamingBoth) {
   EXPECT_NE(p.output.find("marker id 3 is claimed by both 'tool' and 'patient'"), std::string::npos)
       << p.output;
   EXPECT_EQ(std::count(p.output.begin(), p.output.end(), '\n'), 1) << p.output;
+}
+
+// ---------------------------------------------------------------------------------------------
+// objects: auto / ids: auto (mapper/bodies_auto.h)
+
+// Every marker's side from the bodies' truths (the rig's markers.size and markers.sizes for auto).
+MarkerSizes SceneSizes(const BodiesSession& s) {
+  MarkerSizes sizes;
+  sizes.default_size = s.truth.at("tool").marker_size;
+  for (const auto& [name, truth] : s.truth)
+    for (const auto& [id, size] : truth.marker_sizes)
+      if (size != sizes.default_size) sizes.overrides[id] = size;
+  return sizes;
+}
+
+// objects: auto: one unnamed auto body.
+MapperOptions AutoOptions(MapperOptions o, const MarkerSizes& sizes) {
+  MapperBody all;
+  all.auto_ids = true;
+  all.sizes = sizes;
+  o.bodies = {all};
+  o.rig_frame.clear();
+  return o;
+}
+
+// The found body holding `id` (nullptr: none).
+const FoundBody* BodyOf(const AutoBodies& found, int id) {
+  for (const FoundBody& b : found.bodies)
+    if (std::find(b.ids.begin(), b.ids.end(), id) != b.ids.end()) return &b;
+  return nullptr;
+}
+
+// The ids of a body that some camera detected, sorted.
+std::vector<int> SeenIdList(const BodiesSession& s, const std::string& body) {
+  std::set<int> seen;
+  for (const detections_t& d : s.detections)
+    for (const marker_t& m : d.markers)
+      if (s.truth.at(body).FindMarker(m.id)) seen.insert(m.id);
+  return std::vector<int>(seen.begin(), seen.end());
+}
+
+void ExpectDeclaredGrouping(const BodiesSession& s, const AutoBodies& found) {
+  for (const char* body : kBodies) {
+    const std::vector<int> ids = SeenIdList(s, body);
+    const FoundBody* b = BodyOf(found, ids[0]);
+    ASSERT_TRUE(b) << body;
+    EXPECT_EQ(b->ids, ids) << body << " found as " << b->name;
+    EXPECT_EQ(b->is_static, std::string(body) == "floor") << body;
+  }
+}
+
+TEST_F(MapperBodies, AutoFindsTheDeclaredGroupingAndWritesAReadySection) {
+  const MapResult r = Map(S().detections, AutoOptions(Options(), SceneSizes(S())));
+  const AutoBodies& found = r.report.auto_bodies;
+  ASSERT_TRUE(found.ran);
+  for (const FoundBody& b : found.bodies)
+    std::printf("found %s%s: %zu ids, %d observations\n", b.name.c_str(), b.is_static ? " (static)" : "",
+                b.ids.size(), b.observations);
+  ASSERT_EQ(found.bodies.size(), 3u);
+  EXPECT_TRUE(found.foreign.empty());
+  ExpectDeclaredGrouping(S(), found);
+  ASSERT_EQ(r.map.objects.size(), 3u);
+  // Mapped as well as declared: the found tool's layout and poses.
+  const std::string tool = BodyOf(found, 0)->name;
+  BodiesSession renamed = S();
+  renamed.truth[tool] = S().truth.at("tool");
+  const sim::EvalResult e = EvaluateBody(renamed, r, tool);
+  EXPECT_LT(e.configuration_mm.max, 0.15);
+  EXPECT_LT(e.camera_position_mm.max, 1.0);
+  EXPECT_LT(e.object_rotation_deg.mean, 0.15);
+  // The objects: section loads as a rig and declares the same bodies.
+  test::TempDir dir("mapper_bodies_auto");
+  for (const char* c : {"cam0", "cam1", "cam2", "cam3", "cam4"})
+    dir.Write(std::string(c) + ".yml", test::ReadText(S().dir + "/" + c + ".yml"));
+  std::string cameras = test::ReadText(S().dir + "/rig.yaml");
+  cameras = cameras.substr(cameras.find("cameras:"));
+  const RigConfig rig = LoadRigConfig(
+      dir.Write("rig.yaml", "markers: {dictionary: DICT_6X6_250}\n" + found.objects_yaml + cameras));
+  ASSERT_EQ(rig.objects.objects.size(), 3u) << found.objects_yaml;
+  for (const ObjectConfig& object : rig.objects.objects) {
+    const FoundBody* b = BodyOf(found, *object.ids.begin());
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->name, object.name);
+    EXPECT_EQ(std::vector<int>(object.ids.begin(), object.ids.end()), b->ids);
+    EXPECT_EQ(object.is_static, b->is_static);
+    for (int id : object.ids) EXPECT_EQ(object.sizes.Get(id), SceneSizes(S()).Get(id)) << id;
+  }
+  EXPECT_NE(ReportJson(r).find("\"auto_objects\": {"), std::string::npos);
+}
+
+// An object with ids: auto takes the found body of its kind and its name (here the static floor, the rig
+// frame); the declared ones keep theirs.
+TEST_F(MapperBodies, AnObjectWithIdsAutoTakesTheFoundBodyOfItsKind) {
+  MapperOptions o = Options();
+  for (MapperBody& b : o.bodies)
+    if (b.name == "floor") {
+      b.ids.clear();
+      b.auto_ids = true;
+    }
+  const MapResult r = Map(S().detections, o);
+  ASSERT_EQ(r.report.auto_bodies.bodies.size(), 1u);
+  EXPECT_EQ(r.report.auto_bodies.bodies[0].name, "floor");
+  EXPECT_EQ(r.report.auto_bodies.bodies[0].ids, SeenIdList(S(), "floor"));
+  ASSERT_EQ(r.map.objects.size(), 3u);
+  EXPECT_EQ(r.map.rig_frame, "floor");
+  EXPECT_LT(EvaluateBody(S(), r, "floor").configuration_mm.max, 0.15);
+  EXPECT_LT(EvaluateBody(S(), r, "patient").camera_position_mm.max, 1.0);
+}
+
+// The scene with two strays: a real marker (id 45) stuck on the floor beside the board, seen by several
+// cameras, and a false detection (id 46) stuck in cam2's image every frame. Neither joins a moving body:
+// 45 is static (with the floor, to which it is rigid, or alone), 46 is foreign.
+TEST_F(MapperBodies, AutoNeverMergesAStrayMarkerIntoAMovingBody) {
+  const sim::DatasetOptions o = sim::DetectionsOnlySession(S().dir, 300, 1);
+  std::vector<sim::SceneBody> bodies = sim::MakeBodiesScene(o);
+  sim::SceneBody stray;
+  stray.name = "stray";
+  stray.is_static = true;
+  stray.object.name = "stray";
+  Rigid3 floor_from_marker = Rigid3::Identity();
+  floor_from_marker.translation() = Eigen::Vector3d(0.42, -0.12, 0.0);
+  stray.object.markers = {{45, 0.08, floor_from_marker}};
+  stray.object.radius = 0.06;
+  stray.frames = bodies.back().frames;  // the floor's pose
+  bodies.push_back(stray);
+  const std::vector<sim::SimCamera> cameras = sim::MakeRig(o.rig);
+  BodiesSession s = S();
+  s.detections.clear();
+  int seen_45 = 0;
+  std::set<std::string> cameras_45;
+  for (size_t c = 0; c < cameras.size(); ++c) {
+    std::mt19937_64 rng(100 + c);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    for (size_t k = 0; k < bodies[0].frames.size(); ++k) {
+      sim::SimFrame frame = bodies[0].frames[k];
+      frame.rig_from_object = Rigid3::Identity();
+      detections_t d;
+      if (!sim::SimulateDetections(cameras[c], sim::SceneAt(bodies, k), frame, o.detections, rng, &d))
+        continue;
+      for (const marker_t& m : d.markers)
+        if (m.id == 45) ++seen_45, cameras_45.insert(d.camera);
+      if (d.camera == "cam2") {
+        marker_t fake;
+        fake.id = 46;
+        const double corners[4][2] = {{100, 100}, {140, 100}, {140, 140}, {100, 140}};
+        for (int i = 0; i < 4; ++i) {
+          fake.corners[i][0] = corners[i][0] + noise(rng);
+          fake.corners[i][1] = corners[i][1] + noise(rng);
+        }
+        d.markers.push_back(fake);
+        d.num_markers = static_cast<int32_t>(d.markers.size());
+      }
+      s.detections.push_back(d);
+    }
+  }
+  std::stable_sort(s.detections.begin(), s.detections.end(),
+                   [](const detections_t& a, const detections_t& b) { return a.utime < b.utime; });
+  std::printf("stray 45 seen in %d camera frames by %zu cameras\n", seen_45, cameras_45.size());
+  ASSERT_GE(cameras_45.size(), 2u) << "the stray marker must be seen by several cameras to test anything";
+  const MapResult r = Map(s.detections, AutoOptions(Options(), SceneSizes(S())));
+  const AutoBodies& found = r.report.auto_bodies;
+  for (const FoundBody& b : found.bodies)
+    std::printf("found %s%s: ids %s\n", b.name.c_str(), b.is_static ? " (static)" : "",
+                DescribeIds(std::set<int>(b.ids.begin(), b.ids.end())).c_str());
+  for (const ForeignId& f : found.foreign) std::printf("foreign %d: %s\n", f.id, f.reason.c_str());
+  const FoundBody* b45 = BodyOf(found, 45);
+  ASSERT_TRUE(b45) << "the real stray marker is in no body";
+  EXPECT_TRUE(b45->is_static);
+  EXPECT_FALSE(BodyOf(found, 46)) << "the false detection joined " << BodyOf(found, 46)->name;
+  ASSERT_EQ(found.foreign.size(), 1u);
+  EXPECT_EQ(found.foreign[0].id, 46);
+  EXPECT_NE(found.foreign[0].reason.find("cam2"), std::string::npos);
+  for (const char* body : {"tool", "patient"}) {
+    const FoundBody* b = BodyOf(found, SeenIdList(S(), body)[0]);
+    ASSERT_TRUE(b) << body;
+    EXPECT_EQ(b->ids, SeenIdList(S(), body)) << body;
+    EXPECT_FALSE(b->is_static) << body;
+  }
 }
 
 }  // namespace
