@@ -134,13 +134,16 @@ AutoBodies GroupIntoBodies(const std::vector<StoredMessage>& messages,
   // Foreign markers first (they join no group): too rarely seen, or static in one camera's view only
   // (rigid with everything static in that view, so it would otherwise join the room).
   const int min_views = std::max(10, o.min_marker_support);
-  std::vector<char> foreign(n, 0);
+  std::vector<char> foreign(n, 0), paired(n, 0);
+  for (const GraphEdge& e : rigid) paired[e.a] = paired[e.b] = 1;
   for (int m = 0; m < n; ++m) {
     const MarkerMotion& mm = motion[m];
     std::string why;
-    if (mm.views < min_views) {
+    if (mm.views < min_views && !paired[m]) {
       why = "seen in only " + std::to_string(mm.views) + " camera frames (fewer than " +
-            std::to_string(min_views) + "): too few to tell which body it is on";
+            std::to_string(min_views) +
+            "), never rigidly with another marker: too few to tell which body "
+            "it is on";
     } else if (mm.judged > 0 && mm.still == mm.judged && mm.cameras.size() < 2) {
       why = "static in the view of one camera only (" + in.camera_names[*mm.cameras.begin()] +
             "): constrains nothing, and a false detection stuck in the image looks the same";

@@ -7,8 +7,8 @@
 //   static       a marker whose pose in every camera that sees it (in at least min_marker_support
 //                frames) agrees with that camera's medoid pose in at least kStaticFraction of its
 //                frames: a body is static when all its markers are.
-//   foreign      an id that joins no body it could be mapped with: seen in fewer than
-//                max(10, min_marker_support) camera frames, or static in one camera's view only (a real
+//   foreign      an id that joins no body it could be mapped with: in no rigid pair and seen in fewer
+//                than max(10, min_marker_support) camera frames, or static in one camera's view only (a real
 //                marker seen by one camera constrains nothing, and a false detection stuck in the image
 //                looks the same).
 // Found bodies are named static_1, static_2, ... and body_1, body_2, ... by decreasing observations; an
