@@ -39,9 +39,15 @@ struct MapCamera {
   int observations = 0;  // marker observations used
   double rms_px = 0.0;   // RMS reprojection error of its corners
   double max_px = 0.0;   // largest corner error
-  // The camera's clock against the reference camera's: its true capture time is utime - time_offset_us
-  // (the mapper's mapper.time_offsets; 0: synchronised, and not written).
+  // The camera's clock against the reference camera's: its true capture time is utime - ClockUs(utime),
+  // ClockUs = time_offset_us + 1e-6 * time_drift_ppm * (utime - RigMap::time_reference_utime) (the
+  // mapper's mapper.time_offsets and mapper.clock_drift; 0: synchronised, and not written).
   double time_offset_us = 0.0;
+  double time_drift_ppm = 0.0;
+  // How far the camera's clock is ahead of the reference camera's at its reading `utime`, us.
+  double ClockUs(int64_t utime, int64_t time_reference_utime) const {
+    return time_offset_us + 1e-6 * time_drift_ppm * static_cast<double>(utime - time_reference_utime);
+  }
 };
 
 struct MapMarker {
@@ -76,6 +82,8 @@ struct RigMap {
   double rms_px = 0.0;
   int num_frames = 0;
   int num_observations = 0;
+  // Where the cameras' time offsets hold when their clocks drift (MapCamera::ClockUs; written only then).
+  int64_t time_reference_utime = 0;
 
   // Version 2 (several bodies): every body; `markers` and `reference_marker` are the first moving body's
   // (FirstMovingObject). Empty

@@ -145,18 +145,21 @@ SelfCalibrationCost::SelfCalibrationCost(const CameraModel* camera, const Marker
       corners_(MarkerCornersInMarker(side)),
       with_intrinsics_(with_intrinsics),
       time_(time ? *time : ObservationTime{}),
-      with_time_(time != nullptr) {
+      with_time_(time != nullptr),
+      with_drift_(time != nullptr && time->with_drift) {
   set_num_residuals(8);
   std::vector<int32_t>* sizes = mutable_parameter_block_sizes();
   *sizes = {7, 7, 7};
   if (with_intrinsics_) sizes->push_back(4 + static_cast<int>(camera->distortion.size()));
   if (with_time_) sizes->push_back(1);
+  if (with_drift_) sizes->push_back(1);
 }
 
 bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* residuals,
                                    double** jacobians) const {
   const int intrinsics_block = with_intrinsics_ ? 3 : -1;
   const int time_block = with_time_ ? (with_intrinsics_ ? 4 : 3) : -1;
+  const int drift_block = with_drift_ ? time_block + 1 : -1;
   CameraModel refined;
   if (with_intrinsics_) refined = ModelWithIntrinsics(*camera_, parameters[intrinsics_block]);
   const CameraModel& camera = with_intrinsics_ ? refined : *camera_;
@@ -169,7 +172,9 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
   if (with_time_ && time_.velocity) {
     w = Eigen::Vector3d(time_.velocity[0], time_.velocity[1], time_.velocity[2]);
     v = Eigen::Vector3d(time_.velocity[3], time_.velocity[4], time_.velocity[5]);
-    const double dt = time_.time_s - parameters[time_block][0];  // capture time = utime - offset
+    // capture time = utime - offset (- drift * clock_s)
+    double dt = time_.time_s - parameters[time_block][0];
+    if (with_drift_) dt -= parameters[drift_block][0] * time_.clock_s;
     r_dt = RotationFromVector(dt * w);
     rig_from_object.linear() = r_dt * rig_from_object.linear();
     rig_from_object.translation() += dt * v;
@@ -213,10 +218,16 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
       IntrinsicsJacobian(camera, p_cam.x() * iz, p_cam.y() * iz,
                          jacobians[intrinsics_block] + 2 * k * n_intr);
     }
-    if (time_block >= 0 && jacobians[time_block]) {
+    if (time_block >= 0 && (jacobians[time_block] || (drift_block >= 0 && jacobians[drift_block]))) {
       const Eigen::Vector2d d = -dpix * r_cam * (w.cross(p_rig - rig_from_object.translation()) + v);
-      jacobians[time_block][2 * k] = d.x();
-      jacobians[time_block][2 * k + 1] = d.y();
+      if (jacobians[time_block]) {
+        jacobians[time_block][2 * k] = d.x();
+        jacobians[time_block][2 * k + 1] = d.y();
+      }
+      if (drift_block >= 0 && jacobians[drift_block]) {
+        jacobians[drift_block][2 * k] = d.x() * time_.clock_s;
+        jacobians[drift_block][2 * k + 1] = d.y() * time_.clock_s;
+      }
     }
   }
   return true;
@@ -229,7 +240,9 @@ CameraModel BundleProblem::Model(int camera) const {
 
 double BundleProblem::ObservationDt(size_t k) const {
   if (!RefinesTime()) return 0.0;
-  return observations[k].time_s - time_offset_s[observations[k].camera];
+  const BundleObservation& o = observations[k];
+  const double drift = RefinesDrift() ? time_drift[o.camera] * o.clock_s : 0.0;
+  return o.time_s - time_offset_s[o.camera] - drift;
 }
 
 void UpdateFrameVelocities(double max_gap_s, BundleProblem* bp) {
@@ -284,11 +297,14 @@ void AddSelfCalibrationResidual(BundleProblem* bp, size_t i, ceres::LossFunction
   const bool with_intrinsics = bp->RefinesIntrinsics(o.camera);
   ObservationTime time;
   time.time_s = o.time_s;
+  time.with_drift = bp->RefinesDrift();
+  time.clock_s = o.clock_s;
   if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
   std::vector<double*> blocks = {bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
                                  bp->rig_from_object[o.frame].data()};
   if (with_intrinsics) blocks.push_back(bp->intrinsics[o.camera].values.data());
   if (bp->RefinesTime()) blocks.push_back(&bp->time_offset_s[o.camera]);
+  if (bp->RefinesDrift()) blocks.push_back(&bp->time_drift[o.camera]);
   problem->AddResidualBlock(new SelfCalibrationCost(bp->models[o.camera], o.corners, o.side, with_intrinsics,
                                                     bp->RefinesTime() ? &time : nullptr),
                             loss, blocks);
@@ -325,6 +341,18 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
       double* block = &bp->time_offset_s[c];
       if (bp->time_offset_fixed[c]) problem->SetParameterBlockConstant(block);
       ordering->AddElementToGroup(block, 4);  // clock offsets
+      ++added;
+    }
+    if (bp->RefinesDrift()) {
+      double* block = &bp->time_drift[c];
+      if (bp->time_offset_fixed[c]) {
+        problem->SetParameterBlockConstant(block);
+      } else {
+        Eigen::MatrixXd a(1, 1);
+        a(0, 0) = 1.0 / kDriftPriorSigma;
+        problem->AddResidualBlock(new ceres::NormalPrior(a, Eigen::VectorXd::Zero(1)), nullptr, block);
+      }
+      ordering->AddElementToGroup(block, 5);  // clock drifts
       ++added;
     }
   }

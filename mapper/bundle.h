@@ -45,21 +45,27 @@ std::vector<std::string> IntrinsicsNames(const CameraModel& model);
 
 // An observation's capture time relative to its frame: the frame block is the object's pose at the
 // frame's time; the camera's clock reads utime at capture, its true capture time (in the reference
-// camera's clock) is utime - offset, offset being the camera's time offset block (seconds; the reference
-// camera's is 0 and constant): dt = time_s - offset with time_s = (utime - frame utime) / 1e6. The pose
-// seen is the frame pose moved along the frame's velocity (a twist in the rig frame, per second, held
-// constant in a solve):
+// camera's clock) is utime - offset - drift * clock_s, offset and drift being the camera's time offset
+// block (seconds; the reference camera's is 0 and constant) and its drift block (seconds per second, only
+// with with_drift), clock_s the reading against the problem's time reference (the session's middle):
+// dt = time_s - offset - drift * clock_s with time_s = (utime - frame utime) / 1e6. The pose seen is the
+// frame pose moved along the frame's velocity (a twist in the rig frame, per second, held constant in a
+// solve):
 //   rig_from_object(dt) = (Exp(dt * w) * R, t + dt * v)
 struct ObservationTime {
   double time_s = 0.0;               // utime minus the frame's utime, seconds (before the offset)
   const double* velocity = nullptr;  // (w, v): rad/s, m/s
+  bool with_drift = false;
+  double clock_s = 0.0;  // utime minus the time reference, seconds (with_drift)
 };
 
 // Residual of one marker observation with the camera's intrinsics and clock as unknowns. Parameter
 // blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each), then the intrinsics
-// (IntrinsicsVector's layout) when `with_intrinsics`, then the time offset (1, seconds) when `with_time`.
+// (IntrinsicsVector's layout) when `with_intrinsics`, then the time offset (1, seconds) when `with_time`,
+// then the drift (1, s/s) when time->with_drift.
 // Jacobians analytic as ReprojectionCost's, with the frame pose moved by dt:
-//   d p_rig / d(dr_frame) = -[p_rig - t(dt)]x Exp(dt w),  d p_rig / d offset = -(w x (p_rig - t(dt)) + v)
+//   d p_rig / d(dr_frame) = -[p_rig - t(dt)]x Exp(dt w),  d p_rig / d offset = -(w x (p_rig - t(dt)) + v),
+//   d p_rig / d drift = clock_s * d p_rig / d offset
 //   d pixel / d(fx, fy, cx, cy) = [[xd, 0, 1, 0], [0, yd, 0, 1]],  d pixel / d k_i = diag(fx, fy) d(xd, yd) /
 //   d k_i
 // (the distortion is affine in its coefficients for radtan with 4 or 5 and for fisheye: the central
@@ -77,6 +83,7 @@ class SelfCalibrationCost : public ceres::CostFunction {
   bool with_intrinsics_;
   ObservationTime time_;
   bool with_time_;
+  bool with_drift_;
 };
 
 // Residual of one marker observation, 8 values:
@@ -111,7 +118,8 @@ struct BundleObservation {
   int frame = 0;
   MarkerCorners2d corners;
   double side = 0.0;
-  double time_s = 0.0;  // utime minus the frame's utime, seconds (before the camera's offset)
+  double time_s = 0.0;   // utime minus the frame's utime, seconds (before the camera's offset)
+  double clock_s = 0.0;  // utime minus the problem's time_reference_utime, seconds (clock drift)
 };
 
 // One camera's intrinsics block when they are refined.
@@ -140,6 +148,10 @@ struct BundleProblem {
   std::vector<BundleIntrinsics> intrinsics;  // per camera
   std::vector<double> time_offset_s;         // per camera, seconds: true capture time = utime - offset
   std::vector<char> time_offset_fixed;       // per camera (the reference camera's, 0)
+  // Per camera, s/s (empty: clocks that do not drift): true capture time = utime - offset - drift *
+  // clock_s; held like the offsets (time_offset_fixed), with a weak prior (kDriftPriorSigma).
+  std::vector<double> time_drift;
+  int64_t time_reference_utime = 0;                   // clock_s = 0 here (the session's middle)
   std::vector<std::array<double, 6>> frame_velocity;  // per frame, (w, v) in the rig frame
   std::vector<double> frame_time_s;                   // per frame, for the velocities
 
@@ -147,11 +159,16 @@ struct BundleProblem {
     return static_cast<size_t>(camera) < intrinsics.size() && intrinsics[camera].refined;
   }
   bool RefinesTime() const { return !time_offset_s.empty(); }
+  bool RefinesDrift() const { return RefinesTime() && !time_drift.empty(); }
   // The camera's model at the current intrinsics.
   CameraModel Model(int camera) const;
   // Capture time of observation k relative to its frame's pose, seconds (0 without time offsets).
   double ObservationDt(size_t k) const;
 };
+
+// The drift's prior: 0 +- this (s/s, 1000 ppm), as a 1 px residual at one sigma: it only anchors a
+// camera seen too briefly to tell a drift from an offset.
+constexpr double kDriftPriorSigma = 1e-3;
 
 // Frame velocities by differences of neighbouring frame poses (problem->frame_time_s, sorted): frames
 // further apart than max_gap_s are not used (velocity 0 for an isolated frame).

@@ -340,12 +340,10 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   MapperOptions first_options = o;
   first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   const MapResult first = SolvePass(messages, s, first_options);
-  std::map<std::string, double> offset_us;
-  for (const MapCamera& c : first.map.cameras) offset_us[c.name] = c.time_offset_us;
   std::vector<StoredMessage> corrected = messages;
   for (StoredMessage& m : corrected) {
-    const auto it = offset_us.find(s.camera_names[m.camera]);
-    if (it != offset_us.end()) m.utime -= std::llround(it->second);
+    const MapCamera* c = first.map.FindCamera(s.camera_names[m.camera]);
+    if (c) m.utime -= std::llround(c->ClockUs(m.utime, first.map.time_reference_utime));
   }
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
@@ -374,10 +372,21 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
                                    worse.str() + ": the first pass's frames are kept");
     return kept;
   }
-  for (MapCamera& c : result.map.cameras)
-    c.time_offset_us += offset_us.count(c.name) ? offset_us[c.name] : 0.0;
-  for (MapCamera& c : result.initial_map.cameras)
-    c.time_offset_us = offset_us.count(c.name) ? offset_us[c.name] : 0.0;
+  // The clocks are the sum of both passes' (the second's on clocks already corrected), expressed at the
+  // second pass's time reference.
+  const int64_t reference = result.map.time_reference_utime;
+  for (MapCamera& c : result.map.cameras) {
+    const MapCamera* f = first.map.FindCamera(c.name);
+    if (!f) continue;
+    c.time_offset_us += f->ClockUs(reference, first.map.time_reference_utime);
+    c.time_drift_ppm += f->time_drift_ppm;
+  }
+  for (MapCamera& c : result.initial_map.cameras) {
+    const MapCamera* f = first.map.FindCamera(c.name);
+    c.time_offset_us = f ? f->ClockUs(reference, first.map.time_reference_utime) : 0.0;
+    c.time_drift_ppm = f ? f->time_drift_ppm : 0.0;
+  }
+  result.initial_map.time_reference_utime = reference;
   result.report.stage_seconds.insert(result.report.stage_seconds.begin(),
                                      {"time offsets (first pass)", first.report.total_seconds});
   result.report.total_seconds += first.report.total_seconds;

@@ -126,6 +126,9 @@ struct MapperOptions {
   // with the clocks corrected.
   bool estimate_time_offsets = false;
   double max_time_offset_ms = 25.0;
+  // With the offsets: a linear drift per camera (true capture time = utime - offset - drift * (utime -
+  // the session's middle)), reported as time_drift_ppm.
+  bool estimate_clock_drift = false;
 
   // References: best connected unless named.
   std::string reference_camera;

@@ -74,6 +74,9 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
                 InRange(0, 1, true))
            .Add("time_offsets", &O::estimate_time_offsets,
                 "estimate per-camera clock offsets against the reference camera in the bundle adjustment")
+           .Add("clock_drift", &O::estimate_clock_drift,
+                "time_offsets: also a linear drift of each camera's clock against the reference camera's "
+                "(map.yaml time_drift_ppm)")
            .Add("max_time_offset_ms", &O::max_time_offset_ms, "ms",
                 "time_offsets: frames are first assembled over this tolerance", Above(0))
            .Add("detect_moves", &O::detect_moves,
@@ -150,6 +153,8 @@ void MapperOptions::Validate(const std::string& file) const {
   if (reference_marker >= 0 && !marker_ids.empty() &&
       std::find(marker_ids.begin(), marker_ids.end(), reference_marker) == marker_ids.end())
     table.Fail(file, "reference_marker", std::to_string(reference_marker) + " is not in markers.ids");
+  if (estimate_clock_drift && !estimate_time_offsets)
+    table.Fail(file, "clock_drift", "needs time_offsets: true (a drift is estimated with the offsets)");
   const IntrinsicsSigma& sigma = intrinsics.sigma;
   for (const auto& [key, v] : {std::pair<const char*, double>{"focal_rel", sigma.focal_rel},
                                {"center_px", sigma.center_px},

@@ -52,12 +52,16 @@ MapperBundle MakeBundleProblem(const Observations& observations, const Observati
     bp.rig_from_object.push_back(BlockFromRigid(poses.rig_from_object[f]));
     bp.frame_time_s.push_back(1e-6 * static_cast<double>(frames[f].utime - frames[0].utime));
   }
+  // Clock drifts are reckoned from the session's middle (the offsets hold there: the least correlated).
+  if (!frames.empty())
+    bp.time_reference_utime = frames.front().utime + (frames.back().utime - frames.front().utime) / 2;
   const std::vector<Observation>& obs = observations.obs;
   for (size_t i = 0; i < obs.size(); ++i) {
     if (!poses.usable[i] || !poses.has_pose[obs[i].frame]) continue;
     const double time_s = 1e-6 * static_cast<double>(obs[i].utime - frames[obs[i].frame].utime);
+    const double clock_s = 1e-6 * static_cast<double>(obs[i].utime - bp.time_reference_utime);
     bp.observations.push_back(
-        {obs[i].camera, obs[i].marker, obs[i].frame, obs[i].corners, obs[i].side, time_s});
+        {obs[i].camera, obs[i].marker, obs[i].frame, obs[i].corners, obs[i].side, time_s, clock_s});
     bundle.observation.push_back(static_cast<int>(i));
   }
   bp.active.assign(bp.observations.size(), 1);
@@ -174,6 +178,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     if (o.estimate_time_offsets) {
       bp.time_offset_s.assign(bp.cam_from_rig.size(), 0.0);
       bp.time_offset_fixed = bp.camera_fixed;  // the reference camera's clock is the rig's
+      if (o.estimate_clock_drift) bp.time_drift.assign(bp.cam_from_rig.size(), 0.0);
     }
     // An intrinsic trades with the camera's pose and barely moves the RMS per iteration: the paper's
     // stopping rule would end the solve long before the intrinsics arrive (cx 8 px off stayed 7.4 off):
@@ -189,8 +194,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
   }
   if (!report->intrinsics.empty() &&
-      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp))
-  {
+      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp)) {
     BundleSettings full = solve_settings;
     full.paper_stop = false;
     if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
@@ -358,8 +362,10 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
     const double rms = s.cam_n[c] ? std::sqrt(s.cam_sq[c] / s.cam_n[c]) : 0.0;
     map->cameras.push_back({(*names.camera_names)[c], bp.Model(static_cast<int>(c)),
                             Normalized(Inverse(RigidFromBlock(bp.cam_from_rig[c].data()))), s.cam_n[c], rms,
-                            s.cam_max[c], bp.RefinesTime() ? 1e6 * bp.time_offset_s[c] : 0.0});
+                            s.cam_max[c], bp.RefinesTime() ? 1e6 * bp.time_offset_s[c] : 0.0,
+                            bp.RefinesDrift() ? 1e6 * bp.time_drift[c] : 0.0});
   }
+  map->time_reference_utime = bp.RefinesDrift() ? bp.time_reference_utime : 0;
   std::vector<int> order(ids.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int x, int y) { return ids[x] < ids[y]; });

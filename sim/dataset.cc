@@ -35,6 +35,8 @@ std::string Num(double v) { return YamlNumber(v); }
 
 std::string TempName(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
 
+std::string TimestampsFileName(const std::string& camera) { return camera + "_timestamps.csv"; }
+
 // An image of a session: written to a temporary name then renamed (a reader never sees half a file),
 // without WriteFileAtomic's two fsyncs per file, which made writing PNGs I/O-bound (a generated session
 // is regenerated, not recovered, after a crash). Throws naming the file.
@@ -86,8 +88,37 @@ void WriteRigYaml(const std::string& path, const DatasetOptions& o, const Ground
     s << "  - name: " << c.name << "\n";
     s << "    intrinsics: " << c.name << ".yml\n";
     s << "    source: " << (o.video ? c.name + ".mp4" : c.name + "/") << "\n";
+    if (!o.detections_only && o.clocks.count(c.name))
+      s << "    timestamps: " << TimestampsFileName(c.name) << "\n";
   }
   WriteFileAtomic(path, s.str());
+}
+
+// The camera's clock readings of every frame (frame_index,time_s: the detector's per-camera times).
+void WriteTimestamps(const std::string& path, const CameraClock& clock, const std::vector<SimFrame>& frames) {
+  std::ostringstream s;
+  s << "frame_index,time_s\n";
+  char line[64];
+  for (const SimFrame& f : frames) {
+    const int64_t utime = ClockUtime(clock, f.utime);
+    std::snprintf(line, sizeof(line), "%lld,%lld.%06lld\n", static_cast<long long>(f.seq),
+                  static_cast<long long>(utime / 1000000), static_cast<long long>(utime % 1000000));
+    s << line;
+  }
+  WriteFileAtomic(path, s.str());
+}
+
+// Names of --intrinsics-error and --clock must be cameras of the rig.
+template <typename T>
+void CheckCameraNames(const std::map<std::string, T>& per_camera, const std::vector<SimCamera>& cameras,
+                      const std::string& option) {
+  for (const auto& entry : per_camera) {
+    bool found = false;
+    for (const SimCamera& c : cameras) found = found || c.name == entry.first;
+    if (!found)
+      throw std::invalid_argument(option + ": no camera named '" + entry.first + "' (cam0 .. cam" +
+                                  std::to_string(cameras.size() - 1) + ")");
+  }
 }
 
 std::string FrameFileName(int64_t seq) {
@@ -143,27 +174,47 @@ void SimulateFrames(const std::vector<SimCamera>& cameras, size_t frames, const 
 
 int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
                            const std::vector<SimFrame>& frames, const DetectionSimOptions& d, uint64_t seed,
-                           const SceneFn& scene, const CameraAtFrameFn& camera_at) {
+                           const SceneFn& scene, const CameraAtFrameFn& camera_at, const PublishFn& publish) {
   const std::string tmp = TempName(path);
   int64_t written = 0;
   {
     lcm::LogFile log(tmp, "w");
     if (!log.good()) throw std::runtime_error("cannot write '" + tmp + "'");
+    // With `publish` the messages' times are the cameras' clocks: kept and written in time order.
+    struct Held {
+      int64_t utime;
+      std::string channel;
+      std::vector<uint8_t> data;
+    };
+    std::vector<Held> held;
+    int64_t eventnum = 0;
+    auto write = [&](int64_t utime, const std::string& channel, std::vector<uint8_t>* data) {
+      lcm::LogEvent ev;
+      ev.eventnum = eventnum++;
+      ev.timestamp = utime;
+      ev.channel = channel;
+      ev.datalen = static_cast<int32_t>(data->size());
+      ev.data = data->data();
+      if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
+    };
     std::vector<std::string> channels;
     for (const SimCamera& c : cameras) channels.push_back(DetectionsChannel(c.name));
     std::vector<uint8_t> buffer;
+    detections_t out;
     SimulateFrames(cameras, frames.size(), d, seed, scene, camera_at, [&](size_t k, const detections_t& msg) {
-      buffer.resize(msg.getEncodedSize());
-      msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-      lcm::LogEvent ev;
-      ev.eventnum = written;
-      ev.timestamp = msg.utime;
-      ev.channel = channels[k];
-      ev.datalen = static_cast<int32_t>(buffer.size());
-      ev.data = buffer.data();
-      if (log.writeEvent(&ev) != 0) throw std::runtime_error("cannot write '" + tmp + "'");
+      out = msg;
+      if (publish) publish(k, &out);
+      buffer.resize(out.getEncodedSize());
+      out.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+      if (publish)
+        held.push_back({out.utime, channels[k], buffer});
+      else
+        write(out.utime, channels[k], &buffer);
       ++written;
     });
+    std::stable_sort(held.begin(), held.end(),
+                     [](const Held& a, const Held& b) { return a.utime < b.utime; });
+    for (Held& h : held) write(h.utime, h.channel, &h.data);
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
@@ -200,6 +251,15 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
   truth.frames = frames;
   AddCameraChanges(o, &truth);
   const std::vector<SimCamera>& cameras = truth.cameras;
+  CheckCameraNames(o.intrinsics_errors, cameras, "--intrinsics-error");
+  CheckCameraNames(o.clocks, cameras, "--clock");
+  truth.clocks = o.clocks;
+  // The intrinsics the rig is written with (and the detections report): the truth unless perturbed.
+  std::vector<CameraModel> written_models;
+  for (const SimCamera& c : cameras) {
+    const auto e = o.intrinsics_errors.find(c.name);
+    written_models.push_back(e == o.intrinsics_errors.end() ? c.model : PerturbedModel(c.model, e->second));
+  }
 
   // Check the dictionary and the ids before writing anything.
   cv::Ptr<cv::aruco::Dictionary> dict = LoadDictionary(o.dictionary);
@@ -208,7 +268,11 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
       throw std::invalid_argument("marker id " + std::to_string(m.id) + " is not in dictionary " +
                                   o.dictionary + " (" + std::to_string(dict->bytesList.rows) + " markers)");
 
-  for (const SimCamera& c : cameras) WriteIntrinsicsOpenCv((dir / (c.name + ".yml")).string(), c.model);
+  for (size_t k = 0; k < cameras.size(); ++k)
+    WriteIntrinsicsOpenCv((dir / (cameras[k].name + ".yml")).string(), written_models[k]);
+  if (!o.detections_only)
+    for (const auto& [name, clock] : o.clocks)
+      WriteTimestamps((dir / TimestampsFileName(name)).string(), clock, frames);
   WriteRigYaml((dir / "rig.yaml").string(), o, truth, sizes);
   WriteGroundTruth((dir / "ground_truth.yaml").string(), truth);
 
@@ -226,7 +290,14 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
           if (!CameraActive(cameras[k].name, truth, f.seq)) return false;
           *camera = CameraAtFrame(cameras[k], truth, f.seq);
           return true;
-        });
+        },
+        o.intrinsics_errors.empty() && o.clocks.empty()
+            ? internal::PublishFn()
+            : [&](size_t k, detections_t* msg) {
+                msg->camera_model = ToCameraModelMsg(written_models[k]);
+                const auto clock = o.clocks.find(cameras[k].name);
+                if (clock != o.clocks.end()) msg->utime = ClockUtime(clock->second, msg->utime);
+              });
   } else {
     Renderer renderer(object, o.dictionary, o.render);
     const int n_cams = static_cast<int>(cameras.size());

@@ -379,25 +379,55 @@ int64_t FrameUtime(int64_t frame, double fps) {
   return kStartUtime + static_cast<int64_t>(std::llround(static_cast<double>(frame) * 1e6 / fps));
 }
 
-std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& o) {
+namespace {
+
+// The random motion of MakeTrajectory: the wiggles and the yaw drawn from the seed.
+struct Motion {
+  explicit Motion(const TrajectoryOptions& o) : o(o) {
+    std::mt19937_64 rng(o.seed * 6364136223846793005ULL + 1442695040888963407ULL);
+    rho = o.position_radius > 0 ? o.position_radius : 0.15;
+    vert = o.vertical_range > 0 ? o.vertical_range : 0.08;
+    wx.Init(rng, 0.04, 0.25);
+    wy.Init(rng, 0.04, 0.25);
+    wz.Init(rng, 0.05, 0.3);
+    tx.Init(rng, 0.05, 0.35);
+    ty.Init(rng, 0.05, 0.35);
+    yaw_wiggle.Init(rng, 0.05, 0.3);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    yaw0 = 2 * kPi * u(rng);
+    direction = u(rng) < 0.5 ? -1.0 : 1.0;
+  }
+  // The centre at motion time t (seconds).
+  Eigen::Vector3d Position(double t) const {
+    return Eigen::Vector3d(rho * wx(t), rho * wy(t), o.look_at_height + vert * wz(t));
+  }
+  // The pose at motion time t and progress s (0..1 over the moving frames).
+  Rigid3 Pose(double t, double s) const {
+    const double yaw = yaw0 + direction * (2 * kPi * o.turns * s) + 0.4 * yaw_wiggle(t);
+    Eigen::Vector2d tilt(tx(t), ty(t));
+    tilt *= Rad(o.max_tilt_deg) / std::sqrt(2.0);
+    Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (tilt.norm() > 0) {
+      const Eigen::Vector3d axis(tilt[0], tilt[1], 0);
+      r = Eigen::AngleAxisd(tilt.norm(), axis.normalized()).toRotationMatrix() * r;
+    }
+    return MakePose(r, Position(t));
+  }
+  const TrajectoryOptions& o;
+  double rho = 0, vert = 0, yaw0 = 0, direction = 1;
+  Wiggle wx, wy, wz, tx, ty, yaw_wiggle;
+};
+
+void CheckTrajectoryOptions(const TrajectoryOptions& o) {
   if (o.frames < 1) throw std::invalid_argument("frames: expected >= 1, got " + std::to_string(o.frames));
   if (!(o.fps > 0) || !(o.fps <= 10000)) throw std::invalid_argument("fps: expected 0..10000");
   if (o.still_frames < 0) throw std::invalid_argument("still-frames: expected >= 0");
-  std::mt19937_64 rng(o.seed * 6364136223846793005ULL + 1442695040888963407ULL);
-  const double rho = o.position_radius > 0 ? o.position_radius : 0.15;
-  const double vert = o.vertical_range > 0 ? o.vertical_range : 0.08;
-  Wiggle wx, wy, wz, tx, ty, yaw_wiggle;
-  wx.Init(rng, 0.04, 0.25);
-  wy.Init(rng, 0.04, 0.25);
-  wz.Init(rng, 0.05, 0.3);
-  tx.Init(rng, 0.05, 0.35);
-  ty.Init(rng, 0.05, 0.35);
-  yaw_wiggle.Init(rng, 0.05, 0.3);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double yaw0 = 2 * kPi * u(rng);
-  const double direction = u(rng) < 0.5 ? -1.0 : 1.0;
+  if (!(o.time_scale > 0 && o.time_scale <= 1000))
+    throw std::invalid_argument("time_scale: expected 0..1000, got " + std::to_string(o.time_scale));
+}
 
-  // Still segments: evenly spaced; motion time does not advance inside them.
+// Frames of the motion (still segments excluded): the motion time does not advance inside them.
+int MovingFrames(const TrajectoryOptions& o, std::vector<bool>* still_out) {
   std::vector<bool> still(o.frames, false);
   const int segments = o.still_frames > 0 ? std::max(0, o.still_segments) : 0;
   for (int j = 0; j < segments; ++j) {
@@ -407,28 +437,62 @@ std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& o) {
   }
   int moving = 0;
   for (bool s : still) moving += s ? 0 : 1;
-  const double duration = std::max(1, moving) / o.fps;
+  if (still_out) *still_out = still;
+  return moving;
+}
 
+}  // namespace
+
+double TrajectoryMaxSpeed(const TrajectoryOptions& o) {
+  CheckTrajectoryOptions(o);
+  const Motion motion(o);
+  const int moving = MovingFrames(o, nullptr);
+  constexpr int kSamples = 20;  // per frame interval
+  const double dt_frame = 1.0 / o.fps;
+  const double dt = dt_frame / kSamples;
+  double top = 0.0;
+  Eigen::Vector3d last = motion.Position(0.0);
+  for (int i = 1; i <= (moving - 1) * kSamples; ++i) {
+    const Eigen::Vector3d p = motion.Position(o.time_scale * i * dt);
+    top = std::max(top, (p - last).norm() / dt);
+    last = p;
+  }
+  return top;
+}
+
+double TimeScaleForMaxSpeed(TrajectoryOptions o, double max_speed_m_s) {
+  if (!(max_speed_m_s > 0 && max_speed_m_s <= 100))
+    throw std::invalid_argument("--max-speed-m-s: expected 0..100 m/s, got " + std::to_string(max_speed_m_s));
+  // The top speed grows with the scale (faster, and over a longer stretch of the motion): bisection.
+  double lo = 1e-3, hi = 1000.0;
+  o.time_scale = hi;
+  if (TrajectoryMaxSpeed(o) < max_speed_m_s)
+    throw std::invalid_argument("--max-speed-m-s: " + std::to_string(max_speed_m_s) +
+                                " m/s is beyond the motion's reach (a larger --radius moves faster)");
+  for (int i = 0; i < 60; ++i) {
+    o.time_scale = std::sqrt(lo * hi);
+    (TrajectoryMaxSpeed(o) < max_speed_m_s ? lo : hi) = o.time_scale;
+  }
+  return std::sqrt(lo * hi);
+}
+
+std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& options) {
+  CheckTrajectoryOptions(options);
+  TrajectoryOptions o = options;
+  if (o.max_speed_m_s > 0) o.time_scale = TimeScaleForMaxSpeed(o, o.max_speed_m_s);
+  const Motion motion(o);
+  std::vector<bool> still;
+  const int moving = MovingFrames(o, &still);
   std::vector<SimFrame> frames(o.frames);
   int tau = 0;
   for (int k = 0; k < o.frames; ++k) {
     if (k > 0 && !still[k]) ++tau;
-    const double t = tau / o.fps;
+    const double t = o.time_scale * tau / o.fps;
     const double s = std::max(1, moving - 1) > 0 ? static_cast<double>(tau) / std::max(1, moving - 1) : 0.0;
-    const Eigen::Vector3d p(rho * wx(t), rho * wy(t), o.look_at_height + vert * wz(t));
-    const double yaw = yaw0 + direction * (2 * kPi * o.turns * s) + 0.4 * yaw_wiggle(t);
-    Eigen::Vector2d tilt(tx(t), ty(t));
-    tilt *= Rad(o.max_tilt_deg) / std::sqrt(2.0);
-    Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    if (tilt.norm() > 0) {
-      const Eigen::Vector3d axis(tilt[0], tilt[1], 0);
-      r = Eigen::AngleAxisd(tilt.norm(), axis.normalized()).toRotationMatrix() * r;
-    }
     frames[k].seq = k;
     frames[k].utime = FrameUtime(k, o.fps);
-    frames[k].rig_from_object = MakePose(r, p);
+    frames[k].rig_from_object = motion.Pose(t, s);
   }
-  (void)duration;
   return frames;
 }
 

@@ -92,6 +92,15 @@ void ReadCameraChanges(const YAML::Node& root, const std::string& path, GroundTr
     truth->late_cameras.push_back(
         {camera(late[i]["camera"], key + ".camera"), GetInt64(late[i]["frame"], path, key + ".frame")});
   }
+  const YAML::Node clocks = root["clocks"];
+  if (clocks && !clocks.IsMap()) Fail(path, "clocks", "expected a map of camera names");
+  if (clocks)
+    for (const auto& entry : clocks) {
+      const std::string name = camera(entry.first, "clocks");
+      const std::string key = "clocks." + name;
+      truth->clocks[name] = {GetNumber(entry.second["offset_ms"], path, key + ".offset_ms"),
+                             GetNumber(entry.second["drift_ppm"], path, key + ".drift_ppm")};
+    }
 }
 
 }  // namespace
@@ -148,6 +157,10 @@ void WriteGroundTruth(const std::string& path, const GroundTruth& truth) {
   if (!truth.late_cameras.empty()) s << "late_cameras:\n";
   for (const LateCamera& l : truth.late_cameras)
     s << "  - {camera: " << l.camera << ", frame: " << l.frame << "}\n";
+  if (!truth.clocks.empty()) s << "clocks:\n";
+  for (const auto& [camera, clock] : truth.clocks)
+    s << "  " << camera << ": {offset_ms: " << Num(clock.offset_ms) << ", drift_ppm: " << Num(clock.drift_ppm)
+      << "}\n";
   WriteFileAtomic(path, s.str());
 }
 

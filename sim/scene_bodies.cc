@@ -147,6 +147,8 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
   if (!o.detections_only)
     throw std::invalid_argument(
         "--scene bodies: only with --detections-only (no renderer for several bodies yet)");
+  if (!o.intrinsics_errors.empty() || !o.clocks.empty())
+    throw std::invalid_argument("--scene bodies: --intrinsics-error and --clock are for --scene object only");
   fs::create_directories(o.out_dir);
   const fs::path dir(o.out_dir);
   const std::vector<SimCamera> cameras = MakeRig(o.rig);

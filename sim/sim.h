@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.h"
@@ -131,11 +132,22 @@ struct TrajectoryOptions {
   // Still segments: `still_segments` segments of `still_frames` frames each where the object does not move.
   int still_frames = 0;
   int still_segments = 2;
+  // Faster (or slower) motion: the motion's own time runs time_scale times as fast as the frames' (the
+  // turns about the vertical stay `turns` over the sequence). max_speed_m_s > 0 replaces time_scale by the
+  // one that makes the object centre's top speed this (TrajectoryMaxSpeed).
+  double time_scale = 1.0;
+  double max_speed_m_s = 0.0;
 };
 
 // A smooth random 6-DoF trajectory (sums of random sinusoids) inside the cameras' common view, turning
 // about the vertical so every side faces every camera. Deterministic for a seed.
 std::vector<SimFrame> MakeTrajectory(const TrajectoryOptions& options);
+// The top speed of the object's centre (m/s) along MakeTrajectory(options) at options.time_scale (its
+// max_speed_m_s ignored), sampled 20 times per frame interval.
+double TrajectoryMaxSpeed(const TrajectoryOptions& options);
+// The time_scale that gives the object's centre the top speed max_speed_m_s (bisection; throws
+// std::invalid_argument naming --max-speed-m-s when it cannot be reached).
+double TimeScaleForMaxSpeed(TrajectoryOptions options, double max_speed_m_s);
 
 // ---------------------------------------------------------------------------------------------
 // Ground-truth projections
@@ -257,6 +269,35 @@ double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double
                              double y1);
 
 // ---------------------------------------------------------------------------------------------
+// What a session tells its user that is not the truth (sim/perturb.cc, issue 18): intrinsics written to
+// the rig (camK.yml, and the camera_model of the detections) that differ from the true ones the images and
+// corners are made with, and camera clocks that are off and drift.
+
+// Error of a camera's written intrinsics against the truth.
+struct IntrinsicsError {
+  double focal_rel = 0.0;           // fx, fy *= 1 + focal_rel
+  double cx_px = 0.0, cy_px = 0.0;  // added to the principal point
+  double k1 = 0.0;                  // added to the first distortion coefficient (radtan or fisheye k1)
+};
+// The written model: `truth` with the error applied (k1 ignored without distortion coefficients).
+CameraModel PerturbedModel(const CameraModel& truth, const IntrinsicsError& error);
+// "CAM,FOCAL_PCT,CX_PX,CY_PX[,K1]" (e.g. "cam1,3,8,-6,0.03"); throws std::invalid_argument naming
+// --intrinsics-error.
+std::pair<std::string, IntrinsicsError> ParseIntrinsicsError(const std::string& text);
+
+// A camera's clock against the true time (the frames' utimes in ground_truth.yaml): at true time t it
+// reads t + offset + drift * (t - kStartUtime).
+struct CameraClock {
+  double offset_ms = 0.0;
+  double drift_ppm = 0.0;  // 1 ppm: 1 us more per second
+};
+// "CAM,OFFSET_MS[,DRIFT_PPM]" (e.g. "cam2,12" or "cam2,-8,200"); throws std::invalid_argument naming
+// --clock.
+std::pair<std::string, CameraClock> ParseCameraClock(const std::string& text);
+// The clock's reading (us, rounded) at true time `utime`.
+int64_t ClockUtime(const CameraClock& clock, int64_t utime);
+
+// ---------------------------------------------------------------------------------------------
 // Ground truth file (ground_truth.yaml)
 
 // A camera that moves during the session (a bumped tripod): from `frame` on it sits at rig_from_cam_after
@@ -287,6 +328,7 @@ struct GroundTruth {
   std::vector<SimFrame> frames;    // seq, utime, rig_from_object
   std::vector<CameraMove> moves;   // cameras[].rig_from_cam is the pose before a move (sim/bump.cc)
   std::vector<LateCamera> late_cameras;
+  std::map<std::string, CameraClock> clocks;  // cameras whose clock is not the true time
   const SimCamera* FindCamera(const std::string& name) const;
   const SimMarker* FindMarker(int id) const;
 };
@@ -305,7 +347,8 @@ struct GroundTruth {
 //   frames:    - {seq: 0, utime: 1000000000000, rig_from_object: POSE}
 //   moves:     - {camera: cam2, frame: 150, rotation_deg: 0.5, translation_mm: 3, rig_from_cam_after: POSE}
 //   late_cameras: - {camera: cam5, frame: 300}
-// (the last two only when there are moves / late cameras).
+//   clocks:    {cam1: {offset_ms: -20, drift_ppm: 0}}
+// (the last three only when there are moves / late cameras / clocks that are off).
 void WriteGroundTruth(const std::string& path, const GroundTruth& truth);
 // Throws std::runtime_error naming the file and key.
 GroundTruth ReadGroundTruth(const std::string& path);
@@ -367,7 +410,13 @@ struct DatasetOptions {
   RenderOptions render;
   DetectionSimOptions detections;
   std::vector<CameraMoveOptions> moves;  // cameras bumped during the session
-  int64_t add_camera_frame = -1;         // >= 0: one extra camera (MakeExtraCamera) from this frame on
+  // Per camera name: the error of the intrinsics written to the rig (camK.yml and the detections'
+  // camera_model; the images, corners and ground truth stay true), and a clock that is off (detections'
+  // utime; with images, camK_timestamps.csv named in rig.yaml). Both recorded in ground_truth.yaml only as
+  // far as the clocks go (the true intrinsics are there).
+  std::map<std::string, IntrinsicsError> intrinsics_errors;
+  std::map<std::string, CameraClock> clocks;
+  int64_t add_camera_frame = -1;  // >= 0: one extra camera (MakeExtraCamera) from this frame on
   std::string dictionary = "DICT_6X6_250";
   bool detections_only = false;
   bool video = false;  // per-camera MP4 instead of PNG folders

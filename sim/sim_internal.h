@@ -47,9 +47,13 @@ void SimulateFrames(const std::vector<SimCamera>& cameras, size_t frames, const 
 // camera index. With `camera_at`, camera k at a frame is the one it gives (a camera moved during the
 // session), and a camera it returns false for does not publish that frame (one that starts late).
 // Returns the messages written.
+// With `publish`, camera k's message is what it makes of the simulated one (the intrinsics it was given,
+// its clock's utime), and the messages are written in utime order.
+using PublishFn = std::function<void(size_t k, detections_t* msg)>;
 int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>& cameras,
                            const std::vector<SimFrame>& frames, const DetectionSimOptions& options,
-                           uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at = nullptr);
+                           uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at = nullptr,
+                           const PublishFn& publish = nullptr);
 
 }  // namespace internal
 }  // namespace sim

@@ -55,8 +55,9 @@ int Main(int argc, char** argv) {
   double surface_albedo = -1.0, surface_texture = 0.0, shading = 0.3, gradient = 0.3, vignetting = 0.0,
          defocus = 0.0, shot_noise = 0.0, gamma = 1.0, sharpen = 0.0;
   int jpeg_quality = 0;
-  std::vector<std::string> move_camera;
+  std::vector<std::string> move_camera, intrinsics_error, clock;
   int add_camera = -1;
+  double max_speed = 0.0;
   bool motion_blur = false, video = false, detections_only = false, bgr = false, quiet = false,
        plain_bg = false;
 
@@ -118,6 +119,9 @@ int Main(int argc, char** argv) {
   args.AddInt("still-frames", &still_frames, "length of each of two still segments, frames (0: none)");
   args.AddDouble("max-tilt-deg", &max_tilt, "largest tilt of the object from upright, degrees");
   args.AddDouble("turns", &turns, "turns of the object about the vertical over the sequence");
+  args.AddDouble("max-speed-m-s", &max_speed,
+                 "faster (or slower) motion: the object's centre reaches this top speed, m/s (the motion's "
+                 "time scaled; 0: the default motion)");
   args.AddInt("threads", &threads, "cameras rendered in parallel");
   args.AddFlag(
       "detections-only", &detections_only,
@@ -135,6 +139,14 @@ int Main(int argc, char** argv) {
   args.AddInt("add-camera", &add_camera,
               "FRAME: one more camera (cam<N>, on the circle halfway between cam0 and cam1) that publishes "
               "from FRAME on (-1: none; ground_truth.yaml late_cameras:)");
+  args.AddList("intrinsics-error", &intrinsics_error,
+               "CAM,FOCAL_PCT,CX_PX,CY_PX[,K1]: the rig is given wrong intrinsics for CAM (camK.yml and the "
+               "detections' camera model: focal length off by FOCAL_PCT %, principal point by CX_PX, CY_PX "
+               "pixels, k1 by K1); images, corners and ground_truth.yaml stay true (repeatable)");
+  args.AddList("clock", &clock,
+               "CAM,OFFSET_MS[,DRIFT_PPM]: CAM's clock reads the true time + OFFSET_MS + DRIFT_PPM * 1e-6 * "
+               "(time since the first frame): its detections' utime, or with images CAM_timestamps.csv "
+               "(rig.yaml timestamps:); ground_truth.yaml clocks: (repeatable)");
   args.AddFlag("quiet", &quiet, "no progress or summary output");
   args.AddEpilog(
       "\nA marker is detected (detections-only) when all 4 corners are in the image, it faces the camera "
@@ -145,7 +157,9 @@ int Main(int argc, char** argv) {
       "object frame the object's body frame; mcmt-eval aligns estimates rigidly.\n"
       "examples:\n"
       "  mcmt-sim --out /tmp/s --object four_sided --cameras 5 --frames 300\n"
-      "  mcmt-sim --out /tmp/d --detections-only --frames 10000 --cameras 8 --corner-noise-px 0.2\n");
+      "  mcmt-sim --out /tmp/d --detections-only --frames 10000 --cameras 8 --corner-noise-px 0.2\n"
+      "  mcmt-sim --out /tmp/q --detections-only --intrinsics-error cam1,3,8,-6,0.03 --clock cam2,12,100 "
+      "--max-speed-m-s 1\n");
   int exit_code = 0;
   if (!args.Parse(argc, argv, &exit_code)) return exit_code;
 
@@ -198,6 +212,7 @@ int Main(int argc, char** argv) {
   if (!(max_tilt >= 0 && max_tilt <= 90)) throw std::invalid_argument("--max-tilt-deg: expected 0..90");
   o.trajectory.max_tilt_deg = max_tilt;
   o.trajectory.turns = turns;
+  if (max_speed != 0.0) o.trajectory.time_scale = sim::TimeScaleForMaxSpeed(o.trajectory, max_speed);
   if (!(noise >= 0 && noise <= 100)) throw std::invalid_argument("--noise: expected 0..100 gray levels");
   if (!(blur >= 0 && blur <= 50)) throw std::invalid_argument("--blur: expected 0..50 px");
   if (supersampling < 0 || supersampling > 16) throw std::invalid_argument("--supersampling: expected 0..16");
@@ -249,6 +264,25 @@ int Main(int argc, char** argv) {
   o.detections.drop_rate = drop_rate;
   o.detections_only = detections_only;
   for (const std::string& m : move_camera) o.moves.push_back(sim::ParseCameraMove(m));
+  for (const std::string& e : intrinsics_error) {
+    const auto parsed = sim::ParseIntrinsicsError(e);
+    if (!o.intrinsics_errors.emplace(parsed).second)
+      throw std::invalid_argument("--intrinsics-error: camera '" + parsed.first + "' given twice");
+  }
+  for (const std::string& c : clock) {
+    const auto parsed = sim::ParseCameraClock(c);
+    if (!o.clocks.emplace(parsed).second)
+      throw std::invalid_argument("--clock: camera '" + parsed.first + "' given twice");
+  }
+  const int named = cameras + (add_camera >= 0 ? 1 : 0);  // cam0 .. cam<named - 1>
+  auto check_name = [&](const std::string& option, const std::string& name) {
+    for (int k = 0; k < named; ++k)
+      if (name == "cam" + std::to_string(k)) return;
+    throw std::invalid_argument(option + ": no camera named '" + name + "' (cam0 .. cam" +
+                                std::to_string(named - 1) + ")");
+  };
+  for (const auto& entry : o.intrinsics_errors) check_name("--intrinsics-error", entry.first);
+  for (const auto& entry : o.clocks) check_name("--clock", entry.first);
   if (add_camera < -1) throw std::invalid_argument("--add-camera: expected a frame >= 0 (-1: none)");
   o.add_camera_frame = add_camera;
   if (video && detections_only)

@@ -190,10 +190,11 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
       msg.dictionary != rig_.markers.dictionary)
     WarnOnce("dict:" + msg.camera, "camera '" + msg.camera + "' detects in '" + msg.dictionary +
                                        "', the rig uses '" + rig_.markers.dictionary + "'");
-  // The camera's clock against the map's reference camera (map.yaml time_offset_us, issue 18): frames are
-  // assembled by true capture time, utime - offset.
-  const double time_offset_us = estimator_->map().FindCamera(msg.camera)->time_offset_us;
-  if (time_offset_us != 0) msg.utime -= static_cast<int64_t>(std::llround(time_offset_us));
+  // The camera's clock against the map's reference camera (map.yaml time_offset_us and time_drift_ppm,
+  // issue 18): frames are assembled by true capture time, utime - offset - drift * (utime - reference).
+  const RigMap& map = estimator_->map();
+  const double clock_us = map.FindCamera(msg.camera)->ClockUs(msg.utime, map.time_reference_utime);
+  if (clock_us != 0) msg.utime -= static_cast<int64_t>(std::llround(clock_us));
   std::vector<SyncedFrame> frames;
   const int64_t late_before = sync_->stats().out_of_order;
   frames = sync_->Add(msg, options_.log_mode ? msg.utime : arrival_wall);

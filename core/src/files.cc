@@ -314,6 +314,9 @@ void WriteMap(const std::string& path, const RigMap& map) {
   out << "rms_px: " << Num(map.rms_px) << "\n";
   out << "num_frames: " << map.num_frames << "\n";
   out << "num_observations: " << map.num_observations << "\n";
+  bool drift = false;
+  for (const auto& c : map.cameras) drift = drift || c.time_drift_ppm != 0;
+  if (drift) out << "time_reference_utime: " << map.time_reference_utime << "\n";
   out << "cameras:" << (map.cameras.empty() ? " []" : "") << "\n";
   for (const auto& c : map.cameras) {
     const CameraModel& k = c.model;
@@ -334,6 +337,7 @@ void WriteMap(const std::string& path, const RigMap& map) {
     out << "    rms_px: " << Num(c.rms_px) << "\n";
     out << "    max_px: " << Num(c.max_px) << "\n";
     if (c.time_offset_us != 0) out << "    time_offset_us: " << Num(c.time_offset_us) << "\n";
+    if (c.time_drift_ppm != 0) out << "    time_drift_ppm: " << Num(c.time_drift_ppm) << "\n";
   }
   if (map.objects.empty()) {
     WriteMarkers(out, "", map.markers);
@@ -467,6 +471,9 @@ RigMap ReadMap(const std::string& path) {
   map.rms_px = r.OptDouble(root, "", "rms_px");
   map.num_frames = r.OptInt(root, "", "num_frames");
   map.num_observations = r.OptInt(root, "", "num_observations");
+  const double reference_utime = r.OptDouble(root, "", "time_reference_utime");
+  if (!(std::abs(reference_utime) < 9e18)) r.Fail("time_reference_utime", "expected a utime (us)");
+  map.time_reference_utime = static_cast<int64_t>(std::llround(reference_utime));
   const YAML::Node cams = r.Get(root, "", "cameras");
   if (!cams.IsSequence()) r.Fail("cameras", "expected a list");
   for (size_t i = 0; i < cams.size(); ++i) {
@@ -501,6 +508,9 @@ RigMap ReadMap(const std::string& path) {
     cam.max_px = r.OptDouble(c, key, "max_px");
     cam.time_offset_us = r.OptDouble(c, key, "time_offset_us");
     if (!std::isfinite(cam.time_offset_us)) r.Fail(key + ".time_offset_us", "expected a finite number");
+    cam.time_drift_ppm = r.OptDouble(c, key, "time_drift_ppm");
+    if (!std::isfinite(cam.time_drift_ppm) || !(std::abs(cam.time_drift_ppm) < 1e5))
+      r.Fail(key + ".time_drift_ppm", "expected a number within +-1e5");
     if (map.FindCamera(cam.name)) r.Fail(key + ".name", "duplicated camera '" + cam.name + "'");
     map.cameras.push_back(cam);
   }

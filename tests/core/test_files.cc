@@ -21,6 +21,7 @@ void ExpectSameMap(const RigMap& a, const RigMap& b) {
   EXPECT_EQ(a.rms_px, b.rms_px);
   EXPECT_EQ(a.num_frames, b.num_frames);
   EXPECT_EQ(a.num_observations, b.num_observations);
+  EXPECT_EQ(a.time_reference_utime, b.time_reference_utime);
   ASSERT_EQ(a.cameras.size(), b.cameras.size());
   for (size_t i = 0; i < a.cameras.size(); ++i) {
     EXPECT_EQ(a.cameras[i].name, b.cameras[i].name);
@@ -31,6 +32,8 @@ void ExpectSameMap(const RigMap& a, const RigMap& b) {
     EXPECT_EQ(a.cameras[i].observations, b.cameras[i].observations);
     EXPECT_EQ(a.cameras[i].rms_px, b.cameras[i].rms_px);
     EXPECT_EQ(a.cameras[i].max_px, b.cameras[i].max_px);
+    EXPECT_EQ(a.cameras[i].time_offset_us, b.cameras[i].time_offset_us);
+    EXPECT_EQ(a.cameras[i].time_drift_ppm, b.cameras[i].time_drift_ppm);
   }
   ASSERT_EQ(a.markers.size(), b.markers.size());
   for (size_t i = 0; i < a.markers.size(); ++i) {
@@ -73,6 +76,11 @@ RigMap RandomMap(uint64_t seed) {
     c.observations = 100 * i;
     c.rms_px = u(rng);
     c.max_px = 10 * u(rng);
+    if (i == 2) {  // a clock that is off and drifts (issue 18)
+      c.time_offset_us = -20000 * u(rng);
+      c.time_drift_ppm = 300 * u(rng);
+      map.time_reference_utime = 1000000005000000LL + static_cast<int64_t>(seed);
+    }
     map.cameras.push_back(c);
   }
   for (int id : {3, 0, 17, 249}) {

@@ -103,6 +103,11 @@ TEST(MapperOptions, OptionsBuiltInCodeGetTheFileChecks) {
   o.marker_inlier_fraction = 1.5;
   EXPECT_EQ(error(o), "mapper.marker_inlier_fraction: must be in [0, 1], got 1.5");
   o = MapperOptions();
+  o.estimate_clock_drift = true;
+  EXPECT_EQ(error(o), "mapper.clock_drift: needs time_offsets: true (a drift is estimated with the offsets)");
+  o.estimate_time_offsets = true;
+  EXPECT_EQ(error(o), "(no error)");
+  o = MapperOptions();
   o.cameras = {"a", "b"};
   o.reference_camera = "c";
   EXPECT_EQ(error(o), "mapper.reference_camera: no camera named 'c' (cameras: a, b)");

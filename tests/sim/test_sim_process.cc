@@ -516,6 +516,120 @@ TEST(SimProcess, DetectionOptionsChangeOnlyTheirOwnOutcome) {
 }
 
 // The documented -1 defaults mean the same given explicitly as omitted; other values take effect.
+// --intrinsics-error and --clock (issue 18) change what the rig is told, not the truth: the written
+// intrinsics are off by exactly what was asked, the corners, the ground-truth cameras and frames are
+// those of the same session without them, and each camera's utimes are its clock's readings (event times
+// too, the log in time order).
+TEST(SimProcess, IntrinsicsErrorAndClockChangeTheWrittenRigNotTheTruth) {
+  const std::string base =
+      " --frames 30 --cameras 3 --seed 7 --distortion radtan --object box --detections-only --quiet";
+  const std::string plain = Tmp() / "selfcal_plain", wrong = Tmp() / "selfcal_wrong";
+  Result r = RunProgram(kSim, "--out " + plain + base);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = RunProgram(kSim, "--out " + wrong + base +
+                           " --intrinsics-error cam1,3,8,-6,0.03 --clock cam2,12,500 --clock cam0,-20.5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const sim::GroundTruth t_plain = sim::ReadGroundTruth(plain + "/ground_truth.yaml");
+  const sim::GroundTruth t_wrong = sim::ReadGroundTruth(wrong + "/ground_truth.yaml");
+  ASSERT_EQ(t_plain.cameras.size(), t_wrong.cameras.size());
+  for (size_t k = 0; k < t_plain.cameras.size(); ++k) {
+    const CameraModel& a = t_plain.cameras[k].model;
+    const CameraModel& b = t_wrong.cameras[k].model;
+    EXPECT_EQ(a.fx, b.fx);
+    EXPECT_EQ(a.cx, b.cx);
+    EXPECT_EQ(a.distortion, b.distortion);
+    EXPECT_TRUE(t_plain.cameras[k].rig_from_cam.isApprox(t_wrong.cameras[k].rig_from_cam, 0));
+  }
+  ASSERT_EQ(t_plain.frames.size(), t_wrong.frames.size());
+  for (size_t f = 0; f < t_plain.frames.size(); ++f)
+    EXPECT_EQ(t_plain.frames[f].utime, t_wrong.frames[f].utime);
+  EXPECT_TRUE(t_plain.clocks.empty());
+  ASSERT_EQ(t_wrong.clocks.size(), 2u);
+  EXPECT_EQ(t_wrong.clocks.at("cam2").offset_ms, 12.0);
+  EXPECT_EQ(t_wrong.clocks.at("cam2").drift_ppm, 500.0);
+  EXPECT_EQ(t_wrong.clocks.at("cam0").offset_ms, -20.5);
+  // The written intrinsics: cam1 off as asked, the others true.
+  const CameraModel truth1 = t_plain.FindCamera("cam1")->model;
+  const CameraModel written1 = LoadIntrinsics(wrong + "/cam1.yml");
+  EXPECT_NEAR(written1.fx / truth1.fx, 1.03, 1e-12);
+  EXPECT_NEAR(written1.fy / truth1.fy, 1.03, 1e-12);
+  EXPECT_NEAR(written1.cx - truth1.cx, 8.0, 1e-9);
+  EXPECT_NEAR(written1.cy - truth1.cy, -6.0, 1e-9);
+  ASSERT_EQ(written1.distortion.size(), truth1.distortion.size());
+  EXPECT_NEAR(written1.distortion[0] - truth1.distortion[0], 0.03, 1e-12);
+  for (size_t i = 1; i < truth1.distortion.size(); ++i)
+    EXPECT_EQ(written1.distortion[i], truth1.distortion[i]);
+  EXPECT_EQ(Slurp(wrong + "/cam0.yml"), Slurp(plain + "/cam0.yml"));
+  EXPECT_NE(Slurp(wrong + "/cam1.yml"), Slurp(plain + "/cam1.yml"));
+  // The detections: same corners, the written model, the clock's utime.
+  const std::vector<LogMessage> a = ReadDetectionsLog(plain + "/detections.lcmlog");
+  const std::vector<LogMessage> b = ReadDetectionsLog(wrong + "/detections.lcmlog");
+  ASSERT_EQ(a.size(), b.size());
+  std::map<std::pair<std::string, int64_t>, const detections_t*> by_key;
+  for (const LogMessage& m : a) by_key[{m.msg.camera, m.msg.seq}] = &m.msg;
+  int64_t last = 0;
+  int shifted = 0;
+  for (const LogMessage& m : b) {
+    EXPECT_EQ(m.timestamp, m.msg.utime);
+    EXPECT_GE(m.timestamp, last) << "log not in time order";
+    last = m.timestamp;
+    const auto it = by_key.find({m.msg.camera, m.msg.seq});
+    ASSERT_NE(it, by_key.end()) << m.msg.camera << " " << m.msg.seq;
+    const detections_t& p = *it->second;
+    ASSERT_EQ(p.markers.size(), m.msg.markers.size());
+    for (size_t i = 0; i < p.markers.size(); ++i)
+      for (int c = 0; c < 4; ++c) {
+        EXPECT_EQ(p.markers[i].corners[c][0], m.msg.markers[i].corners[c][0]);
+        EXPECT_EQ(p.markers[i].corners[c][1], m.msg.markers[i].corners[c][1]);
+      }
+    const double since_start_s = 1e-6 * static_cast<double>(p.utime - sim::kStartUtime);
+    int64_t expected = p.utime;
+    if (m.msg.camera == "cam2") expected += std::llround(12000 + 500 * since_start_s);
+    if (m.msg.camera == "cam0") expected -= 20500;
+    EXPECT_EQ(m.msg.utime, expected) << m.msg.camera << " " << m.msg.seq;
+    shifted += m.msg.utime != p.utime;
+    EXPECT_EQ(m.msg.camera_model.fx, m.msg.camera == "cam1" ? written1.fx : p.camera_model.fx);
+  }
+  EXPECT_EQ(shifted, 60);
+  // With images: the clock goes into CAM_timestamps.csv, named in rig.yaml.
+  const std::string rendered = Tmp() / "selfcal_rendered";
+  r = RunProgram(kSim, "--out " + rendered + " --frames 2 --cameras 2 --seed 7 --quiet --clock cam1,5,1000");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const RigConfig rig = LoadRigConfig(rendered + "/rig.yaml");
+  EXPECT_EQ(rig.cameras[0].timestamps_path, "");
+  EXPECT_EQ(fs::path(rig.cameras[1].timestamps_path).filename(), "cam1_timestamps.csv");
+  EXPECT_EQ(Slurp(rendered + "/cam1_timestamps.csv"),
+            "frame_index,time_s\n0,1000000.005000\n1,1000000.038366\n");
+}
+
+// --max-speed-m-s: the object's centre reaches that top speed (frame to frame differences a little
+// below it: chords of the path, 2.5 % short at 2 m/s and 30 fps), along a motion otherwise the default's.
+TEST(SimProcess, MaxSpeedSetsTheObjectsTopSpeed) {
+  auto top_speed = [&](const std::string& name, const std::string& extra) {
+    const std::string dir = Tmp() / name;
+    const Result r = RunProgram(
+        kSim, "--out " + dir + " --frames 300 --cameras 2 --seed 3 --detections-only --quiet" + extra);
+    EXPECT_EQ(r.code, 0) << r.err;
+    const sim::GroundTruth t = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
+    double top = 0;
+    for (size_t f = 1; f < t.frames.size(); ++f)
+      top = std::max(
+          top,
+          (t.frames[f].rig_from_object.translation() - t.frames[f - 1].rig_from_object.translation()).norm() *
+              t.fps);
+    return top;
+  };
+  const double plain = top_speed("speed_plain", "");
+  for (double v : {0.5, 1.0, 2.0}) {
+    const double top = top_speed("speed_" + std::to_string(v), " --max-speed-m-s " + std::to_string(v));
+    std::printf("--max-speed-m-s %.1f: top frame-to-frame speed %.4f m/s (default motion %.4f)\n", v, top,
+                plain);
+    EXPECT_LE(top, v * 1.0001);
+    EXPECT_GT(top, 0.96 * v);
+  }
+  EXPECT_LT(plain, 0.4);
+}
+
 TEST(SimProcess, ExplicitDefaultsAreTheDefaults) {
   const std::string base = " --frames 2 --cameras 2 --detections-only --quiet";
   auto truth_text = [&](const std::string& name, const std::string& extra) {
@@ -562,6 +676,13 @@ TEST(SimProcess, BadOptionsGiveOneLineNamingTheOption) {
       {"--out " + out + " --threads 0", "--threads"},
       {"--out " + out + " --frames", "--frames"},
       {"--out " + out + " --video --detections-only", "--video"},
+      {"--out " + out + " --intrinsics-error cam1,3,8", "--intrinsics-error"},
+      {"--out " + out + " --intrinsics-error cam1,x,8,0", "--intrinsics-error"},
+      {"--out " + out + " --intrinsics-error cam9,3,8,0", "cam9"},
+      {"--out " + out + " --clock cam1", "--clock"},
+      {"--out " + out + " --clock cam7,5", "cam7"},
+      {"--out " + out + " --clock cam1,5 --clock cam1,6", "--clock"},
+      {"--out " + out + " --max-speed-m-s -1", "--max-speed-m-s"},
       {"--out " + file + "/sub --frames 2", "--out"},
       {"--out " + file + "/sub --frames 2", file + "/sub"},
   };

@@ -1,5 +1,6 @@
-// The tracker applies the map's per-camera clock offsets (map.yaml time_offset_us, issue 18): a camera
-// whose clock reads 15 ms late joins the frames it was captured in.
+// The tracker applies the map's per-camera clock offsets and drifts (map.yaml time_offset_us,
+// time_drift_ppm, issue 18): a camera whose clock reads 15 ms late (and drifts) joins the frames it was
+// captured in.
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
@@ -20,15 +21,18 @@ TrackerNodeOptions LogMode() {
   return o;
 }
 
-// Poses (seq, cameras used) from feeding the session with cam2's clock 15 ms late.
+// Poses (seq, cameras used) from feeding the session with cam2's clock 15 ms late, drifting by drift_ppm
+// from the session's middle on.
 std::vector<TrajectoryRow> Track(const tracker_test::SyntheticSession& session, const RigMap& map,
-                                 const RigConfig& rig) {
+                                 const RigConfig& rig, double drift_ppm = 0.0) {
   lcm::LCM in("memq://");
   TrackerNode node(in, rig, LogMode(), map);
   std::vector<detections_t> all;
+  const int64_t middle = session.utimes[session.utimes.size() / 2];
   for (const auto& frame : session.views)
     for (detections_t d : frame) {
-      if (d.camera == "cam2") d.utime += 15000;
+      if (d.camera == "cam2")
+        d.utime += 15000 + std::llround(1e-6 * drift_ppm * static_cast<double>(d.utime - middle));
       all.push_back(d);
     }
   std::stable_sort(all.begin(), all.end(),
@@ -64,6 +68,37 @@ TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
     EXPECT_LT(tracker_test::TranslationError(applied[f].rig_from_object, session.rig_from_object[f]), 2e-3)
         << f;
   }
+}
+
+// A clock that also drifts (5000 ppm: +-5 ms at the ends of a 2 s session): the offset alone leaves cam2's
+// views at the ends outside their frames; with time_drift_ppm and time_reference_utime every frame has all
+// five cameras.
+TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
+  const tracker_test::SyntheticSession session = tracker_test::MakeSession(tracker_test::SyntheticOptions{});
+  const RigConfig rig =
+      LoadRigConfig(tracker_test::WriteRigFiles(tracker_test::MakeTempDir("drift"), session.map));
+  const double drift_ppm = 5000;
+  ASSERT_GT(1e-6 * drift_ppm * static_cast<double>(session.utimes.back() - session.utimes.front()),
+            2 * 2500.0)
+      << "session too short for the drift to matter";
+  RigMap offset_only = session.map;
+  for (MapCamera& c : offset_only.cameras)
+    if (c.name == "cam2") c.time_offset_us = 15000;
+  RigMap with_drift = offset_only;
+  with_drift.time_reference_utime = session.utimes[session.utimes.size() / 2];
+  for (MapCamera& c : with_drift.cameras)
+    if (c.name == "cam2") c.time_drift_ppm = drift_ppm;
+  auto full_frames = [](const std::vector<TrajectoryRow>& rows) {
+    int n = 0;
+    for (const TrajectoryRow& r : rows) n += r.cameras == 5;
+    return n;
+  };
+  const std::vector<TrajectoryRow> offset_applied = Track(session, offset_only, rig, drift_ppm);
+  const std::vector<TrajectoryRow> drift_applied = Track(session, with_drift, rig, drift_ppm);
+  EXPECT_LT(full_frames(offset_applied), static_cast<int>(0.9 * session.views.size()));
+  ASSERT_EQ(drift_applied.size(), session.views.size());
+  EXPECT_EQ(full_frames(drift_applied), static_cast<int>(session.views.size()));
+  for (size_t f = 0; f < drift_applied.size(); ++f) EXPECT_EQ(drift_applied[f].utime, session.utimes[f]) << f;
 }
 
 }  // namespace

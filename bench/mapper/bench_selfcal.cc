@@ -1,0 +1,247 @@
+// Self-calibration (issue 18): each perturbation of what the mapper is told (intrinsics, clock offsets
+// and drifts, both), the errors before and after refinement, the recovered values against the truth, and
+// the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
+//
+//   bench_selfcal [--frames 300] [--long 1200] [--verbose]
+//
+// Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
+// noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
+// / --max-speed-m-s). --long: the quick-calibration rows again with that many frames (how the camera error
+// falls with more observations; 0: skipped). Prints a markdown table.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "tests/mapper/selfcal_sim.h"
+
+namespace mcmt {
+namespace {
+
+using testing::SelfCalRun;
+using testing::SelfCalSession;
+
+bool verbose = false;
+
+struct Row {
+  std::string perturbation, settings;
+  double camera_mm = 0, object_mm = 0, seconds = 0, baseline_s = 0;
+  std::string recovered;
+};
+
+// Largest error of the refined focal lengths (%), principal points (px) and k1 over the cameras.
+std::string IntrinsicsRecovered(const sim::GroundTruth& truth, const MapResult& r) {
+  double focal = 0, centre = 0, k1 = 0, sigma_focal = 0;
+  for (const MapCamera& c : r.map.cameras) {
+    const CameraModel& t = truth.FindCamera(c.name)->model;
+    const CameraModel& m = c.model;
+    focal = std::max({focal, std::abs(m.fx / t.fx - 1), std::abs(m.fy / t.fy - 1)});
+    centre = std::max({centre, std::abs(m.cx - t.cx), std::abs(m.cy - t.cy)});
+    if (!t.distortion.empty()) k1 = std::max(k1, std::abs(m.distortion[0] - t.distortion[0]));
+  }
+  for (const IntrinsicsReport& ir : r.report.intrinsics)
+    if (ir.is_refined[0]) sigma_focal = std::max(sigma_focal, ir.posterior_sigma[0] / ir.refined[0]);
+  char text[256];
+  std::snprintf(text, sizeof(text), "focal %.3f %% (posterior sigma <= %.3f %%), centre %.2f px, k1 %.4f",
+                100 * focal, 100 * sigma_focal, centre, k1);
+  return text;
+}
+
+// Largest error of the cameras' clocks (offset + drift) over the session (us) and of the drifts (ppm),
+// against the reference camera's clock.
+std::string ClocksRecovered(const SelfCalRun& run, const MapResult& r, bool drift) {
+  auto reading = [&](const std::string& name, int64_t utime) {
+    const auto it = run.truth.clocks.find(name);
+    return it == run.truth.clocks.end() ? 0.0
+                                        : static_cast<double>(sim::ClockUtime(it->second, utime) - utime);
+  };
+  auto drift_of = [&](const std::string& name) {
+    const auto it = run.truth.clocks.find(name);
+    return it == run.truth.clocks.end() ? 0.0 : it->second.drift_ppm;
+  };
+  double worst_us = 0, worst_ppm = 0;
+  for (const MapCamera& c : r.map.cameras) {
+    for (const sim::SimFrame& f : run.truth.frames) {
+      const double truth = reading(c.name, f.utime) - reading(r.map.reference_camera, f.utime);
+      worst_us = std::max(worst_us, std::abs(c.ClockUs(f.utime, r.map.time_reference_utime) - truth));
+    }
+    worst_ppm = std::max(worst_ppm,
+                         std::abs(c.time_drift_ppm - (drift_of(c.name) - drift_of(r.map.reference_camera))));
+  }
+  char text[160];
+  if (drift)
+    std::snprintf(text, sizeof(text), "clocks within %.0f us over the session, drifts within %.1f ppm",
+                  worst_us, worst_ppm);
+  else
+    std::snprintf(text, sizeof(text), "clocks within %.0f us over the session", worst_us);
+  return text;
+}
+
+MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::string& what) {
+  const MapResult r = testing::MapDetections(run.detections, options);
+  if (verbose) {
+    std::fprintf(stderr, "%s: %.2f s, %d solves, %d iterations\n", what.c_str(), r.report.total_seconds,
+                 r.report.solves, r.report.iterations);
+    for (const auto& [stage, seconds] : r.report.stage_seconds)
+      std::fprintf(stderr, "  %-32s %.3f s\n", stage.c_str(), seconds);
+  }
+  return r;
+}
+
+Row Measure(const SelfCalRun& run, const MapperOptions& options, double baseline_s,
+            const std::string& perturbation, const std::string& settings, const std::string& recovered_kind) {
+  const MapResult r = Map(run, options, perturbation + " / " + settings);
+  const sim::EvalResult e = sim::Evaluate(run.truth, &r.map, &r.trajectory);
+  Row row;
+  row.perturbation = perturbation;
+  row.settings = settings;
+  row.camera_mm = e.camera_position_mm.mean;
+  row.object_mm = e.object_translation_mm.mean;
+  row.seconds = r.report.total_seconds;
+  row.baseline_s = baseline_s;
+  if (recovered_kind == "intrinsics") row.recovered = IntrinsicsRecovered(run.truth, r);
+  if (recovered_kind == "clocks") row.recovered = ClocksRecovered(run, r, false);
+  if (recovered_kind == "drift") row.recovered = ClocksRecovered(run, r, true);
+  if (recovered_kind == "both")
+    row.recovered = IntrinsicsRecovered(run.truth, r) + "; " + ClocksRecovered(run, r, true);
+  if (recovered_kind.empty()) row.recovered = "-";
+  return row;
+}
+
+// The quick calibration of the issue: cam1 and cam3 focal +-3 %, principal point 8 px, k1 +-0.03.
+void QuickCalibration(SelfCalRun* run) {
+  testing::PerturbIntrinsics("cam1", {0.03, 8.0, -6.0, 0.03}, run);
+  testing::PerturbIntrinsics("cam3", {-0.03, -8.0, 8.0, -0.03}, run);
+}
+
+const std::map<std::string, sim::CameraClock> kOffsets = {
+    {"cam1", {-20.0, 0.0}}, {"cam2", {12.0, 0.0}}, {"cam4", {20.0, 0.0}}};
+const std::map<std::string, sim::CameraClock> kDrifts = {
+    {"cam1", {-20.0, 400.0}}, {"cam2", {12.0, -300.0}}, {"cam4", {20.0, 0.0}}};
+
+void QuickCalibrationRows(int frames, std::vector<Row>* rows) {
+  SelfCalSession session;
+  session.frames = frames;
+  const SelfCalRun exact = testing::SimulateSelfCal(session);
+  SelfCalRun wrong = exact;
+  QuickCalibration(&wrong);
+  MapperOptions defaults = testing::SelfCalOptions(exact.truth);
+  MapperOptions all = defaults;
+  all.intrinsics.refine = IntrinsicsRefinement::kAll;
+  const std::string n = " (" + std::to_string(frames) + " frames)";
+  const Row base = Measure(exact, defaults, 0, "none" + n, "defaults", "");
+  rows->push_back(base);
+  rows->back().baseline_s = base.seconds;
+  rows->push_back(Measure(exact, all, base.seconds, "none" + n, "`refine_intrinsics: all`", "intrinsics"));
+  rows->push_back(Measure(wrong, defaults, base.seconds,
+                          "cam1, cam3: focal +-3 %, centre 8 px, k1 +-0.03" + n, "defaults", "intrinsics"));
+  rows->push_back(Measure(wrong, all, base.seconds, "same" + n, "`refine_intrinsics: all`", "intrinsics"));
+}
+
+void Print(const std::vector<Row>& rows) {
+  std::printf(
+      "| perturbation | mapper settings | camera position error | object error | recovered vs truth (worst "
+      "camera) "
+      "| map time | vs defaults |\n");
+  std::printf("|---|---|---:|---:|---|---:|---:|\n");
+  for (const Row& r : rows)
+    std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx |\n", r.perturbation.c_str(),
+                r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(), r.seconds,
+                r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0);
+}
+
+int Main(int argc, char** argv) {
+  int frames = 300, long_frames = 1200;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--frames" && i + 1 < argc) {
+      frames = std::atoi(argv[++i]);
+    } else if (a == "--long" && i + 1 < argc) {
+      long_frames = std::atoi(argv[++i]);
+    } else if (a == "--verbose") {
+      verbose = true;
+    } else {
+      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--verbose]\n");
+      return 2;
+    }
+  }
+  std::vector<Row> rows;
+  QuickCalibrationRows(frames, &rows);
+  const double base_s = rows.front().seconds;
+  {
+    SelfCalSession session;
+    session.frames = frames;
+    SelfCalRun rough = testing::SimulateSelfCal(session);
+    testing::PerturbIntrinsics("cam2", {0.15, 0, 0, 0}, &rough);
+    testing::PerturbIntrinsics("cam4", {-0.15, 0, 0, 0}, &rough);
+    MapperOptions o = testing::SelfCalOptions(rough.truth);
+    o.intrinsics.refine = IntrinsicsRefinement::kFocal;
+    o.intrinsics.sigma.focal_rel = 0.2;
+    rows.push_back(Measure(rough, o, base_s, "cam2, cam4: focal +-15 %",
+                           "`focal`, `intrinsics_sigma.focal_rel: 0.2`", "intrinsics"));
+    // Only a field of view: focal lengths +15.8 % / -14.4 %, the principal point at the image centre.
+    session.distortion = DistortionModel::kNone;
+    SelfCalRun fov = testing::SimulateSelfCal(session);
+    for (const auto& [name, deg] : std::map<std::string, double>{{"cam2", 53.0}, {"cam4", 68.0}}) {
+      CameraModel m = fov.truth.FindCamera(name)->model;
+      m.fx = m.fy = 0.5 * m.width / std::tan(0.5 * deg * M_PI / 180);
+      m.cx = 0.5 * (m.width - 1);
+      m.cy = 0.5 * (m.height - 1);
+      testing::GiveIntrinsics(name, m, &fov);
+    }
+    MapperOptions f = testing::SelfCalOptions(fov.truth);
+    const double fov_base_s = Map(fov, f, "hfov baseline").report.total_seconds;
+    f.intrinsics.refine = IntrinsicsRefinement::kFocalCenter;
+    f.intrinsics.sigma.focal_rel = 0.2;
+    rows.push_back(Measure(fov, f, fov_base_s, "cam2, cam4: only hfov_deg 53 / 68 (no distortion)",
+                           "`focal_center`, `intrinsics_sigma.focal_rel: 0.2`", "intrinsics"));
+  }
+  {
+    // Clocks: the object up to ~0.95 m/s (time scale 6).
+    SelfCalSession session;
+    session.frames = frames;
+    session.speed = 6.0;
+    const SelfCalRun synced = testing::SimulateSelfCal(session);
+    const SelfCalRun late = testing::SimulateSelfCal(session, kOffsets);
+    const SelfCalRun drifting = testing::SimulateSelfCal(session, kDrifts);
+    SelfCalRun both = drifting;
+    QuickCalibration(&both);
+    const MapperOptions defaults = testing::SelfCalOptions(synced.truth);
+    char speed[96];
+    std::snprintf(speed, sizeof(speed), "object up to %.2f m/s", synced.max_speed_m_s);
+    const Row base = Measure(synced, defaults, 0, std::string("synchronised, ") + speed, "defaults", "");
+    rows.push_back(base);
+    rows.back().baseline_s = base.seconds;
+    MapperOptions wide = defaults;
+    wide.sync_tolerance_ms = 25;
+    rows.push_back(Measure(late, wide, base.seconds, "cam1, cam2, cam4 clocks -20, +12, +20 ms",
+                           "`sync.tolerance_ms: 25`, offsets ignored", ""));
+    MapperOptions offsets = defaults;
+    offsets.estimate_time_offsets = true;
+    rows.push_back(Measure(late, offsets, base.seconds, "same", "`time_offsets: true`", "clocks"));
+    rows.push_back(Measure(drifting, offsets, base.seconds, "same, drifting +400, -300, 0 ppm",
+                           "`time_offsets: true`", "drift"));
+    MapperOptions drift = offsets;
+    drift.estimate_clock_drift = true;
+    rows.push_back(
+        Measure(drifting, drift, base.seconds, "same", "`time_offsets`, `clock_drift: true`", "drift"));
+    rows.push_back(Measure(both, wide, base.seconds, "quick calibration (cam1, cam3) and drifting clocks",
+                           "`sync.tolerance_ms: 25`", ""));
+    MapperOptions everything = drift;
+    everything.intrinsics.refine = IntrinsicsRefinement::kAll;
+    rows.push_back(Measure(both, everything, base.seconds, "same",
+                           "`refine_intrinsics: all`, `time_offsets`, `clock_drift`", "both"));
+  }
+  if (long_frames > 0) QuickCalibrationRows(long_frames, &rows);
+  Print(rows);
+  return 0;
+}
+
+}  // namespace
+}  // namespace mcmt
+
+int main(int argc, char** argv) { return mcmt::Main(argc, argv); }
