@@ -559,8 +559,8 @@ TEST(SimProcess, IntrinsicsErrorAndClockChangeTheWrittenRigNotTheTruth) {
   EXPECT_NEAR(written1.distortion[0] - truth1.distortion[0], 0.03, 1e-12);
   for (size_t i = 1; i < truth1.distortion.size(); ++i)
     EXPECT_EQ(written1.distortion[i], truth1.distortion[i]);
-  EXPECT_EQ(Slurp(wrong + "/cam0.yml"), Slurp(plain + "/cam0.yml"));
-  EXPECT_NE(Slurp(wrong + "/cam1.yml"), Slurp(plain + "/cam1.yml"));
+  EXPECT_EQ(mcmt::test::ReadText(wrong + "/cam0.yml"), mcmt::test::ReadText(plain + "/cam0.yml"));
+  EXPECT_NE(mcmt::test::ReadText(wrong + "/cam1.yml"), mcmt::test::ReadText(plain + "/cam1.yml"));
   // The detections: same corners, the written model, the clock's utime.
   const std::vector<LogMessage> a = ReadDetectionsLog(plain + "/detections.lcmlog");
   const std::vector<LogMessage> b = ReadDetectionsLog(wrong + "/detections.lcmlog");
@@ -598,7 +598,7 @@ TEST(SimProcess, IntrinsicsErrorAndClockChangeTheWrittenRigNotTheTruth) {
   const RigConfig rig = LoadRigConfig(rendered + "/rig.yaml");
   EXPECT_EQ(rig.cameras[0].timestamps_path, "");
   EXPECT_EQ(fs::path(rig.cameras[1].timestamps_path).filename(), "cam1_timestamps.csv");
-  EXPECT_EQ(Slurp(rendered + "/cam1_timestamps.csv"),
+  EXPECT_EQ(mcmt::test::ReadText(rendered + "/cam1_timestamps.csv"),
             "frame_index,time_s\n0,1000000.005000\n1,1000000.038366\n");
 }
 
