@@ -337,7 +337,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
 
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma) {
+                bool fit_gamma, bool* kept_lines) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -366,6 +366,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   const int max_passes = std::max(1, passes) + 4;
   SideProfiles side_profiles;
   std::array<SideFit, 4> side_fits;  // each side's model fit of the previous model pass
+  // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
+  std::array<bool, 4> side_unfitted{};
   for (int pass = 0;; ++pass) {
     // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
     // onto the edges (the model passes fix the offsets, and their crossings the directions).
@@ -450,26 +452,39 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         outside.push_back(profiles[static_cast<size_t>(i) * m + m - 1]);
       }
       const double level_in = Median(inside), level_out = Median(outside);
-      if (std::abs(level_out - level_in) < 8.0) return false;  // no edge
-      const float mid = static_cast<float>(0.5 * (level_in + level_out));
-      const float sign = level_out > level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
-      points.clear();
-      for (int i = 0; i < n; ++i) {
-        if (!valid[i] || (use_clean && !clean[i])) continue;
-        const float* prof = &profiles[static_cast<size_t>(i) * m];
-        // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
-        double best = 1e9;
-        for (int j = 0; j + 1 < m; ++j) {
-          const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
-          if (v0 <= 0.f && v1 > 0.f) {
-            const double s = -h + (j + v0 / (v0 - v1)) * ds;
-            if (std::abs(s) < std::abs(best)) best = s;
+      // No clean crossing on this side (its profile ends at similar levels: a margin narrower than
+      // the profile between a dark border and a dark surround, or the candidate a pixel or two off):
+      // the side keeps the line through the current corners. A model pass fits its edge from there
+      // (its profiles reach over border, margin and surround); without the model it fails.
+      bool crossed = std::abs(level_out - level_in) >= 8.0;
+      if (crossed) {
+        const float mid = static_cast<float>(0.5 * (level_in + level_out));
+        const float sign = level_out > level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
+        points.clear();
+        for (int i = 0; i < n; ++i) {
+          if (!valid[i] || (use_clean && !clean[i])) continue;
+          const float* prof = &profiles[static_cast<size_t>(i) * m];
+          // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+          double best = 1e9;
+          for (int j = 0; j + 1 < m; ++j) {
+            const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+            if (v0 <= 0.f && v1 > 0.f) {
+              const double s = -h + (j + v0 / (v0 - v1)) * ds;
+              if (std::abs(s) < std::abs(best)) best = s;
+            }
           }
+          if (best > 1e8) continue;
+          points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
         }
-        if (best > 1e8) continue;
-        points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
+        crossed = points.size() >= 4 && FitLine(points, &lines[side]);
       }
-      if (points.size() < 4 || !FitLine(points, &lines[side])) return false;
+      if (!crossed) {
+        if (!model_fit) return false;
+        const Eigen::Vector2d normal_ideal(-dir.y(), dir.x());
+        lines[side] = {normal_ideal, normal_ideal.dot(a)};
+      }
+      side_unfitted[side] = !crossed;
+      if (!crossed && kept_lines) *kept_lines = true;
       if (model_pass) {
         const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
         // The gamma of the marker's other sides (their latest fits with gamma free), for a side whose
@@ -484,6 +499,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
                                  valid, origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint,
                                  &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
+        if (std::isfinite(e)) side_unfitted[side] = false;
         if (std::isfinite(e)) {
           Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
           for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
@@ -506,6 +522,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     if (model_pass) ++model_passes;
     model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
   }
+  for (int side = 0; side < 4; ++side)
+    if (side_unfitted[side]) return false;
   const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {
     if (!std::isfinite(img[k].x()) || !std::isfinite(img[k].y()) || (img[k] - original[k]).norm() > limit)
@@ -519,11 +537,14 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
-                         bool fit_gamma) {
+                         bool fit_gamma, bool* kept_lines) {
+  if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
-  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma) ||
-         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma);
+  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma,
+                    kept_lines) ||
+         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma,
+                    kept_lines);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -787,9 +808,13 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         return CodeMismatches(gray, corners, bits, cells) <= candidate_mismatches + cells;
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
-      bool refined = RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes,
-                                         &r.corners, options_.edge_model, &sigma, options_.gamma == 0);
-      if (refined && !reads(r.corners)) refined = false, slid = true;
+      bool kept_lines = false;
+      bool refined =
+          RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
+                              options_.edge_model, &sigma, options_.gamma == 0, &kept_lines);
+      // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
+      // unrefined marker, not a confusing region.
+      if (refined && !reads(r.corners)) refined = false, slid = !kept_lines;
       if (!refined) r.corners = candidate;
       if (!refined) {
         // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner

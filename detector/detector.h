@@ -99,9 +99,11 @@ struct DetectorStats {
 // (bits + 2). `bits` (cells-2 x cells-2, CV_8U 0/1, the marker's bits as in its dictionary at corner 0 =
 // top-left) may be empty; with it, edge samples next to bit cells of value 1 are skipped. `camera` may be
 // null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
+// A side without a clean mid-level crossing keeps the line through its current corners for the side
+// model to fit; `kept_lines` (optional) tells whether any side did.
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
-                         double* blur_sigma = nullptr, bool fit_gamma = false);
+                         double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr);
 
 class MarkerDetector {
  public:
