@@ -62,6 +62,10 @@ struct TrackerOptions {
   double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
   int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
   double status_period_s = 5.0;  // status line period (wall time); 0: none
+  // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
+  // Keys camera_health and health_* (health_gate_px, health_window_frames, ...).
+  bool camera_health = true;
+  HealthOptions health;
 
   // Keys declared once in tracker/options.cc (TrackerOptionTable); the sync: section gives the defaults of
   // deadline_ms, sync_tolerance_ms and camera_timeout_s.
@@ -209,9 +213,6 @@ struct TrackerNodeOptions {
   // truncated) by the constructor, which throws naming the file when it cannot be written.
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)
-  // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
-  bool camera_health = true;
-  HealthOptions health;
 };
 
 class TrackerNode {

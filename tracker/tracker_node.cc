@@ -88,10 +88,10 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
   sync_ = std::make_unique<FrameSynchronizer>(sync);
   reported_stale_.clear();
-  if (options_.camera_health) {
+  if (options_.tracker.camera_health) {
     std::vector<std::string> names;
     for (const auto& c : map.cameras) names.push_back(c.name);
-    health_ = std::make_unique<HealthMonitor>(names, options_.health);  // a new map: every camera ok
+    health_ = std::make_unique<HealthMonitor>(names, options_.tracker.health);  // a new map: every camera ok
   }
   if (switching) stats_.map_switches++;
   if (!rig_.markers.dictionary.empty() && !map.dictionary.empty() &&
