@@ -202,6 +202,10 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     std::cerr << "mcmt-tracker: " << line.str() << std::endl;
     changes += (changes.empty() ? "" : "; ") + line.str();
   }
+  if (!health_change_.empty()) {
+    changes = health_change_ + (changes.empty() ? "" : "; " + changes);
+    health_change_.clear();
+  }
   if (gated.size() > excluded.size()) sol = estimator_->Solve(Without(obs, gated), start);
   if (!changes.empty() || utime - last_health_utime_ >= 1000000) PublishHealth(utime, changes);
   return sol;

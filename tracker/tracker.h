@@ -7,8 +7,9 @@
 // residual stays gross are dropped and counted. One marker seen by one camera works and is flagged
 // ambiguous when both planar solutions are plausible.
 //
-// TrackerNode: the process around it. Subscribes MCMT_DETECTIONS_.* (and MCMT_MAP when no map file is
-// given), assembles frames with core's FrameSynchronizer, publishes object_pose_t, keeps the trajectory.
+// TrackerNode: the process around it. Subscribes MCMT_DETECTIONS_.* and MCMT_MAP (live always: a newer map
+// replaces the map file too; in a log only without a map file), assembles frames with core's
+// FrameSynchronizer, publishes object_pose_t, keeps the trajectory.
 #pragma once
 
 #include <array>
@@ -273,6 +274,7 @@ class TrackerNode {
   std::unique_ptr<PoseEstimator> estimator_;
   std::unique_ptr<HealthMonitor> health_;  // per camera of the map
   int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
+  std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   MotionModel motion_;
