@@ -235,7 +235,8 @@ void MaintainNode::Reestimate(const std::string& camera, const Candidate& candid
   else
     line << "re-estimated (moved " << Fixed(event.rotation_deg, 3) << " deg, "
          << Fixed(event.translation_mm, 2) << " mm)";
-  line << " from " << event.frames << " frames, rms " << Fixed(solved->rms_px, 3) << " px";
+  line << " from " << event.frames << " frames, rms " << Fixed(solved->rms_px, 3) << " px, solved in "
+       << Fixed(result.report.total_seconds, 2) << " s";
   for (const MovedCamera& m : result.report.moved_cameras)
     if (m.camera != camera)
       line << "; camera '" << m.camera << "' re-estimated too (moved " << Fixed(m.rotation_deg, 3) << " deg, "

@@ -167,6 +167,8 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
     const sim::EvalResult e = sim::Evaluate(at_end, &first, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 0.5) << logs;
     EXPECT_LT(e.camera_rotation_deg.max, 0.05) << logs;
+    std::cout << "first map: cameras within " << e.camera_position_mm.max << " mm, "
+              << e.camera_rotation_deg.max << " deg\n";
   }
   {
     const RigMap second = FromRigMapMsg(got.maps[1].msg);
@@ -174,6 +176,8 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
     const sim::EvalResult e = sim::Evaluate(at_end, &second, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 1.0) << logs;
     EXPECT_LT(e.camera_rotation_deg.max, 0.05) << logs;
+    std::cout << "second map: cameras within " << e.camera_position_mm.max << " mm, "
+              << e.camera_rotation_deg.max << " deg\n";
     EXPECT_TRUE(ReadMap(dir / "maintained/map.yaml").FindCamera("cam5"));
   }
   bool noted = false;
@@ -183,9 +187,12 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
 
   // The tracker: cam2 excluded under the first map, ok under the newer one; cam5 judged once added.
   bool excluded = false, back_ok = false, cam5_ok = false;
+  int64_t suspect_seq = -1;  // frame at which cam2 left ok
   for (const tracker_status_t& s : got.statuses) {
     const camera_health_t* h = Health(s, "cam2");
     ASSERT_TRUE(h);
+    if (s.map_utime == 0 && h->state != camera_health_t::STATE_OK && suspect_seq < 0)
+      suspect_seq = (h->since_utime - sim::FrameUtime(0, 30.0)) / 33333;
     if (s.map_utime == 0 && h->state == camera_health_t::STATE_EXCLUDED) excluded = true;
     if (s.map_utime == got.maps[0].msg.utime && h->state == camera_health_t::STATE_OK && h->frames > 30)
       back_ok = true;
@@ -196,6 +203,9 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
     }
   }
   EXPECT_TRUE(excluded) << logs;
+  EXPECT_GE(suspect_seq, kBumpFrame);
+  EXPECT_LE(suspect_seq, kBumpFrame + 30);
+  std::cout << "cam2 suspect at frame " << suspect_seq << " (bumped at " << kBumpFrame << ")\n";
   EXPECT_TRUE(back_ok) << logs;
   EXPECT_TRUE(cam5_ok) << logs;
 
