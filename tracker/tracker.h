@@ -117,6 +117,12 @@ class PoseEstimator {
   // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
 
+  // Levenberg-Marquardt with outlier rejection from `start` alone (no single-square restarts, no
+  // covariance): the cheap solve that judges cameras (tracker/health.cc). False when fewer than two
+  // mapped observations stay inliers.
+  bool RefinePose(const std::vector<MarkerObservation>& observations, const Rigid3& start,
+                  Rigid3* pose) const;
+
   const RigMap& map() const { return map_; }
 
   // RMS corner error of the mapped observations at `pose` (-1 when none is mapped; +inf when a corner
@@ -150,6 +156,8 @@ class PoseEstimator {
     bool valid = false;
   };
 
+  // The mapped observations with finite corners (the others counted in *unmapped).
+  std::vector<Obs> Mapped(const std::vector<MarkerObservation>& observations, int* unmapped) const;
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
   // The corners of the active observations, for core's rigid-pose solver (core/rigid_pose.h).
