@@ -133,7 +133,7 @@ void MaintainNode::Suspect(const std::string& camera, bool added, int64_t since_
   const auto settled = settled_until_.find(camera);  // a failed attempt: only newer frames
   c.since_utime = settled == settled_until_.end() ? since_utime : std::max(since_utime, settled->second + 1);
   for (const auto& [utime, pose] : poses_)  // the poses already received
-    if (utime >= since_utime) CountFrame(utime, pose);
+    if (utime >= c.since_utime) CountFrame(utime, pose);
   Status(mapper_status_t::STATE_COLLECTING,
          "maintain: camera '" + camera + "' " + (added ? "is new" : "is suspect") + ": collecting frames");
 }
