@@ -11,6 +11,7 @@
 
 #include "core/lcm_util.h"
 #include "core/math.h"
+#include "mapper/stages.h"
 #include "mcmt/camera_health_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
@@ -20,14 +21,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kQueueCapacity = 10000;
-
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
 
 }  // namespace
 

@@ -15,14 +15,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMinCheckFrames = 10;  // frames shared with the others to check or place a camera
 
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
-
 // The most moved camera among those neither excluded nor unchecked (-1: none beyond the thresholds), at
 // *pose; the excluded ones are left out of the others' checks.
 int MostMovedCamera(const std::vector<ViewPose>& views, int num_frames, const CameraPlacement& cameras,
