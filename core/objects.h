@@ -11,6 +11,11 @@
 //       ids: other                 # every id no other object claims (at most one object)
 //   rig_frame: room                # optional: this static body's frame is the rig frame
 //
+// `ids: auto` (an object) or `objects: auto` (the whole list) leave the grouping of the ids no object
+// claims into rigid bodies to the mapper (mapper/bodies_auto.h): an `ids: auto` object takes the largest
+// body found of its kind (static or moving); `objects: auto` is one such object with no name (every body
+// found is named by the mapper: static_1, body_1, ...). The bodies found are in the map's objects.
+//
 // A rig with only `markers:` is one object named `tracker.object` (default "object") holding
 // markers.ids (none: every id), exactly as before. Errors are ConfigError naming the file and key, e.g.
 //   "rig.yaml: objects[1].ids: marker id 12 is claimed by both 'tool' and 'patient'".
@@ -34,6 +39,7 @@ struct ObjectConfig {
   std::string name;
   std::set<int> ids;       // the ids it claims (ranges expanded); empty with `other`
   bool other = false;      // ids: other (every id no other object claims)
+  bool auto_ids = false;   // ids: auto (found by the mapper); claims no id here
   bool is_static = false;  // static: true
   MarkerSizes sizes;       // default side and per-id overrides
 };
@@ -41,6 +47,7 @@ struct ObjectConfig {
 struct ObjectsConfig {
   std::vector<ObjectConfig> objects;  // never empty after loading
   bool declared = false;              // an `objects:` list was given (false: the single markers: object)
+  bool auto_objects = false;          // objects: auto (objects holds one unnamed auto_ids object)
   std::string rig_frame;              // a static object's name, or empty (the reference camera)
 
   // Index of the object that holds `id` (explicit ids first, then the `other` object); -1: none.

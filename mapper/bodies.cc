@@ -15,14 +15,19 @@
 #include <thread>
 
 #include "core/medoid.h"
+#include "mapper/bodies_auto.h"
 
 namespace mcmt {
 
 std::vector<MapperBody> BodiesFromRig(const RigConfig& rig) {
   std::vector<MapperBody> out;
-  if (rig.objects.objects.size() < 2) return out;
-  for (const ObjectConfig& o : rig.objects.objects)
-    out.push_back({o.name, o.is_static, std::vector<int>(o.ids.begin(), o.ids.end()), o.other, o.sizes});
+  const std::vector<ObjectConfig>& objects = rig.objects.objects;
+  if (objects.size() < 2 &&
+      std::none_of(objects.begin(), objects.end(), [](const ObjectConfig& o) { return o.auto_ids; }))
+    return out;
+  for (const ObjectConfig& o : objects)
+    out.push_back(
+        {o.name, o.is_static, std::vector<int>(o.ids.begin(), o.ids.end()), o.other, o.sizes, o.auto_ids});
   return out;
 }
 
@@ -127,12 +132,13 @@ Rigid3 StaticPose(const BodyStages& body, const std::vector<Frame>& frames, MapR
     if (TranslationDistance(poses[k], pose) > body.options.consistency_m ||
         RotationAngle(poses[k], pose) > body.options.consistency_deg * M_PI / 180.0)
       moved.push_back(std::to_string(frames[frame_of[k]].seq));
-  if (moved.size() > 0.05 * poses.size())
-    report->warnings.push_back(BodyName(body) + " is declared static but its pose moves by more than " +
-                               std::to_string(body.options.consistency_m * 1000) + " mm or " +
-                               std::to_string(body.options.consistency_deg) + " deg in " +
-                               std::to_string(moved.size()) + " of " + std::to_string(poses.size()) +
-                               " frames (seq " + JoinNames(moved, 8) + ")");
+  if (moved.size() > 0.05 * poses.size()) {
+    std::ostringstream why;
+    why << BodyName(body) << " is declared static but its pose moves by more than "
+        << body.options.consistency_m * 1000 << " mm or " << body.options.consistency_deg << " deg in "
+        << moved.size() << " of " << poses.size() << " frames (seq " << JoinNames(moved, 8) << ")";
+    report->warnings.push_back(why.str());
+  }
   return pose;
 }
 
@@ -299,6 +305,41 @@ int IgnoredIds(const std::vector<StoredMessage>& messages, const std::vector<Bod
 
 }  // namespace
 
+// objects: auto / ids: auto: the bodies found, then mapped as if declared (the report says what was found
+// and holds the objects: section).
+MapResult SolveAutoBodies(const std::vector<StoredMessage>& messages, const BodiesInputs& in,
+                          const MapperOptions& o) {
+  const auto start = Clock::now();
+  const int threads =
+      o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  AutoBodies found = GroupIntoBodies(messages, o.bodies, in, o, threads);
+  MapReport notes;
+  MapperOptions resolved = o;
+  resolved.bodies = ResolveAutoBodies(o.bodies, found, &notes);
+  found.objects_yaml = ObjectsSectionYaml(resolved.bodies, o.rig_frame);
+  std::string listed;
+  for (const FoundBody& b : found.bodies)
+    listed += (listed.empty() ? "" : "; ") + b.name + (b.is_static ? " (static)" : "") + ": ids " +
+              DescribeIds(std::set<int>(b.ids.begin(), b.ids.end()));
+  if (std::none_of(resolved.bodies.begin(), resolved.bodies.end(),
+                   [](const MapperBody& b) { return !b.is_static; }))
+    throw MapperError("objects: auto: no moving body among the ids seen (found: " +
+                      (listed.empty() ? std::string("nothing") : listed) + ")");
+  std::vector<std::string> warnings = in.warnings;
+  warnings.insert(warnings.end(), notes.warnings.begin(), notes.warnings.end());
+  warnings.push_back(
+      "objects found (auto): " + (listed.empty() ? std::string("none") : listed) +
+      (found.foreign.empty() ? "" : "; " + std::to_string(found.foreign.size()) + " foreign ids"));
+  const BodiesInputs inputs{in.camera_names, in.models, warnings, in.progress};
+  MapResult result = SolveBodies(messages, inputs, resolved);
+  result.report.auto_bodies = std::move(found);
+  const double grouping =
+      std::chrono::duration<double>(Clock::now() - start).count() - result.report.total_seconds;
+  result.report.stage_seconds.insert(result.report.stage_seconds.begin(), {"auto objects", grouping});
+  result.report.total_seconds += grouping;
+  return result;
+}
+
 std::string TrajectoryFileNames(const RigMap& map) {
   if (map.objects.empty()) return "trajectory.csv, trajectory_initial.csv";
   std::string out;
@@ -329,6 +370,7 @@ MapResult DiagnosticsView(const MapResult& result) {
 MapResult SolveBodies(const std::vector<StoredMessage>& messages, const BodiesInputs& in,
                       const MapperOptions& o) {
   const auto start = Clock::now();
+  if (HasAutoBodies(o.bodies)) return SolveAutoBodies(messages, in, o);
   if (o.estimate_time_offsets)
     throw MapperError("mapper.time_offsets is not supported with several objects yet (objects:)");
   MapResult result;

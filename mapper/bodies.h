@@ -39,6 +39,11 @@ struct BodiesInputs {
 MapResult SolveBodies(const std::vector<StoredMessage>& messages, const BodiesInputs& inputs,
                       const MapperOptions& options);
 
+// objects: auto / ids: auto (mapper/bodies_auto.h): the bodies found among the ids no object claims, then
+// SolveBodies on them; report.auto_bodies says what was found. Called by SolveBodies.
+MapResult SolveAutoBodies(const std::vector<StoredMessage>& messages, const BodiesInputs& inputs,
+                          const MapperOptions& options);
+
 // The files a map's trajectories go to: "trajectory.csv, trajectory_initial.csv" for one object,
 // "trajectory_<body>.csv, ..." (and their trajectory_initial_<body>.csv) for the moving bodies of several.
 std::string TrajectoryFileNames(const RigMap& map);

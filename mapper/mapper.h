@@ -73,6 +73,30 @@ struct MapperBody {
   std::vector<int> ids;  // explicit ids
   bool other = false;    // every id no other body claims
   MarkerSizes sizes;
+  bool auto_ids = false;  // ids: auto (objects: auto: with no name): found by the mapper (bodies_auto.h)
+};
+
+// What `objects: auto` / `ids: auto` found (mapper/bodies_auto.h; report.json "auto_objects").
+struct FoundBody {
+  std::string name;
+  bool is_static = false;
+  std::vector<int> ids;  // sorted
+  int observations = 0;
+  std::vector<std::string> cameras;  // that see it
+  std::string declared_as;           // the `ids: auto` object it became (empty: named by the mapper)
+};
+
+struct ForeignId {
+  int id = 0;
+  int observations = 0;
+  std::string reason;
+};
+
+struct AutoBodies {
+  bool ran = false;
+  std::vector<FoundBody> bodies;
+  std::vector<ForeignId> foreign;  // ids seen that join no body
+  std::string objects_yaml;        // a ready objects: section (objects.yaml beside map.yaml)
 };
 
 struct MapperOptions {
@@ -232,6 +256,7 @@ struct MapReport {
   std::string linear_solver;
   int threads = 0;
   std::vector<IntrinsicsReport> intrinsics;  // cameras whose intrinsics were considered for refinement
+  AutoBodies auto_bodies;                    // objects: auto / ids: auto
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order
   double total_seconds = 0.0;
 };

@@ -13,24 +13,6 @@ std::string JoinIds(const std::vector<int>& ids, size_t max = 12) {
   return JoinNames(s, max);
 }
 
-// One item per observation with a kept hypothesis: marker_from_cam and cam_from_marker per hypothesis,
-// grouped by view (camera frame).
-std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs) {
-  std::vector<GraphItem> items;
-  for (const Observation& ob : obs) {
-    if (ob.kept == 0) continue;
-    GraphItem item;
-    item.group = ob.view;
-    item.node = ob.marker;
-    for (int h = 0; h < ob.kept; ++h) {
-      item.node_from_common.push_back(Inverse(ob.pose.hypotheses[h].cam_from_marker));
-      item.common_from_node.push_back(ob.pose.hypotheses[h].cam_from_marker);
-    }
-    items.push_back(std::move(item));
-  }
-  return items;
-}
-
 int ReferenceMarker(const Observations& observations, const std::vector<GraphEdge>& verified,
                     const std::vector<int>& counts, const MapperOptions& o) {
   if (o.reference_marker >= 0) {
@@ -113,6 +95,22 @@ void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& i
 }
 
 }  // namespace
+
+std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs) {
+  std::vector<GraphItem> items;
+  for (const Observation& ob : obs) {
+    if (ob.kept == 0) continue;
+    GraphItem item;
+    item.group = ob.view;
+    item.node = ob.marker;
+    for (int h = 0; h < ob.kept; ++h) {
+      item.node_from_common.push_back(Inverse(ob.pose.hypotheses[h].cam_from_marker));
+      item.common_from_node.push_back(ob.pose.hypotheses[h].cam_from_marker);
+    }
+    items.push_back(std::move(item));
+  }
+  return items;
+}
 
 ConsistencyOptions ConsistencyFor(const MapperOptions& o) {
   ConsistencyOptions consistency;

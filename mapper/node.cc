@@ -345,7 +345,8 @@ MapResult MapperNode::SolveWriteAndPublish() {
          << " duplicate detections (same id twice in one frame)\n";
   for (const std::string& w : r.warnings) log_ << "warning: " << w << "\n";
   log_ << "wrote " << (std::filesystem::path(options_.outdir) / "map.yaml").string() << ", "
-       << TrajectoryFileNames(result.map) << ", report.json, map_initial.yaml, residuals.csv\n"
+       << TrajectoryFileNames(result.map) << ", report.json, map_initial.yaml, residuals.csv"
+       << (r.auto_bodies.ran ? ", objects.yaml (the objects: section found)" : "") << "\n"
        << verdicts;
   for (const MapObject& o : result.map.objects)
     log_ << "object " << o.name << (o.is_static ? " (static)" : "") << ": " << o.markers.size()

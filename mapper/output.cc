@@ -16,6 +16,7 @@
 #include "core/json.h"
 #include "core/version.h"
 #include "mapper/bodies.h"
+#include "mapper/bodies_auto.h"
 #include "mapper/diagnostics.h"
 #include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
@@ -27,7 +28,8 @@ namespace {
 namespace fs = std::filesystem;
 
 const char* const kOutputFiles[] = {"map.yaml",         "trajectory.csv",         "report.json",
-                                    "map_initial.yaml", "trajectory_initial.csv", "residuals.csv"};
+                                    "map_initial.yaml", "trajectory_initial.csv", "residuals.csv",
+                                    "objects.yaml"};
 constexpr char kStagingMarker[] = ".mcmt-staging-";
 
 bool ProcessAlive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
@@ -72,6 +74,8 @@ void WriteSet(const std::string& dir, const MapResult& result, const Diagnostics
     WriteTrajectory(dir + "/trajectory_" + name + ".csv", result.object_trajectories.at(k));
   }
   WriteFileAtomic(dir + "/residuals.csv", ResidualsCsv(diagnostics));
+  if (result.report.auto_bodies.ran)  // objects: auto / ids: auto: the objects: section found
+    WriteFileAtomic(dir + "/objects.yaml", result.report.auto_bodies.objects_yaml);
   WriteFileAtomic(dir + "/report.json", WithDiagnostics(ReportJson(result), diagnostics));
   WriteMap(dir + "/map.yaml", result.map);  // last: its presence means the rest is there
 }
@@ -207,6 +211,7 @@ std::string ReportJson(const MapResult& result) {
   j << "],\n";
   j << SelfCalibrationJson(r);
   j << CameraChangesJson(r);
+  j << AutoBodiesJson(r.auto_bodies);
   j << "  \"warnings\": [";
   for (size_t i = 0; i < r.warnings.size(); ++i)
     j << (i ? ", " : "") << "\n    " << JsonString(r.warnings[i]);

@@ -102,6 +102,10 @@ struct MarkerLayout {
   double ObjectScale() const;              // largest placed marker distance from the origin, >= 5 cm
 };
 
+// The marker graph's items (mapper/graph.h): one per observation with a kept hypothesis, marker_from_cam
+// and cam_from_marker per hypothesis, grouped by view (camera frame).
+std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs);
+
 // Fills report->rejected_markers (and warnings with --allow-partial); throws MapperError for a marker
 // that cannot be connected (unless allow_partial) or a reference_marker never detected.
 MarkerLayout BuildMarkerGraph(const Observations& observations, const MapperOptions& options, int threads,

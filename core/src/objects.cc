@@ -78,15 +78,17 @@ ObjectConfig ParseObject(const YamlSection& s, double markers_size, const Marker
   object.name = s.RequireString("name");
   if (!ValidName(object.name))
     s.Fail("name", "'" + object.name + "' is not a valid object name (letters, digits and _ only)");
-  if (!s.Has("ids")) s.Fail("ids", "missing (a list of ids and ranges \"A-B\", or other)");
+  if (!s.Has("ids")) s.Fail("ids", "missing (a list of ids and ranges \"A-B\", other or auto)");
   const YAML::Node ids = s.node()["ids"];
   if (ids.IsScalar() && ids.Scalar() == "other") {
     object.other = true;
+  } else if (ids.IsScalar() && ids.Scalar() == "auto") {
+    object.auto_ids = true;
   } else if (ids.IsSequence() && ids.size() > 0) {
     for (size_t i = 0; i < ids.size(); ++i) AddIdItem(s, ids[i], i, dictionary_size, &object.ids);
   } else {
     s.Fail("ids",
-           "expected a non-empty list of ids and ranges \"A-B\", or other, got '" + NodeText(ids) + "'");
+           "expected a non-empty list of ids and ranges \"A-B\", other or auto, got '" + NodeText(ids) + "'");
   }
   object.is_static = s.GetBool("static", false);
   object.sizes = markers_sizes;
@@ -100,7 +102,7 @@ ObjectConfig ParseObject(const YamlSection& s, double markers_size, const Marker
       const std::string key = it->first.IsScalar() ? it->first.Scalar() : "?";
       if (!it->first.IsScalar() || !YAML::convert<int>::decode(it->first, id) || id < 0)
         s.Fail("sizes", "expected a non-negative marker id as key, got '" + key + "'");
-      if (!object.other && !object.ids.count(id))
+      if (!object.other && !object.auto_ids && !object.ids.count(id))
         s.Fail("sizes." + key, "marker id " + key + " is not one of '" + object.name + "' ids");
       object.sizes.overrides[id] = ReadSize(s, "sizes." + key, it->second);
     }
@@ -148,8 +150,21 @@ ObjectsConfig ParseObjects(const YamlSection& top, double markers_size, const Ma
     return SingleObject(markers_size, markers_sizes, markers_ids, single_name);
   }
   const YAML::Node list = top.node()["objects"];
-  if (list.IsScalar() && list.Scalar() == "auto")
-    top.Fail("objects", "'auto' (grouping the ids into bodies) is not implemented yet: list the objects");
+  if (list.IsScalar() && list.Scalar() == "auto") {
+    if (!markers_ids.empty())
+      top.Fail("objects", "markers.ids and objects: auto exclude each other (auto groups every id seen)");
+    if (top.Has("rig_frame"))
+      top.Fail("rig_frame",
+               "needs a static object of that name: with objects: auto the bodies have no "
+               "names yet (declare the static one with ids: auto)");
+    ObjectsConfig out = SingleObject(markers_size, markers_sizes, {}, "");
+    out.declared = true;
+    out.auto_objects = true;
+    out.objects[0].other = false;
+    out.objects[0].auto_ids = true;
+    if (!(markers_size > 0)) top.Fail("objects", "auto needs markers.size (the side of the markers)");
+    return out;
+  }
   if (!list.IsSequence() || list.size() == 0)
     top.Fail("objects", "expected a non-empty list of objects (name, ids, size, static)");
   if (!markers_ids.empty())

@@ -75,6 +75,25 @@ TEST(Objects, IdsRangesOtherSizesStaticAndRigFrame) {
   EXPECT_EQ(ChannelSuffix("tool_2"), "TOOL_2");
 }
 
+// objects: auto (one unnamed object whose ids the mapper finds) and an object with ids: auto.
+TEST(Objects, AutoLeavesTheGroupingToTheMapper) {
+  TempDir dir;
+  const ObjectsConfig all = Load(dir, "markers: {size: 0.04}\nobjects: auto\n").objects;
+  EXPECT_TRUE(all.declared);
+  EXPECT_TRUE(all.auto_objects);
+  ASSERT_EQ(all.objects.size(), 1u);
+  EXPECT_TRUE(all.objects[0].auto_ids);
+  EXPECT_TRUE(all.objects[0].name.empty());
+  EXPECT_EQ(all.ObjectOf(7), -1);
+  const ObjectsConfig some = Load(dir, Replace(kObjects, "ids: other", "ids: auto")).objects;
+  EXPECT_FALSE(some.auto_objects);
+  EXPECT_TRUE(some.objects[2].auto_ids);
+  EXPECT_FALSE(some.objects[2].other);
+  EXPECT_TRUE(some.objects[2].ids.empty());
+  EXPECT_EQ(some.ObjectOf(9), -1);  // an auto object claims nothing
+  EXPECT_EQ(some.rig_frame, "room");
+}
+
 TEST(Objects, MarkersAloneAreOneObjectNamedByTracker) {
   TempDir dir;
   const ObjectsConfig a = Load(dir, "markers: {size: 0.04, ids: [1, 2], sizes: {2: 0.03}}\n").objects;
@@ -116,7 +135,10 @@ TEST(Objects, BadInputNamesFileKeyIdAndObjects) {
   EXPECT_CONTAINS(Error(Replace(kObjects, "static: true", "statc: true")), "objects[2].statc: unknown key");
   EXPECT_CONTAINS(Error(Replace(Replace(kObjects, ", size: 0.05", ""), "    size: 0.12\n", "")),
                   "objects[1].size: missing (and no markers.size");
-  EXPECT_CONTAINS(Error("markers: {size: 0.04}\nobjects: auto\n"), "objects: 'auto'");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04}\nobjects: auto\nrig_frame: room\n"),
+                  "rig_frame: needs a static object of that name: with objects: auto");
+  EXPECT_CONTAINS(Error("markers: {size: 0.04, ids: [1]}\nobjects: auto\n"),
+                  "markers.ids and objects: auto exclude each other");
   EXPECT_CONTAINS(Error("markers: {size: 0.04}\nobjects: []\n"), "objects: expected a non-empty list");
   EXPECT_CONTAINS(Error("markers: {size: 0.04, ids: [1]}\nobjects: [{name: a, ids: [1]}]\n"),
                   "objects: markers.ids and objects: exclude each other");

@@ -12,6 +12,7 @@
 #include "core/se3.h"
 #include "import/rosbag.h"
 #include "tests/sim/temp_dir.h"
+#include "tests/support/tagslam.h"
 #include "tests/tracker/process_util.h"
 
 namespace mcmt {
@@ -20,33 +21,8 @@ namespace {
 const std::string kData = MCMT_SOURCE_DIR "/../shared/data/tagslam_test/";
 const std::string kBin = MCMT_BIN_DIR "/";
 
-// TagSLAM's final estimates in reference.bag's /tf (geometry_msgs/Transform: translation, then rotation
-// as x, y, z, w): the last rig->camN (rig_from_cam) and perch->tag_N (perch_from_tag) of the session.
-struct TagslamResult {
-  std::map<std::string, Rigid3> rig_from_cam;
-  std::map<int, Rigid3> perch_from_tag;
-};
-
-TagslamResult ReadTagslam(const std::string& reference_bag) {
-  const RosBag bag = RosBag::Open(reference_bag);
-  TagslamResult out;
-  for (const BagMessage& m : bag.messages()) {
-    if (bag.Connection(m.connection).topic != "/tf") continue;
-    const RosValue tf = bag.Decode(m);  // (a temporary's member would dangle in the range-for)
-    for (const RosValue& t : tf.At("transforms").items) {
-      const std::string parent = t.At("header.frame_id").text, child = t.At("child_frame_id").text;
-      const RosValue& tr = t.At("transform");
-      const Eigen::Vector3d p(tr.At("translation.x").AsDouble(), tr.At("translation.y").AsDouble(),
-                              tr.At("translation.z").AsDouble());
-      const std::array<double, 4> wxyz = {tr.At("rotation.w").AsDouble(), tr.At("rotation.x").AsDouble(),
-                                          tr.At("rotation.y").AsDouble(), tr.At("rotation.z").AsDouble()};
-      if (parent == "rig") out.rig_from_cam[child] = RigidFromQuaternion(wxyz, p);
-      if (parent == "perch" && child.rfind("tag_", 0) == 0)
-        out.perch_from_tag[std::stoi(child.substr(4))] = RigidFromQuaternion(wxyz, p);
-    }
-  }
-  return out;
-}
+using test::ReadTagslam;
+using test::TagslamResult;
 
 // Our map with TagSLAM's camera poses and tag layout (TagSLAM's tag frame taken as mcmt's marker frame:
 // its tag corners are AprilTag's (-s/2,-s/2), (s/2,-s/2), (s/2,s/2), (-s/2,s/2)), for the tracker to
