@@ -34,6 +34,7 @@ constexpr char kMapChannel[] = "MCMT_MAP";
 constexpr char kPoseChannel[] = "MCMT_POSE";
 constexpr char kMapperStatusChannel[] = "MCMT_MAPPER_STATUS";
 constexpr char kMapperCommandChannel[] = "MCMT_MAPPER_COMMAND";
+constexpr char kTrackerStatusChannel[] = "MCMT_TRACKER_STATUS";  // tracker_status_t, from mcmt-tracker
 
 // "cam0" -> "MCMT_DETECTIONS_CAM0"; characters other than [A-Za-z0-9_] become '_'.
 std::string DetectionsChannel(const std::string& camera_name);

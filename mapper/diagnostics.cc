@@ -14,6 +14,7 @@
 #include "core/lcm_util.h"
 #include "core/math.h"
 #include "mapper/bundle.h"
+#include "mapper/stages.h"
 
 namespace mcmt {
 namespace {
@@ -163,12 +164,6 @@ void FillResiduals(const Rebuilt& r, std::vector<ObservationResidual>* rows) {
     for (int c = 0; c < 4; ++c) o.residual[c] = Eigen::Vector2d(res[2 * c], res[2 * c + 1]);
     o.rms_px = rms[k];
   }
-}
-
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
 }
 
 void Judge(const DiagnosticsOptions& o, CameraDiagnostics* c) {

@@ -9,15 +9,36 @@
 #include "core/config.h"
 #include "core/lcm_util.h"
 #include "core/options.h"
+#include "mapper/maintain.h"
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "mapper/out_folder.h"
 
 namespace {
 
+// --maintain: live, from the map given with --map (mapper/maintain.h).
+int Maintain(const mcmt::RigConfig& rig, const mcmt::MapperOptions& options, const std::string& map_path,
+             const std::string& log, const std::string& out, const std::string& lcm_url,
+             const std::string& pose_channel) {
+  if (map_path.empty()) throw std::runtime_error("--maintain: needs --map (the map in use)");
+  if (!log.empty()) throw std::runtime_error("--maintain: live only (no --log)");
+  const mcmt::RigMap map = mcmt::ReadMap(map_path);
+  std::unique_ptr<lcm::LCM> lcm = mcmt::OpenLcm(lcm_url);
+  mcmt::MaintainNodeOptions node_options;
+  node_options.pose_channel = pose_channel;
+  node_options.outdir = out;
+  const mcmt::StopToken stop = mcmt::StopOnSignals();
+  mcmt::MaintainNode node(*lcm, lcm.get(), rig, options, map, node_options, std::cerr);
+  node.Run(stop);
+  int published = 0;
+  for (const mcmt::MaintainEvent& e : node.events()) published += e.published;
+  std::cerr << "maintain: stopped after " << published << " new maps" << std::endl;
+  return 0;
+}
+
 int Run(int argc, char** argv) {
-  std::string config, log, out, lcm_url, reference_camera, old_map;
-  bool refine_layout = false;
+  std::string config, log, out, lcm_url, reference_camera, old_map, pose_channel = mcmt::kPoseChannel;
+  bool refine_layout = false, maintain = false;
   int frames = 0;
   double seconds = 0.0;
   bool allow_partial = false, publish = false, no_refine = false, force = false;
@@ -29,8 +50,8 @@ int Run(int argc, char** argv) {
   args.AddString("log", &log, "read detections from this LCM log (at full speed) instead of live LCM");
   args.AddString("out", &out,
                  "output folder: map.yaml, trajectory.csv, report.json, map_initial.yaml, "
-                 "trajectory_initial.csv",
-                 true);
+                 "trajectory_initial.csv (required; with --maintain optional: map.yaml rewritten at each "
+                 "new map)");
   args.AddString("lcm-url", &lcm_url, "LCM URL (default: lcm.url of the rig YAML, else LCM's default)");
   args.AddInt("frames", &frames, "stop collecting after this many frames (0: no limit)");
   args.AddDouble("seconds", &seconds,
@@ -51,6 +72,13 @@ int Run(int argc, char** argv) {
       "cameras it lacks (report.json moved_cameras, added_cameras)");
   args.AddFlag("refine-layout", &refine_layout,
                "with --map: refine the marker layout too (default: held fixed)");
+  args.AddFlag("maintain", &maintain,
+               "with --map, live: keep the map true while trackers run: re-estimate a camera the tracker "
+               "reports suspect or excluded (MCMT_TRACKER_STATUS) from frames of object poses seen by the "
+               "others, add a rig camera that publishes and is not in the map, publish each new map on "
+               "MCMT_MAP (mapper.maintain_frames, maintain_added_frames)");
+  args.AddString("pose-channel", &pose_channel,
+                 "with --maintain: the tracker's object_pose_t channel");
   args.AddEpilog(
       "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
       "mapper_command_t\n"
@@ -59,7 +87,9 @@ int Run(int argc, char** argv) {
       "rig_map_t on MCMT_MAP (status on MCMT_MAPPER_STATUS).\n"
       "examples:\n"
       "  mcmt-mapper --config rig.yaml --log session.lcmlog --out map/\n"
-      "  mcmt-mapper --config rig.yaml --out map/ --seconds 60\n");
+      "  mcmt-mapper --config rig.yaml --out map/ --seconds 60\n"
+      "  mcmt-mapper --config rig.yaml --map OLD/map.yaml --log new.lcmlog --out NEW/   # offline update\n"
+      "  mcmt-mapper --config rig.yaml --map map.yaml --maintain                        # live upkeep\n");
   args.SetConfigHelp("### mapper\n\n" + mcmt::MapperOptionTable().Markdown() + "\n### sync\n\n" +
                      mcmt::SyncOptionTable().Markdown());
   int code = 0;
@@ -78,6 +108,9 @@ int Run(int argc, char** argv) {
   if (frames < 0) throw std::runtime_error("--frames must be >= 0");
   if (seconds < 0) throw std::runtime_error("--seconds must be >= 0");
   if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
+  if (maintain) return Maintain(rig, options, old_map, log, out, lcm_url, pose_channel);
+  if (out.empty()) throw std::runtime_error("--out is required (the output folder)");
+  if (args.Given("pose-channel")) throw std::runtime_error("--pose-channel: only with --maintain");
 
   mcmt::Mapper mapper(options);
   if (!old_map.empty()) {

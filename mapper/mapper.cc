@@ -428,9 +428,11 @@ MapResult SolveWithEpochs(const std::vector<StoredMessage>& messages, const Solv
 
 }  // namespace
 
-void Mapper::SetBaseMap(const RigMap& old_map, bool refine_layout) {
+void Mapper::SetBaseMap(const RigMap& old_map, bool refine_layout,
+                        const std::vector<std::string>& only_cameras) {
   impl_->base_map = std::make_unique<RigMap>(old_map);
   impl_->update.refine_layout = refine_layout;
+  impl_->update.only_cameras = only_cameras;
 }
 
 MapResult Mapper::Solve() {

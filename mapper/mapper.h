@@ -166,6 +166,12 @@ struct MapperOptions {
   double move_min_mm = 1.5;
   double move_min_rms_ratio =
       2.0;  // ... and its RMS with one pose exceeds this multiple of the median camera's
+  // Maintenance (mcmt-mapper --maintain, mapper/maintain.h): frames seen by the others collected before a
+  // suspect camera is re-estimated (a new camera: maintain_added_frames); the result is published when the
+  // camera's RMS is at most maintain_max_rms_ratio x the other cameras' median.
+  int maintain_frames = 150;
+  int maintain_added_frames = 300;
+  double maintain_max_rms_ratio = 2.0;
 
   // From the rig: expected cameras (empty: whatever sends detections), marker id whitelist, sizes.
   std::vector<std::string> cameras;
@@ -299,8 +305,10 @@ class Mapper {
   MapResult Solve();
 
   // The offline update (mapper/update.h): Solve() starts from this map (its layout held fixed unless
-  // refine_layout), re-estimates the cameras that moved and adds the rig's cameras it lacks.
-  void SetBaseMap(const RigMap& old_map, bool refine_layout);
+  // refine_layout), re-estimates the cameras that moved (only_cameras not empty: only those may be) and
+  // adds the rig's cameras it lacks.
+  void SetBaseMap(const RigMap& old_map, bool refine_layout,
+                  const std::vector<std::string>& only_cameras = {});
 
   const MapperOptions& options() const { return options_; }
 

@@ -1,11 +1,20 @@
 // Stages: frames, observations, square hypotheses (step 1).
 #include <algorithm>
 #include <numeric>
+#include <sstream>
 
 #include "mapper/parallel.h"
 #include "mapper/stages.h"
 
 namespace mcmt {
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
 
 std::string JoinNames(const std::vector<std::string>& names, size_t max) {
   std::string out;

@@ -86,7 +86,16 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
            .Add("move_min_deg", &O::move_min_deg, "deg", "smallest rotation reported as a move", Above(0))
            .Add("move_min_mm", &O::move_min_mm, "mm", "smallest translation reported as a move", Above(0))
            .Add("move_min_rms_ratio", &O::move_min_rms_ratio, "",
-                "a moved camera's RMS must exceed the others' median by this factor", Above(0));
+                "a moved camera's RMS must exceed the others' median by this factor", Above(0))
+           .Add("maintain_frames", &O::maintain_frames, "frames",
+                "--maintain: frames seen by the others collected before a suspect camera is re-estimated",
+                AtLeast(10))
+           .Add("maintain_added_frames", &O::maintain_added_frames, "frames",
+                "--maintain: frames collected before a camera not in the map is added", AtLeast(10))
+           .Add("maintain_max_rms_ratio", &O::maintain_max_rms_ratio, "",
+                "--maintain: a re-estimated camera's RMS must be at most this multiple of the others' "
+                "median to be published",
+                Above(0));
   return *table;
 }
 

@@ -210,5 +210,7 @@ ConsistencyOptions ConsistencyFor(const MapperOptions& options);
 
 // "a, b, c, ..." (at most `max` names).
 std::string JoinNames(const std::vector<std::string>& names, size_t max = 12);
+// v with `digits` digits after the point (messages and warnings).
+std::string Fixed(double v, int digits);
 
 }  // namespace mcmt

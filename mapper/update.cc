@@ -15,21 +15,15 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMinCheckFrames = 10;  // frames shared with the others to check or place a camera
 
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
-
-// The most moved camera among those not excluded (-1: none beyond the thresholds), at *pose.
+// The most moved camera among those neither excluded nor unchecked (-1: none beyond the thresholds), at
+// *pose; the excluded ones are left out of the others' checks.
 int MostMovedCamera(const std::vector<ViewPose>& views, int num_frames, const CameraPlacement& cameras,
-                    const MapperOptions& o, const std::vector<char>& excluded, Rigid3* pose) {
+                    const MapperOptions& o, const std::vector<char>& excluded,
+                    const std::vector<char>& unchecked, Rigid3* pose) {
   int best = -1;
   double best_excess = 1.0;
   for (size_t c = 0; c < cameras.rig_from_cam.size(); ++c) {
-    if (!cameras.placed[c] || excluded[c]) continue;
+    if (!cameras.placed[c] || excluded[c] || unchecked[c]) continue;
     Rigid3 now;
     const int n = PoseAgainstOthers(static_cast<int>(c), cameras.rig_from_cam[c], views, num_frames, cameras,
                                     excluded, &now);
@@ -131,11 +125,16 @@ CameraPlacement PlacementFromMap(const RigMap& old_map, const std::vector<std::s
 
 std::vector<char> CheckCameras(const std::vector<ViewPose>& views, int num_frames,
                                const std::vector<std::string>& camera_names, const MapperOptions& o,
-                               CameraPlacement* cameras, MapReport* report) {
+                               const std::vector<std::string>& only_cameras, CameraPlacement* cameras,
+                               MapReport* report) {
   const int n = static_cast<int>(camera_names.size());
   std::vector<char> reestimated(n, 0);
+  std::vector<char> unchecked(n, 0);  // held where the old map has them
+  for (int c = 0; c < n; ++c)
+    unchecked[c] = !only_cameras.empty() &&
+                   std::find(only_cameras.begin(), only_cameras.end(), camera_names[c]) == only_cameras.end();
   Rigid3 pose;
-  for (int c; (c = MostMovedCamera(views, num_frames, *cameras, o, reestimated, &pose)) >= 0;) {
+  for (int c; (c = MostMovedCamera(views, num_frames, *cameras, o, reestimated, unchecked, &pose)) >= 0;) {
     MovedCamera m;
     m.camera = camera_names[c];
     m.seq = -1;
@@ -191,8 +190,8 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
   const std::vector<ViewPose> views = FitViews(observations, layout, models, threads);
   CameraPlacement cameras = PlacementFromMap(old_map, camera_names);
   for (const ViewPose& v : views) ++cameras.views[v.camera];
-  const std::vector<char> reestimated =
-      CheckCameras(views, static_cast<int>(frames.size()), camera_names, o, &cameras, &report);
+  const std::vector<char> reestimated = CheckCameras(views, static_cast<int>(frames.size()), camera_names, o,
+                                                     settings.only_cameras, &cameras, &report);
   const ObjectPoses poses = InitialObjectPoses(observations, frames, layout, cameras, o, threads, &report);
 
   const ObservationNames names{&frames, &camera_names, &observations.marker_ids};

@@ -26,6 +26,9 @@ namespace mcmt {
 
 struct UpdateSettings {
   bool refine_layout = false;
+  // Only these cameras may be found moved (mcmt-mapper --maintain: the camera the tracker suspects; a
+  // check of every camera against the others can blame a neighbour of the moved one); empty: every camera.
+  std::vector<std::string> only_cameras;
 };
 
 // The old map's layout over the observed markers (reference: the old reference marker, else the
@@ -36,12 +39,14 @@ MarkerLayout LayoutFromMap(const RigMap& old_map, const Observations& observatio
 // lacks unplaced. Throws MapperError when the old reference camera is not among camera_names.
 CameraPlacement PlacementFromMap(const RigMap& old_map, const std::vector<std::string>& camera_names);
 
-// Moves the cameras that moved (report->moved_cameras, seq -1) and places the cameras the old map lacks
-// that share frames with placed ones (report->added_cameras); the others stay where the old map has them.
-// Returns, per camera, whether it is re-estimated.
+// Moves the cameras that moved (report->moved_cameras, seq -1; only those of only_cameras when it is not
+// empty) and places the cameras the old map lacks that share frames with placed ones
+// (report->added_cameras); the others stay where the old map has them. Returns, per camera, whether it is
+// re-estimated.
 std::vector<char> CheckCameras(const std::vector<ViewPose>& views, int num_frames,
                                const std::vector<std::string>& camera_names, const MapperOptions& options,
-                               CameraPlacement* cameras, MapReport* report);
+                               const std::vector<std::string>& only_cameras, CameraPlacement* cameras,
+                               MapReport* report);
 
 // The whole update on the mapper's messages.
 MapResult SolveUpdate(const std::vector<StoredMessage>& messages,

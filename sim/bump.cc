@@ -30,7 +30,7 @@ CameraMoveOptions ParseCameraMove(const std::string& text) {
   m.camera = parts[0];
   char* end = nullptr;
   const long long frame = std::strtoll(parts[1].c_str(), &end, 10);
-  if (end == parts[1].c_str() || *end || frame < 1) bad("FRAME must be an integer >= 1");
+  if (end == parts[1].c_str() || *end || frame < 0) bad("FRAME must be an integer >= 0");
   m.frame = frame;
   m.rotation_deg = std::strtod(parts[2].c_str(), &end);
   if (end == parts[2].c_str() || *end || !(std::fabs(m.rotation_deg) <= 45)) bad("ROT_DEG must be -45..45");

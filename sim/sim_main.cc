@@ -134,8 +134,8 @@ int Main(int argc, char** argv) {
   args.AddDouble("drop-rate", &drop_rate, "detections-only: probability a camera frame is not published");
   args.AddList("move-camera", &move_camera,
                "CAM,FRAME,ROT_DEG,TRANS_MM: the camera is bumped at FRAME: turned by ROT_DEG degrees about "
-               "its y axis and shifted by TRANS_MM millimetres along its x axis (repeatable; "
-               "ground_truth.yaml moves:)");
+               "its y axis and shifted by TRANS_MM millimetres along its x axis (FRAME 0: moved before the "
+               "session, a session for mcmt-mapper --map; repeatable; ground_truth.yaml moves:)");
   args.AddInt("add-camera", &add_camera,
               "FRAME: one more camera (cam<N>, on the circle halfway between cam0 and cam1) that publishes "
               "from FRAME on (-1: none; ground_truth.yaml late_cameras:)");

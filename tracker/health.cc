@@ -152,9 +152,15 @@ std::map<std::string, double> TrackerNode::JudgeCameras(const std::vector<Marker
     std::set<std::string> other_cameras;
     for (const MarkerObservation& o : others) other_cameras.insert(o.camera);
     if (other_cameras.size() < 2) continue;  // one camera alone fixes the depth too loosely to judge
-    const PoseSolution from_others = estimator_->Solve(others, start);
-    if (from_others.status != PoseStatus::kTracking) continue;
-    const double r = CameraRms(Only(obs, c), from_others.rig_from_object);
+    Rigid3 from_others;
+    if (start) {  // from this frame's pose: one refinement, no restarts
+      if (!estimator_->RefinePose(others, *start, &from_others)) continue;
+    } else {
+      const PoseSolution solved = estimator_->Solve(others, nullptr);
+      if (solved.status != PoseStatus::kTracking) continue;
+      from_others = solved.rig_from_object;
+    }
+    const double r = CameraRms(Only(obs, c), from_others);
     if (r >= 0) rms[c] = std::isfinite(r) ? r : 1e3;
   }
   return rms;
@@ -201,6 +207,10 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
          << " px under the pose from the others, baseline " << h.baseline_px << " px)";
     std::cerr << "mcmt-tracker: " << line.str() << std::endl;
     changes += (changes.empty() ? "" : "; ") + line.str();
+  }
+  if (!health_change_.empty()) {
+    changes = health_change_ + (changes.empty() ? "" : "; " + changes);
+    health_change_.clear();
   }
   if (gated.size() > excluded.size()) sol = estimator_->Solve(Without(obs, gated), start);
   if (!changes.empty() || utime - last_health_utime_ >= 1000000) PublishHealth(utime, changes);

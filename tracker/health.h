@@ -23,9 +23,6 @@
 
 namespace mcmt {
 
-// tracker_status_t, from mcmt-tracker.
-constexpr char kTrackerStatusChannel[] = "MCMT_TRACKER_STATUS";
-
 struct HealthOptions {
   double gate_px = 1.2;
   double gate_ratio = 5.0;

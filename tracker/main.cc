@@ -25,7 +25,8 @@ int Main(int argc, char** argv) {
       "covariance, RMS error, cameras and markers used, status, latency).");
   args.AddString("config", &config, "rig YAML (cameras, markers, optional tracker: section)", true);
   args.AddString("map", &map_path,
-                 "map.yaml from mcmt-mapper; without it: wait for MCMT_MAP, switch to newer maps");
+                 "map.yaml from mcmt-mapper; without it: wait for MCMT_MAP; live, newer maps on MCMT_MAP "
+                 "replace either (mcmt-mapper --maintain)");
   args.AddString("log", &log_path, "process this LCM log as fast as possible instead of live traffic");
   args.AddString(
       "out", &out_path,

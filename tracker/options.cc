@@ -10,6 +10,7 @@ namespace mcmt {
 
 const OptionTable<TrackerOptions>& TrackerOptionTable() {
   using O = TrackerOptions;
+  const auto H = [](auto HealthOptions::*member) { return OptionTable<O>::Of(&O::health, member); };
   static const OptionTable<O>* table =
       &(*new OptionTable<O>("tracker"))
            .Add("channel", &O::channel, "output channel of object_pose_t", NotEmpty())
@@ -44,9 +45,44 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 "observations",
                 AtLeast(1))
            .Add("status_period_s", &O::status_period_s, "s", "status line period, wall time (0: none)",
-                AtLeast(0));
+                AtLeast(0))
+           .Add("camera_health", &O::camera_health,
+                "judge each camera under the pose from the others (suspect, excluded; MCMT_TRACKER_STATUS)")
+           .Add("health_gate_px", H(&HealthOptions::gate_px), "px",
+                "a camera's markers are left out of a frame whose RMS under the pose from the others "
+                "exceeds max(this, health_gate_ratio x its baseline)",
+                Above(0))
+           .Add("health_gate_ratio", H(&HealthOptions::gate_ratio), "", "see health_gate_px", AtLeast(1))
+           .Add("health_suspect_px", H(&HealthOptions::suspect_px), "px",
+                "suspect when the median RMS of the last health_window_frames exceeds max(this, "
+                "health_suspect_ratio x its baseline)",
+                Above(0))
+           .Add("health_suspect_ratio", H(&HealthOptions::suspect_ratio), "", "see health_suspect_px",
+                AtLeast(1))
+           .Add("health_window_frames", H(&HealthOptions::window), "frames",
+                "judged frames in the median that decides suspect", AtLeast(1))
+           .Add("health_exclude_frames", H(&HealthOptions::exclude_frames), "frames",
+                "suspect this many judged frames in a row: excluded from every pose until a new map",
+                AtLeast(1))
+           .Add("health_baseline_frames", H(&HealthOptions::baseline_frames), "frames",
+                "a camera's baseline: the median RMS of its last this many judged frames while ok",
+                AtLeast(1))
+           .Add("health_min_baseline_frames", H(&HealthOptions::min_baseline_frames), "frames",
+                "judged frames while ok before a camera can be gated or suspected", AtLeast(1));
   return *table;
 }
+
+namespace {
+
+void CheckBetweenOptions(const TrackerOptions& o, const std::string& file) {
+  if (o.health.min_baseline_frames > o.health.baseline_frames)
+    TrackerOptionTable().Fail(file, "health_min_baseline_frames",
+                              "must be <= health_baseline_frames (" +
+                                  std::to_string(o.health.baseline_frames) + "), got " +
+                                  std::to_string(o.health.min_baseline_frames));
+}
+
+}  // namespace
 
 TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   TrackerOptions o;
@@ -56,10 +92,14 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   o.deadline_ms = sync.deadline_ms;
   o.camera_timeout_s = sync.camera_timeout_s;
   TrackerOptionTable().Load(rig.tracker, &o);
+  CheckBetweenOptions(o, rig.tracker.file());
   return o;
 }
 
-void TrackerOptions::Validate() const { TrackerOptionTable().Check(*this); }
+void TrackerOptions::Validate() const {
+  TrackerOptionTable().Check(*this);
+  CheckBetweenOptions(*this, "");
+}
 
 void CheckMapMatchesRig(const RigMap& map, const RigConfig& rig, const std::string& map_name) {
   for (const auto& c : map.cameras) {

@@ -188,26 +188,39 @@ bool PoseEstimator::Better(const Refined& a, const Refined& b) {
   return a.cost < b.cost;
 }
 
-PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,
-                                  const Rigid3* prior) const {
-  PoseSolution sol;
+std::vector<PoseEstimator::Obs> PoseEstimator::Mapped(const std::vector<MarkerObservation>& observations,
+                                                      int* unmapped) const {
   std::vector<Obs> obs;
   obs.reserve(observations.size());
   for (const auto& o : observations) {
     auto c = camera_index_.find(o.camera);
     auto m = marker_index_.find(o.id);
-    if (c == camera_index_.end() || m == marker_index_.end()) {
-      sol.num_unmapped++;
-      continue;
-    }
     bool finite = true;
     for (const auto& p : o.corners) finite = finite && p.allFinite();
-    if (!finite) {
-      sol.num_unmapped++;
+    if (c == camera_index_.end() || m == marker_index_.end() || !finite) {
+      ++*unmapped;
       continue;
     }
     obs.push_back(Obs{c->second, m->second, &o.corners});
   }
+  return obs;
+}
+
+bool PoseEstimator::RefinePose(const std::vector<MarkerObservation>& observations, const Rigid3& start,
+                               Rigid3* pose) const {
+  int unmapped = 0;
+  const std::vector<Obs> obs = Mapped(observations, &unmapped);
+  if (obs.empty()) return false;
+  const Refined r = RefineFrom(obs, start);
+  if (!r.valid || r.num_inliers < 2) return false;
+  *pose = r.pose;
+  return true;
+}
+
+PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,
+                                  const Rigid3* prior) const {
+  PoseSolution sol;
+  const std::vector<Obs> obs = Mapped(observations, &sol.num_unmapped);
   if (obs.empty()) return sol;
 
   Refined best;

@@ -7,8 +7,9 @@
 // residual stays gross are dropped and counted. One marker seen by one camera works and is flagged
 // ambiguous when both planar solutions are plausible.
 //
-// TrackerNode: the process around it. Subscribes MCMT_DETECTIONS_.* (and MCMT_MAP when no map file is
-// given), assembles frames with core's FrameSynchronizer, publishes object_pose_t, keeps the trajectory.
+// TrackerNode: the process around it. Subscribes MCMT_DETECTIONS_.* and MCMT_MAP (live always: a newer map
+// replaces the map file too; in a log only without a map file), assembles frames with core's
+// FrameSynchronizer, publishes object_pose_t, keeps the trajectory.
 #pragma once
 
 #include <array>
@@ -62,6 +63,10 @@ struct TrackerOptions {
   double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
   int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
   double status_period_s = 5.0;  // status line period (wall time); 0: none
+  // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
+  // Keys camera_health and health_* (health_gate_px, health_window_frames, ...).
+  bool camera_health = true;
+  HealthOptions health;
 
   // Keys declared once in tracker/options.cc (TrackerOptionTable); the sync: section gives the defaults of
   // deadline_ms, sync_tolerance_ms and camera_timeout_s.
@@ -112,6 +117,12 @@ class PoseEstimator {
   // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
 
+  // Levenberg-Marquardt with outlier rejection from `start` alone (no single-square restarts, no
+  // covariance): the cheap solve that judges cameras (tracker/health.cc). False when fewer than two
+  // mapped observations stay inliers.
+  bool RefinePose(const std::vector<MarkerObservation>& observations, const Rigid3& start,
+                  Rigid3* pose) const;
+
   const RigMap& map() const { return map_; }
 
   // RMS corner error of the mapped observations at `pose` (-1 when none is mapped; +inf when a corner
@@ -145,6 +156,8 @@ class PoseEstimator {
     bool valid = false;
   };
 
+  // The mapped observations with finite corners (the others counted in *unmapped).
+  std::vector<Obs> Mapped(const std::vector<MarkerObservation>& observations, int* unmapped) const;
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
   // The corners of the active observations, for core's rigid-pose solver (core/rigid_pose.h).
@@ -209,9 +222,6 @@ struct TrackerNodeOptions {
   // truncated) by the constructor, which throws naming the file when it cannot be written.
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)
-  // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
-  bool camera_health = true;
-  HealthOptions health;
 };
 
 class TrackerNode {
@@ -272,6 +282,7 @@ class TrackerNode {
   std::unique_ptr<PoseEstimator> estimator_;
   std::unique_ptr<HealthMonitor> health_;  // per camera of the map
   int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
+  std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   MotionModel motion_;

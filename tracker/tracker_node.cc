@@ -59,7 +59,10 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
   subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &TrackerNode::HandleDetections, this));
   subscriptions_.back()->setQueueCapacity(kQueueCapacity);
   waits_for_map_ = !map;
-  if (!map) subscriptions_.push_back(lcm_.subscribe(kMapChannel, &TrackerNode::HandleMap, this));
+  // Live, newer maps on MCMT_MAP replace the map file too (mcmt-mapper --maintain re-estimates a moved
+  // camera, adds a new one); in a log only without a map file.
+  if (!map || !options_.log_mode)
+    subscriptions_.push_back(lcm_.subscribe(kMapChannel, &TrackerNode::HandleMap, this));
   last_status_wall_us_ = NowUtime();
 }
 
@@ -77,21 +80,25 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   const bool switching = estimator_ != nullptr;
   estimator_ = std::move(estimator);
   motion_.Reset();
-  // Frames are assembled over the map's cameras (pending frames of the old map are dropped).
-  FrameSyncOptions sync;
-  sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
-  sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
-  sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
-  sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
-  sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
-  sync.arrival_is_wall_time = !options_.log_mode;
-  for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
-  sync_ = std::make_unique<FrameSynchronizer>(sync);
-  reported_stale_.clear();
-  if (options_.camera_health) {
+  // Frames are assembled over the map's cameras. A newer map (mcmt-mapper --maintain) keeps the frames
+  // being assembled: they are solved with it, none is lost; a camera the new map adds joins as it reports.
+  if (!switching) {
+    FrameSyncOptions sync;
+    sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
+    sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
+    sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
+    sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
+    sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
+    sync.arrival_is_wall_time = !options_.log_mode;
+    for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
+    sync_ = std::make_unique<FrameSynchronizer>(sync);
+    reported_stale_.clear();
+  }
+  if (options_.tracker.camera_health) {
     std::vector<std::string> names;
     for (const auto& c : map.cameras) names.push_back(c.name);
-    health_ = std::make_unique<HealthMonitor>(names, options_.health);  // a new map: every camera ok
+    health_ = std::make_unique<HealthMonitor>(names, options_.tracker.health);  // a new map: every camera ok
+    if (switching) health_change_ = "new map from " + origin + ": every camera judged afresh";
   }
   if (switching) stats_.map_switches++;
   if (!rig_.markers.dictionary.empty() && !map.dictionary.empty() &&

@@ -8,12 +8,13 @@
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/rig_map_t.hpp"
+#include "mcmt/tracker_status_t.hpp"
 
 namespace mcmt::viz {
 
 LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
     : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
-  for (const char* channel : {kMapChannel, kPoseChannel, kDetectionsChannelRegex})
+  for (const char* channel : {kMapChannel, kPoseChannel, kDetectionsChannelRegex, kTrackerStatusChannel})
     subscriptions_.push_back(lcm_.subscribe(channel, &LcmCollector::OnMessage, this));
 }
 
@@ -42,6 +43,8 @@ void LcmCollector::Handle(const std::string& channel, const void* data, size_t s
     OnPose(data, size, channel);
   else if (IsDetectionsChannel(channel))
     OnDetections(data, size, channel);
+  else if (channel == kTrackerStatusChannel)
+    OnTrackerStatus(data, size, channel);
 }
 
 void LcmCollector::OnMap(const void* data, size_t size, const std::string& channel) {
@@ -86,6 +89,19 @@ void LcmCollector::OnPose(const void* data, size_t size, const std::string& chan
   const int64_t now = NowUtime();
   arrivals_us_.push_back(now);
   while (!arrivals_us_.empty() && arrivals_us_.front() < now - 1000000) arrivals_us_.pop_front();
+}
+
+void LcmCollector::OnTrackerStatus(const void* data, size_t size, const std::string& channel) {
+  ++messages_;
+  tracker_status_t msg;
+  std::string error;
+  if (!Decode(data, size, &msg, &error)) {
+    if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
+    return;
+  }
+  ++status_count_;
+  camera_states_.clear();
+  for (const camera_health_t& c : msg.cameras) camera_states_[c.camera] = c.state;
 }
 
 void LcmCollector::OnDetections(const void* data, size_t size, const std::string& channel) {

@@ -1,5 +1,6 @@
 // Collects what the viewer shows from LCM (live) or a log (core's reader): the newest
-// MCMT_MAP, the poses on MCMT_POSE and the marker ids on MCMT_DETECTIONS_.* per frame utime.
+// MCMT_MAP, the poses on MCMT_POSE, the marker ids on MCMT_DETECTIONS_.* per frame utime and the
+// tracker's camera states (MCMT_TRACKER_STATUS).
 #pragma once
 
 #include <cstdint>
@@ -50,6 +51,10 @@ class LcmCollector {
   // Marker ids per camera detected in the frame of `utime` (empty if none known).
   std::map<std::string, std::vector<int>> DetectionsAt(int64_t utime) const;
   const PoseStats& stats() const { return stats_; }
+  // Per camera, its state in the newest MCMT_TRACKER_STATUS (camera_health_t::STATE_*; absent: never
+  // reported); status_count() counts the status messages received.
+  const std::map<std::string, int>& camera_states() const { return camera_states_; }
+  int64_t status_count() const { return status_count_; }
   // Poses per second of wall time over the second before now_us (NowUtime()).
   double RateHz(int64_t now_us) const;
   int64_t messages() const { return messages_; }
@@ -59,6 +64,7 @@ class LcmCollector {
   void OnMap(const void* data, size_t size, const std::string& channel);
   void OnPose(const void* data, size_t size, const std::string& channel);
   void OnDetections(const void* data, size_t size, const std::string& channel);
+  void OnTrackerStatus(const void* data, size_t size, const std::string& channel);
 
   lcm::LCM& lcm_;
   size_t keep_frames_;
@@ -72,6 +78,8 @@ class LcmCollector {
   std::deque<int64_t> arrivals_us_;  // wall time of recent poses (rate)
   PoseStats stats_;
   int64_t messages_ = 0;
+  std::map<std::string, int> camera_states_;
+  int64_t status_count_ = 0;
 };
 
 }  // namespace mcmt::viz

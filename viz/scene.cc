@@ -23,6 +23,7 @@
 #include "core/dictionary.h"
 #include "core/marker.h"
 #include "core/math.h"
+#include "mcmt/camera_health_t.hpp"
 
 namespace mcmt::viz {
 namespace {
@@ -87,6 +88,18 @@ Eigen::Vector3d ResidualColor(double rms_px, double scale_px) {
   t = std::clamp(t, 0.0, 1.0);
   // Green (t = 0) -> yellow (t = 1/2) -> red (t = 1), linear in each half.
   return Eigen::Vector3d(std::min(1.0, 2.0 * t), std::min(1.0, 2.0 * (1.0 - t)) * 0.85, 0.1);
+}
+
+bool CameraStateColor(int state, Eigen::Vector3d* rgb) {
+  if (state == camera_health_t::STATE_SUSPECT) {
+    *rgb = Eigen::Vector3d(1.0, 0.55, 0.0);  // orange
+    return true;
+  }
+  if (state == camera_health_t::STATE_EXCLUDED) {
+    *rgb = Eigen::Vector3d(0.9, 0.0, 0.0);  // red
+    return true;
+  }
+  return false;
 }
 
 Rigid3 CamFromFrustum() {
@@ -272,7 +285,9 @@ void VizScene::BuildPanel(Panel* panel) {
   for (const auto& cam : map.cameras) {
     auto set = CSetOfObjects::Create();
     set->setPose(ToCPose(cam.rig_from_cam));
-    const Eigen::Vector3d color = has_residuals_ ? ResidualColor(cam.rms_px, residual_scale_) : kNeutral;
+    Eigen::Vector3d color = has_residuals_ ? ResidualColor(cam.rms_px, residual_scale_) : kNeutral;
+    const auto state = camera_states_.find(cam.name);
+    const bool flagged = state != camera_states_.end() && CameraStateColor(state->second, &color);
     const double hfov = cam.model.fx > 0 ? 2.0 * std::atan2(0.5 * cam.model.width, cam.model.fx) : 1.0;
     const double vfov = cam.model.fy > 0 ? 2.0 * std::atan2(0.5 * cam.model.height, cam.model.fy) : 0.75;
     auto frustum =
@@ -286,7 +301,9 @@ void VizScene::BuildPanel(Panel* panel) {
     auto body = CBox::Create(mrpt::math::TPoint3D(-b, -b, -b), mrpt::math::TPoint3D(b, b, b));
     body->setColor(ToColor(color));
     set->insert(body);
-    auto label = CText::Create(cam.name);
+    auto label = CText::Create(
+        flagged ? cam.name + (state->second == camera_health_t::STATE_SUSPECT ? " (suspect)" : " (excluded)")
+                : cam.name);
     label->setLocation(0, -2.5 * b, 0);  // above the camera (its -Y)
     label->setColor(1, 1, 1);
     set->insert(label);

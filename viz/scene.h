@@ -32,6 +32,9 @@ cv::Vec3b BackgroundBgr();
 // scale/4, yellow half-way, red at and above scale (the default scale, 2 px: green <= 0.5 px, red >= 2 px).
 // RGB in [0, 1].
 Eigen::Vector3d ResidualColor(double rms_px, double scale_px);
+// A camera the tracker reports suspect (orange) or excluded (red) (camera_health_t::STATE_*;
+// MCMT_TRACKER_STATUS) is drawn in this colour, whatever its residual; false for ok (and unknown states).
+bool CameraStateColor(int state, Eigen::Vector3d* rgb);
 constexpr double kDefaultResidualScalePx = 2.0;
 
 // MRPT frustums look along their +X (Y left, Z up); OpenCV cameras along +Z (X right, Y down).
@@ -85,6 +88,11 @@ class VizScene {
   const std::vector<TrajectoryRow>& trajectory() const;
   // The current rig_from_object of a panel, if there is one.
   std::optional<Rigid3> CurrentPose(int panel) const;
+
+  // The tracker's camera states (camera_health_t::STATE_* by name), used by the next SetPanels: suspect
+  // cameras orange, excluded ones red, "(suspect)" / "(excluded)" after the name.
+  void SetCameraStates(const std::map<std::string, int>& states) { camera_states_ = states; }
+  const std::map<std::string, int>& camera_states() const { return camera_states_; }
 
   // Marker ids each camera detected in the current frame (rays).
   void SetDetections(const std::map<std::string, std::vector<int>>& ids_by_camera);
@@ -143,6 +151,7 @@ class VizScene {
   mrpt::opengl::COpenGLScene::Ptr scene_;
   std::vector<Panel> panels_;
   std::vector<ViewCamera> views_;
+  std::map<std::string, int> camera_states_;
   Rigid3 world_from_rig_ = Rigid3::Identity();
   double residual_scale_ = 1.0;
   bool has_residuals_ = false;

@@ -198,6 +198,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     }
   }
   VizScene scene(options_.scene);
+  if (collector) scene.SetCameraStates(collector->camera_states());  // the tracker's newest
   scene.SetPanels(Panels(collector));
   const auto& rows = scene.trajectory();
   auto detections_at = [&](int index) {
@@ -387,10 +388,22 @@ int Viewer::RunWindow(LcmCollector* collector) {
       const bool new_map = collector->map_count() != map_count && (collector->has_map() || have_file_map_);
       if (new_map || (map_count < 0 && have_file_map_)) {
         map_count = collector->map_count();
+        scene.SetCameraStates(collector->camera_states());
         scene.SetPanels(Panels(collector));
         ptr = scene.scene();
         poses_shown = collector->total_poses();
         reset = true;
+        dirty = true;
+      } else if (scene.HasMap() && collector->camera_states() != scene.camera_states()) {
+        // A camera turned suspect, excluded or ok again (MCMT_TRACKER_STATUS): redrawn, the view kept.
+        const ViewCamera view = scene.view(scene.num_panels() - 1);
+        const int shown = scene.current_frame();
+        scene.SetCameraStates(collector->camera_states());
+        scene.SetPanels(Panels(collector));
+        scene.SetView(view);
+        scene.SetCurrentFrame(browsing ? shown : -1);
+        ptr = scene.scene();
+        poses_shown = collector->total_poses();
         dirty = true;
       }
       if (scene.HasMap() && !have_file_trajectory_) {

@@ -1,6 +1,7 @@
 // Tracker benchmark (markdown tables):
 //  1. PoseEstimator::Solve time per frame for 1 / 3 / 5 / 8 cameras with 3-6 markers each (a cube with
 //     2x2 markers per face), tracking (constant-velocity prediction) and lost (IPPE hypotheses), one core.
+//  1b. The per-camera health's cost per frame (TrackerNode in-process, camera_health on / off).
 //  2. End-to-end latency over loopback udpm (port 7750): the real mcmt-tracker process, a publisher of
 //     detections and a subscriber of MCMT_POSE (own thread) in this process; from publishing a frame's last
 //     detection to receiving its pose.
@@ -258,6 +259,44 @@ void LogThroughputTable(int frames) {
   std::printf("| %d | 5 | %.3f | %.0f |\n\n", frames, best, frames / best);
 }
 
+// The cost of the per-camera health (tracker/health.h: one extra solve per camera seeing the object):
+// TrackerNode on the same log in-process, tracker.camera_health on and off.
+void HealthCostTable(int frames) {
+  SyntheticOptions o;
+  o.cameras = 5;
+  o.frames = frames;
+  o.cube_side = 0.1;
+  o.grid = 2;
+  o.grid_rows = 1;
+  const SyntheticSession s = MakeSession(o);
+  const std::string dir = mcmt::tracker_test::MakeTempDir("bench_health");
+  const mcmt::RigConfig rig = mcmt::LoadRigConfig(mcmt::tracker_test::WriteRigFiles(dir, s.map));
+  mcmt::tracker_test::WriteLog(dir + "/session.lcmlog", s);
+  std::printf("## Per-camera health cost (TrackerNode --log in-process, %d frames, 5 cameras)\n\n", frames);
+  std::printf("| tracker.camera_health | ms per frame (best of 3) | tracked |\n|---|---|---|\n");
+  double ms[2] = {0, 0};
+  for (const bool health : {false, true}) {
+    double best = 1e9;
+    int64_t tracked = 0;
+    for (int rep = 0; rep < 3; ++rep) {
+      mcmt::TrackerNodeOptions options;
+      options.log_mode = true;
+      options.quiet = true;
+      options.tracker.camera_health = health;
+      lcm::LCM lcm("memq://");
+      mcmt::TrackerNode node(lcm, rig, options, s.map);
+      const auto t0 = Clock::now();
+      node.RunLog(dir + "/session.lcmlog", mcmt::StopToken());
+      best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
+      tracked = node.stats().tracked;
+    }
+    ms[health] = 1000.0 * best / frames;
+    std::printf("| %s | %.4f | %lld |\n", health ? "true (default)" : "false", ms[health],
+                static_cast<long long>(tracked));
+  }
+  std::printf("\nHealth adds %.4f ms per frame (%.1fx).\n\n", ms[1] - ms[0], ms[0] > 0 ? ms[1] / ms[0] : 0.0);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -283,6 +322,7 @@ int main(int argc, char** argv) {
   std::printf("# mcmt tracker benchmark\n\n");
   SolveTable(frames);
   LogThroughputTable(20000);
+  HealthCostTable(5000);
   if (latency) LatencyTable(latency_frames, rate);
   return 0;
 }

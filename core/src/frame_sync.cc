@@ -299,6 +299,13 @@ std::vector<SyncedFrame> FrameSynchronizer::Add(const detections_t& detections, 
   if (best == pending_.end() && emitted_until_utime_ != INT64_MIN &&
       utime <= emitted_until_utime_ + options_.tolerance_us) {
     ++stats_.out_of_order;
+    // A camera heard of for the first time by a late view (one that joins a running rig and reports
+    // after the others): known from now on, so the next frames wait for it instead of dropping it for ever.
+    if (!last_utime_.count(detections.camera)) {
+      last_utime_[detections.camera] = utime;
+      first_utime_[detections.camera] = utime;
+      last_arrival_[detections.camera] = arrival_us;
+    }
     return {};
   }
   if (best != pending_.end() && HasCamera(best->second, detections.camera)) {

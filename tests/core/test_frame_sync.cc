@@ -106,6 +106,31 @@ TEST(FrameSync, DuplicatesAreDropped) {
   EXPECT_EQ(sync.stats().duplicates, 1);
 }
 
+TEST(FrameSync, ACameraWhoseFirstViewIsLateIsWaitedForAfterwards) {
+  // A camera joining a running rig (a camera added to the map, issue 17) that reports after the others:
+  // its first view comes after its frame was emitted; it must not stay unknown (every view late for ever).
+  FrameSyncOptions options;
+  options.cameras = {"a", "b"};
+  FrameSynchronizer sync(options);
+  std::vector<SyncedFrame> frames;
+  for (int f = 0; f < 5; ++f) {
+    Append(&frames, sync.Add(View("a", f), f * kPeriod));
+    Append(&frames, sync.Add(View("b", f), f * kPeriod));
+  }
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_TRUE(sync.Add(View("c", 4), 4 * kPeriod + 100).empty());  // late: frame 4 is out
+  EXPECT_EQ(sync.stats().out_of_order, 1);
+  for (int f = 5; f < 10; ++f) {
+    Append(&frames, sync.Add(View("a", f), f * kPeriod));
+    Append(&frames, sync.Add(View("b", f), f * kPeriod));
+    Append(&frames, sync.Add(View("c", f), f * kPeriod + 100));
+  }
+  ASSERT_EQ(frames.size(), 10u);
+  for (int f = 5; f < 10; ++f)
+    EXPECT_EQ(CamerasOf(frames[f]), (std::vector<std::string>{"a", "b", "c"})) << f;
+  EXPECT_EQ(sync.stats().out_of_order, 1);
+}
+
 TEST(FrameSync, OutOfOrderAndLateViewsAreDropped) {
   FrameSyncOptions options;
   options.cameras = {"a", "b"};

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "core/ippe.h"
+#include "core/options.h"
 #include "tests/tracker/synthetic_rig.h"
 #include "tracker/tracker.h"
 
@@ -337,6 +338,35 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
     const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
     EXPECT_EQ(o.sync_tolerance_ms, 7.0);
     EXPECT_EQ(o.deadline_ms, 4.0);
+  }
+  {
+    // The camera health thresholds and windows (issue 17) come from the rig file too.
+    const std::string rig_path = tracker_test::WriteRigFiles(
+        dir, s.map,
+        "tracker:\n  camera_health: false\n  health_gate_px: 2.5\n  health_suspect_ratio: 4\n"
+        "  health_window_frames: 15\n  health_exclude_frames: 3\n  health_min_baseline_frames: 10\n");
+    const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+    EXPECT_FALSE(o.camera_health);
+    EXPECT_EQ(o.health.gate_px, 2.5);
+    EXPECT_EQ(o.health.suspect_ratio, 4.0);
+    EXPECT_EQ(o.health.window, 15);
+    EXPECT_EQ(o.health.exclude_frames, 3);
+    EXPECT_EQ(o.health.min_baseline_frames, 10);
+    EXPECT_EQ(o.health.baseline_frames, HealthOptions{}.baseline_frames);
+  }
+  for (const std::string bad : {"health_window_frames: 0", "health_gate_ratio: 0.5",
+                                "health_baseline_frames: 20\n  health_min_baseline_frames: 40"}) {
+    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  " + bad + "\n");
+    try {
+      TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+      FAIL() << "must be refused: " << bad;
+    } catch (const OptionError& e) {
+      EXPECT_NE(std::string(e.what()).find(rig_path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(
+                    "tracker." + bad.substr(bad.rfind("health_"), bad.rfind(':') - bad.rfind("health_"))),
+                std::string::npos)
+          << e.what();
+    }
   }
   {
     const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  outlier_pix: 3\n");

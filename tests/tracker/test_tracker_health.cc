@@ -58,7 +58,7 @@ TrackedRun Track(const std::string& dir, const sim::GroundTruth& truth, bool cam
   options.log_mode = true;
   options.keep_trajectory = true;
   options.quiet = true;
-  options.camera_health = camera_health;
+  options.tracker.camera_health = camera_health;
   lcm::LCM lcm("memq://");
   TrackerNode node(lcm, rig, options, map);
   node.RunLog(dir + "/detections.lcmlog", StopToken());

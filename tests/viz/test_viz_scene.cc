@@ -7,8 +7,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/dictionary.h"
+#include "core/lcm_util.h"
 #include "core/marker.h"
+#include "mcmt/tracker_status_t.hpp"
 #include "tests/viz/viz_test_util.h"
+#include "viz/collector.h"
 #include "viz/scene.h"
 #include "viz/viewer.h"
 
@@ -176,6 +179,68 @@ TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
   Eigen::Vector2d px2;
   ASSERT_TRUE(other.ProjectRigPoint(0, rig.map.cameras[2].rig_from_cam.translation(), &px2));
   EXPECT_FALSE(NotBackgroundNear(img2, px2, bg, 1)) << "removed camera still drawn at " << px2.transpose();
+}
+
+// Pixels within `radius` of px that look orange (R high, G about half of R, B low) or red (G and B low).
+int ColouredNear(const cv::Mat& bgr, const Eigen::Vector2d& px, bool orange, int radius = 4) {
+  int n = 0;
+  for (int y = static_cast<int>(px.y()) - radius; y <= static_cast<int>(px.y()) + radius; ++y)
+    for (int x = static_cast<int>(px.x()) - radius; x <= static_cast<int>(px.x()) + radius; ++x) {
+      if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      const double b = p[0], g = p[1], r = p[2];
+      if (r < 100 || b > 0.25 * r) continue;
+      if (orange ? (g > 0.3 * r && g < 0.8 * r) : g < 0.2 * r) ++n;
+    }
+  return n;
+}
+
+TEST(VizRender, SuspectCamerasOrangeExcludedRedFromTheTrackerStatus) {
+  const int w = 800, h = 450;
+  const auto rig = MakeTestRig(4, 12);
+  // The tracker's status as the live viewer receives it (MCMT_TRACKER_STATUS through the collector).
+  lcm::LCM lcm("memq://");
+  LcmCollector collector(lcm, 0);
+  tracker_status_t status;
+  for (size_t i = 0; i < rig.map.cameras.size(); ++i) {
+    camera_health_t c;
+    c.camera = rig.map.cameras[i].name;
+    c.state = i == 1   ? camera_health_t::STATE_SUSPECT
+              : i == 2 ? camera_health_t::STATE_EXCLUDED
+                       : camera_health_t::STATE_OK;
+    status.cameras.push_back(c);
+  }
+  status.num_cameras = static_cast<int32_t>(status.cameras.size());
+  const std::vector<uint8_t> bytes = Encode(status);
+  collector.Handle(kTrackerStatusChannel, bytes.data(), bytes.size());
+  ASSERT_EQ(collector.status_count(), 1);
+  // The map from MCMT_MAP has no residuals: cameras neutral unless flagged.
+  RigMap map = rig.map;
+  for (MapCamera& c : map.cameras) c.rms_px = 0.0;
+  for (MapMarker& m : map.markers) m.rms_px = 0.0;
+  auto render = [&](const std::map<std::string, int>& states, VizScene* scene) {
+    scene->SetCameraStates(states);
+    scene->SetPanels({PanelInput{"map", map, rig.trajectory}});
+    scene->SetCurrentFrame(5);
+    return scene->Render(&Renderer(w, h));
+  };
+  VizScene flagged(BareOptions(w, h)), plain(BareOptions(w, h));
+  const cv::Mat with = render(collector.camera_states(), &flagged);
+  plain.SetView(flagged.view(0));
+  const cv::Mat without = render({}, &plain);
+  Dump(with, "camera_states.png");
+  Eigen::Vector2d px[4];
+  for (int i = 0; i < 4; ++i)
+    ASSERT_TRUE(flagged.ProjectRigPoint(0, map.cameras[i].rig_from_cam.translation(), &px[i]));
+  EXPECT_GT(ColouredNear(with, px[1], true), 3) << "cam 1 (suspect) is not orange";
+  EXPECT_GT(ColouredNear(with, px[2], false), 3) << "cam 2 (excluded) is not red";
+  for (int i : {0, 3}) {
+    EXPECT_EQ(ColouredNear(with, px[i], true), 0) << i;
+    EXPECT_EQ(ColouredNear(with, px[i], false), 0) << i;
+  }
+  // Control: the same scene without the states has neither colour there.
+  EXPECT_EQ(ColouredNear(without, px[1], true), 0);
+  EXPECT_EQ(ColouredNear(without, px[2], false), 0);
 }
 
 TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {

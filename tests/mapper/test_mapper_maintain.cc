@@ -1,0 +1,170 @@
+// mcmt-mapper --maintain's node in-process (mapper/maintain.h), fed the messages of a simulated session
+// directly: detections, the tracker's poses (from the ground truth, solved without the suspect camera)
+// and its status. The check that refuses an update, statuses judged under an older map, a stranger
+// camera; the live pipeline as processes is test_mapper_maintain_process.
+#include <gtest/gtest.h>
+
+#include <lcm/lcm-cpp.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/lcm_util.h"
+#include "core/log_reader.h"
+#include "mapper/maintain.h"
+#include "mcmt/camera_health_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/tracker_status_t.hpp"
+#include "sim/eval.h"
+#include "sim/sim.h"
+#include "tests/support/temp_dir.h"
+
+namespace mcmt {
+namespace {
+
+struct Session {
+  sim::GroundTruth truth;
+  RigMap map;  // the truth at the start
+  std::vector<TrajectoryRow> rows;
+  std::vector<LogEvent> events;
+};
+
+Session Make(const std::string& dir, std::vector<sim::CameraMoveOptions> moves) {
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir, 400, 11);
+  o.moves = std::move(moves);
+  Session s;
+  s.truth = sim::GenerateDataset(o).truth;
+  s.map = sim::MapFromGroundTruth(s.truth, 0, 0, &s.rows);
+  s.events = ReadEventLog(dir + "/detections.lcmlog");
+  return s;
+}
+
+template <class Msg>
+std::vector<uint8_t> Bytes(const Msg& m) {
+  return Encode(m);
+}
+
+tracker_status_t Status(const RigMap& map, const std::string& camera, int8_t state, int64_t since,
+                        int64_t map_utime) {
+  tracker_status_t s;
+  s.utime = since;
+  s.map_utime = map_utime;
+  for (const MapCamera& c : map.cameras) {
+    camera_health_t h;
+    h.camera = c.name;
+    h.state = c.name == camera ? state : camera_health_t::STATE_OK;
+    h.since_utime = since;
+    s.cameras.push_back(h);
+  }
+  s.num_cameras = static_cast<int32_t>(s.cameras.size());
+  return s;
+}
+
+// Feeds detections and, per frame, a pose without `suspect` (as the tracker publishes once it is
+// excluded); from frame `status_frame` on, once a second, a status naming it excluded since that frame (-1:
+// none). Steps after every frame.
+void Feed(const Session& s, MaintainNode* node, const std::string& suspect, int status_frame,
+          int64_t map_utime = 0) {
+  size_t e = 0;
+  const int64_t since = status_frame >= 0 ? s.rows.at(status_frame).utime : 0;
+  for (const TrajectoryRow& r : s.rows) {
+    for (; e < s.events.size(); ++e) {
+      detections_t d;
+      ASSERT_TRUE(Decode(s.events[e].data.data(), s.events[e].data.size(), &d));
+      if (d.utime > r.utime) break;
+      node->OnDetections(s.events[e].channel, s.events[e].data.data(), s.events[e].data.size());
+    }
+    object_pose_t p{};
+    p.utime = r.utime;
+    p.seq = r.seq;
+    p.status = 0;
+    p.rig_from_object = ToPose3d(r.rig_from_object);
+    for (const MapCamera& c : s.map.cameras)
+      if (c.name != suspect) p.cameras.push_back(c.name);
+    p.num_cameras = static_cast<int32_t>(p.cameras.size());
+    const std::vector<uint8_t> pose = Bytes(p);
+    node->OnPose(pose.data(), pose.size());
+    if (status_frame >= 0 && r.seq >= status_frame && (r.seq - status_frame) % 30 == 0) {  // once a second
+      const std::vector<uint8_t> st =
+          Bytes(Status(s.map, suspect, camera_health_t::STATE_EXCLUDED, since, map_utime));
+      node->OnTrackerStatus(st.data(), st.size());
+    }
+    node->Step();
+  }
+}
+
+MapperOptions Options(const std::string& dir) {
+  MapperOptions o = MapperOptions::FromConfig(LoadRigConfig(dir + "/rig.yaml"));
+  o.threads = 1;
+  return o;
+}
+
+TEST(MapperMaintain, ASuspectCameraThatDidNotMoveKeepsTheMap) {
+  test::TempDir dir("maintain_still");
+  const Session s = Make(dir.str(), {});
+  const RigConfig rig = LoadRigConfig(dir / "rig.yaml");
+  lcm::LCM lcm("memq://");
+  std::ostringstream log;
+  MaintainNode node(lcm, nullptr, rig, Options(dir.str()), s.map, {}, log);
+  Feed(s, &node, "cam2", 50);
+  // 350 frames after the suspicion: two attempts of 150 frames, each refused (each on newer frames).
+  ASSERT_EQ(node.events().size(), 2u) << log.str();
+  for (const MaintainEvent& e : node.events()) {
+    EXPECT_FALSE(e.published);
+    EXPECT_EQ(e.frames, 150);
+    EXPECT_NE(e.message.find("has not moved"), std::string::npos) << e.message;
+  }
+  EXPECT_GT(node.events()[1].since_utime, node.events()[0].solved_utime);
+  EXPECT_EQ(node.map_utime(), 0);
+  EXPECT_LT(TranslationDistance(node.map().FindCamera("cam2")->rig_from_cam,
+                                s.map.FindCamera("cam2")->rig_from_cam),
+            1e-12);
+}
+
+TEST(MapperMaintain, ABumpedCameraIsReestimatedAndOlderStatusesAreIgnored) {
+  test::TempDir dir("maintain_bump");
+  const Session s = Make(dir.str(), {{"cam2", 40, 0.5, 3.0}});
+  const RigConfig rig = LoadRigConfig(dir / "rig.yaml");
+  lcm::LCM lcm("memq://");
+  std::ostringstream log;
+  MaintainNode node(lcm, nullptr, rig, Options(dir.str()), s.map, {}, log);
+  Feed(s, &node, "cam2", 50);
+  ASSERT_EQ(node.events().size(), 1u) << log.str();
+  const MaintainEvent& e = node.events()[0];
+  EXPECT_TRUE(e.published) << e.message;
+  EXPECT_NEAR(e.rotation_deg, 0.5, 0.05);
+  EXPECT_NEAR(e.translation_mm, 3.0, 0.5);
+  EXPECT_GT(node.map_utime(), 0);
+  const sim::EvalResult eval = sim::Evaluate(sim::TruthAtEnd(s.truth), &node.map(), nullptr);
+  EXPECT_LT(eval.camera_position_mm.max, 0.5);
+  EXPECT_LT(eval.camera_rotation_deg.max, 0.05);
+  // A status judged under the map file (map_utime 0) still says excluded: not acted on again, though
+  // the frames seen without cam2 would be enough.
+  const std::vector<uint8_t> old =
+      Bytes(Status(s.map, "cam2", camera_health_t::STATE_EXCLUDED, s.rows.at(50).utime, 0));
+  node.OnTrackerStatus(old.data(), old.size());
+  Feed(s, &node, "cam2", -1);
+  EXPECT_EQ(node.events().size(), 1u) << log.str();
+}
+
+TEST(MapperMaintain, ACameraOutsideTheRigIsNotAdded) {
+  test::TempDir dir("maintain_stranger");
+  const Session s = Make(dir.str(), {});
+  const RigConfig rig = LoadRigConfig(dir / "rig.yaml");
+  lcm::LCM lcm("memq://");
+  std::ostringstream log;
+  MaintainNode node(lcm, nullptr, rig, Options(dir.str()), s.map, {}, log);
+  detections_t d;
+  ASSERT_TRUE(Decode(s.events[0].data.data(), s.events[0].data.size(), &d));
+  d.camera = "cam9";
+  const std::vector<uint8_t> bytes = Bytes(d);
+  node.OnDetections(DetectionsChannel("cam9"), bytes.data(), bytes.size());
+  EXPECT_NE(log.str().find("camera 'cam9'"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("not a camera of"), std::string::npos) << log.str();
+  Feed(s, &node, "", -1);
+  EXPECT_TRUE(node.events().empty());
+}
+
+}  // namespace
+}  // namespace mcmt

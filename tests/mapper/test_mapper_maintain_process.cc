@@ -1,0 +1,245 @@
+// Continuous calibration live (issue 17), every part its own process over udpm (ports 7980-7989):
+//   a replayer (this test) publishes a detections session of mcmt-sim's generator at twice its speed:
+//   cam2 bumped at frame 150 (0.5 deg, 3 mm), a sixth camera cam5 publishing from frame 400;
+//   mcmt-tracker tracks with the map of the session's start (its ground truth before the bump, no cam5);
+//   mcmt-mapper --maintain re-estimates cam2 once the tracker reports it, adds cam5, publishes new maps;
+//   a subscriber (this test) checks every pose against the truth, the tracker's camera states, the maps.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/files.h"
+#include "core/lcm_util.h"
+#include "core/log_reader.h"
+#include "mcmt/camera_health_t.hpp"
+#include "mcmt/object_pose_t.hpp"
+#include "mcmt/tracker_status_t.hpp"
+#include "sim/eval.h"
+#include "sim/sim.h"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
+
+namespace mcmt {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr int kFrames = 1050;  // margin: under load the sixth camera's map came as late as frame 899
+constexpr int kBumpFrame = 150;
+constexpr int kAddFrame = 400;
+constexpr double kSpeed = 2.0;  // replay at 60 fps
+
+std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+
+struct Received {
+  std::mutex mutex;
+  std::map<int64_t, object_pose_t> poses;  // by seq
+  std::vector<tracker_status_t> statuses;
+  struct Map {
+    rig_map_t msg;
+    int64_t last_pose_seq = -1;  // newest pose seq received when the map arrived
+  };
+  std::vector<Map> maps;
+  std::vector<std::string> mapper_messages;
+  int64_t last_seq = -1;
+};
+
+class Subscriber {
+ public:
+  Subscriber(const std::string& url, Received* out) : lcm_(url), out_(out) {
+    lcm_.subscribe("MCMT_POSE", &Subscriber::OnPose, this)->setQueueCapacity(10000);
+    lcm_.subscribe(kTrackerStatusChannel, &Subscriber::OnStatus, this)->setQueueCapacity(10000);
+    lcm_.subscribe(kMapChannel, &Subscriber::OnMap, this)->setQueueCapacity(100);
+    lcm_.subscribe(kMapperStatusChannel, &Subscriber::OnMapperStatus, this)->setQueueCapacity(1000);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(20);
+    });
+  }
+  ~Subscriber() {
+    stop_ = true;
+    thread_.join();
+  }
+  bool good() { return lcm_.good(); }
+
+ private:
+  void OnPose(const lcm::ReceiveBuffer*, const std::string&, const object_pose_t* m) {
+    std::lock_guard<std::mutex> lock(out_->mutex);
+    out_->poses[m->seq] = *m;
+    out_->last_seq = std::max(out_->last_seq, m->seq);
+  }
+  void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const tracker_status_t* m) {
+    std::lock_guard<std::mutex> lock(out_->mutex);
+    out_->statuses.push_back(*m);
+  }
+  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const rig_map_t* m) {
+    std::lock_guard<std::mutex> lock(out_->mutex);
+    out_->maps.push_back({*m, out_->last_seq});
+  }
+  void OnMapperStatus(const lcm::ReceiveBuffer*, const std::string&, const mapper_status_t* m) {
+    std::lock_guard<std::mutex> lock(out_->mutex);
+    out_->mapper_messages.push_back(m->message);
+  }
+  lcm::LCM lcm_;
+  Received* out_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Publishes the log's events at kSpeed times their pace (event time = message utime).
+void Replay(const std::string& log, const std::string& url) {
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  const std::vector<LogEvent> events = ReadEventLog(log);
+  ASSERT_FALSE(events.empty());
+  const auto start = std::chrono::steady_clock::now();
+  const int64_t t0 = events.front().timestamp;
+  for (const LogEvent& e : events) {
+    std::this_thread::sleep_until(
+        start + std::chrono::microseconds(static_cast<int64_t>((e.timestamp - t0) / kSpeed)));
+    lcm.publish(e.channel, e.data.data(), static_cast<unsigned>(e.data.size()));
+  }
+}
+
+const camera_health_t* Health(const tracker_status_t& s, const std::string& camera) {
+  for (const camera_health_t& h : s.cameras)
+    if (h.camera == camera) return &h;
+  return nullptr;
+}
+
+TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted) {
+  test::TempDir dir("maintain_process");
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), kFrames, 7);
+  o.moves = {{"cam2", kBumpFrame, 0.5, 3.0}};
+  o.add_camera_frame = kAddFrame;
+  const sim::GroundTruth truth = sim::GenerateDataset(o).truth;
+  // The map in use: the truth at the session's start, without the sixth camera.
+  std::vector<TrajectoryRow> truth_rows;
+  RigMap map = sim::MapFromGroundTruth(truth, 0, 0, &truth_rows);
+  map.cameras.erase(std::remove_if(map.cameras.begin(), map.cameras.end(),
+                                   [](const MapCamera& c) { return c.name == "cam5"; }),
+                    map.cameras.end());
+  ASSERT_EQ(map.cameras.size(), 5u);
+  WriteMap(dir / "map.yaml", map);
+  std::map<int64_t, Rigid3> truth_at;
+  for (const TrajectoryRow& r : truth_rows) truth_at[r.seq] = r.rig_from_object;
+
+  const std::string url = Url(7980);
+  Received got;
+  Subscriber subscriber(url, &got);
+  ASSERT_TRUE(subscriber.good());
+  test::Child tracker(
+      {test::Bin("mcmt-tracker"), "--config", dir / "rig.yaml", "--map", dir / "map.yaml", "--lcm-url", url},
+      dir / "tracker.txt");
+  test::Child maintainer({test::Bin("mcmt-mapper"), "--config", dir / "rig.yaml", "--map", dir / "map.yaml",
+                          "--maintain", "--lcm-url", url, "--out", dir / "maintained", "--threads", "1"},
+                         dir / "mapper.txt");
+  ASSERT_TRUE(test::WaitForText(dir / "tracker.txt", "mcmt-tracker: ready", 20))
+      << test::ReadText(dir / "tracker.txt");
+  ASSERT_TRUE(test::WaitForText(dir / "mapper.txt", "maintain: keeping", 20))
+      << test::ReadText(dir / "mapper.txt");
+  Replay(dir / "detections.lcmlog", url);
+  std::this_thread::sleep_for(1s);
+  tracker.Signal(SIGINT);
+  maintainer.Signal(SIGINT);
+  EXPECT_EQ(tracker.Wait(20), 0) << test::ReadText(dir / "tracker.txt");
+  EXPECT_EQ(maintainer.Wait(20), 0) << test::ReadText(dir / "mapper.txt");
+  const std::string logs =
+      "tracker:\n" + test::ReadText(dir / "tracker.txt") + "\nmapper:\n" + test::ReadText(dir / "mapper.txt");
+  std::lock_guard<std::mutex> lock(got.mutex);
+
+  // Two new maps, each a higher version: cam2 re-estimated within 300 frames of the bump, then cam5 added.
+  ASSERT_EQ(got.maps.size(), 2u) << logs;
+  EXPECT_GT(got.maps[1].msg.utime, got.maps[0].msg.utime);
+  EXPECT_LE(got.maps[0].last_pose_seq, kBumpFrame + 300) << logs;
+  const sim::GroundTruth at_end = sim::TruthAtEnd(truth);
+  {
+    const RigMap first = FromRigMapMsg(got.maps[0].msg);
+    EXPECT_EQ(first.cameras.size(), 5u);
+    const sim::EvalResult e = sim::Evaluate(at_end, &first, nullptr);
+    EXPECT_LT(e.camera_position_mm.max, 0.5) << logs;
+    EXPECT_LT(e.camera_rotation_deg.max, 0.05) << logs;
+    std::cout << "first map: cameras within " << e.camera_position_mm.max << " mm, "
+              << e.camera_rotation_deg.max << " deg\n";
+  }
+  {
+    const RigMap second = FromRigMapMsg(got.maps[1].msg);
+    ASSERT_EQ(second.cameras.size(), 6u);
+    const sim::EvalResult e = sim::Evaluate(at_end, &second, nullptr);
+    EXPECT_LT(e.camera_position_mm.max, 1.0) << logs;
+    EXPECT_LT(e.camera_rotation_deg.max, 0.05) << logs;
+    std::cout << "second map: cameras within " << e.camera_position_mm.max << " mm, "
+              << e.camera_rotation_deg.max << " deg\n";
+    EXPECT_TRUE(ReadMap(dir / "maintained/map.yaml").FindCamera("cam5"));
+  }
+  bool noted = false;
+  for (const std::string& m : got.mapper_messages)
+    noted = noted || m.find("camera 'cam2' re-estimated") != std::string::npos;
+  EXPECT_TRUE(noted) << logs;
+
+  // The tracker: cam2 excluded under the first map, ok under the newer one; cam5 judged once added.
+  bool excluded = false, back_ok = false, cam5_ok = false;
+  int64_t suspect_seq = -1;  // frame at which cam2 left ok
+  for (const tracker_status_t& s : got.statuses) {
+    const camera_health_t* h = Health(s, "cam2");
+    ASSERT_TRUE(h);
+    if (s.map_utime == 0 && h->state != camera_health_t::STATE_OK && suspect_seq < 0)
+      suspect_seq = (h->since_utime - sim::FrameUtime(0, 30.0)) / 33333;
+    if (s.map_utime == 0 && h->state == camera_health_t::STATE_EXCLUDED) excluded = true;
+    if (s.map_utime == got.maps[0].msg.utime && h->state == camera_health_t::STATE_OK && h->frames > 30)
+      back_ok = true;
+    const camera_health_t* h5 = Health(s, "cam5");
+    if (h5 && h5->state == camera_health_t::STATE_OK && h5->frames > 30) cam5_ok = true;
+    if (s.map_utime != 0) {
+      EXPECT_NE(h->state, camera_health_t::STATE_EXCLUDED) << s.message;
+    }
+  }
+  EXPECT_TRUE(excluded) << logs;
+  EXPECT_GE(suspect_seq, kBumpFrame);
+  EXPECT_LE(suspect_seq, kBumpFrame + 30);
+  std::cout << "cam2 suspect at frame " << suspect_seq << " (bumped at " << kBumpFrame << ")\n";
+  EXPECT_TRUE(back_ok) << logs;
+  EXPECT_TRUE(cam5_ok) << logs;
+
+  // Every pose near the truth: no more than twice the largest error before the bump.
+  double normal_mm = 0.0;
+  for (const auto& [seq, p] : got.poses)
+    if (seq < kBumpFrame && p.status == 0)
+      normal_mm =
+          std::max(normal_mm, 1000.0 * TranslationDistance(FromPose3d(p.rig_from_object), truth_at.at(seq)));
+  ASSERT_GT(normal_mm, 0.0);
+  int tracked = 0, with_cam5 = 0;
+  double worst_mm = 0.0;
+  int64_t worst_seq = -1;
+  for (const auto& [seq, p] : got.poses) {
+    if (p.status != 0) continue;
+    ++tracked;
+    const double e = 1000.0 * TranslationDistance(FromPose3d(p.rig_from_object), truth_at.at(seq));
+    if (e > worst_mm) {
+      worst_mm = e;
+      worst_seq = seq;
+    }
+    with_cam5 += std::count(p.cameras.begin(), p.cameras.end(), "cam5") > 0;
+  }
+  EXPECT_LE(worst_mm, 2.0 * normal_mm) << "normal " << normal_mm << " mm, worst at seq " << worst_seq;
+  EXPECT_GE(tracked, kFrames - 9) << logs;  // udpm on loopback may drop a rare datagram
+  EXPECT_GT(with_cam5, 50);
+  // No frame lost where the tracker switched maps.
+  for (const Received::Map& m : got.maps)
+    for (int64_t seq = m.last_pose_seq - 15; seq <= m.last_pose_seq + 15; ++seq)
+      EXPECT_TRUE(got.poses.count(seq)) << "seq " << seq << " around a map switch";
+  std::cout << "normal error " << normal_mm << " mm, worst " << worst_mm << " mm (seq " << worst_seq
+            << "); maps after poses " << got.maps[0].last_pose_seq << ", " << got.maps[1].last_pose_seq
+            << "\n";
+}
+
+}  // namespace
+}  // namespace mcmt
