@@ -41,6 +41,17 @@ double Percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
+// Every table's session: `cameras` cameras around a 10 cm cube with 2 x 1 markers per face.
+SyntheticSession BenchSession(int cameras, int frames) {
+  SyntheticOptions o;
+  o.cameras = cameras;
+  o.frames = frames;
+  o.cube_side = 0.1;
+  o.grid = 2;
+  o.grid_rows = 1;
+  return MakeSession(o);
+}
+
 void SolveTable(int frames) {
   std::printf("## Pose solve time per frame (PoseEstimator::Solve, one core)\n\n");
   std::printf(
@@ -54,13 +65,7 @@ void SolveTable(int frames) {
       "tracking frames/s | lost median (ms) | lost p99 (ms) | mean error (mm / deg) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (int cameras : {1, 3, 5, 8}) {
-    SyntheticOptions o;
-    o.cameras = cameras;
-    o.frames = frames;
-    o.cube_side = 0.1;
-    o.grid = 2;
-    o.grid_rows = 1;
-    const SyntheticSession s = MakeSession(o);
+    const SyntheticSession s = BenchSession(cameras, frames);
     const mcmt::PoseEstimator est(s.map);
     std::vector<std::vector<mcmt::MarkerObservation>> obs;
     double markers = 0, views = 0;
@@ -165,13 +170,7 @@ void LatencyTable(int frames, double rate_hz) {
     std::printf("(latency: %s not built, skipped)\n", tracker.c_str());
     return;
   }
-  SyntheticOptions o;
-  o.cameras = 5;
-  o.frames = frames;
-  o.cube_side = 0.1;
-  o.grid = 2;
-  o.grid_rows = 1;
-  const SyntheticSession s = MakeSession(o);
+  const SyntheticSession s = BenchSession(5, frames);
   const std::string dir = mcmt::tracker_test::MakeTempDir("bench");
   const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
   mcmt::WriteMap(dir + "/map.yaml", s.map);
@@ -235,13 +234,7 @@ void LatencyTable(int frames, double rate_hz) {
 void LogThroughputTable(int frames) {
   const std::string tracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
   if (access(tracker.c_str(), X_OK) != 0) return;
-  SyntheticOptions o;
-  o.cameras = 5;
-  o.frames = frames;
-  o.cube_side = 0.1;
-  o.grid = 2;
-  o.grid_rows = 1;
-  const SyntheticSession s = MakeSession(o);
+  const SyntheticSession s = BenchSession(5, frames);
   const std::string dir = mcmt::tracker_test::MakeTempDir("bench_log");
   const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
   mcmt::WriteMap(dir + "/map.yaml", s.map);
@@ -262,13 +255,7 @@ void LogThroughputTable(int frames) {
 // The cost of the per-camera health (tracker/health.h: one extra solve per camera seeing the object):
 // TrackerNode on the same log in-process, tracker.camera_health on and off.
 void HealthCostTable(int frames) {
-  SyntheticOptions o;
-  o.cameras = 5;
-  o.frames = frames;
-  o.cube_side = 0.1;
-  o.grid = 2;
-  o.grid_rows = 1;
-  const SyntheticSession s = MakeSession(o);
+  const SyntheticSession s = BenchSession(5, frames);
   const std::string dir = mcmt::tracker_test::MakeTempDir("bench_health");
   const mcmt::RigConfig rig = mcmt::LoadRigConfig(mcmt::tracker_test::WriteRigFiles(dir, s.map));
   mcmt::tracker_test::WriteLog(dir + "/session.lcmlog", s);
