@@ -71,7 +71,7 @@ class HealthMonitor {
     CameraHealth health;
     std::deque<double> window;
     std::deque<char> gated;
-    std::deque<double> history;         // judged RMS while ok, for the baseline (oldest first)
+    std::deque<double> history;          // judged RMS while ok, for the baseline (oldest first)
     std::vector<double> sorted_history;  // the same, sorted
     int suspect_run = 0;
     int recover_run = 0;  // excluded: judged frames in a row good enough to come back

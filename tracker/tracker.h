@@ -117,7 +117,6 @@ class PoseEstimator {
   // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
 
-
   const RigMap& map() const { return map_; }
 
   // The observation's corners as core's rigid-pose points (world = rig, body = object; pointers into this
