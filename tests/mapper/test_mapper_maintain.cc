@@ -7,6 +7,7 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "sim/eval.h"
 #include "sim/sim.h"
 #include "tests/support/temp_dir.h"
+#include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
@@ -194,6 +196,63 @@ TEST(MapperMaintain, ABumpedCameraIsReestimatedOnTheMapsClocks) {
                   old.ClockUs(utime, s.map.time_reference_utime), 1.0)
           << old.name;
   }
+}
+
+// The tracker and the maintenance together in-process (the tracker's poses and statuses on a memq bus):
+// cam2 did not move but saw a 2 s transient (its corners 3 px off, frames 100-159 of 400, a reflection):
+// the tracker excludes it and takes it back under the same map once its residuals are good again; the
+// maintenance, collecting frames to re-estimate it meanwhile, drops it when it is ok again: no new map.
+TEST(MapperMaintain, ATransientExcludesACameraForAWhileAndNoMapIsPublished) {
+  test::TempDir dir("maintain_transient");
+  Session s = Make(dir.str(), {});
+  const int64_t from = s.rows.at(100).utime, to = s.rows.at(160).utime;
+  for (LogEvent& e : s.events) {
+    detections_t d;
+    ASSERT_TRUE(Decode(e.data.data(), e.data.size(), &d));
+    if (d.camera != "cam2" || d.utime < from || d.utime >= to) continue;
+    for (marker_t& m : d.markers)
+      for (auto& corner : m.corners) corner[0] += 3.0;
+    const std::vector<uint8_t> bytes = Encode(d);
+    e.data.assign(bytes.begin(), bytes.end());
+  }
+  const RigConfig rig = LoadRigConfig(dir / "rig.yaml");
+  lcm::LCM input("memq://"), bus("memq://");
+  TrackerNodeOptions tracker_options;
+  tracker_options.log_mode = true;
+  tracker_options.quiet = true;
+  TrackerNode tracker(input, rig, tracker_options, s.map, &bus);
+  std::ostringstream log;
+  MaintainNode node(bus, nullptr, rig, Options(dir.str()), s.map, {}, log);
+  struct States {  // cam2's states in the tracker's statuses
+    std::set<int> seen;
+    void On(const lcm::ReceiveBuffer*, const std::string&, const tracker_status_t* m) {
+      for (const camera_health_t& h : m->cameras)
+        if (h.camera == "cam2") seen.insert(h.state);
+    }
+  } states;
+  bus.subscribe(kTrackerStatusChannel, &States::On, &states)->setQueueCapacity(10000);
+  for (const LogEvent& e : s.events) {
+    tracker.OnDetections(e.channel, e.data.data(), e.data.size());
+    node.OnDetections(e.channel, e.data.data(), e.data.size());
+    while (bus.handleTimeout(0) > 0) {
+    }
+    node.Step();
+  }
+  tracker.Flush();
+  while (bus.handleTimeout(0) > 0) {
+  }
+  node.Step();
+  ASSERT_TRUE(tracker.health());
+  const CameraHealth cam2 = tracker.health()->Of("cam2");
+  EXPECT_EQ(cam2.state, CameraState::kOk);
+  EXPECT_GE(cam2.first_suspect_utime, from);
+  EXPECT_TRUE(states.seen.count(camera_health_t::STATE_EXCLUDED));
+  EXPECT_NE(log.str().find("camera 'cam2' is suspect"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("camera 'cam2' is ok again before it was re-estimated"), std::string::npos)
+      << log.str();
+  EXPECT_TRUE(node.events().empty()) << log.str();
+  EXPECT_EQ(node.map_utime(), 0);
+  EXPECT_EQ(tracker.stats().tracked, 400);
 }
 
 TEST(MapperMaintain, ACameraOutsideTheRigIsNotAdded) {
