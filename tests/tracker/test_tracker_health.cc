@@ -115,6 +115,9 @@ TEST_P(TrackerHealthBump, SuspectWithin30FramesExcludedAndNoPoseCorrupted) {
     EXPECT_EQ(h.state, CameraState::kExcluded);
     EXPECT_GE(h.first_suspect_utime, bump_utime);
     EXPECT_LE(h.first_suspect_utime, sim::FrameUtime(480, 30.0));
+    std::cout << "cam2 (" << bump.rotation_deg << " deg, " << bump.translation_mm
+              << " mm at frame 450) suspect at frame "
+              << (h.first_suspect_utime - sim::FrameUtime(0, 30.0)) / 33333 << "\n";
   }
   EXPECT_GE(static_cast<double>(run.seq.size()), 0.95 * 900);
 
