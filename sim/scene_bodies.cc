@@ -110,17 +110,22 @@ std::vector<SceneBody> MakeBodiesScene(const DatasetOptions& o, bool with_static
   bodies.push_back(MovingBody("tool", ObjectKind::kFourSided, 0, o.trajectory.seed, 1.0, o));
   bodies.push_back(MovingBody("patient", ObjectKind::kCube, 10, o.trajectory.seed + 1, -1.0, o));
   if (with_static) {
-    SceneBody floor;
-    floor.name = "floor";
-    floor.is_static = true;
-    floor.object = FloorBoard(o.rig.radius, 20);
     Rigid3 rig_from_floor = Rigid3::Identity();
     rig_from_floor.translation() = Eigen::Vector3d(0, 0, o.trajectory.look_at_height - 0.25 * o.rig.radius);
-    floor.frames = bodies[0].frames;
-    for (SimFrame& f : floor.frames) f.rig_from_object = rig_from_floor;
-    bodies.push_back(floor);
+    bodies.push_back(StaticBody("floor", FloorBoard(o.rig.radius, 20), rig_from_floor, bodies[0].frames));
   }
   return bodies;
+}
+
+SceneBody StaticBody(const std::string& name, const SimObject& object, const Rigid3& rig_from_object,
+                     const std::vector<SimFrame>& like) {
+  SceneBody body;
+  body.name = name;
+  body.is_static = true;
+  body.object = object;
+  body.frames = like;
+  for (SimFrame& f : body.frames) f.rig_from_object = rig_from_object;
+  return body;
 }
 
 SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k) {
