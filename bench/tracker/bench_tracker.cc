@@ -2,9 +2,9 @@
 //  1. PoseEstimator::Solve time per frame for 1 / 3 / 5 / 8 cameras with 3-6 markers each (a cube with
 //     2x2 markers per face), tracking (constant-velocity prediction) and lost (IPPE hypotheses), one core.
 //  1b. The per-camera health's cost per frame (TrackerNode in-process, camera_health on / off).
-//  2. End-to-end latency over loopback udpm (port 7750): the real mcmt-tracker process, a publisher of
-//     detections and a subscriber of MCMT_POSE (own thread) in this process; from publishing a frame's last
-//     detection to receiving its pose.
+//  2. End-to-end latency over loopback udpm (port 7750, or $MCMT_BENCH_PORT): the real mcmt-tracker
+//     process, a publisher of detections and a subscriber of MCMT_POSE (own thread) in this process; from
+//     publishing a frame's last detection to receiving its pose.
 // Usage: bench_tracker [--frames N] [--latency-frames N] [--rate HZ] [--no-latency]
 #include <signal.h>
 #include <sys/wait.h>
@@ -174,7 +174,8 @@ void LatencyTable(int frames, double rate_hz) {
   const std::string dir = mcmt::tracker_test::MakeTempDir("bench");
   const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
   mcmt::WriteMap(dir + "/map.yaml", s.map);
-  const std::string url = "udpm://239.255.76.67:7750?ttl=0";
+  const char* port = std::getenv("MCMT_BENCH_PORT");  // bench/run --port-base
+  const std::string url = "udpm://239.255.76.67:" + std::string(port ? port : "7750") + "?ttl=0";
   const std::string err = dir + "/tracker.txt";
   const pid_t pid = fork();
   if (pid == 0) {
