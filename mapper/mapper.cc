@@ -264,6 +264,7 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
     const BundleSettings settings =
         WithProgress(BundleSettingsFor(o, threads), s.progress, o.max_iterations, &report.solves);
     RefineWithRejection(observations, names, layout, o, settings, &bundle, &report);
+    log.End("refine");
     if (moves && o.detect_moves) {
       *moves = FindCameraMoves(bundle.problem, frames, o, split);
       log.End("moved cameras");
@@ -274,7 +275,7 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
       }
     }
     DropUnreliableCameras(observations, names, o, settings, &cameras, &bundle, &report);
-    log.End("refine");
+    log.End("unreliable cameras");
   }
   FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
   report.final_rms_px = result.map.rms_px;
