@@ -123,17 +123,16 @@ void TrackerNode::HandleMap(const lcm::ReceiveBuffer* rbuf, const std::string& /
 }
 
 void TrackerNode::OnMap(const void* data, size_t size) {
-  rig_map_t msg;
+  MapMessage msg;  // rig_map2_t (mcmt-mapper) or rig_map_t (older logs)
   std::string error;
-  if (!Decode(data, size, &msg, &error)) {
+  if (!DecodeMapMessage(data, size, &msg, &error)) {
     WarnOnce("bad-map", std::string("ignoring undecodable message on ") + kMapChannel + ": " + error);
     return;
   }
   if (estimator_ && msg.utime <= map_utime_) return;  // the same map again, or an older one
   try {
-    RigMap map = FromRigMapMsg(msg);
-    CheckMapMatchesRig(map, rig_, kMapChannel);
-    SetMap(map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
+    CheckMapMatchesRig(msg.map, rig_, kMapChannel);
+    SetMap(msg.map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
     map_utime_ = msg.utime;
   } catch (const std::exception& e) {
     WarnOnce("map-" + std::to_string(msg.utime), std::string("ignoring map: ") + e.what());
