@@ -199,10 +199,13 @@ std::vector<PoseStreamPlan> PlanPoseStreams(const TrackerOptions& o, const std::
       table.Fail(file, keys[a],
                  "channel " + plan[a].channel + " of '" + plan[a].name + "' is a detections channel");
     for (size_t b = 0; b < a; ++b)
-      if (plan[a].channel == plan[b].channel)
-        table.Fail(file, keys[a],
-                   "channel " + plan[a].channel + " of '" + plan[a].name + "' is also '" + plan[b].name +
-                       "''s (two pose streams on one channel)");
+      if (plan[a].channel == plan[b].channel) {
+        // Name the key that was set by hand (channels.NAME) when one was.
+        const bool b_set = keys[b].rfind("channels.", 0) == 0 && keys[a].rfind("channels.", 0) != 0;
+        table.Fail(file, b_set ? keys[b] : keys[a],
+                   "channel " + plan[a].channel + " of '" + plan[b_set ? b : a].name + "' is also '" +
+                       plan[b_set ? a : b].name + "''s (two pose streams on one channel)");
+      }
   }
   return plan;
 }
