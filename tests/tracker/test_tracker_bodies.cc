@@ -345,5 +345,42 @@ TEST(TrackerBodies, RelativeToAStaticBodyUsesItsMapPose) {
   }
 }
 
+// Maps from MCMT_MAP of both types: rig_map2_t (what mcmt-mapper publishes) gives every body its stream;
+// an old rig_map_t (one object: the first moving body's markers) the single stream on MCMT_POSE.
+TEST(TrackerBodies, MapsOnMcmtMapOfEitherType) {
+  const BodiesSession& s = Bodies();
+  const RigConfig rig = LoadRigConfig(s.Rig("rig_maps.yaml", kRelativeSection));
+  TrackerNodeOptions options;
+  options.tracker = TrackerOptions::FromConfig(rig);
+  options.quiet = true;
+  lcm::LCM lcm("memq://");
+  TrackerNode node(lcm, rig, options, std::nullopt);
+  EXPECT_FALSE(node.has_map());
+  const std::vector<uint8_t> v2 = Encode(ToRigMap2Msg(s.map, 10));
+  node.OnMap(v2.data(), v2.size());
+  ASSERT_TRUE(node.has_map());
+  std::vector<std::string> channels;
+  for (const PoseStream& st : node.streams()) channels.push_back(st.channel);
+  EXPECT_EQ(channels,
+            (std::vector<std::string>{"MCMT_POSE_TOOL", "MCMT_POSE_PATIENT", "MCMT_POSE_TOOL_IN_PATIENT"}));
+  for (const detections_t& d : s.detections) {
+    if (d.seq >= 20) break;
+    const std::vector<uint8_t> bytes = Encode(d);
+    node.OnDetections(DetectionsChannel(d.camera), bytes.data(), bytes.size());
+  }
+  node.Flush();
+  for (const PoseStream& st : node.streams()) EXPECT_EQ(st.tracked, 20) << st.name;
+
+  TrackerNodeOptions plain;  // a one-object map: no relative pose to give
+  plain.quiet = true;
+  TrackerNode old_node(lcm, rig, plain, std::nullopt);
+  const std::vector<uint8_t> v1 = Encode(ToRigMapMsg(s.map, 11));
+  old_node.OnMap(v1.data(), v1.size());
+  ASSERT_TRUE(old_node.has_map());
+  ASSERT_EQ(old_node.streams().size(), 1u);
+  EXPECT_EQ(old_node.streams()[0].channel, "MCMT_POSE");
+  EXPECT_EQ(old_node.streams()[0].name, "object");
+}
+
 }  // namespace
 }  // namespace mcmt
