@@ -106,16 +106,18 @@ int Main(int argc, char** argv) {
   else
     node.Run(stop);
   if (!out_path.empty()) {
-    // One file per pose stream: OUT for a single object, else OUT's name + _NAME (poses_tool.csv).
-    std::remove(options.partial_path.c_str());
+    // One file per pose stream: OUT for a single object, else OUT's name + _NAME (poses_tool.csv); the
+    // partial files go only once every final file is written.
     if (node.streams().empty()) mcmt::WriteTrajectory(out_path, {});  // no map came
     for (const mcmt::PoseStream& s : node.streams()) {
       const std::string path = mcmt::StreamPath(out_path, s.name, s.single);
       mcmt::WriteTrajectory(path, s.trajectory);
-      if (!s.single) std::remove((path + ".partial").c_str());
       if (!quiet)
         std::cerr << "mcmt-tracker: wrote " << s.trajectory.size() << " poses to " << path << std::endl;
     }
+    std::remove(options.partial_path.c_str());
+    for (const mcmt::PoseStream& s : node.streams())
+      if (!s.single) std::remove((mcmt::StreamPath(out_path, s.name, false) + ".partial").c_str());
   }
   if (report.damaged()) {
     std::cerr << "mcmt-tracker: " << report.Summary() << " (exit status " << mcmt::kExitDamagedLog << ")"

@@ -4,6 +4,7 @@
 // bad streams stop it with one line (ports 7940-7949 belong to this file).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <iostream>
@@ -63,6 +64,12 @@ TEST(TrackerBodiesProcess, EachBodyOnItsChannelOverUdpm) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (got.Count("MCMT_POSE_TOOL_IN_PATIENT") < 300 && std::chrono::steady_clock::now() < end)
     lcm.handleTimeout(20);
+  // While it runs, every published pose is already in its stream's partial file (what survives a crash).
+  for (const char* name : {"tool", "patient", "tool_in_patient"}) {
+    const std::string partial = test::ReadText(s.dir->File(std::string("poses_") + name + ".csv.partial"));
+    EXPECT_GE(std::count(partial.begin(), partial.end(), '\n'), 286) << name;  // header + >= 285 poses
+  }
+  EXPECT_TRUE(test::ReadText(out + ".partial").empty());  // several bodies: no single partial file
   tracker.Signal(SIGTERM);
   EXPECT_EQ(tracker.Wait(20), 0) << test::ReadText(err);
   const std::string log = test::ReadText(err);
