@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <iostream>
 #include <map>
 #include <random>
@@ -283,6 +284,34 @@ TEST(TrackerBodies, ABodyThatLeavesAndReEntersIsLostThenTrackedAgain) {
   const sim::EvalResult e = tracker_test::EvaluateBody(s, "tool", Poses(back));
   std::cout << "tool after re-entering: " << e.object_translation_mm.max << " mm max over 10 frames\n";
   EXPECT_LT(e.object_translation_mm.max, 0.5);
+}
+
+// A camera that moves (its corners 2.5 px off from frame 100 on: under outlier_px, so only the health leaves
+// them out): judged on the first body (the tool), excluded, and then left out of every body's pose, the
+// patient's too, which stays accurate.
+TEST(TrackerBodies, AnExcludedCameraIsLeftOutOfEveryBody) {
+  const BodiesSession& s = Bodies();
+  std::vector<detections_t> detections = s.detections;
+  for (detections_t& d : detections)
+    if (d.camera == "cam2" && d.seq >= 100)
+      for (marker_t& m : d.markers)
+        for (auto& c : m.corners) c[0] += 2.5;
+  const Published got = Track(s, s.Rig("rig_bumped.yaml", kRelativeSection), detections);
+  int with_cam2_late = 0, late = 0;
+  std::vector<object_pose_t> patient_late;
+  for (const char* channel : {"MCMT_POSE_TOOL", "MCMT_POSE_PATIENT"})
+    for (const object_pose_t& m : got.by_channel.at(channel)) {
+      if (m.seq < 150 || m.status == object_pose_t::STATUS_LOST) continue;
+      ++late;
+      with_cam2_late += std::count(m.cameras.begin(), m.cameras.end(), "cam2") > 0;
+      if (std::string(channel) == "MCMT_POSE_PATIENT") patient_late.push_back(m);
+    }
+  std::cout << "cam2 moved at frame 100: in " << with_cam2_late << " of " << late
+            << " body poses from frame 150 on\n";
+  EXPECT_GT(late, 250);
+  EXPECT_EQ(with_cam2_late, 0);
+  const sim::EvalResult e = tracker_test::EvaluateBody(s, "patient", Poses(patient_late));
+  EXPECT_LT(e.object_translation_mm.max, 1.0);
 }
 
 std::string ConfigError(const std::string& rig_path) {
