@@ -7,7 +7,6 @@
 #include "core/lcm_util.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
-#include "mcmt/rig_map_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
 
 namespace mcmt::viz {
@@ -49,19 +48,14 @@ void LcmCollector::Handle(const std::string& channel, const void* data, size_t s
 
 void LcmCollector::OnMap(const void* data, size_t size, const std::string& channel) {
   ++messages_;
-  rig_map_t msg;
+  MapMessage msg;  // rig_map2_t or rig_map_t
   std::string error;
-  if (!Decode(data, size, &msg, &error)) {
+  if (!DecodeMapMessage(data, size, &msg, &error)) {
     if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
     return;
   }
-  try {
-    map_ = FromRigMapMsg(msg);
-    ++map_count_;
-  } catch (const std::exception& e) {
-    if (stats_.decode_errors++ == 0)
-      std::cerr << "mcmt-viz: warning: " << channel << ": " << e.what() << "\n";
-  }
+  map_ = std::move(msg.map);
+  ++map_count_;
 }
 
 void LcmCollector::OnPose(const void* data, size_t size, const std::string& channel) {

@@ -45,7 +45,7 @@ struct Received {
   std::map<int64_t, object_pose_t> poses;  // by seq
   std::vector<tracker_status_t> statuses;
   struct Map {
-    rig_map_t msg;
+    MapMessage msg;              // the mapper publishes rig_map2_t (core's DecodeMapMessage)
     int64_t last_pose_seq = -1;  // newest pose seq received when the map arrived
   };
   std::vector<Map> maps;
@@ -80,9 +80,11 @@ class Subscriber {
     std::lock_guard<std::mutex> lock(out_->mutex);
     out_->statuses.push_back(*m);
   }
-  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const rig_map_t* m) {
+  void OnMap(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    MapMessage m;
+    if (!DecodeMapMessage(rbuf->data, rbuf->data_size, &m)) return;
     std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->maps.push_back({*m, out_->last_seq});
+    out_->maps.push_back({m, out_->last_seq});
   }
   void OnMapperStatus(const lcm::ReceiveBuffer*, const std::string&, const mapper_status_t* m) {
     std::lock_guard<std::mutex> lock(out_->mutex);
@@ -162,7 +164,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
   EXPECT_LE(got.maps[0].last_pose_seq, kBumpFrame + 300) << logs;
   const sim::GroundTruth at_end = sim::TruthAtEnd(truth);
   {
-    const RigMap first = FromRigMapMsg(got.maps[0].msg);
+    const RigMap first = got.maps[0].msg.map;
     EXPECT_EQ(first.cameras.size(), 5u);
     const sim::EvalResult e = sim::Evaluate(at_end, &first, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 0.5) << logs;
@@ -171,7 +173,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
               << e.camera_rotation_deg.max << " deg\n";
   }
   {
-    const RigMap second = FromRigMapMsg(got.maps[1].msg);
+    const RigMap second = got.maps[1].msg.map;
     ASSERT_EQ(second.cameras.size(), 6u);
     const sim::EvalResult e = sim::Evaluate(at_end, &second, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 1.0) << logs;
