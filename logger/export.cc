@@ -121,11 +121,13 @@ struct PoseText {
 };
 
 // Writes every stream's files (names: BodyPath for a body's stream), fills result->streams.
-void WritePoseStreams(std::vector<PoseText>* streams, const LogExportRequest& request, LogExportResult* result) {
+void WritePoseStreams(std::vector<PoseText>* streams, const LogExportRequest& request,
+                      LogExportResult* result) {
   for (PoseText& p : *streams) {
     if (!request.poses_csv.empty())
       p.out.poses_csv = p.out.body.empty() ? request.poses_csv : BodyPath(request.poses_csv, p.out.body);
-    if (!request.tum.empty()) p.out.tum = p.out.body.empty() ? request.tum : BodyPath(request.tum, p.out.body);
+    if (!request.tum.empty())
+      p.out.tum = p.out.body.empty() ? request.tum : BodyPath(request.tum, p.out.body);
   }
   if (streams->empty()) {  // no pose at all: the asked files, empty (WhyPosesEmpty says why)
     PoseText none;
@@ -168,8 +170,8 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
         det_csv += "\n";
         ++result.detection_rows;
       }
-    } else if (want_poses &&
-               (e.channel == request.pose_channel || e.channel.compare(0, body_prefix.size(), body_prefix) == 0)) {
+    } else if (want_poses && (e.channel == request.pose_channel ||
+                              e.channel.compare(0, body_prefix.size(), body_prefix) == 0)) {
       object_pose_t pose;
       std::string error;
       if (!Decode(e.data.data(), e.data.size(), &pose, &error))
@@ -180,8 +182,8 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
         stream.out.source = e.channel;
         if (e.channel != request.pose_channel) {
           stream.out.body = BodyOfPoseChannel(e.channel, pose.object);
-          if (stream.out.body.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") !=
-              std::string::npos)
+          if (stream.out.body.find_first_not_of(
+                  "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
             throw LogFormatError(EventWhere(part, e, index) + ": body name '" + stream.out.body +
                                  "' cannot be part of a file name (letters, digits and _ only)");
         }
@@ -232,8 +234,9 @@ std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::s
       if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
     if (map.objects.size() == 1 && !out.empty()) out[0].first.clear();  // one body: today's names
     if (out.empty())
-      throw FileFormatError(map_path + ": every body is static: no trajectory to export (their poses are "
-                                       "rig_from_object in the map)");
+      throw FileFormatError(map_path +
+                            ": every body is static: no trajectory to export (their poses are "
+                            "rig_from_object in the map)");
   }
   for (const auto& [body, path] : out)
     if (::stat(path.c_str(), &st) != 0)

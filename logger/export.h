@@ -33,7 +33,7 @@ struct LogExportRequest {
 // One stream of poses exported: a body's (name "" for MCMT_POSE / a single trajectory.csv).
 struct PoseExport {
   std::string body;
-  std::string source;  // the channel, or the trajectory file
+  std::string source;          // the channel, or the trajectory file
   std::string poses_csv, tum;  // the files written ("" when not asked)
   int64_t rows = 0;
   int64_t skipped = 0;  // LOST
@@ -42,8 +42,8 @@ struct PoseExport {
 struct LogExportResult {
   int64_t detection_messages = 0;
   int64_t detection_rows = 0;
-  int64_t pose_rows = 0;       // every stream's
-  int64_t poses_skipped = 0;   // LOST (no valid pose)
+  int64_t pose_rows = 0;            // every stream's
+  int64_t poses_skipped = 0;        // LOST (no valid pose)
   std::vector<PoseExport> streams;  // in channel order; empty when the log holds no pose
 };
 

@@ -321,8 +321,8 @@ std::array<Eigen::Vector3d, 4> FaceCorners(const MapMarker& m) {
 }  // namespace
 
 std::string MarkersPly(const std::vector<MapMarker>& markers, const std::string& name) {
-  std::string out = "ply\nformat ascii 1.0\ncomment mcmt " + name +
-                    ": marker squares in the object frame, metres\n";
+  std::string out =
+      "ply\nformat ascii 1.0\ncomment mcmt " + name + ": marker squares in the object frame, metres\n";
   out += "element vertex " + std::to_string(4 * markers.size()) + "\n";
   out += "property double x\nproperty double y\nproperty double z\n";
   out += "element face " + std::to_string(markers.size()) + "\n";
@@ -393,11 +393,14 @@ const std::vector<MapExportFormat>& MapExportFormats() {
        [](const RigMap& m, const std::string& p, const Options&) { WriteFileAtomic(p, OpenCvMapYaml(m)); }},
       {"ply", "the object's marker squares as PLY (several bodies: one file per body, PATH_<body>.ply)",
        [](const RigMap& m, const std::string& p, const Options&) {
-         WriteLayouts(m, p, "PLY", [](const auto& markers, const auto& name) { return MarkersPly(markers, name); });
+         WriteLayouts(m, p, "PLY",
+                      [](const auto& markers, const auto& name) { return MarkersPly(markers, name); });
        }},
-      {"obj", "the object's marker squares as Wavefront OBJ (several bodies: one file per body, PATH_<body>.obj)",
+      {"obj",
+       "the object's marker squares as Wavefront OBJ (several bodies: one file per body, PATH_<body>.obj)",
        [](const RigMap& m, const std::string& p, const Options&) {
-         WriteLayouts(m, p, "OBJ", [](const auto& markers, const auto& name) { return MarkersObj(markers, name); });
+         WriteLayouts(m, p, "OBJ",
+                      [](const auto& markers, const auto& name) { return MarkersObj(markers, name); });
        }},
   };
   return formats;
