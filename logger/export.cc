@@ -221,29 +221,6 @@ bool IsTrajectoryCsv(const std::string& path) {
          (first == kTrajectoryHeader || first == std::string(kTrajectoryHeader) + "\r");
 }
 
-std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir) {
-  const std::string map_path = outdir + "/map.yaml";
-  std::vector<std::pair<std::string, std::string>> out;
-  struct stat st;
-  if (::stat(map_path.c_str(), &st) != 0) {
-    out.emplace_back("", outdir + "/trajectory.csv");
-  } else {
-    const RigMap map = ReadMap(map_path);
-    if (map.objects.empty()) out.emplace_back("", outdir + "/trajectory.csv");
-    for (const MapObject& o : map.objects)
-      if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
-    if (map.objects.size() == 1 && !out.empty()) out[0].first.clear();  // one body: today's names
-    if (out.empty())
-      throw FileFormatError(map_path +
-                            ": every body is static: no trajectory to export (their poses are "
-                            "rig_from_object in the map)");
-  }
-  for (const auto& [body, path] : out)
-    if (::stat(path.c_str(), &st) != 0)
-      throw FileFormatError(path + ": no such trajectory (is " + outdir + " an mcmt-mapper OUTDIR?)");
-  return out;
-}
-
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request) {
   struct stat st;
   const bool is_dir = ::stat(csv.c_str(), &st) == 0 && S_ISDIR(st.st_mode);

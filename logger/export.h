@@ -52,16 +52,12 @@ struct LogExportResult {
 // event, byte offset and channel. Channels nobody asked for are ignored.
 LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request);
 
-// The trajectories of the mapper's OUTDIR: OUTDIR/trajectory.csv for a single-object map, one
-// OUTDIR/trajectory_<body>.csv per moving body of OUTDIR/map.yaml's objects (body, path). Throws
-// FileFormatError naming the file that is missing.
-std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir);
-
 // Is this file a trajectory CSV (first line kTrajectoryHeader: mcmt-mapper's trajectory.csv, mcmt-tracker's
 // or mcmt-export's poses.csv)?
 bool IsTrajectoryCsv(const std::string& path);
 // request.poses_csv / request.tum from a trajectory CSV (pose_rows counts its rows), or from the mapper's
-// OUTDIR (MapperTrajectories: one file per moving body). Throws FileFormatError naming the file and line.
+// OUTDIR (core's MapperTrajectories: one file per moving body). Throws FileFormatError naming the file and
+// line.
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request);
 // Why an export came out empty (one line, naming the source and what to do), "" when it has rows.
 std::string WhyPosesEmpty(const std::string& source, bool from_trajectory, const LogExportResult& result,
