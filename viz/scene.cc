@@ -124,9 +124,9 @@ Eigen::Vector3d BodyColor(size_t k) {
   static const Eigen::Vector3d kPalette[] = {
       {1.0, 0.2, 0.85},    // magenta
       {0.25, 0.4, 1.0},    // blue
-      {0.97, 0.97, 0.97},  // white
       {1.0, 0.62, 0.75},   // pink
       {0.6, 0.3, 1.0},     // violet
+      {0.55, 0.35, 0.15},  // brown
   };
   return kPalette[k % (sizeof(kPalette) / sizeof(kPalette[0]))];
 }

@@ -77,8 +77,8 @@ struct PanelInput {
 };
 
 // The colour of body k of a map with several bodies (map.objects order), RGB in [0, 1]: magenta, blue,
-// white, pink, violet, then again; none of them a residual colour (green .. red), the trail's orange of a
-// single object, the rays' cyan or the neutral light blue.
+// pink, violet, brown, then again; none of them a residual colour (green .. red), the trail's orange of a
+// single object, the rays' cyan, the neutral light blue or the markers' black and white.
 Eigen::Vector3d BodyColor(size_t k);
 constexpr int64_t kBodyPoseMaxAgeUs = 500000;
 
