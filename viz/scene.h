@@ -73,7 +73,8 @@ struct PanelInput {
   std::string title;  // "initial", "refined", ...
   RigMap map;
   std::vector<TrajectoryRow> trajectory;
-  std::map<std::string, std::vector<TrajectoryRow>> bodies;
+  std::map<std::string, std::vector<TrajectoryRow>> bodies =
+      {};  // (= {}: PanelInput{title, map, rows} is fine)
 };
 
 // The colour of body k of a map with several bodies (map.objects order), RGB in [0, 1]: magenta, blue,
@@ -164,8 +165,8 @@ class VizScene {
       size_t object_index = 0;                      // into the map's objects
       mrpt::opengl::CText::Ptr label;
       double reach = 0.0;
-      mrpt::opengl::CSetOfObjects::Ptr object;      // pose world_from_rig * rig_from_object
-      mrpt::opengl::CSetOfLines::Ptr trail;         // rig frame
+      mrpt::opengl::CSetOfObjects::Ptr object;  // pose world_from_rig * rig_from_object
+      mrpt::opengl::CSetOfLines::Ptr trail;     // rig frame
       int current = -1;
       int trail_first = 0, trail_last = -1;
     };
