@@ -149,7 +149,7 @@ std::string Viewer::NoPosesInLog() const {
   return options_.log_path +
          " has no MCMT_POSE (mcmt-tracker was not running while it was recorded), so the object is not "
          "drawn: "
-         "add --trajectory OUTDIR/trajectory.csv (the mapper's)";
+         "add --trajectory OUTDIR/trajectory.csv (the mapper's; several bodies: --trajectory OUTDIR)";
 }
 
 std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {

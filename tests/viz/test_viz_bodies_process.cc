@@ -6,8 +6,10 @@
 #include <atomic>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
+#include <tuple>
 
 #include "core/lcm_util.h"
+#include "core/log_writer.h"
 #include "core/objects.h"
 #include "tests/viz/viz_test_util.h"
 #include "viz/scene.h"
@@ -131,6 +133,51 @@ TEST(VizBodiesProcess, LivePosesOnPerBodyChannelsOverUdpm) {
   VizScene scene =
       SceneLike(PanelInput{"map", ReadMap(dir / "map.yaml"), tool, {{"patient", patient}}}, 1280, 720);
   scene.SetCurrentFrame(0);
+  ExpectEveryBodyInItsColour(scene, img, rig.map, {"tool", "patient", "floor"});
+}
+
+// Replay: a log of the tracker's per-body channels (and a relative stream, not drawn), frame 17 shown.
+TEST(VizBodiesProcess, ALogOfPerBodyChannelsDrawsEveryBodyAtTheFrame) {
+  TempDir dir("bodies_log");
+  const auto rig = MakeBodiesTestRig(24);
+  WriteMap(dir / "map.yaml", rig.map);
+  const std::string log = (dir / "poses.lcmlog");
+  {
+    EventLogWriter w(log);
+    for (size_t k = 0; k < rig.trajectory.size(); ++k)
+      for (const auto& [channel, object, row] :
+           std::vector<std::tuple<std::string, std::string, TrajectoryRow>>{
+               {"MCMT_POSE_TOOL", "tool", rig.trajectory[k]},
+               {"MCMT_POSE_PATIENT", "patient", rig.bodies.at("patient")[k]},
+               {"MCMT_POSE_TOOL_IN_PATIENT", "tool", rig.trajectory[0]}}) {
+        object_pose_t pose{};
+        pose.object = object;
+        pose.utime = row.utime;
+        pose.seq = row.seq;
+        pose.rig_from_object = ToPose3d(row.rig_from_object);
+        pose.status = object_pose_t::STATUS_TRACKING;
+        const std::vector<uint8_t> data = Encode(pose);
+        w.Write(row.utime, channel, data.data(), data.size());
+      }
+    w.Close();
+  }
+  const auto r = RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + VizBin() + " --map " + (dir / "map.yaml") +
+                            " --log " + log + " --snapshot " + (dir / "log.png") +
+                            " --size 1280x720 --frame 17 --no-grid --no-legend --no-rays");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat img = cv::imread(dir / "log.png", cv::IMREAD_COLOR);
+  ASSERT_EQ(img.cols, 1280);
+  // Poses round-trip through pose3d_t: the scene from the decoded rows.
+  std::vector<TrajectoryRow> tool, patient;
+  for (size_t k = 0; k < rig.trajectory.size(); ++k) {
+    tool.push_back(rig.trajectory[k]);
+    tool.back().rig_from_object = FromPose3d(ToPose3d(rig.trajectory[k].rig_from_object));
+    patient.push_back(rig.bodies.at("patient")[k]);
+    patient.back().rig_from_object = FromPose3d(ToPose3d(patient.back().rig_from_object));
+  }
+  VizScene scene =
+      SceneLike(PanelInput{"map", ReadMap(dir / "map.yaml"), tool, {{"patient", patient}}}, 1280, 720);
+  scene.SetCurrentFrame(17);
   ExpectEveryBodyInItsColour(scene, img, rig.map, {"tool", "patient", "floor"});
 }
 
