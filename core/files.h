@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.h"
@@ -120,6 +121,11 @@ extern const char kTrajectoryHeader[];
 std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+
+// The trajectories of the mapper's OUTDIR as (body, path): OUTDIR/trajectory.csv for a single-object map
+// (body ""), one OUTDIR/trajectory_<body>.csv per moving body of OUTDIR/map.yaml's objects (a map with one
+// body: body "" too). Throws FileFormatError naming the file that is missing.
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir);
 
 // The first key that appears twice in one mapping anywhere in `root` (yaml-cpp keeps both and answers
 // lookups with the first), as "LINE: duplicated key 'KEY' (first at line N)"; "" when none.

@@ -1,6 +1,7 @@
 #include "core/files.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -595,6 +596,29 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +
                           "')");
   return rows;
+}
+
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir) {
+  const std::string map_path = outdir + "/map.yaml";
+  std::vector<std::pair<std::string, std::string>> out;
+  struct stat st;
+  if (::stat(map_path.c_str(), &st) != 0) {
+    out.emplace_back("", outdir + "/trajectory.csv");
+  } else {
+    const RigMap map = ReadMap(map_path);
+    if (map.objects.empty()) out.emplace_back("", outdir + "/trajectory.csv");
+    for (const MapObject& o : map.objects)
+      if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
+    if (map.objects.size() == 1 && !out.empty()) out[0].first.clear();  // one body: today's names
+    if (out.empty())
+      throw FileFormatError(map_path +
+                            ": every body is static: no trajectory to export (their poses are "
+                            "rig_from_object in the map)");
+  }
+  for (const auto& [body, path] : out)
+    if (::stat(path.c_str(), &st) != 0)
+      throw FileFormatError(path + ": no such trajectory (is " + outdir + " an mcmt-mapper OUTDIR?)");
+  return out;
 }
 
 }  // namespace mcmt
