@@ -112,8 +112,9 @@ class MaintainNode {
   RigMap map_;
   int64_t map_utime_ = 0;
   std::vector<lcm::Subscription*> subscriptions_;
-  std::map<std::string, std::map<int64_t, detections_t>> views_;  // per camera, by utime
-  std::map<int64_t, PoseInfo> poses_;                             // tracked frames, by utime
+  // Per camera, by utime on the reference camera's clock (RigMap::ReferenceUtime; the messages as sent).
+  std::map<std::string, std::map<int64_t, detections_t>> views_;
+  std::map<int64_t, PoseInfo> poses_;  // tracked frames, by utime
   std::map<std::string, Candidate> candidates_;
   std::map<std::string, int64_t> settled_until_;  // per camera: no suspicion from frames before this
   std::vector<MaintainEvent> events_;

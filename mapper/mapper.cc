@@ -342,10 +342,7 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   const MapResult first = SolvePass(messages, s, first_options);
   std::vector<StoredMessage> corrected = messages;
-  for (StoredMessage& m : corrected) {
-    const MapCamera* c = first.map.FindCamera(s.camera_names[m.camera]);
-    if (c) m.utime -= std::llround(c->ClockUs(m.utime, first.map.time_reference_utime));
-  }
+  for (StoredMessage& m : corrected) m.utime = first.map.ReferenceUtime(s.camera_names[m.camera], m.utime);
   MapperOptions second_options = o;
   second_options.reference_camera = first.map.reference_camera;  // offsets against the same clock
   const int64_t second_window_us =
@@ -375,13 +372,8 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   }
   // The clocks are the sum of both passes' (the second's on clocks already corrected), expressed at the
   // second pass's time reference.
+  ComposeClocks(first.map, &result.map);
   const int64_t reference = result.map.time_reference_utime;
-  for (MapCamera& c : result.map.cameras) {
-    const MapCamera* f = first.map.FindCamera(c.name);
-    if (!f) continue;
-    c.time_offset_us += f->ClockUs(reference, first.map.time_reference_utime);
-    c.time_drift_ppm += f->time_drift_ppm;
-  }
   for (MapCamera& c : result.initial_map.cameras) {
     const MapCamera* f = first.map.FindCamera(c.name);
     c.time_offset_us = f ? f->ClockUs(reference, first.map.time_reference_utime) : 0.0;

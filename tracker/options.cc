@@ -68,13 +68,21 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
            .Add("health_window_frames", H(&HealthOptions::window), "frames",
                 "judged frames in the median that decides suspect", AtLeast(1))
            .Add("health_exclude_frames", H(&HealthOptions::exclude_frames), "frames",
-                "suspect this many judged frames in a row: excluded from every pose until a new map",
+                "suspect this many judged frames in a row: excluded from every pose until a new map or "
+                "until it is good again (health_recover_frames)",
                 AtLeast(1))
            .Add("health_baseline_frames", H(&HealthOptions::baseline_frames), "frames",
                 "a camera's baseline: the median RMS of its last this many judged frames while ok",
                 AtLeast(1))
            .Add("health_min_baseline_frames", H(&HealthOptions::min_baseline_frames), "frames",
                 "judged frames while ok before a camera can be gated or suspected", AtLeast(1))
+           .Add("health_recover_ratio", H(&HealthOptions::recover_ratio), "",
+                "an excluded camera is good when its median RMS is at most this x its suspect threshold (0: "
+                "never, it waits for a new map)",
+                InRange(0, 1))
+           .Add("health_recover_frames", H(&HealthOptions::recover_frames), "frames",
+                "good this many judged frames in a row: an excluded camera is used again (no new map)",
+                AtLeast(1))
            .Other("channels", "",
                   "several bodies: channel per pose stream by its name, e.g. {tool: TOOL_POSE, "
                   "tool_in_patient: NAV} (default: channel_NAME, channel_OF_IN_IN)")

@@ -149,13 +149,12 @@ class PoseEstimator {
   // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
 
-  // Levenberg-Marquardt with outlier rejection from `start` alone (no single-square restarts, no
-  // covariance): the cheap solve that judges cameras (tracker/health.cc). False when fewer than two
-  // mapped observations stay inliers.
-  bool RefinePose(const std::vector<MarkerObservation>& observations, const Rigid3& start,
-                  Rigid3* pose) const;
-
   const RigMap& map() const { return map_; }
+
+  // The observation's corners as core's rigid-pose points (world = rig, body = object; pointers into this
+  // estimator and into `observation`), for the normal equations that judge cameras (tracker/health.cc);
+  // empty when its camera or marker is not mapped or a corner is not finite.
+  std::vector<PosePoint> PosePoints(const MarkerObservation& observation) const;
 
   // RMS corner error of the mapped observations at `pose` (-1 when none is mapped; +inf when a corner
   // falls behind its camera).
@@ -190,6 +189,8 @@ class PoseEstimator {
 
   // The mapped observations with finite corners (the others counted in *unmapped).
   std::vector<Obs> Mapped(const std::vector<MarkerObservation>& observations, int* unmapped) const;
+  // One observation's indices; false when its camera or marker is not mapped or a corner is not finite.
+  bool ToObs(const MarkerObservation& observation, Obs* obs) const;
   // Per-observation RMS corner error at `pose` (infinite when a corner is behind the camera).
   double ObservationRms(const Obs& obs, const Rigid3& pose) const;
   // The corners of the active observations, for core's rigid-pose solver (core/rigid_pose.h).
@@ -323,11 +324,6 @@ class TrackerNode {
   PoseSolution SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
                                    int64_t utime);
   void PublishHealth(int64_t utime, const std::string& message);
-  double CameraRms(const std::vector<MarkerObservation>& mine, const Rigid3& pose) const;
-  std::map<std::string, double> JudgeCameras(const std::vector<MarkerObservation>& obs,
-                                             const std::set<std::string>& cameras,
-                                             const std::set<std::string>& left_out,
-                                             const Rigid3* start) const;
 
   lcm::LCM& lcm_;
   lcm::LCM* output_;

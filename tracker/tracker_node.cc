@@ -301,9 +301,7 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
                                        "', the rig uses '" + rig_.markers.dictionary + "'");
   // The camera's clock against the map's reference camera (map.yaml time_offset_us and time_drift_ppm,
   // issue 18): frames are assembled by true capture time, utime - offset - drift * (utime - reference).
-  const RigMap& map = estimator_->map();
-  const double clock_us = map.FindCamera(msg.camera)->ClockUs(msg.utime, map.time_reference_utime);
-  if (clock_us != 0) msg.utime -= static_cast<int64_t>(std::llround(clock_us));
+  msg.utime = estimator_->map().ReferenceUtime(msg.camera, msg.utime);
   std::vector<SyncedFrame> frames;
   const int64_t late_before = sync_->stats().out_of_order;
   frames = sync_->Add(msg, options_.log_mode ? msg.utime : arrival_wall);

@@ -257,6 +257,25 @@ const MapCamera* RigMap::FindCamera(const std::string& name) const {
   return nullptr;
 }
 
+int64_t RigMap::ReferenceUtime(const std::string& camera, int64_t utime) const {
+  const MapCamera* c = FindCamera(camera);
+  return c ? utime - std::llround(c->ClockUs(utime, time_reference_utime)) : utime;
+}
+
+void ComposeClocks(const RigMap& applied, RigMap* map) {
+  const int64_t reference =
+      map->time_reference_utime != 0 ? map->time_reference_utime : applied.time_reference_utime;
+  for (MapCamera& c : map->cameras) {
+    double offset_us = c.ClockUs(reference, map->time_reference_utime);
+    if (const MapCamera* a = applied.FindCamera(c.name)) {
+      offset_us += a->ClockUs(reference, applied.time_reference_utime);
+      c.time_drift_ppm += a->time_drift_ppm;
+    }
+    c.time_offset_us = offset_us;
+  }
+  map->time_reference_utime = reference;
+}
+
 const MapMarker* RigMap::FindMarker(int id) const {
   for (const auto& m : markers)
     if (m.id == id) return &m;
