@@ -41,22 +41,24 @@ int MostMovedCamera(const std::vector<ViewPose>& views, int num_frames, const Ca
 }
 
 // Cameras of the old map the new map lacks (no detections, not in the rig) and markers it did not see,
-// copied unchanged; the old clocks of cameras that kept their pose.
-void KeepWhatWasNotSeen(const RigMap& old_map, const std::vector<char>& reestimated,
-                        const std::vector<std::string>& camera_names, RigMap* map) {
+// copied unchanged. The clocks: the update ran on the old clocks' readings (OnOldClocks), so every camera
+// of the old map has its old clock (offset and drift) plus what the update estimated on top (nothing for a
+// camera held). A new map without drifts of its own (time reference 0) takes the old map's time
+// reference; one with its own gets the old clocks re-expressed at its reference (MapCamera::ClockUs).
+void KeepWhatWasNotSeen(const RigMap& old_map, RigMap* map) {
+  if (map->time_reference_utime == 0) map->time_reference_utime = old_map.time_reference_utime;
   for (const MapCamera& c : old_map.cameras) {
-    const auto it = std::find(camera_names.begin(), camera_names.end(), c.name);
-    const bool kept = it == camera_names.end() || !reestimated[it - camera_names.begin()];
     MapCamera* now = nullptr;
     for (MapCamera& m : map->cameras)
       if (m.name == c.name) now = &m;
     if (!now) {
-      MapCamera copy = c;
-      copy.observations = 0;
-      map->cameras.push_back(copy);
-    } else if (kept) {
-      now->time_offset_us = c.time_offset_us;
+      map->cameras.push_back(c);
+      now = &map->cameras.back();
+      now->observations = 0;
+      now->time_offset_us = now->time_drift_ppm = 0.0;
     }
+    now->time_offset_us += c.ClockUs(map->time_reference_utime, old_map.time_reference_utime);
+    now->time_drift_ppm += c.time_drift_ppm;
   }
   for (const MapMarker& m : old_map.markers)
     if (!map->FindMarker(m.id)) {
@@ -66,6 +68,17 @@ void KeepWhatWasNotSeen(const RigMap& old_map, const std::vector<char>& reestima
     }
   std::sort(map->markers.begin(), map->markers.end(),
             [](const MapMarker& a, const MapMarker& b) { return a.id < b.id; });
+}
+
+// The messages with the old map's clocks applied (as the tracker applies them: utime - MapCamera::ClockUs),
+// so that frames are assembled in the reference camera's clock; cameras not in the old map unchanged.
+std::vector<StoredMessage> OnOldClocks(const std::vector<StoredMessage>& messages,
+                                       const std::vector<std::string>& camera_names, const RigMap& old_map) {
+  std::vector<StoredMessage> out = messages;
+  for (StoredMessage& m : out)
+    if (const MapCamera* c = old_map.FindCamera(camera_names[m.camera]))
+      m.utime -= std::llround(c->ClockUs(m.utime, old_map.time_reference_utime));
+  return out;
 }
 
 // The map and trajectory in the frame of the reference camera's new pose (a moved reference).
@@ -181,10 +194,11 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
     if (models[c].width == 0)
       if (const MapCamera* old = old_map.FindCamera(camera_names[c])) models[c] = old->model;
 
+  const std::vector<StoredMessage> on_old_clocks = OnOldClocks(messages, camera_names, old_map);
   const std::vector<Frame> frames =
-      AssembleFrames(messages, static_cast<int>(camera_names.size()), o.sync_tolerance_us());
+      AssembleFrames(on_old_clocks, static_cast<int>(camera_names.size()), o.sync_tolerance_us());
   report.frames_assembled = static_cast<int>(frames.size());
-  Observations observations = CollectObservations(messages, frames, camera_names, o, &report);
+  Observations observations = CollectObservations(on_old_clocks, frames, camera_names, o, &report);
   EstimateHypotheses(models, o.tau_e, threads, &observations.obs);
   const MarkerLayout layout = LayoutFromMap(old_map, observations);
   const std::vector<ViewPose> views = FitViews(observations, layout, models, threads);
@@ -203,8 +217,7 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
   if (o.refine)
     RefineWithRejection(observations, names, layout, o, BundleSettingsFor(o, threads), &bundle, &report);
   FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
-  for (RigMap* map : {&result.map, &result.initial_map})
-    KeepWhatWasNotSeen(old_map, reestimated, camera_names, map);
+  for (RigMap* map : {&result.map, &result.initial_map}) KeepWhatWasNotSeen(old_map, map);
   for (MovedCamera& m : report.moved_cameras) {  // against the solved pose, in the old map's frame
     const Rigid3& after = result.map.FindCamera(m.camera)->rig_from_cam;
     m.rotation_deg = RotationAngle(m.rig_from_cam_before, after) * 180.0 / kPi;

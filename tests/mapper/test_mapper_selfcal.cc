@@ -438,3 +438,51 @@ TEST(MapperSelfCal, FieldOfViewOnlyIsRecovered) {
 
 }  // namespace
 }  // namespace mcmt
+
+namespace mcmt {
+namespace {
+
+// The offline update (`--map OLD --log NEW`, Mapper::SetBaseMap) of a map with drifting clocks: the new
+// log's messages are read on the old map's clocks (frames assembled as in the first map), and every
+// camera keeps its clock, offset and drift: the update's clocks read as the old map's over the session.
+TEST(MapperSelfCal, UpdateKeepsTheOldMapsClocksAndDrifts) {
+  SelfCalSession session;
+  session.speed = 6.0;
+  const std::map<std::string, sim::CameraClock> clocks = {
+      {"cam1", {-20.0, 400.0}}, {"cam2", {12.0, -300.0}}, {"cam4", {20.0, 0.0}}};
+  const SelfCalRun run = SimulateSelfCal(session, clocks);
+  MapperOptions options = SelfCalOptions(run.truth);
+  MapperOptions drift = options;
+  drift.estimate_time_offsets = true;
+  drift.estimate_clock_drift = true;
+  const MapResult old = MapDetections(run.detections, drift);
+  ASSERT_NE(old.map.time_reference_utime, 0);
+  Mapper mapper(options);
+  mapper.SetBaseMap(old.map, false);
+  for (const detections_t& d : run.detections) mapper.Add(d);
+  const MapResult updated = mapper.Solve();
+  std::printf("frames: first map %d, update %d (assembled %d); rms %.3f / %.3f px\n", old.map.num_frames,
+              updated.map.num_frames, updated.report.frames_assembled, old.map.rms_px, updated.map.rms_px);
+  EXPECT_TRUE(updated.report.moved_cameras.empty());
+  ASSERT_EQ(updated.map.cameras.size(), old.map.cameras.size());
+  for (const MapCamera& before : old.map.cameras) {
+    const MapCamera* after = updated.map.FindCamera(before.name);
+    ASSERT_NE(after, nullptr) << before.name;
+    double worst_us = 0;
+    for (const sim::SimFrame& f : run.truth.frames)
+      worst_us = std::max(worst_us, std::abs(after->ClockUs(f.utime, updated.map.time_reference_utime) -
+                                             before.ClockUs(f.utime, old.map.time_reference_utime)));
+    std::printf("%s: drift %.1f ppm (old map %.1f), offset %.1f us (old %.1f); clocks differ by %.3f us\n",
+                before.name.c_str(), after->time_drift_ppm, before.time_drift_ppm, after->time_offset_us,
+                before.time_offset_us, worst_us);
+    EXPECT_EQ(after->time_drift_ppm, before.time_drift_ppm) << before.name;
+    EXPECT_LT(worst_us, 0.01) << before.name;
+  }
+  // On the old clocks the cameras' views join into the first map's frames (on the raw clocks, 12-40 ms
+  // apart, every camera would be alone in its frame), and the fit is the first map's.
+  EXPECT_EQ(updated.report.frames_assembled, old.report.frames_assembled);
+  EXPECT_LT(updated.map.rms_px, 1.1 * old.map.rms_px);
+}
+
+}  // namespace
+}  // namespace mcmt
