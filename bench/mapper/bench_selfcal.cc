@@ -2,12 +2,13 @@
 // and drifts, both), the errors before and after refinement, the recovered values against the truth, and
 // the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
 //
-//   bench_selfcal [--frames 300] [--long 1200] [--verbose]
+//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]
 //
 // Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
 // noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
 // / --max-speed-m-s). --long: the quick-calibration rows again with that many frames (how the camera error
-// falls with more observations; 0: skipped). Prints a markdown table.
+// falls with more observations; 0: skipped). --seeds N: instead, the quick calibration over N sessions, why
+// the refined cameras' positions are worse (SeedRows). Prints a markdown table.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -153,6 +154,74 @@ void QuickCalibrationRows(int frames, std::vector<Row>* rows) {
   rows->push_back(Measure(wrong, all, &base, "same" + n, "`refine_intrinsics: all`", "intrinsics"));
 }
 
+// Why the refined cameras' positions are worse than with exact intrinsics (--seeds N): the quick
+// calibration over N sessions (seeds 11, 12, ...). Per refined camera: its focal length's error against its
+// posterior sigma (z: an unbiased estimate has |z| ~ 0.8 on average), its position error split along its
+// optical axis and across it, and the axial error the focal error alone predicts (distance to the object x
+// relative focal error: a camera whose focal length is long by x % sees the object x % larger, as from x %
+// closer).
+void SeedRows(int num_seeds, int frames) {
+  std::printf(
+      "| seed | camera error, exact intrinsics | refined | ratio | camera | fx error (posterior sigma, z) | "
+      "position error along / across the axis (exact intrinsics) | distance x fx error |\n");
+  std::printf("|---:|---:|---:|---:|---|---|---|---:|\n");
+  double sum_abs_z = 0, sum_exact = 0, sum_refined = 0;
+  int n_z = 0;
+  for (int k = 0; k < num_seeds; ++k) {
+    SelfCalSession session;
+    session.frames = frames;
+    session.seed = 11 + k;
+    const SelfCalRun exact = testing::SimulateSelfCal(session);
+    SelfCalRun wrong = exact;
+    QuickCalibration(&wrong);
+    MapperOptions defaults = testing::SelfCalOptions(exact.truth);
+    MapperOptions all = defaults;
+    all.intrinsics.refine = IntrinsicsRefinement::kAll;
+    const MapResult r_exact = testing::MapDetections(exact.detections, defaults);
+    const MapResult r_refined = testing::MapDetections(wrong.detections, all);
+    const sim::EvalResult e_exact = sim::Evaluate(exact.truth, &r_exact.map, &r_exact.trajectory);
+    const sim::EvalResult e_refined = sim::Evaluate(exact.truth, &r_refined.map, &r_refined.trajectory);
+    sum_exact += e_exact.camera_position_mm.mean;
+    sum_refined += e_refined.camera_position_mm.mean;
+    Eigen::Vector3d object_mean = Eigen::Vector3d::Zero();
+    for (const sim::SimFrame& f : exact.truth.frames) object_mean += f.rig_from_object.translation();
+    object_mean /= static_cast<double>(exact.truth.frames.size());
+    // Position error of a camera split along its (true) optical axis and across it, mm.
+    auto split = [&](const sim::EvalResult& e, const MapResult& r, const std::string& name) {
+      const sim::SimCamera& t = *exact.truth.FindCamera(name);
+      const Eigen::Vector3d error =
+          e.gt_rig_from_est_rig * r.map.FindCamera(name)->rig_from_cam.translation() -
+          t.rig_from_cam.translation();
+      const Eigen::Vector3d axis = t.rig_from_cam.linear().col(2);
+      return std::make_pair(1000 * error.dot(axis), 1000 * (error - error.dot(axis) * axis).norm());
+    };
+    for (const IntrinsicsReport& ir : r_refined.report.intrinsics) {
+      if (!ir.is_refined[0]) continue;
+      const sim::SimCamera& t = *exact.truth.FindCamera(ir.camera);
+      const double fx_error = ir.refined[0] / t.model.fx - 1, sigma = ir.posterior_sigma[0] / ir.refined[0];
+      const double z = fx_error / sigma;
+      sum_abs_z += std::abs(z);
+      ++n_z;
+      const auto refined = split(e_refined, r_refined, ir.camera);
+      const auto base = split(e_exact, r_exact, ir.camera);
+      const double distance_mm = 1000 * (t.rig_from_cam.translation() - object_mean).norm();
+      std::printf(
+          "| %llu | %.3f mm | %.3f mm | %.1fx | %s | %+.3f %% (%.3f %%, z %+.2f) | %+.3f / %.3f mm (%+.3f / "
+          "%.3f) "
+          "| %+.3f mm |\n",
+          static_cast<unsigned long long>(session.seed), e_exact.camera_position_mm.mean,
+          e_refined.camera_position_mm.mean,
+          e_refined.camera_position_mm.mean / e_exact.camera_position_mm.mean, ir.camera.c_str(),
+          100 * fx_error, 100 * sigma, z, refined.first, refined.second, base.first, base.second,
+          distance_mm * fx_error);
+    }
+  }
+  std::printf(
+      "\nmean over %d sessions: exact intrinsics %.3f mm, refined %.3f mm (%.1fx); mean |z| of fx %.2f\n",
+      num_seeds, sum_exact / num_seeds, sum_refined / num_seeds, sum_refined / sum_exact,
+      n_z ? sum_abs_z / n_z : 0.0);
+}
+
 void Print(const std::vector<Row>& rows) {
   std::printf(
       "| perturbation | mapper settings | camera position error | object error | recovered vs truth (worst "
@@ -166,19 +235,25 @@ void Print(const std::vector<Row>& rows) {
 }
 
 int Main(int argc, char** argv) {
-  int frames = 300, long_frames = 1200;
+  int frames = 300, long_frames = 1200, seeds = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) {
       frames = std::atoi(argv[++i]);
     } else if (a == "--long" && i + 1 < argc) {
       long_frames = std::atoi(argv[++i]);
+    } else if (a == "--seeds" && i + 1 < argc) {
+      seeds = std::atoi(argv[++i]);
     } else if (a == "--verbose") {
       verbose = true;
     } else {
-      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--verbose]\n");
+      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]\n");
       return 2;
     }
+  }
+  if (seeds > 0) {
+    SeedRows(seeds, frames);
+    return 0;
   }
   std::vector<Row> rows;
   QuickCalibrationRows(frames, &rows);
