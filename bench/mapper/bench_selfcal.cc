@@ -157,13 +157,13 @@ void QuickCalibrationRows(int frames, std::vector<Row>* rows) {
 // Why the refined cameras' positions are worse than with exact intrinsics (--seeds N): the quick
 // calibration over N sessions (seeds 11, 12, ...). Per refined camera: its focal length's error against its
 // posterior sigma (z: an unbiased estimate has |z| ~ 0.8 on average), its position error split along its
-// optical axis and across it, and the axial error the focal error alone predicts (distance to the object x
-// relative focal error: a camera whose focal length is long by x % sees the object x % larger, as from x %
-// closer).
+// optical axis and across it (+: towards the scene), and the axial error the focal error alone predicts
+// (-distance to the object x relative focal error: with its focal length short by x % the camera, to see
+// the object as large as it is seen, is placed x % closer).
 void SeedRows(int num_seeds, int frames) {
   std::printf(
       "| seed | camera error, exact intrinsics | refined | ratio | camera | fx error (posterior sigma, z) | "
-      "position error along / across the axis (exact intrinsics) | distance x fx error |\n");
+      "position error along / across the axis (exact intrinsics) | -distance x fx error |\n");
   std::printf("|---:|---:|---:|---:|---|---|---|---:|\n");
   double sum_abs_z = 0, sum_exact = 0, sum_refined = 0;
   int n_z = 0;
