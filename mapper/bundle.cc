@@ -4,10 +4,12 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 
 #include "core/math.h"
 
@@ -510,46 +512,86 @@ namespace {
 // unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). `j` has
 // the reduced unknowns' columns first (num_reduced), then the frames' (6 each).
 Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
-  const int num_frames = (j.num_cols - num_reduced) / 6;
+  // The rows of each frame (a row without a frame column: frame -1, first).
+  std::vector<int> row_frame(j.num_rows, -1), order(j.num_rows);
+  for (int row = 0; row < j.num_rows; ++row)
+    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k)
+      if (j.cols[k] >= num_reduced) row_frame[row] = (j.cols[k] - num_reduced) / 6;
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return row_frame[a] < row_frame[b]; });
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(num_reduced, num_reduced);
-  Eigen::MatrixXd hrf = Eigen::MatrixXd::Zero(num_reduced, 6 * num_frames);
-  std::vector<Eigen::Matrix<double, 6, 6>> hff(num_frames, Eigen::Matrix<double, 6, 6>::Zero());
-  std::vector<int> cols;
-  std::vector<double> values;
-  for (int row = 0; row < j.num_rows; ++row) {
-    cols.clear();
-    values.clear();
-    Eigen::Matrix<double, 6, 1> jf = Eigen::Matrix<double, 6, 1>::Zero();
-    int frame = -1;
-    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k) {
-      if (j.cols[k] < num_reduced) {
-        cols.push_back(j.cols[k]);
-        values.push_back(j.values[k]);
-      } else {
-        frame = (j.cols[k] - num_reduced) / 6;
-        jf((j.cols[k] - num_reduced) % 6) = j.values[k];
+  std::vector<int> slot(num_reduced, -1), seen;  // a frame's reduced unknowns and their rows in hrf
+  Eigen::Matrix<double, Eigen::Dynamic, 6> hrf(num_reduced, 6);
+  Eigen::Matrix<double, 6, 6> hff;
+  // Rows with the same columns (one residual block's 8) are gathered and added as one product.
+  std::vector<int> cols, row_cols;
+  std::vector<double> row_values;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
+  int group_rows = 0, group_frame = -1;
+  auto finish_group = [&]() {
+    if (group_rows == 0) return;
+    const auto r = jr.topRows(group_rows);
+    const Eigen::MatrixXd rr = r.transpose() * r;
+    for (size_t a = 0; a < cols.size(); ++a)
+      for (size_t b = 0; b < cols.size(); ++b) s(cols[a], cols[b]) += rr(a, b);
+    if (group_frame >= 0) {
+      const auto f = jf.topRows(group_rows);
+      hff += f.transpose() * f;
+      const Eigen::MatrixXd rf = r.transpose() * f;
+      for (size_t a = 0; a < cols.size(); ++a) {
+        if (slot[cols[a]] < 0) {
+          slot[cols[a]] = static_cast<int>(seen.size());
+          hrf.row(seen.size()).setZero();
+          seen.push_back(cols[a]);
+        }
+        hrf.row(slot[cols[a]]) += rf.row(a);
       }
     }
-    for (size_t a = 0; a < cols.size(); ++a)
-      for (size_t b = 0; b < cols.size(); ++b) s(cols[a], cols[b]) += values[a] * values[b];
-    if (frame < 0) continue;
-    hff[frame] += jf * jf.transpose();
-    for (size_t a = 0; a < cols.size(); ++a)
-      hrf.block<1, 6>(cols[a], 6 * frame) += values[a] * jf.transpose();
+    group_rows = 0;
+  };
+  auto finish_frame = [&]() {
+    finish_group();
+    if (!seen.empty()) {
+      const Eigen::MatrixXd b = hrf.topRows(static_cast<int>(seen.size()));
+      const Eigen::MatrixXd update = b * Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(b.transpose());
+      for (size_t x = 0; x < seen.size(); ++x)
+        for (size_t y = 0; y < seen.size(); ++y) s(seen[x], seen[y]) -= update(x, y);
+    }
+    for (int c : seen) slot[c] = -1;
+    seen.clear();
+    hff.setZero();
+  };
+  hff.setZero();
+  for (size_t i = 0; i < order.size(); ++i) {
+    const int row = order[i];
+    if (i > 0 && row_frame[row] != row_frame[order[i - 1]]) finish_frame();
+    row_cols.clear();
+    row_values.clear();
+    Eigen::Matrix<double, 1, 6> row_jf = Eigen::Matrix<double, 1, 6>::Zero();
+    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k) {
+      if (j.cols[k] < num_reduced) {
+        row_cols.push_back(j.cols[k]);
+        row_values.push_back(j.values[k]);
+      } else {
+        row_jf((j.cols[k] - num_reduced) % 6) = j.values[k];
+      }
+    }
+    if (group_rows > 0 && row_cols != cols) finish_group();
+    if (group_rows == 0) {
+      cols = row_cols;
+      group_frame = row_frame[row];
+      jr.resize(8, static_cast<int>(cols.size()));
+      jf.resize(8, 6);
+    } else if (group_rows == jr.rows()) {
+      jr.conservativeResize(2 * group_rows, Eigen::NoChange);
+      jf.conservativeResize(2 * group_rows, Eigen::NoChange);
+    }
+    for (size_t a = 0; a < cols.size(); ++a) jr(group_rows, static_cast<int>(a)) = row_values[a];
+    jf.row(group_rows) = row_jf;
+    ++group_rows;
   }
-  std::vector<int> rows;  // the reduced unknowns a frame is seen with
-  for (int f = 0; f < num_frames; ++f) {
-    const auto rf = hrf.middleCols<6>(6 * f);
-    rows.clear();
-    for (int r = 0; r < num_reduced; ++r)
-      if (!rf.row(r).isZero(0)) rows.push_back(r);
-    if (rows.empty()) continue;
-    Eigen::MatrixXd b(rows.size(), 6);
-    for (size_t k = 0; k < rows.size(); ++k) b.row(k) = rf.row(rows[k]);
-    const Eigen::MatrixXd update = b * Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff[f]).solve(b.transpose());
-    for (size_t x = 0; x < rows.size(); ++x)
-      for (size_t y = 0; y < rows.size(); ++y) s(rows[x], rows[y]) -= update(x, y);
-  }
+  finish_frame();
   return s;
 }
 
