@@ -73,10 +73,12 @@ int Main(int argc, char** argv) {
                  "folders are removed)",
                  true);
   args.AddString("object", &object, "four_sided | box | pentagon | cube | board");
-  args.AddString("scene", &scene,
-                 "object: one object (--object) | bodies: a static floor board and two moving objects, tool "
-                 "and patient, that cross and occlude each other (with --detections-only; rig.yaml lists "
-                 "objects:, ground_truth_<body>.yaml per body)");
+  args.AddString(
+      "scene", &scene,
+      "object: one object (--object) | bodies: a static floor board and two moving objects, tool "
+      "and patient, that cross and occlude each other (with --detections-only; rig.yaml lists "
+      "objects:, ground_truth_<body>.yaml per body; --intrinsics-error, --clock and --max-speed-m-s as "
+      "for object, each moving body at that top speed)");
   args.AddInt("cameras", &cameras, "number of cameras on the circle (named cam0 .. camN-1)");
   args.AddDouble("radius", &radius, "circle radius, metres");
   args.AddDouble("camera-height", &camera_height,
