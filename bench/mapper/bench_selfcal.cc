@@ -213,7 +213,7 @@ void SeedRows(int num_seeds, int frames) {
           e_refined.camera_position_mm.mean,
           e_refined.camera_position_mm.mean / e_exact.camera_position_mm.mean, ir.camera.c_str(),
           100 * fx_error, 100 * sigma, z, refined.first, refined.second, base.first, base.second,
-          distance_mm * fx_error);
+          -distance_mm * fx_error);
     }
   }
   std::printf(
