@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.h"
@@ -95,9 +96,18 @@ struct RigMap {
   const MapCamera* FindCamera(const std::string& name) const;
   const MapMarker* FindMarker(int id) const;
   const MapObject* FindObject(const std::string& name) const;
+  // A message of `camera` stamped `utime` by its clock, on the reference camera's clock: utime -
+  // ClockUs(utime), rounded (the tracker's frames, the mapper's passes, the maintenance's frames); utime
+  // itself for a camera the map lacks.
+  int64_t ReferenceUtime(const std::string& camera, int64_t utime) const;
   // The map of body k alone, as a version 1 map (the cameras and its markers).
   RigMap ObjectMap(size_t k) const;
 };
+
+// Clocks measured on messages already corrected by `applied`'s clocks (RigMap::ReferenceUtime) made whole:
+// each camera of *map gets its clock plus applied's (the offsets at one time reference: *map's when its
+// clocks drift, else applied's; the drifts added).
+void ComposeClocks(const RigMap& applied, RigMap* map);
 
 // The first moving body of a version 2 map (0 when all are static): the one `markers` holds.
 size_t FirstMovingObject(const RigMap& map);
@@ -120,6 +130,11 @@ extern const char kTrajectoryHeader[];
 std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+
+// The trajectories of the mapper's OUTDIR as (body, path): OUTDIR/trajectory.csv for a single-object map
+// (body ""), one OUTDIR/trajectory_<body>.csv per moving body of OUTDIR/map.yaml's objects (a map with one
+// body: body "" too). Throws FileFormatError naming the file that is missing.
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir);
 
 // The first key that appears twice in one mapping anywhere in `root` (yaml-cpp keeps both and answers
 // lookups with the first), as "LINE: duplicated key 'KEY' (first at line N)"; "" when none.

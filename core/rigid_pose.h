@@ -40,6 +40,10 @@ struct RigidPoseOptions {
   double huber_px = 0.0;  // <= 0: plain least squares
 };
 
+// The step delta = (w, v) applied to world_from_body: rotation R(w) about `pivot`, then translation v (the
+// step the normal equations above are written for).
+Rigid3 ApplyPoseStep(const Rigid3& world_from_body, const Vector6d& delta, const Eigen::Vector3d& pivot);
+
 // Levenberg-Marquardt from *world_from_body; returns the iterations taken. Stops on a step below 1e-9
 // (rad, m), a relative decrease below 1e-10, or when no damping makes progress.
 int RefineRigidPose(const std::vector<PosePoint>& points, const RigidPoseOptions& options,

@@ -74,7 +74,9 @@ void MaintainNode::OnDetections(const std::string& channel, const void* data, si
   }
   DropInvalidMarkers(&msg);
   std::map<int64_t, detections_t>& mine = views_[msg.camera];
-  const int64_t utime = msg.utime;
+  // Kept by the time on the reference camera's clock, as the tracker's poses are stamped (the map's
+  // clock offsets and drifts); the update puts the messages on the same clocks (mapper/update.cc).
+  const int64_t utime = map_.ReferenceUtime(msg.camera, msg.utime);
   const bool has_markers = !msg.markers.empty();
   mine[utime] = std::move(msg);
   while (static_cast<int>(mine.size()) > node_options_.history_frames) mine.erase(mine.begin());
@@ -254,7 +256,7 @@ void MaintainNode::Publish(const RigMap& map, const std::string& message) {
     WriteMap((std::filesystem::path(node_options_.outdir) / "map.yaml").string(), map_);
   }
   if (output_) {
-    const rig_map_t msg = ToRigMapMsg(map_, map_utime_);
+    const rig_map2_t msg = ToRigMap2Msg(map_, map_utime_);
     output_->publish(kMapChannel, &msg);
   }
   log_ << message << "\n";

@@ -16,7 +16,7 @@
 //   checks    the camera is reported moved (or added) by the update, and its RMS in the new map is at most
 //             maintain_max_rms_ratio x the median of the other cameras' (else nothing is published and the
 //             reason goes into the status message)
-//   publishes the new map on MCMT_MAP (rig_map_t utime: the map's version, higher than every map before),
+//   publishes the new map on MCMT_MAP (rig_map2_t utime: the map's version, higher than every map before),
 //             the change as a mapper_status_t (STATE_DONE) on MCMT_MAPPER_STATUS, and the map file in
 //             --out when given
 // Trackers switch to the newer map between frames (tracker/tracker_node.cc) and judge every camera
@@ -112,8 +112,9 @@ class MaintainNode {
   RigMap map_;
   int64_t map_utime_ = 0;
   std::vector<lcm::Subscription*> subscriptions_;
-  std::map<std::string, std::map<int64_t, detections_t>> views_;  // per camera, by utime
-  std::map<int64_t, PoseInfo> poses_;                             // tracked frames, by utime
+  // Per camera, by utime on the reference camera's clock (RigMap::ReferenceUtime; the messages as sent).
+  std::map<std::string, std::map<int64_t, detections_t>> views_;
+  std::map<int64_t, PoseInfo> poses_;  // tracked frames, by utime
   std::map<std::string, Candidate> candidates_;
   std::map<std::string, int64_t> settled_until_;  // per camera: no suspicion from frames before this
   std::vector<MaintainEvent> events_;

@@ -40,23 +40,18 @@ int MostMovedCamera(const std::vector<ViewPose>& views, int num_frames, const Ca
   return best;
 }
 
-// Cameras of the old map the new map lacks (no detections, not in the rig) and markers it did not see,
-// copied unchanged; the old clocks of cameras that kept their pose.
-void KeepWhatWasNotSeen(const RigMap& old_map, const std::vector<char>& reestimated,
-                        const std::vector<std::string>& camera_names, RigMap* map) {
+// The clocks: the messages were put on the old map's clocks (SolveUpdate), so each camera's clock is the
+// old one plus what this solve found (nothing unless mapper.time_offsets); then the cameras of the old
+// map the new map lacks (no detections, not in the rig) and markers it did not see, copied unchanged (a
+// camera's offset at the new map's time reference).
+void KeepWhatWasNotSeen(const RigMap& old_map, RigMap* map) {
+  ComposeClocks(old_map, map);
   for (const MapCamera& c : old_map.cameras) {
-    const auto it = std::find(camera_names.begin(), camera_names.end(), c.name);
-    const bool kept = it == camera_names.end() || !reestimated[it - camera_names.begin()];
-    MapCamera* now = nullptr;
-    for (MapCamera& m : map->cameras)
-      if (m.name == c.name) now = &m;
-    if (!now) {
-      MapCamera copy = c;
-      copy.observations = 0;
-      map->cameras.push_back(copy);
-    } else if (kept) {
-      now->time_offset_us = c.time_offset_us;
-    }
+    if (map->FindCamera(c.name)) continue;
+    MapCamera copy = c;
+    copy.observations = 0;
+    copy.time_offset_us = c.ClockUs(map->time_reference_utime, old_map.time_reference_utime);
+    map->cameras.push_back(copy);
   }
   for (const MapMarker& m : old_map.markers)
     if (!map->FindMarker(m.id)) {
@@ -181,10 +176,13 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
     if (models[c].width == 0)
       if (const MapCamera* old = old_map.FindCamera(camera_names[c])) models[c] = old->model;
 
+  // Frames on the old map's clocks (the tracker's way: RigMap::ReferenceUtime).
+  std::vector<StoredMessage> on_clock = messages;
+  for (StoredMessage& m : on_clock) m.utime = old_map.ReferenceUtime(camera_names[m.camera], m.utime);
   const std::vector<Frame> frames =
-      AssembleFrames(messages, static_cast<int>(camera_names.size()), o.sync_tolerance_us());
+      AssembleFrames(on_clock, static_cast<int>(camera_names.size()), o.sync_tolerance_us());
   report.frames_assembled = static_cast<int>(frames.size());
-  Observations observations = CollectObservations(messages, frames, camera_names, o, &report);
+  Observations observations = CollectObservations(on_clock, frames, camera_names, o, &report);
   EstimateHypotheses(models, o.tau_e, threads, &observations.obs);
   const MarkerLayout layout = LayoutFromMap(old_map, observations);
   const std::vector<ViewPose> views = FitViews(observations, layout, models, threads);
@@ -203,8 +201,7 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
   if (o.refine)
     RefineWithRejection(observations, names, layout, o, BundleSettingsFor(o, threads), &bundle, &report);
   FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
-  for (RigMap* map : {&result.map, &result.initial_map})
-    KeepWhatWasNotSeen(old_map, reestimated, camera_names, map);
+  for (RigMap* map : {&result.map, &result.initial_map}) KeepWhatWasNotSeen(old_map, map);
   for (MovedCamera& m : report.moved_cameras) {  // against the solved pose, in the old map's frame
     const Rigid3& after = result.map.FindCamera(m.camera)->rig_from_cam;
     m.rotation_deg = RotationAngle(m.rig_from_cam_before, after) * 180.0 / kPi;

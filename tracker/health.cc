@@ -1,6 +1,7 @@
 // Per-camera health (tracker/health.h has the rules).
 #include "tracker/health.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -11,6 +12,7 @@
 
 #include "core/lcm_util.h"
 #include "core/math.h"
+#include "core/rigid_pose.h"
 #include "mcmt/tracker_status_t.hpp"
 #include "tracker/tracker.h"
 
@@ -33,9 +35,24 @@ HealthMonitor::HealthMonitor(const std::vector<std::string>& cameras, const Heal
   for (const std::string& c : cameras) tracks_[c].health.camera = c;
 }
 
+// The median of the history (core's Median picks the element at size / 2 of the sorted values: the
+// same one, kept sorted instead of sorted again every frame).
 double HealthMonitor::Baseline(const Track& t) const {
-  if (t.history.empty()) return 0.0;
-  return Median(std::vector<double>(t.history.begin(), t.history.end()));
+  return t.sorted_history.empty() ? 0.0 : t.sorted_history[t.sorted_history.size() / 2];
+}
+
+void HealthMonitor::AddToBaseline(double rms_px, Track* t) const {
+  t->history.push_back(rms_px);
+  t->sorted_history.insert(std::upper_bound(t->sorted_history.begin(), t->sorted_history.end(), rms_px),
+                           rms_px);
+  if (static_cast<int>(t->history.size()) <= options_.baseline_frames) return;
+  t->sorted_history.erase(
+      std::lower_bound(t->sorted_history.begin(), t->sorted_history.end(), t->history.front()));
+  t->history.pop_front();
+}
+
+double HealthMonitor::SuspectPx(const Track& t) const {
+  return std::max(options_.suspect_px, options_.suspect_ratio * Baseline(t));
 }
 
 bool HealthMonitor::Excluded(const std::string& camera) const {
@@ -71,18 +88,23 @@ bool HealthMonitor::Update(const std::string& camera, int64_t utime, double rms_
   h.baseline_px = Baseline(t);
   const CameraState before = h.state;
   const bool full = static_cast<int>(t.window.size()) >= options_.window;
-  const bool high = full && Established(t) &&
-                    h.rms_px > std::max(options_.suspect_px, options_.suspect_ratio * h.baseline_px);
+  const bool high = full && Established(t) && h.rms_px > SuspectPx(t);
   if (h.state != CameraState::kExcluded) {
     t.suspect_run = high ? t.suspect_run + 1 : 0;
     if (!high) h.state = CameraState::kOk;
     if (high)
       h.state = t.suspect_run >= options_.exclude_frames ? CameraState::kExcluded : CameraState::kSuspect;
+  } else {
+    // Hysteresis: back only when well under the suspect threshold for recover_frames in a row.
+    const bool good = full && h.rms_px <= options_.recover_ratio * SuspectPx(t);
+    t.recover_run = good ? t.recover_run + 1 : 0;
+    if (t.recover_run >= options_.recover_frames) {
+      h.state = CameraState::kOk;
+      t.recover_run = 0;
+      t.suspect_run = 0;
+    }
   }
-  if (h.state == CameraState::kOk && !gated) {
-    t.history.push_back(rms_px);
-    if (static_cast<int>(t.history.size()) > options_.baseline_frames) t.history.pop_front();
-  }
+  if (h.state == CameraState::kOk && !gated) AddToBaseline(rms_px, &t);
   if (h.state != before) h.since_utime = utime;
   if (h.state != CameraState::kOk && h.first_suspect_utime < 0) h.first_suspect_utime = utime;
   return h.state != before;
@@ -100,6 +122,15 @@ std::vector<CameraHealth> HealthMonitor::Snapshot() const {
 
 // ---------------------------------------------------------------------------------------------------
 // The tracker node's use of it.
+//
+// A camera is judged under the pose from the others without solving again: at the frame's pose P (solved
+// from every camera not excluded) each camera's inlier observations give its share (H_c, g_c) of the
+// Gauss-Newton normal equations (core's PoseNormalEquations, the solver's Huber weights, rotation about
+// P's origin); the others' pose is one step from P on the normal equations without that share,
+// (sum_{k != c} H_k) dx = -(sum_{k != c} g_k), P (+) dx. P is the others' optimum up to the pull of camera
+// c, which is what the step takes out (a moved camera's few pixels move P by far less than the region
+// where the problem is linear), so this costs one pass over the frame's corners and a 6x6 solve per
+// camera instead of a refinement per camera.
 
 namespace mcmt {
 namespace {
@@ -112,25 +143,46 @@ std::vector<MarkerObservation> Without(const std::vector<MarkerObservation>& obs
   return kept;
 }
 
-std::vector<MarkerObservation> Only(const std::vector<MarkerObservation>& obs, const std::string& camera) {
-  std::vector<MarkerObservation> kept;
-  for (const MarkerObservation& o : obs)
-    if (o.camera == camera) kept.push_back(o);
-  return kept;
+// One camera's part of the frame at the frame's pose.
+struct CameraShare {
+  std::vector<std::vector<PosePoint>> markers;  // its mapped observations' corners
+  Matrix6d h = Matrix6d::Zero();                // its inliers' J^T W J and J^T W r at the frame's pose
+  Vector6d g = Vector6d::Zero();
+  int inliers = 0;
+};
+
+// The shares of every camera with a mapped observation, at `pose` (an observation within outlier_px of
+// it is an inlier, as for the solver).
+std::map<std::string, CameraShare> Shares(const PoseEstimator& estimator, const TrackerOptions& o,
+                                          const std::vector<MarkerObservation>& obs, const Rigid3& pose) {
+  std::map<std::string, CameraShare> shares;
+  Matrix6d h;
+  Vector6d g;
+  for (const MarkerObservation& ob : obs) {
+    std::vector<PosePoint> points = estimator.PosePoints(ob);
+    if (points.empty()) continue;
+    CameraShare& share = shares[ob.camera];
+    double squares = 0.0;
+    PoseNormalEquations(points, pose, pose.translation(), o.huber_px, &h, &g, &squares);
+    if (squares <= 4.0 * o.outlier_px * o.outlier_px) {
+      share.h += h;
+      share.g += g;
+      ++share.inliers;
+    }
+    share.markers.push_back(std::move(points));
+  }
+  return shares;
 }
 
-}  // namespace
-
 // A camera's RMS over its markers within outlier_px (one wrong marker is the pose solver's to reject,
-// not a sign that the camera moved); when none is, its best marker's.
-double TrackerNode::CameraRms(const std::vector<MarkerObservation>& mine, const Rigid3& pose) const {
+// not a sign that the camera moved); when none is, its best marker's; -1 without a marker.
+double CameraRms(const CameraShare& share, const Rigid3& pose, double outlier_px) {
   double sum = 0.0, best = -1.0;
   int n = 0;
-  for (const MarkerObservation& o : mine) {
-    const double r = estimator_->RmsAt({o}, pose);
-    if (r < 0) continue;
+  for (const std::vector<PosePoint>& marker : share.markers) {
+    const double r = std::sqrt(PoseSquaredError(marker, pose) / 4.0);
     if (best < 0 || r < best) best = r;
-    if (r <= options_.tracker.outlier_px) {
+    if (r <= outlier_px) {
       sum += r * r;
       ++n;
     }
@@ -138,33 +190,52 @@ double TrackerNode::CameraRms(const std::vector<MarkerObservation>& mine, const 
   return n ? std::sqrt(sum / n) : best;
 }
 
-// Each camera's RMS under the pose from the others (those not left out); -1 where it cannot be judged.
-std::map<std::string, double> TrackerNode::JudgeCameras(const std::vector<MarkerObservation>& obs,
-                                                        const std::set<std::string>& cameras,
-                                                        const std::set<std::string>& left_out,
-                                                        const Rigid3* start) const {
+// The pose from the cameras in `from` (their inlier shares), one Gauss-Newton step from `pose`; false
+// when fewer than two of them have an inlier (one camera alone fixes the depth too loosely to judge) or
+// the step is not determined.
+bool PoseFrom(const std::map<std::string, CameraShare>& shares, const std::set<std::string>& from,
+              const Rigid3& pose, Rigid3* out) {
+  Matrix6d h = Matrix6d::Zero();
+  Vector6d g = Vector6d::Zero();
+  int cameras = 0;
+  for (const std::string& c : from) {
+    const auto it = shares.find(c);
+    if (it == shares.end() || it->second.inliers == 0) continue;
+    h += it->second.h;
+    g += it->second.g;
+    ++cameras;
+  }
+  if (cameras < 2) return false;
+  h.diagonal() += Vector6d::Constant(1e-12);
+  const Eigen::LDLT<Matrix6d> ldlt(h);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const Vector6d dx = ldlt.solve(-g);
+  if (!dx.allFinite()) return false;
+  *out = ApplyPoseStep(pose, dx, pose.translation());
+  return true;
+}
+
+// Each camera of `judged` under the pose from the cameras of `used` other than itself; -1 where it
+// cannot be judged.
+std::map<std::string, double> Judge(const std::map<std::string, CameraShare>& shares,
+                                    const std::set<std::string>& judged, const std::set<std::string>& used,
+                                    const Rigid3& pose, double outlier_px) {
   std::map<std::string, double> rms;
-  for (const std::string& c : cameras) {
+  for (const std::string& c : judged) {
     rms[c] = -1.0;
-    std::set<std::string> without = left_out;
-    without.insert(c);
-    const std::vector<MarkerObservation> others = Without(obs, without);
-    std::set<std::string> other_cameras;
-    for (const MarkerObservation& o : others) other_cameras.insert(o.camera);
-    if (other_cameras.size() < 2) continue;  // one camera alone fixes the depth too loosely to judge
+    const auto mine = shares.find(c);
+    if (mine == shares.end()) continue;
+    std::set<std::string> others = used;
+    others.erase(c);
     Rigid3 from_others;
-    if (start) {  // from this frame's pose: one refinement, no restarts
-      if (!estimator_->RefinePose(others, *start, &from_others)) continue;
-    } else {
-      const PoseSolution solved = estimator_->Solve(others, nullptr);
-      if (solved.status != PoseStatus::kTracking) continue;
-      from_others = solved.rig_from_object;
-    }
-    const double r = CameraRms(Only(obs, c), from_others);
+    if (!PoseFrom(shares, others, pose, &from_others)) continue;
+    const double r = CameraRms(mine->second, from_others, outlier_px);
     if (r >= 0) rms[c] = std::isfinite(r) ? r : 1e3;
   }
   return rms;
 }
+
+}  // namespace
 
 PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
                                               int64_t utime) {
@@ -174,7 +245,8 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     if (health_->Excluded(o.camera)) excluded.insert(o.camera);
   }
   PoseSolution sol = estimator_->Solve(Without(obs, excluded), prior);
-  const Rigid3* start = sol.ok() ? &sol.rig_from_object : prior;
+  std::map<std::string, CameraShare> shares;  // none when lost: nothing to judge against
+  if (sol.ok()) shares = Shares(*estimator_, options_.tracker, obs, sol.rig_from_object);
   // Worst first: a moved camera would make the cameras judged against it look moved too, so the camera
   // furthest over its gate is left out and the others judged again without it.
   std::set<std::string> gated = excluded;
@@ -183,7 +255,8 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     std::set<std::string> open;
     for (const std::string& c : cameras)
       if (!gated.count(c)) open.insert(c);
-    const std::map<std::string, double> rms = JudgeCameras(obs, open, gated, start);
+    const std::map<std::string, double> rms =
+        Judge(shares, open, open, sol.rig_from_object, options_.tracker.outlier_px);
     std::string worst;
     double worst_excess = 1.0;
     for (const auto& [c, r] : rms) {
@@ -196,8 +269,11 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     if (worst.empty()) break;
     gated.insert(worst);
   }
-  for (const std::string& c : excluded)  // excluded cameras are still watched
-    judged[c] = JudgeCameras(obs, {c}, excluded, start)[c];
+  std::set<std::string> used;  // excluded cameras are still watched, under the pose from the cameras used
+  for (const std::string& c : cameras)
+    if (!gated.count(c)) used.insert(c);
+  for (const auto& [c, r] : Judge(shares, excluded, used, sol.rig_from_object, options_.tracker.outlier_px))
+    judged[c] = r;
   std::string changes;
   for (const auto& [c, r] : judged) {
     if (r < 0 || !health_->Update(c, utime, r, gated.count(c) && !excluded.count(c))) continue;
@@ -212,7 +288,10 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     changes = health_change_ + (changes.empty() ? "" : "; " + changes);
     health_change_.clear();
   }
-  if (gated.size() > excluded.size()) sol = estimator_->Solve(Without(obs, gated), start);
+  if (gated.size() > excluded.size()) {
+    const Rigid3 start = sol.rig_from_object;
+    sol = estimator_->Solve(Without(obs, gated), &start);
+  }
   if (!changes.empty() || utime - last_health_utime_ >= 1000000) PublishHealth(utime, changes);
   return sol;
 }

@@ -6,9 +6,13 @@
 //   gate     this frame's RMS > max(gate_px, gate_ratio * baseline): its markers are left out of this
 //            frame's published pose (counted in rejected_share)
 //   suspect  the median of its last `window` judged RMS > max(suspect_px, suspect_ratio * baseline)
-//   excluded suspect for exclude_frames judged frames in a row: left out of every pose until a new map
-//            (mcmt-mapper --maintain re-estimates it and publishes one)
-//   ok again a suspect camera whose window median falls back below the threshold
+//   excluded suspect for exclude_frames judged frames in a row: left out of every pose (still judged,
+//            under the pose from the cameras used) until a new map (mcmt-mapper --maintain re-estimates it
+//            and publishes one) or until it is good again
+//   ok again a suspect camera whose window median falls back below the threshold; an excluded one whose
+//            window median stays at or below recover_ratio x the threshold for recover_frames judged
+//            frames in a row (hysteresis: a camera that did not move, only saw a transient - a hand, a
+//            reflection - comes back under the same map; one that moved stays far above)
 // baseline = the median of its judged RMS while ok (the last baseline_frames), so a camera whose detector
 // is noisier than the others' is held to its own level; nothing is gated or suspected before
 // min_baseline_frames judged frames (a map that is off from the start is the mapper's to report). No LCM
@@ -32,6 +36,8 @@ struct HealthOptions {
   int exclude_frames = 6;
   int baseline_frames = 300;
   int min_baseline_frames = 30;  // judged frames while ok before a camera is gated or suspected
+  double recover_ratio = 0.5;    // an excluded camera is good when its median is <= this x the threshold
+  int recover_frames = 30;       // ... for this many judged frames in a row: ok again
 };
 
 enum class CameraState : int8_t { kOk = 0, kSuspect = 1, kExcluded = 2 };
@@ -65,10 +71,14 @@ class HealthMonitor {
     CameraHealth health;
     std::deque<double> window;
     std::deque<char> gated;
-    std::deque<double> history;  // judged RMS while ok, for the baseline
+    std::deque<double> history;          // judged RMS while ok, for the baseline (oldest first)
+    std::vector<double> sorted_history;  // the same, sorted
     int suspect_run = 0;
+    int recover_run = 0;  // excluded: judged frames in a row good enough to come back
   };
   double Baseline(const Track& t) const;
+  double SuspectPx(const Track& t) const;  // max(suspect_px, suspect_ratio x baseline)
+  void AddToBaseline(double rms_px, Track* t) const;
   bool Established(const Track& t) const;
   HealthOptions options_;
   std::vector<std::string> order_;

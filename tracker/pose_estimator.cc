@@ -193,28 +193,30 @@ std::vector<PoseEstimator::Obs> PoseEstimator::Mapped(const std::vector<MarkerOb
   std::vector<Obs> obs;
   obs.reserve(observations.size());
   for (const auto& o : observations) {
-    auto c = camera_index_.find(o.camera);
-    auto m = marker_index_.find(o.id);
-    bool finite = true;
-    for (const auto& p : o.corners) finite = finite && p.allFinite();
-    if (c == camera_index_.end() || m == marker_index_.end() || !finite) {
+    Obs mapped;
+    if (!ToObs(o, &mapped)) {
       ++*unmapped;
       continue;
     }
-    obs.push_back(Obs{c->second, m->second, &o.corners});
+    obs.push_back(mapped);
   }
   return obs;
 }
 
-bool PoseEstimator::RefinePose(const std::vector<MarkerObservation>& observations, const Rigid3& start,
-                               Rigid3* pose) const {
-  int unmapped = 0;
-  const std::vector<Obs> obs = Mapped(observations, &unmapped);
-  if (obs.empty()) return false;
-  const Refined r = RefineFrom(obs, start);
-  if (!r.valid || r.num_inliers < 2) return false;
-  *pose = r.pose;
+bool PoseEstimator::ToObs(const MarkerObservation& observation, Obs* obs) const {
+  const auto c = camera_index_.find(observation.camera);
+  const auto m = marker_index_.find(observation.id);
+  bool finite = true;
+  for (const auto& p : observation.corners) finite = finite && p.allFinite();
+  if (c == camera_index_.end() || m == marker_index_.end() || !finite) return false;
+  *obs = Obs{c->second, m->second, &observation.corners};
   return true;
+}
+
+std::vector<PosePoint> PoseEstimator::PosePoints(const MarkerObservation& observation) const {
+  Obs obs;
+  if (!ToObs(observation, &obs)) return {};
+  return Points({obs}, {1});
 }
 
 PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,

@@ -1,6 +1,7 @@
 #include "core/files.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -254,6 +255,25 @@ const MapCamera* RigMap::FindCamera(const std::string& name) const {
   for (const auto& c : cameras)
     if (c.name == name) return &c;
   return nullptr;
+}
+
+int64_t RigMap::ReferenceUtime(const std::string& camera, int64_t utime) const {
+  const MapCamera* c = FindCamera(camera);
+  return c ? utime - std::llround(c->ClockUs(utime, time_reference_utime)) : utime;
+}
+
+void ComposeClocks(const RigMap& applied, RigMap* map) {
+  const int64_t reference =
+      map->time_reference_utime != 0 ? map->time_reference_utime : applied.time_reference_utime;
+  for (MapCamera& c : map->cameras) {
+    double offset_us = c.ClockUs(reference, map->time_reference_utime);
+    if (const MapCamera* a = applied.FindCamera(c.name)) {
+      offset_us += a->ClockUs(reference, applied.time_reference_utime);
+      c.time_drift_ppm += a->time_drift_ppm;
+    }
+    c.time_offset_us = offset_us;
+  }
+  map->time_reference_utime = reference;
 }
 
 const MapMarker* RigMap::FindMarker(int id) const {
@@ -595,6 +615,29 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +
                           "')");
   return rows;
+}
+
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir) {
+  const std::string map_path = outdir + "/map.yaml";
+  std::vector<std::pair<std::string, std::string>> out;
+  struct stat st;
+  if (::stat(map_path.c_str(), &st) != 0) {
+    out.emplace_back("", outdir + "/trajectory.csv");
+  } else {
+    const RigMap map = ReadMap(map_path);
+    if (map.objects.empty()) out.emplace_back("", outdir + "/trajectory.csv");
+    for (const MapObject& o : map.objects)
+      if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
+    if (map.objects.size() == 1 && !out.empty()) out[0].first.clear();  // one body: today's names
+    if (out.empty())
+      throw FileFormatError(map_path +
+                            ": every body is static: no trajectory to export (their poses are "
+                            "rig_from_object in the map)");
+  }
+  for (const auto& [body, path] : out)
+    if (::stat(path.c_str(), &st) != 0)
+      throw FileFormatError(path + ": no such trajectory (is " + outdir + " an mcmt-mapper OUTDIR?)");
+  return out;
 }
 
 }  // namespace mcmt

@@ -15,16 +15,6 @@ Eigen::Vector3d InCamera(const PosePoint& p, const Eigen::Vector3d& p_world) {
   return p.cam_from_world->linear() * p_world + p.cam_from_world->translation();
 }
 
-// The step: rotation R(w) about `pivot`, then translation v.
-Rigid3 ApplyAbout(const Rigid3& pose, const Vector6d& delta, const Eigen::Vector3d& pivot) {
-  const Eigen::Matrix3d dr = RotationFromVector(delta.head<3>());
-  Rigid3 out = Rigid3::Identity();
-  // Keep the rotation orthonormal over thousands of incremental updates.
-  out.linear() = Eigen::Quaterniond(dr * pose.linear()).normalized().toRotationMatrix();
-  out.translation() = dr * (pose.translation() - pivot) + pivot + delta.tail<3>();
-  return out;
-}
-
 double Huber(double squared, double k, double* weight) {
   if (squared <= k * k) {
     *weight = 1.0;
@@ -36,6 +26,15 @@ double Huber(double squared, double k, double* weight) {
 }
 
 }  // namespace
+
+Rigid3 ApplyPoseStep(const Rigid3& pose, const Vector6d& delta, const Eigen::Vector3d& pivot) {
+  const Eigen::Matrix3d dr = RotationFromVector(delta.head<3>());
+  Rigid3 out = Rigid3::Identity();
+  // Keep the rotation orthonormal over thousands of incremental updates.
+  out.linear() = Eigen::Quaterniond(dr * pose.linear()).normalized().toRotationMatrix();
+  out.translation() = dr * (pose.translation() - pivot) + pivot + delta.tail<3>();
+  return out;
+}
 
 double PoseNormalEquations(const std::vector<PosePoint>& points, const Rigid3& world_from_body,
                            const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h, Vector6d* g,
@@ -84,7 +83,7 @@ int RefineRigidPose(const std::vector<PosePoint>& points, const RigidPoseOptions
     a.diagonal() += lambda * h.diagonal() + Vector6d::Constant(1e-12);
     const Vector6d dx = a.ldlt().solve(-g);
     if (!dx.allFinite()) break;
-    const Rigid3 candidate = ApplyAbout(*world_from_body, dx, world_from_body->translation());
+    const Rigid3 candidate = ApplyPoseStep(*world_from_body, dx, world_from_body->translation());
     Matrix6d h_new;
     Vector6d g_new;
     const double cost_new =

@@ -315,5 +315,34 @@ markers:
   EXPECT_EQ(map.markers[0].size, 0.05);
 }
 
+// A camera's clock (offset and drift against the reference camera's) applied to its messages, and two
+// clocks measured one on top of the other made one (the maintenance, the time-offset passes).
+TEST(Files, MapClocksCorrectMessagesAndCompose) {
+  constexpr int64_t kRef = 1000000000000LL;
+  RigMap applied;
+  applied.time_reference_utime = kRef;
+  applied.cameras.resize(2);
+  applied.cameras[0].name = "cam0";
+  applied.cameras[1].name = "cam1";
+  applied.cameras[1].time_offset_us = 12000.0;
+  applied.cameras[1].time_drift_ppm = 300.0;
+  // 10 s after the reference cam1 reads 12 ms + 3 ms ahead.
+  EXPECT_EQ(applied.ReferenceUtime("cam1", kRef + 10000000), kRef + 10000000 - 15000);
+  EXPECT_EQ(applied.ReferenceUtime("cam0", kRef + 5), kRef + 5);
+  EXPECT_EQ(applied.ReferenceUtime("cam9", kRef + 5), kRef + 5);  // not in the map: as stamped
+
+  RigMap found = applied;  // what a solve on the corrected messages found: 0.5 ms more for cam1, no drift
+  found.time_reference_utime = 0;
+  for (MapCamera& c : found.cameras) c.time_offset_us = c.time_drift_ppm = 0.0;
+  found.cameras[1].time_offset_us = 500.0;
+  ComposeClocks(applied, &found);
+  EXPECT_EQ(found.time_reference_utime, kRef);
+  for (int64_t utime : {kRef - 20000000, kRef, kRef + 30000000}) {
+    EXPECT_NEAR(found.cameras[1].ClockUs(utime, found.time_reference_utime),
+                500.0 + applied.cameras[1].ClockUs(utime, kRef), 1e-6);
+    EXPECT_NEAR(found.cameras[0].ClockUs(utime, found.time_reference_utime), 0.0, 1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace mcmt

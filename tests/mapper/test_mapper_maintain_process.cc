@@ -25,6 +25,7 @@
 #include "mcmt/tracker_status_t.hpp"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/mapper/maintain_watch.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
 
@@ -32,67 +33,15 @@ namespace mcmt {
 namespace {
 
 using namespace std::chrono_literals;
+using test::Health;
+using test::Received;
+using test::Subscriber;
+using test::Url;
 
 constexpr int kFrames = 1050;  // margin: under load the sixth camera's map came as late as frame 899
 constexpr int kBumpFrame = 150;
 constexpr int kAddFrame = 400;
 constexpr double kSpeed = 2.0;  // replay at 60 fps
-
-std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
-
-struct Received {
-  std::mutex mutex;
-  std::map<int64_t, object_pose_t> poses;  // by seq
-  std::vector<tracker_status_t> statuses;
-  struct Map {
-    rig_map_t msg;
-    int64_t last_pose_seq = -1;  // newest pose seq received when the map arrived
-  };
-  std::vector<Map> maps;
-  std::vector<std::string> mapper_messages;
-  int64_t last_seq = -1;
-};
-
-class Subscriber {
- public:
-  Subscriber(const std::string& url, Received* out) : lcm_(url), out_(out) {
-    lcm_.subscribe("MCMT_POSE", &Subscriber::OnPose, this)->setQueueCapacity(10000);
-    lcm_.subscribe(kTrackerStatusChannel, &Subscriber::OnStatus, this)->setQueueCapacity(10000);
-    lcm_.subscribe(kMapChannel, &Subscriber::OnMap, this)->setQueueCapacity(100);
-    lcm_.subscribe(kMapperStatusChannel, &Subscriber::OnMapperStatus, this)->setQueueCapacity(1000);
-    thread_ = std::thread([this] {
-      while (!stop_) lcm_.handleTimeout(20);
-    });
-  }
-  ~Subscriber() {
-    stop_ = true;
-    thread_.join();
-  }
-  bool good() { return lcm_.good(); }
-
- private:
-  void OnPose(const lcm::ReceiveBuffer*, const std::string&, const object_pose_t* m) {
-    std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->poses[m->seq] = *m;
-    out_->last_seq = std::max(out_->last_seq, m->seq);
-  }
-  void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const tracker_status_t* m) {
-    std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->statuses.push_back(*m);
-  }
-  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const rig_map_t* m) {
-    std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->maps.push_back({*m, out_->last_seq});
-  }
-  void OnMapperStatus(const lcm::ReceiveBuffer*, const std::string&, const mapper_status_t* m) {
-    std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->mapper_messages.push_back(m->message);
-  }
-  lcm::LCM lcm_;
-  Received* out_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
 
 // Publishes the log's events at kSpeed times their pace (event time = message utime).
 void Replay(const std::string& log, const std::string& url) {
@@ -107,12 +56,6 @@ void Replay(const std::string& log, const std::string& url) {
         start + std::chrono::microseconds(static_cast<int64_t>((e.timestamp - t0) / kSpeed)));
     lcm.publish(e.channel, e.data.data(), static_cast<unsigned>(e.data.size()));
   }
-}
-
-const camera_health_t* Health(const tracker_status_t& s, const std::string& camera) {
-  for (const camera_health_t& h : s.cameras)
-    if (h.camera == camera) return &h;
-  return nullptr;
 }
 
 TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted) {
@@ -162,7 +105,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
   EXPECT_LE(got.maps[0].last_pose_seq, kBumpFrame + 300) << logs;
   const sim::GroundTruth at_end = sim::TruthAtEnd(truth);
   {
-    const RigMap first = FromRigMapMsg(got.maps[0].msg);
+    const RigMap first = got.maps[0].msg.map;
     EXPECT_EQ(first.cameras.size(), 5u);
     const sim::EvalResult e = sim::Evaluate(at_end, &first, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 0.5) << logs;
@@ -171,7 +114,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
               << e.camera_rotation_deg.max << " deg\n";
   }
   {
-    const RigMap second = FromRigMapMsg(got.maps[1].msg);
+    const RigMap second = got.maps[1].msg.map;
     ASSERT_EQ(second.cameras.size(), 6u);
     const sim::EvalResult e = sim::Evaluate(at_end, &second, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 1.0) << logs;
@@ -210,35 +153,22 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
   EXPECT_TRUE(cam5_ok) << logs;
 
   // Every pose near the truth: no more than twice the largest error before the bump.
-  double normal_mm = 0.0;
+  const test::PoseErrors errors = test::CheckPoses(got.poses, truth_at, kBumpFrame);
+  ASSERT_GT(errors.normal_mm, 0.0);
+  int with_cam5 = 0;
   for (const auto& [seq, p] : got.poses)
-    if (seq < kBumpFrame && p.status == 0)
-      normal_mm =
-          std::max(normal_mm, 1000.0 * TranslationDistance(FromPose3d(p.rig_from_object), truth_at.at(seq)));
-  ASSERT_GT(normal_mm, 0.0);
-  int tracked = 0, with_cam5 = 0;
-  double worst_mm = 0.0;
-  int64_t worst_seq = -1;
-  for (const auto& [seq, p] : got.poses) {
-    if (p.status != 0) continue;
-    ++tracked;
-    const double e = 1000.0 * TranslationDistance(FromPose3d(p.rig_from_object), truth_at.at(seq));
-    if (e > worst_mm) {
-      worst_mm = e;
-      worst_seq = seq;
-    }
-    with_cam5 += std::count(p.cameras.begin(), p.cameras.end(), "cam5") > 0;
-  }
-  EXPECT_LE(worst_mm, 2.0 * normal_mm) << "normal " << normal_mm << " mm, worst at seq " << worst_seq;
-  EXPECT_GE(tracked, kFrames - 9) << logs;  // udpm on loopback may drop a rare datagram
+    with_cam5 += p.status == 0 && std::count(p.cameras.begin(), p.cameras.end(), "cam5") > 0;
+  EXPECT_LE(errors.worst_mm, 2.0 * errors.normal_mm)
+      << "normal " << errors.normal_mm << " mm, worst at seq " << errors.worst_seq;
+  EXPECT_GE(errors.tracked, kFrames - 9) << logs;  // udpm on loopback may drop a rare datagram
   EXPECT_GT(with_cam5, 50);
   // No frame lost where the tracker switched maps.
   for (const Received::Map& m : got.maps)
     for (int64_t seq = m.last_pose_seq - 15; seq <= m.last_pose_seq + 15; ++seq)
       EXPECT_TRUE(got.poses.count(seq)) << "seq " << seq << " around a map switch";
-  std::cout << "normal error " << normal_mm << " mm, worst " << worst_mm << " mm (seq " << worst_seq
-            << "); maps after poses " << got.maps[0].last_pose_seq << ", " << got.maps[1].last_pose_seq
-            << "\n";
+  std::cout << "normal error " << errors.normal_mm << " mm, worst " << errors.worst_mm << " mm (seq "
+            << errors.worst_seq << "); maps after poses " << got.maps[0].last_pose_seq << ", "
+            << got.maps[1].last_pose_seq << "\n";
 }
 
 }  // namespace

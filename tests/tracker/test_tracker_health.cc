@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
+#include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <string>
@@ -30,21 +32,28 @@ struct TrackedRun {
   int64_t frames = 0;
 };
 
-// Drops marker `id` from every message of the session's log.
-void HideMarker(const std::string& log, int id) {
+// Rewrites every message of the session's log with `edit`.
+void EditLog(const std::string& log, const std::function<void(detections_t*)>& edit) {
   std::string bytes;
   int64_t n = 0;
   for (const LogEvent& e : ReadEventLog(log)) {
     detections_t d;
     ASSERT_TRUE(Decode(e.data.data(), e.data.size(), &d));
-    d.markers.erase(
-        std::remove_if(d.markers.begin(), d.markers.end(), [&](const marker_t& m) { return m.id == id; }),
-        d.markers.end());
-    d.num_markers = static_cast<int32_t>(d.markers.size());
+    edit(&d);
     const std::vector<uint8_t> data = Encode(d);
     AppendEncodedEvent(n++, e.timestamp, e.channel, data.data(), data.size(), &bytes);
   }
   WriteFileAtomic(log, bytes);
+}
+
+// Drops marker `id` from every message of the session's log.
+void HideMarker(const std::string& log, int id) {
+  EditLog(log, [id](detections_t* d) {
+    d->markers.erase(
+        std::remove_if(d->markers.begin(), d->markers.end(), [&](const marker_t& m) { return m.id == id; }),
+        d->markers.end());
+    d->num_markers = static_cast<int32_t>(d->markers.size());
+  });
 }
 
 // Tracks the session written in `dir` with the map of its ground truth (the cameras before any move).
@@ -115,6 +124,42 @@ TEST_P(TrackerHealthBump, SuspectWithin30FramesExcludedAndNoPoseCorrupted) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Bumps, TrackerHealthBump, ::testing::Values(Bump{0.3, 0.0}, Bump{0.0, 3.0}));
+
+// A camera that did not move but saw something misleading for 2 s (a reflection, a shaking tripod: its
+// corners 3 px off from frame 450 to 509) is excluded, then comes back under the same map once its
+// residuals are good again (hysteresis: health_recover_frames), and no pose is corrupted meanwhile.
+TEST(TrackerHealth, ATransientExcludesACameraThatThenComesBackUnderTheSameMap) {
+  test::TempDir dir("health_transient");
+  sim::DatasetOptions o = sim::DetectionsOnlySession(dir.str(), 900, 5);
+  const sim::GroundTruth truth = sim::GenerateDataset(o).truth;
+  const int64_t from = sim::FrameUtime(450, 30.0), to = sim::FrameUtime(510, 30.0);
+  EditLog(dir / "detections.lcmlog", [&](detections_t* d) {
+    if (d->camera != "cam2" || d->utime < from || d->utime >= to) return;
+    for (marker_t& m : d->markers)
+      for (auto& corner : m.corners) corner[0] += 3.0;
+  });
+  const TrackedRun run = Track(dir.str(), truth);
+  ASSERT_EQ(run.health.size(), 5u);
+  const double normal = MaxError(run, 0, 450);
+  EXPECT_LE(MaxError(run, 450, 900), 2.0 * normal) << "normal " << normal << " mm";
+  EXPECT_GE(static_cast<double>(run.seq.size()), 0.95 * 900);
+  for (const CameraHealth& h : run.health) {
+    EXPECT_EQ(h.state, CameraState::kOk) << h.camera << " rms " << h.rms_px;
+    if (h.camera != "cam2") {
+      EXPECT_EQ(h.first_suspect_utime, -1) << h.camera;
+      continue;
+    }
+    EXPECT_GE(h.first_suspect_utime, from);
+    EXPECT_LE(h.first_suspect_utime, sim::FrameUtime(480, 30.0));
+    // Back within the window and health_recover_frames (9 + 30 judged frames) after the transient.
+    EXPECT_GT(h.since_utime, to);
+    EXPECT_LE(h.since_utime, sim::FrameUtime(510 + 60, 30.0));
+    std::cout << "cam2 suspect at frame " << (h.first_suspect_utime - sim::FrameUtime(0, 30.0)) / 33333
+              << ", ok again at frame " << (h.since_utime - sim::FrameUtime(0, 30.0)) / 33333
+              << " (transient frames 450-509)\n";
+  }
+  // A camera that moved stays excluded: the bump tests above (its residuals stay far above the threshold).
+}
 
 TEST(TrackerHealth, NoFalseAlarmWithNoiseOnlyFastMotionAndAHiddenMarker) {
   test::TempDir dir("health_quiet");

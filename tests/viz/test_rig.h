@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,66 @@ inline TestRig MakeTestRig(int num_cameras = 4, int frames = 12, double camera_r
     row.rms_px = 0.4;
     row.cameras = num_cameras;
     row.markers = 3;
+  }
+  return rig;
+}
+
+// A map with several bodies (version 2) on the same cameras: "tool" (MakeTestRig's cube, ids 0-4, on its
+// circle), "patient" (the same cube shape at 0.8 scale, ids 10-14, on a circle of 0.12 m, 0.45 m high) and
+// the static "floor" (8 markers of 0.1 m, ids 20-27, facing up on a ring of radius 0.9 m at z = 0,
+// around the others). trajectory: the tool's; bodies["patient"]: the patient's, same utimes.
+struct BodiesTestRig {
+  RigMap map;
+  std::vector<TrajectoryRow> trajectory;
+  std::map<std::string, std::vector<TrajectoryRow>> bodies;
+  Rigid3 world_from_rig = Rigid3::Identity();
+};
+
+inline BodiesTestRig MakeBodiesTestRig(int frames = 24) {
+  const TestRig base = MakeTestRig(4, frames);
+  BodiesTestRig rig;
+  rig.map = base.map;
+  rig.world_from_rig = base.world_from_rig;
+  const Rigid3 rig_from_world = Inverse(base.world_from_rig);
+  MapObject tool;
+  tool.name = "tool";
+  tool.markers = base.map.markers;
+  MapObject patient;
+  patient.name = "patient";
+  patient.reference_marker = 10;
+  for (MapMarker m : base.map.markers) {
+    m.id += 10;
+    m.size *= 0.8;
+    m.object_from_marker.translation() *= 0.8;
+    patient.markers.push_back(m);
+  }
+  MapObject floor;
+  floor.name = "floor";
+  floor.is_static = true;
+  floor.reference_marker = 20;
+  for (int k = 0; k < 8; ++k) {
+    const double a = 2.0 * M_PI * k / 8;
+    MapMarker m;
+    m.id = 20 + k;
+    m.size = 0.1;
+    m.object_from_marker.translation() = Eigen::Vector3d(0.9 * std::cos(a), 0.9 * std::sin(a), 0.0);
+    m.object_from_marker.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    m.rms_px = 0.3;
+    floor.markers.push_back(m);
+  }
+  floor.rig_from_object = rig_from_world;  // the floor's frame is the world frame
+  rig.map.objects = {tool, patient, floor};
+  rig.map.version = kMapVersionBodies;
+  rig.trajectory = base.trajectory;
+  // The patient: on a smaller circle (0.12 m) higher up (0.45 m), half a turn ahead, turning as the tool.
+  for (size_t k = 0; k < base.trajectory.size(); ++k) {
+    const double a = 2.0 * M_PI * static_cast<double>(k) / std::max(frames, 1) + M_PI;
+    Rigid3 world_from_patient = Rigid3::Identity();
+    world_from_patient.linear() = Eigen::AngleAxisd(0.6 * a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    world_from_patient.translation() = Eigen::Vector3d(0.12 * std::cos(a), 0.12 * std::sin(a), 0.45);
+    TrajectoryRow p = base.trajectory[k];
+    p.rig_from_object = Normalized(rig_from_world * world_from_patient);
+    rig.bodies["patient"].push_back(p);
   }
   return rig;
 }

@@ -506,4 +506,35 @@ TEST(VizOptions, SizeParsing) {
 }
 
 }  // namespace
+// MCMT_MAP through the collector: the mapper's rig_map2_t (here with two bodies) and an old log's
+// rig_map_t both become the map drawn (core's DecodeMapMessage); anything else is counted, not drawn.
+TEST(VizCollector, TakesMapsOfEitherType) {
+  const auto rig = MakeTestRig(3, 4);
+  RigMap bodies = rig.map;
+  for (const char* name : {"tool", "patient"}) {
+    MapObject o;
+    o.name = name;
+    o.markers = {rig.map.markers[o.name == "tool" ? 0 : 1]};
+    o.reference_marker = o.markers[0].id;
+    bodies.objects.push_back(o);
+  }
+  bodies.version = kMapVersionBodies;
+  lcm::LCM lcm("memq://");
+  LcmCollector collector(lcm, 0);
+  const std::vector<uint8_t> v2 = Encode(ToRigMap2Msg(bodies, 5));
+  collector.Handle(kMapChannel, v2.data(), v2.size());
+  ASSERT_TRUE(collector.has_map());
+  EXPECT_EQ(collector.map().objects.size(), 2u);
+  EXPECT_EQ(collector.map().objects[1].name, "patient");
+  const std::vector<uint8_t> v1 = Encode(ToRigMapMsg(rig.map, 6));
+  collector.Handle(kMapChannel, v1.data(), v1.size());
+  EXPECT_EQ(collector.map_count(), 2);
+  EXPECT_TRUE(collector.map().objects.empty());
+  EXPECT_EQ(collector.map().markers.size(), rig.map.markers.size());
+  const std::vector<uint8_t> other = Encode(mcmt::tracker_status_t());
+  collector.Handle(kMapChannel, other.data(), other.size());
+  EXPECT_EQ(collector.map_count(), 2);
+  EXPECT_EQ(collector.stats().decode_errors, 1);
+}
+
 }  // namespace mcmt::viz
