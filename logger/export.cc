@@ -23,8 +23,10 @@
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/marker_t.hpp"
+#include "mcmt/object_layout_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/pose3d_t.hpp"
+#include "mcmt/rig_map2_t.hpp"
 #include "mcmt/rig_map_t.hpp"
 
 namespace mcmt {
@@ -60,6 +62,8 @@ const std::map<uint64_t, std::string>& KnownTypes() {
     AddKnownType<detections_t>(&t);
     AddKnownType<object_pose_t>(&t);
     AddKnownType<rig_map_t>(&t);
+    AddKnownType<rig_map2_t>(&t);
+    AddKnownType<object_layout_t>(&t);
     AddKnownType<mapper_status_t>(&t);
     AddKnownType<mapper_command_t>(&t);
     AddKnownType<camera_model_t>(&t);
@@ -320,8 +324,8 @@ LogSummary SummarizeLog(const std::string& log) {
         }
         ++s.pose_status[pose.status];
       } else if (e.channel == kMapChannel) {
-        rig_map_t map;
-        if (!Decode(e.data.data(), e.data.size(), &map)) {
+        MapMessage map;
+        if (!DecodeMapMessage(e.data.data(), e.data.size(), &map)) {
           ++c.undecodable;
           continue;
         }
@@ -454,17 +458,19 @@ RigMap ReadMapOrLog(const std::string& path) {
     std::fclose(f);
   }
   if (!is_log) return ReadMap(path);
-  rig_map_t last;
+  MapMessage last;  // rig_map2_t (mcmt-mapper) or rig_map_t (older logs)
   bool found = false;
   ForEachEvent(path, [&](const LogEvent& e, int64_t index, const std::string& part) {
     if (e.channel != kMapChannel) return;
     std::string error;
-    if (!Decode(e.data.data(), e.data.size(), &last, &error))
+    if (!DecodeMapMessage(e.data.data(), e.data.size(), &last, &error))
       throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
     found = true;
   });
-  if (!found) throw LogFormatError(path + ": no rig_map_t on " + std::string(kMapChannel) + " in this log");
-  return FromRigMapMsg(last);
+  if (!found)
+    throw LogFormatError(path + ": no map (rig_map2_t or rig_map_t) on " + std::string(kMapChannel) +
+                         " in this log");
+  return last.map;
 }
 
 }  // namespace mcmt

@@ -105,7 +105,8 @@ std::string FormatSummary(const LogSummary& summary);
 
 // ---- from a map -----------------------------------------------------------------------------------------
 
-// map.yaml, or an LCM log: then the last rig_map_t on MCMT_MAP (throws naming the log when it has none).
+// map.yaml, or an LCM log: then the last map on MCMT_MAP, rig_map2_t (mcmt-mapper, several bodies) or
+// rig_map_t (older logs) (throws naming the log when it has none).
 RigMap ReadMapOrLog(const std::string& path);
 
 // The map exports (Kalibr, ROS, OpenCV, PLY, OBJ) are in core/map_export.h.

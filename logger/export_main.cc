@@ -152,7 +152,8 @@ void AddOptions(mcmt::ArgParser* args, Request* r) {
                   "bodies: PATH_<body>.tum per body");
   args->AddFlag("summary", &r->summary,
                 "from --log: print channels, counts, rates, span, cameras, ids, seq gaps");
-  args->AddString("map", &r->map_path, "map.yaml to read, or a log: its last rig_map_t on MCMT_MAP");
+  args->AddString("map", &r->map_path,
+                  "map.yaml to read, or a log: its last map on MCMT_MAP (rig_map2_t or rig_map_t)");
   const std::vector<mcmt::MapExportFormat>& formats = mcmt::MapExportFormats();
   r->map_paths.resize(formats.size());
   for (size_t i = 0; i < formats.size(); ++i)

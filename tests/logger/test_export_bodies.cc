@@ -389,3 +389,25 @@ TEST_F(ExportBodies, TumPerMovingBodyFromAMapperFolder) {
   EXPECT_NE(err.find(outdir + "/trajectory_patient.csv: no such trajectory"), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
 }
+
+// mcmt-mapper publishes rig_map2_t on MCMT_MAP: a log of it exports every body, and --summary names the
+// type and counts the map (an older log's rig_map_t still reads: test_logger_unit).
+TEST_F(ExportBodies, TheMapOfALogWithRigMap2HasEveryBody) {
+  const RigMap map = BodiesMap();
+  const std::string log = dir_ + "/map.lcmlog";
+  {
+    EventLogWriter w(log);
+    const std::vector<uint8_t> data = Encode(ToRigMap2Msg(map, 5));
+    w.Write(5, kMapChannel, data.data(), data.size());
+    w.Close();
+  }
+  std::string out, err;
+  ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--map", log, "--ply", dir_ + "/layout.ply"}, &out, &err), 0)
+      << err;
+  for (const MapObject& o : map.objects)
+    ExpectLayout(ReadPly(dir_ + "/layout_" + o.name + ".ply"), o.markers, o.name);
+  ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--summary", log}, &out, &err), 0) << err;
+  EXPECT_NE(out.find("mcmt.rig_map2_t"), std::string::npos) << out;
+  EXPECT_NE(out.find("maps: 1"), std::string::npos) << out;
+  EXPECT_EQ(out.find("do not decode"), std::string::npos) << out;
+}
