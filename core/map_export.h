@@ -42,9 +42,7 @@ struct MapExportFormat {
 // layout_floor.ply), each body's markers in its own frame (MeshLab opens the files as layers, Blender
 // imports each as its own object). A map with one body keeps the asked name. ROS static transforms and
 // OpenCV YAML hold every body in one file.
-bool HasSeveralBodies(const RigMap& map);
-// "dir/name.ext" + "tool" -> "dir/name_tool.ext" (no extension: "dir/name_tool").
-std::string BodyPath(const std::string& path, const std::string& body);
+bool HasSeveralBodies(const RigMap& map);  // (file names: core/files.h's BodyPath)
 
 // Every map export format, in the order --help lists them.
 const std::vector<MapExportFormat>& MapExportFormats();

@@ -228,8 +228,11 @@ bool IsTrajectoryCsv(const std::string& path) {
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request) {
   struct stat st;
   const bool is_dir = ::stat(csv.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-  const std::vector<std::pair<std::string, std::string>> sources =
+  std::vector<std::pair<std::string, std::string>> sources =
       is_dir ? MapperTrajectories(csv) : std::vector<std::pair<std::string, std::string>>{{"", csv}};
+  if (is_dir && sources.size() == 1 && !sources[0].first.empty() &&
+      ReadMap(csv + "/map.yaml").objects.size() == 1)
+    sources[0].first.clear();  // a map with one body keeps the asked name
   std::vector<PoseText> streams;
   for (const auto& [body, path] : sources) {
     PoseText p;

@@ -471,7 +471,8 @@ std::map<std::string, GroundTruth> ReadBodyTruths(const std::string& ground_trut
   return out;
 }
 
-std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path) {
+std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path,
+                                                                       const RigMap& map) {
   std::map<std::string, std::vector<TrajectoryRow>> out;
   std::ifstream in(path, std::ios::binary);
   unsigned char magic[4] = {0, 0, 0, 0};
@@ -479,12 +480,7 @@ std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std
   const bool is_log =
       readable && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
   if (!is_log) {
-    if (!std::ifstream(path + "/map.yaml") && !std::ifstream(path + "/trajectory.csv"))
-      throw FileFormatError(
-          path +
-          ": expected the mapper's OUTDIR (map.yaml, trajectory_<body>.csv) or an LCM log of "
-          "MCMT_POSE_<BODY>");
-    for (const auto& [body, file] : MapperTrajectories(path)) out[body] = ReadTrajectory(file);
+    for (const auto& [body, file] : BodyTrajectoryFiles(path, map)) out[body] = ReadTrajectory(file);
     return out;
   }
   int bad = 0;

@@ -114,11 +114,13 @@ std::vector<BodyResult> EvaluateBodies(const std::map<std::string, GroundTruth>&
 // throws EvalInputError naming the missing file and body.
 std::map<std::string, GroundTruth> ReadBodyTruths(const std::string& ground_truth, const RigMap& map);
 
-// Trajectories by body: the mapper's OUTDIR (core's MapperTrajectories: trajectory_<body>.csv), or an LCM
-// log with object_pose_t on MCMT_POSE_<BODY> (the body named by core's BodyOfPoseChannel; TRACKING and
+// Trajectories by body: the mapper's OUTDIR (trajectory_<body>.csv), the tracker's --out PATH
+// (PATH_<body>.csv; both core's BodyTrajectoryFiles for `map`), or an LCM log with object_pose_t on
+// MCMT_POSE_<BODY> (the body named by core's BodyOfPoseChannel; TRACKING and
 // AMBIGUOUS poses). Streams of no body of the map (relative poses, MCMT_POSE_TOOL_IN_PATIENT) are kept
 // under their name and ignored by EvaluateBodies.
-std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path);
+std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path,
+                                                                       const RigMap& map);
 
 // The cameras once, then per body its layout and pose figures and its marker table.
 std::string FormatBodiesTable(const std::vector<BodyResult>& bodies);

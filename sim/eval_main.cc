@@ -29,7 +29,8 @@ int Main(int argc, char** argv) {
   args.AddString(
       "trajectory", &trajectory_path,
       "trajectory.csv / poses.csv, or an LCM log with object_pose_t on MCMT_POSE; a map with several "
-      "bodies: the mapper's OUTDIR (trajectory_<body>.csv) or a log with MCMT_POSE_<BODY>");
+      "bodies: the mapper's OUTDIR (trajectory_<body>.csv), the tracker's --out PATH (PATH_<body>.csv) or a "
+      "log with MCMT_POSE_<BODY>");
   args.AddString(
       "object", &object,
       "a map with several bodies (version 2): evaluate only this body, against its own ground truth "
@@ -67,7 +68,7 @@ int Main(int argc, char** argv) {
   const RigMap full = ReadMap(map_path);
   if (!full.objects.empty() && object.empty()) {  // several bodies: every body against its own truth
     std::map<std::string, std::vector<TrajectoryRow>> trajectories;
-    if (!trajectory_path.empty()) trajectories = sim::ReadBodyTrajectories(trajectory_path);
+    if (!trajectory_path.empty()) trajectories = sim::ReadBodyTrajectories(trajectory_path, full);
     const std::vector<sim::BodyResult> bodies = sim::EvaluateBodies(
         sim::ReadBodyTruths(ground_truth, full), full, trajectory_path.empty() ? nullptr : &trajectories);
     if (json) {

@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
                    "the mapper's initial solution (OUTDIR/map_initial.yaml): before/after side by side");
     args.AddString(
         "trajectory", &o.trajectory_path,
-        "trajectory.csv, or the mapper's OUTDIR of a map with several bodies (its trajectory_<body>.csv) "
+        "trajectory.csv, or for a map with several bodies the mapper's OUTDIR (its trajectory_<body>.csv) or "
+        "the tracker's --out PATH (PATH_<body>.csv) "
         "(default: MCMT_POSE and every MCMT_POSE_<BODY> from the log or LCM)");
     args.AddString(
         "initial-trajectory", &o.initial_trajectory_path,

@@ -123,8 +123,12 @@ Viewer::Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log)
     if (!traj.empty()) file_initial_trajectory_ = ReadTrajectory(traj);
   }
   if (!options_.trajectory_path.empty()) {
-    if (fs::is_directory(options_.trajectory_path)) {  // the mapper's OUTDIR: every moving body's
-      for (const auto& [body, path] : MapperTrajectories(options_.trajectory_path)) {
+    const bool per_body =
+        fs::is_directory(options_.trajectory_path) ||
+        (!fs::exists(options_.trajectory_path) && have_file_map_ && !file_map_.objects.empty());
+    if (per_body) {  // the mapper's OUTDIR, or the tracker's --out PATH (PATH_<body>.csv): every moving
+                     // body's
+      for (const auto& [body, path] : BodyTrajectoryFiles(options_.trajectory_path, file_map_)) {
         if (body.empty())
           file_trajectory_ = ReadTrajectory(path);
         else
@@ -138,7 +142,7 @@ Viewer::Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log)
 }
 
 const PoseStream& Viewer::MainStream(const LcmCollector& collector, const RigMap& map) {
-  if (map.objects.size() > 1) {
+  if (!map.objects.empty()) {
     const auto it = collector.body_poses().find(map.objects[FirstMovingObject(map)].name);
     if (it != collector.body_poses().end()) return it->second;
   }
@@ -162,7 +166,8 @@ std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
   else
     return {};
   const bool several = refined.map.objects.size() > 1;
-  const std::string main_body = several ? refined.map.objects[FirstMovingObject(refined.map)].name : "";
+  const std::string main_body =
+      refined.map.objects.empty() ? "" : refined.map.objects[FirstMovingObject(refined.map)].name;
   if (have_file_trajectory_) {
     refined.trajectory = file_trajectory_;
     for (const auto& [body, rows] : file_body_trajectories_) {
@@ -453,7 +458,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
           if (browsing) scene.SetCurrentFrame(shown);
           dirty = true;
         }
-        const std::string main_body = map.objects.size() > 1 ? map.objects[FirstMovingObject(map)].name : "";
+        const std::string main_body = map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
         for (const auto& [body, stream] : collector->body_poses()) {
           if (body == main_body) continue;
           int64_t& body_shown = poses_shown[body];

@@ -628,7 +628,6 @@ std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::s
     if (map.objects.empty()) out.emplace_back("", outdir + "/trajectory.csv");
     for (const MapObject& o : map.objects)
       if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
-    if (map.objects.size() == 1 && !out.empty()) out[0].first.clear();  // one body: today's names
     if (out.empty())
       throw FileFormatError(map_path +
                             ": every body is static: no trajectory to export (their poses are "
@@ -637,6 +636,31 @@ std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::s
   for (const auto& [body, path] : out)
     if (::stat(path.c_str(), &st) != 0)
       throw FileFormatError(path + ": no such trajectory (is " + outdir + " an mcmt-mapper OUTDIR?)");
+  return out;
+}
+
+std::string BodyPath(const std::string& path, const std::string& body) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && dot > (slash == std::string::npos ? 0 : slash + 1);
+  return has_ext ? path.substr(0, dot) + "_" + body + path.substr(dot) : path + "_" + body;
+}
+
+std::vector<std::pair<std::string, std::string>> BodyTrajectoryFiles(const std::string& path,
+                                                                     const RigMap& map) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return MapperTrajectories(path);
+  std::vector<std::pair<std::string, std::string>> out;
+  std::string looked;
+  for (const MapObject& o : map.objects) {
+    if (o.is_static) continue;
+    const std::string file = BodyPath(path, o.name);
+    looked += (looked.empty() ? "" : ", ") + file;
+    if (::stat(file.c_str(), &st) == 0) out.emplace_back(o.name, file);
+  }
+  if (out.empty())
+    throw FileFormatError(path + ": neither the mapper's OUTDIR nor the tracker's per-body files (" +
+                          (looked.empty() ? std::string("the map has no moving body") : looked) + ")");
   return out;
 }
 

@@ -357,13 +357,6 @@ std::string MarkersObj(const RigMap& map) { return MarkersObj(map.markers); }
 
 bool HasSeveralBodies(const RigMap& map) { return map.objects.size() > 1; }
 
-std::string BodyPath(const std::string& path, const std::string& body) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  const bool has_ext = dot != std::string::npos && dot > (slash == std::string::npos ? 0 : slash + 1);
-  return has_ext ? path.substr(0, dot) + "_" + body + path.substr(dot) : path + "_" + body;
-}
-
 void WriteLayouts(const RigMap& map, const std::string& path, const std::string& format,
                   const std::function<std::string(const std::vector<MapMarker>&, const std::string&)>& text) {
   if (!HasSeveralBodies(map)) {

@@ -181,12 +181,13 @@ TEST(EvalBodies, TrajectoriesByBodyFromALogOfPoseChannels) {
       }
     w.Close();
   }
-  const auto rows = ReadBodyTrajectories(log);
+  const auto rows = ReadBodyTrajectories(log, RigMap());
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows.at("tool").size(), 6u);
   EXPECT_EQ(rows.at("patient").size(), 5u);  // the LOST one left out
   EXPECT_EQ(rows.at("tool_in_patient").size(), 6u);
-  EXPECT_THROW(ReadBodyTrajectories(dir.str()), FileFormatError);  // neither a mapper OUTDIR nor a log
+  EXPECT_THROW(ReadBodyTrajectories(dir.str(), RigMap()),
+               FileFormatError);  // neither a mapper OUTDIR nor a log
 }
 
 // The real programs on a bodies session: mcmt-eval's JSON per body within the targets, the same
@@ -222,7 +223,7 @@ TEST(EvalBodiesProcess, SimMapperEvalPerBody) {
   }
   // The same figures as the library on the same files.
   const RigMap map = ReadMap(o + "/map.yaml");
-  const auto trajectories = ReadBodyTrajectories(o);
+  const auto trajectories = ReadBodyTrajectories(o, map);
   const auto bodies = EvaluateBodies(ReadBodyTruths(s + "/ground_truth.yaml", map), map, &trajectories);
   for (size_t k = 0; k < bodies.size(); ++k) {
     EXPECT_EQ(json["bodies"][k]["name"].as<std::string>(), bodies[k].name);
@@ -231,6 +232,12 @@ TEST(EvalBodiesProcess, SimMapperEvalPerBody) {
     EXPECT_NEAR(json["bodies"][k]["markers"]["configuration_mm"]["max"].as<double>(),
                 bodies[k].result.configuration_mm.max, 1e-8);
   }
+  // The tracker's --out PATH files (PATH_<body>.csv) give the same figures as the mapper's OUTDIR.
+  for (const char* body : {"tool", "patient"})
+    std::filesystem::copy_file(o + "/trajectory_" + body + ".csv", dir.str() + "/poses_" + body + ".csv");
+  const auto tracker_run = run(eval + " --trajectory " + dir.str() + "/poses.csv --json");
+  ASSERT_EQ(tracker_run.exit_code, 0) << tracker_run.output;
+  EXPECT_EQ(tracker_run.output, json_run.output);
   // Text: one section per body.
   const auto text = run(eval + " --trajectory " + o);
   ASSERT_EQ(text.exit_code, 0);

@@ -87,7 +87,8 @@ inline TestRig MakeTestRig(int num_cameras = 4, int frames = 12, double camera_r
 }
 
 // A map with several bodies (version 2) on the same cameras: "tool" (MakeTestRig's cube, ids 0-4, on its
-// circle), "patient" (the same cube shape at 0.8 scale, ids 10-14, on a circle of 0.12 m, 0.65 m high) and
+// trajectory), "patient" (the same cube shape at 0.8 scale, ids 10-14, on a circle of 0.1 m around
+// (0.5, 0, 0.2)) and
 // the static "floor" (8 markers of 0.1 m, ids 20-27, facing up on a ring of radius 0.9 m at z = 0,
 // around the others). trajectory: the tool's; bodies["patient"]: the patient's, same utimes.
 struct BodiesTestRig {
@@ -133,12 +134,12 @@ inline BodiesTestRig MakeBodiesTestRig(int frames = 24) {
   rig.map.objects = {tool, patient, floor};
   rig.map.version = kMapVersionBodies;
   rig.trajectory = base.trajectory;
-  // The patient: on a smaller circle (0.12 m) higher up (0.65 m, above the tool's trail as the cameras see it), half a turn ahead, turning as the tool.
+  // The patient: on a small circle (0.1 m) beside the tool's path (centre x = 0.5 m, 0.2 m high), turning.
   for (size_t k = 0; k < base.trajectory.size(); ++k) {
     const double a = 2.0 * M_PI * static_cast<double>(k) / std::max(frames, 1) + M_PI;
     Rigid3 world_from_patient = Rigid3::Identity();
     world_from_patient.linear() = Eigen::AngleAxisd(0.6 * a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    world_from_patient.translation() = Eigen::Vector3d(0.12 * std::cos(a), 0.12 * std::sin(a), 0.65);
+    world_from_patient.translation() = Eigen::Vector3d(0.5 + 0.1 * std::cos(a), 0.1 * std::sin(a), 0.2);
     TrajectoryRow p = base.trajectory[k];
     p.rig_from_object = Normalized(rig_from_world * world_from_patient);
     rig.bodies["patient"].push_back(p);
