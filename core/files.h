@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.h"
@@ -129,6 +130,20 @@ extern const char kTrajectoryHeader[];
 std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+
+// A body's file beside the asked one: "dir/name.ext" + "tool" -> "dir/name_tool.ext" (no extension:
+// "dir/name_tool"): the tracker's poses_<body>.csv for --out poses.csv, the exporter's per-body files.
+std::string BodyPath(const std::string& path, const std::string& body);
+
+// The trajectories of the mapper's OUTDIR as (body, path): OUTDIR/trajectory.csv for a single-object map
+// (body ""), one OUTDIR/trajectory_<body>.csv per moving body of OUTDIR/map.yaml's objects. Throws
+// FileFormatError naming the file that is missing.
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir);
+// The moving bodies' trajectories of a map with objects, given as `path`: the mapper's OUTDIR
+// (MapperTrajectories), or the tracker's --out PATH (BodyPath(PATH, body) per moving body, those that
+// exist). Throws FileFormatError naming the path and the files looked for when there is none.
+std::vector<std::pair<std::string, std::string>> BodyTrajectoryFiles(const std::string& path,
+                                                                     const RigMap& map);
 
 // The first key that appears twice in one mapping anywhere in `root` (yaml-cpp keeps both and answers
 // lookups with the first), as "LINE: duplicated key 'KEY' (first at line N)"; "" when none.

@@ -21,8 +21,10 @@
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/marker_t.hpp"
+#include "mcmt/object_layout_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/pose3d_t.hpp"
+#include "mcmt/rig_map2_t.hpp"
 #include "mcmt/rig_map_t.hpp"
 
 namespace mcmt {
@@ -62,6 +64,8 @@ bool CheckEncoded(const void* data, size_t size, const marker_t*, std::string* e
 bool CheckEncoded(const void* data, size_t size, const detections_t*, std::string* error);
 bool CheckEncoded(const void* data, size_t size, const pose3d_t*, std::string* error);
 bool CheckEncoded(const void* data, size_t size, const rig_map_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const object_layout_t*, std::string* error);
+bool CheckEncoded(const void* data, size_t size, const rig_map2_t*, std::string* error);
 bool CheckEncoded(const void* data, size_t size, const object_pose_t*, std::string* error);
 bool CheckEncoded(const void* data, size_t size, const mapper_status_t*, std::string* error);
 bool CheckEncoded(const void* data, size_t size, const mapper_command_t*, std::string* error);
@@ -119,6 +123,22 @@ camera_model_t ToCameraModelMsg(const CameraModel& model);
 CameraModel FromCameraModelMsg(const camera_model_t& msg);  // throws std::invalid_argument
 rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime);
 RigMap FromRigMapMsg(const rig_map_t& msg);
+// The map with its bodies (what mcmt-mapper publishes on MCMT_MAP): a version 1 map is one object with an
+// empty name, a version 2 map its objects (and, from the first moving one, `markers`, as ReadMap). Camera
+// clocks (time offsets and drifts) are carried; per-marker statistics are not.
+rig_map2_t ToRigMap2Msg(const RigMap& map, int64_t utime);
+RigMap FromRigMap2Msg(const rig_map2_t& msg);  // throws std::invalid_argument (camera model, no object)
+
+// A map message on MCMT_MAP of either type, told apart by its fingerprint: rig_map2_t (mcmt-mapper) or
+// rig_map_t (older logs and publishers). Every subscriber of MCMT_MAP decodes through this.
+struct MapMessage {
+  RigMap map;
+  int64_t utime = 0;
+  const char* type = "";  // "rig_map2_t" or "rig_map_t"
+};
+// False with a one-line reason in *error (a foreign fingerprint, a damaged buffer, an invalid camera model
+// or layout); never throws.
+bool DecodeMapMessage(const void* data, size_t size, MapMessage* out, std::string* error = nullptr);
 // A tracker pose as a trajectory row (utime, seq, rig_from_object, rms_px, cameras, markers); the status
 // is the caller's to check.
 TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg);

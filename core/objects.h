@@ -69,4 +69,10 @@ std::string DescribeIds(const std::set<int>& ids);
 // An object name as it appears in channel names: upper-cased ("tool" -> "TOOL").
 std::string ChannelSuffix(const std::string& object_name);
 
+// The body whose poses a channel carries, for readers of every MCMT_POSE* channel (viewer, exporter,
+// mcmt-eval): "" for MCMT_POSE itself (a single-object rig) and for a channel not starting with
+// "MCMT_POSE_"; else the message's object field when the channel is MCMT_POSE_<ChannelSuffix(object)>,
+// and otherwise the channel's suffix lower-cased ("MCMT_POSE_TOOL_IN_PATIENT" -> "tool_in_patient").
+std::string BodyOfPoseChannel(const std::string& channel, const std::string& object);
+
 }  // namespace mcmt

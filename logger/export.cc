@@ -16,14 +16,17 @@
 
 #include "core/lcm_util.h"
 #include "core/marker.h"
+#include "core/objects.h"
 #include "core/se3.h"
 #include "mcmt/camera_model_t.hpp"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/marker_t.hpp"
+#include "mcmt/object_layout_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/pose3d_t.hpp"
+#include "mcmt/rig_map2_t.hpp"
 #include "mcmt/rig_map_t.hpp"
 
 namespace mcmt {
@@ -59,6 +62,8 @@ const std::map<uint64_t, std::string>& KnownTypes() {
     AddKnownType<detections_t>(&t);
     AddKnownType<object_pose_t>(&t);
     AddKnownType<rig_map_t>(&t);
+    AddKnownType<rig_map2_t>(&t);
+    AddKnownType<object_layout_t>(&t);
     AddKnownType<mapper_status_t>(&t);
     AddKnownType<mapper_command_t>(&t);
     AddKnownType<camera_model_t>(&t);
@@ -110,11 +115,46 @@ std::string TumLine(int64_t utime, const double* p, const double* q_wxyz) {
 // ---------------------------------------------------------------------------------------------------------
 // Log -> CSV / TUM
 
+namespace {
+
+// The poses of one stream as poses CSV and TUM text.
+struct PoseText {
+  PoseExport out;
+  std::string poses_csv = std::string(kTrajectoryHeader) + "\n";
+  std::string tum = kTumHeader;
+};
+
+// Writes every stream's files (names: BodyPath for a body's stream), fills result->streams.
+void WritePoseStreams(std::vector<PoseText>* streams, const LogExportRequest& request,
+                      LogExportResult* result) {
+  for (PoseText& p : *streams) {
+    if (!request.poses_csv.empty())
+      p.out.poses_csv = p.out.body.empty() ? request.poses_csv : BodyPath(request.poses_csv, p.out.body);
+    if (!request.tum.empty())
+      p.out.tum = p.out.body.empty() ? request.tum : BodyPath(request.tum, p.out.body);
+  }
+  if (streams->empty()) {  // no pose at all: the asked files, empty (WhyPosesEmpty says why)
+    PoseText none;
+    if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, none.poses_csv);
+    if (!request.tum.empty()) WriteFileAtomic(request.tum, none.tum);
+    return;
+  }
+  for (PoseText& p : *streams) {
+    if (!p.out.poses_csv.empty()) WriteFileAtomic(p.out.poses_csv, p.poses_csv);
+    if (!p.out.tum.empty()) WriteFileAtomic(p.out.tum, p.tum);
+    result->pose_rows += p.out.rows;
+    result->poses_skipped += p.out.skipped;
+    result->streams.push_back(p.out);
+  }
+}
+
+}  // namespace
+
 LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request) {
   LogExportResult result;
   std::string det_csv = std::string(kDetectionsCsvHeader) + "\n";
-  std::string poses_csv = std::string(kTrajectoryHeader) + "\n";
-  std::string tum = kTumHeader;
+  std::map<std::string, PoseText> by_channel;  // MCMT_POSE and every MCMT_POSE_<BODY>
+  const std::string body_prefix = request.pose_channel + "_";
   const bool want_det = !request.detections_csv.empty();
   const bool want_poses = !request.poses_csv.empty() || !request.tum.empty();
   ForEachEvent(log, [&](const LogEvent& e, int64_t index, const std::string& part) {
@@ -134,29 +174,47 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
         det_csv += "\n";
         ++result.detection_rows;
       }
-    } else if (want_poses && e.channel == request.pose_channel) {
+    } else if (want_poses && (e.channel == request.pose_channel ||
+                              e.channel.compare(0, body_prefix.size(), body_prefix) == 0)) {
       object_pose_t pose;
       std::string error;
       if (!Decode(e.data.data(), e.data.size(), &pose, &error))
         throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
+      auto [it, fresh] = by_channel.try_emplace(e.channel);
+      PoseText& stream = it->second;
+      if (fresh) {
+        stream.out.source = e.channel;
+        if (e.channel != request.pose_channel) {
+          stream.out.body = BodyOfPoseChannel(e.channel, pose.object);
+          if (stream.out.body.find_first_not_of(
+                  "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
+            throw LogFormatError(EventWhere(part, e, index) + ": body name '" + stream.out.body +
+                                 "' cannot be part of a file name (letters, digits and _ only)");
+        }
+      }
       if (pose.status != object_pose_t::STATUS_TRACKING && pose.status != object_pose_t::STATUS_AMBIGUOUS) {
-        ++result.poses_skipped;
+        ++stream.out.skipped;
         return;
       }
       // The message's own numbers, in trajectory.csv's format (core's TrajectoryCsvLine would go through a
       // rotation matrix and could change the last digit of the quaternion).
       const double* p = pose.rig_from_object.position;
       const double* q = pose.rig_from_object.orientation;  // w x y z
-      poses_csv += std::to_string(pose.utime) + "," + std::to_string(pose.seq);
-      for (double v : {p[0], p[1], p[2], q[0], q[1], q[2], q[3], pose.rms_px}) poses_csv += "," + G17(v);
-      poses_csv += "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) + "\n";
-      tum += TumLine(pose.utime, p, q);
-      ++result.pose_rows;
+      stream.poses_csv += std::to_string(pose.utime) + "," + std::to_string(pose.seq);
+      for (double v : {p[0], p[1], p[2], q[0], q[1], q[2], q[3], pose.rms_px})
+        stream.poses_csv += "," + G17(v);
+      stream.poses_csv +=
+          "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) + "\n";
+      stream.tum += TumLine(pose.utime, p, q);
+      ++stream.out.rows;
     }
   });
   if (want_det) WriteFileAtomic(request.detections_csv, det_csv);
-  if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, poses_csv);
-  if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
+  if (want_poses) {
+    std::vector<PoseText> streams;
+    for (auto& [channel, stream] : by_channel) streams.push_back(std::move(stream));
+    WritePoseStreams(&streams, request, &result);
+  }
   return result;
 }
 
@@ -168,16 +226,28 @@ bool IsTrajectoryCsv(const std::string& path) {
 }
 
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request) {
-  LogExportResult result;
-  std::string poses_csv = std::string(kTrajectoryHeader) + "\n", tum = kTumHeader;
-  for (const TrajectoryRow& row : ReadTrajectory(csv)) {
-    poses_csv += TrajectoryCsvLine(row) + "\n";
-    const Eigen::Vector3d p = row.rig_from_object.translation();
-    tum += TumLine(row.utime, p.data(), QuaternionWxyz(row.rig_from_object).data());
-    ++result.pose_rows;
+  struct stat st;
+  const bool is_dir = ::stat(csv.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+  std::vector<std::pair<std::string, std::string>> sources =
+      is_dir ? MapperTrajectories(csv) : std::vector<std::pair<std::string, std::string>>{{"", csv}};
+  if (is_dir && sources.size() == 1 && !sources[0].first.empty() &&
+      ReadMap(csv + "/map.yaml").objects.size() == 1)
+    sources[0].first.clear();  // a map with one body keeps the asked name
+  std::vector<PoseText> streams;
+  for (const auto& [body, path] : sources) {
+    PoseText p;
+    p.out.body = body;
+    p.out.source = path;
+    for (const TrajectoryRow& row : ReadTrajectory(path)) {
+      p.poses_csv += TrajectoryCsvLine(row) + "\n";
+      const Eigen::Vector3d t = row.rig_from_object.translation();
+      p.tum += TumLine(row.utime, t.data(), QuaternionWxyz(row.rig_from_object).data());
+      ++p.out.rows;
+    }
+    streams.push_back(std::move(p));
   }
-  if (!request.poses_csv.empty()) WriteFileAtomic(request.poses_csv, poses_csv);
-  if (!request.tum.empty()) WriteFileAtomic(request.tum, tum);
+  LogExportResult result;
+  WritePoseStreams(&streams, request, &result);
   return result;
 }
 
@@ -188,10 +258,10 @@ std::string WhyPosesEmpty(const std::string& source, bool from_trajectory, const
   if (r.poses_skipped > 0)
     return "all " + std::to_string(r.poses_skipped) + " object_pose_t on " + pose_channel + " in " + source +
            " are LOST (no pose)";
-  return "no object_pose_t on " + pose_channel + " in " + source +
-         " (mcmt-tracker was not running while it was recorded); the mapper's poses are in "
+  return "no object_pose_t on " + pose_channel + " in " + source + " nor on " + pose_channel +
+         "_<BODY> (mcmt-tracker was not running while it was recorded); the mapper's poses are in "
          "OUTDIR/trajectory.csv: "
-         "give it as --trajectory OUTDIR/trajectory.csv";
+         "give it as --trajectory OUTDIR/trajectory.csv (several bodies: --trajectory OUTDIR)";
 }
 
 std::string WhyDetectionsEmpty(const std::string& log, const LogExportResult& r) {
@@ -249,7 +319,7 @@ LogSummary SummarizeLog(const std::string& log) {
           cam.ids.insert(m.id);
           s.marker_ids.insert(m.id);
         }
-      } else if (e.channel == kPoseChannel) {
+      } else if (e.channel == kPoseChannel || !BodyOfPoseChannel(e.channel, "").empty()) {
         object_pose_t pose;
         if (!Decode(e.data.data(), e.data.size(), &pose)) {
           ++c.undecodable;
@@ -257,8 +327,8 @@ LogSummary SummarizeLog(const std::string& log) {
         }
         ++s.pose_status[pose.status];
       } else if (e.channel == kMapChannel) {
-        rig_map_t map;
-        if (!Decode(e.data.data(), e.data.size(), &map)) {
+        MapMessage map;
+        if (!DecodeMapMessage(e.data.data(), e.data.size(), &map)) {
           ++c.undecodable;
           continue;
         }
@@ -391,17 +461,19 @@ RigMap ReadMapOrLog(const std::string& path) {
     std::fclose(f);
   }
   if (!is_log) return ReadMap(path);
-  rig_map_t last;
+  MapMessage last;  // rig_map2_t (mcmt-mapper) or rig_map_t (older logs)
   bool found = false;
   ForEachEvent(path, [&](const LogEvent& e, int64_t index, const std::string& part) {
     if (e.channel != kMapChannel) return;
     std::string error;
-    if (!Decode(e.data.data(), e.data.size(), &last, &error))
+    if (!DecodeMapMessage(e.data.data(), e.data.size(), &last, &error))
       throw LogFormatError(EventWhere(part, e, index) + ": " + error + ", found type " + TypeOf(e.data));
     found = true;
   });
-  if (!found) throw LogFormatError(path + ": no rig_map_t on " + std::string(kMapChannel) + " in this log");
-  return FromRigMapMsg(last);
+  if (!found)
+    throw LogFormatError(path + ": no map (rig_map2_t or rig_map_t) on " + std::string(kMapChannel) +
+                         " in this log");
+  return last.map;
 }
 
 }  // namespace mcmt

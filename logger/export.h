@@ -19,6 +19,10 @@ namespace mcmt {
 
 // ---- from a log ----------------------------------------------------------------------------------------
 
+// Poses of several bodies (a log with MCMT_POSE_<BODY> channels, or the mapper's OUTDIR of a map with
+// several bodies) go into one file per body: the asked path with "_<body>" before its extension
+// (core/map_export.h's BodyPath: --tum poses.tum writes poses_tool.tum, poses_patient.tum); poses on
+// MCMT_POSE itself (a single-object rig) keep the asked name.
 struct LogExportRequest {
   std::string detections_csv;  // one row per marker of every detections_t on MCMT_DETECTIONS_*
   std::string poses_csv;       // trajectory.csv format from object_pose_t on MCMT_POSE (TRACKING/AMBIGUOUS)
@@ -26,11 +30,21 @@ struct LogExportRequest {
   std::string pose_channel = "MCMT_POSE";
 };
 
+// One stream of poses exported: a body's (name "" for MCMT_POSE / a single trajectory.csv).
+struct PoseExport {
+  std::string body;
+  std::string source;          // the channel, or the trajectory file
+  std::string poses_csv, tum;  // the files written ("" when not asked)
+  int64_t rows = 0;
+  int64_t skipped = 0;  // LOST
+};
+
 struct LogExportResult {
   int64_t detection_messages = 0;
   int64_t detection_rows = 0;
-  int64_t pose_rows = 0;
-  int64_t poses_skipped = 0;  // LOST (no valid pose)
+  int64_t pose_rows = 0;            // every stream's
+  int64_t poses_skipped = 0;        // LOST (no valid pose)
+  std::vector<PoseExport> streams;  // in channel order; empty when the log holds no pose
 };
 
 // Reads the log strictly (LogParts: a split recording is read part after part). A message on a
@@ -41,8 +55,9 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
 // Is this file a trajectory CSV (first line kTrajectoryHeader: mcmt-mapper's trajectory.csv, mcmt-tracker's
 // or mcmt-export's poses.csv)?
 bool IsTrajectoryCsv(const std::string& path);
-// request.poses_csv / request.tum from a trajectory CSV (pose_rows counts its rows). Throws
-// FileFormatError naming the file and line.
+// request.poses_csv / request.tum from a trajectory CSV (pose_rows counts its rows), or from the mapper's
+// OUTDIR (core's MapperTrajectories: one file per moving body). Throws FileFormatError naming the file and
+// line.
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request);
 // Why an export came out empty (one line, naming the source and what to do), "" when it has rows.
 std::string WhyPosesEmpty(const std::string& source, bool from_trajectory, const LogExportResult& result,
@@ -90,7 +105,8 @@ std::string FormatSummary(const LogSummary& summary);
 
 // ---- from a map -----------------------------------------------------------------------------------------
 
-// map.yaml, or an LCM log: then the last rig_map_t on MCMT_MAP (throws naming the log when it has none).
+// map.yaml, or an LCM log: then the last map on MCMT_MAP, rig_map2_t (mcmt-mapper, several bodies) or
+// rig_map_t (older logs) (throws naming the log when it has none).
 RigMap ReadMapOrLog(const std::string& path);
 
 // The map exports (Kalibr, ROS, OpenCV, PLY, OBJ) are in core/map_export.h.

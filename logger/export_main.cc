@@ -100,6 +100,13 @@ bool ExportPosesAndDetections(const Request& r) {
     if (!why.empty()) std::cerr << "mcmt-export: " << r.det_csv << " is empty: " << why << "\n";
   }
   if (!r.poses_csv.empty() || !r.tum.empty()) {
+    for (const mcmt::PoseExport& s : result.streams) {
+      if (s.body.empty()) continue;
+      std::cerr << "mcmt-export: body " << s.body << " (" << s.source << "): " << s.rows << " poses";
+      if (!from_trajectory) std::cerr << " (" << s.skipped << " lost skipped)";
+      std::cerr << " -> " << s.poses_csv << (s.poses_csv.empty() || s.tum.empty() ? "" : ", ") << s.tum
+                << "\n";
+    }
     std::cerr << "mcmt-export: " << result.pose_rows << " poses";
     if (!from_trajectory) std::cerr << " (" << result.poses_skipped << " lost skipped)";
     std::cerr << "\n";
@@ -130,17 +137,23 @@ bool ExportMap(const Request& r) {
 void AddOptions(mcmt::ArgParser* args, Request* r) {
   args->AddString("log", &r->log,
                   "LCM log to read (a split recording: NAME.lcmlog reads NAME.00.lcmlog, ...)");
-  args->AddString("trajectory", &r->trajectory,
-                  "trajectory.csv or poses.csv to read instead of --log, for --poses and --tum");
+  args->AddString(
+      "trajectory", &r->trajectory,
+      "trajectory.csv or poses.csv to read instead of --log, for --poses and --tum; or the mapper's "
+      "OUTDIR (several bodies: its trajectory_<body>.csv, one output file per body)");
   args->AddString("detections", &r->det_csv,
                   "from --log: detections CSV (utime,seq,camera,id,x0,y0,...,x3,y3)");
-  args->AddString("poses", &r->poses_csv,
-                  "from --log (MCMT_POSE) or --trajectory: poses CSV (trajectory.csv format)");
+  args->AddString(
+      "poses", &r->poses_csv,
+      "from --log (MCMT_POSE) or --trajectory: poses CSV (trajectory.csv format); poses of several "
+      "bodies (MCMT_POSE_<BODY>) go to PATH_<body>.csv, one file per body");
   args->AddString("tum", &r->tum,
-                  "from --log or --trajectory: poses in TUM format (timestamp tx ty tz qx qy qz qw)");
+                  "from --log or --trajectory: poses in TUM format (timestamp tx ty tz qx qy qz qw); several "
+                  "bodies: PATH_<body>.tum per body");
   args->AddFlag("summary", &r->summary,
                 "from --log: print channels, counts, rates, span, cameras, ids, seq gaps");
-  args->AddString("map", &r->map_path, "map.yaml to read, or a log: its last rig_map_t on MCMT_MAP");
+  args->AddString("map", &r->map_path,
+                  "map.yaml to read, or a log: its last map on MCMT_MAP (rig_map2_t or rig_map_t)");
   const std::vector<mcmt::MapExportFormat>& formats = mcmt::MapExportFormats();
   r->map_paths.resize(formats.size());
   for (size_t i = 0; i < formats.size(); ++i)
@@ -158,6 +171,9 @@ void AddOptions(mcmt::ArgParser* args, Request* r) {
       "  mcmt-export --summary session.lcmlog\n"
       "  mcmt-export --log session.lcmlog --detections det.csv --poses poses.csv --tum poses.tum\n"
       "  mcmt-export --trajectory map/trajectory.csv --tum trajectory.tum\n"
+      "  mcmt-export --trajectory map/ --tum poses.tum --ply layout.ply --map map/map.yaml   (several "
+      "bodies: "
+      "poses_<body>.tum, layout_<body>.ply)\n"
       "  mcmt-export --map out/map.yaml --kalibr camchain.yaml --ros-dir ros/ --opencv map.yml --ply "
       "object.ply\n"
       "  mcmt-export --detections-to-log det.csv --out det.lcmlog --config rig.yaml\n");

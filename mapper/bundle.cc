@@ -2,12 +2,14 @@
 
 #include <ceres/normal_prior.h>
 
-#include <Eigen/SparseCholesky>
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 
 #include "core/math.h"
 
@@ -502,6 +504,99 @@ Rigid3 ObservedFramePose(const BundleProblem& bp, size_t k) {
   return pose;
 }
 
+namespace {
+
+// The information (J^T J) of the unknowns other than the frame poses, marginal over the frames: each
+// residual touches one frame block, so the frames' part of J^T J is block-diagonal (6 x 6 per frame) and
+// the Schur complement S = H_rr - H_rf H_ff^-1 H_fr is formed frame by frame (dense, a few hundred
+// unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). `j` has
+// the reduced unknowns' columns first (num_reduced), then the frames' (6 each).
+Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
+  // The rows of each frame (a row without a frame column: frame -1, first).
+  std::vector<int> row_frame(j.num_rows, -1), order(j.num_rows);
+  for (int row = 0; row < j.num_rows; ++row)
+    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k)
+      if (j.cols[k] >= num_reduced) row_frame[row] = (j.cols[k] - num_reduced) / 6;
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return row_frame[a] < row_frame[b]; });
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(num_reduced, num_reduced);
+  std::vector<int> slot(num_reduced, -1), seen;  // a frame's reduced unknowns and their rows in hrf
+  Eigen::Matrix<double, Eigen::Dynamic, 6> hrf(num_reduced, 6);
+  Eigen::Matrix<double, 6, 6> hff;
+  // Rows with the same columns (one residual block's 8) are gathered and added as one product.
+  std::vector<int> cols, row_cols;
+  std::vector<double> row_values;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
+  int group_rows = 0, group_frame = -1;
+  auto finish_group = [&]() {
+    if (group_rows == 0) return;
+    const auto r = jr.topRows(group_rows);
+    const Eigen::MatrixXd rr = r.transpose() * r;
+    for (size_t a = 0; a < cols.size(); ++a)
+      for (size_t b = 0; b < cols.size(); ++b) s(cols[a], cols[b]) += rr(a, b);
+    if (group_frame >= 0) {
+      const auto f = jf.topRows(group_rows);
+      hff += f.transpose() * f;
+      const Eigen::MatrixXd rf = r.transpose() * f;
+      for (size_t a = 0; a < cols.size(); ++a) {
+        if (slot[cols[a]] < 0) {
+          slot[cols[a]] = static_cast<int>(seen.size());
+          hrf.row(seen.size()).setZero();
+          seen.push_back(cols[a]);
+        }
+        hrf.row(slot[cols[a]]) += rf.row(a);
+      }
+    }
+    group_rows = 0;
+  };
+  auto finish_frame = [&]() {
+    finish_group();
+    if (!seen.empty()) {
+      const Eigen::MatrixXd b = hrf.topRows(static_cast<int>(seen.size()));
+      const Eigen::MatrixXd update = b * Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(b.transpose());
+      for (size_t x = 0; x < seen.size(); ++x)
+        for (size_t y = 0; y < seen.size(); ++y) s(seen[x], seen[y]) -= update(x, y);
+    }
+    for (int c : seen) slot[c] = -1;
+    seen.clear();
+    hff.setZero();
+  };
+  hff.setZero();
+  for (size_t i = 0; i < order.size(); ++i) {
+    const int row = order[i];
+    if (i > 0 && row_frame[row] != row_frame[order[i - 1]]) finish_frame();
+    row_cols.clear();
+    row_values.clear();
+    Eigen::Matrix<double, 1, 6> row_jf = Eigen::Matrix<double, 1, 6>::Zero();
+    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k) {
+      if (j.cols[k] < num_reduced) {
+        row_cols.push_back(j.cols[k]);
+        row_values.push_back(j.values[k]);
+      } else {
+        row_jf((j.cols[k] - num_reduced) % 6) = j.values[k];
+      }
+    }
+    if (group_rows > 0 && row_cols != cols) finish_group();
+    if (group_rows == 0) {
+      cols = row_cols;
+      group_frame = row_frame[row];
+      jr.resize(8, static_cast<int>(cols.size()));
+      jf.resize(8, 6);
+    } else if (group_rows == jr.rows()) {
+      jr.conservativeResize(2 * group_rows, Eigen::NoChange);
+      jf.conservativeResize(2 * group_rows, Eigen::NoChange);
+    }
+    for (size_t a = 0; a < cols.size(); ++a) jr(group_rows, static_cast<int>(a)) = row_values[a];
+    jf.row(group_rows) = row_jf;
+    ++group_rows;
+  }
+  finish_frame();
+  return s;
+}
+
+}  // namespace
+
 std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
   std::vector<Eigen::MatrixXd> out(bp->cam_from_rig.size());
   BuiltProblem built;
@@ -509,27 +604,31 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigm
   delete built.ordering;
   if (built.num_corners == 0) return out;
   ceres::Problem& problem = *built.problem;
-  std::vector<double*> all, blocks;
+  std::vector<double*> all, blocks, frames;
   problem.GetParameterBlocks(&all);
   std::map<const double*, int> column;
   int cols = 0;
+  const double* first_frame = bp->rig_from_object.empty() ? nullptr : bp->rig_from_object.front().data();
+  const double* end_frame = first_frame + 7 * bp->rig_from_object.size();
   for (double* b : all) {
     if (problem.IsParameterBlockConstant(b)) continue;
+    if (b >= first_frame && b < end_frame) {
+      frames.push_back(b);
+      continue;
+    }
     blocks.push_back(b);
     column[b] = cols;
     cols += problem.ParameterBlockTangentSize(b);
   }
+  const int num_reduced = cols;
+  blocks.insert(blocks.end(), frames.begin(), frames.end());  // the frames' columns last, 6 each
   ceres::Problem::EvaluateOptions eo;
   eo.parameter_blocks = blocks;
   eo.apply_loss_function = false;
   eo.num_threads = std::max(1, threads);
   ceres::CRSMatrix crs;
   if (!problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs)) return out;
-  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> j(
-      crs.num_rows, crs.num_cols, static_cast<int>(crs.values.size()), crs.rows.data(), crs.cols.data(),
-      crs.values.data());
-  const Eigen::SparseMatrix<double> h = (j.transpose() * j).pruned();
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(FramesMarginalised(crs, num_reduced));
   if (ldlt.info() != Eigen::Success) return out;
   for (size_t c = 0; c < out.size(); ++c) {
     if (!bp->RefinesIntrinsics(static_cast<int>(c))) continue;
@@ -541,7 +640,7 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigm
     std::vector<int> entries;  // tangent index -> entry
     for (int k = 0; k < n; ++k)
       if (std::find(in.constant.begin(), in.constant.end(), k) == in.constant.end()) entries.push_back(k);
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(cols, static_cast<int>(entries.size()));
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_reduced, static_cast<int>(entries.size()));
     for (size_t a = 0; a < entries.size(); ++a) rhs(it->second + static_cast<int>(a), a) = 1.0;
     const Eigen::MatrixXd x = ldlt.solve(rhs);
     for (size_t a = 0; a < entries.size(); ++a)

@@ -33,10 +33,12 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
                                                        const std::vector<std::string>& camera_names,
                                                        double sigma_px, int threads, BundleProblem* problem);
 
-// After a solve with the intrinsics free: per camera and entry, a change from the given value that the
-// data do not call for -- within 1.96 posterior sigmas (95 %) -- is undone and the entry held at the given
-// value (a calibration the data agree with is not traded for the data's own
-// noise). Returns true when a group was held (the caller re-solves).
+// After a solve with the intrinsics free: changes from the given values that the data do not call for
+// are undone and the entries held at the given values (a calibration the data agree with is not traded
+// for the data's own noise). Per camera, first all its entries together: held when the changes'
+// Mahalanobis distance is within the chi-square level of a 5 % chance, family-wise over the cameras, of
+// changing a right calibration; a camera that differs keeps free only its entries changed by more than
+// 1.96 posterior sigmas. Returns true when an entry was held (the caller re-solves).
 bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
                             BundleProblem* problem);
 

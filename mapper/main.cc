@@ -84,7 +84,7 @@ int Run(int argc, char** argv) {
       "mapper_command_t\n"
       "\"solve\" on MCMT_MAPPER_COMMAND, or the --frames/--seconds limit; then solves, writes OUTDIR and "
       "publishes\n"
-      "rig_map_t on MCMT_MAP (status on MCMT_MAPPER_STATUS).\n"
+      "rig_map2_t on MCMT_MAP (status on MCMT_MAPPER_STATUS).\n"
       "examples:\n"
       "  mcmt-mapper --config rig.yaml --log session.lcmlog --out map/\n"
       "  mcmt-mapper --config rig.yaml --out map/ --seconds 60\n"

@@ -256,7 +256,7 @@ void MaintainNode::Publish(const RigMap& map, const std::string& message) {
     WriteMap((std::filesystem::path(node_options_.outdir) / "map.yaml").string(), map_);
   }
   if (output_) {
-    const rig_map_t msg = ToRigMapMsg(map_, map_utime_);
+    const rig_map2_t msg = ToRigMap2Msg(map_, map_utime_);
     output_->publish(kMapChannel, &msg);
   }
   log_ << message << "\n";

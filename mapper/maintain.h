@@ -16,7 +16,7 @@
 //   checks    the camera is reported moved (or added) by the update, and its RMS in the new map is at most
 //             maintain_max_rms_ratio x the median of the other cameras' (else nothing is published and the
 //             reason goes into the status message)
-//   publishes the new map on MCMT_MAP (rig_map_t utime: the map's version, higher than every map before),
+//   publishes the new map on MCMT_MAP (rig_map2_t utime: the map's version, higher than every map before),
 //             the change as a mapper_status_t (STATE_DONE) on MCMT_MAPPER_STATUS, and the map file in
 //             --out when given
 // Trackers switch to the newer map between frames (tracker/tracker_node.cc) and judge every camera

@@ -353,7 +353,7 @@ MapResult MapperNode::SolveWriteAndPublish() {
          << " markers, " << (o.is_static ? "" : std::to_string(o.num_frames) + " frames, ")
          << o.num_observations << " observations, rms " << o.rms_px << " px\n";
   if (options_.publish && output_) {
-    const rig_map_t msg = ToRigMapMsg(result.map, NowUtime());
+    const rig_map2_t msg = ToRigMap2Msg(result.map, NowUtime());
     output_->publish(kMapChannel, &msg);
     PublishStatus(mapper_status_t::STATE_DONE, summary.str(), r.iterations, 0.0, r.final_rms_px);
   }

@@ -1,6 +1,6 @@
 // The mcmt-mapper process around the Mapper: collects detections from live LCM or a log (core's log
 // reader: damage is skipped and reported), shows progress, solves when told, writes the files and
-// publishes rig_map_t on MCMT_MAP and mapper_status_t on MCMT_MAPPER_STATUS.
+// publishes rig_map2_t on MCMT_MAP and mapper_status_t on MCMT_MAPPER_STATUS.
 // Every message is checked where it enters (one-line warnings naming camera and channel): undecodable,
 // camera field vs channel, invalid camera model, non-finite corners, a camera model that changes
 // mid-stream; repeated messages (same camera, seq, utime) are dropped and counted (report.json

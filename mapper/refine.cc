@@ -166,24 +166,29 @@ void RefineWithRejection(const Observations& observations, const ObservationName
   double sigma_px = 0.0;
   BundleSettings solve_settings = settings;
   BundleProblem& bp = bundle->problem;
-  if (o.intrinsics.refine != IntrinsicsRefinement::kNone || o.estimate_time_offsets) {
-    // Poses first at the given intrinsics (no rejection yet: rough intrinsics leave large residuals
-    // that are not outliers), then the intrinsics the data can constrain join the unknowns.
-    const BundleSummary first = Solve(settings, bundle, report);
-    if (!first.usable) throw MapperError("refinement failed: " + first.termination);
-    // Corner noise per coordinate: the observations' RMS corner distance / sqrt(2).
-    sigma_px = std::max(0.05, CurrentRms(bundle->problem) / std::sqrt(2.0));
-    report->intrinsics =
-        PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px, settings.threads, &bp);
+  const bool intrinsics = o.intrinsics.refine != IntrinsicsRefinement::kNone;
+  if (intrinsics || o.estimate_time_offsets) {
+    if (intrinsics) {
+      // Poses first at the given intrinsics (no rejection yet: rough intrinsics leave large residuals
+      // that are not outliers), then the intrinsics the data can constrain join the unknowns. (The clocks
+      // alone join at once: the poses-first solve took a fifth of the time-offset mapping and changed
+      // the offsets by 1 us.)
+      const BundleSummary first = Solve(settings, bundle, report);
+      if (!first.usable) throw MapperError("refinement failed: " + first.termination);
+      // Corner noise per coordinate: the observations' RMS corner distance / sqrt(2).
+      sigma_px = std::max(0.05, CurrentRms(bundle->problem) / std::sqrt(2.0));
+      report->intrinsics =
+          PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px, settings.threads, &bp);
+      // An intrinsic trades with the camera's pose and barely moves the RMS per iteration: the paper's
+      // stopping rule would end the solve long before the intrinsics arrive (cx 8 px off stayed 7.4
+      // off): it stops at a 100 times smaller RMS improvement.
+      solve_settings.paper_stop_px = 0.01 * settings.paper_stop_px;
+    }
     if (o.estimate_time_offsets) {
       bp.time_offset_s.assign(bp.cam_from_rig.size(), 0.0);
       bp.time_offset_fixed = bp.camera_fixed;  // the reference camera's clock is the rig's
       if (o.estimate_clock_drift) bp.time_drift.assign(bp.cam_from_rig.size(), 0.0);
     }
-    // An intrinsic trades with the camera's pose and barely moves the RMS per iteration: the paper's
-    // stopping rule would end the solve long before the intrinsics arrive (cx 8 px off stayed 7.4 off):
-    // it stops at a 100 times smaller RMS improvement.
-    solve_settings.paper_stop_px = 0.01 * settings.paper_stop_px;
   }
   for (int round = 0;; ++round) {
     if (bp.RefinesTime()) UpdateFrameVelocities(VelocityGapS(bp), &bp);

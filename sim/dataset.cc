@@ -151,6 +151,27 @@ void RemoveStaleFrames(const fs::path& folder, const std::vector<SimFrame>& fram
 
 namespace internal {
 
+std::vector<CameraModel> WrittenModels(const DatasetOptions& o, const std::vector<SimCamera>& cameras) {
+  CheckCameraNames(o.intrinsics_errors, cameras, "--intrinsics-error");
+  CheckCameraNames(o.clocks, cameras, "--clock");
+  std::vector<CameraModel> written;
+  for (const SimCamera& c : cameras) {
+    const auto e = o.intrinsics_errors.find(c.name);
+    written.push_back(e == o.intrinsics_errors.end() ? c.model : PerturbedModel(c.model, e->second));
+  }
+  return written;
+}
+
+PublishFn CamerasTold(const DatasetOptions& o, const std::vector<SimCamera>& cameras,
+                      const std::vector<CameraModel>& written_models) {
+  if (o.intrinsics_errors.empty() && o.clocks.empty()) return PublishFn();
+  return [&o, &cameras, &written_models](size_t k, detections_t* msg) {
+    msg->camera_model = ToCameraModelMsg(written_models[k]);
+    const auto clock = o.clocks.find(cameras[k].name);
+    if (clock != o.clocks.end()) msg->utime = ClockUtime(clock->second, msg->utime);
+  };
+}
+
 void SimulateFrames(const std::vector<SimCamera>& cameras, size_t frames, const DetectionSimOptions& d,
                     uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at,
                     const std::function<void(size_t k, const detections_t& message)>& publish) {
@@ -251,15 +272,9 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
   truth.frames = frames;
   AddCameraChanges(o, &truth);
   const std::vector<SimCamera>& cameras = truth.cameras;
-  CheckCameraNames(o.intrinsics_errors, cameras, "--intrinsics-error");
-  CheckCameraNames(o.clocks, cameras, "--clock");
   truth.clocks = o.clocks;
   // The intrinsics the rig is written with (and the detections report): the truth unless perturbed.
-  std::vector<CameraModel> written_models;
-  for (const SimCamera& c : cameras) {
-    const auto e = o.intrinsics_errors.find(c.name);
-    written_models.push_back(e == o.intrinsics_errors.end() ? c.model : PerturbedModel(c.model, e->second));
-  }
+  const std::vector<CameraModel> written_models = internal::WrittenModels(o, cameras);
 
   // Check the dictionary and the ids before writing anything.
   cv::Ptr<cv::aruco::Dictionary> dict = LoadDictionary(o.dictionary);
@@ -291,13 +306,7 @@ DatasetSummary GenerateDataset(const DatasetOptions& o) {
           *camera = CameraAtFrame(cameras[k], truth, f.seq);
           return true;
         },
-        o.intrinsics_errors.empty() && o.clocks.empty()
-            ? internal::PublishFn()
-            : [&](size_t k, detections_t* msg) {
-                msg->camera_model = ToCameraModelMsg(written_models[k]);
-                const auto clock = o.clocks.find(cameras[k].name);
-                if (clock != o.clocks.end()) msg->utime = ClockUtime(clock->second, msg->utime);
-              });
+        internal::CamerasTold(o, cameras, written_models));
   } else {
     Renderer renderer(object, o.dictionary, o.render);
     const int n_cams = static_cast<int>(cameras.size());

@@ -13,6 +13,7 @@
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
 #include "core/marker.h"
+#include "core/objects.h"
 #include "core/se3.h"
 #include "mcmt/object_pose_t.hpp"
 
@@ -291,60 +292,68 @@ RigMap SelectObject(const RigMap& map, const std::string& object, const GroundTr
   return map.ObjectMap(static_cast<size_t>(found - map.objects.data()));
 }
 
-std::string FormatTable(const EvalResult& r) {
-  std::ostringstream s;
-  s << "| metric (after rigid alignment)   | mean    | median  | max     |\n";
-  s << "|----------------------------------|---------|---------|---------|\n";
-  auto line = [&](const std::string& name, const Stats& st) {
-    std::string n = name;
-    if (n.size() < 32) n += std::string(32 - n.size(), ' ');
-    s << "| " << n << " | " << Fmt(st.mean) << std::string(std::max(0, 7 - (int)Fmt(st.mean).size()), ' ')
-      << " | " << Fmt(st.median) << std::string(std::max(0, 7 - (int)Fmt(st.median).size()), ' ') << " | "
-      << Fmt(st.max) << std::string(std::max(0, 7 - (int)Fmt(st.max).size()), ' ') << " |\n";
-  };
+namespace {
+
+void StatsLine(std::ostringstream& s, const std::string& name, const Stats& st) {
+  std::string n = name;
+  if (n.size() < 32) n += std::string(32 - n.size(), ' ');
+  s << "| " << n << " | " << Fmt(st.mean) << std::string(std::max(0, 7 - (int)Fmt(st.mean).size()), ' ')
+    << " | " << Fmt(st.median) << std::string(std::max(0, 7 - (int)Fmt(st.median).size()), ' ') << " | "
+    << Fmt(st.max) << std::string(std::max(0, 7 - (int)Fmt(st.max).size()), ' ') << " |\n";
+}
+
+const char kStatsHeader[] =
+    "| metric (after rigid alignment)   | mean    | median  | max     |\n"
+    "|----------------------------------|---------|---------|---------|\n";
+
+void PoseLines(std::ostringstream& s, const EvalResult& r, const std::string& what) {
   if (r.has_trajectory && r.object_rotation_deg.count > 0) {
-    line("object rotation error (deg)", r.object_rotation_deg);
-    line("object translation error (mm)", r.object_translation_mm);
+    StatsLine(s, what + " rotation error (deg)", r.object_rotation_deg);
+    StatsLine(s, what + " translation error (mm)", r.object_translation_mm);
   }
-  line("camera position error (mm)", r.camera_position_mm);
-  line("object configuration error (mm)", r.configuration_mm);
-  line("camera rotation error (deg)", r.camera_rotation_deg);
-  if (r.has_trajectory && r.object_translation_aligned_mm.count > 0)
-    line("object transl. (traj. Horn) (mm)", r.object_translation_aligned_mm);
-  s << "\ncameras mapped: " << r.mapped_cameras << " / " << r.gt_cameras;
+}
+
+void CameraTable(std::ostringstream& s, const EvalResult& r) {
+  s << "\n| camera | position error (mm) | rotation error (deg) "
+       "|\n|--------|--------------------|----------------------|\n";
+  for (const auto& c : r.cameras)
+    s << "| " << c.name << " | " << Fmt(c.position_mm) << " | " << Fmt(c.rotation_deg, 4) << " |\n";
+}
+
+void MarkerTable(std::ostringstream& s, const EvalResult& r) {
+  s << "\n| marker | corner error (mm) | size error (mm) "
+       "|\n|--------|-------------------|-----------------|\n";
+  for (const auto& m : r.markers)
+    s << "| " << m.id << " | " << Fmt(m.corner_mm) << " | " << Fmt(m.size_mm) << " |\n";
+}
+
+void CamerasMapped(std::ostringstream& s, const EvalResult& r) {
+  s << "cameras mapped: " << r.mapped_cameras << " / " << r.gt_cameras;
   if (!r.missing_cameras.empty()) {
     s << " (missing:";
     for (const auto& n : r.missing_cameras) s << " " << n;
     s << ")";
   }
-  s << "; markers mapped: " << r.mapped_markers << " / " << r.gt_markers;
+}
+
+void MarkersMapped(std::ostringstream& s, const EvalResult& r) {
+  s << "markers mapped: " << r.mapped_markers << " / " << r.gt_markers;
   if (!r.missing_markers.empty()) {
     s << " (missing:";
     for (int id : r.missing_markers) s << " " << id;
     s << ")";
   }
-  s << "; map RMS reprojection error " << Fmt(r.map_rms_px) << " px\n";
-  if (r.has_trajectory) {
-    const double frac = r.gt_frames > 0 ? 100.0 * r.frames_with_pose / r.gt_frames : 0.0;
-    s << "frames with a pose: " << r.frames_with_pose << " / " << r.gt_frames << " (" << Fmt(frac, 1)
-      << " %)\n";
-  }
-  s << "\n| camera | position error (mm) | rotation error (deg) "
-       "|\n|--------|--------------------|----------------------|\n";
-  for (const auto& c : r.cameras)
-    s << "| " << c.name << " | " << Fmt(c.position_mm) << " | " << Fmt(c.rotation_deg, 4) << " |\n";
-  s << "\n| marker | corner error (mm) | size error (mm) "
-       "|\n|--------|-------------------|-----------------|\n";
-  for (const auto& m : r.markers)
-    s << "| " << m.id << " | " << Fmt(m.corner_mm) << " | " << Fmt(m.size_mm) << " |\n";
-  return s.str();
 }
 
-std::string FormatJson(const EvalResult& r) {
+void FramesWithPose(std::ostringstream& s, const EvalResult& r) {
+  const double frac = r.gt_frames > 0 ? 100.0 * r.frames_with_pose / r.gt_frames : 0.0;
+  s << "frames with a pose: " << r.frames_with_pose << " / " << r.gt_frames << " (" << Fmt(frac, 1)
+    << " %)\n";
+}
+
+std::string JsonCameras(const EvalResult& r) {
   std::ostringstream s;
-  s << "{\n";
-  s << "  \"cameras\": {\"ground_truth\": " << r.gt_cameras << ", \"mapped\": " << r.mapped_cameras
-    << ", \"missing\": [";
+  s << "{\"ground_truth\": " << r.gt_cameras << ", \"mapped\": " << r.mapped_cameras << ", \"missing\": [";
   for (size_t i = 0; i < r.missing_cameras.size(); ++i)
     s << (i ? ", " : "") << JsonString(r.missing_cameras[i]);
   s << "],\n    \"position_mm\": " << JsonStats(r.camera_position_mm)
@@ -353,29 +362,195 @@ std::string FormatJson(const EvalResult& r) {
     s << (i ? ", " : "") << "{\"name\": " << JsonString(r.cameras[i].name)
       << ", \"position_mm\": " << JsonNumber(r.cameras[i].position_mm)
       << ", \"rotation_deg\": " << JsonNumber(r.cameras[i].rotation_deg) << "}";
-  s << "]},\n";
-  s << "  \"markers\": {\"ground_truth\": " << r.gt_markers << ", \"mapped\": " << r.mapped_markers
-    << ", \"missing\": [";
+  s << "]}";
+  return s.str();
+}
+
+std::string JsonMarkers(const EvalResult& r) {
+  std::ostringstream s;
+  s << "{\"ground_truth\": " << r.gt_markers << ", \"mapped\": " << r.mapped_markers << ", \"missing\": [";
   for (size_t i = 0; i < r.missing_markers.size(); ++i) s << (i ? ", " : "") << r.missing_markers[i];
   s << "],\n    \"configuration_mm\": " << JsonStats(r.configuration_mm) << ",\n    \"per_marker\": [";
   for (size_t i = 0; i < r.markers.size(); ++i)
     s << (i ? ", " : "") << "{\"id\": " << r.markers[i].id
       << ", \"corner_mm\": " << JsonNumber(r.markers[i].corner_mm)
       << ", \"size_mm\": " << JsonNumber(r.markers[i].size_mm) << "}";
-  s << "]},\n";
+  s << "]}";
+  return s.str();
+}
+
+std::string JsonObject(const EvalResult& r) {
+  if (!r.has_trajectory) return "null";
+  std::ostringstream s;
+  s << "{\"ground_truth_frames\": " << r.gt_frames << ", \"frames_with_pose\": " << r.frames_with_pose
+    << ", \"fraction_with_pose\": "
+    << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
+    << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
+    << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
+    << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm) << "}";
+  return s.str();
+}
+
+}  // namespace
+
+std::string FormatTable(const EvalResult& r) {
+  std::ostringstream s;
+  s << kStatsHeader;
+  PoseLines(s, r, "object");
+  StatsLine(s, "camera position error (mm)", r.camera_position_mm);
+  StatsLine(s, "object configuration error (mm)", r.configuration_mm);
+  StatsLine(s, "camera rotation error (deg)", r.camera_rotation_deg);
+  if (r.has_trajectory && r.object_translation_aligned_mm.count > 0)
+    StatsLine(s, "object transl. (traj. Horn) (mm)", r.object_translation_aligned_mm);
+  s << "\n";
+  CamerasMapped(s, r);
+  s << "; ";
+  MarkersMapped(s, r);
+  s << "; map RMS reprojection error " << Fmt(r.map_rms_px) << " px\n";
+  if (r.has_trajectory) FramesWithPose(s, r);
+  CameraTable(s, r);
+  MarkerTable(s, r);
+  return s.str();
+}
+
+std::string FormatJson(const EvalResult& r) {
+  std::ostringstream s;
+  s << "{\n";
+  s << "  \"cameras\": " << JsonCameras(r) << ",\n";
+  s << "  \"markers\": " << JsonMarkers(r) << ",\n";
   s << "  \"map_rms_px\": " << JsonNumber(r.map_rms_px) << ",\n";
-  if (r.has_trajectory) {
-    s << "  \"object\": {\"ground_truth_frames\": " << r.gt_frames
-      << ", \"frames_with_pose\": " << r.frames_with_pose << ", \"fraction_with_pose\": "
-      << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
-      << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
-      << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
-      << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm)
-      << "}\n";
-  } else {
-    s << "  \"object\": null\n";
-  }
+  s << "  \"object\": " << JsonObject(r) << "\n";
   s << "}\n";
+  return s.str();
+}
+
+std::vector<BodyResult> EvaluateBodies(
+    const std::map<std::string, GroundTruth>& truths, const RigMap& map,
+    const std::map<std::string, std::vector<TrajectoryRow>>* trajectories) {
+  if (map.objects.empty())
+    throw EvalInputError("the map holds one object (version 1): no bodies to evaluate");
+  std::vector<BodyResult> out;
+  for (const MapObject& o : map.objects) {
+    auto truth = truths.find(o.name);
+    if (truth == truths.end()) throw EvalInputError("body '" + o.name + "' of the map has no ground truth");
+    std::vector<TrajectoryRow> trajectory;
+    bool with_poses = o.is_static;
+    if (!o.is_static && trajectories) {
+      auto t = trajectories->find(o.name);
+      if (t != trajectories->end()) {
+        trajectory = t->second;
+        with_poses = true;
+      }
+    }
+    BodyResult b;
+    b.name = o.name;
+    b.is_static = o.is_static;
+    const RigMap own = SelectObject(map, o.name, truth->second, &trajectory);
+    try {
+      b.result = Evaluate(truth->second, &own, with_poses ? &trajectory : nullptr);
+    } catch (const EvalInputError& e) {
+      throw EvalInputError("body '" + o.name + "': " + e.what());
+    }
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+std::map<std::string, GroundTruth> ReadBodyTruths(const std::string& ground_truth, const RigMap& map) {
+  const size_t slash = ground_truth.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : ground_truth.substr(0, slash);
+  std::map<std::string, GroundTruth> out;
+  for (const MapObject& o : map.objects) {
+    const std::string path = dir + "/ground_truth_" + o.name + ".yaml";
+    std::ifstream probe(path);
+    if (!probe)
+      throw EvalInputError(path + ": no ground truth for body '" + o.name +
+                           "' (mcmt-sim --scene bodies writes one per body beside ground_truth.yaml)");
+    out[o.name] = ReadGroundTruth(path);
+  }
+  return out;
+}
+
+std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path,
+                                                                       const RigMap& map) {
+  std::map<std::string, std::vector<TrajectoryRow>> out;
+  std::ifstream in(path, std::ios::binary);
+  unsigned char magic[4] = {0, 0, 0, 0};
+  const bool readable = static_cast<bool>(in.read(reinterpret_cast<char*>(magic), 4));
+  const bool is_log =
+      readable && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
+  if (!is_log) {
+    for (const auto& [body, file] : BodyTrajectoryFiles(path, map)) out[body] = ReadTrajectory(file);
+    return out;
+  }
+  int bad = 0;
+  const LogReadReport report = ForEachLogEvent(path, [&](const LogEvent& ev) {
+    if (ev.channel.rfind(std::string(kPoseChannel) + "_", 0) != 0) return true;
+    object_pose_t msg;
+    if (!Decode(ev.data.data(), ev.data.size(), &msg)) {
+      ++bad;
+      return true;
+    }
+    if (msg.status == object_pose_t::STATUS_TRACKING || msg.status == object_pose_t::STATUS_AMBIGUOUS)
+      out[BodyOfPoseChannel(ev.channel, msg.object)].push_back(FromObjectPoseMsg(msg));
+    return true;
+  });
+  if (report.damaged()) throw FileFormatError(path + ": " + report.Summary());
+  if (out.empty())
+    throw FileFormatError(path + ": no pose on " + kPoseChannel + "_<BODY>" +
+                          (bad > 0 ? " (" + std::to_string(bad) + " undecodable messages)" : ""));
+  return out;
+}
+
+std::string FormatBodiesTable(const std::vector<BodyResult>& bodies) {
+  std::ostringstream s;
+  if (bodies.empty()) return "";
+  const EvalResult& first = bodies.front().result;
+  s << "## cameras\n\n" << kStatsHeader;
+  StatsLine(s, "camera position error (mm)", first.camera_position_mm);
+  StatsLine(s, "camera rotation error (deg)", first.camera_rotation_deg);
+  s << "\n";
+  CamerasMapped(s, first);
+  s << "; map RMS reprojection error " << Fmt(first.map_rms_px) << " px\n";
+  CameraTable(s, first);
+  for (const BodyResult& b : bodies) {
+    const EvalResult& r = b.result;
+    s << "\n## body " << b.name << (b.is_static ? " (static)" : " (moving)") << "\n\n" << kStatsHeader;
+    StatsLine(s, "layout error (mm)", r.configuration_mm);
+    PoseLines(s, r, b.is_static ? "static" : "pose");
+    if (!b.is_static && r.has_trajectory && r.object_translation_aligned_mm.count > 0)
+      StatsLine(s, "pose transl. (traj. Horn) (mm)", r.object_translation_aligned_mm);
+    s << "\n";
+    MarkersMapped(s, r);
+    s << "\n";
+    if (!b.is_static) {
+      if (r.has_trajectory)
+        FramesWithPose(s, r);
+      else
+        s << "poses: not evaluated (give --trajectory OUTDIR or a log of MCMT_POSE_" << ChannelSuffix(b.name)
+          << ")\n";
+    }
+    MarkerTable(s, r);
+  }
+  return s.str();
+}
+
+std::string FormatBodiesJson(const std::vector<BodyResult>& bodies) {
+  std::ostringstream s;
+  s << "{\n";
+  if (!bodies.empty()) {
+    s << "  \"cameras\": " << JsonCameras(bodies.front().result) << ",\n";
+    s << "  \"map_rms_px\": " << JsonNumber(bodies.front().result.map_rms_px) << ",\n";
+  }
+  s << "  \"bodies\": [";
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    const BodyResult& b = bodies[i];
+    s << (i ? ",\n" : "\n") << "   {\"name\": " << JsonString(b.name)
+      << ", \"static\": " << (b.is_static ? "true" : "false")
+      << ",\n    \"markers\": " << JsonMarkers(b.result) << ",\n    \"poses\": " << JsonObject(b.result)
+      << "}";
+  }
+  s << "]\n}\n";
   return s.str();
 }
 

@@ -94,5 +94,39 @@ RigMap SelectObject(const RigMap& map, const std::string& object, const GroundTr
 std::string FormatTable(const EvalResult& result);
 std::string FormatJson(const EvalResult& result);
 
+// ---- several bodies (a version 2 map: mcmt-eval without --object) -------------------------------------
+
+struct BodyResult {
+  std::string name;
+  bool is_static = false;
+  EvalResult result;  // the body's layout, and its poses (a static body: its one pose in every frame)
+};
+
+// Every body of `map` against its own ground truth (`truths` by body name: the cameras, its markers in its
+// own frame, its pose per frame). A moving body is compared with trajectories->at(name) when there is one
+// (else its layout only); a static body's one rig_from_object in every ground-truth frame. The cameras are
+// aligned once per body on the same camera centres, so every body's camera figures are the same. Throws
+// EvalInputError naming the body without a ground truth, or when the map holds one object (version 1).
+std::vector<BodyResult> EvaluateBodies(const std::map<std::string, GroundTruth>& truths, const RigMap& map,
+                                       const std::map<std::string, std::vector<TrajectoryRow>>* trajectories);
+
+// ground_truth_<body>.yaml beside `ground_truth` (mcmt-sim --scene bodies) for every body of the map;
+// throws EvalInputError naming the missing file and body.
+std::map<std::string, GroundTruth> ReadBodyTruths(const std::string& ground_truth, const RigMap& map);
+
+// Trajectories by body: the mapper's OUTDIR (trajectory_<body>.csv), the tracker's --out PATH
+// (PATH_<body>.csv; both core's BodyTrajectoryFiles for `map`), or an LCM log with object_pose_t on
+// MCMT_POSE_<BODY> (the body named by core's BodyOfPoseChannel; TRACKING and
+// AMBIGUOUS poses). Streams of no body of the map (relative poses, MCMT_POSE_TOOL_IN_PATIENT) are kept
+// under their name and ignored by EvaluateBodies.
+std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path,
+                                                                       const RigMap& map);
+
+// The cameras once, then per body its layout and pose figures and its marker table.
+std::string FormatBodiesTable(const std::vector<BodyResult>& bodies);
+// {"cameras": ..., "map_rms_px": ..., "bodies": [{"name", "static", "markers": ..., "poses": ... | null}]}
+// (markers and poses as FormatJson's markers and object; a static body's poses: its one pose per frame).
+std::string FormatBodiesJson(const std::vector<BodyResult>& bodies);
+
 }  // namespace sim
 }  // namespace mcmt

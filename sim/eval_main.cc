@@ -1,6 +1,8 @@
 // mcmt-eval: accuracy of a map (and trajectory) against mcmt-sim's ground truth, as the paper measures.
 #include <iostream>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "core/cli.h"
 #include "core/files.h"
@@ -24,12 +26,17 @@ int Main(int argc, char** argv) {
                  "caliscope's camera_array.toml: report the map's agreement with it (camera centres aligned "
                  "rigidly; position and rotation differences per camera) instead of ground-truth errors");
   args.AddString("map", &map_path, "map.yaml written by mcmt-mapper", true);
-  args.AddString("trajectory", &trajectory_path,
-                 "trajectory.csv / poses.csv, or an LCM log with object_pose_t on MCMT_POSE");
-  args.AddString("object", &object,
-                 "a map with several bodies (version 2): the body to evaluate, against its own ground truth "
-                 "(mcmt-sim --scene bodies writes ground_truth_<body>.yaml); a static body's one pose is "
-                 "compared in every ground-truth frame");
+  args.AddString(
+      "trajectory", &trajectory_path,
+      "trajectory.csv / poses.csv, or an LCM log with object_pose_t on MCMT_POSE; a map with several "
+      "bodies: the mapper's OUTDIR (trajectory_<body>.csv), the tracker's --out PATH (PATH_<body>.csv) or a "
+      "log with MCMT_POSE_<BODY>");
+  args.AddString(
+      "object", &object,
+      "a map with several bodies (version 2): evaluate only this body, against its own ground truth "
+      "(mcmt-sim --scene bodies writes ground_truth_<body>.yaml); without it every body is "
+      "evaluated (cameras once, then each body's layout and poses); a static body's one pose is "
+      "compared in every ground-truth frame");
   args.AddFlag("json", &json, "print the figures as JSON instead of a table");
   args.AddEpilog(
       "\nFigures: object rotation (deg) and translation (mm) errors per frame, camera position (mm) and "
@@ -38,6 +45,8 @@ int Main(int argc, char** argv) {
       "do not match (camera names, marker ids, frame seqs).\n"
       "example:\n  mcmt-eval --ground-truth sim/ground_truth.yaml --map out/map.yaml --trajectory "
       "out/poses.csv\n"
+      "  mcmt-eval --ground-truth sim/ground_truth.yaml --map out/map.yaml --trajectory out/   (several "
+      "bodies)\n"
       "  mcmt-eval --caliscope data/camera_array.toml --map out/map.yaml\n");
   int exit_code = 0;
   if (!args.Parse(argc, argv, &exit_code)) return exit_code;
@@ -56,8 +65,22 @@ int Main(int argc, char** argv) {
     }
     return 0;
   }
-  const sim::GroundTruth truth = sim::ReadGroundTruth(ground_truth);
   const RigMap full = ReadMap(map_path);
+  if (!full.objects.empty() && object.empty()) {  // several bodies: every body against its own truth
+    std::map<std::string, std::vector<TrajectoryRow>> trajectories;
+    if (!trajectory_path.empty()) trajectories = sim::ReadBodyTrajectories(trajectory_path, full);
+    const std::vector<sim::BodyResult> bodies = sim::EvaluateBodies(
+        sim::ReadBodyTruths(ground_truth, full), full, trajectory_path.empty() ? nullptr : &trajectories);
+    if (json) {
+      std::cout << sim::FormatBodiesJson(bodies);
+    } else {
+      std::cout << "mcmt-eval: " << map_path << (trajectory_path.empty() ? "" : " + " + trajectory_path)
+                << " vs " << ground_truth << " (every body: ground_truth_<body>.yaml)\n\n"
+                << sim::FormatBodiesTable(bodies);
+    }
+    return 0;
+  }
+  const sim::GroundTruth truth = sim::ReadGroundTruth(ground_truth);
   std::vector<TrajectoryRow> trajectory;
   if (!trajectory_path.empty()) trajectory = sim::ReadTrajectoryAny(trajectory_path);
   const RigMap map = sim::SelectObject(full, object, truth, &trajectory);

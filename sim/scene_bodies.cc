@@ -74,6 +74,7 @@ GroundTruth BodyTruth(const SceneBody& body, const std::vector<SimCamera>& camer
   truth.cameras = cameras;
   truth.markers = body.object.markers;
   truth.frames = body.frames;
+  truth.clocks = o.clocks;
   return truth;
 }
 
@@ -110,17 +111,22 @@ std::vector<SceneBody> MakeBodiesScene(const DatasetOptions& o, bool with_static
   bodies.push_back(MovingBody("tool", ObjectKind::kFourSided, 0, o.trajectory.seed, 1.0, o));
   bodies.push_back(MovingBody("patient", ObjectKind::kCube, 10, o.trajectory.seed + 1, -1.0, o));
   if (with_static) {
-    SceneBody floor;
-    floor.name = "floor";
-    floor.is_static = true;
-    floor.object = FloorBoard(o.rig.radius, 20);
     Rigid3 rig_from_floor = Rigid3::Identity();
     rig_from_floor.translation() = Eigen::Vector3d(0, 0, o.trajectory.look_at_height - 0.25 * o.rig.radius);
-    floor.frames = bodies[0].frames;
-    for (SimFrame& f : floor.frames) f.rig_from_object = rig_from_floor;
-    bodies.push_back(floor);
+    bodies.push_back(StaticBody("floor", FloorBoard(o.rig.radius, 20), rig_from_floor, bodies[0].frames));
   }
   return bodies;
+}
+
+SceneBody StaticBody(const std::string& name, const SimObject& object, const Rigid3& rig_from_object,
+                     const std::vector<SimFrame>& like) {
+  SceneBody body;
+  body.name = name;
+  body.is_static = true;
+  body.object = object;
+  body.frames = like;
+  for (SimFrame& f : body.frames) f.rig_from_object = rig_from_object;
+  return body;
 }
 
 SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k) {
@@ -147,11 +153,10 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
   if (!o.detections_only)
     throw std::invalid_argument(
         "--scene bodies: only with --detections-only (no renderer for several bodies yet)");
-  if (!o.intrinsics_errors.empty() || !o.clocks.empty())
-    throw std::invalid_argument("--scene bodies: --intrinsics-error and --clock are for --scene object only");
   fs::create_directories(o.out_dir);
   const fs::path dir(o.out_dir);
   const std::vector<SimCamera> cameras = MakeRig(o.rig);
+  const std::vector<CameraModel> written_models = internal::WrittenModels(o, cameras);
   const std::vector<SceneBody> bodies = MakeBodiesScene(o);
   const int dictionary_size = LoadDictionary(o.dictionary)->bytesList.rows;
   for (const SceneBody& b : bodies)
@@ -161,7 +166,8 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
                                     o.dictionary);
 
   DatasetSummary summary;
-  for (const SimCamera& c : cameras) WriteIntrinsicsOpenCv((dir / (c.name + ".yml")).string(), c.model);
+  for (size_t k = 0; k < cameras.size(); ++k)
+    WriteIntrinsicsOpenCv((dir / (cameras[k].name + ".yml")).string(), written_models[k]);
   WriteFileAtomic((dir / "rig.yaml").string(), BodiesRigYaml(bodies, cameras, o));
   const std::vector<SceneBody> moving(bodies.begin(), bodies.begin() + 2);
   WriteFileAtomic((dir / "rig_moving.yaml").string(), BodiesRigYaml(moving, cameras, o));
@@ -174,14 +180,15 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
   d.dictionary = o.dictionary;
   d.dictionary_size = dictionary_size;
   SimObject scene;
-  summary.messages_written =
-      internal::WriteDetectionsLog((dir / "detections.lcmlog").string(), cameras, bodies[0].frames, d,
-                                   o.trajectory.seed, [&](size_t k, SimFrame* frame) -> const SimObject& {
-                                     scene = SceneAt(bodies, k);
-                                     *frame = bodies[0].frames[k];
-                                     frame->rig_from_object = Rigid3::Identity();
-                                     return scene;
-                                   });
+  summary.messages_written = internal::WriteDetectionsLog(
+      (dir / "detections.lcmlog").string(), cameras, bodies[0].frames, d, o.trajectory.seed,
+      [&](size_t k, SimFrame* frame) -> const SimObject& {
+        scene = SceneAt(bodies, k);
+        *frame = bodies[0].frames[k];
+        frame->rig_from_object = Rigid3::Identity();
+        return scene;
+      },
+      nullptr, internal::CamerasTold(o, cameras, written_models));
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -41,7 +41,9 @@ Session SimulateSession(const SessionOptions& o) {
   body.object = MakeObject(o.object);
   body.name = body.object.name;
   body.frames = MakeTrajectory(o.trajectory);
-  Session s = SimulateSession(MakeRig(o.rig), {body}, o.detections, o.trajectory.seed, o.camera_stagger_us);
+  std::vector<SceneBody> bodies = {body};
+  bodies.insert(bodies.end(), o.extra_bodies.begin(), o.extra_bodies.end());
+  Session s = SimulateSession(MakeRig(o.rig), bodies, o.detections, o.trajectory.seed, o.camera_stagger_us);
   s.fps = o.trajectory.fps;
   return s;
 }

@@ -462,6 +462,11 @@ struct SceneBody {
 // each other) at s = 1/4 and 3/4. `with_static`: false leaves the floor out.
 std::vector<SceneBody> MakeBodiesScene(const DatasetOptions& options, bool with_static = true);
 
+// A body that does not move: `object` at rig_from_object in every frame of `like` (same seqs and utimes),
+// is_static set (a floor, a marker fixed in the room).
+SceneBody StaticBody(const std::string& name, const SimObject& object, const Rigid3& rig_from_object,
+                     const std::vector<SimFrame>& like);
+
 // The scene's bodies at frame k as one object in the rig frame (markers and faces of all bodies): a
 // marker of one body hidden by another body is occluded.
 SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k);
@@ -500,9 +505,13 @@ struct SessionOptions {
   DetectionSimOptions detections;
   // Camera k's messages are stamped k * camera_stagger_us after the frame (cameras not triggered together).
   int64_t camera_stagger_us = 0;
+  // More bodies beside the object (bodies[1], ...; e.g. StaticBody: a marker fixed in the room), each with
+  // one pose per frame of the trajectory; their markers are detected and hide, and are hidden by, the others.
+  std::vector<SceneBody> extra_bodies;
 };
 
-// The rig, the object and its trajectory made from the options (MakeRig, MakeObject, MakeTrajectory).
+// The rig, the object and its trajectory made from the options (MakeRig, MakeObject, MakeTrajectory), and
+// the extra bodies.
 Session SimulateSession(const SessionOptions& options);
 // Given cameras and bodies (the same number of frames each; frame times and seqs are bodies[0]'s): the
 // detections of every body's markers, a body hiding markers of the others. Throws std::invalid_argument

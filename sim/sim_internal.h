@@ -55,6 +55,14 @@ int64_t WriteDetectionsLog(const std::string& path, const std::vector<SimCamera>
                            uint64_t seed, const SceneFn& scene, const CameraAtFrameFn& camera_at = nullptr,
                            const PublishFn& publish = nullptr);
 
+// --intrinsics-error and --clock (DatasetOptions): the intrinsics each camera is told (the rig's files and
+// its messages; the truth unless perturbed), and the publish step that puts them and the camera's clock
+// reading into its messages (empty when neither option is given; it refers to its arguments). Throws
+// naming the option for a camera not in the rig.
+std::vector<CameraModel> WrittenModels(const DatasetOptions& o, const std::vector<SimCamera>& cameras);
+PublishFn CamerasTold(const DatasetOptions& o, const std::vector<SimCamera>& cameras,
+                      const std::vector<CameraModel>& written_models);
+
 }  // namespace internal
 }  // namespace sim
 }  // namespace mcmt

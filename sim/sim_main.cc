@@ -73,10 +73,12 @@ int Main(int argc, char** argv) {
                  "folders are removed)",
                  true);
   args.AddString("object", &object, "four_sided | box | pentagon | cube | board");
-  args.AddString("scene", &scene,
-                 "object: one object (--object) | bodies: a static floor board and two moving objects, tool "
-                 "and patient, that cross and occlude each other (with --detections-only; rig.yaml lists "
-                 "objects:, ground_truth_<body>.yaml per body)");
+  args.AddString(
+      "scene", &scene,
+      "object: one object (--object) | bodies: a static floor board and two moving objects, tool "
+      "and patient, that cross and occlude each other (with --detections-only; rig.yaml lists "
+      "objects:, ground_truth_<body>.yaml per body; --intrinsics-error, --clock and --max-speed-m-s as "
+      "for object, each moving body at that top speed)");
   args.AddInt("cameras", &cameras, "number of cameras on the circle (named cam0 .. camN-1)");
   args.AddDouble("radius", &radius, "circle radius, metres");
   args.AddDouble("camera-height", &camera_height,
@@ -212,7 +214,10 @@ int Main(int argc, char** argv) {
   if (!(max_tilt >= 0 && max_tilt <= 90)) throw std::invalid_argument("--max-tilt-deg: expected 0..90");
   o.trajectory.max_tilt_deg = max_tilt;
   o.trajectory.turns = turns;
-  if (max_speed != 0.0) o.trajectory.time_scale = sim::TimeScaleForMaxSpeed(o.trajectory, max_speed);
+  if (max_speed != 0.0) {  // checked here (one line naming the option); each body's motion its own scale
+    o.trajectory.time_scale = sim::TimeScaleForMaxSpeed(o.trajectory, max_speed);
+    o.trajectory.max_speed_m_s = max_speed;
+  }
   if (!(noise >= 0 && noise <= 100)) throw std::invalid_argument("--noise: expected 0..100 gray levels");
   if (!(blur >= 0 && blur <= 50)) throw std::invalid_argument("--blur: expected 0..50 px");
   if (supersampling < 0 || supersampling > 16) throw std::invalid_argument("--supersampling: expected 0..16");

@@ -15,6 +15,12 @@
 
 namespace {
 
+std::string StreamChannels(const std::vector<mcmt::PoseStream>& streams) {
+  std::string out;
+  for (size_t k = 0; k < streams.size(); ++k) out += (k ? ", " : "") + streams[k].channel;
+  return out;
+}
+
 int Main(int argc, char** argv) {
   std::string config, map_path, log_path, out_path, lcm_url, channel;
   bool quiet = false;
@@ -22,7 +28,9 @@ int Main(int argc, char** argv) {
   mcmt::ArgParser args(
       "mcmt-tracker",
       "Tracks the object with a known map: one object_pose_t per frame on MCMT_POSE (rig_from_object,\n"
-      "covariance, RMS error, cameras and markers used, status, latency).");
+      "covariance, RMS error, cameras and markers used, status, latency). With several bodies (a map\n"
+      "with objects:), one per moving body on MCMT_POSE_<NAME>, and the relative poses of\n"
+      "tracker.relative on MCMT_POSE_<OF>_IN_<IN>.");
   args.AddString("config", &config, "rig YAML (cameras, markers, optional tracker: section)", true);
   args.AddString("map", &map_path,
                  "map.yaml from mcmt-mapper; without it: wait for MCMT_MAP; live, newer maps on MCMT_MAP "
@@ -30,13 +38,17 @@ int Main(int argc, char** argv) {
   args.AddString("log", &log_path, "process this LCM log as fast as possible instead of live traffic");
   args.AddString(
       "out", &out_path,
-      "write the trajectory (trajectory.csv format) here on exit, atomically; while running, every "
-      "pose is appended to OUT.partial at once (what survives a crash), removed at a clean exit");
+      "write the trajectory (trajectory.csv format) here on exit, atomically; with several bodies one "
+      "file per pose stream, OUT's name + _NAME (poses_tool.csv, poses_tool_in_patient.csv); while "
+      "running, every pose is appended to OUT.partial at once (what survives a crash), removed at a "
+      "clean exit");
   args.AddString(
       "lcm-url", &lcm_url,
       "LCM URL (default: lcm.url of the rig YAML, else LCM's default); with --log: publish poses there, "
       "as fast as the log is read (slow receivers over udpm may drop some)");
-  args.AddString("channel", &channel, "output channel (default: tracker.channel, else MCMT_POSE)");
+  args.AddString("channel", &channel,
+                 "output channel (default: tracker.channel, else MCMT_POSE); with several bodies the "
+                 "prefix of their channels");
   args.AddDouble("deadline-ms", &deadline_ms,
                  "frame deadline: wait this long after a frame's first detection for the other cameras "
                  "(overrides tracker.deadline_ms; raise it when cameras' messages lag each other)");
@@ -85,7 +97,7 @@ int Main(int argc, char** argv) {
   mcmt::TrackerNode node(*input, rig, options, map, output.get());
   if (!quiet)  // subscribed from here on (tests wait for this line)
     std::cerr << "mcmt-tracker: ready, " << (map ? "" : "waiting for MCMT_MAP, ") << "poses on "
-              << options.tracker.channel
+              << (node.streams().empty() ? options.tracker.channel : StreamChannels(node.streams()))
               << (options.log_mode && !output ? " (not published: --log without --lcm-url)" : "")
               << std::endl;
   mcmt::LogReadReport report;
@@ -94,11 +106,18 @@ int Main(int argc, char** argv) {
   else
     node.Run(stop);
   if (!out_path.empty()) {
-    mcmt::WriteTrajectory(out_path, node.trajectory());
+    // One file per pose stream: OUT for a single object, else OUT's name + _NAME (poses_tool.csv); the
+    // partial files go only once every final file is written.
+    if (node.streams().empty()) mcmt::WriteTrajectory(out_path, {});  // no map came
+    for (const mcmt::PoseStream& s : node.streams()) {
+      const std::string path = mcmt::StreamPath(out_path, s.name, s.single);
+      mcmt::WriteTrajectory(path, s.trajectory);
+      if (!quiet)
+        std::cerr << "mcmt-tracker: wrote " << s.trajectory.size() << " poses to " << path << std::endl;
+    }
     std::remove(options.partial_path.c_str());
-    if (!quiet)
-      std::cerr << "mcmt-tracker: wrote " << node.trajectory().size() << " poses to " << out_path
-                << std::endl;
+    for (const mcmt::PoseStream& s : node.streams())
+      if (!s.single) std::remove((mcmt::StreamPath(out_path, s.name, false) + ".partial").c_str());
   }
   if (report.damaged()) {
     std::cerr << "mcmt-tracker: " << report.Summary() << " (exit status " << mcmt::kExitDamagedLog << ")"

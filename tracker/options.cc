@@ -1,9 +1,14 @@
 // TrackerOptions from the rig YAML, map/rig consistency, constant-velocity motion model.
 #include "core/options.h"
 
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
+#include "core/objects.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
@@ -13,7 +18,8 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
   const auto H = [](auto HealthOptions::*member) { return OptionTable<O>::Of(&O::health, member); };
   static const OptionTable<O>* table =
       &(*new OptionTable<O>("tracker"))
-           .Add("channel", &O::channel, "output channel of object_pose_t", NotEmpty())
+           .Add("channel", &O::channel,
+                "output channel of object_pose_t (several bodies: their prefix, channel_NAME)", NotEmpty())
            .Add("object", &O::object, "object name put in object_pose_t")
            .Add("deadline_ms", &O::deadline_ms, "ms",
                 "solve a frame at the latest this long after its first detection "
@@ -76,7 +82,13 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 InRange(0, 1))
            .Add("health_recover_frames", H(&HealthOptions::recover_frames), "frames",
                 "good this many judged frames in a row: an excluded camera is used again (no new map)",
-                AtLeast(1));
+                AtLeast(1))
+           .Other("channels", "",
+                  "several bodies: channel per pose stream by its name, e.g. {tool: TOOL_POSE, "
+                  "tool_in_patient: NAV} (default: channel_NAME, channel_OF_IN_IN)")
+           .Other("relative", "",
+                  "several bodies: relative poses to publish, e.g. [{of: tool, in: patient}] -> "
+                  "MCMT_POSE_TOOL_IN_PATIENT (patient_from_tool, covariance from both)");
   return *table;
 }
 
@@ -90,7 +102,127 @@ void CheckBetweenOptions(const TrackerOptions& o, const std::string& file) {
                                   std::to_string(o.health.min_baseline_frames));
 }
 
+void CheckStreamOptions(const TrackerOptions& o, const std::string& file) {
+  for (const auto& [name, channel] : o.channels)
+    if (channel.empty()) TrackerOptionTable().Fail(file, "channels." + name, "must not be empty");
+  for (size_t i = 0; i < o.relative.size(); ++i) {
+    const std::string key = "relative[" + std::to_string(i) + "]";
+    if (o.relative[i].of.empty()) TrackerOptionTable().Fail(file, key + ".of", "missing (a body's name)");
+    if (o.relative[i].in.empty()) TrackerOptionTable().Fail(file, key + ".in", "missing (a body's name)");
+    if (o.relative[i].of == o.relative[i].in)
+      TrackerOptionTable().Fail(file, key, "'" + o.relative[i].of + "' relative to itself");
+  }
+}
+
+// tracker.channels: {name: channel} and tracker.relative: [{of: A, in: B}] (OptionTable Other keys).
+void LoadStreamOptions(const YamlSection& section, TrackerOptions* o) {
+  if (section.Has("channels")) {
+    const YamlSection channels = section.Child("channels");
+    for (auto it = channels.node().begin(); it != channels.node().end(); ++it) {
+      const std::string name = it->first.Scalar();
+      if (!it->second.IsScalar()) channels.Fail(name, "expected a channel name");
+      o->channels[name] = it->second.Scalar();
+    }
+  }
+  if (section.Has("relative")) {
+    const YAML::Node list = section.node()["relative"];
+    if (!list.IsSequence()) section.Fail("relative", "expected a list like [{of: tool, in: patient}]");
+    for (size_t i = 0; i < list.size(); ++i) {
+      const YamlSection item(list[i], section.file(), section.KeyName("relative[" + std::to_string(i) + "]"));
+      if (!list[i].IsMap()) item.Fail("of", "expected {of: BODY, in: BODY}");
+      item.CheckKnownKeys({"of", "in"});
+      o->relative.push_back({item.GetString("of", ""), item.GetString("in", "")});
+    }
+  }
+}
+
+std::string Names(const std::vector<BodyName>& bodies) {
+  std::string out;
+  for (size_t i = 0; i < bodies.size(); ++i) out += (i ? ", " : "") + bodies[i].name;
+  return out;
+}
+
 }  // namespace
+
+std::vector<BodyName> MapBodies(const RigMap& map, const std::string& single_name) {
+  if (map.objects.empty()) return {{single_name, false}};
+  std::vector<BodyName> out;
+  for (const MapObject& o : map.objects) out.push_back({o.name, o.is_static});
+  return out;
+}
+
+std::vector<PoseStreamPlan> PlanPoseStreams(const TrackerOptions& o, const std::vector<BodyName>& bodies,
+                                            bool single, const std::string& file) {
+  const auto& table = TrackerOptionTable();
+  auto find = [&](const std::string& key, const std::string& name) {
+    for (size_t k = 0; k < bodies.size(); ++k)
+      if (bodies[k].name == name) return static_cast<int>(k);
+    table.Fail(file, key, "no body named '" + name + "' (bodies: " + Names(bodies) + ")");
+  };
+  std::vector<PoseStreamPlan> plan;
+  std::vector<std::string> keys;  // the key that set each stream's channel
+  auto channel_of = [&](const std::string& name, const std::string& fallback, const std::string& key) {
+    const auto it = o.channels.find(name);
+    keys.push_back(it != o.channels.end() ? "channels." + name : key);
+    return it != o.channels.end() ? it->second : fallback;
+  };
+  for (size_t k = 0; k < bodies.size(); ++k) {
+    if (bodies[k].is_static) continue;
+    PoseStreamPlan p;
+    p.name = bodies[k].name;
+    p.body = static_cast<int>(k);
+    p.channel = channel_of(p.name, single ? o.channel : o.channel + "_" + ChannelSuffix(p.name), "channel");
+    plan.push_back(p);
+  }
+  if (plan.empty())
+    table.Fail(file, "relative", "the map has no moving body to track (" + Names(bodies) + ")");
+  for (size_t i = 0; i < o.relative.size(); ++i) {
+    const std::string key = "relative[" + std::to_string(i) + "]";
+    PoseStreamPlan p;
+    p.of = find(key + ".of", o.relative[i].of);
+    p.in = find(key + ".in", o.relative[i].in);
+    if (bodies[p.of].is_static)
+      table.Fail(file, key + ".of", "'" + o.relative[i].of + "' is a static body (not tracked)");
+    p.name = o.relative[i].of + "_in_" + o.relative[i].in;
+    p.channel = channel_of(
+        p.name, o.channel + "_" + ChannelSuffix(o.relative[i].of) + "_IN_" + ChannelSuffix(o.relative[i].in),
+        key);
+    plan.push_back(p);
+  }
+  for (const auto& [name, channel] : o.channels) {
+    bool known = false;
+    for (const PoseStreamPlan& p : plan) known = known || p.name == name;
+    if (known) continue;
+    const int k = find("channels." + name, name);
+    table.Fail(file, "channels." + name, "'" + bodies[k].name + "' is a static body (not tracked)");
+  }
+  const std::vector<std::string> reserved = {kMapChannel, kMapperStatusChannel, kMapperCommandChannel,
+                                             kTrackerStatusChannel};
+  for (size_t a = 0; a < plan.size(); ++a) {
+    for (const std::string& r : reserved)
+      if (plan[a].channel == r)
+        table.Fail(file, keys[a],
+                   "channel " + r + " of '" + plan[a].name + "' is an mcmt channel of another type");
+    if (IsDetectionsChannel(plan[a].channel))
+      table.Fail(file, keys[a],
+                 "channel " + plan[a].channel + " of '" + plan[a].name + "' is a detections channel");
+    for (size_t b = 0; b < a; ++b)
+      if (plan[a].channel == plan[b].channel) {
+        // Name the key that was set by hand (channels.NAME) when one was.
+        const bool b_set = keys[b].rfind("channels.", 0) == 0 && keys[a].rfind("channels.", 0) != 0;
+        table.Fail(file, b_set ? keys[b] : keys[a],
+                   "channel " + plan[a].channel + " of '" + plan[b_set ? b : a].name + "' is also '" +
+                       plan[b_set ? a : b].name + "''s (two pose streams on one channel)");
+      }
+  }
+  return plan;
+}
+
+std::string StreamPath(const std::string& path, const std::string& stream, bool single) {
+  if (single) return path;
+  const std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + "_" + stream + p.extension().string())).string();
+}
 
 TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   TrackerOptions o;
@@ -100,13 +232,28 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   o.deadline_ms = sync.deadline_ms;
   o.camera_timeout_s = sync.camera_timeout_s;
   TrackerOptionTable().Load(rig.tracker, &o);
+  LoadStreamOptions(rig.tracker, &o);
   CheckBetweenOptions(o, rig.tracker.file());
+  CheckStreamOptions(o, rig.tracker.file());
+  // Bodies declared in the rig: relative poses and channels are checked against them now (a map's bodies
+  // are checked again when it arrives).
+  if (rig.objects.declared && !rig.objects.auto_objects) {
+    std::vector<BodyName> bodies;
+    bool any_auto = false;
+    for (const ObjectConfig& c : rig.objects.objects) {
+      bodies.push_back({c.name, c.is_static});
+      any_auto = any_auto || c.auto_ids;
+    }
+    // (One declared object is mapped as a single object: a version 1 map.)
+    if (!any_auto && bodies.size() >= 2) PlanPoseStreams(o, bodies, false, rig.tracker.file());
+  }
   return o;
 }
 
 void TrackerOptions::Validate() const {
   TrackerOptionTable().Check(*this);
   CheckBetweenOptions(*this, "");
+  CheckStreamOptions(*this, "");
 }
 
 void CheckMapMatchesRig(const RigMap& map, const RigConfig& rig, const std::string& map_name) {

@@ -67,6 +67,14 @@ struct TrackerOptions {
   // Keys camera_health and health_* (health_gate_px, health_window_frames, ...).
   bool camera_health = true;
   HealthOptions health;
+  // Several bodies (a version 2 map): one pose stream per moving body on channel + "_" + NAME
+  // (MCMT_POSE_TOOL) and one per relative pose on channel + "_" + OF + "_IN_" + IN; `channels` (key
+  // channels: {tool: X, tool_in_patient: Y}) overrides a stream's channel by its name.
+  struct Relative {
+    std::string of, in;  // publishes in_from_of: the pose of body `of` in body `in`'s frame
+  };
+  std::map<std::string, std::string> channels;
+  std::vector<Relative> relative;  // key relative: [{of: tool, in: patient}]
 
   // Keys declared once in tracker/options.cc (TrackerOptionTable); the sync: section gives the defaults of
   // deadline_ms, sync_tolerance_ms and camera_timeout_s.
@@ -76,6 +84,30 @@ struct TrackerOptions {
 template <class T>
 class OptionTable;
 const OptionTable<TrackerOptions>& TrackerOptionTable();
+
+// A body the tracker knows of: from the map (or the rig's objects: list).
+struct BodyName {
+  std::string name;
+  bool is_static = false;
+};
+// One pose stream of the tracker: a moving body's, or a relative pose's.
+struct PoseStreamPlan {
+  std::string name;      // the body's ("tool"), a relative pose's ("tool_in_patient")
+  std::string channel;   // MCMT_POSE_TOOL, MCMT_POSE_TOOL_IN_PATIENT; a single object: tracker.channel
+  int body = -1;         // a moving body: its index in the bodies; -1 for a relative pose
+  int of = -1, in = -1;  // a relative pose: indices in the bodies (`in` may be a static body)
+};
+// The streams for these bodies (`single`: a one-object map, named tracker.object, on tracker.channel).
+// Throws OptionError naming `file` and the key: a relative pose or a channel naming an unknown or static
+// body, a body relative to itself, two streams on one channel, a stream on another mcmt channel.
+std::vector<PoseStreamPlan> PlanPoseStreams(const TrackerOptions& options,
+                                            const std::vector<BodyName>& bodies, bool single,
+                                            const std::string& file = "");
+// The bodies of a map: version 1 one body named `single_name`; version 2 every object.
+std::vector<BodyName> MapBodies(const RigMap& map, const std::string& single_name);
+// Where a stream's poses go when the tracker writes to `path` (--out): a single object `path` itself,
+// else "dir/poses.csv" -> "dir/poses_tool.csv".
+std::string StreamPath(const std::string& path, const std::string& stream, bool single);
 
 // One marker seen by one camera in the frame being solved.
 struct MarkerObservation {
@@ -214,13 +246,25 @@ struct TrackerStats {
   int64_t clock_jumps = 0;      // messages whose utime is far from their camera's or the others' (dropped)
 };
 
+// What the tracker published on one pose stream (a moving body's or a relative pose's).
+struct PoseStream {
+  std::string name;                       // "tool", "tool_in_patient"; a single object: tracker.object
+  std::string channel;                    // where its object_pose_t go
+  bool single = false;                    // the one stream of a single-object map (--out writes OUT itself)
+  std::vector<TrajectoryRow> trajectory;  // its TRACKING/AMBIGUOUS poses (keep_trajectory)
+  int64_t frames = 0;                     // frames solved
+  int64_t tracked = 0;                    // of them with a pose
+};
+
 struct TrackerNodeOptions {
   TrackerOptions tracker;
   bool log_mode = false;         // reading a log: frame deadlines in message time
   bool keep_trajectory = false;  // remember TRACKING/AMBIGUOUS poses for --out
   // When set (with keep_trajectory): every kept pose is also appended to this file (trajectory.csv
   // format) and flushed at once, so a tracker killed mid-run loses nothing it computed. Created (or
-  // truncated) by the constructor, which throws naming the file when it cannot be written.
+  // truncated) by the constructor, which throws naming the file when it cannot be written. With several
+  // bodies each stream has its own, StreamPath(OUT, name) + ".partial" for partial_path OUT.partial (the
+  // single one is then removed).
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)
 };
@@ -252,9 +296,12 @@ class TrackerNode {
   void OnMap(const void* data, size_t size);
 
   bool has_map() const { return estimator_ != nullptr; }
+  // Every pose stream of the map in use (empty before a map): the moving bodies, then the relative poses.
+  const std::vector<PoseStream>& streams() const { return streams_; }
   const HealthMonitor* health() const { return health_.get(); }  // null without a map or health
   const TrackerStats& stats() const { return stats_; }
-  const std::vector<TrajectoryRow>& trajectory() const { return trajectory_; }
+  // The first stream's poses (the single object's, or the first moving body's).
+  const std::vector<TrajectoryRow>& trajectory() const;
   std::string StatusLine() const;
 
  private:
@@ -263,6 +310,13 @@ class TrackerNode {
   void SetMap(const RigMap& map, const std::string& origin);
   void ProcessFrames(std::vector<SyncedFrame> frames, int64_t trigger_wall_us);
   void ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wall_us);
+  // The pose streams of `map` (PlanPoseStreams): bodies, relative poses, their partial files; a stream of
+  // the same name keeps its trajectory across a map switch. Throws OptionError (bad channels, names).
+  void SetStreams(const RigMap& map);
+  // Solves every moving body of the frame (the first one judging the cameras when health is on).
+  std::vector<PoseSolution> SolveBodies(const std::vector<MarkerObservation>& obs, int64_t utime);
+  // Keeps (trajectory, partial file) and publishes one stream's solution for the frame.
+  void Emit(size_t stream, const SyncedFrame& frame, const PoseSolution& sol, double latency_ms);
   void CheckStaleCameras();
   void WarnOnce(const std::string& key, const std::string& text);
   void MaybePrintStatus();
@@ -275,13 +329,29 @@ class TrackerNode {
   lcm::LCM* output_;
   const RigConfig& rig_;
   TrackerNodeOptions options_;
-  std::unique_ptr<PoseEstimator> estimator_;
+  // A moving body of the map in use: its own map (RigMap::ObjectMap), estimator and motion model.
+  struct Body {
+    size_t stream = 0;  // its index in streams_
+    std::unique_ptr<PoseEstimator> estimator;
+    MotionModel motion;
+  };
+  struct Relative {
+    size_t stream = 0;
+    int of = -1;  // index in bodies_
+    int in = -1;  // index in bodies_, -1: a static body at rig_from_in
+    Rigid3 rig_from_in = Rigid3::Identity();
+  };
+  const PoseEstimator* estimator_ = nullptr;  // the first moving body's (health judges cameras with it)
+  std::vector<Body> bodies_;
+  std::vector<Relative> relatives_;
+  std::map<int, size_t> body_of_marker_;  // marker id -> index in bodies_ (several bodies)
+  std::vector<PoseStream> streams_;
+  std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> stream_partials_;
   std::unique_ptr<HealthMonitor> health_;  // per camera of the map
   int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
   std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
-  MotionModel motion_;
   int64_t last_published_utime_ = INT64_MIN;
   std::vector<lcm::Subscription*> subscriptions_;
   std::set<std::string> warned_;
@@ -290,7 +360,6 @@ class TrackerNode {
   DuplicateFilter duplicates_;
   bool waits_for_map_ = false;  // no map file: maps come from MCMT_MAP
   TrackerStats stats_;
-  std::vector<TrajectoryRow> trajectory_;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> partial_{nullptr, &std::fclose};
   std::vector<double> latencies_ms_;  // since the last status line
   int64_t last_status_wall_us_ = 0;

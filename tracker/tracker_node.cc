@@ -3,11 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
 
 #include "core/lcm_util.h"
+#include "tracker/relative.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
@@ -41,8 +43,7 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
     : lcm_(lcm),
       output_(output ? output : (options.log_mode ? nullptr : &lcm)),
       rig_(rig),
-      options_(options),
-      motion_(options.tracker.max_gap_s) {
+      options_(options) {
   options_.tracker.Validate();
   if (options_.keep_trajectory && !options_.partial_path.empty()) {
     partial_.reset(std::fopen(options_.partial_path.c_str(), "w"));
@@ -75,11 +76,103 @@ void TrackerNode::WarnOnce(const std::string& key, const std::string& text) {
   std::cerr << "mcmt-tracker: warning: " << text << std::endl;
 }
 
+namespace {
+
+// A stream's partial file: StreamPath of OUT for OUT.partial, ".partial" appended again.
+std::string PartialPath(const std::string& partial_path, const std::string& stream, bool single) {
+  const std::string suffix = ".partial";
+  const bool ends = partial_path.size() > suffix.size() &&
+                    partial_path.compare(partial_path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  const std::string base = ends ? partial_path.substr(0, partial_path.size() - suffix.size()) : partial_path;
+  return StreamPath(base, stream, single) + suffix;
+}
+
+}  // namespace
+
+const std::vector<TrajectoryRow>& TrackerNode::trajectory() const {
+  static const std::vector<TrajectoryRow> kNone;
+  return streams_.empty() ? kNone : streams_[0].trajectory;
+}
+
+void TrackerNode::SetStreams(const RigMap& map) {
+  const bool single = map.objects.empty();
+  const std::vector<BodyName> names = MapBodies(map, options_.tracker.object);
+  const std::vector<PoseStreamPlan> plan = PlanPoseStreams(options_.tracker, names, single);
+  std::vector<Body> bodies;
+  std::vector<Relative> relatives;
+  std::map<int, size_t> body_of_marker;
+  std::vector<int> body_index(names.size(), -1);  // map body -> index in bodies
+  for (size_t s = 0; s < plan.size(); ++s) {
+    if (plan[s].body < 0) continue;
+    Body b;
+    b.stream = s;
+    b.estimator =
+        std::make_unique<PoseEstimator>(single ? map : map.ObjectMap(plan[s].body), options_.tracker);
+    b.motion = MotionModel(options_.tracker.max_gap_s);
+    body_index[plan[s].body] = static_cast<int>(bodies.size());
+    if (!single)
+      for (const MapMarker& m : map.objects[plan[s].body].markers) body_of_marker[m.id] = bodies.size();
+    bodies.push_back(std::move(b));
+  }
+  for (size_t s = 0; s < plan.size(); ++s) {
+    if (plan[s].body >= 0) continue;
+    Relative r;
+    r.stream = s;
+    r.of = body_index[plan[s].of];
+    r.in = body_index[plan[s].in];
+    if (r.in < 0) r.rig_from_in = map.objects[plan[s].in].rig_from_object;  // a static body
+    relatives.push_back(r);
+  }
+  // The streams: a stream of the same name (a newer map of the same rig) keeps what it published.
+  std::vector<PoseStream> streams;
+  std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> partials;
+  std::vector<int> previous;  // index in streams_ of the stream of the same name, or -1
+  for (const PoseStreamPlan& p : plan) {
+    PoseStream st;
+    st.name = p.name;
+    st.channel = p.channel;
+    st.single = single;
+    previous.push_back(-1);
+    for (size_t k = 0; k < streams_.size(); ++k)
+      if (streams_[k].name == p.name && streams_[k].single == single) previous.back() = static_cast<int>(k);
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> partial{nullptr, &std::fclose};
+    if (previous.back() < 0 && options_.keep_trajectory && !options_.partial_path.empty() && !single) {
+      const std::string path = PartialPath(options_.partial_path, p.name, false);
+      partial.reset(std::fopen(path.c_str(), "w"));
+      if (!partial) throw std::runtime_error(path + ": cannot write");
+      std::fprintf(partial.get(), "%s\n", kTrajectoryHeader);
+      std::fflush(partial.get());
+    }
+    streams.push_back(std::move(st));
+    partials.push_back(std::move(partial));
+  }
+  // Nothing throws from here on.
+  for (size_t s = 0; s < streams.size(); ++s) {
+    if (previous[s] >= 0) {
+      PoseStream& old = streams_[previous[s]];
+      streams[s].trajectory = std::move(old.trajectory);
+      streams[s].frames = old.frames;
+      streams[s].tracked = old.tracked;
+      partials[s] = std::move(stream_partials_[previous[s]]);
+    } else if (single && partial_) {
+      partials[s] = std::move(partial_);  // the constructor's
+    }
+  }
+  if (!single && partial_) {  // several bodies: the per-stream files replace the single one
+    partial_.reset();
+    std::remove(options_.partial_path.c_str());
+  }
+  bodies_ = std::move(bodies);
+  relatives_ = std::move(relatives);
+  body_of_marker_ = std::move(body_of_marker);
+  streams_ = std::move(streams);
+  stream_partials_ = std::move(partials);
+  estimator_ = bodies_.front().estimator.get();
+}
+
 void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
-  auto estimator = std::make_unique<PoseEstimator>(map, options_.tracker);
   const bool switching = estimator_ != nullptr;
-  estimator_ = std::move(estimator);
-  motion_.Reset();
+  SetStreams(map);  // throws before anything changes when the map's bodies do not fit the options
   // Frames are assembled over the map's cameras. A newer map (mcmt-mapper --maintain) keeps the frames
   // being assembled: they are solved with it, none is lost; a camera the new map adds joins as it reports.
   if (!switching) {
@@ -108,8 +201,18 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   if (!options_.quiet || switching) {
     std::ostringstream s;
     s << "mcmt-tracker: " << (switching ? "switched to a newer map" : "using map") << " from " << origin
-      << ": " << map.cameras.size() << " cameras, " << map.markers.size() << " markers, rms " << map.rms_px
-      << " px";
+      << ": " << map.cameras.size() << " cameras, ";
+    if (map.objects.empty()) {
+      s << map.markers.size() << " markers";
+    } else {
+      s << map.objects.size() << " bodies (";
+      for (size_t k = 0; k < map.objects.size(); ++k)
+        s << (k ? ", " : "") << map.objects[k].name << " " << map.objects[k].markers.size() << " markers"
+          << (map.objects[k].is_static ? " static" : "");
+      s << ")";
+    }
+    s << ", rms " << map.rms_px << " px; poses on ";
+    for (size_t k = 0; k < streams_.size(); ++k) s << (k ? ", " : "") << streams_[k].channel;
     std::cerr << s.str() << std::endl;
   }
 }
@@ -123,17 +226,16 @@ void TrackerNode::HandleMap(const lcm::ReceiveBuffer* rbuf, const std::string& /
 }
 
 void TrackerNode::OnMap(const void* data, size_t size) {
-  rig_map_t msg;
+  MapMessage msg;  // rig_map2_t (mcmt-mapper) or rig_map_t (older logs)
   std::string error;
-  if (!Decode(data, size, &msg, &error)) {
+  if (!DecodeMapMessage(data, size, &msg, &error)) {
     WarnOnce("bad-map", std::string("ignoring undecodable message on ") + kMapChannel + ": " + error);
     return;
   }
   if (estimator_ && msg.utime <= map_utime_) return;  // the same map again, or an older one
   try {
-    RigMap map = FromRigMapMsg(msg);
-    CheckMapMatchesRig(map, rig_, kMapChannel);
-    SetMap(map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
+    CheckMapMatchesRig(msg.map, rig_, kMapChannel);
+    SetMap(msg.map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
     map_utime_ = msg.utime;
   } catch (const std::exception& e) {
     WarnOnce("map-" + std::to_string(msg.utime), std::string("ignoring map: ") + e.what());
@@ -265,33 +367,82 @@ void TrackerNode::CheckStaleCameras() {
   }
 }
 
-void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wall_us) {
-  if (!estimator_) return;
-  if (frame.utime <= last_published_utime_) return;  // never publish out of order
-  Rigid3 predicted;
-  const bool have_prior = motion_.Predict(frame.utime, &predicted);
-  const std::vector<MarkerObservation> obs = ObservationsFromViews(frame.views);
-  const Rigid3* prior = have_prior ? &predicted : nullptr;
-  const PoseSolution sol =
-      health_ ? SolveJudgingCameras(obs, prior, frame.utime) : estimator_->Solve(obs, prior);
-
-  stats_.frames++;
-  stats_.rejected += sol.num_rejected;
-  status_frames_++;
-  if (sol.ok()) {
-    stats_.tracked++;
-    status_tracked_++;
-    if (sol.status == PoseStatus::kAmbiguous) stats_.ambiguous++;
-    motion_.Update(frame.utime, sol.rig_from_object);
+std::vector<PoseSolution> TrackerNode::SolveBodies(const std::vector<MarkerObservation>& obs, int64_t utime) {
+  // Each body gets its own markers' observations (one body: all of them, unmapped ones counted).
+  std::vector<std::vector<MarkerObservation>> mine(bodies_.size());
+  if (bodies_.size() == 1) {
+    mine[0] = obs;
   } else {
-    stats_.lost++;
-    motion_.Reset();
+    for (const MarkerObservation& o : obs) {
+      const auto it = body_of_marker_.find(o.id);
+      if (it != body_of_marker_.end()) mine[it->second].push_back(o);
+    }
   }
+  std::vector<PoseSolution> out;
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    Body& body = bodies_[b];
+    Rigid3 predicted;
+    const Rigid3* prior = body.motion.Predict(utime, &predicted) ? &predicted : nullptr;
+    if (health_ && b == 0) {  // the cameras are judged on the first body
+      out.push_back(SolveJudgingCameras(mine[b], prior, utime));
+    } else if (health_) {  // the others leave out the excluded cameras
+      std::vector<MarkerObservation> kept;
+      for (const MarkerObservation& o : mine[b])
+        if (!health_->Excluded(o.camera)) kept.push_back(o);
+      out.push_back(body.estimator->Solve(kept, prior));
+    } else {
+      out.push_back(body.estimator->Solve(mine[b], prior));
+    }
+    if (out.back().ok())
+      body.motion.Update(utime, out.back().rig_from_object);
+    else
+      body.motion.Reset();
+  }
+  return out;
+}
 
+namespace {
+
+// The pose of body `of` in body `in`'s frame (tracker/relative.h) as a solution: a pose when both have
+// one (ambiguous when either is), the cameras and markers of both.
+PoseSolution RelativeSolution(const PoseSolution& of, const PoseSolution* in, const Rigid3& rig_from_static) {
+  PoseSolution out;
+  const bool in_ok = !in || in->ok();
+  out.num_rejected = of.num_rejected + (in ? in->num_rejected : 0);
+  if (!of.ok() || !in_ok) return out;
+  const RelativePose rel =
+      in ? ComposeRelative(of.rig_from_object, of.covariance, in->rig_from_object, in->covariance)
+         : ComposeRelative(of.rig_from_object, of.covariance, rig_from_static, Matrix6d::Zero());
+  out.status = of.status == PoseStatus::kAmbiguous || (in && in->status == PoseStatus::kAmbiguous)
+                   ? PoseStatus::kAmbiguous
+                   : PoseStatus::kTracking;
+  out.rig_from_object = rel.in_from_of;
+  out.covariance = rel.covariance;
+  const int n_in = in ? in->num_observations : 0;
+  out.num_observations = of.num_observations + n_in;
+  const double ss = of.rms_px * of.rms_px * of.num_observations + (in ? in->rms_px * in->rms_px * n_in : 0.0);
+  out.rms_px = out.num_observations > 0 ? std::sqrt(ss / out.num_observations) : 0.0;
+  std::set<std::string> cameras(of.cameras.begin(), of.cameras.end());
+  std::set<int> markers(of.markers.begin(), of.markers.end());
+  if (in) {
+    cameras.insert(in->cameras.begin(), in->cameras.end());
+    markers.insert(in->markers.begin(), in->markers.end());
+  }
+  out.cameras.assign(cameras.begin(), cameras.end());
+  out.markers.assign(markers.begin(), markers.end());
+  return out;
+}
+
+}  // namespace
+
+void TrackerNode::Emit(size_t stream, const SyncedFrame& frame, const PoseSolution& sol, double latency_ms) {
+  PoseStream& st = streams_[stream];
+  st.frames++;
+  if (sol.ok()) st.tracked++;
   object_pose_t msg;
   msg.utime = frame.utime;
   msg.seq = frame.seq;
-  msg.object = options_.tracker.object;
+  msg.object = st.name;
   msg.rig_from_object = ToPose3d(sol.ok() ? sol.rig_from_object : Rigid3::Identity());
   for (int a = 0; a < 6; ++a)
     for (int b = 0; b < 6; ++b) msg.covariance[a][b] = sol.covariance(a, b);
@@ -302,6 +453,7 @@ void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wa
   msg.num_markers = static_cast<int32_t>(msg.markers.size());
   msg.num_rejected = sol.num_rejected;
   msg.status = static_cast<int8_t>(sol.status);
+  msg.latency_ms = latency_ms;
   // Kept (and on disk) before it is published: whatever a subscriber saw survives a crash.
   if (options_.keep_trajectory && sol.ok()) {
     TrajectoryRow row;
@@ -311,18 +463,41 @@ void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wa
     row.rms_px = sol.rms_px;
     row.cameras = static_cast<int>(sol.cameras.size());
     row.markers = static_cast<int>(sol.markers.size());
-    trajectory_.push_back(row);
-    if (partial_) {
-      std::fprintf(partial_.get(), "%s\n", TrajectoryCsvLine(row).c_str());
-      std::fflush(partial_.get());
+    st.trajectory.push_back(row);
+    if (std::FILE* f = stream_partials_[stream].get()) {
+      std::fprintf(f, "%s\n", TrajectoryCsvLine(row).c_str());
+      std::fflush(f);
     }
   }
+  if (output_) output_->publish(st.channel, &msg);
+}
+
+void TrackerNode::ProcessFrame(const SyncedFrame& frame, int64_t last_arrival_wall_us) {
+  if (!estimator_) return;
+  if (frame.utime <= last_published_utime_) return;  // never publish out of order
+  const std::vector<PoseSolution> solutions = SolveBodies(ObservationsFromViews(frame.views), frame.utime);
+  const PoseSolution& sol = solutions.front();  // the counts below are the first body's
+
+  stats_.frames++;
+  for (const PoseSolution& s : solutions) stats_.rejected += s.num_rejected;
+  status_frames_++;
+  if (sol.ok()) {
+    stats_.tracked++;
+    status_tracked_++;
+    if (sol.status == PoseStatus::kAmbiguous) stats_.ambiguous++;
+  } else {
+    stats_.lost++;
+  }
   const int64_t now = NowUtime();
-  msg.latency_ms = std::max<int64_t>(0, now - last_arrival_wall_us) / 1000.0;
-  if (output_) output_->publish(options_.tracker.channel, &msg);
+  const double latency_ms = std::max<int64_t>(0, now - last_arrival_wall_us) / 1000.0;
+  for (size_t b = 0; b < bodies_.size(); ++b) Emit(bodies_[b].stream, frame, solutions[b], latency_ms);
+  for (const Relative& r : relatives_)
+    Emit(r.stream, frame,
+         RelativeSolution(solutions[r.of], r.in >= 0 ? &solutions[r.in] : nullptr, r.rig_from_in),
+         latency_ms);
   if (latencies_ms_.size() >= (1u << 20))
     latencies_ms_.erase(latencies_ms_.begin(), latencies_ms_.begin() + (1u << 19));
-  latencies_ms_.push_back(msg.latency_ms);
+  latencies_ms_.push_back(latency_ms);
   last_published_utime_ = frame.utime;
 }
 
@@ -348,6 +523,11 @@ std::string TrackerNode::StatusLine() const {
     << " tracked = " << (stats_.frames > 0 ? 100.0 * stats_.tracked / stats_.frames : 0.0) << " %, "
     << stats_.ambiguous << " ambiguous, " << stats_.lost << " lost, " << stats_.rejected
     << " outliers rejected)";
+  if (streams_.size() > 1) {
+    s << ", tracked per stream:";
+    for (const PoseStream& st : streams_)
+      s << " " << st.name << " " << (st.frames > 0 ? 100.0 * st.tracked / st.frames : 0.0) << " %";
+  }
   if (!late_views_.empty()) {
     s << ", late views dropped:";
     for (const auto& kv : late_views_) s << " " << kv.first << " " << kv.second;

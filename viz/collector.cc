@@ -5,16 +5,18 @@
 #include <iostream>
 
 #include "core/lcm_util.h"
+#include "core/objects.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/object_pose_t.hpp"
-#include "mcmt/rig_map_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
 
 namespace mcmt::viz {
 
 LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
     : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
-  for (const char* channel : {kMapChannel, kPoseChannel, kDetectionsChannelRegex, kTrackerStatusChannel})
+  // MCMT_POSE and every MCMT_POSE_<BODY> (LCM subscriptions are regular expressions).
+  const std::string poses = std::string(kPoseChannel) + "(_.*)?";
+  for (const char* channel : {kMapChannel, poses.c_str(), kDetectionsChannelRegex, kTrackerStatusChannel})
     subscriptions_.push_back(lcm_.subscribe(channel, &LcmCollector::OnMessage, this));
 }
 
@@ -39,7 +41,7 @@ void LcmCollector::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& 
 void LcmCollector::Handle(const std::string& channel, const void* data, size_t size) {
   if (channel == kMapChannel)
     OnMap(data, size, channel);
-  else if (channel == kPoseChannel)
+  else if (channel == kPoseChannel || !BodyOfPoseChannel(channel, "").empty())
     OnPose(data, size, channel);
   else if (IsDetectionsChannel(channel))
     OnDetections(data, size, channel);
@@ -49,19 +51,14 @@ void LcmCollector::Handle(const std::string& channel, const void* data, size_t s
 
 void LcmCollector::OnMap(const void* data, size_t size, const std::string& channel) {
   ++messages_;
-  rig_map_t msg;
+  MapMessage msg;  // rig_map2_t or rig_map_t
   std::string error;
-  if (!Decode(data, size, &msg, &error)) {
+  if (!DecodeMapMessage(data, size, &msg, &error)) {
     if (stats_.decode_errors++ == 0) std::cerr << "mcmt-viz: warning: " << channel << ": " << error << "\n";
     return;
   }
-  try {
-    map_ = FromRigMapMsg(msg);
-    ++map_count_;
-  } catch (const std::exception& e) {
-    if (stats_.decode_errors++ == 0)
-      std::cerr << "mcmt-viz: warning: " << channel << ": " << e.what() << "\n";
-  }
+  map_ = std::move(msg.map);
+  ++map_count_;
 }
 
 void LcmCollector::OnPose(const void* data, size_t size, const std::string& channel) {
@@ -77,11 +74,12 @@ void LcmCollector::OnPose(const void* data, size_t size, const std::string& chan
     ++stats_.lost;
     return;
   }
-  poses_.push_back(FromObjectPoseMsg(msg));
-  if (keep_poses_ > 0 && poses_.size() >= 2 * keep_poses_) {
-    const size_t drop = poses_.size() - keep_poses_;
-    poses_.erase(poses_.begin(), poses_.begin() + static_cast<std::ptrdiff_t>(drop));
-    dropped_poses_ += static_cast<int64_t>(drop);
+  PoseStream& stream = channel == kPoseChannel ? poses_ : body_poses_[BodyOfPoseChannel(channel, msg.object)];
+  stream.rows.push_back(FromObjectPoseMsg(msg));
+  if (keep_poses_ > 0 && stream.rows.size() >= 2 * keep_poses_) {
+    const size_t drop = stream.rows.size() - keep_poses_;
+    stream.rows.erase(stream.rows.begin(), stream.rows.begin() + static_cast<std::ptrdiff_t>(drop));
+    stream.dropped += static_cast<int64_t>(drop);
   }
   ++stats_.poses;
   stats_.latency_ms = msg.latency_ms;
@@ -117,6 +115,12 @@ void LcmCollector::OnDetections(const void* data, size_t size, const std::string
   for (const auto& m : msg.markers) ids.push_back(m.id);
   if (keep_frames_ > 0)
     while (detections_.size() > keep_frames_) detections_.erase(detections_.begin());
+}
+
+int64_t LcmCollector::all_poses() const {
+  int64_t n = poses_.total();
+  for (const auto& [body, stream] : body_poses_) n += stream.total();
+  return n;
 }
 
 double LcmCollector::RateHz(int64_t now_us) const {

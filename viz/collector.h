@@ -1,6 +1,7 @@
 // Collects what the viewer shows from LCM (live) or a log (core's reader): the newest
-// MCMT_MAP, the poses on MCMT_POSE, the marker ids on MCMT_DETECTIONS_.* per frame utime and the
-// tracker's camera states (MCMT_TRACKER_STATUS).
+// MCMT_MAP, the poses on MCMT_POSE and, per body, on every MCMT_POSE_<BODY> (the body named by core's
+// BodyOfPoseChannel: the message's object field), the marker ids on MCMT_DETECTIONS_.* per frame utime and
+// the tracker's camera states (MCMT_TRACKER_STATUS).
 #pragma once
 
 #include <cstdint>
@@ -26,6 +27,13 @@ struct PoseStats {
   int64_t decode_errors = 0;  // messages that did not decode (any channel)
 };
 
+// The newest poses of one stream; rows[i] is the (dropped + i)-th pose received.
+struct PoseStream {
+  std::vector<TrajectoryRow> rows;
+  int64_t dropped = 0;
+  int64_t total() const { return dropped + static_cast<int64_t>(rows.size()); }
+};
+
 class LcmCollector {
  public:
   // keep_frames: detections of at most this many frames (utimes) are kept (0: all, for logs).
@@ -45,9 +53,14 @@ class LcmCollector {
   const RigMap& map() const { return *map_; }
   int map_count() const { return map_count_; }  // maps received (a new one replaces the old)
   // The poses kept; poses()[i] is the (first_pose_index() + i)-th pose received.
-  const std::vector<TrajectoryRow>& poses() const { return poses_; }
-  int64_t first_pose_index() const { return dropped_poses_; }
-  int64_t total_poses() const { return dropped_poses_ + static_cast<int64_t>(poses_.size()); }
+  const std::vector<TrajectoryRow>& poses() const { return poses_.rows; }
+  int64_t first_pose_index() const { return poses_.dropped; }
+  int64_t total_poses() const { return poses_.total(); }
+  // The poses of every body's channel MCMT_POSE_<BODY>, by body name (kept as poses() are).
+  const std::map<std::string, PoseStream>& body_poses() const { return body_poses_; }
+  const PoseStream& pose_stream() const { return poses_; }  // MCMT_POSE's
+  // Poses on MCMT_POSE and on every body channel.
+  int64_t all_poses() const;
   // Marker ids per camera detected in the frame of `utime` (empty if none known).
   std::map<std::string, std::vector<int>> DetectionsAt(int64_t utime) const;
   const PoseStats& stats() const { return stats_; }
@@ -69,11 +82,11 @@ class LcmCollector {
   lcm::LCM& lcm_;
   size_t keep_frames_;
   size_t keep_poses_;
-  int64_t dropped_poses_ = 0;
   std::vector<lcm::Subscription*> subscriptions_;
   std::optional<RigMap> map_;
   int map_count_ = 0;
-  std::vector<TrajectoryRow> poses_;
+  PoseStream poses_;
+  std::map<std::string, PoseStream> body_poses_;
   std::map<int64_t, std::map<std::string, std::vector<int>>> detections_;
   std::deque<int64_t> arrivals_us_;  // wall time of recent poses (rate)
   PoseStats stats_;

@@ -22,12 +22,16 @@ int main(int argc, char** argv) {
     args.AddString("map", &o.map_path, "map.yaml from mcmt-mapper (default: MCMT_MAP from the log or LCM)");
     args.AddString("initial-map", &o.initial_map_path,
                    "the mapper's initial solution (OUTDIR/map_initial.yaml): before/after side by side");
-    args.AddString("trajectory", &o.trajectory_path,
-                   "trajectory.csv (default: MCMT_POSE from the log or LCM)");
+    args.AddString(
+        "trajectory", &o.trajectory_path,
+        "trajectory.csv, or for a map with several bodies the mapper's OUTDIR (its trajectory_<body>.csv) or "
+        "the tracker's --out PATH (PATH_<body>.csv) "
+        "(default: MCMT_POSE and every MCMT_POSE_<BODY> from the log or LCM)");
     args.AddString(
         "initial-trajectory", &o.initial_trajectory_path,
         "trajectory of the initial solution (default: trajectory_initial.csv beside --initial-map)");
-    args.AddString("log", &o.log_path, "LCM log to read (MCMT_MAP, MCMT_POSE, MCMT_DETECTIONS_*)");
+    args.AddString("log", &o.log_path,
+                   "LCM log to read (MCMT_MAP, MCMT_POSE, MCMT_POSE_<BODY>, MCMT_DETECTIONS_*)");
     args.AddString("lcm-url", &lcm_url,
                    "LCM URL for live traffic (default: lcm.url of --config, or LCM's default)");
     args.AddString("config", &config, "rig YAML: its optional viz: section and lcm.url");
@@ -58,6 +62,9 @@ int main(int argc, char** argv) {
         "through the frames, n back to the newest, q quit; the mouse orbits, pans and zooms.\n"
         "Examples:\n"
         "  mcmt-viz --map out/map.yaml --trajectory out/trajectory.csv --snapshot view.png\n"
+        "  mcmt-viz --map out/map.yaml --trajectory out/ --snapshot bodies.png   (several bodies: each in "
+        "its "
+        "colour, with its trail and name)\n"
         "  mcmt-viz --map out/map.yaml --initial-map out/map_initial.yaml --trajectory out/trajectory.csv "
         "--snapshot before_after.png\n"
         "  mcmt-viz --log session.lcmlog --video frames/   (then: ffmpeg -framerate 30 -i "

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -74,7 +75,61 @@ std::optional<mrpt::img::CImage> MarkerTexture(const cv::aruco::Dictionary& dict
   return mrpt::img::CImage(bgr, mrpt::img::DEEP_COPY);
 }
 
+// A body's markers as textured squares at object_from_marker, each framed in its residual colour (or the
+// neutral colour), plus the body's axes. With body_rgb (a map with several bodies): an outline in the
+// body's colour around each marker.
+CSetOfObjects::Ptr BodyObject(const std::vector<MapMarker>& markers, const cv::aruco::Dictionary* dictionary,
+                              const std::function<Eigen::Vector3d(const MapMarker&)>& frame_rgb,
+                              const Eigen::Vector3d* body_rgb) {
+  using namespace mrpt::opengl;
+  auto object = CSetOfObjects::Create();
+  double max_marker = 0.0;
+  for (const auto& m : markers) max_marker = std::max(max_marker, m.size);
+  object->insert(stock_objects::CornerXYZSimple(static_cast<float>(0.6 * std::max(max_marker, 0.01)), 2.0f));
+  for (const auto& m : markers) {
+    const float h = static_cast<float>(0.5 * m.size);
+    auto set = CSetOfObjects::Create();
+    set->setPose(ToCPose(m.object_from_marker));
+    auto plane = CTexturedPlane::Create(-h, h, -h, h);
+    std::optional<mrpt::img::CImage> tex;
+    if (dictionary) tex = MarkerTexture(*dictionary, m.id);
+    if (tex) {
+      plane->assignImage(*tex);
+    } else {
+      cv::Mat white(8, 8, CV_8UC3, cv::Scalar(230, 230, 230));
+      plane->assignImage(mrpt::img::CImage(white, mrpt::img::DEEP_COPY));
+    }
+    set->insert(plane);
+    auto square = [&](float e, float width, const Eigen::Vector3d& rgb) {
+      auto frame = CSetOfLines::Create();
+      const float z = static_cast<float>(0.01 * m.size);
+      frame->appendLine(-e, e, z, e, e, z);
+      frame->appendLine(e, e, z, e, -e, z);
+      frame->appendLine(e, -e, z, -e, -e, z);
+      frame->appendLine(-e, -e, z, -e, e, z);
+      frame->setLineWidth(width);
+      frame->setColor(ToColor(rgb));
+      set->insert(frame);
+    };
+    square(1.04f * h, 3.0f, frame_rgb(m));
+    if (body_rgb) square(1.25f * h, 4.0f, *body_rgb);
+    object->insert(set);
+  }
+  return object;
+}
+
 }  // namespace
+
+Eigen::Vector3d BodyColor(size_t k) {
+  static const Eigen::Vector3d kPalette[] = {
+      {1.0, 0.2, 0.85},    // magenta
+      {0.25, 0.4, 1.0},    // blue
+      {1.0, 0.62, 0.75},   // pink
+      {0.6, 0.3, 1.0},     // violet
+      {0.55, 0.35, 0.15},  // brown
+  };
+  return kPalette[k % (sizeof(kPalette) / sizeof(kPalette[0]))];
+}
 
 cv::Vec3b BackgroundBgr() {
   auto byte = [](float v) { return static_cast<uchar>(std::lround(255.0 * v)); };
@@ -172,6 +227,8 @@ void VizScene::SetPanels(std::vector<PanelInput> inputs) {
   for (const auto& in : inputs) {
     for (const auto& c : in.map.cameras) worst = std::max(worst, c.rms_px);
     for (const auto& m : in.map.markers) worst = std::max(worst, m.rms_px);
+    for (const auto& o : in.map.objects)
+      for (const auto& m : o.markers) worst = std::max(worst, m.rms_px);
   }
   has_residuals_ = worst > 0.0;
   residual_scale_ = options_.residual_scale_px > 0 ? options_.residual_scale_px : std::max(0.5, worst);
@@ -218,6 +275,10 @@ void VizScene::SetPanels(std::vector<PanelInput> inputs) {
   for (const auto& p : panels_) {
     for (const auto& c : p.input.map.cameras) pts.push_back(world_from_rig_ * c.rig_from_cam.translation());
     for (const auto& r : p.input.trajectory) pts.push_back(world_from_rig_ * r.rig_from_object.translation());
+    for (const auto& [name, rows] : p.input.bodies)
+      for (const auto& r : rows) pts.push_back(world_from_rig_ * r.rig_from_object.translation());
+    for (const auto& o : p.input.map.objects)
+      if (o.is_static) pts.push_back(world_from_rig_ * o.rig_from_object.translation());
   }
   Eigen::Vector3d lo = pts.empty() ? Eigen::Vector3d::Zero() : pts[0], hi = lo;
   for (const auto& q : pts) {
@@ -311,12 +372,7 @@ void VizScene::BuildPanel(Panel* panel) {
   }
 
   // The object: its markers as textured squares at object_from_marker, framed in their residual
-  // colour, plus the object's axes.
-  panel->object = CSetOfObjects::Create();
-  double max_marker = 0.0;
-  for (const auto& m : map.markers) max_marker = std::max(max_marker, m.size);
-  panel->object->insert(
-      stock_objects::CornerXYZSimple(static_cast<float>(0.6 * std::max(max_marker, 0.01)), 2.0f));
+  // colour, plus the object's axes. Several bodies: each in its own colour, with its name.
   cv::Ptr<cv::aruco::Dictionary> dictionary;
   const std::string dict_name = DictionaryName();
   if (!dict_name.empty()) {
@@ -327,35 +383,56 @@ void VizScene::BuildPanel(Panel* panel) {
       std::cerr << "mcmt-viz: warning: markers drawn without bitmaps: " << e.what() << "\n";
     }
   }
-  for (const auto& m : map.markers) {
-    const float h = static_cast<float>(0.5 * m.size);
-    auto set = CSetOfObjects::Create();
-    set->setPose(ToCPose(m.object_from_marker));
-    auto plane = CTexturedPlane::Create(-h, h, -h, h);
-    std::optional<mrpt::img::CImage> tex;
-    if (dictionary) tex = MarkerTexture(*dictionary, m.id);
-    if (tex) {
-      plane->assignImage(*tex);
-    } else {
-      cv::Mat white(8, 8, CV_8UC3, cv::Scalar(230, 230, 230));
-      plane->assignImage(mrpt::img::CImage(white, mrpt::img::DEEP_COPY));
-    }
-    set->insert(plane);
-    auto frame = CSetOfLines::Create();
-    const float z = static_cast<float>(0.01 * m.size), e = 1.04f * h;
-    frame->appendLine(-e, e, z, e, e, z);
-    frame->appendLine(e, e, z, e, -e, z);
-    frame->appendLine(e, -e, z, -e, -e, z);
-    frame->appendLine(-e, -e, z, -e, e, z);
-    frame->setLineWidth(3.0f);
-    frame->setColor(ToColor(has_residuals_ ? ResidualColor(m.rms_px, residual_scale_) : kNeutral));
-    set->insert(frame);
-    panel->object->insert(set);
+  const auto frame_rgb = [&](const MapMarker& m) {
+    return has_residuals_ ? ResidualColor(m.rms_px, residual_scale_) : kNeutral;
+  };
+  const bool several = map.objects.size() > 1;
+  const size_t main_body = FirstMovingObject(map);
+  Eigen::Vector3d main_rgb(1.0f, 0.6f, 0.15f);  // a single object's trail
+  if (several) main_rgb = BodyColor(main_body);
+  auto reach_of = [](const std::vector<MapMarker>& markers) {
+    double r = 0.0;
+    for (const auto& m : markers) r = std::max(r, m.object_from_marker.translation().norm() + m.size);
+    return r;
+  };
+  panel->object = BodyObject(map.markers, dictionary.get(), frame_rgb, several ? &main_rgb : nullptr);
+  panel->reach = reach_of(map.markers);
+  panel->label = nullptr;
+  if (several) {
+    panel->label = MakeLabel(map.objects[main_body].name, main_rgb);
+    panel->label->setVisibility(false);
   }
   panel->object->setVisibility(false);
+  panel->bodies.clear();
+  for (size_t k = 0; several && k < map.objects.size(); ++k) {
+    if (k == main_body) continue;
+    const MapObject& o = map.objects[k];
+    Panel::Body b;
+    b.name = o.name;
+    b.is_static = o.is_static;
+    b.rig_from_object = o.rig_from_object;
+    b.object_index = k;
+    const Eigen::Vector3d rgb = BodyColor(k);
+    b.object = BodyObject(o.markers, dictionary.get(), frame_rgb, &rgb);
+    b.reach = reach_of(o.markers);
+    b.label = MakeLabel(o.name, rgb);
+    if (o.is_static) {
+      b.object->setPose(ToCPose(world_from_rig_ * o.rig_from_object));
+      const Eigen::Vector3d at = LabelPoint(o.rig_from_object, b.reach);
+      b.label->setLocation(at.x(), at.y(), at.z());
+    } else {
+      b.object->setVisibility(false);
+      b.label->setVisibility(false);
+      b.trail = CSetOfLines::Create();
+      b.trail->setColor(ToColor(rgb));
+      b.trail->setLineWidth(2.0f);
+      panel->root->insert(b.trail);
+    }
+    panel->bodies.push_back(std::move(b));
+  }
 
   panel->trail = CSetOfLines::Create();
-  panel->trail->setColor(1.0f, 0.6f, 0.15f, 1.0f);
+  panel->trail->setColor(ToColor(main_rgb));
   panel->trail->setLineWidth(2.0f);
   panel->root->insert(panel->trail);
   panel->rays = CSetOfLines::Create();
@@ -365,10 +442,24 @@ void VizScene::BuildPanel(Panel* panel) {
   panel->root->insert(panel->rays);
   scene_->insert(panel->root, panel->viewport);
   scene_->insert(panel->object, panel->viewport);  // after the rig: drawn last; posed in the world frame
+  for (const Panel::Body& b : panel->bodies) {
+    scene_->insert(b.object, panel->viewport);
+    scene_->insert(b.label, panel->viewport);
+  }
+  if (panel->label) scene_->insert(panel->label, panel->viewport);
 
   char title[160];
-  std::snprintf(title, sizeof(title), "%s: %zu cameras, %zu markers, RMS %.3f px", panel->input.title.c_str(),
-                map.cameras.size(), map.markers.size(), map.rms_px);
+  size_t markers = map.markers.size();
+  if (several) {
+    markers = 0;
+    for (const auto& o : map.objects) markers += o.markers.size();
+  }
+  if (several)
+    std::snprintf(title, sizeof(title), "%s: %zu cameras, %zu bodies, %zu markers, RMS %.3f px",
+                  panel->input.title.c_str(), map.cameras.size(), map.objects.size(), markers, map.rms_px);
+  else
+    std::snprintf(title, sizeof(title), "%s: %zu cameras, %zu markers, RMS %.3f px",
+                  panel->input.title.c_str(), map.cameras.size(), markers, map.rms_px);
   mrpt::opengl::TFontParams font;
   font.vfont_scale = 8;
   font.color = mrpt::img::TColorf(1, 1, 1, 1);
@@ -486,37 +577,130 @@ void VizScene::SetCurrentFrame(int index) {
   }
 }
 
+namespace {
+
+// Trail: about the newest `keep` rows up to `row`. Grows in place one row at a time and is rebuilt only
+// when it is a quarter too long (amortised O(1) per live pose) or the row jumps.
+void UpdateTrail(const std::vector<TrajectoryRow>& rows, int row, int keep, CSetOfLines* trail, int* first,
+                 int* last) {
+  if (row >= 0 && row == *last + 1 && *last >= *first && row - *first < keep + keep / 4) {
+    trail->appendLine(ToPoint(rows[row - 1].rig_from_object.translation()),
+                      ToPoint(rows[row].rig_from_object.translation()));
+    *last = row;
+    return;
+  }
+  *first = row < 0 ? 0 : std::max(0, row + 1 - keep);
+  *last = row;
+  trail->clear();
+  for (int i = *first + 1; i <= *last; ++i)
+    trail->appendLine(ToPoint(rows[i - 1].rig_from_object.translation()),
+                      ToPoint(rows[i].rig_from_object.translation()));
+}
+
+// The newest row at or before `utime` (1 ms tolerance) and at most kBodyPoseMaxAgeUs older; -1: none.
+int RowAt(const std::vector<TrajectoryRow>& rows, int64_t utime) {
+  auto it = std::upper_bound(rows.begin(), rows.end(), utime + 1000,
+                             [](int64_t t, const TrajectoryRow& r) { return t < r.utime; });
+  if (it == rows.begin()) return -1;
+  --it;
+  return utime - it->utime <= kBodyPoseMaxAgeUs ? static_cast<int>(it - rows.begin()) : -1;
+}
+
+}  // namespace
+
 void VizScene::UpdatePanelFrame(Panel* panel, int row) {
   panel->current = row;
   if (row < 0) {
     panel->object->setVisibility(false);
+    if (panel->label) panel->label->setVisibility(false);
   } else {
+    const Rigid3& rig_from_object = panel->input.trajectory[row].rig_from_object;
     panel->object->setVisibility(true);
-    panel->object->setPose(ToCPose(world_from_rig_ * panel->input.trajectory[row].rig_from_object));
+    panel->object->setPose(ToCPose(world_from_rig_ * rig_from_object));
+    if (panel->label) {
+      const Eigen::Vector3d at = LabelPoint(rig_from_object, panel->reach);
+      panel->label->setLocation(at.x(), at.y(), at.z());
+      panel->label->setVisibility(true);
+    }
   }
-  // Trail: about the newest trail_max rows up to `row`. Grows in place one row at a time and is
-  // rebuilt only when it is a quarter too long (amortised O(1) per live pose) or the row jumps.
   const int keep = std::max(1, options_.trail_max);
-  if (row >= 0 && row == panel->trail_last + 1 && panel->trail_last >= panel->trail_first &&
-      row - panel->trail_first < keep + keep / 4) {
-    const auto& rows = panel->input.trajectory;
-    panel->trail->appendLine(ToPoint(rows[row - 1].rig_from_object.translation()),
-                             ToPoint(rows[row].rig_from_object.translation()));
-    panel->trail_last = row;
-  } else {
-    panel->trail_first = row < 0 ? 0 : std::max(0, row + 1 - keep);
-    panel->trail_last = row;
-    RebuildTrail(panel);
+  UpdateTrail(panel->input.trajectory, row, keep, panel->trail.get(), &panel->trail_first,
+              &panel->trail_last);
+  // The other moving bodies at their rows of this frame's time.
+  for (Panel::Body& b : panel->bodies) {
+    if (b.is_static) continue;
+    const auto it = panel->input.bodies.find(b.name);
+    const int body_row = row < 0 || it == panel->input.bodies.end()
+                             ? -1
+                             : RowAt(it->second, panel->input.trajectory[row].utime);
+    UpdateBodyFrame(panel, &b, body_row);
   }
   UpdateRays(panel);
 }
 
-void VizScene::RebuildTrail(Panel* panel) {
-  panel->trail->clear();
-  const auto& rows = panel->input.trajectory;
-  for (int i = panel->trail_first + 1; i <= panel->trail_last; ++i)
-    panel->trail->appendLine(ToPoint(rows[i - 1].rig_from_object.translation()),
-                             ToPoint(rows[i].rig_from_object.translation()));
+void VizScene::UpdateBodyFrame(Panel* panel, Panel::Body* body, int row) {
+  body->current = row;
+  const auto it = panel->input.bodies.find(body->name);
+  if (row < 0 || it == panel->input.bodies.end()) {
+    body->current = -1;
+    body->object->setVisibility(false);
+    body->label->setVisibility(false);
+    body->trail->clear();
+    body->trail_first = 0;
+    body->trail_last = -1;
+    return;
+  }
+  body->object->setVisibility(true);
+  body->object->setPose(ToCPose(world_from_rig_ * it->second[row].rig_from_object));
+  const Eigen::Vector3d at = LabelPoint(it->second[row].rig_from_object, body->reach);
+  body->label->setLocation(at.x(), at.y(), at.z());
+  body->label->setVisibility(true);
+  UpdateTrail(it->second, row, std::max(1, options_.trail_max), body->trail.get(), &body->trail_first,
+              &body->trail_last);
+}
+
+Eigen::Vector3d VizScene::LabelPoint(const Rigid3& rig_from_object, double reach) const {
+  return world_from_rig_ * rig_from_object.translation() +
+         Eigen::Vector3d(0, 0, reach + 0.25 * frustum_length_);
+}
+
+mrpt::opengl::CText::Ptr VizScene::MakeLabel(const std::string& name, const Eigen::Vector3d& rgb) const {
+  auto label = mrpt::opengl::CText::Create(name);
+  label->setColor(ToColor(rgb));
+  return label;
+}
+
+void VizScene::AddBodyPose(const std::string& name, const TrajectoryRow& row, bool newest) {
+  if (panels_.empty()) return;
+  Panel& p = panels_.back();
+  for (Panel::Body& b : p.bodies) {
+    if (b.name != name || b.is_static) continue;
+    auto& rows = p.input.bodies[name];
+    rows.push_back(row);
+    const size_t keep = std::max<size_t>(5000, static_cast<size_t>(options_.trail_max));
+    if (rows.size() >= 2 * keep) {
+      rows.erase(rows.begin(), rows.end() - static_cast<std::ptrdiff_t>(keep));
+      b.trail_first = 0;
+      b.trail_last = -1;
+    }
+    const int shown = newest ? static_cast<int>(rows.size()) - 1
+                             : (p.current < 0 ? -1 : RowAt(rows, p.input.trajectory[p.current].utime));
+    UpdateBodyFrame(&p, &b, shown);
+    UpdateRays(&p);
+  }
+}
+
+std::optional<Rigid3> VizScene::BodyPose(int panel, const std::string& name) const {
+  const Panel& p = panels_.at(panel);
+  const auto& objects = p.input.map.objects;
+  if (objects.size() > 1 && objects[FirstMovingObject(p.input.map)].name == name) return CurrentPose(panel);
+  for (const Panel::Body& b : p.bodies) {
+    if (b.name != name) continue;
+    if (b.is_static) return b.rig_from_object;
+    if (b.current < 0) return std::nullopt;
+    return p.input.bodies.at(name)[b.current].rig_from_object;
+  }
+  return std::nullopt;
 }
 
 void VizScene::SetDetections(const std::map<std::string, std::vector<int>>& ids_by_camera) {
@@ -526,16 +710,27 @@ void VizScene::SetDetections(const std::map<std::string, std::vector<int>>& ids_
 
 void VizScene::UpdateRays(Panel* panel) {
   panel->rays->clear();
-  if (panel->current < 0) return;
-  const Rigid3& rig_from_object = panel->input.trajectory[panel->current].rig_from_object;
+  // Every marker shown: id -> its position in the rig frame (the bodies partition the ids).
+  std::map<int, Eigen::Vector3d> shown;
+  if (panel->current >= 0) {
+    const Rigid3& rig_from_object = panel->input.trajectory[panel->current].rig_from_object;
+    for (const MapMarker& m : panel->input.map.markers)
+      shown[m.id] = (rig_from_object * m.object_from_marker).translation();
+  }
+  for (const Panel::Body& b : panel->bodies) {
+    if (!b.is_static && b.current < 0) continue;
+    const Rigid3 rig_from_object =
+        b.is_static ? b.rig_from_object : panel->input.bodies.at(b.name)[b.current].rig_from_object;
+    for (const MapMarker& m : panel->input.map.objects[b.object_index].markers)
+      shown[m.id] = (rig_from_object * m.object_from_marker).translation();
+  }
   for (const auto& [camera, ids] : detections_) {
     const MapCamera* cam = panel->input.map.FindCamera(camera);
     if (!cam) continue;
     for (int id : ids) {
-      const MapMarker* m = panel->input.map.FindMarker(id);
-      if (!m) continue;
-      panel->rays->appendLine(ToPoint(cam->rig_from_cam.translation()),
-                              ToPoint((rig_from_object * m->object_from_marker).translation()));
+      const auto m = shown.find(id);
+      if (m == shown.end()) continue;
+      panel->rays->appendLine(ToPoint(cam->rig_from_cam.translation()), ToPoint(m->second));
     }
   }
 }
@@ -569,14 +764,27 @@ std::vector<Eigen::Vector3d> VizScene::FramingPoints() const {
     double reach = 0.0;
     for (const auto& m : p.input.map.markers)
       reach = std::max(reach, m.object_from_marker.translation().norm() + m.size);
-    const auto& rows = p.input.trajectory;
-    const size_t stride = std::max<size_t>(1, rows.size() / 2000);
-    for (size_t i = 0; i < rows.size(); i += stride) {
-      const Eigen::Vector3d c = world_from_rig_ * rows[i].rig_from_object.translation();
-      pts.push_back(c);
-      for (int k = 0; k < 3; ++k) {
-        pts.push_back(c + reach * Eigen::Vector3d::Unit(k));
-        pts.push_back(c - reach * Eigen::Vector3d::Unit(k));
+    auto add_track = [&](const std::vector<TrajectoryRow>& rows, double r) {
+      const size_t stride = std::max<size_t>(1, rows.size() / 2000);
+      for (size_t i = 0; i < rows.size(); i += stride) {
+        const Eigen::Vector3d c = world_from_rig_ * rows[i].rig_from_object.translation();
+        pts.push_back(c);
+        for (int k = 0; k < 3; ++k) {
+          pts.push_back(c + r * Eigen::Vector3d::Unit(k));
+          pts.push_back(c - r * Eigen::Vector3d::Unit(k));
+        }
+      }
+    };
+    add_track(p.input.trajectory, reach);
+    for (const auto& o : p.input.map.objects) {  // the other bodies: their tracks, a static one's pose
+      double r = 0.0;
+      for (const auto& m : o.markers) r = std::max(r, m.object_from_marker.translation().norm() + m.size);
+      if (o.is_static) {
+        TrajectoryRow row;
+        row.rig_from_object = o.rig_from_object;
+        add_track({row}, r);
+      } else if (p.input.bodies.count(o.name)) {
+        add_track(p.input.bodies.at(o.name), r);
       }
     }
   }

@@ -6,6 +6,7 @@
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CText.h>
 
 #include <Eigen/Core>
 #include <map>
@@ -62,11 +63,25 @@ struct SceneOptions {
   void Validate() const;   // throws std::invalid_argument naming the option
 };
 
+// A map with several bodies (version 2, more than one object) draws every body: each in its own colour
+// (BodyColor: an outline around each of its markers, its trail and its name label), static bodies once at
+// their rig_from_object, moving bodies at their pose of the current frame. `trajectory` is the first moving
+// body's (the map's `markers`, FirstMovingObject), which sets the current frame; the other moving bodies'
+// poses are in `bodies` by name, each shown at its newest row not after the current frame's utime (and
+// hidden when that row is more than kBodyPoseMaxAgeUs older).
 struct PanelInput {
   std::string title;  // "initial", "refined", ...
   RigMap map;
   std::vector<TrajectoryRow> trajectory;
+  std::map<std::string, std::vector<TrajectoryRow>> bodies =
+      {};  // (= {}: PanelInput{title, map, rows} is fine)
 };
+
+// The colour of body k of a map with several bodies (map.objects order), RGB in [0, 1]: magenta, blue,
+// pink, violet, brown, then again; none of them a residual colour (green .. red), the trail's orange of a
+// single object, the rays' cyan, the neutral light blue or the markers' black and white.
+Eigen::Vector3d BodyColor(size_t k);
+constexpr int64_t kBodyPoseMaxAgeUs = 500000;
 
 class VizScene {
  public:
@@ -81,6 +96,11 @@ class VizScene {
 
   // Live: appends a pose to the last panel's trajectory and makes it the current frame.
   void AddPose(const TrajectoryRow& row);
+  // Live: appends a pose of another moving body (by name; a body not in the map is ignored) to the last
+  // panel and shows it there (newest = true), or keeps the body at the current frame's row.
+  void AddBodyPose(const std::string& body, const TrajectoryRow& row, bool newest = true);
+  // The rig_from_object a body is drawn at in a panel (moving: its row shown; static: its pose).
+  std::optional<Rigid3> BodyPose(int panel, const std::string& body) const;
   // Current frame: index into the last panel's trajectory (-1: the newest). Other panels show the
   // row with the same seq (or none).
   void SetCurrentFrame(int index);
@@ -136,12 +156,30 @@ class VizScene {
     mrpt::opengl::CSetOfLines::Ptr rays;      // rig frame
     int current = -1;                         // row shown, -1: none
     int trail_first = 0, trail_last = -1;     // rows drawn in the trail
+    mrpt::opengl::CText::Ptr label;           // several bodies: the name, above the body (world frame)
+    double reach = 0.0;                       // the farthest marker corner from the body's origin
+    struct Body {                             // the other bodies of a map with several
+      std::string name;
+      bool is_static = false;
+      Rigid3 rig_from_object = Rigid3::Identity();  // static bodies
+      size_t object_index = 0;                      // into the map's objects
+      mrpt::opengl::CText::Ptr label;
+      double reach = 0.0;
+      mrpt::opengl::CSetOfObjects::Ptr object;  // pose world_from_rig * rig_from_object
+      mrpt::opengl::CSetOfLines::Ptr trail;     // rig frame
+      int current = -1;
+      int trail_first = 0, trail_last = -1;
+    };
+    std::vector<Body> bodies;
   };
+  void UpdateBodyFrame(Panel* panel, Panel::Body* body, int row);
+  // Where a body's name is drawn: above its farthest marker (world +z), in the world frame.
+  Eigen::Vector3d LabelPoint(const Rigid3& rig_from_object, double reach) const;
+  mrpt::opengl::CText::Ptr MakeLabel(const std::string& name, const Eigen::Vector3d& rgb) const;
   void BuildPanel(Panel* panel);
   void BuildLegend();
   void DrawLegend(cv::Mat* bgr) const;
   void UpdatePanelFrame(Panel* panel, int row);
-  void RebuildTrail(Panel* panel);
   void UpdateRays(Panel* panel);
   void UpdateViewports();
   std::vector<Eigen::Vector3d> FramingPoints() const;

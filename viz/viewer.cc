@@ -123,16 +123,37 @@ Viewer::Viewer(ViewerOptions options, lcm::LCM* lcm, bool is_log)
     if (!traj.empty()) file_initial_trajectory_ = ReadTrajectory(traj);
   }
   if (!options_.trajectory_path.empty()) {
-    file_trajectory_ = ReadTrajectory(options_.trajectory_path);
+    const bool per_body =
+        fs::is_directory(options_.trajectory_path) ||
+        (!fs::exists(options_.trajectory_path) && have_file_map_ && !file_map_.objects.empty());
+    if (per_body) {  // the mapper's OUTDIR, or the tracker's --out PATH (PATH_<body>.csv): every moving
+                     // body's
+      for (const auto& [body, path] : BodyTrajectoryFiles(options_.trajectory_path, file_map_)) {
+        if (body.empty())
+          file_trajectory_ = ReadTrajectory(path);
+        else
+          file_body_trajectories_[body] = ReadTrajectory(path);
+      }
+    } else {
+      file_trajectory_ = ReadTrajectory(options_.trajectory_path);
+    }
     have_file_trajectory_ = true;
   }
+}
+
+const PoseStream& Viewer::MainStream(const LcmCollector& collector, const RigMap& map) {
+  if (!map.objects.empty()) {
+    const auto it = collector.body_poses().find(map.objects[FirstMovingObject(map)].name);
+    if (it != collector.body_poses().end()) return it->second;
+  }
+  return collector.pose_stream();
 }
 
 std::string Viewer::NoPosesInLog() const {
   return options_.log_path +
          " has no MCMT_POSE (mcmt-tracker was not running while it was recorded), so the object is not "
          "drawn: "
-         "add --trajectory OUTDIR/trajectory.csv (the mapper's)";
+         "add --trajectory OUTDIR/trajectory.csv (the mapper's; several bodies: --trajectory OUTDIR)";
 }
 
 std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
@@ -144,10 +165,22 @@ std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
     refined.map = collector->map();
   else
     return {};
-  if (have_file_trajectory_)
+  const bool several = refined.map.objects.size() > 1;
+  const std::string main_body =
+      refined.map.objects.empty() ? "" : refined.map.objects[FirstMovingObject(refined.map)].name;
+  if (have_file_trajectory_) {
     refined.trajectory = file_trajectory_;
-  else if (collector)
-    refined.trajectory = collector->poses();
+    for (const auto& [body, rows] : file_body_trajectories_) {
+      if (body == main_body)
+        refined.trajectory = rows;
+      else
+        refined.bodies[body] = rows;
+    }
+  } else if (collector) {
+    refined.trajectory = MainStream(*collector, refined.map).rows;
+    for (const auto& [body, stream] : collector->body_poses())
+      if (several && body != main_body) refined.bodies[body] = stream.rows;
+  }
   std::vector<PanelInput> panels;
   if (have_initial_) {
     PanelInput initial;
@@ -170,7 +203,7 @@ int Viewer::Run() {
     log_damaged_ = collector->ReadLog(options_.log_path).damaged();
     if (!have_file_map_ && !collector->has_map())
       throw std::runtime_error(options_.log_path + ": no MCMT_MAP message in the log (give --map map.yaml)");
-    if (!have_file_trajectory_ && collector->total_poses() == 0) {
+    if (!have_file_trajectory_ && collector->all_poses() == 0) {
       if (!options_.video_dir.empty()) throw std::runtime_error("--video: " + NoPosesInLog());
       std::cerr << "mcmt-viz: note: " << NoPosesInLog() << "\n";
     }
@@ -185,7 +218,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     // Live: wait for a map and enough poses.
     const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout_s);
     auto ready = [&] {
-      return (have_file_map_ || collector->has_map()) && collector->total_poses() >= options_.max_poses;
+      return (have_file_map_ || collector->has_map()) && collector->all_poses() >= options_.max_poses;
     };
     while (!ready() && Clock::now() < deadline) lcm_->handleTimeout(20);
     if (!ready()) {
@@ -193,7 +226,7 @@ int Viewer::RunHeadless(LcmCollector* collector) {
       std::snprintf(text, sizeof(text), "timed out after %.1f s waiting for %s (got %s and %lld poses)",
                     options_.timeout_s, options_.max_poses > 0 ? "a map and --max-poses poses" : "a map",
                     (have_file_map_ || collector->has_map()) ? "a map" : "no MCMT_MAP",
-                    static_cast<long long>(collector->total_poses()));
+                    static_cast<long long>(collector->all_poses()));
       throw std::runtime_error(text);
     }
   }
@@ -296,7 +329,15 @@ int Viewer::RunWindow(LcmCollector* collector) {
   bool follow = options_.follow;
   bool browsing = false;  // stepping through frames with the arrow keys
   int map_count = -1;
-  int64_t poses_shown = 0;  // poses received (collector's absolute index) already in the scene
+  // Poses received (the collector's absolute index per stream: "" the first moving body's) already in
+  // the scene.
+  std::map<std::string, int64_t> poses_shown;
+  auto scene_map = [&]() -> const RigMap& { return have_file_map_ ? file_map_ : collector->map(); };
+  auto all_shown = [&] {
+    poses_shown.clear();
+    poses_shown[""] = MainStream(*collector, scene_map()).total();
+    for (const auto& [body, stream] : collector->body_poses()) poses_shown[body] = stream.total();
+  };
   auto push_view = [&](const ViewCamera& v) {
     win->setCameraPointingToPoint(static_cast<float>(v.pointing.x()), static_cast<float>(v.pointing.y()),
                                   static_cast<float>(v.pointing.z()));
@@ -391,7 +432,7 @@ int Viewer::RunWindow(LcmCollector* collector) {
         scene.SetCameraStates(collector->camera_states());
         scene.SetPanels(Panels(collector));
         ptr = scene.scene();
-        poses_shown = collector->total_poses();
+        all_shown();
         reset = true;
         dirty = true;
       } else if (scene.HasMap() && collector->camera_states() != scene.camera_states()) {
@@ -403,17 +444,29 @@ int Viewer::RunWindow(LcmCollector* collector) {
         scene.SetView(view);
         scene.SetCurrentFrame(browsing ? shown : -1);
         ptr = scene.scene();
-        poses_shown = collector->total_poses();
+        all_shown();
         dirty = true;
       }
       if (scene.HasMap() && !have_file_trajectory_) {
-        const auto& poses = collector->poses();
-        poses_shown = std::max(poses_shown, collector->first_pose_index());  // older ones dropped
-        for (; poses_shown < collector->total_poses(); ++poses_shown) {
+        const RigMap& map = scene_map();
+        const PoseStream& main = MainStream(*collector, map);
+        int64_t& main_shown = poses_shown[""];
+        main_shown = std::max(main_shown, main.dropped);  // older ones dropped
+        for (; main_shown < main.total(); ++main_shown) {
           const int shown = scene.current_frame();
-          scene.AddPose(poses[static_cast<size_t>(poses_shown - collector->first_pose_index())]);
+          scene.AddPose(main.rows[static_cast<size_t>(main_shown - main.dropped)]);
           if (browsing) scene.SetCurrentFrame(shown);
           dirty = true;
+        }
+        const std::string main_body = map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
+        for (const auto& [body, stream] : collector->body_poses()) {
+          if (body == main_body) continue;
+          int64_t& body_shown = poses_shown[body];
+          body_shown = std::max(body_shown, stream.dropped);
+          for (; body_shown < stream.total(); ++body_shown) {
+            scene.AddBodyPose(body, stream.rows[static_cast<size_t>(body_shown - stream.dropped)], !browsing);
+            dirty = true;
+          }
         }
       }
       if (dirty && scene.HasMap() && scene.current_frame() >= 0)

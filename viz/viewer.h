@@ -3,6 +3,7 @@
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,7 @@ namespace mcmt::viz {
 struct ViewerOptions {
   std::string map_path;                 // map.yaml (refined)
   std::string initial_map_path;         // map_initial.yaml: before/after side by side
-  std::string trajectory_path;          // trajectory.csv of the refined map
+  std::string trajectory_path;          // trajectory.csv of the refined map, or the mapper's OUTDIR (bodies)
   std::string initial_trajectory_path;  // default: trajectory_initial.csv beside the initial map
   std::string log_path;                 // LCM log read by core's reader
   std::string snapshot_path;            // PNG
@@ -58,6 +59,9 @@ class Viewer {
 
  private:
   std::vector<PanelInput> Panels(const LcmCollector* collector) const;
+  // The stream of the map's first moving body (MCMT_POSE_<BODY> of a map with several bodies, when it
+  // has poses), else MCMT_POSE's.
+  static const PoseStream& MainStream(const LcmCollector& collector, const RigMap& map);
   std::string NoPosesInLog() const;  // why a log shows no object, and what to add
   int RunHeadless(LcmCollector* collector);
   int RunWindow(LcmCollector* collector);
@@ -70,6 +74,9 @@ class Viewer {
   bool have_file_map_ = false, have_initial_ = false;
   std::vector<TrajectoryRow> file_trajectory_, file_initial_trajectory_;
   bool have_file_trajectory_ = false;
+  // --trajectory OUTDIR of a map with several bodies: trajectory_<body>.csv by body (file_trajectory_ is
+  // then the first moving body's, chosen when the map is known).
+  std::map<std::string, std::vector<TrajectoryRow>> file_body_trajectories_;
 };
 
 }  // namespace mcmt::viz

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
@@ -177,21 +178,23 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  // udpm ports base..base+4 (MCMT_BENCH_PORT: bench/run --port-base).
+  const int base = std::getenv("MCMT_BENCH_PORT") ? std::atoi(std::getenv("MCMT_BENCH_PORT")) : 7770;
   char dir_template[] = "/tmp/mcmt_bench_logger_XXXXXX";
   const std::string dir = mkdtemp(dir_template);
   std::vector<Result> results;
   results.push_back(
-      RunScenario("8 cameras x 60 fps, detections (12 markers)", dir, 7770, 8, 60, 0, seconds, 0));
+      RunScenario("8 cameras x 60 fps, detections (12 markers)", dir, base + 0, 8, 60, 0, seconds, 0));
   results.push_back(RunScenario("8 cameras x 60 fps, detections + 1 image msg (50 kB) per camera frame", dir,
-                                7771, 8, 60, 50000, seconds, 0));
+                                base + 1, 8, 60, 50000, seconds, 0));
   results.push_back(
-      RunScenario("burst: 8 cameras, unpaced, 2000 frames of detections", dir, 7772, 8, 0, 0, 0, 2000));
+      RunScenario("burst: 8 cameras, unpaced, 2000 frames of detections", dir, base + 2, 8, 0, 0, 0, 2000));
   // The same two heavy loads with the kernel's default socket buffer (--recv-buf-mb 0): why the logger raises
   // it.
-  results.push_back(RunScenario("as row 2, --recv-buf-mb 0 (kernel default buffer)", dir, 7773, 8, 60, 50000,
-                                seconds, 0, "0"));
+  results.push_back(RunScenario("as row 2, --recv-buf-mb 0 (kernel default buffer)", dir, base + 3, 8, 60,
+                                50000, seconds, 0, "0"));
   results.push_back(
-      RunScenario("as row 3, --recv-buf-mb 0 (kernel default buffer)", dir, 7774, 8, 0, 0, 0, 2000, "0"));
+      RunScenario("as row 3, --recv-buf-mb 0 (kernel default buffer)", dir, base + 4, 8, 0, 0, 0, 2000, "0"));
   rmdir(dir.c_str());
 
   std::printf(

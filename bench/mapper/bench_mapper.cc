@@ -5,7 +5,7 @@
 //   bench_mapper [--quick] [--frames 300,1000,3000,10000] [--cameras 3,5,8] [--threads N] [--no-accuracy]
 //                [--rendered [--rendered-frames 100]]   (accuracy from rendered images, needs sim + detector)
 //
-// Logs come from `mcmt-sim --detections-only` when it is built (else from the tests' synthetic scene).
+// Logs come from `mcmt-sim --detections-only`.
 // Prints markdown tables.
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -31,7 +32,6 @@
 #include "detector/detector.h"
 #include "mapper/mapper.h"
 #endif
-#include "tests/mapper/synth.h"
 
 namespace fs = std::filesystem;
 
@@ -84,28 +84,20 @@ double JsonValue(const std::string& json, const std::string& key) {
   return std::atof(json.c_str() + at + key.size() + 3);
 }
 
-// Writes DIR/rig.yaml + DIR/detections.lcmlog (+ ground_truth.yaml with mcmt-sim). Returns the log.
-std::string MakeLog(const std::string& dir, int frames, int cameras, double radius, bool* from_sim) {
+// Writes DIR/rig.yaml, DIR/ground_truth.yaml and DIR/detections.lcmlog with mcmt-sim; returns the log.
+// Exits with a one-line reason when mcmt-sim fails.
+std::string MakeLog(const std::string& dir, int frames, int cameras, double radius) {
   fs::create_directories(dir);
   const std::string sim = kBin + "/mcmt-sim";
-  *from_sim = fs::exists(sim);
-  if (*from_sim) {
-    const ProcessResult r =
-        RunProcess({sim, "--out", dir, "--detections-only", "--object", "four_sided", "--cameras",
-                    std::to_string(cameras), "--frames", std::to_string(frames), "--radius",
-                    std::to_string(radius), "--seed", "1"},
-                   dir + "/sim.out");
-    if (r.code == 0 && fs::exists(dir + "/detections.lcmlog")) return dir + "/detections.lcmlog";
-    std::cerr << "mcmt-sim failed (see " << dir << "/sim.out); using the synthetic scene\n";
-    *from_sim = false;
+  const ProcessResult r = RunProcess(
+      {sim, "--out", dir, "--detections-only", "--object", "four_sided", "--cameras", std::to_string(cameras),
+       "--frames", std::to_string(frames), "--radius", std::to_string(radius), "--seed", "1"},
+      dir + "/sim.out");
+  if (r.code != 0 || !fs::exists(dir + "/detections.lcmlog")) {
+    std::cerr << "bench_mapper: error: " << sim << " failed (exit " << r.code << ", see " << dir
+              << "/sim.out)\n";
+    std::exit(1);
   }
-  mcmt::testing::SynthOptions so;
-  so.frames = frames;
-  so.cameras = cameras;
-  so.radius = radius;
-  const mcmt::testing::SynthScene scene = mcmt::testing::MakeScene(so);
-  mcmt::testing::WriteSceneRig(dir, scene);
-  mcmt::testing::WriteSceneLog(dir + "/detections.lcmlog", scene);
   return dir + "/detections.lcmlog";
 }
 
@@ -152,11 +144,10 @@ int main(int argc, char** argv) {
   std::cout << "| frames | cameras | observations | process wall (s) | mapping (s) | init (s) | refine (s) | "
                "iterations | peak RSS (MiB) | final rms (px) |\n";
   std::cout << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  bool from_sim = false;
   for (int cameras : cameras_list) {
     for (int frames : frames_list) {
       const std::string dir = root + "/f" + std::to_string(frames) + "_c" + std::to_string(cameras);
-      const std::string log = MakeLog(dir, frames, cameras, 1.0, &from_sim);
+      const std::string log = MakeLog(dir, frames, cameras, 1.0);
       const ProcessResult r = RunProcess(
           {mapper, "--config", dir + "/rig.yaml", "--log", log, "--out", dir + "/out", "--threads", threads},
           dir + "/mapper.out");
@@ -178,7 +169,7 @@ int main(int argc, char** argv) {
   }
   std::cout
       << "\nlogs: "
-      << (from_sim ? "mcmt-sim --detections-only --object four_sided" : "tests/mapper synthetic scene")
+      << "mcmt-sim --detections-only --object four_sided"
       << ", corner noise 0.1 px; mapping = the mapper's own total (report.json), init = everything before "
          "the bundle adjustment.\n";
 

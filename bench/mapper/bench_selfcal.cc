@@ -2,17 +2,19 @@
 // and drifts, both), the errors before and after refinement, the recovered values against the truth, and
 // the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
 //
-//   bench_selfcal [--frames 300] [--long 1200] [--verbose]
+//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]
 //
 // Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
 // noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
 // / --max-speed-m-s). --long: the quick-calibration rows again with that many frames (how the camera error
-// falls with more observations; 0: skipped). Prints a markdown table.
+// falls with more observations; 0: skipped). --seeds N: instead, the quick calibration over N sessions, why
+// the refined cameras' positions are worse (SeedRows). Prints a markdown table.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <map>
 #include <string>
 #include <vector>
@@ -30,6 +32,7 @@ bool verbose = false;
 struct Row {
   std::string perturbation, settings;
   double camera_mm = 0, object_mm = 0, seconds = 0, baseline_s = 0;
+  double cpu_s = 0, baseline_cpu_s = 0;  // processor time of the mapping (all threads)
   std::string recovered;
 };
 
@@ -81,8 +84,15 @@ std::string ClocksRecovered(const SelfCalRun& run, const MapResult& r, bool drif
   return text;
 }
 
-MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::string& what) {
+// Processor time of this process (all its threads), seconds: on the shared machine the wall time of a
+// mapping varies by 2x with the other processes' load, its processor time by a few per cent.
+double CpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::string& what,
+              double* cpu_s = nullptr) {
+  const double cpu_start = CpuSeconds();
   const MapResult r = testing::MapDetections(run.detections, options);
+  if (cpu_s) *cpu_s = CpuSeconds() - cpu_start;
   if (verbose) {
     std::fprintf(stderr, "%s: %.2f s, %d solves, %d iterations\n", what.c_str(), r.report.total_seconds,
                  r.report.solves, r.report.iterations);
@@ -92,9 +102,10 @@ MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::st
   return r;
 }
 
-Row Measure(const SelfCalRun& run, const MapperOptions& options, double baseline_s,
+Row Measure(const SelfCalRun& run, const MapperOptions& options, const Row* baseline,
             const std::string& perturbation, const std::string& settings, const std::string& recovered_kind) {
-  const MapResult r = Map(run, options, perturbation + " / " + settings);
+  double cpu_s = 0;
+  const MapResult r = Map(run, options, perturbation + " / " + settings, &cpu_s);
   const sim::EvalResult e = sim::Evaluate(run.truth, &r.map, &r.trajectory);
   Row row;
   row.perturbation = perturbation;
@@ -102,7 +113,9 @@ Row Measure(const SelfCalRun& run, const MapperOptions& options, double baseline
   row.camera_mm = e.camera_position_mm.mean;
   row.object_mm = e.object_translation_mm.mean;
   row.seconds = r.report.total_seconds;
-  row.baseline_s = baseline_s;
+  row.cpu_s = cpu_s;
+  row.baseline_s = baseline ? baseline->seconds : row.seconds;
+  row.baseline_cpu_s = baseline ? baseline->cpu_s : row.cpu_s;
   if (recovered_kind == "intrinsics") row.recovered = IntrinsicsRecovered(run.truth, r);
   if (recovered_kind == "clocks") row.recovered = ClocksRecovered(run, r, false);
   if (recovered_kind == "drift") row.recovered = ClocksRecovered(run, r, true);
@@ -133,45 +146,118 @@ void QuickCalibrationRows(int frames, std::vector<Row>* rows) {
   MapperOptions all = defaults;
   all.intrinsics.refine = IntrinsicsRefinement::kAll;
   const std::string n = " (" + std::to_string(frames) + " frames)";
-  const Row base = Measure(exact, defaults, 0, "none" + n, "defaults", "");
+  const Row base = Measure(exact, defaults, nullptr, "none" + n, "defaults", "");
   rows->push_back(base);
-  rows->back().baseline_s = base.seconds;
-  rows->push_back(Measure(exact, all, base.seconds, "none" + n, "`refine_intrinsics: all`", "intrinsics"));
-  rows->push_back(Measure(wrong, defaults, base.seconds,
-                          "cam1, cam3: focal +-3 %, centre 8 px, k1 +-0.03" + n, "defaults", "intrinsics"));
-  rows->push_back(Measure(wrong, all, base.seconds, "same" + n, "`refine_intrinsics: all`", "intrinsics"));
+  rows->push_back(Measure(exact, all, &base, "none" + n, "`refine_intrinsics: all`", "intrinsics"));
+  rows->push_back(Measure(wrong, defaults, &base, "cam1, cam3: focal +-3 %, centre 8 px, k1 +-0.03" + n,
+                          "defaults", "intrinsics"));
+  rows->push_back(Measure(wrong, all, &base, "same" + n, "`refine_intrinsics: all`", "intrinsics"));
+}
+
+// Why the refined cameras' positions are worse than with exact intrinsics (--seeds N): the quick
+// calibration over N sessions (seeds 11, 12, ...). Per refined camera: its focal length's error against its
+// posterior sigma (z: an unbiased estimate has |z| ~ 0.8 on average), its position error split along its
+// optical axis and across it (+: towards the scene), and the axial error the focal error alone predicts
+// (-distance to the object x relative focal error: with its focal length short by x % the camera, to see
+// the object as large as it is seen, is placed x % closer).
+void SeedRows(int num_seeds, int frames) {
+  std::printf(
+      "| seed | camera error, exact intrinsics | refined | ratio | camera | fx error (posterior sigma, z) | "
+      "position error along / across the axis (exact intrinsics) | -distance x fx error |\n");
+  std::printf("|---:|---:|---:|---:|---|---|---|---:|\n");
+  double sum_abs_z = 0, sum_exact = 0, sum_refined = 0;
+  int n_z = 0;
+  for (int k = 0; k < num_seeds; ++k) {
+    SelfCalSession session;
+    session.frames = frames;
+    session.seed = 11 + k;
+    const SelfCalRun exact = testing::SimulateSelfCal(session);
+    SelfCalRun wrong = exact;
+    QuickCalibration(&wrong);
+    MapperOptions defaults = testing::SelfCalOptions(exact.truth);
+    MapperOptions all = defaults;
+    all.intrinsics.refine = IntrinsicsRefinement::kAll;
+    const MapResult r_exact = testing::MapDetections(exact.detections, defaults);
+    const MapResult r_refined = testing::MapDetections(wrong.detections, all);
+    const sim::EvalResult e_exact = sim::Evaluate(exact.truth, &r_exact.map, &r_exact.trajectory);
+    const sim::EvalResult e_refined = sim::Evaluate(exact.truth, &r_refined.map, &r_refined.trajectory);
+    sum_exact += e_exact.camera_position_mm.mean;
+    sum_refined += e_refined.camera_position_mm.mean;
+    Eigen::Vector3d object_mean = Eigen::Vector3d::Zero();
+    for (const sim::SimFrame& f : exact.truth.frames) object_mean += f.rig_from_object.translation();
+    object_mean /= static_cast<double>(exact.truth.frames.size());
+    // Position error of a camera split along its (true) optical axis and across it, mm.
+    auto split = [&](const sim::EvalResult& e, const MapResult& r, const std::string& name) {
+      const sim::SimCamera& t = *exact.truth.FindCamera(name);
+      const Eigen::Vector3d error =
+          e.gt_rig_from_est_rig * r.map.FindCamera(name)->rig_from_cam.translation() -
+          t.rig_from_cam.translation();
+      const Eigen::Vector3d axis = t.rig_from_cam.linear().col(2);
+      return std::make_pair(1000 * error.dot(axis), 1000 * (error - error.dot(axis) * axis).norm());
+    };
+    for (const IntrinsicsReport& ir : r_refined.report.intrinsics) {
+      if (!ir.is_refined[0]) continue;
+      const sim::SimCamera& t = *exact.truth.FindCamera(ir.camera);
+      const double fx_error = ir.refined[0] / t.model.fx - 1, sigma = ir.posterior_sigma[0] / ir.refined[0];
+      const double z = fx_error / sigma;
+      sum_abs_z += std::abs(z);
+      ++n_z;
+      const auto refined = split(e_refined, r_refined, ir.camera);
+      const auto base = split(e_exact, r_exact, ir.camera);
+      const double distance_mm = 1000 * (t.rig_from_cam.translation() - object_mean).norm();
+      std::printf(
+          "| %llu | %.3f mm | %.3f mm | %.1fx | %s | %+.3f %% (%.3f %%, z %+.2f) | %+.3f / %.3f mm (%+.3f / "
+          "%.3f) "
+          "| %+.3f mm |\n",
+          static_cast<unsigned long long>(session.seed), e_exact.camera_position_mm.mean,
+          e_refined.camera_position_mm.mean,
+          e_refined.camera_position_mm.mean / e_exact.camera_position_mm.mean, ir.camera.c_str(),
+          100 * fx_error, 100 * sigma, z, refined.first, refined.second, base.first, base.second,
+          -distance_mm * fx_error);
+    }
+  }
+  std::printf(
+      "\nmean over %d sessions: exact intrinsics %.3f mm, refined %.3f mm (%.1fx); mean |z| of fx %.2f\n",
+      num_seeds, sum_exact / num_seeds, sum_refined / num_seeds, sum_refined / sum_exact,
+      n_z ? sum_abs_z / n_z : 0.0);
 }
 
 void Print(const std::vector<Row>& rows) {
   std::printf(
       "| perturbation | mapper settings | camera position error | object error | recovered vs truth (worst "
-      "camera) "
-      "| map time | vs defaults |\n");
-  std::printf("|---|---|---:|---:|---|---:|---:|\n");
+      "camera) | map time | vs defaults | processor time | vs defaults |\n");
+  std::printf("|---|---|---:|---:|---|---:|---:|---:|---:|\n");
   for (const Row& r : rows)
-    std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx |\n", r.perturbation.c_str(),
-                r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(), r.seconds,
-                r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0);
+    std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx | %.2f s | %.1fx |\n",
+                r.perturbation.c_str(), r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(),
+                r.seconds, r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0, r.cpu_s,
+                r.baseline_cpu_s > 0 ? r.cpu_s / r.baseline_cpu_s : 1.0);
 }
 
 int Main(int argc, char** argv) {
-  int frames = 300, long_frames = 1200;
+  int frames = 300, long_frames = 1200, seeds = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) {
       frames = std::atoi(argv[++i]);
     } else if (a == "--long" && i + 1 < argc) {
       long_frames = std::atoi(argv[++i]);
+    } else if (a == "--seeds" && i + 1 < argc) {
+      seeds = std::atoi(argv[++i]);
     } else if (a == "--verbose") {
       verbose = true;
     } else {
-      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--verbose]\n");
+      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]\n");
       return 2;
     }
   }
+  if (seeds > 0) {
+    SeedRows(seeds, frames);
+    return 0;
+  }
   std::vector<Row> rows;
   QuickCalibrationRows(frames, &rows);
-  const double base_s = rows.front().seconds;
+  const Row base_row = rows.front();
   {
     SelfCalSession session;
     session.frames = frames;
@@ -181,7 +267,7 @@ int Main(int argc, char** argv) {
     MapperOptions o = testing::SelfCalOptions(rough.truth);
     o.intrinsics.refine = IntrinsicsRefinement::kFocal;
     o.intrinsics.sigma.focal_rel = 0.2;
-    rows.push_back(Measure(rough, o, base_s, "cam2, cam4: focal +-15 %",
+    rows.push_back(Measure(rough, o, &base_row, "cam2, cam4: focal +-15 %",
                            "`focal`, `intrinsics_sigma.focal_rel: 0.2`", "intrinsics"));
     // Only a field of view: focal lengths +15.8 % / -14.4 %, the principal point at the image centre.
     session.distortion = DistortionModel::kNone;
@@ -194,10 +280,11 @@ int Main(int argc, char** argv) {
       testing::GiveIntrinsics(name, m, &fov);
     }
     MapperOptions f = testing::SelfCalOptions(fov.truth);
-    const double fov_base_s = Map(fov, f, "hfov baseline").report.total_seconds;
+    Row fov_base;
+    fov_base.seconds = Map(fov, f, "hfov baseline", &fov_base.cpu_s).report.total_seconds;
     f.intrinsics.refine = IntrinsicsRefinement::kFocalCenter;
     f.intrinsics.sigma.focal_rel = 0.2;
-    rows.push_back(Measure(fov, f, fov_base_s, "cam2, cam4: only hfov_deg 53 / 68 (no distortion)",
+    rows.push_back(Measure(fov, f, &fov_base, "cam2, cam4: only hfov_deg 53 / 68 (no distortion)",
                            "`focal_center`, `intrinsics_sigma.focal_rel: 0.2`", "intrinsics"));
   }
   {
@@ -213,27 +300,26 @@ int Main(int argc, char** argv) {
     const MapperOptions defaults = testing::SelfCalOptions(synced.truth);
     char speed[96];
     std::snprintf(speed, sizeof(speed), "object up to %.2f m/s", synced.max_speed_m_s);
-    const Row base = Measure(synced, defaults, 0, std::string("synchronised, ") + speed, "defaults", "");
+    const Row base =
+        Measure(synced, defaults, nullptr, std::string("synchronised, ") + speed, "defaults", "");
     rows.push_back(base);
-    rows.back().baseline_s = base.seconds;
     MapperOptions wide = defaults;
     wide.sync_tolerance_ms = 25;
-    rows.push_back(Measure(late, wide, base.seconds, "cam1, cam2, cam4 clocks -20, +12, +20 ms",
+    rows.push_back(Measure(late, wide, &base, "cam1, cam2, cam4 clocks -20, +12, +20 ms",
                            "`sync.tolerance_ms: 25`, offsets ignored", ""));
     MapperOptions offsets = defaults;
     offsets.estimate_time_offsets = true;
-    rows.push_back(Measure(late, offsets, base.seconds, "same", "`time_offsets: true`", "clocks"));
-    rows.push_back(Measure(drifting, offsets, base.seconds, "same, drifting +400, -300, 0 ppm",
+    rows.push_back(Measure(late, offsets, &base, "same", "`time_offsets: true`", "clocks"));
+    rows.push_back(Measure(drifting, offsets, &base, "same, drifting +400, -300, 0 ppm",
                            "`time_offsets: true`", "drift"));
     MapperOptions drift = offsets;
     drift.estimate_clock_drift = true;
-    rows.push_back(
-        Measure(drifting, drift, base.seconds, "same", "`time_offsets`, `clock_drift: true`", "drift"));
-    rows.push_back(Measure(both, wide, base.seconds, "quick calibration (cam1, cam3) and drifting clocks",
+    rows.push_back(Measure(drifting, drift, &base, "same", "`time_offsets`, `clock_drift: true`", "drift"));
+    rows.push_back(Measure(both, wide, &base, "quick calibration (cam1, cam3) and drifting clocks",
                            "`sync.tolerance_ms: 25`", ""));
     MapperOptions everything = drift;
     everything.intrinsics.refine = IntrinsicsRefinement::kAll;
-    rows.push_back(Measure(both, everything, base.seconds, "same",
+    rows.push_back(Measure(both, everything, &base, "same",
                            "`refine_intrinsics: all`, `time_offsets`, `clock_drift`", "both"));
   }
   if (long_frames > 0) QuickCalibrationRows(long_frames, &rows);

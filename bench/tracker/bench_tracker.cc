@@ -2,9 +2,11 @@
 //  1. PoseEstimator::Solve time per frame for 1 / 3 / 5 / 8 cameras with 3-6 markers each (a cube with
 //     2x2 markers per face), tracking (constant-velocity prediction) and lost (IPPE hypotheses), one core.
 //  1b. The per-camera health's cost per frame (TrackerNode in-process, camera_health on / off).
-//  2. End-to-end latency over loopback udpm (port 7750): the real mcmt-tracker process, a publisher of
-//     detections and a subscriber of MCMT_POSE (own thread) in this process; from publishing a frame's last
-//     detection to receiving its pose.
+//  1c. Several bodies (issue 16): Solve per body per frame on the sim's bodies scene (tool, patient, static
+//      floor; a map from the ground truth), and TrackerNode's whole frame with every stream.
+//  2. End-to-end latency over loopback udpm (port 7750, or $MCMT_BENCH_PORT): the real mcmt-tracker
+//     process, a publisher of detections and a subscriber of MCMT_POSE (own thread) in this process; from
+//     publishing a frame's last detection to receiving its pose.
 // Usage: bench_tracker [--frames N] [--latency-frames N] [--rate HZ] [--no-latency]
 #include <signal.h>
 #include <sys/wait.h>
@@ -19,12 +21,17 @@
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/files.h"
 #include "core/lcm_util.h"
+#ifdef MCMT_BENCH_BODIES
+#include "sim/eval.h"
+#include "sim/sim.h"
+#endif
 #include "tests/tracker/synthetic_rig.h"
 #include "tracker/tracker.h"
 
@@ -174,7 +181,8 @@ void LatencyTable(int frames, double rate_hz) {
   const std::string dir = mcmt::tracker_test::MakeTempDir("bench");
   const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
   mcmt::WriteMap(dir + "/map.yaml", s.map);
-  const std::string url = "udpm://239.255.76.67:7750?ttl=0";
+  const char* port = std::getenv("MCMT_BENCH_PORT");  // bench/run --port-base
+  const std::string url = "udpm://239.255.76.67:" + std::string(port ? port : "7750") + "?ttl=0";
   const std::string err = dir + "/tracker.txt";
   const pid_t pid = fork();
   if (pid == 0) {
@@ -287,6 +295,121 @@ void HealthCostTable(int frames) {
   std::printf("\nHealth adds %.4f ms per frame (%.1fx).\n\n", ms[1] - ms[0], ms[0] > 0 ? ms[1] / ms[0] : 0.0);
 }
 
+#ifdef MCMT_BENCH_BODIES
+// The sim's bodies scene (5 cameras at 1.0 m, `frames` frames) with a version 2 map made from its ground
+// truth (the cameras in cam0's frame, each body's layout in its first marker's frame, the floor's pose).
+mcmt::RigMap BodiesMap(const mcmt::sim::Session& s) {
+  mcmt::RigMap map;
+  for (size_t b = 0; b < s.bodies.size(); ++b) {
+    const mcmt::RigMap own = mcmt::sim::MapFromGroundTruth(s.Truth(b));
+    if (b == 0) map = own;
+    mcmt::MapObject o;
+    o.name = s.bodies[b].name;
+    o.is_static = s.bodies[b].is_static;
+    o.markers = own.markers;
+    o.reference_marker = own.reference_marker;
+    if (o.is_static) {  // rig_from_object in cam0's frame, object frame at its first marker
+      const auto& truth = s.Truth(b);
+      o.rig_from_object = mcmt::Inverse(truth.cameras[0].rig_from_cam) *
+                          s.bodies[b].frames[0].rig_from_object * truth.markers[0].object_from_marker;
+    }
+    map.objects.push_back(o);
+  }
+  map.version = mcmt::kMapVersionBodies;
+  map.markers = map.objects[mcmt::FirstMovingObject(map)].markers;
+  map.reference_marker = map.objects[mcmt::FirstMovingObject(map)].reference_marker;
+  return map;
+}
+
+void BodiesTable(int frames) {
+  const std::string dir = mcmt::tracker_test::MakeTempDir("bench_bodies");
+  const mcmt::sim::DatasetOptions o = mcmt::sim::DetectionsOnlySession(dir, frames, 1);
+  const mcmt::sim::Session s =
+      mcmt::sim::SimulateSession(mcmt::sim::MakeRig(o.rig), mcmt::sim::MakeBodiesScene(o), o.detections, 1);
+  const mcmt::RigMap map = BodiesMap(s);
+  std::printf("## Several bodies: solve time per body per frame (issue 16)\n\n");
+  std::printf(
+      "The sim's bodies scene (mcmt-sim --scene bodies: 5 cameras at 1.0 m, a tool and a patient that cross "
+      "and occlude each other, a static floor board; %d frames), a map from the ground truth. "
+      "PoseEstimator::Solve on each body's own observations, tracking (prediction) and lost (IPPE "
+      "hypotheses), fastest of 3 runs per frame, one core. Target: <= 0.05 ms median per body per frame "
+      "(tracking).\n\n",
+      frames);
+  std::printf(
+      "| body | observations/frame | tracking median (ms) | tracking p99 (ms) | lost median (ms) | frames "
+      "with a pose |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  mcmt::TrackerOptions options;
+  for (size_t k = 0; k < map.objects.size(); ++k) {
+    if (map.objects[k].is_static) continue;
+    const mcmt::PoseEstimator est(map.ObjectMap(k), options);
+    std::set<int> ids;
+    for (const auto& m : map.objects[k].markers) ids.insert(m.id);
+    std::vector<double> t_track, t_lost;
+    double n_obs = 0;
+    int posed = 0;
+    mcmt::MotionModel motion(options.max_gap_s);
+    for (size_t f = 0; f < s.views.size(); ++f) {
+      std::vector<mcmt::MarkerObservation> obs;
+      for (const auto& o2 : mcmt::ObservationsFromViews(s.views[f]))
+        if (ids.count(o2.id)) obs.push_back(o2);
+      n_obs += obs.size();
+      const int64_t utime = s.frames()[f].utime;
+      mcmt::Rigid3 prior;
+      const bool have = motion.Predict(utime, &prior);
+      mcmt::PoseSolution sol;
+      double best_track = 1e9, best_lost = 1e9;
+      for (int rep = 0; rep < 3; ++rep) {
+        const auto t0 = Clock::now();
+        sol = est.Solve(obs, have ? &prior : nullptr);
+        const auto t1 = Clock::now();
+        const mcmt::PoseSolution lost = est.Solve(obs, nullptr);
+        const auto t2 = Clock::now();
+        (void)lost;
+        best_track = std::min(best_track, std::chrono::duration<double, std::milli>(t1 - t0).count());
+        best_lost = std::min(best_lost, std::chrono::duration<double, std::milli>(t2 - t1).count());
+      }
+      t_track.push_back(best_track);
+      t_lost.push_back(best_lost);
+      if (sol.ok()) {
+        motion.Update(utime, sol.rig_from_object);
+        ++posed;
+      } else {
+        motion.Reset();
+      }
+    }
+    std::printf("| %s | %.1f | %.4f | %.4f | %.4f | %d of %zu |\n", map.objects[k].name.c_str(),
+                n_obs / s.views.size(), Percentile(t_track, 0.5), Percentile(t_track, 0.99),
+                Percentile(t_lost, 0.5), posed, s.views.size());
+  }
+  // The whole frame in the node: every body, the health judged on the first, the relative pose.
+  const std::string rig_path = mcmt::sim::WriteSessionRig(dir, s);
+  const mcmt::RigConfig rig = mcmt::LoadRigConfig(rig_path);
+  const std::string log = dir + "/session.lcmlog";
+  mcmt::sim::WriteMessagesLog(log, s.Messages());
+  std::printf("\n| TrackerNode --log in-process | ms per frame (best of 3) | streams |\n|---|---|---|\n");
+  for (const bool relative : {false, true}) {
+    double best = 1e9;
+    size_t streams = 0;
+    for (int rep = 0; rep < 3; ++rep) {
+      mcmt::TrackerNodeOptions node_options;
+      node_options.log_mode = true;
+      node_options.quiet = true;
+      if (relative) node_options.tracker.relative = {{"tool", "patient"}};
+      lcm::LCM lcm("memq://");
+      mcmt::TrackerNode node(lcm, rig, node_options, map);
+      const auto t0 = Clock::now();
+      node.RunLog(log, mcmt::StopToken());
+      best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
+      streams = node.streams().size();
+    }
+    std::printf("| tool, patient%s (health on) | %.4f | %zu |\n", relative ? ", tool_in_patient" : "",
+                1000.0 * best / frames, streams);
+  }
+  std::printf("\n");
+}
+#endif  // MCMT_BENCH_BODIES
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -320,6 +443,9 @@ int main(int argc, char** argv) {
   SolveTable(frames);
   LogThroughputTable(20000);
   HealthCostTable(5000);
+#ifdef MCMT_BENCH_BODIES
+  BodiesTable(std::min(frames, 1000));
+#endif
   if (latency) LatencyTable(latency_frames, rate);
   return 0;
 }

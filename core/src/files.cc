@@ -1,6 +1,7 @@
 #include "core/files.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -614,6 +615,53 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +
                           "')");
   return rows;
+}
+
+std::vector<std::pair<std::string, std::string>> MapperTrajectories(const std::string& outdir) {
+  const std::string map_path = outdir + "/map.yaml";
+  std::vector<std::pair<std::string, std::string>> out;
+  struct stat st;
+  if (::stat(map_path.c_str(), &st) != 0) {
+    out.emplace_back("", outdir + "/trajectory.csv");
+  } else {
+    const RigMap map = ReadMap(map_path);
+    if (map.objects.empty()) out.emplace_back("", outdir + "/trajectory.csv");
+    for (const MapObject& o : map.objects)
+      if (!o.is_static) out.emplace_back(o.name, outdir + "/trajectory_" + o.name + ".csv");
+    if (out.empty())
+      throw FileFormatError(map_path +
+                            ": every body is static: no trajectory to export (their poses are "
+                            "rig_from_object in the map)");
+  }
+  for (const auto& [body, path] : out)
+    if (::stat(path.c_str(), &st) != 0)
+      throw FileFormatError(path + ": no such trajectory (is " + outdir + " an mcmt-mapper OUTDIR?)");
+  return out;
+}
+
+std::string BodyPath(const std::string& path, const std::string& body) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && dot > (slash == std::string::npos ? 0 : slash + 1);
+  return has_ext ? path.substr(0, dot) + "_" + body + path.substr(dot) : path + "_" + body;
+}
+
+std::vector<std::pair<std::string, std::string>> BodyTrajectoryFiles(const std::string& path,
+                                                                     const RigMap& map) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return MapperTrajectories(path);
+  std::vector<std::pair<std::string, std::string>> out;
+  std::string looked;
+  for (const MapObject& o : map.objects) {
+    if (o.is_static) continue;
+    const std::string file = BodyPath(path, o.name);
+    looked += (looked.empty() ? "" : ", ") + file;
+    if (::stat(file.c_str(), &st) == 0) out.emplace_back(o.name, file);
+  }
+  if (out.empty())
+    throw FileFormatError(path + ": neither the mapper's OUTDIR nor the tracker's per-body files (" +
+                          (looked.empty() ? std::string("the map has no moving body") : looked) + ")");
+  return out;
 }
 
 }  // namespace mcmt

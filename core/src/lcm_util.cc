@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <set>
+#include <stdexcept>
 
 namespace mcmt {
 namespace {
@@ -116,6 +118,38 @@ bool RigMapBody(WireReader& r) {
   return r.Fixed(16, "rms_px, num_frames, num_observations");
 }
 
+bool ObjectLayoutBody(WireReader& r) {
+  int32_t nm = 0;
+  if (!(r.String("object_layout_t.name") && r.Fixed(1 + 4, "is_static, reference_marker") &&
+        r.Count(&nm, 4 + 8 + kPoseBytes, "object_layout_t.markers") &&
+        r.Fixed(12 * static_cast<size_t>(nm), "marker_ids, marker_sizes")))
+    return false;
+  for (int32_t i = 0; i < nm; ++i)
+    if (!Pose3dBody(r)) return false;
+  return Pose3dBody(r) && r.Fixed(16, "object_layout_t.rms_px, num_frames, num_observations");
+}
+// An object_layout_t holds at least its name (5), the fixed fields and a pose.
+constexpr size_t kMinObjectLayoutBytes = 5 + 1 + 4 + 4 + kPoseBytes + 16;
+
+bool RigMap2Body(WireReader& r) {
+  int32_t nc = 0, no = 0;
+  if (!(r.Fixed(12, "utime, version") && r.String("reference_camera") && r.String("dictionary") &&
+        r.String("rig_frame") && r.Count(&nc, 5 + kMinCameraModelBytes + kPoseBytes + 16, "cameras")))
+    return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!r.String("camera_names")) return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!CameraModelBody(r)) return false;
+  for (int32_t i = 0; i < nc; ++i)
+    if (!Pose3dBody(r)) return false;
+  if (!r.Fixed(16 * static_cast<size_t>(nc) + 8, "time_offset_us, time_drift_ppm, time_reference_utime"))
+    return false;
+  if (!r.Count(&no, kMinObjectLayoutBytes, "objects")) return false;
+  for (int32_t i = 0; i < no; ++i)
+    if (!ObjectLayoutBody(r)) return false;
+  return r.Fixed(16, "rms_px, num_frames, num_observations");
+}
+
 bool ObjectPoseBody(WireReader& r) {
   int32_t nc = 0, nm = 0;
   if (!(r.Fixed(16, "utime, seq") && r.String("object") && Pose3dBody(r) &&
@@ -151,6 +185,12 @@ bool CheckEncoded(const void* data, size_t size, const pose3d_t*, std::string* e
 }
 bool CheckEncoded(const void* data, size_t size, const rig_map_t*, std::string* error) {
   return CheckTop<rig_map_t>(data, size, RigMapBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const object_layout_t*, std::string* error) {
+  return CheckTop<object_layout_t>(data, size, ObjectLayoutBody, error);
+}
+bool CheckEncoded(const void* data, size_t size, const rig_map2_t*, std::string* error) {
+  return CheckTop<rig_map2_t>(data, size, RigMap2Body, error);
 }
 bool CheckEncoded(const void* data, size_t size, const object_pose_t*, std::string* error) {
   return CheckTop<object_pose_t>(data, size, ObjectPoseBody, error);
@@ -313,6 +353,163 @@ RigMap FromRigMapMsg(const rig_map_t& msg) {
   map.num_frames = msg.num_frames;
   map.num_observations = msg.num_observations;
   return map;
+}
+
+namespace {
+
+object_layout_t ToLayoutMsg(const std::string& name, bool is_static, int reference_marker,
+                            const std::vector<MapMarker>& markers) {
+  object_layout_t msg;
+  msg.name = name;
+  msg.is_static = is_static;
+  msg.reference_marker = reference_marker;
+  msg.num_markers = static_cast<int32_t>(markers.size());
+  for (const MapMarker& m : markers) {
+    msg.marker_ids.push_back(m.id);
+    msg.marker_sizes.push_back(m.size);
+    msg.object_from_marker.push_back(ToPose3d(m.object_from_marker));
+  }
+  msg.rig_from_object = ToPose3d(Rigid3::Identity());
+  msg.rms_px = 0.0;
+  msg.num_frames = 0;
+  msg.num_observations = 0;
+  return msg;
+}
+
+std::vector<MapMarker> FromLayoutMarkers(const object_layout_t& msg) {
+  std::vector<MapMarker> markers;
+  for (int i = 0; i < msg.num_markers; ++i) {
+    MapMarker m;
+    m.id = msg.marker_ids[i];
+    m.size = msg.marker_sizes[i];
+    m.object_from_marker = FromPose3d(msg.object_from_marker[i]);
+    markers.push_back(m);
+  }
+  return markers;
+}
+
+}  // namespace
+
+rig_map2_t ToRigMap2Msg(const RigMap& map, int64_t utime) {
+  rig_map2_t msg;
+  msg.utime = utime;
+  msg.version = map.objects.empty() ? kMapVersion : kMapVersionBodies;
+  msg.reference_camera = map.reference_camera;
+  msg.dictionary = map.dictionary;
+  msg.rig_frame = map.rig_frame;
+  msg.num_cameras = static_cast<int32_t>(map.cameras.size());
+  for (const auto& c : map.cameras) {
+    msg.camera_names.push_back(c.name);
+    msg.camera_models.push_back(ToCameraModelMsg(c.model));
+    msg.rig_from_cam.push_back(ToPose3d(c.rig_from_cam));
+    msg.time_offset_us.push_back(c.time_offset_us);
+    msg.time_drift_ppm.push_back(c.time_drift_ppm);
+  }
+  msg.time_reference_utime = map.time_reference_utime;
+  if (map.objects.empty()) {
+    msg.objects.push_back(ToLayoutMsg("", false, map.reference_marker, map.markers));
+  } else {
+    for (const MapObject& o : map.objects) {
+      object_layout_t layout = ToLayoutMsg(o.name, o.is_static, o.reference_marker, o.markers);
+      layout.rig_from_object = ToPose3d(o.rig_from_object);
+      layout.rms_px = o.rms_px;
+      layout.num_frames = o.num_frames;
+      layout.num_observations = o.num_observations;
+      msg.objects.push_back(layout);
+    }
+  }
+  msg.num_objects = static_cast<int32_t>(msg.objects.size());
+  msg.rms_px = map.rms_px;
+  msg.num_frames = map.num_frames;
+  msg.num_observations = map.num_observations;
+  return msg;
+}
+
+RigMap FromRigMap2Msg(const rig_map2_t& msg) {
+  RigMap map;
+  map.version = msg.version;
+  map.reference_camera = msg.reference_camera;
+  map.dictionary = msg.dictionary;
+  map.rig_frame = msg.rig_frame;
+  for (int i = 0; i < msg.num_cameras; ++i) {
+    MapCamera c;
+    c.name = msg.camera_names[i];
+    c.model = FromCameraModelMsg(msg.camera_models[i]);
+    c.rig_from_cam = FromPose3d(msg.rig_from_cam[i]);
+    c.time_offset_us = msg.time_offset_us[i];
+    c.time_drift_ppm = msg.time_drift_ppm[i];
+    map.cameras.push_back(c);
+  }
+  map.time_reference_utime = msg.time_reference_utime;
+  if (msg.num_objects < 1) throw std::invalid_argument("rig_map2_t without any object");
+  if (msg.version == kMapVersion) {
+    if (msg.num_objects != 1)
+      throw std::invalid_argument("rig_map2_t version 1 with " + std::to_string(msg.num_objects) +
+                                  " objects (expected one)");
+    map.markers = FromLayoutMarkers(msg.objects[0]);
+    map.reference_marker = msg.objects[0].reference_marker;
+  } else if (msg.version == kMapVersionBodies) {
+    std::set<std::string> names;
+    for (const object_layout_t& layout : msg.objects) {
+      if (!names.insert(layout.name).second)
+        throw std::invalid_argument("rig_map2_t: object '" + layout.name + "' twice");
+      MapObject o;
+      o.name = layout.name;
+      o.is_static = layout.is_static;
+      o.reference_marker = layout.reference_marker;
+      o.markers = FromLayoutMarkers(layout);
+      o.rig_from_object = FromPose3d(layout.rig_from_object);
+      o.rms_px = layout.rms_px;
+      o.num_frames = layout.num_frames;
+      o.num_observations = layout.num_observations;
+      map.objects.push_back(o);
+    }
+    const MapObject& first = map.objects[FirstMovingObject(map)];
+    map.markers = first.markers;
+    map.reference_marker = first.reference_marker;
+  } else {
+    throw std::invalid_argument("rig_map2_t: unsupported map version " + std::to_string(msg.version));
+  }
+  map.rms_px = msg.rms_px;
+  map.num_frames = msg.num_frames;
+  map.num_observations = msg.num_observations;
+  return map;
+}
+
+bool DecodeMapMessage(const void* data, size_t size, MapMessage* out, std::string* error) {
+  int64_t hash = 0;
+  if (size >= 8) {
+    uint64_t h = 0;
+    for (size_t i = 0; i < 8; ++i) h = (h << 8) | static_cast<const uint8_t*>(data)[i];
+    hash = static_cast<int64_t>(h);
+  }
+  std::string reason;
+  try {
+    if (size >= 8 && hash == rig_map_t::getHash()) {
+      rig_map_t msg;
+      if (Decode(data, size, &msg, &reason)) {
+        out->map = FromRigMapMsg(msg);
+        out->utime = msg.utime;
+        out->type = "rig_map_t";
+        return true;
+      }
+    } else if (size >= 8 && hash == rig_map2_t::getHash()) {
+      rig_map2_t msg;
+      if (Decode(data, size, &msg, &reason)) {
+        out->map = FromRigMap2Msg(msg);
+        out->utime = msg.utime;
+        out->type = "rig_map2_t";
+        return true;
+      }
+    } else {
+      reason = "neither a rig_map2_t nor a rig_map_t (" + std::to_string(size) +
+               " bytes: fingerprint mismatch, another message type?)";
+    }
+  } catch (const std::exception& e) {
+    reason = std::string("invalid map message: ") + e.what();
+  }
+  if (error) *error = reason;
+  return false;
 }
 
 TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg) {

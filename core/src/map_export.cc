@@ -160,8 +160,16 @@ std::vector<NamedTransform> StaticTransforms(const RigMap& map, const std::strin
   std::vector<NamedTransform> out;
   for (const MapCamera& c : map.cameras)
     out.push_back({rig_frame, c.name + "_optical_frame", c.rig_from_cam});
-  for (const MapMarker& m : map.markers)
-    out.push_back({object_frame, "marker_" + std::to_string(m.id), m.object_from_marker});
+  if (!HasSeveralBodies(map)) {
+    for (const MapMarker& m : map.markers)
+      out.push_back({object_frame, "marker_" + std::to_string(m.id), m.object_from_marker});
+    return out;
+  }
+  for (const MapObject& o : map.objects) {
+    if (o.is_static) out.push_back({rig_frame, o.name, o.rig_from_object});
+    for (const MapMarker& m : o.markers)
+      out.push_back({o.name, o.name + "_marker_" + std::to_string(m.id), m.object_from_marker});
+  }
   return out;
 }
 }  // namespace
@@ -173,12 +181,24 @@ std::string RosStaticTransformsYaml(const RigMap& map, const std::string& rig_fr
   y << YAML::Comment(
       "mcmt map as static transforms. Camera frames are optical frames (x right, y down, z forward); the rig "
       "frame is the reference camera's optical frame; the object frame is the reference marker's frame. "
-      "rig -> object is dynamic (MCMT_POSE).");
+      "rig -> object is dynamic (MCMT_POSE; with several bodies: rig -> <body> on MCMT_POSE_<BODY>, static "
+      "bodies listed here).");
   y << YAML::BeginMap;
   y << YAML::Key << "rig_frame" << YAML::Value << rig_frame;
-  y << YAML::Key << "object_frame" << YAML::Value << object_frame;
   y << YAML::Key << "reference_camera" << YAML::Value << map.reference_camera;
-  y << YAML::Key << "reference_marker" << YAML::Value << map.reference_marker;
+  if (HasSeveralBodies(map)) {  // each body its own frame, named as the body
+    y << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
+    for (const MapObject& o : map.objects) {
+      y << YAML::Flow << YAML::BeginMap << YAML::Key << "frame" << YAML::Value << o.name;
+      y << YAML::Key << "static" << YAML::Value << o.is_static;
+      y << YAML::Key << "reference_marker" << YAML::Value << o.reference_marker;
+      y << YAML::EndMap;
+    }
+    y << YAML::EndSeq;
+  } else {
+    y << YAML::Key << "object_frame" << YAML::Value << object_frame;
+    y << YAML::Key << "reference_marker" << YAML::Value << map.reference_marker;
+  }
   y << YAML::Key << "transforms" << YAML::Value << YAML::BeginSeq;
   for (const NamedTransform& t : StaticTransforms(map, rig_frame, object_frame)) {
     const auto q = QuaternionWxyz(t.parent_from_child);
@@ -265,6 +285,29 @@ std::string OpenCvMapYaml(const RigMap& map) {
     fs << "}";
   }
   fs << "]";
+  if (HasSeveralBodies(map)) {
+    fs << "objects"
+       << "[";
+    for (const MapObject& o : map.objects) {
+      fs << "{";
+      fs << "name" << o.name;
+      fs << "static" << static_cast<int>(o.is_static);
+      fs << "reference_marker" << o.reference_marker;
+      if (o.is_static) fs << "rig_from_object" << ToCvMat(o.rig_from_object.matrix());
+      fs << "markers"
+         << "[";
+      for (const MapMarker& mk : o.markers) {
+        fs << "{";
+        fs << "id" << mk.id;
+        fs << "size" << mk.size;
+        fs << "object_from_marker" << ToCvMat(mk.object_from_marker.matrix());
+        fs << "}";
+      }
+      fs << "]";
+      fs << "}";
+    }
+    fs << "]";
+  }
   return fs.releaseAndGetString();
 }
 
@@ -277,28 +320,28 @@ std::array<Eigen::Vector3d, 4> FaceCorners(const MapMarker& m) {
 }
 }  // namespace
 
-std::string MarkersPly(const RigMap& map) {
+std::string MarkersPly(const std::vector<MapMarker>& markers, const std::string& name) {
   std::string out =
-      "ply\nformat ascii 1.0\ncomment mcmt object: marker squares in the object frame, metres\n";
-  out += "element vertex " + std::to_string(4 * map.markers.size()) + "\n";
+      "ply\nformat ascii 1.0\ncomment mcmt " + name + ": marker squares in the object frame, metres\n";
+  out += "element vertex " + std::to_string(4 * markers.size()) + "\n";
   out += "property double x\nproperty double y\nproperty double z\n";
-  out += "element face " + std::to_string(map.markers.size()) + "\n";
+  out += "element face " + std::to_string(markers.size()) + "\n";
   out += "property list uchar int vertex_indices\nproperty int marker_id\nend_header\n";
-  for (const MapMarker& m : map.markers)
+  for (const MapMarker& m : markers)
     for (const Eigen::Vector3d& p : FaceCorners(m))
       out += YamlNumber(p.x()) + " " + YamlNumber(p.y()) + " " + YamlNumber(p.z()) + "\n";
-  for (size_t i = 0; i < map.markers.size(); ++i) {
+  for (size_t i = 0; i < markers.size(); ++i) {
     const size_t b = 4 * i;
     out += "4 " + std::to_string(b) + " " + std::to_string(b + 1) + " " + std::to_string(b + 2) + " " +
-           std::to_string(b + 3) + " " + std::to_string(map.markers[i].id) + "\n";
+           std::to_string(b + 3) + " " + std::to_string(markers[i].id) + "\n";
   }
   return out;
 }
 
-std::string MarkersObj(const RigMap& map) {
-  std::string out = "# mcmt object: marker squares in the object frame, metres\n";
-  for (size_t i = 0; i < map.markers.size(); ++i) {
-    const MapMarker& m = map.markers[i];
+std::string MarkersObj(const std::vector<MapMarker>& markers, const std::string& name) {
+  std::string out = "# mcmt " + name + ": marker squares in the object frame, metres\n";
+  for (size_t i = 0; i < markers.size(); ++i) {
+    const MapMarker& m = markers[i];
     out += "o marker_" + std::to_string(m.id) + "\n";
     for (const Eigen::Vector3d& p : FaceCorners(m))
       out += "v " + YamlNumber(p.x()) + " " + YamlNumber(p.y()) + " " + YamlNumber(p.z()) + "\n";
@@ -307,6 +350,27 @@ std::string MarkersObj(const RigMap& map) {
            std::to_string(b + 3) + "\n";
   }
   return out;
+}
+
+std::string MarkersPly(const RigMap& map) { return MarkersPly(map.markers); }
+std::string MarkersObj(const RigMap& map) { return MarkersObj(map.markers); }
+
+bool HasSeveralBodies(const RigMap& map) { return map.objects.size() > 1; }
+
+void WriteLayouts(const RigMap& map, const std::string& path, const std::string& format,
+                  const std::function<std::string(const std::vector<MapMarker>&, const std::string&)>& text) {
+  if (!HasSeveralBodies(map)) {
+    if (map.markers.empty()) throw MapExportRefused(format + ": the map has no marker");
+    const std::string name = map.objects.empty() ? std::string("object") : map.objects[0].name;
+    WriteFileAtomic(path, text(map.markers, name));
+    return;
+  }
+  std::vector<std::pair<std::string, std::string>> files;  // every body's text first: refuse before writing
+  for (const MapObject& o : map.objects) {
+    if (o.markers.empty()) throw MapExportRefused(format + ": body '" + o.name + "' has no marker");
+    files.emplace_back(BodyPath(path, o.name), text(o.markers, o.name));
+  }
+  for (const auto& [file, content] : files) WriteFileAtomic(file, content);
 }
 
 const std::vector<MapExportFormat>& MapExportFormats() {
@@ -320,10 +384,17 @@ const std::vector<MapExportFormat>& MapExportFormats() {
        }},
       {"opencv", "OpenCV FileStorage YAML",
        [](const RigMap& m, const std::string& p, const Options&) { WriteFileAtomic(p, OpenCvMapYaml(m)); }},
-      {"ply", "the object's marker squares as PLY",
-       [](const RigMap& m, const std::string& p, const Options&) { WriteFileAtomic(p, MarkersPly(m)); }},
-      {"obj", "the object's marker squares as Wavefront OBJ",
-       [](const RigMap& m, const std::string& p, const Options&) { WriteFileAtomic(p, MarkersObj(m)); }},
+      {"ply", "the object's marker squares as PLY (several bodies: one file per body, PATH_<body>.ply)",
+       [](const RigMap& m, const std::string& p, const Options&) {
+         WriteLayouts(m, p, "PLY",
+                      [](const auto& markers, const auto& name) { return MarkersPly(markers, name); });
+       }},
+      {"obj",
+       "the object's marker squares as Wavefront OBJ (several bodies: one file per body, PATH_<body>.obj)",
+       [](const RigMap& m, const std::string& p, const Options&) {
+         WriteLayouts(m, p, "OBJ",
+                      [](const auto& markers, const auto& name) { return MarkersObj(markers, name); });
+       }},
   };
   return formats;
 }

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/config.h"
+#include "core/lcm_util.h"
 
 namespace mcmt {
 namespace {
@@ -221,6 +222,16 @@ std::string DescribeIds(const std::set<int>& ids) {
 std::string ChannelSuffix(const std::string& object_name) {
   std::string out = object_name;
   for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string BodyOfPoseChannel(const std::string& channel, const std::string& object) {
+  static const std::string kPrefix = std::string(kPoseChannel) + "_";
+  if (channel.size() <= kPrefix.size() || channel.compare(0, kPrefix.size(), kPrefix) != 0) return "";
+  const std::string suffix = channel.substr(kPrefix.size());
+  if (!object.empty() && ChannelSuffix(object) == suffix) return object;
+  std::string out = suffix;
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
 }
 

@@ -95,6 +95,42 @@ RigMap SampleMap() {
 
 rig_map_t SampleMapMsg() { return ToRigMapMsg(SampleMap(), 99); }
 
+// A version 2 map: a static room (the rig frame), a tool and a patient; clocks that drift.
+RigMap SampleBodiesMap() {
+  std::mt19937_64 rng(4);
+  RigMap map = SampleMap();
+  map.version = kMapVersionBodies;
+  map.rig_frame = "room";
+  map.time_reference_utime = 5000000;
+  map.cameras[1].time_offset_us = 250.5;
+  map.cameras[2].time_drift_ppm = -31.25;
+  int id = 0;
+  for (const char* name : {"room", "tool", "patient"}) {
+    MapObject o;
+    o.name = name;
+    o.is_static = o.name == "room";
+    for (int k = 0; k < 3; ++k) {
+      MapMarker m;
+      m.id = id++;
+      m.size = 0.04 + 0.01 * k;
+      m.object_from_marker = k == 0 ? Rigid3::Identity() : RandomRigid(rng, 0.1);
+      o.markers.push_back(m);
+    }
+    o.reference_marker = o.markers[0].id;
+    if (o.is_static) o.rig_from_object = RandomRigid(rng, 1.0);
+    o.rms_px = 0.1 * id;
+    o.num_frames = o.is_static ? 0 : 100 + id;
+    o.num_observations = 10 * id;
+    map.objects.push_back(o);
+  }
+  map.markers = map.objects[1].markers;  // the first moving body's, as ReadMap
+  map.reference_marker = map.objects[1].reference_marker;
+  return map;
+}
+
+rig_map2_t SampleMap2Msg() { return ToRigMap2Msg(SampleBodiesMap(), 77); }
+object_layout_t SampleLayoutMsg() { return SampleMap2Msg().objects[1]; }
+
 mapper_status_t SampleStatus() {
   mapper_status_t s;
   s.utime = 5;
@@ -177,6 +213,102 @@ TEST(LcmUtil, EveryTypeEncodesDecodesAndRejectsBadBuffers) {
   CheckCodec(SamplePose(), SampleDetections());
   CheckCodec(SampleStatus(), SampleCommand());
   CheckCodec(SampleCommand(), SampleStatus());
+  CheckCodec(SampleMap2Msg(), SampleMapMsg());
+  CheckCodec(SampleLayoutMsg(), SampleMap2Msg());
+  CheckCodec(ToRigMap2Msg(SampleMap(), 3), SampleMapMsg());
+}
+
+void ExpectSameMap(const RigMap& a, const RigMap& b) {
+  EXPECT_EQ(a.version, b.version);
+  EXPECT_EQ(a.dictionary, b.dictionary);
+  EXPECT_EQ(a.reference_camera, b.reference_camera);
+  EXPECT_EQ(a.reference_marker, b.reference_marker);
+  EXPECT_EQ(a.rig_frame, b.rig_frame);
+  EXPECT_EQ(a.time_reference_utime, b.time_reference_utime);
+  ASSERT_EQ(a.cameras.size(), b.cameras.size());
+  for (size_t i = 0; i < a.cameras.size(); ++i) {
+    EXPECT_EQ(a.cameras[i].name, b.cameras[i].name);
+    EXPECT_TRUE(a.cameras[i].model == b.cameras[i].model);
+    EXPECT_LT(RotationAngle(a.cameras[i].rig_from_cam, b.cameras[i].rig_from_cam), 1e-15);
+    EXPECT_LT(TranslationDistance(a.cameras[i].rig_from_cam, b.cameras[i].rig_from_cam), 1e-15);
+    EXPECT_EQ(a.cameras[i].time_offset_us, b.cameras[i].time_offset_us);
+    EXPECT_EQ(a.cameras[i].time_drift_ppm, b.cameras[i].time_drift_ppm);
+  }
+  auto same_markers = [](const std::vector<MapMarker>& x, const std::vector<MapMarker>& y) {
+    ASSERT_EQ(x.size(), y.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].id, y[i].id);
+      EXPECT_EQ(x[i].size, y[i].size);
+      EXPECT_LT(RotationAngle(x[i].object_from_marker, y[i].object_from_marker), 1e-15);
+      EXPECT_LT(TranslationDistance(x[i].object_from_marker, y[i].object_from_marker), 1e-15);
+    }
+  };
+  same_markers(a.markers, b.markers);
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  for (size_t k = 0; k < a.objects.size(); ++k) {
+    const MapObject &x = a.objects[k], &y = b.objects[k];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.is_static, y.is_static);
+    EXPECT_EQ(x.reference_marker, y.reference_marker);
+    EXPECT_LT(TranslationDistance(x.rig_from_object, y.rig_from_object), 1e-15);
+    EXPECT_LT(RotationAngle(x.rig_from_object, y.rig_from_object), 1e-15);
+    EXPECT_EQ(x.rms_px, y.rms_px);
+    EXPECT_EQ(x.num_frames, y.num_frames);
+    EXPECT_EQ(x.num_observations, y.num_observations);
+    same_markers(x.markers, y.markers);
+  }
+  EXPECT_EQ(a.rms_px, b.rms_px);
+  EXPECT_EQ(a.num_frames, b.num_frames);
+  EXPECT_EQ(a.num_observations, b.num_observations);
+}
+
+// Both map types decode into the one in-memory map: rig_map2_t with its bodies and clocks, rig_map_t (old
+// logs) as before.
+TEST(LcmUtil, MapMessagesOfBothTypesDecodeIntoTheOneMap) {
+  const RigMap bodies = SampleBodiesMap();
+  const std::vector<uint8_t> v2 = Encode(ToRigMap2Msg(bodies, 77));
+  MapMessage got;
+  std::string error;
+  ASSERT_TRUE(DecodeMapMessage(v2.data(), v2.size(), &got, &error)) << error;
+  EXPECT_STREQ(got.type, "rig_map2_t");
+  EXPECT_EQ(got.utime, 77);
+  ExpectSameMap(got.map, bodies);
+  EXPECT_EQ(got.map.markers[0].id, 3);  // the tool's: the first moving body
+
+  // A one-object map through the new type: one nameless object, the same map back (no objects).
+  RigMap single = SampleMap();
+  single.cameras[2].time_offset_us = -120.0;
+  const std::vector<uint8_t> v1_in_2 = Encode(ToRigMap2Msg(single, 8));
+  ASSERT_TRUE(DecodeMapMessage(v1_in_2.data(), v1_in_2.size(), &got, &error)) << error;
+  EXPECT_EQ(got.map.objects.size(), 0u);
+  ExpectSameMap(got.map, single);
+
+  // The old type: what FromRigMapMsg gives (no clocks on that wire).
+  const std::vector<uint8_t> old = Encode(ToRigMapMsg(SampleMap(), 5));
+  ASSERT_TRUE(DecodeMapMessage(old.data(), old.size(), &got, &error)) << error;
+  EXPECT_STREQ(got.type, "rig_map_t");
+  EXPECT_EQ(got.utime, 5);
+  ExpectSameMap(got.map, SampleMap());
+
+  // Another type, a truncated map, an invalid camera model, a v2 map without objects: false, one line.
+  const std::vector<uint8_t> foreign = Encode(SampleDetections());
+  EXPECT_FALSE(DecodeMapMessage(foreign.data(), foreign.size(), &got, &error));
+  EXPECT_NE(error.find("neither a rig_map2_t nor a rig_map_t"), std::string::npos) << error;
+  EXPECT_FALSE(DecodeMapMessage(v2.data(), v2.size() - 3, &got, &error));
+  EXPECT_NE(error.find("not a valid rig_map2_t"), std::string::npos) << error;
+  EXPECT_FALSE(DecodeMapMessage(v2.data(), 4, &got, &error));
+  rig_map2_t bad = ToRigMap2Msg(bodies, 1);
+  bad.camera_models[1].fx = -1;
+  const std::vector<uint8_t> bad_bytes = Encode(bad);
+  EXPECT_FALSE(DecodeMapMessage(bad_bytes.data(), bad_bytes.size(), &got, &error));
+  EXPECT_NE(error.find("invalid map message"), std::string::npos) << error;
+  bad = ToRigMap2Msg(bodies, 1);
+  bad.objects.clear();
+  bad.num_objects = 0;
+  const std::vector<uint8_t> empty = Encode(bad);
+  EXPECT_FALSE(DecodeMapMessage(empty.data(), empty.size(), &got, &error));
+  EXPECT_NE(error.find("without any object"), std::string::npos) << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos);
 }
 
 // Fingerprints of the message types as recorded when they were defined. A failure here means a .lcm
@@ -192,6 +324,9 @@ TEST(LcmUtil, FingerprintsArePinned) {
   EXPECT_EQ(object_pose_t::getHash(), static_cast<int64_t>(0x739eea3f956a02fcULL));
   EXPECT_EQ(mapper_status_t::getHash(), static_cast<int64_t>(0x5310391edee41472ULL));
   EXPECT_EQ(mapper_command_t::getHash(), static_cast<int64_t>(0x623f9e6ee24a3d2dULL));
+  // Recorded 2026-12-02 (issue 16: the map with its bodies).
+  EXPECT_EQ(object_layout_t::getHash(), static_cast<int64_t>(0x6df3f52ec2c9793fULL));
+  EXPECT_EQ(rig_map2_t::getHash(), static_cast<int64_t>(0xa8ef5bdffe808663ULL));
 }
 
 TEST(LcmUtil, ChannelNames) {

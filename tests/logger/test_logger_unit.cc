@@ -656,7 +656,7 @@ TEST_F(ExportTest, MapFromALogIsTheLastRigMapOnMcmtMap) {
     ReadMapOrLog(no_map);
     FAIL();
   } catch (const LogFormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("n.lcmlog: no rig_map_t on MCMT_MAP"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("n.lcmlog: no map (rig_map2_t or rig_map_t) on MCMT_MAP"), std::string::npos)
         << e.what();
   }
   // A map.yaml still reads as a map.

@@ -17,7 +17,6 @@
 #include "mcmt/camera_health_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/object_pose_t.hpp"
-#include "mcmt/rig_map_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
 
 namespace mcmt {
@@ -30,7 +29,7 @@ struct Received {
   std::map<int64_t, object_pose_t> poses;  // by seq
   std::vector<tracker_status_t> statuses;
   struct Map {
-    rig_map_t msg;
+    MapMessage msg;  // the mapper publishes rig_map2_t (core's DecodeMapMessage)
     int64_t last_pose_seq = -1;  // newest pose seq received when the map arrived
   };
   std::vector<Map> maps;
@@ -65,9 +64,11 @@ class Subscriber {
     std::lock_guard<std::mutex> lock(out_->mutex);
     out_->statuses.push_back(*m);
   }
-  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const rig_map_t* m) {
+  void OnMap(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    MapMessage m;
+    if (!DecodeMapMessage(rbuf->data, rbuf->data_size, &m)) return;
     std::lock_guard<std::mutex> lock(out_->mutex);
-    out_->maps.push_back({*m, out_->last_seq});
+    out_->maps.push_back({m, out_->last_seq});
   }
   void OnMapperStatus(const lcm::ReceiveBuffer*, const std::string&, const mapper_status_t* m) {
     std::lock_guard<std::mutex> lock(out_->mutex);

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/lcm_util.h"
+#include "tests/support/mapper_sim.h"
 
 namespace mcmt {
 namespace testing {
@@ -63,20 +64,10 @@ void GiveIntrinsics(const std::string& camera, const CameraModel& model, SelfCal
     if (d.camera == camera) d.camera_model = ToCameraModelMsg(model);
 }
 
-MapperOptions SelfCalOptions(const sim::GroundTruth& truth) {
-  MapperOptions o;
-  for (const auto& c : truth.cameras) o.cameras.push_back(c.name);
-  o.sizes.default_size = truth.marker_size;
-  for (const auto& [id, size] : truth.marker_sizes)
-    if (size != truth.marker_size) o.sizes.overrides[id] = size;
-  o.dictionary = truth.dictionary;
-  return o;
-}
+MapperOptions SelfCalOptions(const sim::GroundTruth& truth) { return test::MapperOptionsFor(truth); }
 
 MapResult MapDetections(const std::vector<detections_t>& detections, const MapperOptions& options) {
-  Mapper mapper(options);
-  for (const auto& d : detections) mapper.Add(d);
-  return mapper.Solve();
+  return test::MapMessages(detections, options);
 }
 
 }  // namespace testing

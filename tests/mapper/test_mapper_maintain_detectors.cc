@@ -91,7 +91,7 @@ TEST(MapperMaintainDetectors, RenderedBumpFoundReestimatedAndNoPoseCorrupted) {
   // One new map within 300 frames of the bump, cam2 where it went: within 0.5 mm and 0.05 deg.
   ASSERT_EQ(got.maps.size(), 1u) << logs;
   EXPECT_LE(got.maps[0].last_pose_seq, kBumpFrame + 300) << logs;
-  const RigMap maintained = FromRigMapMsg(got.maps[0].msg);
+  const RigMap maintained = got.maps[0].msg.map;
   const sim::EvalResult eval = sim::Evaluate(sim::TruthAtEnd(truth), &maintained, nullptr);
   EXPECT_LT(eval.camera_position_mm.max, 0.5) << logs;
   EXPECT_LT(eval.camera_rotation_deg.max, 0.05) << logs;

@@ -105,7 +105,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
   EXPECT_LE(got.maps[0].last_pose_seq, kBumpFrame + 300) << logs;
   const sim::GroundTruth at_end = sim::TruthAtEnd(truth);
   {
-    const RigMap first = FromRigMapMsg(got.maps[0].msg);
+    const RigMap first = got.maps[0].msg.map;
     EXPECT_EQ(first.cameras.size(), 5u);
     const sim::EvalResult e = sim::Evaluate(at_end, &first, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 0.5) << logs;
@@ -114,7 +114,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
               << e.camera_rotation_deg.max << " deg\n";
   }
   {
-    const RigMap second = FromRigMapMsg(got.maps[1].msg);
+    const RigMap second = got.maps[1].msg.map;
     ASSERT_EQ(second.cameras.size(), 6u);
     const sim::EvalResult e = sim::Evaluate(at_end, &second, nullptr);
     EXPECT_LT(e.camera_position_mm.max, 1.0) << logs;

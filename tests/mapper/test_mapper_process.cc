@@ -19,10 +19,12 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "core/log_writer.h"
 #include "mcmt/mapper_command_t.hpp"
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/rig_map_t.hpp"
-#include "tests/mapper/synth.h"
+#include "sim/eval.h"
+#include "tests/support/mapper_sim.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
 
@@ -44,13 +46,40 @@ CommandResult RunCommand(const std::string& command) {
 
 std::string TempDir(const std::string& name) { return mcmt::test::MakeTempDir("mapper_" + name); }
 
-std::string WriteRig(const std::string& dir, const testing::SynthScene& scene,
-                     const std::string& extra = "") {
-  return testing::WriteSceneRig(dir, scene, 0.04, extra);
+sim::Session Simulate(int frames, uint64_t seed = 1) {
+  return sim::SimulateSession(mcmt::test::MapperSession(frames, seed));
 }
 
-void WriteLog(const std::string& path, const testing::SynthScene& scene, bool add_foreign) {
-  ASSERT_TRUE(testing::WriteSceneLog(path, scene, add_foreign)) << path;
+std::string WriteRig(const std::string& dir, const sim::Session& session, const std::string& extra = "") {
+  return sim::WriteSessionRig(dir, session, "sync:\n  tolerance_ms: 5\n" + extra);
+}
+
+// The messages as a log; with add_foreign, one message of another type on MCMT_DETECTIONS_CAM0 after the
+// third.
+void WriteLog(const std::string& path, const std::vector<detections_t>& messages, bool add_foreign) {
+  EventLogWriter log(path);
+  for (size_t i = 0; i < messages.size(); ++i) {
+    const std::vector<uint8_t> bytes = Encode(messages[i]);
+    log.Write(messages[i].utime, DetectionsChannel(messages[i].camera), bytes.data(), bytes.size());
+    if (add_foreign && i == 3) {
+      mapper_command_t other;
+      other.utime = messages[i].utime;
+      other.command = "not detections";
+      const std::vector<uint8_t> foreign = Encode(other);
+      log.Write(other.utime, DetectionsChannel("cam0"), foreign.data(), foreign.size());
+    }
+  }
+  log.Close();
+}
+
+void ExpectAccurate(const sim::Session& session, const RigMap& map,
+                    const std::vector<TrajectoryRow>& trajectory, int min_frames) {
+  const sim::EvalResult e = sim::Evaluate(session.Truth(), &map, &trajectory);
+  EXPECT_EQ(e.mapped_cameras, 5);
+  EXPECT_LT(e.camera_position_mm.max, 2.0);
+  EXPECT_LT(e.configuration_mm.max, 0.3);
+  EXPECT_LT(e.object_translation_aligned_mm.mean, 0.5);
+  EXPECT_GE(e.frames_with_pose, min_frames);
 }
 
 TEST(MapperProcess, Help) {
@@ -61,13 +90,10 @@ TEST(MapperProcess, Help) {
 }
 
 TEST(MapperProcess, MapsALogAndWarnsAboutForeignMessages) {
-  testing::SynthOptions so;
-  so.frames = 100;
-  so.seed = 41;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(100, 41);
   const std::string dir = TempDir("log");
-  const std::string rig = WriteRig(dir, scene);
-  WriteLog(dir + "/session.lcmlog", scene, true);
+  const std::string rig = WriteRig(dir, session);
+  WriteLog(dir + "/session.lcmlog", session.Messages(), true);
   const CommandResult r =
       RunCommand(kMapper + " --config " + rig + " --log " + dir + "/session.lcmlog --out " + dir + "/out");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -82,11 +108,7 @@ TEST(MapperProcess, MapsALogAndWarnsAboutForeignMessages) {
         << "left a temporary file " << entry.path();
   const RigMap map = ReadMap(dir + "/out/map.yaml");
   const std::vector<TrajectoryRow> trajectory = ReadTrajectory(dir + "/out/trajectory.csv");
-  const testing::MapErrors e = testing::CompareToTruth(scene, map, trajectory);
-  EXPECT_EQ(e.cameras_compared, 5);
-  EXPECT_LT(e.camera_position_m, 0.002);
-  EXPECT_LT(e.configuration_m, 0.0003);
-  EXPECT_LT(e.object_translation_m, 0.0005);
+  ExpectAccurate(session, map, trajectory, 90);
   // The initial solution is there too, and worse than the refined one.
   const RigMap initial = ReadMap(dir + "/out/map_initial.yaml");
   EXPECT_GT(initial.rms_px, map.rms_px);
@@ -106,11 +128,10 @@ TEST(MapperProcess, MapsALogAndWarnsAboutForeignMessages) {
 }
 
 TEST(MapperProcess, BadInputGivesOneLineErrors) {
-  testing::SynthOptions so;
-  so.frames = 40;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(40);
+  const std::vector<detections_t> messages = session.Messages();
   const std::string dir = TempDir("bad");
-  const std::string rig = WriteRig(dir, scene);
+  const std::string rig = WriteRig(dir, session);
   auto expect_error = [&](const std::string& args, const std::string& expected) {
     const CommandResult r = RunCommand(kMapper + " " + args);
     EXPECT_NE(r.code, 0) << args << "\n" << r.output;
@@ -126,16 +147,13 @@ TEST(MapperProcess, BadInputGivesOneLineErrors) {
   expect_error("--config " + rig + " --log " + dir + "/missing.lcmlog --out " + dir + "/out",
                "missing.lcmlog");
   // One camera only.
-  testing::SynthScene one = scene;
-  one.detections.clear();
-  for (const auto& d : scene.detections)
-    if (d.camera == "cam1") one.detections.push_back(d);
-  WriteLog(dir + "/one.lcmlog", one, false);
+  WriteLog(dir + "/one.lcmlog",
+           mcmt::test::Filter(messages, [](const detections_t& d) { return d.camera == "cam1"; }), false);
   expect_error("--config " + rig + " --log " + dir + "/one.lcmlog --out " + dir + "/out",
                "camera 'cam0' sent no detections");
   // A typo in the mapper section.
-  const std::string typo = WriteRig(dir, scene, "mapper:\n  hubr_px: 2\n");
-  WriteLog(dir + "/s.lcmlog", scene, false);
+  const std::string typo = WriteRig(dir, session, "mapper:\n  hubr_px: 2\n");
+  WriteLog(dir + "/s.lcmlog", messages, false);
   expect_error("--config " + typo + " --log " + dir + "/s.lcmlog --out " + dir + "/out", "hubr_px");
   fs::remove_all(dir);
 }
@@ -143,16 +161,20 @@ TEST(MapperProcess, BadInputGivesOneLineErrors) {
 // Live over UDP multicast on the mapper's own port.
 class LiveListener {
  public:
-  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const rig_map_t* msg) {
-    map = *msg;
-    got_map = true;
+  // Through core's one decoder of MCMT_MAP (the mapper publishes rig_map2_t).
+  void OnMap(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    std::string error;
+    got_map = DecodeMapMessage(rbuf->data, rbuf->data_size, &map, &error);
+    map_type = map.type;
+    if (!got_map) map_error = error;
   }
   void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const mapper_status_t* msg) {
     ++statuses;
     last_state = msg->state;
     if (msg->state == mapper_status_t::STATE_COLLECTING) collecting = true;
   }
-  rig_map_t map;
+  MapMessage map;
+  std::string map_type, map_error;
   bool got_map = false, collecting = false;
   int statuses = 0;
   int last_state = -1;
@@ -169,12 +191,9 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   const std::string url = "udpm://239.255.76.67:7720?ttl=0";
   lcm::LCM lcm(url);
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
-  testing::SynthOptions so;
-  so.frames = 60;
-  so.seed = 43;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(60, 43);
   const std::string dir = TempDir("live");
-  const std::string rig = WriteRig(dir, scene);
+  const std::string rig = WriteRig(dir, session);
   LiveListener listener;
   lcm.subscribe(kMapChannel, &LiveListener::OnMap, &listener);
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
@@ -189,7 +208,7 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   // The mapper publishes a COLLECTING status every second once it listens.
   const bool listening = handle_for(20, [&] { return listener.collecting; });
   if (listening) {
-    for (const detections_t& d : scene.detections) {
+    for (const detections_t& d : session.Messages()) {
       lcm.publish(DetectionsChannel(d.camera), &d);
       std::this_thread::sleep_for(std::chrono::microseconds(300));
     }
@@ -205,21 +224,20 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
   const int exit_code = mapper.Wait(60);
   const std::string output = ReadFile(log_path);
   ASSERT_TRUE(listening) << output;
-  ASSERT_TRUE(listener.got_map) << output;
+  ASSERT_TRUE(listener.got_map) << output << listener.map_error;
   EXPECT_EQ(exit_code, 0) << output;
   EXPECT_NE(output.find("solve command"), std::string::npos) << output;
-  EXPECT_EQ(listener.map.num_cameras, 5);
-  EXPECT_EQ(listener.map.num_markers, 4);
+  EXPECT_EQ(listener.map_type, "rig_map2_t");
+  EXPECT_EQ(listener.map.map.cameras.size(), 5u);
+  EXPECT_EQ(listener.map.map.markers.size(), 4u);
   // The published map is the written one.
   const RigMap written = ReadMap(dir + "/out/map.yaml");
-  const RigMap published = FromRigMapMsg(listener.map);
+  const RigMap& published = listener.map.map;
   ASSERT_EQ(written.cameras.size(), published.cameras.size());
   for (size_t c = 0; c < written.cameras.size(); ++c)
     EXPECT_LT(TranslationDistance(written.cameras[c].rig_from_cam, published.cameras[c].rig_from_cam), 1e-9);
-  const testing::MapErrors e =
-      testing::CompareToTruth(scene, written, ReadTrajectory(dir + "/out/trajectory.csv"));
-  EXPECT_LT(e.camera_position_m, 0.002);
-  EXPECT_GE(e.frames_compared, 55);  // nearly every frame arrived over loopback
+  ExpectAccurate(session, written, ReadTrajectory(dir + "/out/trajectory.csv"),
+                 55);  // nearly every frame arrived over loopback
   fs::remove_all(dir);
 }
 
@@ -227,13 +245,10 @@ TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
 // new trajectory files next to an old map.yaml. The whole set is now staged beside OUTDIR and swapped in;
 // leftovers of dead runs are removed; the user's own files in OUTDIR stay.
 TEST(MapperProcess, OutputSetIsReplacedWholeAndLeftoversAreCleaned) {
-  testing::SynthOptions so;
-  so.frames = 40;
-  so.seed = 47;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(40, 47);
   const std::string dir = TempDir("outset");
-  const std::string rig = WriteRig(dir, scene);
-  WriteLog(dir + "/s.lcmlog", scene, false);
+  const std::string rig = WriteRig(dir, session);
+  WriteLog(dir + "/s.lcmlog", session.Messages(), false);
   const std::string out = dir + "/out";
   fs::create_directories(out);
   for (const char* f :
@@ -263,11 +278,8 @@ TEST(MapperProcess, OutputSetIsReplacedWholeAndLeftoversAreCleaned) {
 
 // Issue 14: the live mapper checked --out only after collecting and solving. Now before listening.
 TEST(MapperProcess, LiveChecksTheOutputFolderFirst) {
-  testing::SynthOptions so;
-  so.frames = 5;
-  const testing::SynthScene scene = testing::MakeScene(so);
   const std::string dir = TempDir("badout");
-  const std::string rig = WriteRig(dir, scene);
+  const std::string rig = WriteRig(dir, Simulate(5));
   WriteFileAtomic(dir + "/file.txt", "x\n");
   const auto start = std::chrono::steady_clock::now();
   const CommandResult r = RunCommand("timeout 10 " + kMapper + " --config " + rig + " --out " + dir +
@@ -283,12 +295,9 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
   const std::string url = "udpm://239.255.76.67:7722?ttl=0";
   lcm::LCM lcm(url);
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
-  testing::SynthOptions so;
-  so.frames = 30;
-  so.seed = 45;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(30, 45);
   const std::string dir = TempDir("keep");
-  const std::string rig = WriteRig(dir, scene);
+  const std::string rig = WriteRig(dir, session);
   LiveListener listener;
   lcm.subscribe(kMapperStatusChannel, &LiveListener::OnStatus, &listener);
   const std::string log_path = dir + "/mapper.out";
@@ -298,7 +307,7 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
   while (!listener.collecting && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
   int sent = 0;
   if (listener.collecting)
-    for (const detections_t& d : scene.detections)
+    for (const detections_t& d : session.Messages())
       if (d.camera == "cam1") {  // only one camera: the solve fails
         lcm.publish(DetectionsChannel(d.camera), &d);
         ++sent;
@@ -331,21 +340,19 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
 // Issue 14: invalid content was dropped with a misleading message ("sent no detections") or none. Each
 // kind now gets one line naming the camera and channel; the valid messages still map.
 TEST(MapperProcess, InvalidMessagesGetAOneLineReasonNamingTheCamera) {
-  testing::SynthOptions so;
-  so.frames = 40;
-  so.seed = 49;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const sim::Session session = Simulate(40, 49);
+  const std::vector<detections_t> messages = session.Messages();
   const std::string dir = TempDir("invalid");
-  const std::string rig = WriteRig(dir, scene);
+  const std::string rig = WriteRig(dir, session);
   std::string bytes;
   int64_t n = 0;
   auto add = [&](const std::string& channel, const detections_t& d) {
     const std::vector<uint8_t> data = Encode(d);
     AppendEncodedEvent(n++, d.utime, channel, data.data(), data.size(), &bytes);
   };
-  for (const detections_t& d : scene.detections) add(DetectionsChannel(d.camera), d);
-  const int64_t after = scene.utimes.back() + 1000000;
-  for (const detections_t& original : scene.detections) {
+  for (const detections_t& d : messages) add(DetectionsChannel(d.camera), d);
+  const int64_t after = session.frames().back().utime + 1000000;
+  for (const detections_t& original : messages) {
     if (original.seq != 5) continue;
     detections_t d = original;
     d.utime = after + 1000 * static_cast<int64_t>(n);

@@ -9,6 +9,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/support/mapper_sim.h"
 
 namespace mcmt {
 namespace {
@@ -55,25 +56,6 @@ SimRun Simulate(sim::ObjectKind kind, double radius, int frames, uint64_t seed, 
   return run;
 }
 
-MapperOptions OptionsFor(const sim::GroundTruth& truth, const std::vector<std::string>& cameras = {}) {
-  MapperOptions o;
-  if (cameras.empty())
-    for (const auto& c : truth.cameras) o.cameras.push_back(c.name);
-  else
-    o.cameras = cameras;
-  o.sizes.default_size = truth.marker_size;
-  for (const auto& [id, size] : truth.marker_sizes)
-    if (size != truth.marker_size) o.sizes.overrides[id] = size;
-  o.dictionary = truth.dictionary;
-  return o;
-}
-
-MapResult Map(const std::vector<detections_t>& detections, const MapperOptions& options) {
-  Mapper mapper(options);
-  for (const auto& d : detections) mapper.Add(d);
-  return mapper.Solve();
-}
-
 void ExpectIssueBounds(const sim::GroundTruth& truth, const MapResult& result, const std::string& what) {
   const sim::EvalResult e = sim::Evaluate(truth, &result.map, &result.trajectory);
   EXPECT_EQ(e.mapped_cameras, static_cast<int>(result.map.cameras.size())) << what;
@@ -99,7 +81,7 @@ TEST(MapperSim, PapersObjectsAtThreeRadii) {
       const SimRun run = Simulate(kind, radius, 200, 3);
       const std::string what = name + " at " + std::to_string(radius) + " m";
       MapResult result;
-      ASSERT_NO_THROW(result = Map(run.detections, OptionsFor(run.truth))) << what;
+      ASSERT_NO_THROW(result = test::MapMessages(run.detections, test::MapperOptionsFor(run.truth))) << what;
       EXPECT_EQ(result.map.cameras.size(), 5u) << what;
       EXPECT_TRUE(result.report.rejected_markers.empty()) << what;
       ExpectIssueBounds(run.truth, result, what);
@@ -120,7 +102,7 @@ TEST(MapperSim, EveryThreeCameraSubsetSucceeds) {
           if (std::find(keep.begin(), keep.end(), d.camera) != keep.end()) subset.push_back(d);
         const std::string what = keep[0] + "+" + keep[1] + "+" + keep[2];
         MapResult result;
-        ASSERT_NO_THROW(result = Map(subset, OptionsFor(run.truth, keep))) << what;
+        ASSERT_NO_THROW(result = test::MapMessages(subset, test::MapperOptionsFor(run.truth, keep))) << what;
         EXPECT_EQ(result.map.cameras.size(), 3u) << what;
         ExpectIssueBounds(run.truth, result, what);
         ++subsets;
@@ -135,7 +117,7 @@ TEST(MapperSim, FalseDetectionsAndDroppedFrames) {
     for (const auto& m : d.markers)
       if (!run.truth.FindMarker(m.id)) false_ids.insert(m.id);
   ASSERT_FALSE(false_ids.empty());
-  const MapResult result = Map(run.detections, OptionsFor(run.truth));
+  const MapResult result = test::MapMessages(run.detections, test::MapperOptionsFor(run.truth));
   ExpectIssueBounds(run.truth, result, "box, 10 % false detections, 5 % dropped frames");
   // Every false id is reported and none is mapped; no true marker is rejected.
   std::set<int> reported;
@@ -172,10 +154,10 @@ TEST(MapperSim, SingleCameraFramesFollowTheirNeighbours) {
       d.markers.clear();
       d.num_markers = 0;
     }
-  MapperOptions options = OptionsFor(run.truth);
-  const MapResult with = Map(run.detections, options);
+  MapperOptions options = test::MapperOptionsFor(run.truth);
+  const MapResult with = test::MapMessages(run.detections, options);
   options.continuity_gap_s = 0;
-  const MapResult without = Map(run.detections, options);
+  const MapResult without = test::MapMessages(run.detections, options);
   EXPECT_GT(with.report.weak_frames, 30);
   EXPECT_EQ(with.report.undecided_frames, 0);
   auto flipped = [&](const MapResult& result) {

@@ -1,165 +1,139 @@
-// Integration tests of the whole Mapper (initialisation + refinement) on synthetic detections with
-// known ground truth: accuracy, camera subsets, false ids and dropped frames, bad input.
+// Integration tests of the whole Mapper (initialisation + refinement) on the simulator's detections
+// (tests/support/mapper_sim.h) with known ground truth: accuracy with distortion and differing intrinsics,
+// a marker fixed in the room, false ids and dropped frames, cameras starting late, bad input. (The paper's
+// objects at its radii and the camera subsets: test_mapper_sim.)
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "mapper/mapper.h"
-#include "tests/mapper/synth.h"
+#include "sim/eval.h"
+#include "tests/support/mapper_sim.h"
 
 namespace mcmt {
 namespace {
 
-MapResult MapScene(const testing::SynthScene& scene, MapperOptions options) {
-  Mapper mapper(options);
-  for (const auto& d : scene.detections) mapper.Add(d);
-  return mapper.Solve();
-}
+using test::Filter;
+using test::MapMessages;
+using test::MapperOptionsFor;
+using test::MapperSession;
 
-MapResult MapScene(const testing::SynthScene& scene) {
-  return MapScene(scene, testing::SceneMapperOptions(scene));
-}
+constexpr int kRoomId = 77;
 
-void ExpectWithinIssueBounds(const testing::SynthScene& scene, const MapResult& result,
+struct Scene {
+  sim::Session session;
+  sim::GroundTruth truth;
+  std::vector<detections_t> messages;
+  explicit Scene(const sim::SessionOptions& o)
+      : session(sim::SimulateSession(o)), truth(session.Truth()), messages(session.Messages()) {}
+  MapperOptions Options() const {
+    MapperOptions options = MapperOptionsFor(truth);
+    options.sync_tolerance_ms = 5.0;  // staggered cameras
+    return options;
+  }
+  bool OnObject(int id) const { return truth.FindMarker(id) != nullptr; }
+};
+
+// Means over frames, the worst camera and the worst marker (mean of its corners), after rigid alignment.
+void ExpectWithinIssueBounds(const sim::GroundTruth& truth, const MapResult& result,
                              const std::string& what) {
-  const testing::MapErrors e = testing::CompareToTruth(scene, result.map, result.trajectory);
-  EXPECT_EQ(e.cameras_compared, static_cast<int>(scene.names.size())) << what;
-  EXPECT_EQ(e.markers_compared, static_cast<int>(scene.ids.size())) << what;
-  EXPECT_LT(e.object_translation_m, 0.0005) << what;
-  EXPECT_LT(e.object_rotation_deg, 0.3) << what;
-  EXPECT_LT(e.camera_position_m, 0.002) << what;
-  EXPECT_LT(e.configuration_m, 0.0003) << what;
-  EXPECT_GT(e.frames_compared, static_cast<int>(0.8 * scene.utimes.size())) << what;
+  const sim::EvalResult e = sim::Evaluate(truth, &result.map, &result.trajectory);
+  EXPECT_EQ(e.mapped_cameras, static_cast<int>(result.map.cameras.size())) << what;
+  EXPECT_EQ(e.mapped_markers, e.gt_markers) << what;
+  EXPECT_LT(e.object_translation_aligned_mm.mean, 0.5) << what;
+  EXPECT_LT(e.object_rotation_deg.mean, 0.3) << what;
+  EXPECT_LT(e.camera_position_mm.max, 2.0) << what;
+  EXPECT_LT(e.configuration_mm.max, 0.3) << what;
+  EXPECT_GT(e.frames_with_pose, 0.8 * e.gt_frames) << what;
   // The refinement improved on the initialisation.
   EXPECT_LT(result.report.final_rms_px, result.report.initial_rms_px) << what;
   EXPECT_LT(result.report.final_rms_px, 0.3) << what;
 }
 
-TEST(MapperSynthetic, AccurateAtThePapersRadiiAndObjects) {
+TEST(MapperSynthetic, AccurateWithDistortionAndDifferingIntrinsics) {
+  const std::vector<std::pair<sim::ObjectKind, DistortionModel>> cases = {
+      {sim::ObjectKind::kFourSided, DistortionModel::kRadTan},
+      {sim::ObjectKind::kPentagon, DistortionModel::kNone},
+      {sim::ObjectKind::kBox, DistortionModel::kFisheye}};
   for (double radius : {0.7, 1.0, 1.3}) {
-    for (int object = 0; object < 3; ++object) {
-      testing::SynthOptions so;
-      so.radius = radius;
-      so.frames = 150;
-      so.seed = 10 + object;
-      if (object == 1) {  // pentagon with two small markers per side
-        so.sides = 5;
-        so.markers_per_side = 2;
-        so.marker_size = 0.025;
-        so.side_half_width = 0.06;
-      } else if (object == 2) {  // a six-sided prism with distortion in every camera
-        so.sides = 6;
-        so.radtan_k1 = -0.2;
-      }
-      const testing::SynthScene scene = testing::MakeScene(so);
-      const MapResult result = MapScene(scene, testing::SceneMapperOptions(scene, so.marker_size));
-      const testing::MapErrors e =
-          testing::CompareToTruth(scene, result.map, result.trajectory, so.marker_size);
-      const std::string what = "radius " + std::to_string(radius) + " object " + std::to_string(object);
-      EXPECT_EQ(e.cameras_compared, 5) << what;
-      EXPECT_EQ(e.markers_compared, static_cast<int>(scene.ids.size())) << what;
-      EXPECT_LT(e.object_translation_m, 0.0005) << what;
-      EXPECT_LT(e.object_rotation_deg, 0.3) << what;
-      EXPECT_LT(e.camera_position_m, 0.002) << what;
-      EXPECT_LT(e.configuration_m, 0.0003) << what;
+    for (size_t k = 0; k < cases.size(); ++k) {
+      sim::SessionOptions o = MapperSession(150, 10 + k);
+      o.rig.radius = radius;
+      o.object.kind = cases[k].first;
+      o.object.marker_size = cases[k].first == sim::ObjectKind::kPentagon ? 0.025 : 0.04;
+      o.rig.distortion = cases[k].second;
+      const Scene scene(o);
+      const MapResult result = MapMessages(scene.messages, scene.Options());
+      const std::string what =
+          "radius " + std::to_string(radius) + " " + sim::ObjectKindNames()[static_cast<int>(cases[k].first)];
+      EXPECT_EQ(result.map.cameras.size(), 5u) << what;
       EXPECT_TRUE(result.report.rejected_markers.empty()) << what;
-      EXPECT_LT(result.report.final_rms_px, result.report.initial_rms_px) << what;
+      ExpectWithinIssueBounds(scene.truth, result, what);
     }
   }
-}
-
-TEST(MapperSynthetic, EverySubsetOfThreeOfFiveCamerasMaps) {
-  testing::SynthOptions so;
-  so.frames = 150;
-  so.seed = 21;
-  const testing::SynthScene full = testing::MakeScene(so);
-  int subsets = 0;
-  for (int a = 0; a < 5; ++a)
-    for (int b = a + 1; b < 5; ++b)
-      for (int c = b + 1; c < 5; ++c) {
-        testing::SynthScene scene = full;
-        const std::vector<std::string> keep = {full.names[a], full.names[b], full.names[c]};
-        scene.names = keep;
-        scene.rig_from_cam = {full.rig_from_cam[a], full.rig_from_cam[b], full.rig_from_cam[c]};
-        scene.detections.clear();
-        for (const auto& d : full.detections)
-          if (std::find(keep.begin(), keep.end(), d.camera) != keep.end()) scene.detections.push_back(d);
-        const std::string what = keep[0] + "," + keep[1] + "," + keep[2];
-        MapResult result;
-        ASSERT_NO_THROW(result = MapScene(scene)) << what;
-        ExpectWithinIssueBounds(scene, result, what);
-        ++subsets;
-      }
-  EXPECT_EQ(subsets, 10);
 }
 
 TEST(MapperSynthetic, FalseDetectionsAndDroppedFramesAreHandled) {
-  testing::SynthOptions so;
-  so.frames = 200;
-  so.seed = 31;
-  so.false_rate = 0.1;        // 10 % of camera frames carry a false detection
-  so.drop_rate = 0.05;        // 5 % of camera frames are dropped
-  so.static_false_id = 77;    // and a marker fixed in the room, not on the object
-  so.camera_jitter_us = 700;  // cameras not exactly simultaneous
-  const testing::SynthScene scene = testing::MakeScene(so);
-  ASSERT_GT(scene.false_detections, 50);
-  const MapResult result = MapScene(scene);
-  ExpectWithinIssueBounds(scene, result, "false + dropped");
-  // No false id in the map; the static one is reported as not rigidly attached.
-  for (const MapMarker& m : result.map.markers)
-    EXPECT_NE(std::find(scene.ids.begin(), scene.ids.end(), m.id), scene.ids.end())
-        << "false id " << m.id << " mapped";
-  bool static_reported = false;
+  sim::SessionOptions o = MapperSession(200, 31);
+  o.detections.false_rate = 0.1;  // 0.1 false detections per camera frame
+  o.detections.drop_rate = 0.05;  // 5 % of camera frames are dropped
+  o.extra_bodies = {test::RoomMarker(kRoomId, 0.04, sim::MakeTrajectory(o.trajectory))};  // not on the object
+  o.camera_stagger_us = 700;  // cameras not exactly simultaneous
+  const Scene scene(o);
+  int false_detections = 0, room_detections = 0;
+  for (const detections_t& d : scene.messages)
+    for (const marker_t& m : d.markers) {
+      false_detections += !scene.OnObject(m.id) && m.id != kRoomId;
+      room_detections += m.id == kRoomId;
+    }
+  ASSERT_GT(false_detections, 50);
+  ASSERT_GT(room_detections, 100);
+  const MapResult result = MapMessages(scene.messages, scene.Options());
+  ExpectWithinIssueBounds(scene.truth, result, "false + dropped");
+  // No false id in the map; the room's marker is reported as not rigidly attached.
+  for (const MapMarker& m : result.map.markers) EXPECT_TRUE(scene.OnObject(m.id)) << "false id " << m.id;
+  bool room_reported = false;
   for (const RejectedMarker& r : result.report.rejected_markers) {
-    EXPECT_NE(std::find(scene.false_ids.begin(), scene.false_ids.end(), r.id), scene.false_ids.end())
-        << "true marker " << r.id << " rejected: " << r.reason;
-    if (r.id == 77) {
-      static_reported = true;
+    EXPECT_FALSE(scene.OnObject(r.id)) << "true marker " << r.id << " rejected: " << r.reason;
+    if (r.id == kRoomId) {
+      room_reported = true;
       EXPECT_NE(r.reason.find("not rigidly attached"), std::string::npos) << r.reason;
     }
   }
-  EXPECT_TRUE(static_reported);
+  EXPECT_TRUE(room_reported);
   const std::string json = ReportJson(result);
   EXPECT_NE(json.find("\"id\": 77"), std::string::npos);
 }
 
 TEST(MapperSynthetic, CamerasStartingLateAndStoppingEarly) {
-  testing::SynthOptions so;
-  so.frames = 200;
-  so.seed = 33;
-  so.camera_jitter_us = 900;
-  testing::SynthScene scene = testing::MakeScene(so);
-  std::vector<detections_t> kept;
-  for (const auto& d : scene.detections) {
-    if (d.camera == "cam3" && d.seq < 80) continue;   // starts late
-    if (d.camera == "cam4" && d.seq >= 90) continue;  // stops early
-    kept.push_back(d);
-  }
-  scene.detections = kept;
-  const MapResult result = MapScene(scene);
-  ExpectWithinIssueBounds(scene, result, "late start / early stop");
-  EXPECT_EQ(result.report.frames_assembled, 200);  // jittered utimes still join their frames
+  sim::SessionOptions o = MapperSession(200, 33);
+  o.camera_stagger_us = 900;
+  const Scene scene(o);
+  const std::vector<detections_t> kept = Filter(scene.messages, [](const detections_t& d) {
+    return !(d.camera == "cam3" && d.seq < 80) &&  // starts late
+           !(d.camera == "cam4" && d.seq >= 90);   // stops early
+  });
+  const MapResult result = MapMessages(kept, scene.Options());
+  ExpectWithinIssueBounds(scene.truth, result, "late start / early stop");
+  EXPECT_EQ(result.report.frames_assembled, 200);  // staggered utimes still join their frames
 }
 
 TEST(MapperSynthetic, WhitelistIgnoresOtherIds) {
-  testing::SynthOptions so;
-  so.frames = 80;
-  so.static_false_id = 77;
-  const testing::SynthScene scene = testing::MakeScene(so);
-  MapperOptions options = testing::SceneMapperOptions(scene);
-  options.marker_ids = scene.ids;
-  const MapResult result = MapScene(scene, options);
+  sim::SessionOptions o = MapperSession(80, 1);
+  o.extra_bodies = {test::RoomMarker(kRoomId, 0.04, sim::MakeTrajectory(o.trajectory))};
+  const Scene scene(o);
+  MapperOptions options = scene.Options();
+  for (const sim::SimMarker& m : scene.truth.markers) options.marker_ids.push_back(m.id);
+  const MapResult result = MapMessages(scene.messages, options);
   EXPECT_GT(result.report.ignored_ids, 0);
   EXPECT_TRUE(result.report.rejected_markers.empty());
-  EXPECT_EQ(result.map.markers.size(), scene.ids.size());
+  EXPECT_EQ(result.map.markers.size(), scene.truth.markers.size());
 }
 
 TEST(MapperSynthetic, DuplicateIdsInOneFrameAreDroppedAndReported) {
-  testing::SynthOptions so;
-  so.frames = 80;
-  testing::SynthScene scene = testing::MakeScene(so);
+  Scene scene(MapperSession(80, 1));
   int added = 0;
-  for (auto& d : scene.detections)
+  for (auto& d : scene.messages)
     if (!d.markers.empty() && added < 5) {
       marker_t copy = d.markers[0];
       for (auto& c : copy.corners) c[0] += 100;
@@ -167,20 +141,18 @@ TEST(MapperSynthetic, DuplicateIdsInOneFrameAreDroppedAndReported) {
       d.num_markers = static_cast<int32_t>(d.markers.size());
       ++added;
     }
-  const MapResult result = MapScene(scene);
+  const MapResult result = MapMessages(scene.messages, scene.Options());
   EXPECT_EQ(result.report.duplicates, 2 * added);
   EXPECT_EQ(result.report.duplicate_examples.size(), static_cast<size_t>(added));
-  ExpectWithinIssueBounds(scene, result, "duplicates");
+  ExpectWithinIssueBounds(scene.truth, result, "duplicates");
 }
 
 // ---------------------------------------------------------------------------------------------
 // Bad input
 
 TEST(MapperSynthetic, NoDetectionsIsAClearError) {
-  testing::SynthOptions so;
-  so.frames = 5;
-  const testing::SynthScene scene = testing::MakeScene(so);
-  Mapper mapper(testing::SceneMapperOptions(scene));
+  const Scene scene(MapperSession(5, 1));
+  Mapper mapper(scene.Options());
   try {
     mapper.Solve();
     FAIL() << "expected an error";
@@ -190,14 +162,11 @@ TEST(MapperSynthetic, NoDetectionsIsAClearError) {
 }
 
 TEST(MapperSynthetic, OneCameraOnlyNamesTheSilentCameras) {
-  testing::SynthOptions so;
-  so.frames = 60;
-  const testing::SynthScene scene = testing::MakeScene(so);
-  Mapper mapper(testing::SceneMapperOptions(scene));
-  for (const auto& d : scene.detections)
-    if (d.camera == "cam0") mapper.Add(d);
+  const Scene scene(MapperSession(60, 1));
+  const std::vector<detections_t> cam0 =
+      Filter(scene.messages, [](const detections_t& d) { return d.camera == "cam0"; });
   try {
-    mapper.Solve();
+    MapMessages(cam0, scene.Options());
     FAIL() << "expected an error";
   } catch (const MapperError& e) {
     const std::string what = e.what();
@@ -206,33 +175,20 @@ TEST(MapperSynthetic, OneCameraOnlyNamesTheSilentCameras) {
     EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
   }
   // --allow-partial maps the one camera (markers and object poses still come out).
-  MapperOptions options = testing::SceneMapperOptions(scene);
+  MapperOptions options = scene.Options();
   options.allow_partial = true;
-  Mapper partial(options);
-  for (const auto& d : scene.detections)
-    if (d.camera == "cam0") partial.Add(d);
-  const MapResult result = partial.Solve();
+  const MapResult result = MapMessages(cam0, options);
   EXPECT_EQ(result.map.cameras.size(), 1u);
   EXPECT_EQ(result.report.dropped_cameras.size(), 4u);
 }
 
 TEST(MapperSynthetic, DisconnectedCameraIsNamedWithWhatWouldConnectIt) {
-  testing::SynthOptions so;
-  so.frames = 120;
-  const testing::SynthScene scene = testing::MakeScene(so);
+  const Scene scene(MapperSession(120, 1));
   // cam2 only reports frames where no other camera reports: it never shares a frame with them.
-  Mapper mapper(testing::SceneMapperOptions(scene));
-  MapperOptions options = testing::SceneMapperOptions(scene);
-  options.allow_partial = true;
-  Mapper partial(options);
-  for (const auto& d : scene.detections) {
-    const bool even = d.seq % 2 == 0;
-    if ((d.camera == "cam2") == even) continue;  // cam2: odd frames; others: even frames
-    mapper.Add(d);
-    partial.Add(d);
-  }
+  const std::vector<detections_t> split =
+      Filter(scene.messages, [](const detections_t& d) { return (d.camera == "cam2") != (d.seq % 2 == 0); });
   try {
-    mapper.Solve();
+    MapMessages(split, scene.Options());
     FAIL() << "expected an error";
   } catch (const MapperError& e) {
     const std::string what = e.what();
@@ -242,24 +198,22 @@ TEST(MapperSynthetic, DisconnectedCameraIsNamedWithWhatWouldConnectIt) {
         << what;
     EXPECT_NE(what.find("--allow-partial"), std::string::npos) << what;
   }
-  const MapResult result = partial.Solve();
+  MapperOptions options = scene.Options();
+  options.allow_partial = true;
+  const MapResult result = MapMessages(split, options);
   EXPECT_EQ(result.map.cameras.size(), 4u);
   EXPECT_EQ(result.map.FindCamera("cam2"), nullptr);
   ASSERT_EQ(result.report.dropped_cameras.size(), 1u);
   EXPECT_EQ(result.report.dropped_cameras[0], "cam2");
-  const testing::MapErrors e = testing::CompareToTruth(scene, result.map, result.trajectory);
-  EXPECT_LT(e.camera_position_m, 0.002);
+  const sim::EvalResult e = sim::Evaluate(scene.truth, &result.map, &result.trajectory);
+  EXPECT_LT(e.camera_position_mm.max, 2.0);
 }
 
 TEST(MapperSynthetic, UnknownCameraIsIgnoredWithAWarning) {
-  testing::SynthOptions so;
-  so.frames = 60;
-  testing::SynthScene scene = testing::MakeScene(so);
-  MapperOptions options = testing::SceneMapperOptions(scene);
+  const Scene scene(MapperSession(60, 1));
+  MapperOptions options = scene.Options();
   options.cameras.pop_back();  // cam4 not in the rig
-  scene.names.pop_back();
-  scene.rig_from_cam.pop_back();
-  const MapResult result = MapScene(scene, options);
+  const MapResult result = MapMessages(scene.messages, options);
   EXPECT_EQ(result.map.cameras.size(), 4u);
   ASSERT_FALSE(result.report.warnings.empty());
   EXPECT_NE(result.report.warnings[0].find("cam4"), std::string::npos);

@@ -8,7 +8,8 @@
 #include "mapper/bundle.h"
 #include "mapper/graph.h"
 #include "mapper/mapper.h"
-#include "tests/mapper/synth.h"
+#include "sim/eval.h"
+#include "tests/support/mapper_sim.h"
 
 namespace mcmt {
 namespace {
@@ -230,25 +231,21 @@ TEST(MapperBundle, PointBehindCameraFailsTheEvaluation) {
 // near the truth, which needs the right IPPE hypotheses, the right MST paths and per-frame medoids.
 
 TEST(MapperInit, InitialisationAloneIsCloseToTruth) {
-  testing::SynthOptions so;
-  so.frames = 120;
-  so.noise_px = 0.2;
-  const testing::SynthScene scene = testing::MakeScene(so);
-  MapperOptions options = testing::SceneMapperOptions(scene);
+  const sim::Session session = sim::SimulateSession(test::MapperSession(120, 1, 0.2));
+  const sim::GroundTruth truth = session.Truth();
+  MapperOptions options = test::MapperOptionsFor(truth);
   options.refine = false;
-  Mapper mapper(options);
-  for (const auto& d : scene.detections) mapper.Add(d);
-  const MapResult result = mapper.Solve();
+  const MapResult result = test::MapMessages(session.Messages(), options);
   EXPECT_GT(result.report.ambiguous_observations, 0) << "the scene should exercise both hypotheses";
   ASSERT_EQ(result.initial_map.cameras.size(), 5u);
   ASSERT_EQ(result.initial_map.markers.size(), 4u);
-  const testing::MapErrors e = testing::CompareToTruth(scene, result.initial_map, result.initial_trajectory);
-  EXPECT_LT(e.camera_position_m, 0.03);
-  EXPECT_LT(e.camera_rotation_deg, 2.0);
-  EXPECT_LT(e.configuration_m, 0.005);
-  EXPECT_LT(e.object_translation_m, 0.01);
-  EXPECT_LT(e.object_rotation_deg, 5.0);  // single-square poses: degrees before refinement
-  EXPECT_GE(e.frames_compared, 110);
+  const sim::EvalResult e = sim::Evaluate(truth, &result.initial_map, &result.initial_trajectory);
+  EXPECT_LT(e.camera_position_mm.max, 30);
+  EXPECT_LT(e.camera_rotation_deg.max, 2.0);
+  EXPECT_LT(e.configuration_mm.max, 5);
+  EXPECT_LT(e.object_translation_aligned_mm.mean, 10);
+  EXPECT_LT(e.object_rotation_deg.mean, 5.0);  // single-square poses: degrees before refinement
+  EXPECT_GE(e.frames_with_pose, 110);
   // The reference camera and marker are identity in the map.
   const MapCamera* ref = result.initial_map.FindCamera(result.initial_map.reference_camera);
   ASSERT_NE(ref, nullptr);
@@ -259,18 +256,15 @@ TEST(MapperInit, InitialisationAloneIsCloseToTruth) {
 }
 
 TEST(MapperInit, ConfiguredReferencesAreUsed) {
-  testing::SynthOptions so;
-  so.frames = 60;
-  const testing::SynthScene scene = testing::MakeScene(so);
-  MapperOptions options = testing::SceneMapperOptions(scene);
+  const sim::Session session = sim::SimulateSession(test::MapperSession(60));
+  const int marker = session.object().markers[2].id;
+  MapperOptions options = test::MapperOptionsFor(session.Truth());
   options.reference_camera = "cam3";
-  options.reference_marker = scene.ids[2];
+  options.reference_marker = marker;
   options.refine = false;
-  Mapper mapper(options);
-  for (const auto& d : scene.detections) mapper.Add(d);
-  const MapResult result = mapper.Solve();
+  const MapResult result = test::MapMessages(session.Messages(), options);
   EXPECT_EQ(result.map.reference_camera, "cam3");
-  EXPECT_EQ(result.map.reference_marker, scene.ids[2]);
+  EXPECT_EQ(result.map.reference_marker, marker);
   EXPECT_LT(result.map.FindCamera("cam3")->rig_from_cam.translation().norm(), 1e-12);
 }
 

@@ -1,23 +1,21 @@
-// mapper/diagnostics on synthetic scenes with known corner noise: residuals agree with the mapper's own
-// statistics, verdicts follow the noise, and the pose covariance predicts the spread of camera poses over
-// noise draws.
+// mapper/diagnostics on the simulator's sessions (tests/support/mapper_sim.h) with known corner noise:
+// residuals agree with the mapper's own statistics, verdicts follow the noise, and the pose covariance
+// predicts the spread of camera poses over noise draws.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "mapper/diagnostics.h"
-#include "tests/mapper/synth.h"
+#include "tests/support/mapper_sim.h"
 
 namespace mcmt {
 namespace {
 
-testing::SynthOptions Options(double noise_px, uint64_t seed, int frames = 60) {
-  testing::SynthOptions o;
-  o.cameras = 4;
-  o.frames = frames;
-  o.noise_px = noise_px;
-  o.seed = seed;
-  return o;
+// Four cameras.
+sim::Session Simulate(double noise_px, uint64_t seed, int frames = 60) {
+  sim::SessionOptions o = test::MapperSession(frames, seed, noise_px);
+  o.rig.num_cameras = 4;
+  return sim::SimulateSession(o);
 }
 
 // The synthetic object stays near the image centres: judge by noise here (coverage has its own test).
@@ -27,17 +25,17 @@ DiagnosticsOptions NoCoverageRule() {
   return o;
 }
 
-MapResult Map(const testing::SynthScene& scene) {
-  MapperOptions mo = testing::SceneMapperOptions(scene);
-  mo.reference_camera = scene.names[0];
+MapResult Map(const std::vector<detections_t>& messages, const sim::Session& session) {
+  MapperOptions mo = test::MapperOptionsFor(session.Truth());
+  mo.reference_camera = session.cameras[0].name;
   mo.threads = 1;
-  Mapper mapper(mo);
-  for (const detections_t& d : scene.detections) mapper.Add(d);
-  return mapper.Solve();
+  return test::MapMessages(messages, mo);
 }
 
+MapResult Map(const sim::Session& session) { return Map(session.Messages(), session); }
+
 TEST(Diagnostics, ResidualsAgreeWithTheMapperAndVerdictsFollowTheNoise) {
-  const MapResult result = Map(testing::MakeScene(Options(0.3, 3)));
+  const MapResult result = Map(Simulate(0.3, 3));
   const Diagnostics d = ComputeDiagnostics(result, NoCoverageRule());
   EXPECT_NEAR(d.residual_sigma_px, 0.3, 0.03);
   ASSERT_EQ(d.cameras.size(), result.map.cameras.size());
@@ -59,24 +57,26 @@ TEST(Diagnostics, ResidualsAgreeWithTheMapperAndVerdictsFollowTheNoise) {
 }
 
 TEST(Diagnostics, ANoisyCameraIsJudgedPoorWithTheReason) {
-  testing::SynthScene scene = testing::MakeScene(Options(0.2, 4));
+  const sim::Session session = Simulate(0.2, 4);
+  const std::string noisy = session.cameras[2].name;
+  std::vector<detections_t> messages = session.Messages();
   std::mt19937_64 rng(9);
   std::normal_distribution<double> noise(0.0, 2.0);
-  for (detections_t& det : scene.detections)
-    if (det.camera == scene.names[2])
+  for (detections_t& det : messages)
+    if (det.camera == noisy)
       for (marker_t& m : det.markers)
         for (auto& c : m.corners) c[0] += noise(rng), c[1] += noise(rng);
-  const MapResult result = Map(scene);
+  const MapResult result = Map(messages, session);
   const Diagnostics d = ComputeDiagnostics(result, NoCoverageRule());
   for (const CameraDiagnostics& c : d.cameras) {
-    if (c.name == scene.names[2]) {
+    if (c.name == noisy) {
       EXPECT_EQ(c.verdict, "poor") << c.reason;
       EXPECT_NE(c.reason.find("x the"), std::string::npos) << c.reason;
     } else {
       EXPECT_NE(c.verdict, "poor") << c.name << ": " << c.reason;
     }
   }
-  EXPECT_NE(VerdictLines(d).find("camera " + scene.names[2] + ": poor ("), std::string::npos);
+  EXPECT_NE(VerdictLines(d).find("camera " + noisy + ": poor ("), std::string::npos);
   // With the default rules the small image area the object sweeps is itself a reason.
   for (const CameraDiagnostics& c : ComputeDiagnostics(result).cameras) {
     EXPECT_LT(c.coverage, 0.3) << c.name;
@@ -90,12 +90,12 @@ TEST(Diagnostics, PoseCovariancePredictsTheSpreadOverNoiseDraws) {
   constexpr int kDraws = 10;
   Eigen::Vector3d predicted = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero();
   for (int k = 0; k < kDraws; ++k) {
-    const testing::SynthScene scene = testing::MakeScene(Options(0.5, 100 + k, 40));
-    const MapResult result = Map(scene);
+    const sim::Session session = Simulate(0.5, 100 + k, 60);
+    const MapResult result = Map(session);
     const Diagnostics d = ComputeDiagnostics(result);
-    const MapCamera* cam = result.map.FindCamera(scene.names[1]);
+    const MapCamera* cam = result.map.FindCamera(session.cameras[1].name);
     ASSERT_NE(cam, nullptr);
-    const Rigid3 truth = Inverse(scene.rig_from_cam[0]) * scene.rig_from_cam[1];
+    const Rigid3 truth = Inverse(session.cameras[0].rig_from_cam) * session.cameras[1].rig_from_cam;
     const Eigen::Vector3d error_mm = 1000 * (cam->rig_from_cam.translation() - truth.translation());
     squared += error_mm.cwiseProduct(error_mm);
     ASSERT_TRUE(d.cameras[1].has_covariance) << d.cameras[1].covariance_note;

@@ -630,6 +630,81 @@ TEST(SimProcess, MaxSpeedSetsTheObjectsTopSpeed) {
   EXPECT_LT(plain, 0.4);
 }
 
+// --scene bodies takes --intrinsics-error, --clock and --max-speed-m-s as --scene object does: the
+// written intrinsics off as asked, every body's ground truth naming the clocks, each camera's utimes its
+// clock's readings with the corners of the plain session, and the moving bodies at the top speed asked
+// (their own motion's, to within the push apart of the two bodies: +-6 cm/s over 300 frames).
+TEST(SimProcess, BodiesSceneTakesTheSelfCalibrationOptions) {
+  const std::string base = " --scene bodies --frames 60 --cameras 3 --seed 5 --detections-only --quiet";
+  const std::string plain = Tmp() / "bodies_plain", wrong = Tmp() / "bodies_wrong";
+  Result r = RunProgram(kSim, "--out " + plain + base);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = RunProgram(kSim, "--out " + wrong + base + " --intrinsics-error cam1,3,8,-6,0.03 --clock cam2,12,500");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CameraModel truth1 = sim::ReadGroundTruth(plain + "/ground_truth.yaml").FindCamera("cam1")->model;
+  const CameraModel written1 = LoadIntrinsics(wrong + "/cam1.yml");
+  EXPECT_NEAR(written1.fx / truth1.fx, 1.03, 1e-12);
+  EXPECT_NEAR(written1.cx - truth1.cx, 8.0, 1e-9);
+  EXPECT_NEAR(written1.cy - truth1.cy, -6.0, 1e-9);
+  EXPECT_EQ(mcmt::test::ReadText(wrong + "/cam0.yml"), mcmt::test::ReadText(plain + "/cam0.yml"));
+  for (const std::string body : {"tool", "patient", "floor"}) {
+    const sim::GroundTruth t = sim::ReadGroundTruth(wrong + "/ground_truth_" + body + ".yaml");
+    ASSERT_EQ(t.clocks.size(), 1u) << body;
+    EXPECT_EQ(t.clocks.at("cam2").offset_ms, 12.0) << body;
+    EXPECT_EQ(t.clocks.at("cam2").drift_ppm, 500.0) << body;
+    EXPECT_EQ(t.FindCamera("cam1")->model.fx, truth1.fx) << body;  // the truth stays true
+  }
+  const std::vector<LogMessage> a = ReadDetectionsLog(plain + "/detections.lcmlog");
+  const std::vector<LogMessage> b = ReadDetectionsLog(wrong + "/detections.lcmlog");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 100u);
+  std::map<std::pair<std::string, int64_t>, const detections_t*> by_key;
+  for (const LogMessage& m : a) by_key[{m.msg.camera, m.msg.seq}] = &m.msg;
+  int64_t last = 0;
+  int shifted = 0;
+  for (const LogMessage& m : b) {
+    EXPECT_GE(m.timestamp, last) << "log not in time order";
+    last = m.timestamp;
+    const auto it = by_key.find({m.msg.camera, m.msg.seq});
+    ASSERT_NE(it, by_key.end()) << m.msg.camera << " " << m.msg.seq;
+    const detections_t& p = *it->second;
+    ASSERT_EQ(p.markers.size(), m.msg.markers.size());
+    for (size_t i = 0; i < p.markers.size(); ++i)
+      EXPECT_EQ(p.markers[i].corners[2][1], m.msg.markers[i].corners[2][1]);
+    const double since_start_s = 1e-6 * static_cast<double>(p.utime - sim::kStartUtime);
+    const int64_t expected =
+        m.msg.camera == "cam2" ? p.utime + std::llround(12000 + 500 * since_start_s) : p.utime;
+    EXPECT_EQ(m.msg.utime, expected) << m.msg.camera << " " << m.msg.seq;
+    shifted += m.msg.utime != p.utime;
+    EXPECT_EQ(m.msg.camera_model.fx, m.msg.camera == "cam1" ? written1.fx : p.camera_model.fx);
+  }
+  EXPECT_GT(shifted, 20);
+  // The top speed of each moving body, frame to frame.
+  auto top_speed = [&](const std::string& dir, const std::string& body) {
+    const sim::GroundTruth t = sim::ReadGroundTruth(dir + "/ground_truth_" + body + ".yaml");
+    double top = 0;
+    for (size_t f = 1; f < t.frames.size(); ++f)
+      top = std::max(
+          top,
+          (t.frames[f].rig_from_object.translation() - t.frames[f - 1].rig_from_object.translation()).norm() *
+              t.fps);
+    return top;
+  };
+  const std::string slow = Tmp() / "bodies_slow", fast = Tmp() / "bodies_fast";
+  const std::string long_base = " --scene bodies --frames 300 --cameras 2 --seed 5 --detections-only --quiet";
+  r = RunProgram(kSim, "--out " + slow + long_base);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = RunProgram(kSim, "--out " + fast + long_base + " --max-speed-m-s 1.5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const std::string body : {"tool", "patient"}) {
+    const double before = top_speed(slow, body), after = top_speed(fast, body);
+    std::printf("%s: top speed %.3f m/s (default motion %.3f)\n", body.c_str(), after, before);
+    EXPECT_LT(before, 0.3) << body;
+    EXPECT_GT(after, 1.5 - 0.06 - 0.04) << body;  // less the push, and chords 2.5 % short
+    EXPECT_LT(after, 1.5 + 0.06) << body;
+  }
+}
+
 TEST(SimProcess, ExplicitDefaultsAreTheDefaults) {
   const std::string base = " --frames 2 --cameras 2 --detections-only --quiet";
   auto truth_text = [&](const std::string& name, const std::string& extra) {

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -25,6 +26,7 @@
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
 #include "tests/viz/test_rig.h"
+#include "viz/scene.h"
 
 namespace mcmt::viz::testing {
 
@@ -54,6 +56,61 @@ inline bool NotBackgroundNear(const cv::Mat& bgr, const Eigen::Vector2d& px, con
         if (std::abs(int(p[c]) - int(background[c])) > tol) return true;
     }
   return false;
+}
+
+// ---- several bodies: pixels of a body's colour (viz/scene.h's BodyColor) --------------------------------
+
+// Is this pixel body k's colour (each channel within 45 of it)?
+inline bool IsBodyColour(const cv::Vec3b& p, size_t k) {
+  const Eigen::Vector3d c = 255.0 * BodyColor(k);
+  return std::abs(p[2] - c.x()) < 45 && std::abs(p[1] - c.y()) < 45 && std::abs(p[0] - c.z()) < 45;
+}
+
+// Pixels of body k's colour within `radius` of px.
+inline int BodyPixelsNear(const cv::Mat& bgr, const Eigen::Vector2d& px, size_t k, int radius) {
+  int n = 0;
+  for (int y = static_cast<int>(px.y()) - radius; y <= static_cast<int>(px.y()) + radius; ++y)
+    for (int x = static_cast<int>(px.x()) - radius; x <= static_cast<int>(px.x()) + radius; ++x)
+      if (x >= 0 && y >= 0 && x < bgr.cols && y < bgr.rows && IsBodyColour(bgr.at<cv::Vec3b>(y, x), k)) ++n;
+  return n;
+}
+
+// Pixels of body k's colour in the box [x0, x1) x [y0, y1).
+inline int BodyPixelsIn(const cv::Mat& bgr, int x0, int y0, int x1, int y1, size_t k) {
+  int n = 0;
+  for (int y = std::max(0, y0); y < std::min(bgr.rows, y1); ++y)
+    for (int x = std::max(0, x0); x < std::min(bgr.cols, x1); ++x)
+      if (IsBodyColour(bgr.at<cv::Vec3b>(y, x), k)) ++n;
+  return n;
+}
+
+// For every marker of body k at its pose: the midpoints of its outline's 4 edges (1.25 x the marker's
+// half side, where the body's outline is drawn), projected; how many have body k's colour within 3 px, and
+// how many another body's colour.
+struct OutlineHits {
+  int points = 0, own = 0, other = 0;
+};
+inline OutlineHits Outline(const VizScene& scene, const cv::Mat& img, const RigMap& map, size_t k) {
+  OutlineHits hits;
+  const std::optional<Rigid3> rig_from_object = scene.BodyPose(0, map.objects[k].name);
+  EXPECT_TRUE(rig_from_object.has_value()) << map.objects[k].name;
+  if (!rig_from_object) return hits;
+  for (const MapMarker& m : map.objects[k].markers) {
+    const double e = 1.25 * 0.5 * m.size;
+    for (const Eigen::Vector3d& mid : {Eigen::Vector3d(0, e, 0), Eigen::Vector3d(e, 0, 0),
+                                       Eigen::Vector3d(0, -e, 0), Eigen::Vector3d(-e, 0, 0)}) {
+      Eigen::Vector2d px;
+      if (!scene.ProjectRigPoint(0, *rig_from_object * (m.object_from_marker * mid), &px)) continue;
+      ++hits.points;
+      if (BodyPixelsNear(img, px, k, 3) > 0) ++hits.own;
+      for (size_t j = 0; j < map.objects.size(); ++j)
+        if (j != k && BodyPixelsNear(img, px, j, 3) > 0) {
+          ++hits.other;
+          break;
+        }
+    }
+  }
+  return hits;
 }
 
 }  // namespace mcmt::viz::testing
