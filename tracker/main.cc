@@ -110,14 +110,14 @@ int Main(int argc, char** argv) {
     // partial files go only once every final file is written.
     if (node.streams().empty()) mcmt::WriteTrajectory(out_path, {});  // no map came
     for (const mcmt::PoseStream& s : node.streams()) {
-      const std::string path = mcmt::StreamPath(out_path, s.name, s.single);
+      const std::string path = s.single ? out_path : mcmt::BodyPath(out_path, s.name);
       mcmt::WriteTrajectory(path, s.trajectory);
       if (!quiet)
         std::cerr << "mcmt-tracker: wrote " << s.trajectory.size() << " poses to " << path << std::endl;
     }
     std::remove(options.partial_path.c_str());
     for (const mcmt::PoseStream& s : node.streams())
-      if (!s.single) std::remove((mcmt::StreamPath(out_path, s.name, false) + ".partial").c_str());
+      if (!s.single) std::remove((mcmt::BodyPath(out_path, s.name) + ".partial").c_str());
   }
   if (report.damaged()) {
     std::cerr << "mcmt-tracker: " << report.Summary() << " (exit status " << mcmt::kExitDamagedLog << ")"

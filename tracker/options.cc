@@ -3,7 +3,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <filesystem>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -216,12 +215,6 @@ std::vector<PoseStreamPlan> PlanPoseStreams(const TrackerOptions& o, const std::
       }
   }
   return plan;
-}
-
-std::string StreamPath(const std::string& path, const std::string& stream, bool single) {
-  if (single) return path;
-  const std::filesystem::path p(path);
-  return (p.parent_path() / (p.stem().string() + "_" + stream + p.extension().string())).string();
 }
 
 TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {

@@ -105,9 +105,6 @@ std::vector<PoseStreamPlan> PlanPoseStreams(const TrackerOptions& options,
                                             const std::string& file = "");
 // The bodies of a map: version 1 one body named `single_name`; version 2 every object.
 std::vector<BodyName> MapBodies(const RigMap& map, const std::string& single_name);
-// Where a stream's poses go when the tracker writes to `path` (--out): a single object `path` itself,
-// else "dir/poses.csv" -> "dir/poses_tool.csv".
-std::string StreamPath(const std::string& path, const std::string& stream, bool single);
 
 // One marker seen by one camera in the frame being solved.
 struct MarkerObservation {
@@ -263,7 +260,7 @@ struct TrackerNodeOptions {
   // When set (with keep_trajectory): every kept pose is also appended to this file (trajectory.csv
   // format) and flushed at once, so a tracker killed mid-run loses nothing it computed. Created (or
   // truncated) by the constructor, which throws naming the file when it cannot be written. With several
-  // bodies each stream has its own, StreamPath(OUT, name) + ".partial" for partial_path OUT.partial (the
+  // bodies each stream has its own, BodyPath(OUT, name) + ".partial" for partial_path OUT.partial (the
   // single one is then removed).
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)

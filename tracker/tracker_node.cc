@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/files.h"
 #include "core/lcm_util.h"
 #include "tracker/relative.h"
 #include "tracker/tracker.h"
@@ -78,13 +79,13 @@ void TrackerNode::WarnOnce(const std::string& key, const std::string& text) {
 
 namespace {
 
-// A stream's partial file: StreamPath of OUT for OUT.partial, ".partial" appended again.
+// A stream's partial file: OUT (single) or BodyPath of OUT, for OUT.partial; ".partial" appended.
 std::string PartialPath(const std::string& partial_path, const std::string& stream, bool single) {
   const std::string suffix = ".partial";
   const bool ends = partial_path.size() > suffix.size() &&
                     partial_path.compare(partial_path.size() - suffix.size(), suffix.size(), suffix) == 0;
   const std::string base = ends ? partial_path.substr(0, partial_path.size() - suffix.size()) : partial_path;
-  return StreamPath(base, stream, single) + suffix;
+  return (single ? base : BodyPath(base, stream)) + suffix;
 }
 
 }  // namespace
