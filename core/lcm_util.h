@@ -75,6 +75,14 @@ bool CheckEncoded(const void*, size_t, const Msg*, std::string*) {
   return true;
 }
 
+// The fingerprint an encoded message starts with (0 for fewer than 8 bytes).
+int64_t EncodedHash(const void* data, size_t size);
+// Whether the buffer carries a Msg (by fingerprint only: Decode checks the rest).
+template <typename Msg>
+bool HasType(const void* data, size_t size) {
+  return size >= 8 && EncodedHash(data, size) == Msg::getHash();
+}
+
 // Decodes exactly `size` bytes. A truncated, over-long, corrupted or foreign (fingerprint mismatch)
 // buffer returns false with a reason in *error (never crashes, never throws).
 template <typename Msg>

@@ -74,5 +74,8 @@ std::string ChannelSuffix(const std::string& object_name);
 // "MCMT_POSE_"; else the message's object field when the channel is MCMT_POSE_<ChannelSuffix(object)>,
 // and otherwise the channel's suffix lower-cased ("MCMT_POSE_TOOL_IN_PATIENT" -> "tool_in_patient").
 std::string BodyOfPoseChannel(const std::string& channel, const std::string& object);
+// The body of a pose stream's object_pose_t: BodyOfPoseChannel on an MCMT_POSE_<X> channel, else (a
+// stream renamed by tracker.channels: "NAV") the message's object field, the tracker's stream name.
+std::string BodyOfPose(const std::string& channel, const std::string& object);
 
 }  // namespace mcmt

@@ -175,7 +175,8 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
         ++result.detection_rows;
       }
     } else if (want_poses && (e.channel == request.pose_channel ||
-                              e.channel.compare(0, body_prefix.size(), body_prefix) == 0)) {
+                              e.channel.compare(0, body_prefix.size(), body_prefix) == 0 ||
+                              HasType<object_pose_t>(e.data.data(), e.data.size()))) {
       object_pose_t pose;
       std::string error;
       if (!Decode(e.data.data(), e.data.size(), &pose, &error))
@@ -185,7 +186,7 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
       if (fresh) {
         stream.out.source = e.channel;
         if (e.channel != request.pose_channel) {
-          stream.out.body = BodyOfPoseChannel(e.channel, pose.object);
+          stream.out.body = BodyOfPose(e.channel, pose.object);
           if (stream.out.body.find_first_not_of(
                   "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
             throw LogFormatError(EventWhere(part, e, index) + ": body name '" + stream.out.body +
@@ -319,7 +320,8 @@ LogSummary SummarizeLog(const std::string& log) {
           cam.ids.insert(m.id);
           s.marker_ids.insert(m.id);
         }
-      } else if (e.channel == kPoseChannel || !BodyOfPoseChannel(e.channel, "").empty()) {
+      } else if (e.channel == kPoseChannel || !BodyOfPoseChannel(e.channel, "").empty() ||
+                 HasType<object_pose_t>(e.data.data(), e.data.size())) {
         object_pose_t pose;
         if (!Decode(e.data.data(), e.data.size(), &pose)) {
           ++c.undecodable;

@@ -485,14 +485,15 @@ std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std
   }
   int bad = 0;
   const LogReadReport report = ForEachLogEvent(path, [&](const LogEvent& ev) {
-    if (ev.channel.rfind(std::string(kPoseChannel) + "_", 0) != 0) return true;
+    // Every pose stream but the single object's MCMT_POSE, by type (tracker.channels may rename them).
+    if (ev.channel == kPoseChannel || !HasType<object_pose_t>(ev.data.data(), ev.data.size())) return true;
     object_pose_t msg;
     if (!Decode(ev.data.data(), ev.data.size(), &msg)) {
       ++bad;
       return true;
     }
     if (msg.status == object_pose_t::STATUS_TRACKING || msg.status == object_pose_t::STATUS_AMBIGUOUS)
-      out[BodyOfPoseChannel(ev.channel, msg.object)].push_back(FromObjectPoseMsg(msg));
+      out[BodyOfPose(ev.channel, msg.object)].push_back(FromObjectPoseMsg(msg));
     return true;
   });
   if (report.damaged()) throw FileFormatError(path + ": " + report.Summary());

@@ -14,10 +14,8 @@ namespace mcmt::viz {
 
 LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
     : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
-  // MCMT_POSE and every MCMT_POSE_<BODY> (LCM subscriptions are regular expressions).
-  const std::string poses = std::string(kPoseChannel) + "(_.*)?";
-  for (const char* channel : {kMapChannel, poses.c_str(), kDetectionsChannelRegex, kTrackerStatusChannel})
-    subscriptions_.push_back(lcm_.subscribe(channel, &LcmCollector::OnMessage, this));
+  // Every channel: pose streams are told by their type (tracker.channels may name them anything).
+  subscriptions_.push_back(lcm_.subscribe(".*", &LcmCollector::OnMessage, this));
 }
 
 LcmCollector::~LcmCollector() {
@@ -41,12 +39,13 @@ void LcmCollector::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& 
 void LcmCollector::Handle(const std::string& channel, const void* data, size_t size) {
   if (channel == kMapChannel)
     OnMap(data, size, channel);
-  else if (channel == kPoseChannel || !BodyOfPoseChannel(channel, "").empty())
-    OnPose(data, size, channel);
   else if (IsDetectionsChannel(channel))
     OnDetections(data, size, channel);
   else if (channel == kTrackerStatusChannel)
     OnTrackerStatus(data, size, channel);
+  else if (channel == kPoseChannel || !BodyOfPoseChannel(channel, "").empty() ||
+           HasType<object_pose_t>(data, size))
+    OnPose(data, size, channel);
 }
 
 void LcmCollector::OnMap(const void* data, size_t size, const std::string& channel) {
@@ -74,7 +73,7 @@ void LcmCollector::OnPose(const void* data, size_t size, const std::string& chan
     ++stats_.lost;
     return;
   }
-  PoseStream& stream = channel == kPoseChannel ? poses_ : body_poses_[BodyOfPoseChannel(channel, msg.object)];
+  PoseStream& stream = channel == kPoseChannel ? poses_ : body_poses_[BodyOfPose(channel, msg.object)];
   stream.rows.push_back(FromObjectPoseMsg(msg));
   if (keep_poses_ > 0 && stream.rows.size() >= 2 * keep_poses_) {
     const size_t drop = stream.rows.size() - keep_poses_;

@@ -476,13 +476,15 @@ RigMap FromRigMap2Msg(const rig_map2_t& msg) {
   return map;
 }
 
+int64_t EncodedHash(const void* data, size_t size) {
+  if (size < 8) return 0;
+  uint64_t h = 0;
+  for (size_t i = 0; i < 8; ++i) h = (h << 8) | static_cast<const uint8_t*>(data)[i];
+  return static_cast<int64_t>(h);
+}
+
 bool DecodeMapMessage(const void* data, size_t size, MapMessage* out, std::string* error) {
-  int64_t hash = 0;
-  if (size >= 8) {
-    uint64_t h = 0;
-    for (size_t i = 0; i < 8; ++i) h = (h << 8) | static_cast<const uint8_t*>(data)[i];
-    hash = static_cast<int64_t>(h);
-  }
+  const int64_t hash = EncodedHash(data, size);
   std::string reason;
   try {
     if (size >= 8 && hash == rig_map_t::getHash()) {

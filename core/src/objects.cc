@@ -235,4 +235,9 @@ std::string BodyOfPoseChannel(const std::string& channel, const std::string& obj
   return out;
 }
 
+std::string BodyOfPose(const std::string& channel, const std::string& object) {
+  const std::string by_channel = BodyOfPoseChannel(channel, object);
+  return by_channel.empty() ? object : by_channel;
+}
+
 }  // namespace mcmt

@@ -353,6 +353,34 @@ TEST_F(ExportBodies, TumPerBodyChannelFromALog) {
   }
 }
 
+// A stream renamed by tracker.channels ({tool: NAV}): found by its type, the file named by the message's
+// object field (poses_tool.csv), the numbers of the messages.
+TEST_F(ExportBodies, RenamedPoseChannelIsExportedUnderItsBody) {
+  const std::string log = dir_ + "/renamed.lcmlog";
+  {
+    EventLogWriter w(log);
+    for (int64_t seq = 0; seq < 5; ++seq)
+      for (int b = 0; b < 2; ++b) {
+        object_pose_t p = MakePose(seq, object_pose_t::STATUS_TRACKING);
+        p.object = b == 0 ? "tool" : "patient";
+        p.rig_from_object = ToPose3d(BodyPose(b, seq));
+        const std::vector<uint8_t> data = Encode(p);
+        w.Write(p.utime + 100, b == 0 ? "NAV" : "MCMT_POSE_PATIENT", data.data(), data.size());
+      }
+    w.Close();
+  }
+  std::string out, err;
+  ASSERT_EQ(RunProgram({Bin("mcmt-export"), "--log", log, "--poses", dir_ + "/poses.csv"}, &out, &err), 0)
+      << err;
+  for (int b = 0; b < 2; ++b) {
+    const auto csv = ReadTrajectory(dir_ + (b == 0 ? "/poses_tool.csv" : "/poses_patient.csv"));
+    ASSERT_EQ(csv.size(), 5u) << b;
+    for (const TrajectoryRow& row : csv)
+      EXPECT_LT(TranslationDistance(row.rig_from_object, BodyPose(b, row.seq)), 1e-15);
+  }
+  EXPECT_FALSE(FileExists(dir_ + "/poses_nav.csv"));
+}
+
 // The mapper's OUTDIR of a map with several bodies: --trajectory OUTDIR writes one TUM per moving body
 // (the static floor has none); a single-object OUTDIR keeps trajectory.csv -> the asked name.
 TEST_F(ExportBodies, TumPerMovingBodyFromAMapperFolder) {

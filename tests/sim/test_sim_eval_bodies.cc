@@ -190,6 +190,35 @@ TEST(EvalBodies, TrajectoriesByBodyFromALogOfPoseChannels) {
                FileFormatError);  // neither a mapper OUTDIR nor a log
 }
 
+// A stream renamed by tracker.channels ({tool: NAV}) is found by its type and named by its object field;
+// the single object's MCMT_POSE and a foreign type on another channel are not poses of a body.
+TEST(EvalBodies, RenamedPoseChannelIsReadByTypeAndObjectField) {
+  mcmt::test::TempDir dir("eval_bodies_renamed");
+  const std::string log = dir.str() + "/poses.lcmlog";
+  {
+    EventLogWriter w(log);
+    for (int64_t seq = 0; seq < 4; ++seq)
+      for (const auto& [channel, object] : std::vector<std::pair<std::string, std::string>>{
+               {"NAV", "tool"}, {"MCMT_POSE_PATIENT", "patient"}, {"MCMT_POSE", "object"}}) {
+        object_pose_t p{};
+        p.utime = 1000 + seq;
+        p.seq = seq;
+        p.object = object;
+        p.status = object_pose_t::STATUS_TRACKING;
+        p.rig_from_object = ToPose3d(Rigid3::Identity());
+        const std::vector<uint8_t> data = Encode(p);
+        w.Write(p.utime, channel, data.data(), data.size());
+      }
+    const std::vector<uint8_t> other(40, 7);  // not an object_pose_t
+    w.Write(2000, "OTHER", other.data(), other.size());
+    w.Close();
+  }
+  const auto rows = ReadBodyTrajectories(log, RigMap());
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows.at("tool").size(), 4u);
+  EXPECT_EQ(rows.at("patient").size(), 4u);
+}
+
 // The real programs on a bodies session: mcmt-eval's JSON per body within the targets, the same
 // figures as EvaluateBodies on the same files, and a one-line error when a body's ground truth is missing.
 TEST(EvalBodiesProcess, SimMapperEvalPerBody) {
