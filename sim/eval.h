@@ -116,7 +116,8 @@ std::map<std::string, GroundTruth> ReadBodyTruths(const std::string& ground_trut
 
 // Trajectories by body: the mapper's OUTDIR (trajectory_<body>.csv), the tracker's --out PATH
 // (PATH_<body>.csv; both core's BodyTrajectoryFiles for `map`), or an LCM log with object_pose_t on
-// MCMT_POSE_<BODY> (the body named by core's BodyOfPoseChannel; TRACKING and
+// any channel but MCMT_POSE (MCMT_POSE_<BODY> or renamed by tracker.channels; the body named by core's
+// BodyOfPose; TRACKING and
 // AMBIGUOUS poses). Streams of no body of the map (relative poses, MCMT_POSE_TOOL_IN_PATIENT) are kept
 // under their name and ignored by EvaluateBodies.
 std::map<std::string, std::vector<TrajectoryRow>> ReadBodyTrajectories(const std::string& path,

@@ -1,7 +1,7 @@
 // Collects what the viewer shows from LCM (live) or a log (core's reader): the newest
-// MCMT_MAP, the poses on MCMT_POSE and, per body, on every MCMT_POSE_<BODY> (the body named by core's
-// BodyOfPoseChannel: the message's object field), the marker ids on MCMT_DETECTIONS_.* per frame utime and
-// the tracker's camera states (MCMT_TRACKER_STATUS).
+// MCMT_MAP, the poses on MCMT_POSE and, per body, every other object_pose_t channel (MCMT_POSE_<BODY> or one
+// renamed by tracker.channels; the body named by core's BodyOfPose), the marker ids on MCMT_DETECTIONS_.*
+// per frame utime and the tracker's camera states (MCMT_TRACKER_STATUS).
 #pragma once
 
 #include <cstdint>

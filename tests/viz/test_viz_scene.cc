@@ -9,6 +9,7 @@
 #include "core/dictionary.h"
 #include "core/lcm_util.h"
 #include "core/marker.h"
+#include "mcmt/object_pose_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
 #include "tests/viz/viz_test_util.h"
 #include "viz/collector.h"
@@ -535,6 +536,35 @@ TEST(VizCollector, TakesMapsOfEitherType) {
   collector.Handle(kMapChannel, other.data(), other.size());
   EXPECT_EQ(collector.map_count(), 2);
   EXPECT_EQ(collector.stats().decode_errors, 1);
+}
+
+// A pose stream renamed by tracker.channels ({tool: NAV}) reaches the live viewer through its
+// subscription (every channel, poses told by type) under the body its object field names; a foreign
+// message on another channel is not a pose.
+TEST(VizCollector, RenamedPoseChannelIsTheBodyOfItsObjectField) {
+  lcm::LCM lcm("memq://");
+  LcmCollector collector(lcm, 0);
+  for (int64_t seq = 0; seq < 3; ++seq) {
+    object_pose_t p{};
+    p.utime = 1000 + seq;
+    p.seq = seq;
+    p.object = "tool";
+    p.status = object_pose_t::STATUS_TRACKING;
+    Rigid3 pose = Rigid3::Identity();
+    pose.translation().x() = 0.1 * static_cast<double>(seq);
+    p.rig_from_object = ToPose3d(pose);
+    const std::vector<uint8_t> data = Encode(p);
+    lcm.publish("NAV", data.data(), static_cast<unsigned>(data.size()));
+  }
+  const std::vector<uint8_t> other(40, 7);
+  lcm.publish("OTHER", other.data(), static_cast<unsigned>(other.size()));
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  ASSERT_EQ(collector.body_poses().size(), 1u);
+  const PoseStream& tool = collector.body_poses().at("tool");
+  ASSERT_EQ(tool.rows.size(), 3u);
+  EXPECT_DOUBLE_EQ(tool.rows[2].rig_from_object.translation().x(), 0.2);
+  EXPECT_TRUE(collector.poses().empty());
 }
 
 }  // namespace mcmt::viz
