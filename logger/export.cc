@@ -45,12 +45,6 @@ std::string EventWhere(const std::string& path, const LogEvent& e, int64_t index
   return s.str();
 }
 
-uint64_t Fingerprint(const std::vector<uint8_t>& data) {
-  uint64_t v = 0;
-  for (size_t i = 0; i < 8 && i < data.size(); ++i) v = (v << 8) | data[i];
-  return v;
-}
-
 template <typename Msg>
 void AddKnownType(std::map<uint64_t, std::string>* types) {
   (*types)[static_cast<uint64_t>(Msg::getHash())] = std::string("mcmt.") + Msg::getTypeName();
@@ -76,7 +70,7 @@ const std::map<uint64_t, std::string>& KnownTypes() {
 
 std::string TypeOf(const std::vector<uint8_t>& data) {
   if (data.size() < 8) return "unknown (" + std::to_string(data.size()) + " bytes, no fingerprint)";
-  const uint64_t fp = Fingerprint(data);
+  const uint64_t fp = static_cast<uint64_t>(EncodedHash(data.data(), data.size()));
   auto it = KnownTypes().find(fp);
   if (it != KnownTypes().end()) {
     // "mcmt.detections_t" may come back from getTypeName() already qualified; avoid "mcmt.mcmt.".
