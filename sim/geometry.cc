@@ -232,14 +232,27 @@ SimObject MakeObject(const ObjectOptions& o) {
     }
     case ObjectKind::kCube: {
       const double s = o.marker_size > 0 ? o.marker_size : 0.04;
-      const double side = s + 0.02;
+      if (o.face_columns < 1 || o.face_rows < 1)
+        throw std::invalid_argument("cube: face_columns and face_rows must be >= 1 (got " +
+                                    std::to_string(o.face_columns) + " x " + std::to_string(o.face_rows) +
+                                    ")");
+      const int n = std::max(o.face_columns, o.face_rows);
+      const double pitch = s * 1.25;  // marker plus a quarter-side gap
+      const double side = n * pitch - 0.25 * s + 0.02;
       obj.faces = BoxFaces(side, side, side, albedo);
       const Eigen::Vector3d normals[6] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
                                           Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
                                           Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ()};
       for (int k = 0; k < 6; ++k) {
         const Eigen::Vector3d up = k < 4 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
-        obj.markers.push_back({id++, s, MarkerOnFace(normals[k] * side / 2, normals[k], up)});
+        const Eigen::Matrix3d face = FrameFromNormalUp(normals[k], up);
+        for (int row = 0; row < o.face_rows; ++row)
+          for (int col = 0; col < o.face_columns; ++col) {
+            const double u = (col - 0.5 * (o.face_columns - 1)) * pitch;
+            const double v = (row - 0.5 * (o.face_rows - 1)) * pitch;
+            const Eigen::Vector3d c = normals[k] * side / 2 + face.col(0) * u + face.col(1) * v;
+            obj.markers.push_back({id++, s, MarkerOnFace(c, normals[k], up)});
+          }
       }
       break;
     }

@@ -93,13 +93,17 @@ struct ObjectOptions {
   double marker_size = 0.04;  // metres (pentagon: default 0.025 when marker_size <= 0)
   int first_id = 0;           // ids first_id, first_id + 1, ...
   uint64_t seed = 1;          // box: random placement
+  // cube: a grid of markers on every face, face_columns x face_rows (ids row by row, face by face).
+  int face_columns = 1;
+  int face_rows = 1;
 };
 // four_sided: a square prism 1.75 marker sides wide and high (7 cm for 4 cm markers) with one marker on each
 //             of its four sides, id 0..3.
 // box:        a box of 4.5 x 3.5 x 2.5 marker sides (18x14x10 cm) with 8 markers at random places / in-plane
 //             rotations on its faces (room for a one-cell quiet zone of a 6x6 dictionary).
 // pentagon:   a pentagonal prism (radius 6 cm) with two small markers on each side (10 markers, 2.5 cm).
-// cube:       a cube (side = marker side + 2 cm) with one marker per face, 6 markers.
+// cube:       a cube with a face_columns x face_rows grid of markers on each face (default one, 6 markers);
+//             markers a quarter side apart, side = n markers + (n - 1) gaps + 2 cm, n = max(columns, rows).
 // board:      a printed sheet on a thin board: a 3x3 grid of markers on its front face, white paper between
 //             them (the board's albedo is the paper's, RenderOptions::white_level / 255).
 SimObject MakeObject(const ObjectOptions& options);

@@ -8,6 +8,7 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "core/marker.h"
 #include "sim/sim.h"
 #include "tests/support/temp_dir.h"
 
@@ -112,6 +113,46 @@ TEST(SimSession, RigAndLogFilesReadBack) {
   for (size_t i = 0; i < back.size(); ++i) {
     EXPECT_EQ(Encode(back[i]), Encode(messages[i]));
     EXPECT_EQ(times[i], messages[i].utime + (messages[i].camera == "cam1" ? 70 : 0));
+  }
+}
+
+// The cube with a grid of markers per face (the tracker's test rig): every marker flat on a face, inside it,
+// the markers of one face a quarter side apart; ids in order; bad grid sizes named.
+TEST(SimObject, CubeWithAGridOfMarkersPerFace) {
+  sim::ObjectOptions o;
+  o.kind = sim::ObjectKind::kCube;
+  o.marker_size = 0.02;
+  o.face_columns = 3;
+  o.face_rows = 2;
+  o.first_id = 5;
+  const sim::SimObject cube = sim::MakeObject(o);
+  ASSERT_EQ(cube.markers.size(), 36u);
+  const double half = 0.5 * (3 * 0.025 - 0.005 + 0.02);
+  for (size_t k = 0; k < cube.markers.size(); ++k) {
+    const sim::SimMarker& m = cube.markers[k];
+    EXPECT_EQ(m.id, 5 + static_cast<int>(k));
+    const Eigen::Vector3d n = m.object_from_marker.linear().col(2);
+    EXPECT_NEAR(n.cwiseAbs().maxCoeff(), 1.0, 1e-12) << "marker " << m.id << " not on a cube face";
+    for (const auto& c : MarkerCornersInMarker(m.size)) {
+      const Eigen::Vector3d p = m.object_from_marker * c;
+      EXPECT_NEAR(p.dot(n), half, 1e-12) << "marker " << m.id << " off its face";
+      EXPECT_LE(p.cwiseAbs().maxCoeff(), half + 1e-12) << "marker " << m.id << " over the face's edge";
+    }
+    for (size_t j = 0; j < k; ++j) {
+      const sim::SimMarker& other = cube.markers[j];
+      if (other.object_from_marker.linear().col(2).dot(n) < 0.5) continue;
+      const double d = (other.object_from_marker.translation() - m.object_from_marker.translation()).norm();
+      EXPECT_GE(d, 0.025 - 1e-12) << "markers " << other.id << " and " << m.id << " overlap";
+    }
+  }
+  o.face_columns = 1, o.face_rows = 1;
+  EXPECT_EQ(sim::MakeObject(o).markers.size(), 6u);
+  o.face_rows = 0;
+  try {
+    sim::MakeObject(o);
+    FAIL() << "no error for a 1 x 0 grid";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "cube: face_columns and face_rows must be >= 1 (got 1 x 0)");
   }
 }
 

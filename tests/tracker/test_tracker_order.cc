@@ -16,8 +16,8 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "tests/support/temp_dir.h"
 #include "tests/tracker/process_util.h"
-#include "tests/tracker/synthetic_rig.h"
 
 namespace mcmt {
 namespace {
@@ -55,7 +55,7 @@ struct Session {
 
 Session Simulate(const std::string& name) {
   Session s;
-  s.dir = tracker_test::MakeTempDir("order_" + name);
+  s.dir = test::MakeTempDir("tracker_order_" + name);
   std::string out;
   EXPECT_EQ(RunProgram({kBin + "/mcmt-sim", "--out", s.dir, "--object", "four_sided", "--radius", "1.0",
                         "--frames", "300", "--seed", "11", "--detections-only", "--quiet"},

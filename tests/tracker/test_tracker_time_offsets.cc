@@ -7,11 +7,34 @@
 #include <set>
 
 #include "core/lcm_util.h"
-#include "tests/tracker/synthetic_rig.h"
+#include "core/se3.h"
+#include "sim/eval.h"
+#include "sim/sim.h"
+#include "tests/support/temp_dir.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
+
+// The simulator's session: 5 cameras on a 1 m circle, the cube (one 4 cm marker per face), 150 frames at
+// 30 fps, 0.1 px corner noise; the map and the truth in the tracker's frames (rig = cam0, object = marker 0).
+struct Rig {
+  sim::Session session;
+  RigMap map;
+  std::vector<TrajectoryRow> truth;
+  RigConfig config;
+};
+
+Rig MakeRig(const std::string& name) {
+  sim::SessionOptions o;
+  o.object.kind = sim::ObjectKind::kCube;
+  o.trajectory.frames = 150;
+  Rig r;
+  r.session = sim::SimulateSession(o);
+  r.map = sim::MapFromGroundTruth(r.session.Truth(), 0, 0, &r.truth);
+  r.config = LoadRigConfig(sim::WriteSessionRig(test::MakeTempDir("tracker_" + name), r.session));
+  return r;
+}
 
 TrackerNodeOptions LogMode() {
   TrackerNodeOptions o;
@@ -23,12 +46,12 @@ TrackerNodeOptions LogMode() {
 
 // Poses (seq, cameras used) from feeding the session with cam2's clock 15 ms late, drifting by drift_ppm
 // from the session's middle on.
-std::vector<TrajectoryRow> Track(const tracker_test::SyntheticSession& session, const RigMap& map,
-                                 const RigConfig& rig, double drift_ppm = 0.0) {
+std::vector<TrajectoryRow> Track(const sim::Session& session, const RigMap& map, const RigConfig& rig,
+                                 double drift_ppm = 0.0) {
   lcm::LCM in("memq://");
   TrackerNode node(in, rig, LogMode(), map);
   std::vector<detections_t> all;
-  const int64_t middle = session.utimes[session.utimes.size() / 2];
+  const int64_t middle = session.frames()[session.frames().size() / 2].utime;
   for (const auto& frame : session.views)
     for (detections_t d : frame) {
       if (d.camera == "cam2")
@@ -46,13 +69,13 @@ std::vector<TrajectoryRow> Track(const tracker_test::SyntheticSession& session, 
 }
 
 TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
-  const tracker_test::SyntheticSession session = tracker_test::MakeSession(tracker_test::SyntheticOptions{});
-  const RigConfig rig =
-      LoadRigConfig(tracker_test::WriteRigFiles(tracker_test::MakeTempDir("offsets"), session.map));
-  RigMap with_offset = session.map;
+  const Rig r = MakeRig("offsets");
+  const sim::Session& session = r.session;
+  const RigConfig& rig = r.config;
+  RigMap with_offset = r.map;
   for (MapCamera& c : with_offset.cameras)
     if (c.name == "cam2") c.time_offset_us = 15000;
-  const std::vector<TrajectoryRow> ignored = Track(session, session.map, rig);
+  const std::vector<TrajectoryRow> ignored = Track(session, r.map, rig);
   const std::vector<TrajectoryRow> applied = Track(session, with_offset, rig);
   auto max_cameras = [](const std::vector<TrajectoryRow>& rows) {
     int m = 0;
@@ -64,9 +87,8 @@ TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
   ASSERT_EQ(applied.size(), session.views.size());
   EXPECT_EQ(max_cameras(applied), 5);
   for (size_t f = 0; f < applied.size(); ++f) {
-    EXPECT_EQ(applied[f].utime, session.utimes[f]) << f;  // the reference clock
-    EXPECT_LT(tracker_test::TranslationError(applied[f].rig_from_object, session.rig_from_object[f]), 2e-3)
-        << f;
+    EXPECT_EQ(applied[f].utime, r.truth[f].utime) << f;  // the reference clock
+    EXPECT_LT(TranslationDistance(applied[f].rig_from_object, r.truth[f].rig_from_object), 2e-3) << f;
   }
 }
 
@@ -74,18 +96,19 @@ TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
 // views at the ends outside their frames; with time_drift_ppm and time_reference_utime every frame has all
 // five cameras.
 TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
-  const tracker_test::SyntheticSession session = tracker_test::MakeSession(tracker_test::SyntheticOptions{});
-  const RigConfig rig =
-      LoadRigConfig(tracker_test::WriteRigFiles(tracker_test::MakeTempDir("drift"), session.map));
+  const Rig r = MakeRig("drift");
+  const sim::Session& session = r.session;
+  const RigConfig& rig = r.config;
   const double drift_ppm = 5000;
-  ASSERT_GT(1e-6 * drift_ppm * static_cast<double>(session.utimes.back() - session.utimes.front()),
-            2 * 2500.0)
+  ASSERT_GT(
+      1e-6 * drift_ppm * static_cast<double>(session.frames().back().utime - session.frames().front().utime),
+      2 * 2500.0)
       << "session too short for the drift to matter";
-  RigMap offset_only = session.map;
+  RigMap offset_only = r.map;
   for (MapCamera& c : offset_only.cameras)
     if (c.name == "cam2") c.time_offset_us = 15000;
   RigMap with_drift = offset_only;
-  with_drift.time_reference_utime = session.utimes[session.utimes.size() / 2];
+  with_drift.time_reference_utime = session.frames()[session.frames().size() / 2].utime;
   for (MapCamera& c : with_drift.cameras)
     if (c.name == "cam2") c.time_drift_ppm = drift_ppm;
   auto full_frames = [](const std::vector<TrajectoryRow>& rows) {
@@ -98,7 +121,7 @@ TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
   EXPECT_LT(full_frames(offset_applied), static_cast<int>(0.9 * session.views.size()));
   ASSERT_EQ(drift_applied.size(), session.views.size());
   EXPECT_EQ(full_frames(drift_applied), static_cast<int>(session.views.size()));
-  for (size_t f = 0; f < drift_applied.size(); ++f) EXPECT_EQ(drift_applied[f].utime, session.utimes[f]) << f;
+  for (size_t f = 0; f < drift_applied.size(); ++f) EXPECT_EQ(drift_applied[f].utime, r.truth[f].utime) << f;
 }
 
 }  // namespace
