@@ -26,7 +26,7 @@
 #include "mapper/node.h"
 #include "sim/eval.h"
 #include "tests/support/temp_dir.h"
-#include "tests/tracker/process_util.h"
+#include "tests/support/process.h"
 #include "tracker/tracker.h"
 #include "viz/collector.h"
 
@@ -34,7 +34,7 @@ namespace mcmt {
 namespace {
 
 namespace fs = std::filesystem;
-using tracker_test::RunProgram;
+using test::RunProgram;
 const std::string kBin = MCMT_BIN_DIR;
 constexpr int kLogs = 300;        // in process
 constexpr int kProcessLogs = 24;  // also through the real programs
