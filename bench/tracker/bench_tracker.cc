@@ -55,8 +55,10 @@ TrackerSim BenchSession(int cameras, int frames) {
 void SolveTable(int frames) {
   std::printf("## Pose solve time per frame (PoseEstimator::Solve, one core)\n\n");
   std::printf(
-      "The simulator's session (tests/support/tracker_sim.h): cameras on a 1 m circle (radtan distortion), an "
-      "11 cm cube with 2 markers of 4 cm per face, 0.1 px corner noise, %d frames. Times: fastest of 3 runs of each frame's solve (shared machine); "
+      "The simulator's session (tests/support/tracker_sim.h): cameras on a 1 m circle (radtan distortion), "
+      "an "
+      "11 cm cube with 2 markers of 4 cm per face, 0.1 px corner noise, %d frames. Times: fastest of 3 runs "
+      "of each frame's solve (shared machine); "
       "frames/s: first runs only. Tracking = started from the constant-velocity prediction; lost = from "
       "the IPPE hypotheses.\n\n",
       frames);
@@ -178,8 +180,8 @@ void LatencyTable(int frames, double rate_hz) {
   const char* port = std::getenv("MCMT_BENCH_PORT");  // bench/run --port-base
   const std::string url = "udpm://239.255.76.67:" + std::string(port ? port : "7750") + "?ttl=0";
   const std::string err = dir / "tracker.txt";
-  mcmt::test::Child child({tracker, "--config", rig, "--map", dir / "map.yaml", "--lcm-url", url}, dir / "out.txt",
-                          err);
+  mcmt::test::Child child({tracker, "--config", rig, "--map", dir / "map.yaml", "--lcm-url", url},
+                          dir / "out.txt", err);
   mcmt::test::WaitForText(err, "ready", 5.0);  // subscribed
   lcm::LCM lcm(url);
   Receiver rx(url + "&recv_buf_size=4194304", views.size());

@@ -25,8 +25,8 @@
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "sim/eval.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 #include "tracker/tracker.h"
 #include "viz/collector.h"
 

@@ -23,8 +23,8 @@ namespace test {
 sim::SessionOptions TrackerSession(int frames = 150, uint64_t seed = 1, double noise_px = 0.1);
 
 struct TrackerSim {
-  sim::Session session;             // session.views[f]: frame f's messages, one per camera, camera order
-  RigMap map;                       // the exact map (the truth in the tracker's frames)
+  sim::Session session;              // session.views[f]: frame f's messages, one per camera, camera order
+  RigMap map;                        // the exact map (the truth in the tracker's frames)
   std::vector<TrajectoryRow> truth;  // per frame: seq, utime, the true rig_from_object in the map's frames
 
   // Every camera's detections (sim::SimulateDetections with corner noise noise_px, drawn from `seed`) of the

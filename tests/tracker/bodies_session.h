@@ -50,8 +50,9 @@ inline const BodiesSession& Bodies() {
       detections_t d;
       if (Decode(e.data.data(), e.data.size(), &d)) s->detections.push_back(d);
     }
-    s->map = test::MapMessages(s->detections, MapperOptions::FromConfig(LoadRigConfig(s->dir->File("rig.yaml"))))
-                 .map;
+    s->map =
+        test::MapMessages(s->detections, MapperOptions::FromConfig(LoadRigConfig(s->dir->File("rig.yaml"))))
+            .map;
     s->map_path = s->dir->File("map.yaml");
     WriteMap(s->map_path, s->map);
     return s;

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
-#include <regex>
 #include <limits>
+#include <regex>
 
 #include "core/lcm_util.h"
 #include "tests/support/temp_dir.h"
@@ -13,7 +13,6 @@
 
 namespace mcmt {
 namespace {
-
 
 // Collects the poses a node publishes (memq: same process).
 class PoseSink {
@@ -196,8 +195,9 @@ TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
   dirty.Flush();
   ASSERT_EQ(clean.trajectory().size(), dirty.trajectory().size());
   for (size_t f = 0; f < clean.trajectory().size(); ++f) {
-    EXPECT_LT(TranslationDistance(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
-              1e-7);
+    EXPECT_LT(
+        TranslationDistance(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
+        1e-7);
     EXPECT_LT(RotationAngle(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
               1e-7);
   }
@@ -288,8 +288,7 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
     const bool gone = f >= 10 && f < 20;
     EXPECT_EQ(sink.poses[f].status, gone ? object_pose_t::STATUS_LOST : object_pose_t::STATUS_TRACKING) << f;
     if (!gone) {
-      EXPECT_LT(TranslationDistance(FromPose3d(sink.poses[f].rig_from_object), fx.Truth(f)),
-                2e-3);
+      EXPECT_LT(TranslationDistance(FromPose3d(sink.poses[f].rig_from_object), fx.Truth(f)), 2e-3);
     }
   }
   EXPECT_EQ(node.stats().lost, 10);

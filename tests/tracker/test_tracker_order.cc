@@ -16,8 +16,8 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {

@@ -75,10 +75,10 @@ void Receive(lcm::LCM& lcm, const std::function<bool()>& done, std::chrono::mill
 // never says so.
 std::unique_ptr<test::Child> StartLiveTracker(const Session& x, int port, const std::string& out_csv,
                                               const std::string& err) {
-  auto tracker = std::make_unique<test::Child>(
-      std::vector<std::string>{kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out",
-                               out_csv},
-      err);
+  auto tracker =
+      std::make_unique<test::Child>(std::vector<std::string>{kTracker, "--config", x.rig, "--map", x.map,
+                                                             "--lcm-url", Url(port), "--out", out_csv},
+                                    err);
   if (WaitForText(err, "ready", 20)) return tracker;
   return nullptr;  // killed by Child's destructor
 }
@@ -155,9 +155,9 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   for (size_t f = 0; f < collector.poses.size(); ++f) {
     EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
     EXPECT_EQ(collector.poses[f].status, object_pose_t::STATUS_TRACKING);
-    EXPECT_LT(TranslationDistance(FromPose3d(collector.poses[f].rig_from_object),
-                                             x.s.truth[f].rig_from_object),
-              2e-3);
+    EXPECT_LT(
+        TranslationDistance(FromPose3d(collector.poses[f].rig_from_object), x.s.truth[f].rig_from_object),
+        2e-3);
   }
   const std::string log = ReadText(err);
   auto count = [&](const std::string& needle) {

@@ -119,7 +119,8 @@ TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
   EXPECT_LT(full_frames(offset_applied), static_cast<int>(0.9 * session.views.size()));
   ASSERT_EQ(drift_applied.size(), session.views.size());
   EXPECT_EQ(full_frames(drift_applied), static_cast<int>(session.views.size()));
-  for (size_t f = 0; f < drift_applied.size(); ++f) EXPECT_EQ(drift_applied[f].utime, r.sim.truth[f].utime) << f;
+  for (size_t f = 0; f < drift_applied.size(); ++f)
+    EXPECT_EQ(drift_applied[f].utime, r.sim.truth[f].utime) << f;
 }
 
 }  // namespace
