@@ -76,7 +76,7 @@ Base MakeBase() {
   for (const LogEvent& e : ReadEventLog(b.dir + "/detections.lcmlog")) {
     add(e.timestamp, e.channel, e.data);
     if (pose < trajectory.size() && e.channel == "MCMT_DETECTIONS_CAM0") {
-      object_pose_t p;
+      object_pose_t p{};  // zeroed: num_cameras, num_markers, covariance, ... are encoded
       p.utime = trajectory[pose].utime;
       p.seq = trajectory[pose].seq;
       p.object = "object";
