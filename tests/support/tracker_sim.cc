@@ -18,6 +18,7 @@ sim::SessionOptions TrackerSession(int frames, uint64_t seed, double noise_px) {
   o.trajectory.seed = seed;
   o.trajectory.turns = 0.125 * frames / o.trajectory.fps;  // 45 deg/s
   o.detections.corner_noise_px = noise_px;
+  o.detections.max_view_angle_deg = 75.0;
   return o;
 }
 

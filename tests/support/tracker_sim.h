@@ -19,7 +19,8 @@ namespace test {
 // The tracker tests' session: sim's rig (5 cameras on a 1 m circle, 0.5 m above the object's motion,
 // 640x480, 60 deg; radtan distortion, intrinsics 2 % apart), the cube with one 4 cm marker per face (a 6 cm
 // cube; face_columns / face_rows for more), `frames` frames at 30 fps turning about the vertical at
-// about 45 deg/s, corner noise `noise_px`; `seed` seeds the rig's spread, the trajectory and the detections.
+// about 45 deg/s, markers detected up to 75 deg from frontal, corner noise `noise_px`; `seed` seeds the rig's
+// spread, the trajectory and the detections.
 sim::SessionOptions TrackerSession(int frames = 150, uint64_t seed = 1, double noise_px = 0.1);
 
 struct TrackerSim {
