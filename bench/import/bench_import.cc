@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/files.h"
-#include "tests/tracker/process_util.h"
+#include "tests/support/process.h"
 
 namespace {
 
@@ -29,7 +29,7 @@ struct Run {
 // Runs a program to completion (its output into `log`); wall time and the process's own peak RSS.
 Run Timed(const std::vector<std::string>& argv, const std::string& log) {
   const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = mcmt::tracker_test::Spawn(argv, log);
+  const pid_t pid = mcmt::test::Child(argv, log).Release();
   int status = 0;
   rusage usage{};
   if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {

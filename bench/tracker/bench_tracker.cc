@@ -1,6 +1,7 @@
 // Tracker benchmark (markdown tables):
-//  1. PoseEstimator::Solve time per frame for 1 / 3 / 5 / 8 cameras with 3-6 markers each (a cube with
-//     2x2 markers per face), tracking (constant-velocity prediction) and lost (IPPE hypotheses), one core.
+//  1. PoseEstimator::Solve time per frame for 1 / 3 / 5 / 8 cameras on the simulator's sessions
+//     (tests/support/tracker_sim.h; a cube with 2x1 markers per face), tracking (constant-velocity
+//     prediction) and lost (IPPE hypotheses), one core.
 //  1b. The per-camera health's cost per frame (TrackerNode in-process, camera_health on / off).
 //  1c. Several bodies (issue 16): Solve per body per frame on the sim's bodies scene (tool, patient, static
 //      floor; a map from the ground truth), and TrackerNode's whole frame with every stream.
@@ -8,10 +9,6 @@
 //     process, a publisher of detections and a subscriber of MCMT_POSE (own thread) in this process; from
 //     publishing a frame's last detection to receiving its pose.
 // Usage: bench_tracker [--frames N] [--latency-frames N] [--rate HZ] [--no-latency]
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -28,19 +25,17 @@
 
 #include "core/files.h"
 #include "core/lcm_util.h"
-#ifdef MCMT_BENCH_BODIES
 #include "sim/eval.h"
 #include "sim/sim.h"
-#endif
-#include "tests/tracker/synthetic_rig.h"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/tracker_sim.h"
 #include "tracker/tracker.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using mcmt::tracker_test::MakeSession;
-using mcmt::tracker_test::SyntheticOptions;
-using mcmt::tracker_test::SyntheticSession;
+using mcmt::test::TrackerSim;
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -48,22 +43,22 @@ double Percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
-// Every table's session: `cameras` cameras around a 10 cm cube with 2 x 1 markers per face.
-SyntheticSession BenchSession(int cameras, int frames) {
-  SyntheticOptions o;
-  o.cameras = cameras;
-  o.frames = frames;
-  o.cube_side = 0.1;
-  o.grid = 2;
-  o.grid_rows = 1;
-  return MakeSession(o);
+// Every table's session: `cameras` cameras around an 11 cm cube with 2 x 1 markers per face.
+TrackerSim BenchSession(int cameras, int frames) {
+  mcmt::sim::SessionOptions o = mcmt::test::TrackerSession(frames);
+  o.rig.num_cameras = cameras;
+  o.object.face_columns = 2;
+  o.object.face_rows = 1;
+  return mcmt::test::SimulateTracking(o);
 }
 
 void SolveTable(int frames) {
   std::printf("## Pose solve time per frame (PoseEstimator::Solve, one core)\n\n");
   std::printf(
-      "Synthetic rig: cameras on a 1 m circle, a 10 cm cube with 2 markers of 4 cm per face, 0.1 px "
-      "corner noise, %d frames. Times: fastest of 3 runs of each frame's solve (shared machine); "
+      "The simulator's session (tests/support/tracker_sim.h): cameras on a 1 m circle (radtan distortion), "
+      "an "
+      "11 cm cube with 2 markers of 4 cm per face, 0.1 px corner noise, %d frames. Times: fastest of 3 runs "
+      "of each frame's solve (shared machine); "
       "frames/s: first runs only. Tracking = started from the constant-velocity prediction; lost = from "
       "the IPPE hypotheses.\n\n",
       frames);
@@ -72,11 +67,11 @@ void SolveTable(int frames) {
       "tracking frames/s | lost median (ms) | lost p99 (ms) | mean error (mm / deg) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (int cameras : {1, 3, 5, 8}) {
-    const SyntheticSession s = BenchSession(cameras, frames);
+    const TrackerSim s = BenchSession(cameras, frames);
     const mcmt::PoseEstimator est(s.map);
     std::vector<std::vector<mcmt::MarkerObservation>> obs;
     double markers = 0, views = 0;
-    for (const auto& f : s.views) {
+    for (const auto& f : s.session.views) {
       obs.push_back(mcmt::ObservationsFromViews(f));
       for (const auto& v : f) {
         if (v.markers.empty()) continue;
@@ -91,7 +86,7 @@ void SolveTable(int frames) {
     double total_track = 0;
     for (size_t f = 0; f < obs.size(); ++f) {
       mcmt::Rigid3 prior;
-      const bool have = motion.Predict(s.utimes[f], &prior);
+      const bool have = motion.Predict(s.truth[f].utime, &prior);
       // Each solve is timed kRepeats times and the fastest kept: the machine is shared, and a time slice
       // lost to another process says nothing about the solver. frames/s uses the first run's total.
       constexpr int kRepeats = 3;
@@ -112,9 +107,9 @@ void SolveTable(int frames) {
       t_track.push_back(best_track);
       t_lost.push_back(best_lost);
       if (sol.ok()) {
-        motion.Update(s.utimes[f], sol.rig_from_object);
-        err_t += mcmt::tracker_test::TranslationError(sol.rig_from_object, s.rig_from_object[f]);
-        err_r += mcmt::tracker_test::RotationError(sol.rig_from_object, s.rig_from_object[f]);
+        motion.Update(s.truth[f].utime, sol.rig_from_object);
+        err_t += mcmt::TranslationDistance(sol.rig_from_object, s.truth[f].rig_from_object);
+        err_r += mcmt::RotationAngle(sol.rig_from_object, s.truth[f].rig_from_object);
         ++posed;
       } else {
         motion.Reset();
@@ -172,57 +167,45 @@ class Receiver {
 };
 
 void LatencyTable(int frames, double rate_hz) {
-  const std::string tracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
-  if (access(tracker.c_str(), X_OK) != 0) {
+  const std::string tracker = mcmt::test::Bin("mcmt-tracker");
+  if (!mcmt::test::ProgramsBuilt({"mcmt-tracker"})) {
     std::printf("(latency: %s not built, skipped)\n", tracker.c_str());
     return;
   }
-  const SyntheticSession s = BenchSession(5, frames);
-  const std::string dir = mcmt::tracker_test::MakeTempDir("bench");
-  const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
-  mcmt::WriteMap(dir + "/map.yaml", s.map);
+  const TrackerSim s = BenchSession(5, frames);
+  const auto& views = s.session.views;
+  const mcmt::test::TempDir dir("bench_tracker_latency");
+  const std::string rig = mcmt::sim::WriteSessionRig(dir.str(), s.session);
+  mcmt::WriteMap(dir / "map.yaml", s.map);
   const char* port = std::getenv("MCMT_BENCH_PORT");  // bench/run --port-base
   const std::string url = "udpm://239.255.76.67:" + std::string(port ? port : "7750") + "?ttl=0";
-  const std::string err = dir + "/tracker.txt";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    FILE* f = std::freopen(err.c_str(), "w", stderr);
-    (void)f;
-    execl(tracker.c_str(), tracker.c_str(), "--config", rig.c_str(), "--map", (dir + "/map.yaml").c_str(),
-          "--lcm-url", url.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  // Wait for the tracker to subscribe.
-  for (int i = 0; i < 500; ++i) {
-    std::ifstream in(err);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (text.find("ready") != std::string::npos) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  const std::string err = dir / "tracker.txt";
+  mcmt::test::Child child({tracker, "--config", rig, "--map", dir / "map.yaml", "--lcm-url", url},
+                          dir / "out.txt", err);
+  mcmt::test::WaitForText(err, "ready", 5.0);  // subscribed
   lcm::LCM lcm(url);
-  Receiver rx(url + "&recv_buf_size=4194304", s.views.size());
+  Receiver rx(url + "&recv_buf_size=4194304", views.size());
   rx.Start();
-  std::vector<Clock::time_point> sent(s.views.size());
+  std::vector<Clock::time_point> sent(views.size());
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);
   const auto start = Clock::now();
-  for (size_t f = 0; f < s.views.size(); ++f) {
+  for (size_t f = 0; f < views.size(); ++f) {
     const auto due = start + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(f));
     std::this_thread::sleep_until(due);
-    for (size_t c = 0; c < s.views[f].size(); ++c) {
-      const auto& d = s.views[f][c];
-      if (c + 1 == s.views[f].size()) sent[f] = Clock::now();  // the frame's last detection
+    for (size_t c = 0; c < views[f].size(); ++c) {
+      const auto& d = views[f][c];
+      if (c + 1 == views[f].size()) sent[f] = Clock::now();  // the frame's last detection
       lcm.publish(mcmt::DetectionsChannel(d.camera), &d);
     }
   }
   const auto end = Clock::now() + std::chrono::seconds(3);
-  while (rx.count() < s.views.size() && Clock::now() < end)
+  while (rx.count() < views.size() && Clock::now() < end)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   rx.Stop();
-  kill(pid, SIGINT);
-  int status = 0;
-  waitpid(pid, &status, 0);
+  child.Signal(SIGINT);
+  child.Wait(20);
   std::vector<double> lat;
-  for (size_t f = 0; f < s.views.size(); ++f)
+  for (size_t f = 0; f < views.size(); ++f)
     if (rx.have_[f]) lat.push_back(std::chrono::duration<double, std::milli>(rx.got_[f] - sent[f]).count());
   std::printf("## End-to-end latency over loopback udpm (real mcmt-tracker process)\n\n");
   std::printf(
@@ -233,20 +216,21 @@ void LatencyTable(int frames, double rate_hz) {
       "| frames sent | poses received | latency p50 (ms) | p99 (ms) | max (ms) | tracker's own latency_ms "
       "p50 / p99 |\n");
   std::printf("|---|---|---|---|---|---|\n");
-  std::printf("| %zu | %zu | %.3f | %.3f | %.3f | %.3f / %.3f |\n\n", s.views.size(), lat.size(),
+  std::printf("| %zu | %zu | %.3f | %.3f | %.3f | %.3f / %.3f |\n\n", views.size(), lat.size(),
               Percentile(lat, 0.5), Percentile(lat, 0.99), Percentile(lat, 1.0),
               Percentile(rx.internal_ms, 0.5), Percentile(rx.internal_ms, 0.99));
 }
 
 // mcmt-tracker --log on a recorded session: decode, frame assembly, solve, trajectory file, one process.
 void LogThroughputTable(int frames) {
-  const std::string tracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
-  if (access(tracker.c_str(), X_OK) != 0) return;
-  const SyntheticSession s = BenchSession(5, frames);
-  const std::string dir = mcmt::tracker_test::MakeTempDir("bench_log");
-  const std::string rig = mcmt::tracker_test::WriteRigFiles(dir, s.map);
+  const std::string tracker = mcmt::test::Bin("mcmt-tracker");
+  if (!mcmt::test::ProgramsBuilt({"mcmt-tracker"})) return;
+  const TrackerSim s = BenchSession(5, frames);
+  const mcmt::test::TempDir temp("bench_tracker_log");
+  const std::string& dir = temp.str();
+  const std::string rig = mcmt::sim::WriteSessionRig(dir, s.session);
   mcmt::WriteMap(dir + "/map.yaml", s.map);
-  mcmt::tracker_test::WriteLog(dir + "/session.lcmlog", s);
+  mcmt::sim::WriteMessagesLog(dir + "/session.lcmlog", s.session.Messages());
   const std::string cmd = tracker + " --config " + rig + " --map " + dir + "/map.yaml --log " + dir +
                           "/session.lcmlog --out " + dir + "/poses.csv --quiet";
   double best = 1e9;
@@ -264,10 +248,11 @@ void LogThroughputTable(int frames) {
 // Gauss-Newton step per judged camera): TrackerNode on the same log in-process, tracker.camera_health on
 // and off, the runs interleaved (a shared machine's load falls on both alike), best of 5 each.
 void HealthCostTable(int frames) {
-  const SyntheticSession s = BenchSession(5, frames);
-  const std::string dir = mcmt::tracker_test::MakeTempDir("bench_health");
-  const mcmt::RigConfig rig = mcmt::LoadRigConfig(mcmt::tracker_test::WriteRigFiles(dir, s.map));
-  mcmt::tracker_test::WriteLog(dir + "/session.lcmlog", s);
+  const TrackerSim s = BenchSession(5, frames);
+  const mcmt::test::TempDir temp("bench_tracker_health");
+  const std::string& dir = temp.str();
+  const mcmt::RigConfig rig = mcmt::LoadRigConfig(mcmt::sim::WriteSessionRig(dir, s.session));
+  mcmt::sim::WriteMessagesLog(dir + "/session.lcmlog", s.session.Messages());
   std::printf("## Per-camera health cost (TrackerNode --log in-process, %d frames, 5 cameras)\n\n", frames);
   std::printf("| tracker.camera_health | ms per frame (best of 5, interleaved) | tracked |\n|---|---|---|\n");
   double best[2] = {1e9, 1e9};
@@ -295,7 +280,6 @@ void HealthCostTable(int frames) {
   std::printf("\nHealth adds %.4f ms per frame (%.1fx).\n\n", ms[1] - ms[0], ms[0] > 0 ? ms[1] / ms[0] : 0.0);
 }
 
-#ifdef MCMT_BENCH_BODIES
 // The sim's bodies scene (5 cameras at 1.0 m, `frames` frames) with a version 2 map made from its ground
 // truth (the cameras in cam0's frame, each body's layout in its first marker's frame, the floor's pose).
 mcmt::RigMap BodiesMap(const mcmt::sim::Session& s) {
@@ -322,7 +306,8 @@ mcmt::RigMap BodiesMap(const mcmt::sim::Session& s) {
 }
 
 void BodiesTable(int frames) {
-  const std::string dir = mcmt::tracker_test::MakeTempDir("bench_bodies");
+  const mcmt::test::TempDir temp("bench_tracker_bodies");
+  const std::string& dir = temp.str();
   const mcmt::sim::DatasetOptions o = mcmt::sim::DetectionsOnlySession(dir, frames, 1);
   const mcmt::sim::Session s =
       mcmt::sim::SimulateSession(mcmt::sim::MakeRig(o.rig), mcmt::sim::MakeBodiesScene(o), o.detections, 1);
@@ -408,7 +393,6 @@ void BodiesTable(int frames) {
   }
   std::printf("\n");
 }
-#endif  // MCMT_BENCH_BODIES
 
 }  // namespace
 
@@ -443,9 +427,7 @@ int main(int argc, char** argv) {
   SolveTable(frames);
   LogThroughputTable(20000);
   HealthCostTable(5000);
-#ifdef MCMT_BENCH_BODIES
   BodiesTable(std::min(frames, 1000));
-#endif
   if (latency) LatencyTable(latency_frames, rate);
   return 0;
 }

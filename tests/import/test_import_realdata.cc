@@ -11,9 +11,9 @@
 #include "core/files.h"
 #include "core/se3.h"
 #include "import/rosbag.h"
+#include "tests/support/process.h"
 #include "tests/support/tagslam.h"
 #include "tests/support/temp_dir.h"
-#include "tests/tracker/process_util.h"
 
 namespace mcmt {
 namespace {
@@ -45,9 +45,9 @@ RigMap TagslamMap(const RigMap& ours, const TagslamResult& t) {
 std::pair<double, size_t> TrackedRms(const std::string& dir, const std::string& map_path,
                                      const std::string& out) {
   std::string text;
-  EXPECT_EQ(tracker_test::RunProgram({kBin + "mcmt-tracker", "--config", dir + "/session/rig.yaml", "--map",
-                                      map_path, "--log", dir + "/session/session.lcmlog", "--out", out},
-                                     out + ".txt", &text),
+  EXPECT_EQ(test::RunProgram({kBin + "mcmt-tracker", "--config", dir + "/session/rig.yaml", "--map", map_path,
+                              "--log", dir + "/session/session.lcmlog", "--out", out},
+                             out + ".txt", &text),
             0)
       << text;
   double sq = 0;
@@ -95,14 +95,14 @@ void RunSession(const std::string& name, Limits limits) {
     GTEST_SKIP() << "no " << src << " (real data absent)";
   test::TempDir dir("import_" + name);
   std::string out;
-  ASSERT_EQ(tracker_test::RunProgram({kBin + "mcmt-import", "--rosbag", src + "tag_detections.bag.bz2",
-                                      "--cameras", src + "cameras.yaml", "--out", dir / "session"},
-                                     dir / "import.txt", &out),
+  ASSERT_EQ(test::RunProgram({kBin + "mcmt-import", "--rosbag", src + "tag_detections.bag.bz2", "--cameras",
+                              src + "cameras.yaml", "--out", dir / "session"},
+                             dir / "import.txt", &out),
             0)
       << out;
-  ASSERT_EQ(tracker_test::RunProgram({kBin + "mcmt-mapper", "--config", dir / "session/rig.yaml", "--log",
-                                      dir / "session/session.lcmlog", "--out", dir / "map"},
-                                     dir / "mapper.txt", &out, std::chrono::minutes(4)),
+  ASSERT_EQ(test::RunProgram({kBin + "mcmt-mapper", "--config", dir / "session/rig.yaml", "--log",
+                              dir / "session/session.lcmlog", "--out", dir / "map"},
+                             dir / "mapper.txt", &out, 4 * 60),
             0)
       << out;
   std::cout << out.substr(out.rfind("mapped ")) << std::flush;

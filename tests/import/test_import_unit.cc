@@ -11,8 +11,8 @@
 #include "core/marker.h"
 #include "import/import.h"
 #include "tests/import/bag_writer.h"
+#include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
-#include "tests/tracker/process_util.h"
 
 namespace mcmt {
 namespace {
@@ -343,22 +343,21 @@ TEST(ImportProcess, BadInputGivesOneLineAndANonZeroExit) {
   TempDir dir("import_cli");
   const std::string bin = MCMT_BIN_DIR "/mcmt-import";
   std::string out;
-  EXPECT_EQ(
-      tracker_test::RunProgram({bin, "--rosbag", dir / "x.bag", "--out", dir / "s"}, dir / "1.txt", &out), 2);
+  EXPECT_EQ(test::RunProgram({bin, "--rosbag", dir / "x.bag", "--out", dir / "s"}, dir / "1.txt", &out), 2);
   EXPECT_EQ(out, "mcmt-import: error: --rosbag needs --cameras cameras.yaml\n");
   std::ofstream(dir / "x.bag") << "not a bag";
   WriteCameras(dir / "cameras.yaml", {"/a"});
-  EXPECT_EQ(tracker_test::RunProgram({bin, "--rosbag", dir / "x.bag", "--cameras", dir / "cameras.yaml",
-                                      "--tag-size", "0.1", "--out", dir / "s"},
-                                     dir / "2.txt", &out),
+  EXPECT_EQ(test::RunProgram({bin, "--rosbag", dir / "x.bag", "--cameras", dir / "cameras.yaml", "--tag-size",
+                              "0.1", "--out", dir / "s"},
+                             dir / "2.txt", &out),
             1);
   EXPECT_EQ(out, "mcmt-import: error: " + dir / "x.bag" + ": not a ROS bag (no '#ROSBAG V2.0' line)\n");
   EXPECT_FALSE(std::filesystem::exists(dir / "s"));
   import_test::WriteBag(dir / "ok.bag", {{"/a", "apriltag_msgs/ApriltagArrayStamped", AprilTagDefinition()}},
                         {{0, 1, 0, AprilTagArray(0, 1, 0, {Tag(4, 0)})}}, "bz2");
-  EXPECT_EQ(tracker_test::RunProgram({bin, "--rosbag", dir / "ok.bag", "--cameras", dir / "cameras.yaml",
-                                      "--tag-size", "0.1", "--out", dir / "s"},
-                                     dir / "3.txt", &out),
+  EXPECT_EQ(test::RunProgram({bin, "--rosbag", dir / "ok.bag", "--cameras", dir / "cameras.yaml",
+                              "--tag-size", "0.1", "--out", dir / "s"},
+                             dir / "3.txt", &out),
             0)
       << out;
   EXPECT_NE(out.find("cam0: /a, 1 messages, 1 tags"), std::string::npos) << out;

@@ -25,8 +25,8 @@
 #include "mapper/mapper.h"
 #include "mapper/node.h"
 #include "sim/eval.h"
+#include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
-#include "tests/tracker/process_util.h"
 #include "tracker/tracker.h"
 #include "viz/collector.h"
 
@@ -34,7 +34,7 @@ namespace mcmt {
 namespace {
 
 namespace fs = std::filesystem;
-using tracker_test::RunProgram;
+using test::RunProgram;
 const std::string kBin = MCMT_BIN_DIR;
 constexpr int kLogs = 300;        // in process
 constexpr int kProcessLogs = 24;  // also through the real programs
@@ -76,7 +76,7 @@ Base MakeBase() {
   for (const LogEvent& e : ReadEventLog(b.dir + "/detections.lcmlog")) {
     add(e.timestamp, e.channel, e.data);
     if (pose < trajectory.size() && e.channel == "MCMT_DETECTIONS_CAM0") {
-      object_pose_t p;
+      object_pose_t p{};  // zeroed: num_cameras, num_markers, covariance, ... are encoded
       p.utime = trajectory[pose].utime;
       p.seq = trajectory[pose].seq;
       p.object = "object";

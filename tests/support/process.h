@@ -5,6 +5,7 @@
 //   mcmt::test::Child mapper({Bin("mcmt-mapper"), "--config", rig, "--out", out}, dir / "out.txt");
 //   mapper.Signal(SIGINT);
 //   EXPECT_EQ(mapper.Wait(30), 0);
+//   EXPECT_EQ(RunProgram({Bin("mcmt-tracker"), "--help"}, dir / "help.txt", &output), 0);
 //   const ProcessResult r = RunCommand(Bin("mcmt-eval") + " --json ...");   // r.exit_code, r.output
 #pragma once
 
@@ -32,6 +33,13 @@ inline std::string ReadText(const std::string& path) {
 
 // A built program (MCMT_BIN_DIR, set by mcmt_add_test).
 inline std::string Bin(const std::string& name) { return std::string(MCMT_BIN_DIR) + "/" + name; }
+
+// Whether every one of these programs is built (an executable Bin(name)).
+inline bool ProgramsBuilt(const std::vector<std::string>& names) {
+  for (const std::string& name : names)
+    if (::access(Bin(name).c_str(), X_OK) != 0) return false;
+  return true;
+}
 
 // Waits for a child by pid: its exit code, 128 + signal when killed by one, or -1 on timeout (the child is
 // then killed).
@@ -114,6 +122,16 @@ class Child {
   bool done_ = false;
   int status_ = 0;
 };
+
+// Runs argv[0] to completion with stdout and stderr into output_path: its exit code as Child::Wait gives it
+// (-1 after timeout_s, the child then killed); *output (optional) gets what it wrote.
+inline int RunProgram(const std::vector<std::string>& argv, const std::string& output_path,
+                      std::string* output = nullptr, double timeout_s = 120) {
+  Child child(argv, output_path);
+  const int code = child.Wait(timeout_s);
+  if (output) *output = ReadText(output_path);
+  return code;
+}
 
 struct ProcessResult {
   int exit_code = -1;  // -1: not run or not exited normally

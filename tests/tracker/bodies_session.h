@@ -19,6 +19,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/support/mapper_sim.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
 
@@ -49,9 +50,9 @@ inline const BodiesSession& Bodies() {
       detections_t d;
       if (Decode(e.data.data(), e.data.size(), &d)) s->detections.push_back(d);
     }
-    Mapper mapper(MapperOptions::FromConfig(LoadRigConfig(s->dir->File("rig.yaml"))));
-    for (const detections_t& d : s->detections) mapper.Add(d);
-    s->map = mapper.Solve().map;
+    s->map =
+        test::MapMessages(s->detections, MapperOptions::FromConfig(LoadRigConfig(s->dir->File("rig.yaml"))))
+            .map;
     s->map_path = s->dir->File("map.yaml");
     WriteMap(s->map_path, s->map);
     return s;

@@ -1,22 +1,22 @@
-// PoseEstimator, MotionModel, TrackerOptions on the synthetic rig (exact map, noisy corners).
+// PoseEstimator, MotionModel, TrackerOptions on the simulator's sessions (tests/support/tracker_sim.h:
+// exact map, noisy corners).
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
+#include <set>
 
 #include "core/ippe.h"
 #include "core/options.h"
-#include "tests/tracker/synthetic_rig.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/tracker_sim.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
 
-using tracker_test::MakeSession;
-using tracker_test::RotationError;
-using tracker_test::SyntheticOptions;
-using tracker_test::SyntheticSession;
-using tracker_test::TranslationError;
+using test::SimulateTracking;
+using test::TrackerSession;
+using test::TrackerSim;
 
 constexpr double kDeg = M_PI / 180.0;
 
@@ -31,25 +31,25 @@ struct RunResult {
   double mean_t = 0, mean_r = 0, max_t = 0;
   int posed = 0, with_markers = 0, rejected = 0;
 };
-RunResult Track(const SyntheticSession& s, const PoseEstimator& est, bool use_prior) {
+RunResult Track(const TrackerSim& s, const PoseEstimator& est, bool use_prior) {
   RunResult r;
   MotionModel motion(0.5);
-  for (size_t f = 0; f < s.views.size(); ++f) {
-    if (AnyMarker(s.views[f])) r.with_markers++;
+  for (size_t f = 0; f < s.session.views.size(); ++f) {
+    if (AnyMarker(s.session.views[f])) r.with_markers++;
     Rigid3 prior;
-    const bool have = use_prior && motion.Predict(s.utimes[f], &prior);
-    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), have ? &prior : nullptr);
+    const bool have = use_prior && motion.Predict(s.truth[f].utime, &prior);
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.session.views[f]), have ? &prior : nullptr);
     if (!sol.ok()) {
       motion.Reset();
       continue;
     }
-    motion.Update(s.utimes[f], sol.rig_from_object);
+    motion.Update(s.truth[f].utime, sol.rig_from_object);
     r.posed++;
     r.rejected += sol.num_rejected;
-    const double et = TranslationError(sol.rig_from_object, s.rig_from_object[f]);
+    const double et = TranslationDistance(sol.rig_from_object, s.truth[f].rig_from_object);
     r.mean_t += et;
     r.max_t = std::max(r.max_t, et);
-    r.mean_r += RotationError(sol.rig_from_object, s.rig_from_object[f]);
+    r.mean_r += RotationAngle(sol.rig_from_object, s.truth[f].rig_from_object);
   }
   if (r.posed) {
     r.mean_t /= r.posed;
@@ -59,14 +59,12 @@ RunResult Track(const SyntheticSession& s, const PoseEstimator& est, bool use_pr
 }
 
 TEST(PoseEstimator, AccurateOnFiveCamerasWithPredictionAndFromScratch) {
-  SyntheticOptions o;
-  o.frames = 120;
-  const SyntheticSession s = MakeSession(o);
+  const TrackerSim s = SimulateTracking(TrackerSession(120));
   const PoseEstimator est(s.map);
   for (bool prior : {true, false}) {
     const RunResult r = Track(s, est, prior);
     SCOPED_TRACE(prior ? "with prediction" : "from scratch every frame");
-    EXPECT_EQ(r.with_markers, static_cast<int>(s.views.size()));
+    EXPECT_EQ(r.with_markers, static_cast<int>(s.session.views.size()));
     EXPECT_EQ(r.posed, r.with_markers);  // a pose for every frame where a mapped marker is seen
     EXPECT_EQ(r.rejected, 0);            // clean data: nothing dropped
     EXPECT_LT(r.mean_t, 0.5e-3) << "mean translation error, m";
@@ -75,60 +73,57 @@ TEST(PoseEstimator, AccurateOnFiveCamerasWithPredictionAndFromScratch) {
 }
 
 TEST(PoseEstimator, ExactDataGivesExactPose) {
-  SyntheticOptions o;
-  o.frames = 10;
-  o.noise_px = 0.0;
-  const SyntheticSession s = MakeSession(o);
+  const TrackerSim s = SimulateTracking(TrackerSession(10, 1, 0.0));
   const PoseEstimator est(s.map);
-  for (size_t f = 0; f < s.views.size(); ++f) {
-    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), nullptr);
+  for (size_t f = 0; f < s.session.views.size(); ++f) {
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.session.views[f]), nullptr);
     ASSERT_TRUE(sol.ok());
-    EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[f]), 1e-9);
-    EXPECT_LT(RotationError(sol.rig_from_object, s.rig_from_object[f]), 1e-9);
+    EXPECT_LT(TranslationDistance(sol.rig_from_object, s.truth[f].rig_from_object), 1e-9);
+    EXPECT_LT(RotationAngle(sol.rig_from_object, s.truth[f].rig_from_object), 1e-9);
     EXPECT_LT(sol.rms_px, 1e-6);
   }
 }
 
 TEST(PoseEstimator, SameResultFromPredictionAndFromHypotheses) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
-  for (size_t f = 1; f < s.views.size(); f += 7) {
-    const auto obs = ObservationsFromViews(s.views[f]);
+  for (size_t f = 1; f < s.session.views.size(); f += 7) {
+    const auto obs = ObservationsFromViews(s.session.views[f]);
     // A prediction 2 cm and 3 degrees off.
     Vector6d delta;
     delta << 0.02, -0.03, 0.04, 0.01, -0.015, 0.01;
-    const Rigid3 prior = PerturbLeft(s.rig_from_object[f], delta * 0.7);
+    const Rigid3 prior = PerturbLeft(s.truth[f].rig_from_object, delta * 0.7);
     const PoseSolution a = est.Solve(obs, &prior);
     const PoseSolution b = est.Solve(obs, nullptr);
     ASSERT_TRUE(a.ok() && b.ok());
     EXPECT_TRUE(a.from_prior);
     EXPECT_FALSE(b.from_prior);
-    EXPECT_LT(TranslationError(a.rig_from_object, b.rig_from_object), 1e-8);
-    EXPECT_LT(RotationError(a.rig_from_object, b.rig_from_object), 1e-8);
+    EXPECT_LT(TranslationDistance(a.rig_from_object, b.rig_from_object), 1e-8);
+    EXPECT_LT(RotationAngle(a.rig_from_object, b.rig_from_object), 1e-8);
   }
 }
 
 TEST(PoseEstimator, RecoversFromAWrongPrediction) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
   // The prediction is the object turned half around: the hypotheses must take over.
   Vector6d delta;
   delta << 0, 0, M_PI * 0.9, 0.05, 0, 0;
-  const Rigid3 prior = PerturbLeft(s.rig_from_object[5], delta);
-  const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[5]), &prior);
+  const Rigid3 prior = PerturbLeft(s.truth[5].rig_from_object, delta);
+  const PoseSolution sol = est.Solve(ObservationsFromViews(s.session.views[5]), &prior);
   ASSERT_TRUE(sol.ok());
   EXPECT_EQ(sol.num_rejected, 0);
-  EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[5]), 1e-3);
+  EXPECT_LT(TranslationDistance(sol.rig_from_object, s.truth[5].rig_from_object), 1e-3);
 }
 
 // A false marker: an id seen where that marker cannot be (its corners copied from another marker's
 // place in the image, or shifted). The pose must not move and the observation is counted as rejected.
 TEST(PoseEstimator, FalseMarkerIsRejectedAndPoseUnaffected) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
   int checked = 0;
-  for (size_t f = 0; f < s.views.size(); f += 5) {
-    auto views = s.views[f];
+  for (size_t f = 0; f < s.session.views.size(); f += 5) {
+    auto views = s.session.views[f];
     const auto clean = ObservationsFromViews(views);
     const PoseSolution ref = est.Solve(clean, nullptr);
     ASSERT_TRUE(ref.ok());
@@ -156,8 +151,8 @@ TEST(PoseEstimator, FalseMarkerIsRejectedAndPoseUnaffected) {
       ASSERT_TRUE(sol.ok());
       EXPECT_EQ(sol.num_rejected, 1);
       EXPECT_EQ(sol.num_observations, static_cast<int>(clean.size()));
-      EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
-      EXPECT_LT(RotationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
+      EXPECT_LT(TranslationDistance(sol.rig_from_object, ref.rig_from_object), 1e-7);
+      EXPECT_LT(RotationAngle(sol.rig_from_object, ref.rig_from_object), 1e-7);
     }
     ++checked;
   }
@@ -165,9 +160,9 @@ TEST(PoseEstimator, FalseMarkerIsRejectedAndPoseUnaffected) {
 }
 
 TEST(PoseEstimator, GrosslyShiftedMarkerIsRejected) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
-  auto obs = ObservationsFromViews(s.views[12]);
+  auto obs = ObservationsFromViews(s.session.views[12]);
   ASSERT_GE(obs.size(), 4u);
   auto without = obs;
   without.erase(without.begin() + 2);
@@ -176,17 +171,15 @@ TEST(PoseEstimator, GrosslyShiftedMarkerIsRejected) {
   const PoseSolution sol = est.Solve(obs, nullptr);
   ASSERT_TRUE(sol.ok());
   EXPECT_EQ(sol.num_rejected, 1);
-  EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-7);
+  EXPECT_LT(TranslationDistance(sol.rig_from_object, ref.rig_from_object), 1e-7);
 }
 
 TEST(PoseEstimator, SingleCameraSingleMarker) {
-  SyntheticOptions o;
-  o.noise_px = 0.0;
-  const SyntheticSession s = MakeSession(o);
+  const TrackerSim s = SimulateTracking(TrackerSession(150, 1, 0.0));
   const PoseEstimator est(s.map);
   int ambiguous = 0, tracking = 0, n = 0;
-  for (size_t f = 0; f < s.views.size(); ++f) {
-    for (const auto& v : s.views[f]) {
+  for (size_t f = 0; f < s.session.views.size(); ++f) {
+    for (const auto& v : s.session.views[f]) {
       for (const auto& m : v.markers) {
         MarkerObservation ob;
         ob.camera = v.camera;
@@ -205,7 +198,7 @@ TEST(PoseEstimator, SingleCameraSingleMarker) {
         } else {
           EXPECT_EQ(sol.status, PoseStatus::kTracking);
           // Exact corners and a sure square: the pose is the truth.
-          EXPECT_LT(TranslationError(sol.rig_from_object, s.rig_from_object[f]), 1e-6);
+          EXPECT_LT(TranslationDistance(sol.rig_from_object, s.truth[f].rig_from_object), 1e-6);
           ++tracking;
         }
         ++n;
@@ -217,10 +210,9 @@ TEST(PoseEstimator, SingleCameraSingleMarker) {
 }
 
 TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
-  SyntheticOptions o;
-  o.noise_px = 0.3;
-  o.cameras = 1;
-  const SyntheticSession s = MakeSession(o);
+  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
+  o.rig.num_cameras = 1;
+  const TrackerSim s = SimulateTracking(o);
   const PoseEstimator est(s.map);
   // A marker facing the camera squarely: both IPPE solutions nearly equally good.
   const auto& cam = s.map.cameras[0];
@@ -228,8 +220,7 @@ TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
   cam_from_marker.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
   cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
   const Rigid3 rig_from_object = cam.rig_from_cam * cam_from_marker;  // marker 0 = object frame
-  std::mt19937_64 rng(3);
-  const auto views = tracker_test::Detect(s.map, rig_from_object, 1, 1, 0.3, &rng);
+  const auto views = s.DetectAt(rig_from_object, 1, 1, 0.3, 3);
   auto obs = ObservationsFromViews(views);
   ASSERT_EQ(obs.size(), 1u);
   ASSERT_EQ(obs[0].id, 0);
@@ -238,19 +229,19 @@ TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
   EXPECT_EQ(sol.status, PoseStatus::kAmbiguous);
   EXPECT_LT(sol.ippe_ratio, 2.0);
   // The same frame seen by five cameras is not ambiguous.
-  const SyntheticSession five = MakeSession(SyntheticOptions{});
+  const TrackerSim five = SimulateTracking(TrackerSession());
   const PoseEstimator est5(five.map);
-  const PoseSolution multi = est5.Solve(ObservationsFromViews(five.views[0]), nullptr);
+  const PoseSolution multi = est5.Solve(ObservationsFromViews(five.session.views[0]), nullptr);
   ASSERT_TRUE(multi.ok());
   EXPECT_EQ(multi.status, PoseStatus::kTracking);
   EXPECT_GT(multi.cameras.size(), 1u);
 }
 
 TEST(PoseEstimator, UnmappedObservationsAreIgnoredAndNothingIsLost) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
+  const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
   EXPECT_EQ(est.Solve({}, nullptr).status, PoseStatus::kLost);
-  auto obs = ObservationsFromViews(s.views[3]);
+  auto obs = ObservationsFromViews(s.session.views[3]);
   const PoseSolution ref = est.Solve(obs, nullptr);
   MarkerObservation stranger = obs[0];
   stranger.camera = "cam_unknown";
@@ -262,7 +253,7 @@ TEST(PoseEstimator, UnmappedObservationsAreIgnoredAndNothingIsLost) {
   ASSERT_TRUE(sol.ok());
   EXPECT_EQ(sol.num_unmapped, 2);
   EXPECT_EQ(sol.num_rejected, 0);
-  EXPECT_LT(TranslationError(sol.rig_from_object, ref.rig_from_object), 1e-12);
+  EXPECT_LT(TranslationDistance(sol.rig_from_object, ref.rig_from_object), 1e-12);
   // Only unmapped observations: lost.
   const PoseSolution lost = est.Solve({stranger, unknown_id}, nullptr);
   EXPECT_EQ(lost.status, PoseStatus::kLost);
@@ -272,23 +263,19 @@ TEST(PoseEstimator, UnmappedObservationsAreIgnoredAndNothingIsLost) {
 // The covariance must describe the actual error: over many noisy frames, the squared Mahalanobis
 // distance of the error averages ~6 (chi-square with 6 degrees of freedom).
 TEST(PoseEstimator, CovarianceMatchesTheActualError) {
-  SyntheticOptions o;
-  o.frames = 300;
-  o.noise_px = 0.3;
-  o.seed = 7;
-  const SyntheticSession s = MakeSession(o);
+  const TrackerSim s = SimulateTracking(TrackerSession(300, 7, 0.3));
   const PoseEstimator est(s.map);
   double sum = 0;
   int n = 0;
-  for (size_t f = 0; f < s.views.size(); ++f) {
-    const PoseSolution sol = est.Solve(ObservationsFromViews(s.views[f]), nullptr);
+  for (size_t f = 0; f < s.session.views.size(); ++f) {
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.session.views[f]), nullptr);
     ASSERT_TRUE(sol.ok());
     // truth = Exp(delta) * estimate; delta in message order (translation, rotation).
-    const Eigen::Matrix3d dr = s.rig_from_object[f].linear() * sol.rig_from_object.linear().transpose();
+    const Eigen::Matrix3d dr = s.truth[f].rig_from_object.linear() * sol.rig_from_object.linear().transpose();
     const Eigen::AngleAxisd aa(dr);
     Vector6d delta;
     delta.tail<3>() = aa.angle() * aa.axis();
-    delta.head<3>() = s.rig_from_object[f].translation() - dr * sol.rig_from_object.translation();
+    delta.head<3>() = s.truth[f].rig_from_object.translation() - dr * sol.rig_from_object.translation();
     EXPECT_TRUE(sol.covariance.isApprox(sol.covariance.transpose(), 1e-9));
     sum += delta.dot(sol.covariance.ldlt().solve(delta));
     ++n;
@@ -310,22 +297,23 @@ TEST(MotionModel, PredictsConstantVelocity) {
   };
   m.Update(0, pose_at(0));
   ASSERT_TRUE(m.Predict(33333, &p));
-  EXPECT_LT(TranslationError(p, pose_at(0)), 1e-12);  // one pose: no velocity yet
+  EXPECT_LT(TranslationDistance(p, pose_at(0)), 1e-12);  // one pose: no velocity yet
   m.Update(33333, pose_at(0.033333));
   ASSERT_TRUE(m.Predict(66666, &p));
-  EXPECT_LT(RotationError(p, pose_at(0.066666)), 1e-9);
-  EXPECT_LT(TranslationError(p, pose_at(0.066666)), 2e-4);
+  EXPECT_LT(RotationAngle(p, pose_at(0.066666)), 1e-9);
+  EXPECT_LT(TranslationDistance(p, pose_at(0.066666)), 2e-4);
   EXPECT_FALSE(m.Predict(33333 + 600000, &p));  // too long a gap
   m.Reset();
   EXPECT_FALSE(m.Predict(66666, &p));
 }
 
 TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
-  const SyntheticSession s = MakeSession(SyntheticOptions{});
-  const std::string dir = tracker_test::MakeTempDir("options");
+  const TrackerSim s = SimulateTracking(TrackerSession());
+  const test::TempDir temp("tracker_options");
+  const std::string& dir = temp.str();
   {
-    const std::string rig_path = tracker_test::WriteRigFiles(
-        dir, s.map, "tracker:\n  deadline_ms: 5\n  outlier_px: 3\n  channel: POSE_X\n");
+    const std::string rig_path = sim::WriteSessionRig(
+        dir, s.session, "tracker:\n  deadline_ms: 5\n  outlier_px: 3\n  channel: POSE_X\n");
     const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
     EXPECT_EQ(o.deadline_ms, 5.0);
     EXPECT_EQ(o.outlier_px, 3.0);
@@ -333,16 +321,16 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
   }
   {
     // The shared sync: section gives defaults, tracker: keys override them.
-    const std::string rig_path = tracker_test::WriteRigFiles(
-        dir, s.map, "sync:\n  tolerance_ms: 7\n  deadline_ms: 9\ntracker:\n  deadline_ms: 4\n");
+    const std::string rig_path = sim::WriteSessionRig(
+        dir, s.session, "sync:\n  tolerance_ms: 7\n  deadline_ms: 9\ntracker:\n  deadline_ms: 4\n");
     const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
     EXPECT_EQ(o.sync_tolerance_ms, 7.0);
     EXPECT_EQ(o.deadline_ms, 4.0);
   }
   {
     // The camera health thresholds and windows (issue 17) come from the rig file too.
-    const std::string rig_path = tracker_test::WriteRigFiles(
-        dir, s.map,
+    const std::string rig_path = sim::WriteSessionRig(
+        dir, s.session,
         "tracker:\n  camera_health: false\n  health_gate_px: 2.5\n  health_suspect_ratio: 4\n"
         "  health_window_frames: 15\n  health_exclude_frames: 3\n  health_min_baseline_frames: 10\n");
     const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
@@ -356,7 +344,7 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
   }
   for (const std::string bad : {"health_window_frames: 0", "health_gate_ratio: 0.5",
                                 "health_baseline_frames: 20\n  health_min_baseline_frames: 40"}) {
-    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  " + bad + "\n");
+    const std::string rig_path = sim::WriteSessionRig(dir, s.session, "tracker:\n  " + bad + "\n");
     try {
       TrackerOptions::FromConfig(LoadRigConfig(rig_path));
       FAIL() << "must be refused: " << bad;
@@ -369,7 +357,7 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
     }
   }
   {
-    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  outlier_pix: 3\n");
+    const std::string rig_path = sim::WriteSessionRig(dir, s.session, "tracker:\n  outlier_pix: 3\n");
     try {
       TrackerOptions::FromConfig(LoadRigConfig(rig_path));
       FAIL() << "a typo must be caught";
@@ -378,7 +366,7 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
     }
   }
   {
-    const std::string rig_path = tracker_test::WriteRigFiles(dir, s.map, "tracker:\n  max_iterations: 0\n");
+    const std::string rig_path = sim::WriteSessionRig(dir, s.session, "tracker:\n  max_iterations: 0\n");
     try {
       TrackerOptions::FromConfig(LoadRigConfig(rig_path));
       FAIL() << "a bad value must be caught";

@@ -3,21 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
-#include <regex>
 #include <limits>
+#include <regex>
 
 #include "core/lcm_util.h"
-#include "tests/tracker/synthetic_rig.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/tracker_sim.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
-
-using tracker_test::MakeSession;
-using tracker_test::RotationError;
-using tracker_test::SyntheticOptions;
-using tracker_test::SyntheticSession;
-using tracker_test::TranslationError;
 
 // Collects the poses a node publishes (memq: same process).
 class PoseSink {
@@ -38,14 +33,14 @@ class PoseSink {
   lcm::LCM& lcm_;
 };
 
+// The simulator's session (tests/support/tracker_sim.h: 5 cameras, the cube, 150 frames) and its rig file.
 struct Fixture {
-  SyntheticSession session;
-  std::string dir;
-  RigConfig rig;
-  explicit Fixture(const SyntheticOptions& o = SyntheticOptions{}) : session(MakeSession(o)) {
-    dir = tracker_test::MakeTempDir("node");
-    rig = LoadRigConfig(tracker_test::WriteRigFiles(dir, session.map));
-  }
+  test::TrackerSim sim = test::SimulateTracking(test::TrackerSession());
+  const sim::Session& session = sim.session;
+  const RigMap& map = sim.map;
+  test::TempDir dir{"tracker_node"};
+  RigConfig rig = LoadRigConfig(sim::WriteSessionRig(dir.str(), session));
+  Rigid3 Truth(size_t f) const { return sim.truth.at(f).rig_from_object; }
 };
 
 TrackerNodeOptions LogModeOptions() {
@@ -66,7 +61,7 @@ TEST(TrackerNode, OnePosePerFrameInOrderAndAccurate) {
   lcm::LCM in("memq://"), out("memq://");
   ASSERT_TRUE(in.good() && out.good());
   PoseSink sink(out);
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map, &out);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map, &out);
   for (const auto& frame : fx.session.views)
     for (const auto& d : frame) Feed(node, d);
   node.Flush();
@@ -75,12 +70,12 @@ TEST(TrackerNode, OnePosePerFrameInOrderAndAccurate) {
   for (size_t f = 0; f < sink.poses.size(); ++f) {
     const object_pose_t& p = sink.poses[f];
     EXPECT_EQ(p.seq, static_cast<int64_t>(f));
-    EXPECT_EQ(p.utime, fx.session.utimes[f]);
+    EXPECT_EQ(p.utime, fx.sim.truth[f].utime);
     EXPECT_EQ(p.status, object_pose_t::STATUS_TRACKING);
     EXPECT_EQ(p.object, "object");
     EXPECT_EQ(p.num_rejected, 0);
     EXPECT_GE(p.latency_ms, 0.0);
-    EXPECT_LT(TranslationError(FromPose3d(p.rig_from_object), fx.session.rig_from_object[f]), 2e-3);
+    EXPECT_LT(TranslationDistance(FromPose3d(p.rig_from_object), fx.Truth(f)), 2e-3);
     for (int a = 0; a < 6; ++a) EXPECT_GT(p.covariance[a][a], 0.0);
   }
   // Every frame was complete: all five cameras used somewhere.
@@ -98,7 +93,7 @@ TEST(TrackerNode, OnePosePerFrameInOrderAndAccurate) {
 TEST(TrackerNode, CameraKilledMidRunTheOthersCarryOn) {
   Fixture fx;
   lcm::LCM in("memq://");
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map);
   const int killed = 2, kill_from = 40;
   for (size_t f = 0; f < fx.session.views.size(); ++f)
     for (const auto& d : fx.session.views[f])
@@ -110,7 +105,7 @@ TEST(TrackerNode, CameraKilledMidRunTheOthersCarryOn) {
   double mean_t = 0;
   for (size_t f = 0; f < traj.size(); ++f) {
     EXPECT_EQ(traj[f].seq, static_cast<int64_t>(f));
-    mean_t += TranslationError(traj[f].rig_from_object, fx.session.rig_from_object[f]);
+    mean_t += TranslationDistance(traj[f].rig_from_object, fx.Truth(f));
     if (static_cast<int>(f) >= kill_from) {
       EXPECT_LE(traj[f].cameras, 4);
     }
@@ -123,7 +118,7 @@ TEST(TrackerNode, CameraKilledMidRunTheOthersCarryOn) {
 TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
   Fixture fx;
   lcm::LCM in("memq://");
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map);
   testing::internal::CaptureStderr();
   const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13};
   for (size_t f = 0; f < fx.session.views.size(); ++f) {
@@ -159,7 +154,7 @@ TEST(TrackerNode, GarbageUnknownCameraDuplicatesAreIgnored) {
 TEST(TrackerNode, LaggingCameraViewsAreDroppedAndReported) {
   Fixture fx;
   lcm::LCM in("memq://");
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map);
   testing::internal::CaptureStderr();
   const auto& views = fx.session.views;
   for (size_t f = 0; f < views.size(); ++f) {
@@ -180,15 +175,15 @@ TEST(TrackerNode, LaggingCameraViewsAreDroppedAndReported) {
 TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
   Fixture fx;
   lcm::LCM in1("memq://"), in2("memq://");
-  TrackerNode clean(in1, fx.rig, LogModeOptions(), fx.session.map);
-  TrackerNode dirty(in2, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode clean(in1, fx.rig, LogModeOptions(), fx.map);
+  TrackerNode dirty(in2, fx.rig, LogModeOptions(), fx.map);
   for (size_t f = 0; f < fx.session.views.size(); ++f) {
     for (const auto& d : fx.session.views[f]) {
       Feed(clean, d);
       detections_t bad = d;
       if (d.camera == "cam1" && !d.markers.empty()) {
         marker_t fake = d.markers[0];
-        fake.id = (fake.id + 3) % 6;  // the opposite face's id, placed where another marker is
+        fake.id = fake.id ^ 1;  // the opposite face's id (sim's cube: +x -x +y -y +z -z), placed elsewhere
         for (auto& c : fake.corners) c[1] += 4.0;
         bad.markers.push_back(fake);
         bad.num_markers++;
@@ -200,9 +195,10 @@ TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
   dirty.Flush();
   ASSERT_EQ(clean.trajectory().size(), dirty.trajectory().size());
   for (size_t f = 0; f < clean.trajectory().size(); ++f) {
-    EXPECT_LT(TranslationError(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
-              1e-7);
-    EXPECT_LT(RotationError(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
+    EXPECT_LT(
+        TranslationDistance(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
+        1e-7);
+    EXPECT_LT(RotationAngle(clean.trajectory()[f].rig_from_object, dirty.trajectory()[f].rig_from_object),
               1e-7);
   }
   EXPECT_GT(dirty.stats().rejected, 50);
@@ -211,7 +207,7 @@ TEST(TrackerNode, FalseMarkerDoesNotMoveThePose) {
 
 TEST(TrackerNode, MapOfAnotherRigIsRefused) {
   Fixture fx;
-  RigMap other = fx.session.map;
+  RigMap other = fx.map;
   other.cameras[3].name = "left_camera";
   lcm::LCM in("memq://");
   try {
@@ -237,7 +233,7 @@ TEST(TrackerNode, WaitsForMapMessageAndSwitchesToNewerMaps) {
   EXPECT_EQ(node.trajectory().size(), 0u);
   EXPECT_GT(node.stats().no_map, 0);
   // A map of another rig on MCMT_MAP: ignored with a warning, still waiting.
-  RigMap foreign = fx.session.map;
+  RigMap foreign = fx.map;
   foreign.cameras[0].name = "zzz";
   auto foreign_bytes = Encode(ToRigMapMsg(foreign, 5));
   node.OnMap(foreign_bytes.data(), foreign_bytes.size());
@@ -246,7 +242,7 @@ TEST(TrackerNode, WaitsForMapMessageAndSwitchesToNewerMaps) {
   node.OnMap(garbage.data(), garbage.size());
   EXPECT_FALSE(node.has_map());
   // The right map.
-  auto bytes = Encode(ToRigMapMsg(fx.session.map, 10));
+  auto bytes = Encode(ToRigMapMsg(fx.map, 10));
   node.OnMap(bytes.data(), bytes.size());
   ASSERT_TRUE(node.has_map());
   for (int f = 10; f < 60; ++f)
@@ -254,7 +250,7 @@ TEST(TrackerNode, WaitsForMapMessageAndSwitchesToNewerMaps) {
   // Same map again: no switch. Newer map: switch.
   node.OnMap(bytes.data(), bytes.size());
   EXPECT_EQ(node.stats().map_switches, 0);
-  auto newer = Encode(ToRigMapMsg(fx.session.map, 11));
+  auto newer = Encode(ToRigMapMsg(fx.map, 11));
   node.OnMap(newer.data(), newer.size());
   EXPECT_EQ(node.stats().map_switches, 1);
   for (size_t f = 60; f < views.size(); ++f)
@@ -267,7 +263,7 @@ TEST(TrackerNode, WaitsForMapMessageAndSwitchesToNewerMaps) {
   EXPECT_GE(node.trajectory().size(), views.size() - 11);
   for (const auto& row : node.trajectory()) {
     EXPECT_GE(row.seq, 10);
-    EXPECT_LT(TranslationError(row.rig_from_object, fx.session.rig_from_object[row.seq]), 2e-3);
+    EXPECT_LT(TranslationDistance(row.rig_from_object, fx.Truth(row.seq)), 2e-3);
   }
 }
 
@@ -275,7 +271,7 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
   Fixture fx;
   lcm::LCM in("memq://"), out("memq://");
   PoseSink sink(out);
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map, &out);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map, &out);
   for (size_t f = 0; f < 40; ++f) {
     for (auto d : fx.session.views[f]) {
       if (f >= 10 && f < 20) {  // the object leaves every view
@@ -292,8 +288,7 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
     const bool gone = f >= 10 && f < 20;
     EXPECT_EQ(sink.poses[f].status, gone ? object_pose_t::STATUS_LOST : object_pose_t::STATUS_TRACKING) << f;
     if (!gone) {
-      EXPECT_LT(TranslationError(FromPose3d(sink.poses[f].rig_from_object), fx.session.rig_from_object[f]),
-                2e-3);
+      EXPECT_LT(TranslationDistance(FromPose3d(sink.poses[f].rig_from_object), fx.Truth(f)), 2e-3);
     }
   }
   EXPECT_EQ(node.stats().lost, 10);
@@ -304,7 +299,7 @@ TEST(TrackerNode, LostWhenNoMappedMarkerIsSeenThenRecovers) {
 TEST(TrackerNode, InvalidContentIsDroppedWithAReasonNamingTheCamera) {
   Fixture fx;
   lcm::LCM in("memq://");
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map);
   testing::internal::CaptureStderr();
   const auto& views = fx.session.views;
   int nan_markers = 0;
@@ -348,7 +343,7 @@ namespace {
 TEST(TrackerNode, StatusLineLabelsTheIntervalAndTheTotalTrackedShares) {
   Fixture fx;
   lcm::LCM in("memq://");
-  TrackerNode node(in, fx.rig, LogModeOptions(), fx.session.map);
+  TrackerNode node(in, fx.rig, LogModeOptions(), fx.map);
   const size_t lost_from = fx.session.views.size() * 2 / 3;
   for (size_t f = 0; f < fx.session.views.size(); ++f)
     for (detections_t d : fx.session.views[f]) {

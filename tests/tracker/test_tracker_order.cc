@@ -16,18 +16,18 @@
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
-#include "tests/tracker/process_util.h"
 
 namespace mcmt {
 namespace {
 
 using mcmt::test::ReadText;
-using tracker_test::RunProgram;
+using test::RunProgram;
 
 const std::string kBin = MCMT_BIN_DIR;
 
-bool HavePrograms() { return tracker_test::ProgramsBuilt({"mcmt-sim", "mcmt-mapper", "mcmt-tracker"}); }
+bool HavePrograms() { return test::ProgramsBuilt({"mcmt-sim", "mcmt-mapper", "mcmt-tracker"}); }
 
 void WriteEvents(const std::string& path, const std::vector<LogEvent>& events) {
   std::string bytes;

@@ -5,47 +5,48 @@
 #include <chrono>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <thread>
 
 #include "core/files.h"
 #include "core/lcm_util.h"
-#include "tests/tracker/process_util.h"
-#include "tests/tracker/synthetic_rig.h"
+#include "sim/sim.h"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/tracker_sim.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
 
 using namespace std::chrono_literals;
-using mcmt::test::ReadText;
-using tracker_test::RunProgram;
-using tracker_test::Spawn;
-using tracker_test::WaitExit;
-using tracker_test::WaitForText;
+using test::ReadText;
+using test::RunProgram;
+using test::WaitForText;
 
-const std::string kTracker = std::string(MCMT_BIN_DIR) + "/mcmt-tracker";
+const std::string kTracker = test::Bin("mcmt-tracker");
 
 std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 // This test's own LCM instances: a large receive buffer, since they see every message on the group
 // (their own detections included) and a burst of small datagrams fills the default buffer quickly.
 std::string TestUrl(int port) { return Url(port) + "&recv_buf_size=4194304"; }
 
-// One session on disk: rig.yaml, map.yaml, detections.lcmlog, and the poses --log mode gives.
+// One session on disk (the simulator's, tests/support/tracker_sim.h, 90 frames): rig.yaml, map.yaml (exact),
+// detections.lcmlog.
 struct Session {
-  tracker_test::SyntheticSession s;
+  test::TrackerSim s;
+  const std::vector<std::vector<detections_t>>& views() const { return s.session.views; }
   std::string dir, rig, map, log;
   static const Session& Get() {
     static Session* session = [] {
       auto* x = new Session;
-      tracker_test::SyntheticOptions o;
-      o.frames = 90;
-      x->s = tracker_test::MakeSession(o);
-      x->dir = tracker_test::MakeTempDir("process");
-      x->rig = tracker_test::WriteRigFiles(x->dir, x->s.map);
+      x->s = test::SimulateTracking(test::TrackerSession(90));
+      x->dir = test::MakeTempDir("tracker_process");
+      x->rig = sim::WriteSessionRig(x->dir, x->s.session);
       x->map = x->dir + "/map.yaml";
       WriteMap(x->map, x->s.map);
       x->log = x->dir + "/detections.lcmlog";
-      tracker_test::WriteLog(x->log, x->s);
+      sim::WriteMessagesLog(x->log, x->s.session.Messages());
       return x;
     }();
     return *session;
@@ -70,15 +71,16 @@ void Receive(lcm::LCM& lcm, const std::function<bool()>& done, std::chrono::mill
   while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
 }
 
-// The real tracker, live on `port`, writing --out out_csv: its pid once it has subscribed, or -1 (killed)
-// when it never says so.
-pid_t StartLiveTracker(const Session& x, int port, const std::string& out_csv, const std::string& err) {
-  const pid_t pid =
-      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--lcm-url", Url(port), "--out", out_csv}, err);
-  if (WaitForText(err, "ready", 20s)) return pid;
-  kill(pid, SIGKILL);
-  WaitExit(pid, 20s);
-  return -1;
+// The real tracker, live on `port`, writing --out out_csv, once it has subscribed; null (killed) when it
+// never says so.
+std::unique_ptr<test::Child> StartLiveTracker(const Session& x, int port, const std::string& out_csv,
+                                              const std::string& err) {
+  auto tracker =
+      std::make_unique<test::Child>(std::vector<std::string>{kTracker, "--config", x.rig, "--map", x.map,
+                                                             "--lcm-url", Url(port), "--out", out_csv},
+                                    err);
+  if (WaitForText(err, "ready", 20)) return tracker;
+  return nullptr;  // killed by Child's destructor
 }
 
 // --log mode's poses of the session, written to DIR/NAME.csv: the path, or "" when the tracker failed.
@@ -112,13 +114,13 @@ TEST(TrackerProcess, LogModeIsAccurateAndDeterministic) {
       0)
       << out;
   const auto rows = ReadTrajectory(poses1);
-  ASSERT_EQ(rows.size(), x.s.views.size());
+  ASSERT_EQ(rows.size(), x.views().size());
   double mean_t = 0, mean_r = 0;
   for (size_t f = 0; f < rows.size(); ++f) {
     EXPECT_EQ(rows[f].seq, static_cast<int64_t>(f));
-    EXPECT_EQ(rows[f].utime, x.s.utimes[f]);
-    mean_t += tracker_test::TranslationError(rows[f].rig_from_object, x.s.rig_from_object[f]);
-    mean_r += tracker_test::RotationError(rows[f].rig_from_object, x.s.rig_from_object[f]);
+    EXPECT_EQ(rows[f].utime, x.s.truth[f].utime);
+    mean_t += TranslationDistance(rows[f].rig_from_object, x.s.truth[f].rig_from_object);
+    mean_r += RotationAngle(rows[f].rig_from_object, x.s.truth[f].rig_from_object);
   }
   EXPECT_LT(mean_t / rows.size(), 0.5e-3);
   EXPECT_LT(mean_r / rows.size(), 0.3 * M_PI / 180);
@@ -131,31 +133,31 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   const Session& x = Session::Get();
   const int port = 7741;
   const std::string err = x.dir + "/live.txt", out_csv = x.dir + "/poses_live.csv";
-  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << ReadText(err);
+  const auto tracker = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_TRUE(tracker) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   const std::vector<uint8_t> garbage(33, 0x5a);
   lcm.publish("MCMT_DETECTIONS_CAM0", garbage.data(), garbage.size());
-  for (size_t f = 0; f < x.s.views.size(); ++f) {
-    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
-    detections_t stranger = x.s.views[f][0];
+  for (size_t f = 0; f < x.views().size(); ++f) {
+    for (const auto& d : x.views()[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    detections_t stranger = x.views()[f][0];
     stranger.camera = "stranger";
     lcm.publish(DetectionsChannel(stranger.camera), &stranger);
     lcm.handleTimeout(3);  // ~300 frames/s, and take the poses in
   }
   Receive(
-      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 10s);
-  kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
-  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << ReadText(err);
+      lcm, [&] { return collector.poses.size() >= x.views().size(); }, 10s);
+  tracker->Signal(SIGINT);
+  EXPECT_EQ(tracker->Wait(20), 0) << ReadText(err);
+  ASSERT_EQ(collector.poses.size(), x.views().size()) << ReadText(err);
   for (size_t f = 0; f < collector.poses.size(); ++f) {
     EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
     EXPECT_EQ(collector.poses[f].status, object_pose_t::STATUS_TRACKING);
-    EXPECT_LT(tracker_test::TranslationError(FromPose3d(collector.poses[f].rig_from_object),
-                                             x.s.rig_from_object[f]),
-              2e-3);
+    EXPECT_LT(
+        TranslationDistance(FromPose3d(collector.poses[f].rig_from_object), x.s.truth[f].rig_from_object),
+        2e-3);
   }
   const std::string log = ReadText(err);
   auto count = [&](const std::string& needle) {
@@ -167,7 +169,7 @@ TEST(TrackerProcess, LiveOverUdpmOnePosePerFrameInOrder) {
   EXPECT_EQ(count("camera 'stranger'"), 1u) << log;
   // SIGINT wrote the trajectory, the same as --log mode's.
   const auto live = ReadTrajectory(out_csv);
-  ASSERT_EQ(live.size(), x.s.views.size());
+  ASSERT_EQ(live.size(), x.views().size());
   const std::string log_csv = LogModePoses(x, "poses_log_for_live");
   ASSERT_FALSE(log_csv.empty());
   EXPECT_EQ(ReadText(out_csv), ReadText(log_csv));
@@ -181,23 +183,23 @@ TEST(TrackerProcess, LiveWaitsForALaggingCameraAndIgnoresAFutureUtime) {
   const Session& x = Session::Get();
   const int port = 7747;
   const std::string err = x.dir + "/lagging.txt", out_csv = x.dir + "/poses_lagging.csv";
-  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << ReadText(err);
+  const auto tracker = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_TRUE(tracker) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   constexpr size_t kLagFrames = 4;  // x 8 ms: ~32 ms, beyond the 15 ms deadline, within 100 ms
-  const size_t frames = x.s.views.size();
+  const size_t frames = x.views().size();
   for (size_t f = 0; f < frames + kLagFrames; ++f) {
     if (f < frames)
-      for (size_t c = 0; c + 1 < x.s.views[f].size(); ++c)
-        lcm.publish(DetectionsChannel(x.s.views[f][c].camera), &x.s.views[f][c]);
+      for (size_t c = 0; c + 1 < x.views()[f].size(); ++c)
+        lcm.publish(DetectionsChannel(x.views()[f][c].camera), &x.views()[f][c]);
     if (f >= kLagFrames) {
-      const detections_t& late = x.s.views[f - kLagFrames].back();
+      const detections_t& late = x.views()[f - kLagFrames].back();
       lcm.publish(DetectionsChannel(late.camera), &late);
     }
     if (f == 40) {
-      detections_t future = x.s.views[f][0];
+      detections_t future = x.views()[f][0];
       future.utime += 100000000;
       lcm.publish(DetectionsChannel(future.camera), &future);
     }
@@ -206,10 +208,10 @@ TEST(TrackerProcess, LiveWaitsForALaggingCameraAndIgnoresAFutureUtime) {
   }
   Receive(
       lcm, [&] { return collector.poses.size() >= frames; }, 10s);
-  kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  tracker->Signal(SIGINT);
+  EXPECT_EQ(tracker->Wait(20), 0) << ReadText(err);
   const std::string log = ReadText(err);
-  EXPECT_NE(log.find("camera '" + x.s.views[40][0].camera + "': utime"), std::string::npos) << log;
+  EXPECT_NE(log.find("camera '" + x.views()[40][0].camera + "': utime"), std::string::npos) << log;
   ASSERT_EQ(collector.poses.size(), frames) << log;
   const std::string log_csv = LogModePoses(x, "poses_log_for_lagging");
   ASSERT_FALSE(log_csv.empty());
@@ -222,21 +224,21 @@ TEST(TrackerProcess, KilledTrackerLeavesEveryPoseInThePartialFile) {
   const Session& x = Session::Get();
   const int port = 7746;
   const std::string err = x.dir + "/killed.txt", out_csv = x.dir + "/poses_killed.csv";
-  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << ReadText(err);
+  const auto tracker = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_TRUE(tracker) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
-  const size_t half = x.s.views.size() / 2;
+  const size_t half = x.views().size() / 2;
   for (size_t f = 0; f < half; ++f) {
-    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    for (const auto& d : x.views()[f]) lcm.publish(DetectionsChannel(d.camera), &d);
     lcm.handleTimeout(3);
   }
   Receive(
       lcm, [&] { return collector.poses.size() >= half; }, 10s);
   ASSERT_EQ(collector.poses.size(), half) << ReadText(err);
-  kill(pid, SIGKILL);
-  WaitExit(pid, 20s);
+  tracker->Signal(SIGKILL);
+  tracker->Wait(20);
   EXPECT_FALSE(std::ifstream(out_csv));
   const auto partial = ReadTrajectory(out_csv + ".partial");
   ASSERT_EQ(partial.size(), half);
@@ -251,21 +253,21 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   const Session& x = Session::Get();
   const int port = 7742;
   const std::string err = x.dir + "/replay.txt", out_csv = x.dir + "/poses_replay.csv";
-  const pid_t pid = StartLiveTracker(x, port, out_csv, err);
-  ASSERT_GT(pid, 0) << ReadText(err);
+  const auto tracker = StartLiveTracker(x, port, out_csv, err);
+  ASSERT_TRUE(tracker) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   // Receive while the player plays (udpm delivers every message on the group to every socket: an idle
   // receiver would overflow its buffer).
-  const pid_t player =
-      Spawn({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + Url(port), x.log}, x.dir + "/player.txt");
+  test::Child player({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + Url(port), x.log},
+                     x.dir + "/player.txt");
   Receive(
-      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
-  EXPECT_EQ(WaitExit(player, 20s), 0) << ReadText(x.dir + "/player.txt");
-  kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
-  EXPECT_EQ(collector.poses.size(), x.s.views.size());
+      lcm, [&] { return collector.poses.size() >= x.views().size(); }, 20s);
+  EXPECT_EQ(player.Wait(20), 0) << ReadText(x.dir + "/player.txt");
+  tracker->Signal(SIGINT);
+  EXPECT_EQ(tracker->Wait(20), 0) << ReadText(err);
+  EXPECT_EQ(collector.poses.size(), x.views().size());
   const std::string log_csv = LogModePoses(x, "poses_log_for_replay");
   ASSERT_FALSE(log_csv.empty());
   EXPECT_EQ(ReadText(out_csv), ReadText(log_csv));
@@ -320,12 +322,12 @@ TEST(TrackerProcess, LogModePublishesWithLcmUrl) {
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   const std::string err = x.dir + "/logpub.txt";
-  const pid_t pid =
-      Spawn({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", Url(port)}, err);
+  test::Child tracker({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", Url(port)},
+                      err);
   Receive(
-      lcm, [&] { return collector.poses.size() >= x.s.views.size(); }, 20s);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
-  ASSERT_EQ(collector.poses.size(), x.s.views.size()) << ReadText(err);
+      lcm, [&] { return collector.poses.size() >= x.views().size(); }, 20s);
+  EXPECT_EQ(tracker.Wait(20), 0) << ReadText(err);
+  ASSERT_EQ(collector.poses.size(), x.views().size()) << ReadText(err);
   for (size_t f = 0; f < collector.poses.size(); ++f)
     EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
 }
@@ -335,21 +337,21 @@ TEST(TrackerProcess, LiveWaitsForMapMessage) {
   const Session& x = Session::Get();
   const int port = 7743;
   const std::string err = x.dir + "/waitmap.txt";
-  const pid_t pid = Spawn({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
-  ASSERT_TRUE(WaitForText(err, "ready", 20s)) << ReadText(err);
+  test::Child tracker({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
+  ASSERT_TRUE(WaitForText(err, "ready", 20)) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   PoseCollector collector(lcm);
   const rig_map_t map_msg = ToRigMapMsg(x.s.map, 42);
   lcm.publish(kMapChannel, &map_msg);
-  ASSERT_TRUE(WaitForText(err, "using map from MCMT_MAP", 10s)) << ReadText(err);
+  ASSERT_TRUE(WaitForText(err, "using map from MCMT_MAP", 10)) << ReadText(err);
   for (size_t f = 0; f < 30; ++f) {
-    for (const auto& d : x.s.views[f]) lcm.publish(DetectionsChannel(d.camera), &d);
+    for (const auto& d : x.views()[f]) lcm.publish(DetectionsChannel(d.camera), &d);
     lcm.handleTimeout(3);
   }
   Receive(
       lcm, [&] { return collector.poses.size() >= 30; }, 10s);
-  kill(pid, SIGINT);
-  EXPECT_EQ(WaitExit(pid, 20s), 0) << ReadText(err);
+  tracker.Signal(SIGINT);
+  EXPECT_EQ(tracker.Wait(20), 0) << ReadText(err);
   ASSERT_EQ(collector.poses.size(), 30u) << ReadText(err);
   for (size_t f = 0; f < 30; ++f) EXPECT_EQ(collector.poses[f].seq, static_cast<int64_t>(f));
 }

@@ -3,27 +3,28 @@
 // accuracy at radius 1.0 m, a pose for every frame where a mapped marker is seen, a camera killed
 // mid-run, false markers (mapped ids placed where they are not) injected.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
+#include <chrono>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <set>
 
 #include "core/files.h"
 #include "core/lcm_util.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
-#include "tests/tracker/process_util.h"
-#include "tests/tracker/synthetic_rig.h"
+#include "tests/support/process.h"
+#include "tests/support/temp_dir.h"
 
 namespace mcmt {
 namespace {
 
-using tracker_test::RunProgram;
+using test::RunProgram;
 
 const std::string kBin = MCMT_BIN_DIR;
 
-bool HavePrograms() { return tracker_test::ProgramsBuilt({"mcmt-sim", "mcmt-mapper", "mcmt-tracker"}); }
+bool HavePrograms() { return test::ProgramsBuilt({"mcmt-sim", "mcmt-mapper", "mcmt-tracker"}); }
 
 struct Recording {
   std::string dir, rig, log, map, truth;
@@ -33,7 +34,7 @@ struct Recording {
 // mcmt-sim --detections-only + mcmt-mapper, once per object.
 Recording Record(const std::string& object, int frames, uint64_t seed) {
   Recording r;
-  r.dir = tracker_test::MakeTempDir("sim_" + object);
+  r.dir = test::MakeTempDir("tracker_sim_" + object);
   std::string out;
   EXPECT_EQ(
       RunProgram({kBin + "/mcmt-sim", "--out", r.dir, "--object", object, "--radius", "1.0", "--frames",
@@ -164,9 +165,9 @@ TEST(TrackerSimRobustness, CameraKilledMidRunAndFalseMarkers) {
   const auto dirty = Track(r, false_log, "false");
   ASSERT_EQ(Seqs(dirty), Seqs(clean));
   for (size_t i = 0; i < clean.size(); ++i) {
-    EXPECT_LT(tracker_test::TranslationError(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-6)
+    EXPECT_LT(TranslationDistance(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-6)
         << "seq " << clean[i].seq;
-    EXPECT_LT(tracker_test::RotationError(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-5)
+    EXPECT_LT(RotationAngle(clean[i].rig_from_object, dirty[i].rig_from_object), 1e-5)
         << "seq " << clean[i].seq;
   }
   const std::string err = mcmt::test::ReadText(r.dir + "/false.txt");
@@ -191,10 +192,9 @@ class PoseCollector {
 };
 
 TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
-  if (!HavePrograms() || access((kBin + "/mcmt-detector").c_str(), X_OK) != 0)
+  if (!HavePrograms() || !test::ProgramsBuilt({"mcmt-detector"}))
     GTEST_SKIP() << "mcmt-sim / mcmt-detector not built in " << kBin;
-  using namespace std::chrono_literals;
-  const std::string dir = tracker_test::MakeTempDir("detectors");
+  const std::string dir = test::MakeTempDir("tracker_detectors");
   const int frames = 30;
   std::string out;
   ASSERT_EQ(RunProgram({kBin + "/mcmt-sim", "--out", dir, "--cameras", "3", "--frames",
@@ -202,47 +202,36 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
                        dir + "/sim.txt", &out),
             0)
       << out;
-  // The map from the ground truth (rig frame = the simulator's world frame; any frame will do).
+  // The map from the ground truth, and the true poses in its frames (rig = cam0's, object = marker 0's).
   const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
-  RigMap map;
-  map.dictionary = truth.dictionary;
-  map.reference_camera = truth.cameras[0].name;
-  map.reference_marker = truth.markers[0].id;
-  for (const auto& c : truth.cameras) map.cameras.push_back(MapCamera{c.name, c.model, c.rig_from_cam});
-  for (const auto& m : truth.markers) {
-    MapMarker mm;
-    mm.id = m.id;
-    mm.size = m.size;
-    mm.object_from_marker = m.object_from_marker;
-    map.markers.push_back(mm);
-  }
-  WriteMap(dir + "/map.yaml", map);
+  std::vector<TrajectoryRow> truth_rows;
+  WriteMap(dir + "/map.yaml", sim::MapFromGroundTruth(truth, 0, 0, &truth_rows));
   const std::string url = "udpm://239.255.76.67:7744?ttl=0";
   const std::string tracker_err = dir + "/tracker.txt";
-  const pid_t tracker = tracker_test::Spawn(
+  test::Child tracker(
       // The detector processes start a few hundred ms apart and each replays the recording from its first
       // frame: a generous frame deadline lets every frame wait for all three.
       {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url,
        "--deadline-ms", "3000"},
       tracker_err);
-  ASSERT_TRUE(tracker_test::WaitForText(tracker_err, "ready", 20s)) << mcmt::test::ReadText(tracker_err);
+  ASSERT_TRUE(test::WaitForText(tracker_err, "ready", 20)) << test::ReadText(tracker_err);
   lcm::LCM lcm(url + "&recv_buf_size=4194304");  // sees every message on the group
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
-  std::vector<pid_t> detectors;
+  std::vector<std::unique_ptr<test::Child>> detectors;
   for (const auto& c : truth.cameras)
-    detectors.push_back(
-        tracker_test::Spawn({kBin + "/mcmt-detector", "--config", dir + "/rig.yaml", "--camera", c.name,
-                             "--lcm-url", url, "--rate", "realtime", "--quiet"},
-                            dir + "/detector_" + c.name + ".txt"));
-  const auto end = std::chrono::steady_clock::now() + 60s;
+    detectors.push_back(std::make_unique<test::Child>(
+        std::vector<std::string>{kBin + "/mcmt-detector", "--config", dir + "/rig.yaml", "--camera", c.name,
+                                 "--lcm-url", url, "--rate", "realtime", "--quiet"},
+        dir + "/detector_" + c.name + ".txt"));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (collector.poses.size() < static_cast<size_t>(frames) && std::chrono::steady_clock::now() < end)
     lcm.handleTimeout(20);
   for (size_t i = 0; i < detectors.size(); ++i)
-    EXPECT_EQ(tracker_test::WaitExit(detectors[i], 30s), 0)
-        << mcmt::test::ReadText(dir + "/detector_" + truth.cameras[i].name + ".txt");
-  kill(tracker, SIGINT);
-  EXPECT_EQ(tracker_test::WaitExit(tracker, 20s), 0) << mcmt::test::ReadText(tracker_err);
+    EXPECT_EQ(detectors[i]->Wait(30), 0)
+        << test::ReadText(dir + "/detector_" + truth.cameras[i].name + ".txt");
+  tracker.Signal(SIGINT);
+  EXPECT_EQ(tracker.Wait(20), 0) << test::ReadText(tracker_err);
   ASSERT_EQ(collector.poses.size(), static_cast<size_t>(frames)) << mcmt::test::ReadText(tracker_err);
   double mean_t = 0;
   int max_cams = 0;
@@ -256,8 +245,7 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
       EXPECT_EQ(p.num_cameras, 1);
       EXPECT_EQ(p.num_markers, 1);
     }
-    // The map's object frame is the ground truth's (the map was made from it).
-    mean_t += tracker_test::TranslationError(FromPose3d(p.rig_from_object), truth.frames[f].rig_from_object);
+    mean_t += TranslationDistance(FromPose3d(p.rig_from_object), truth_rows[f].rig_from_object);
     max_cams = std::max(max_cams, p.num_cameras);
   }
   mean_t /= frames;

@@ -8,20 +8,19 @@
 
 #include "core/lcm_util.h"
 #include "core/se3.h"
-#include "sim/eval.h"
 #include "sim/sim.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/tracker_sim.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
 namespace {
 
 // The simulator's session: 5 cameras on a 1 m circle, the cube (one 4 cm marker per face), 150 frames at
-// 30 fps, 0.1 px corner noise; the map and the truth in the tracker's frames (rig = cam0, object = marker 0).
+// 30 fps, 0.1 px corner noise, sim's defaults otherwise (no distortion); the map and the truth in the
+// tracker's frames (tests/support/tracker_sim.h: rig = cam0, object = marker 0).
 struct Rig {
-  sim::Session session;
-  RigMap map;
-  std::vector<TrajectoryRow> truth;
+  test::TrackerSim sim;
   RigConfig config;
 };
 
@@ -30,9 +29,8 @@ Rig MakeRig(const std::string& name) {
   o.object.kind = sim::ObjectKind::kCube;
   o.trajectory.frames = 150;
   Rig r;
-  r.session = sim::SimulateSession(o);
-  r.map = sim::MapFromGroundTruth(r.session.Truth(), 0, 0, &r.truth);
-  r.config = LoadRigConfig(sim::WriteSessionRig(test::MakeTempDir("tracker_" + name), r.session));
+  r.sim = test::SimulateTracking(o);
+  r.config = LoadRigConfig(sim::WriteSessionRig(test::MakeTempDir("tracker_" + name), r.sim.session));
   return r;
 }
 
@@ -70,12 +68,12 @@ std::vector<TrajectoryRow> Track(const sim::Session& session, const RigMap& map,
 
 TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
   const Rig r = MakeRig("offsets");
-  const sim::Session& session = r.session;
+  const sim::Session& session = r.sim.session;
   const RigConfig& rig = r.config;
-  RigMap with_offset = r.map;
+  RigMap with_offset = r.sim.map;
   for (MapCamera& c : with_offset.cameras)
     if (c.name == "cam2") c.time_offset_us = 15000;
-  const std::vector<TrajectoryRow> ignored = Track(session, r.map, rig);
+  const std::vector<TrajectoryRow> ignored = Track(session, r.sim.map, rig);
   const std::vector<TrajectoryRow> applied = Track(session, with_offset, rig);
   auto max_cameras = [](const std::vector<TrajectoryRow>& rows) {
     int m = 0;
@@ -87,8 +85,8 @@ TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
   ASSERT_EQ(applied.size(), session.views.size());
   EXPECT_EQ(max_cameras(applied), 5);
   for (size_t f = 0; f < applied.size(); ++f) {
-    EXPECT_EQ(applied[f].utime, r.truth[f].utime) << f;  // the reference clock
-    EXPECT_LT(TranslationDistance(applied[f].rig_from_object, r.truth[f].rig_from_object), 2e-3) << f;
+    EXPECT_EQ(applied[f].utime, r.sim.truth[f].utime) << f;  // the reference clock
+    EXPECT_LT(TranslationDistance(applied[f].rig_from_object, r.sim.truth[f].rig_from_object), 2e-3) << f;
   }
 }
 
@@ -97,14 +95,14 @@ TEST(TrackerTimeOffsets, LateCameraJoinsItsFramesWithTheMapsOffset) {
 // five cameras.
 TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
   const Rig r = MakeRig("drift");
-  const sim::Session& session = r.session;
+  const sim::Session& session = r.sim.session;
   const RigConfig& rig = r.config;
   const double drift_ppm = 5000;
   ASSERT_GT(
       1e-6 * drift_ppm * static_cast<double>(session.frames().back().utime - session.frames().front().utime),
       2 * 2500.0)
       << "session too short for the drift to matter";
-  RigMap offset_only = r.map;
+  RigMap offset_only = r.sim.map;
   for (MapCamera& c : offset_only.cameras)
     if (c.name == "cam2") c.time_offset_us = 15000;
   RigMap with_drift = offset_only;
@@ -121,7 +119,8 @@ TEST(TrackerTimeOffsets, DriftingCameraJoinsItsFramesWithTheMapsDrift) {
   EXPECT_LT(full_frames(offset_applied), static_cast<int>(0.9 * session.views.size()));
   ASSERT_EQ(drift_applied.size(), session.views.size());
   EXPECT_EQ(full_frames(drift_applied), static_cast<int>(session.views.size()));
-  for (size_t f = 0; f < drift_applied.size(); ++f) EXPECT_EQ(drift_applied[f].utime, r.truth[f].utime) << f;
+  for (size_t f = 0; f < drift_applied.size(); ++f)
+    EXPECT_EQ(drift_applied[f].utime, r.sim.truth[f].utime) << f;
 }
 
 }  // namespace
