@@ -233,7 +233,8 @@ struct UnionFind {
 
 std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges) {
   std::sort(edges.begin(), edges.end(), [](const GraphEdge& x, const GraphEdge& y) {
-    return std::tie(x.cost, x.a, x.b) < std::tie(y.cost, y.a, y.b);
+    const bool x_unconfirmed = !x.Confirmed(), y_unconfirmed = !y.Confirmed();
+    return std::tie(x_unconfirmed, x.cost, x.a, x.b) < std::tie(y_unconfirmed, y.cost, y.a, y.b);
   });
   UnionFind uf(n);
   std::vector<GraphEdge> tree;

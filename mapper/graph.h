@@ -42,6 +42,9 @@ struct GraphEdge {
   int support = 0;                       // stored events with a candidate consistent with the medoid
   int stored_events = 0;
   double SupportFraction() const { return stored_events > 0 ? double(support) / stored_events : 0.0; }
+  // A second co-observation agrees with a_from_b. An edge of one candidate has d = 0, so the paper's
+  // cost calls it the cheapest of all; one co-observation (a grazing view, a flipped square) proves nothing.
+  bool Confirmed() const { return support >= 2; }
 };
 
 // Medoid of the pair's candidates and the paper's edge cost; support against `consistency`.
@@ -71,7 +74,9 @@ struct EdgeOptions {
 std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
                                        const EdgeOptions& options, int threads);
 
-// Kruskal's minimum spanning forest over nodes 0..n-1 (ties broken by (a, b)).
+// Kruskal's minimum spanning forest over nodes 0..n-1: confirmed edges (GraphEdge::Confirmed) first by
+// cost, then the others by cost, so an unconfirmed edge joins only what no confirmed path joins (ties broken
+// by (a, b)). Edges of infinite cost (no candidate) are left out.
 std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges);
 
 // The node with the largest summed number of candidates over its edges (the paper's "best connected"),

@@ -43,6 +43,17 @@ TEST(MapperGraph, MinimumSpanningTreeKeepsCheapestEdges) {
   EXPECT_EQ(got, (std::set<std::pair<int, int>>{{0, 1}, {1, 2}, {2, 3}}));
 }
 
+TEST(MapperGraph, UnconfirmedEdgesJoinTheTreeLast) {
+  // 0-1 (1), 1-2 (2), 0-2 (0: one candidate, d = 0) and 2-3 (0, unconfirmed): 0-2 is the cheapest but no
+  // second co-observation agrees with it, so 1-2 joins 2; 2-3 is the only way to 3 and is taken.
+  std::vector<GraphEdge> edges = {Edge(0, 1, 1), Edge(1, 2, 2), Edge(0, 2, 0), Edge(2, 3, 0)};
+  for (GraphEdge& e : edges) e.support = e.cost > 0 ? 5 : 1;
+  const std::vector<GraphEdge> tree = MinimumSpanningTree(4, edges);
+  std::set<std::pair<int, int>> got;
+  for (const GraphEdge& e : tree) got.insert({e.a, e.b});
+  EXPECT_EQ(got, (std::set<std::pair<int, int>>{{0, 1}, {1, 2}, {2, 3}}));
+}
+
 TEST(MapperGraph, PosesAlongTreePathsCompose) {
   std::mt19937_64 rng(3);
   std::vector<Rigid3> truth(5);  // root_from_node
