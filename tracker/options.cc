@@ -82,6 +82,10 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
            .Add("health_recover_frames", H(&HealthOptions::recover_frames), "frames",
                 "good this many judged frames in a row: an excluded camera is used again (no new map)",
                 AtLeast(1))
+           .Add("health_unjudged_frames", H(&HealthOptions::unjudged_frames), "frames",
+                "a camera that reported in this many frames and was never judged (never with two other "
+                "cameras within the sync tolerance) is 'not judged', said once with the cure",
+                AtLeast(1))
            .Other("channels", "",
                   "several bodies: channel per pose stream by its name, e.g. {tool: TOOL_POSE, "
                   "tool_in_patient: NAV} (default: channel_NAME, channel_OF_IN_IN)")

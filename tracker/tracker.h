@@ -310,16 +310,31 @@ class TrackerNode {
   // The pose streams of `map` (PlanPoseStreams): bodies, relative poses, their partial files; a stream of
   // the same name keeps its trajectory across a map switch. Throws OptionError (bad channels, names).
   void SetStreams(const RigMap& map);
-  // Solves every moving body of the frame (the first one judging the cameras when health is on).
+  // Solves every moving body of the frame (each judging the cameras that see it when health is on: a
+  // camera's residuals pooled over the bodies it sees; excluded cameras left out of every body).
   std::vector<PoseSolution> SolveBodies(const std::vector<MarkerObservation>& obs, int64_t utime);
   // Keeps (trajectory, partial file) and publishes one stream's solution for the frame.
   void Emit(size_t stream, const SyncedFrame& frame, const PoseSolution& sol, double latency_ms);
   void CheckStaleCameras();
   void WarnOnce(const std::string& key, const std::string& text);
   void MaybePrintStatus();
-  // The frame's pose without excluded and gated cameras, every camera judged (tracker/health.cc).
-  PoseSolution SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
-                                   int64_t utime);
+  // One camera's judgement in a frame, pooled over the bodies it was judged on.
+  struct CameraJudgement {
+    double squares = 0.0;  // sum over bodies of rms^2 x markers (rms under the pose from the others)
+    int markers = 0;
+    bool gated = false;  // its markers were left out of a body's pose in this frame
+  };
+  struct FrameJudgement {
+    std::map<std::string, CameraJudgement> cameras;  // the cameras judged
+    std::set<std::string> seen;                      // cameras with a mapped marker on a body with a pose
+    std::map<std::string, int> companions;           // of those: most other cameras on one of its bodies
+  };
+  // A body's pose without excluded and gated cameras, every camera of it judged under the pose from the
+  // others (tracker/health.cc); the judgements added to *frame.
+  PoseSolution SolveJudgingCameras(const PoseEstimator& estimator, const std::vector<MarkerObservation>& obs,
+                                   const Rigid3* prior, FrameJudgement* frame);
+  // The frame's judgements into the monitor; cameras never judged said once; MCMT_TRACKER_STATUS.
+  void UpdateHealth(const FrameJudgement& frame, int64_t utime);
   void PublishHealth(int64_t utime, const std::string& message);
 
   lcm::LCM& lcm_;
@@ -338,7 +353,7 @@ class TrackerNode {
     int in = -1;  // index in bodies_, -1: a static body at rig_from_in
     Rigid3 rig_from_in = Rigid3::Identity();
   };
-  const PoseEstimator* estimator_ = nullptr;  // the first moving body's (health judges cameras with it)
+  const PoseEstimator* estimator_ = nullptr;  // the first moving body's
   std::vector<Body> bodies_;
   std::vector<Relative> relatives_;
   std::map<int, size_t> body_of_marker_;  // marker id -> index in bodies_ (several bodies)
@@ -347,6 +362,7 @@ class TrackerNode {
   std::unique_ptr<HealthMonitor> health_;  // per camera of the map
   int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
   std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
+  std::map<std::string, int> companions_;  // per camera: most other cameras seen with it on a body
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   int64_t last_published_utime_ = INT64_MIN;

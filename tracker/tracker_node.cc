@@ -192,6 +192,7 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     std::vector<std::string> names;
     for (const auto& c : map.cameras) names.push_back(c.name);
     health_ = std::make_unique<HealthMonitor>(names, options_.tracker.health);  // a new map: every camera ok
+    companions_.clear();
     if (switching) health_change_ = "new map from " + origin + ": every camera judged afresh";
   }
   if (switching) stats_.map_switches++;
@@ -380,25 +381,21 @@ std::vector<PoseSolution> TrackerNode::SolveBodies(const std::vector<MarkerObser
     }
   }
   std::vector<PoseSolution> out;
+  FrameJudgement judged;
   for (size_t b = 0; b < bodies_.size(); ++b) {
     Body& body = bodies_[b];
     Rigid3 predicted;
     const Rigid3* prior = body.motion.Predict(utime, &predicted) ? &predicted : nullptr;
-    if (health_ && b == 0) {  // the cameras are judged on the first body
-      out.push_back(SolveJudgingCameras(mine[b], prior, utime));
-    } else if (health_) {  // the others leave out the excluded cameras
-      std::vector<MarkerObservation> kept;
-      for (const MarkerObservation& o : mine[b])
-        if (!health_->Excluded(o.camera)) kept.push_back(o);
-      out.push_back(body.estimator->Solve(kept, prior));
-    } else {
+    if (health_)  // every body judges the cameras that see it; excluded cameras are left out of all
+      out.push_back(SolveJudgingCameras(*body.estimator, mine[b], prior, &judged));
+    else
       out.push_back(body.estimator->Solve(mine[b], prior));
-    }
     if (out.back().ok())
       body.motion.Update(utime, out.back().rig_from_object);
     else
       body.motion.Reset();
   }
+  if (health_) UpdateHealth(judged, utime);
   return out;
 }
 
