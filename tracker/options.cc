@@ -292,4 +292,13 @@ bool MotionModel::Predict(int64_t utime, Rigid3* predicted) const {
   return true;
 }
 
+bool MotionModel::Motion(int64_t from, int64_t to, Rigid3* rig_motion) const {
+  const int64_t dt_prev = utime_[0] - utime_[1];
+  if (count_ < 2 || dt_prev <= 0 || dt_prev > max_gap_us_) return false;
+  Rigid3 at_from, at_to;
+  if (!Predict(from, &at_from) || !Predict(to, &at_to)) return false;
+  *rig_motion = at_to * Inverse(at_from);
+  return true;
+}
+
 }  // namespace mcmt

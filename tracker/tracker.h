@@ -111,6 +111,11 @@ struct MarkerObservation {
   std::string camera;
   int id = 0;
   MarkerCorners2d corners;  // distorted pixels, ArUco order
+  int64_t utime = 0;        // its view's capture time (the reference camera's clock)
+  // Set by PoseEstimator::SeenAt for a view captured at another time than its frame's: the camera's pose
+  // for it, cam_from_rig x the object's motion from the frame's time to the view's.
+  bool moved = false;
+  Rigid3 cam_from_rig = Rigid3::Identity();
 };
 
 // All markers of a frame's views (views sorted by camera name, so the result never depends on the
@@ -148,6 +153,11 @@ class PoseEstimator {
 
   const RigMap& map() const { return map_; }
 
+  // The observation's object seen moved by rig_motion (the object at the view's capture time =
+  // rig_motion x rig_from_object at the frame's): its camera's pose for it becomes cam_from_rig x
+  // rig_motion (unchanged for a camera not in the map).
+  void SeenAt(const Rigid3& rig_motion, MarkerObservation* observation) const;
+
   // The observation's corners as core's rigid-pose points (world = rig, body = object; pointers into this
   // estimator and into `observation`), for the normal equations that judge cameras (tracker/health.cc);
   // empty when its camera or marker is not mapped or a corner is not finite.
@@ -174,6 +184,7 @@ class PoseEstimator {
     int camera = 0;
     int marker = 0;
     const MarkerCorners2d* pixels = nullptr;
+    const Rigid3* cam_from_rig = nullptr;  // the camera's, or the observation's when moved
   };
   struct Refined {
     Rigid3 pose;
@@ -218,6 +229,9 @@ class MotionModel {
   void Reset() { count_ = 0; }
   // False (no prediction) when nothing is known or the last pose is older than max_gap.
   bool Predict(int64_t utime, Rigid3* predicted) const;
+  // The object's motion in the rig frame from `from` to `to` at constant velocity (Predict(to) x
+  // Predict(from)^-1); false without a velocity (fewer than two poses, or too far apart).
+  bool Motion(int64_t from, int64_t to, Rigid3* rig_motion) const;
 
  private:
   int64_t max_gap_us_;

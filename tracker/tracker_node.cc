@@ -386,6 +386,12 @@ std::vector<PoseSolution> TrackerNode::SolveBodies(const std::vector<MarkerObser
     Body& body = bodies_[b];
     Rigid3 predicted;
     const Rigid3* prior = body.motion.Predict(utime, &predicted) ? &predicted : nullptr;
+    // A view captured at another time than the frame's (within the sync tolerance; clocks corrected by
+    // the map's offsets) sees the body moved to its capture time along the body's velocity.
+    for (MarkerObservation& o : mine[b]) {
+      Rigid3 motion;
+      if (o.utime != utime && body.motion.Motion(utime, o.utime, &motion)) body.estimator->SeenAt(motion, &o);
+    }
     if (health_)  // every body judges the cameras that see it; excluded cameras are left out of all
       out.push_back(SolveJudgingCameras(*body.estimator, mine[b], prior, &judged));
     else
@@ -556,14 +562,18 @@ void TrackerNode::MaybePrintStatus() {
 LogReadReport TrackerNode::RunLog(const std::string& path, const StopToken& stop) {
   struct Item {
     int64_t utime = 0, seq = 0;
+    int64_t capture = 0;  // utime on the reference clock (the map's offsets)
     std::string camera, channel;
     std::vector<uint8_t> bytes;
   };
   std::vector<Item> segment;  // detections since the last map event
   auto track_segment = [&] {
+    // Capture time on the reference clock: the map's clock offsets applied (a camera whose images are
+    // 122 ms older than its stamps joins the frames it was captured in, not a frame 122 ms later).
+    for (Item& i : segment) i.capture = estimator_ ? estimator_->map().ReferenceUtime(i.camera, i.utime) : i.utime;
     std::sort(segment.begin(), segment.end(), [](const Item& a, const Item& b) {
-      return CaptureOrderKey(a.utime, a.camera, a.seq, a.bytes) <
-             CaptureOrderKey(b.utime, b.camera, b.seq, b.bytes);
+      return CaptureOrderKey(a.capture, a.camera, a.seq, a.bytes) <
+             CaptureOrderKey(b.capture, b.camera, b.seq, b.bytes);
     });
     for (const Item& item : segment) OnDetections(item.channel, item.bytes.data(), item.bytes.size());
     segment.clear();
