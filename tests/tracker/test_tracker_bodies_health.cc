@@ -113,7 +113,7 @@ TEST(TrackerBodiesHealth, ABumpedCameraThatSeesOnlyTheSecondBodyIsSuspectedAndEx
   ASSERT_EQ(run.cameras.size(), 5u);
   for (const CameraHealth& h : run.cameras) {
     std::cout << "[ health ] " << h.camera << ": " << CameraStateName(h.state) << " since frame "
-              << Frame(h.since_utime) << ", first suspect at frame "
+              << (h.since_utime > 0 ? Frame(h.since_utime) : 0) << ", first suspect at frame "
               << (h.first_suspect_utime < 0 ? -1 : Frame(h.first_suspect_utime)) << ", " << h.frames
               << " frames judged, rms " << h.rms_px << " px, baseline " << h.baseline_px << " px\n";
     if (h.camera != kCamera) {

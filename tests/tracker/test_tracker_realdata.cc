@@ -126,10 +126,13 @@ struct HealthRun {
   int64_t frames = 0;
 };
 
-void OnStatus(const lcm::ReceiveBuffer* rbuf, const std::string&, std::vector<tracker_status_t>* out) {
-  tracker_status_t msg;
-  if (Decode(rbuf->data, rbuf->data_size, &msg)) out->push_back(msg);
-}
+struct StatusSink {
+  std::vector<tracker_status_t>* out;
+  void On(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    tracker_status_t msg;
+    if (Decode(rbuf->data, rbuf->data_size, &msg)) out->push_back(msg);
+  }
+};
 
 // The detections written as a log (in camera order: mcmt-tracker --log sorts them by capture time) and
 // tracked with `map` and the sync tolerance.
@@ -150,7 +153,8 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   options.quiet = true;
   lcm::LCM input("memq://"), output("memq://");
   HealthRun run;
-  output.subscribe(kTrackerStatusChannel, &OnStatus, &run.statuses)->setQueueCapacity(1 << 16);
+  StatusSink sink{&run.statuses};
+  output.subscribe(kTrackerStatusChannel, &StatusSink::On, &sink)->setQueueCapacity(1 << 16);
   TrackerNode node(input, rig, options, map, &output);
   testing::internal::CaptureStderr();
   node.RunLog(dir / "detections.lcmlog", StopToken());
