@@ -336,10 +336,17 @@ void TrackerNode::UpdateHealth(const FrameJudgement& frame, int64_t utime) {
     changes += (changes.empty() ? "" : "; ") + line.str();
   }
   // Cameras that report but are never judged: said once, in one line per kind, with the cure.
+  // A camera's frame counts as unjudged only while two other cameras see a body too (within the last
+  // second, in other frames): alone because nobody else sees the object is not a clock problem.
   for (const auto& [c, n] : frame.companions) companions_[c] = std::max(companions_[c], n);
+  for (const std::string& c : frame.seen) last_seen_utime_[c] = utime;
   std::vector<std::string> alone, paired;
-  for (const std::string& c : frame.seen)
-    if (!frame.cameras.count(c) && health_->NotJudged(c, utime)) (companions_[c] == 0 ? alone : paired).push_back(c);
+  for (const std::string& c : frame.seen) {
+    if (frame.cameras.count(c)) continue;
+    int others = 0;
+    for (const auto& [o, seen_utime] : last_seen_utime_) others += o != c && utime - seen_utime <= 1000000;
+    if (others >= 2 && health_->NotJudged(c, utime)) (companions_[c] == 0 ? alone : paired).push_back(c);
+  }
   for (const bool single : {true, false}) {
     const std::vector<std::string>& names = single ? alone : paired;
     if (names.empty()) continue;
@@ -349,7 +356,7 @@ void TrackerNode::UpdateHealth(const FrameJudgement& frame, int64_t utime) {
                                           : (one ? " shares" : " share"))
          << (single ? " a frame with another camera" : " frames with one other camera at most (two are needed)")
          << " within the sync tolerance (" << options_.tracker.sync_tolerance_ms << " ms) in "
-         << options_.tracker.health.unjudged_frames << " frames: " << (one ? "its" : "their")
+         << options_.tracker.health.unjudged_frames << " frames while two others see the object: " << (one ? "its" : "their")
          << " health cannot be judged (state 'not judged'); if the cameras' clocks differ, map with "
             "mapper.time_offsets: true (the map's time_offset_us are applied to the detections) or widen "
             "tracker.sync_tolerance_ms";

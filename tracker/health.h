@@ -13,9 +13,9 @@
 //            window median stays at or below recover_ratio x the threshold for recover_frames judged
 //            frames in a row (hysteresis: a camera that did not move, only saw a transient - a hand, a
 //            reflection - comes back under the same map; one that moved stays far above)
-//   not judged  a camera that reported in unjudged_frames frames without being judged once since the map
-//            (never in a frame with two other cameras: clocks apart by more than the sync tolerance, one
-//            camera alone on a body): its health is unknown, said once by the tracker; judged, it is ok
+//   not judged  a camera that reported in unjudged_frames frames without being judged once since the map,
+//            while two other cameras saw the object too (within a second, in other frames): clocks apart
+//            by more than the sync tolerance; its health is unknown, said once by the tracker; judged, ok
 // baseline = the median of its judged RMS while ok (the last baseline_frames), so a camera whose detector
 // is noisier than the others' is held to its own level; nothing is gated or suspected before
 // min_baseline_frames judged frames (a map that is off from the start is the mapper's to report). No LCM

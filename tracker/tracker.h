@@ -377,6 +377,7 @@ class TrackerNode {
   int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
   std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
   std::map<std::string, int> companions_;  // per camera: most other cameras seen with it on a body
+  std::map<std::string, int64_t> last_seen_utime_;  // per camera: last frame it saw a body with a pose
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   int64_t last_published_utime_ = INT64_MIN;

@@ -179,7 +179,8 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   if (!switching) {
     FrameSyncOptions sync;
     sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
-    sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
+    // A frame spans sync_tolerance_ms of capture time: its views cannot all have come before that.
+    sync.deadline_us = std::max(static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0), sync.tolerance_us);
     sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
     sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
     sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
@@ -193,6 +194,7 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     for (const auto& c : map.cameras) names.push_back(c.name);
     health_ = std::make_unique<HealthMonitor>(names, options_.tracker.health);  // a new map: every camera ok
     companions_.clear();
+    last_seen_utime_.clear();
     if (switching) health_change_ = "new map from " + origin + ": every camera judged afresh";
   }
   if (switching) stats_.map_switches++;
