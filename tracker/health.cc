@@ -108,7 +108,8 @@ bool HealthMonitor::Update(const std::string& camera, int64_t utime, double rms_
   }
   if (h.state == CameraState::kOk && !gated) AddToBaseline(rms_px, &t);
   if (h.state != before) h.since_utime = utime;
-  if ((h.state == CameraState::kSuspect || h.state == CameraState::kExcluded) && h.first_suspect_utime < 0) h.first_suspect_utime = utime;
+  if ((h.state == CameraState::kSuspect || h.state == CameraState::kExcluded) && h.first_suspect_utime < 0)
+    h.first_suspect_utime = utime;
   return h.state != before;
 }
 
@@ -352,11 +353,13 @@ void TrackerNode::UpdateHealth(const FrameJudgement& frame, int64_t utime) {
     if (names.empty()) continue;
     const bool one = names.size() == 1;
     std::ostringstream line;
-    line << CamerasText(names) << (single ? (one ? " never shares" : " never share")
-                                          : (one ? " shares" : " share"))
-         << (single ? " a frame with another camera" : " frames with one other camera at most (two are needed)")
+    line << CamerasText(names)
+         << (single ? (one ? " never shares" : " never share") : (one ? " shares" : " share"))
+         << (single ? " a frame with another camera"
+                    : " frames with one other camera at most (two are needed)")
          << " within the sync tolerance (" << options_.tracker.sync_tolerance_ms << " ms) in "
-         << options_.tracker.health.unjudged_frames << " frames while two others see the object: " << (one ? "its" : "their")
+         << options_.tracker.health.unjudged_frames
+         << " frames while two others see the object: " << (one ? "its" : "their")
          << " health cannot be judged (state 'not judged'); if the cameras' clocks differ, map with "
             "mapper.time_offsets: true (the map's time_offset_us are applied to the detections) or widen "
             "tracker.sync_tolerance_ms";

@@ -209,7 +209,8 @@ bool PoseEstimator::ToObs(const MarkerObservation& observation, Obs* obs) const 
   bool finite = true;
   for (const auto& p : observation.corners) finite = finite && p.allFinite();
   if (c == camera_index_.end() || m == marker_index_.end() || !finite) return false;
-  const Rigid3* cam_from_rig = observation.moved ? &observation.cam_from_rig : &cameras_[c->second].cam_from_rig;
+  const Rigid3* cam_from_rig =
+      observation.moved ? &observation.cam_from_rig : &cameras_[c->second].cam_from_rig;
   *obs = Obs{c->second, m->second, &observation.corners, cam_from_rig};
   return true;
 }

@@ -373,10 +373,10 @@ class TrackerNode {
   std::map<int, size_t> body_of_marker_;  // marker id -> index in bodies_ (several bodies)
   std::vector<PoseStream> streams_;
   std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> stream_partials_;
-  std::unique_ptr<HealthMonitor> health_;  // per camera of the map
-  int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
-  std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
-  std::map<std::string, int> companions_;  // per camera: most other cameras seen with it on a body
+  std::unique_ptr<HealthMonitor> health_;           // per camera of the map
+  int64_t last_health_utime_ = INT64_MIN;           // last MCMT_TRACKER_STATUS (frame utime)
+  std::string health_change_;                       // a map switch, for the next MCMT_TRACKER_STATUS
+  std::map<std::string, int> companions_;           // per camera: most other cameras seen with it on a body
   std::map<std::string, int64_t> last_seen_utime_;  // per camera: last frame it saw a body with a pose
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras

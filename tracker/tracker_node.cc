@@ -180,7 +180,8 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     FrameSyncOptions sync;
     sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
     // A frame spans sync_tolerance_ms of capture time: its views cannot all have come before that.
-    sync.deadline_us = std::max(static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0), sync.tolerance_us);
+    sync.deadline_us =
+        std::max(static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0), sync.tolerance_us);
     sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
     sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
     sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
@@ -572,7 +573,8 @@ LogReadReport TrackerNode::RunLog(const std::string& path, const StopToken& stop
   auto track_segment = [&] {
     // Capture time on the reference clock: the map's clock offsets applied (a camera whose images are
     // 122 ms older than its stamps joins the frames it was captured in, not a frame 122 ms later).
-    for (Item& i : segment) i.capture = estimator_ ? estimator_->map().ReferenceUtime(i.camera, i.utime) : i.utime;
+    for (Item& i : segment)
+      i.capture = estimator_ ? estimator_->map().ReferenceUtime(i.camera, i.utime) : i.utime;
     std::sort(segment.begin(), segment.end(), [](const Item& a, const Item& b) {
       return CaptureOrderKey(a.capture, a.camera, a.seq, a.bytes) <
              CaptureOrderKey(b.capture, b.camera, b.seq, b.bytes);

@@ -23,9 +23,9 @@ namespace {
 using tracker_test::Bodies;
 using tracker_test::BodiesSession;
 
-constexpr int kFrames = 300;       // the bodies session's
-constexpr int kBumpFrame = 150;    // the bump
-constexpr char kCamera[] = "cam3"; // the camera that sees only the patient (the tool hidden from it)
+constexpr int kFrames = 300;        // the bodies session's
+constexpr int kBumpFrame = 150;     // the bump
+constexpr char kCamera[] = "cam3";  // the camera that sees only the patient (the tool hidden from it)
 
 bool IsTool(int id) { return id >= 0 && id <= 3; }  // the tool's ids (sim/scene_bodies.cc: four_sided 0-3)
 
@@ -34,9 +34,9 @@ bool IsTool(int id) { return id >= 0 && id <= 3; }  // the tool's ids (sim/scene
 std::vector<detections_t> PatientOnlyFor(const std::string& camera, std::vector<detections_t> messages) {
   for (detections_t& d : messages) {
     if (d.camera != camera) continue;
-    d.markers.erase(std::remove_if(d.markers.begin(), d.markers.end(),
-                                   [](const marker_t& m) { return IsTool(m.id); }),
-                    d.markers.end());
+    d.markers.erase(
+        std::remove_if(d.markers.begin(), d.markers.end(), [](const marker_t& m) { return IsTool(m.id); }),
+        d.markers.end());
     d.num_markers = static_cast<int32_t>(d.markers.size());
   }
   return messages;

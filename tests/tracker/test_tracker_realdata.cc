@@ -141,7 +141,8 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   std::string bytes;
   int64_t n = 0;
   for (const detections_t& d : CameraTimeDetections(rig)) {
-    if (getenv("DEBUG_FRAMES")) std::cout << "D " << d.camera << " " << d.utime << " " << d.num_markers << "\n";
+    if (getenv("DEBUG_FRAMES"))
+      std::cout << "D " << d.camera << " " << d.utime << " " << d.num_markers << "\n";
     const std::vector<uint8_t> data = Encode(d);
     AppendEncodedEvent(n++, d.utime, DetectionsChannel(d.camera), data.data(), data.size(), &bytes);
   }
@@ -180,8 +181,8 @@ std::map<int, int> CamerasPerFrame(const HealthRun& run) {
   return out;
 }
 
-#define SKIP_WITHOUT_DATA()                                                       \
-  if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4"))         \
+#define SKIP_WITHOUT_DATA()                                               \
+  if (!std::filesystem::exists(kData + "/charuco_calibration/cam_0.mp4")) \
   GTEST_SKIP() << "real data not found at " << kData << " (the caliscope sessions of ../shared/data)"
 
 // With the map's offsets at the 2 ms tolerance: no view shares a frame with two others, no camera is
@@ -210,7 +211,8 @@ TEST(TrackerRealData, CameraTimesApartFromEachOtherLeaveHealthNotJudgedAndSaySo)
     EXPECT_NE(run.log.find("mapper.time_offsets"), std::string::npos);
     bool published = false;
     for (const tracker_status_t& s : run.statuses)
-      for (const camera_health_t& c : s.cameras) published = published || c.state == camera_health_t::STATE_NOT_JUDGED;
+      for (const camera_health_t& c : s.cameras)
+        published = published || c.state == camera_health_t::STATE_NOT_JUDGED;
     EXPECT_TRUE(published);
   }
 }
