@@ -19,6 +19,7 @@
 #include "detector/detector.h"
 #include "mapper/mapper.h"
 #include "mcmt/tracker_status_t.hpp"
+#include "tests/support/caliscope.h"
 #include "tests/support/temp_dir.h"
 #include "tracker/tracker.h"
 
@@ -90,31 +91,16 @@ TEST(TrackerRealData, CharucoSessionAgreesWithTheMappersTrajectory) {
 // Camera health on real clocks. Detected with each camera's own frame times (caliscope_time: camera), the
 // session's clocks jitter 5-6 ms RMS and its images show capture latencies of +122, -24, -27 ms against
 // cam0 (tests/mapper/test_mapper_selfcal_realdata.cc): at 6 fps no two cameras' views fall within the 2 ms
-// sync tolerance of each other, with or without the offsets.
+// sync tolerance of two others once the offsets are applied.
 
 const std::string kRig = std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml";
-
-const std::vector<detections_t>& CameraTimeDetections(const RigConfig& rig) {
-  static const std::vector<detections_t> all = [&] {
-    RigConfig copy = rig;
-    YAML::Node detector = copy.detector.node();
-    detector["caliscope_time"] = "camera";
-    std::vector<detections_t> out;
-    for (const CameraConfig& c : copy.cameras) {
-      std::vector<detections_t> d = DetectRecording(copy, c.name);
-      out.insert(out.end(), d.begin(), d.end());
-    }
-    return out;
-  }();
-  return all;
-}
 
 MapResult MapCameraTimes(const RigConfig& rig, bool offsets) {
   MapperOptions options = MapperOptions::FromConfig(rig);
   options.estimate_time_offsets = offsets;
   if (!offsets) options.sync_tolerance_ms = 25.0;  // the mapper's frames over the clocks' jitter
   Mapper mapper(options);
-  for (const auto& d : CameraTimeDetections(rig)) mapper.Add(d);
+  for (const auto& d : test::CaliscopeCameraTimeDetections(rig)) mapper.Add(d);
   return mapper.Solve();
 }
 
@@ -140,9 +126,7 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   test::TempDir dir("tracker_realdata_health");
   std::string bytes;
   int64_t n = 0;
-  for (const detections_t& d : CameraTimeDetections(rig)) {
-    if (getenv("DEBUG_FRAMES"))
-      std::cout << "D " << d.camera << " " << d.utime << " " << d.num_markers << "\n";
+  for (const detections_t& d : test::CaliscopeCameraTimeDetections(rig)) {
     const std::vector<uint8_t> data = Encode(d);
     AppendEncodedEvent(n++, d.utime, DetectionsChannel(d.camera), data.data(), data.size(), &bytes);
   }
@@ -233,8 +217,6 @@ TEST(TrackerRealData, CameraTimesWithTheMapsOffsetsJudgeEveryCameraOk) {
   }
   std::vector<double> rms;
   for (const TrajectoryRow& r : run.poses) rms.push_back(r.rms_px);
-  if (getenv("DEBUG_FRAMES"))
-    for (const TrajectoryRow& r : run.poses) std::cout << "F " << r.utime << " " << r.cameras << "\n";
   std::cout << "[ health ]   median pose rms " << Median(rms) << " px\n" << run.log;
   // The board is in cam1's view alone for the session's first 62 frames (10 s); from then on 43 of 53
   // poses come from 3-4 cameras.
