@@ -105,6 +105,7 @@ void MaintainNode::OnTrackerStatus(const void* data, size_t size) {
   if (msg.map_utime < map_utime_) return;  // judged under a map older than the one published last
   for (const camera_health_t& h : msg.cameras) {
     if (!map_.FindCamera(h.camera)) continue;
+    if (h.state == camera_health_t::STATE_NOT_JUDGED) continue;  // nothing known of it yet
     const auto it = candidates_.find(h.camera);
     if (h.state == camera_health_t::STATE_OK) {
       if (it != candidates_.end() && !it->second.added) {

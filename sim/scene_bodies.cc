@@ -155,9 +155,19 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
         "--scene bodies: only with --detections-only (no renderer for several bodies yet)");
   fs::create_directories(o.out_dir);
   const fs::path dir(o.out_dir);
-  const std::vector<SimCamera> cameras = MakeRig(o.rig);
+  // --move-camera and --add-camera as for one object (sim/bump.cc): the cameras, their moves, late ones.
+  GroundTruth changes;
+  changes.cameras = MakeRig(o.rig);
+  AddCameraChanges(o, &changes);
+  const std::vector<SimCamera>& cameras = changes.cameras;
   const std::vector<CameraModel> written_models = internal::WrittenModels(o, cameras);
   const std::vector<SceneBody> bodies = MakeBodiesScene(o);
+  auto body_truth = [&](const SceneBody& b) {
+    GroundTruth truth = BodyTruth(b, cameras, o);
+    truth.moves = changes.moves;
+    truth.late_cameras = changes.late_cameras;
+    return truth;
+  };
   const int dictionary_size = LoadDictionary(o.dictionary)->bytesList.rows;
   for (const SceneBody& b : bodies)
     for (const SimMarker& m : b.object.markers)
@@ -172,8 +182,8 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
   const std::vector<SceneBody> moving(bodies.begin(), bodies.begin() + 2);
   WriteFileAtomic((dir / "rig_moving.yaml").string(), BodiesRigYaml(moving, cameras, o));
   for (const SceneBody& b : bodies)
-    WriteGroundTruth((dir / ("ground_truth_" + b.name + ".yaml")).string(), BodyTruth(b, cameras, o));
-  summary.truth = BodyTruth(bodies[0], cameras, o);
+    WriteGroundTruth((dir / ("ground_truth_" + b.name + ".yaml")).string(), body_truth(b));
+  summary.truth = body_truth(bodies[0]);
   WriteGroundTruth((dir / "ground_truth.yaml").string(), summary.truth);
 
   DetectionSimOptions d = o.detections;
@@ -188,7 +198,12 @@ DatasetSummary GenerateBodiesDataset(const DatasetOptions& o) {
         frame->rig_from_object = Rigid3::Identity();
         return scene;
       },
-      nullptr, internal::CamerasTold(o, cameras, written_models));
+      [&](size_t k, const SimFrame& f, SimCamera* camera) {
+        if (!CameraActive(cameras[k].name, changes, f.seq)) return false;
+        *camera = CameraAtFrame(cameras[k], changes, f.seq);
+        return true;
+      },
+      internal::CamerasTold(o, cameras, written_models));
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

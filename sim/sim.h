@@ -478,7 +478,8 @@ SimObject SceneAt(const std::vector<SceneBody>& bodies, size_t k);
 // mcmt-sim --scene bodies (detections only): DIR/rig.yaml (objects: tool, patient, floor static and the
 // rig frame), DIR/rig_moving.yaml (the same without the floor: its ids ignored), camK.yml,
 // DIR/ground_truth_<body>.yaml per body (its markers in its own frame, rig_from_object per frame),
-// DIR/ground_truth.yaml (= the tool's) and DIR/detections.lcmlog.
+// DIR/ground_truth.yaml (= the tool's) and DIR/detections.lcmlog. `moves` and `add_camera_frame` as for
+// one object (each body's ground truth lists the moves and late cameras).
 DatasetSummary GenerateBodiesDataset(const DatasetOptions& options);
 
 // ---------------------------------------------------------------------------------------------

@@ -26,6 +26,8 @@ const char* CameraStateName(CameraState state) {
       return "suspect";
     case CameraState::kExcluded:
       return "excluded";
+    case CameraState::kNotJudged:
+      return "not judged";
   }
   return "?";
 }
@@ -106,8 +108,20 @@ bool HealthMonitor::Update(const std::string& camera, int64_t utime, double rms_
   }
   if (h.state == CameraState::kOk && !gated) AddToBaseline(rms_px, &t);
   if (h.state != before) h.since_utime = utime;
-  if (h.state != CameraState::kOk && h.first_suspect_utime < 0) h.first_suspect_utime = utime;
+  if ((h.state == CameraState::kSuspect || h.state == CameraState::kExcluded) && h.first_suspect_utime < 0)
+    h.first_suspect_utime = utime;
   return h.state != before;
+}
+
+bool HealthMonitor::NotJudged(const std::string& camera, int64_t utime) {
+  const auto it = tracks_.find(camera);
+  if (it == tracks_.end()) return false;
+  CameraHealth& h = it->second.health;
+  if (h.frames > 0 || h.state == CameraState::kNotJudged) return false;
+  if (++h.unjudged_frames < options_.unjudged_frames) return false;
+  h.state = CameraState::kNotJudged;
+  h.since_utime = utime;
+  return true;
 }
 
 CameraHealth HealthMonitor::Of(const std::string& camera) const { return tracks_.at(camera).health; }
@@ -175,8 +189,13 @@ std::map<std::string, CameraShare> Shares(const PoseEstimator& estimator, const 
 }
 
 // A camera's RMS over its markers within outlier_px (one wrong marker is the pose solver's to reject,
-// not a sign that the camera moved); when none is, its best marker's; -1 without a marker.
-double CameraRms(const CameraShare& share, const Rigid3& pose, double outlier_px) {
+// not a sign that the camera moved) and their number; when none is, its best marker's (one marker); rms
+// -1 without a marker.
+struct CameraResidual {
+  double rms = -1.0;
+  int markers = 0;
+};
+CameraResidual CameraRms(const CameraShare& share, const Rigid3& pose, double outlier_px) {
   double sum = 0.0, best = -1.0;
   int n = 0;
   for (const std::vector<PosePoint>& marker : share.markers) {
@@ -187,7 +206,8 @@ double CameraRms(const CameraShare& share, const Rigid3& pose, double outlier_px
       ++n;
     }
   }
-  return n ? std::sqrt(sum / n) : best;
+  if (n) return {std::sqrt(sum / n), n};
+  return {best, best < 0 ? 0 : 1};
 }
 
 // The pose from the cameras in `from` (their inlier shares), one Gauss-Newton step from `pose`; false
@@ -215,54 +235,69 @@ bool PoseFrom(const std::map<std::string, CameraShare>& shares, const std::set<s
   return true;
 }
 
-// Each camera of `judged` under the pose from the cameras of `used` other than itself; -1 where it
+// Each camera of `judged` under the pose from the cameras of `used` other than itself; rms -1 where it
 // cannot be judged.
-std::map<std::string, double> Judge(const std::map<std::string, CameraShare>& shares,
-                                    const std::set<std::string>& judged, const std::set<std::string>& used,
-                                    const Rigid3& pose, double outlier_px) {
-  std::map<std::string, double> rms;
+std::map<std::string, CameraResidual> Judge(const std::map<std::string, CameraShare>& shares,
+                                            const std::set<std::string>& judged,
+                                            const std::set<std::string>& used, const Rigid3& pose,
+                                            double outlier_px) {
+  std::map<std::string, CameraResidual> rms;
   for (const std::string& c : judged) {
-    rms[c] = -1.0;
+    rms[c] = CameraResidual();
     const auto mine = shares.find(c);
     if (mine == shares.end()) continue;
     std::set<std::string> others = used;
     others.erase(c);
     Rigid3 from_others;
     if (!PoseFrom(shares, others, pose, &from_others)) continue;
-    const double r = CameraRms(mine->second, from_others, outlier_px);
-    if (r >= 0) rms[c] = std::isfinite(r) ? r : 1e3;
+    CameraResidual r = CameraRms(mine->second, from_others, outlier_px);
+    if (r.rms >= 0 && !std::isfinite(r.rms)) r.rms = 1e3;
+    rms[c] = r;
   }
   return rms;
 }
 
+// The cameras of `names`, quoted: "camera 'cam1'" or "cameras 'cam1', 'cam3'".
+std::string CamerasText(const std::vector<std::string>& names) {
+  std::string out = names.size() == 1 ? "camera " : "cameras ";
+  for (size_t k = 0; k < names.size(); ++k) out += (k ? ", '" : "'") + names[k] + "'";
+  return out;
+}
+
 }  // namespace
 
-PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
-                                              int64_t utime) {
+PoseSolution TrackerNode::SolveJudgingCameras(const PoseEstimator& estimator,
+                                              const std::vector<MarkerObservation>& obs, const Rigid3* prior,
+                                              FrameJudgement* frame) {
   std::set<std::string> cameras, excluded;
   for (const MarkerObservation& o : obs) {
     cameras.insert(o.camera);
     if (health_->Excluded(o.camera)) excluded.insert(o.camera);
   }
-  PoseSolution sol = estimator_->Solve(Without(obs, excluded), prior);
+  PoseSolution sol = estimator.Solve(Without(obs, excluded), prior);
   std::map<std::string, CameraShare> shares;  // none when lost: nothing to judge against
-  if (sol.ok()) shares = Shares(*estimator_, options_.tracker, obs, sol.rig_from_object);
+  if (sol.ok()) shares = Shares(estimator, options_.tracker, obs, sol.rig_from_object);
+  for (const auto& [c, share] : shares) {
+    frame->seen.insert(c);
+    int& most = frame->companions[c];
+    most = std::max(most, static_cast<int>(shares.size()) - 1);
+  }
   // Worst first: a moved camera would make the cameras judged against it look moved too, so the camera
   // furthest over its gate is left out and the others judged again without it.
   std::set<std::string> gated = excluded;
-  std::map<std::string, double> judged;
+  std::map<std::string, CameraResidual> judged;
   for (;;) {
     std::set<std::string> open;
     for (const std::string& c : cameras)
       if (!gated.count(c)) open.insert(c);
-    const std::map<std::string, double> rms =
+    const std::map<std::string, CameraResidual> rms =
         Judge(shares, open, open, sol.rig_from_object, options_.tracker.outlier_px);
     std::string worst;
     double worst_excess = 1.0;
     for (const auto& [c, r] : rms) {
       judged[c] = r;
-      if (r / health_->GatePx(c) > worst_excess) {
-        worst_excess = r / health_->GatePx(c);
+      if (r.rms / health_->GatePx(c) > worst_excess) {
+        worst_excess = r.rms / health_->GatePx(c);
         worst = c;
       }
     }
@@ -274,9 +309,26 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     if (!gated.count(c)) used.insert(c);
   for (const auto& [c, r] : Judge(shares, excluded, used, sol.rig_from_object, options_.tracker.outlier_px))
     judged[c] = r;
-  std::string changes;
+  // Pooled over the frame's bodies: the squares and markers of each body a camera was judged on.
   for (const auto& [c, r] : judged) {
-    if (r < 0 || !health_->Update(c, utime, r, gated.count(c) && !excluded.count(c))) continue;
+    if (r.rms < 0 || r.markers == 0) continue;
+    CameraJudgement& j = frame->cameras[c];
+    j.squares += r.rms * r.rms * r.markers;
+    j.markers += r.markers;
+    j.gated = j.gated || (gated.count(c) && !excluded.count(c));
+  }
+  if (gated.size() > excluded.size()) {
+    const Rigid3 start = sol.rig_from_object;
+    sol = estimator.Solve(Without(obs, gated), &start);
+  }
+  return sol;
+}
+
+void TrackerNode::UpdateHealth(const FrameJudgement& frame, int64_t utime) {
+  std::string changes;
+  for (const auto& [c, j] : frame.cameras) {
+    const double rms = std::sqrt(j.squares / j.markers);
+    if (!health_->Update(c, utime, rms, j.gated)) continue;
     const CameraHealth h = health_->Of(c);
     std::ostringstream line;
     line << "camera '" << c << "' " << CameraStateName(h.state) << " (rms " << h.rms_px
@@ -284,16 +336,41 @@ PoseSolution TrackerNode::SolveJudgingCameras(const std::vector<MarkerObservatio
     std::cerr << "mcmt-tracker: " << line.str() << std::endl;
     changes += (changes.empty() ? "" : "; ") + line.str();
   }
+  // Cameras that report but are never judged: said once, in one line per kind, with the cure.
+  // A camera's frame counts as unjudged only while two other cameras see a body too (within the last
+  // second, in other frames): alone because nobody else sees the object is not a clock problem.
+  for (const auto& [c, n] : frame.companions) companions_[c] = std::max(companions_[c], n);
+  for (const std::string& c : frame.seen) last_seen_utime_[c] = utime;
+  std::vector<std::string> alone, paired;
+  for (const std::string& c : frame.seen) {
+    if (frame.cameras.count(c)) continue;
+    int others = 0;
+    for (const auto& [o, seen_utime] : last_seen_utime_) others += o != c && utime - seen_utime <= 1000000;
+    if (others >= 2 && health_->NotJudged(c, utime)) (companions_[c] == 0 ? alone : paired).push_back(c);
+  }
+  for (const bool single : {true, false}) {
+    const std::vector<std::string>& names = single ? alone : paired;
+    if (names.empty()) continue;
+    const bool one = names.size() == 1;
+    std::ostringstream line;
+    line << CamerasText(names)
+         << (single ? (one ? " never shares" : " never share") : (one ? " shares" : " share"))
+         << (single ? " a frame with another camera"
+                    : " frames with one other camera at most (two are needed)")
+         << " within the sync tolerance (" << options_.tracker.sync_tolerance_ms << " ms) in "
+         << options_.tracker.health.unjudged_frames
+         << " frames while two others see the object: " << (one ? "its" : "their")
+         << " health cannot be judged (state 'not judged'); if the cameras' clocks differ, map with "
+            "mapper.time_offsets: true (the map's time_offset_us are applied to the detections) or widen "
+            "tracker.sync_tolerance_ms";
+    std::cerr << "mcmt-tracker: warning: " << line.str() << std::endl;
+    changes += (changes.empty() ? "" : "; ") + line.str();
+  }
   if (!health_change_.empty()) {
     changes = health_change_ + (changes.empty() ? "" : "; " + changes);
     health_change_.clear();
   }
-  if (gated.size() > excluded.size()) {
-    const Rigid3 start = sol.rig_from_object;
-    sol = estimator_->Solve(Without(obs, gated), &start);
-  }
   if (!changes.empty() || utime - last_health_utime_ >= 1000000) PublishHealth(utime, changes);
-  return sol;
 }
 
 void TrackerNode::PublishHealth(int64_t utime, const std::string& message) {

@@ -13,6 +13,9 @@
 //            window median stays at or below recover_ratio x the threshold for recover_frames judged
 //            frames in a row (hysteresis: a camera that did not move, only saw a transient - a hand, a
 //            reflection - comes back under the same map; one that moved stays far above)
+//   not judged  a camera that reported in unjudged_frames frames without being judged once since the map,
+//            while two other cameras saw the object too (within a second, in other frames): clocks apart
+//            by more than the sync tolerance; its health is unknown, said once by the tracker; judged, ok
 // baseline = the median of its judged RMS while ok (the last baseline_frames), so a camera whose detector
 // is noisier than the others' is held to its own level; nothing is gated or suspected before
 // min_baseline_frames judged frames (a map that is off from the start is the mapper's to report). No LCM
@@ -38,9 +41,11 @@ struct HealthOptions {
   int min_baseline_frames = 30;  // judged frames while ok before a camera is gated or suspected
   double recover_ratio = 0.5;    // an excluded camera is good when its median is <= this x the threshold
   int recover_frames = 30;       // ... for this many judged frames in a row: ok again
+  int unjudged_frames = 30;      // frames a camera reports in, never judged, before it is "not judged"
 };
 
-enum class CameraState : int8_t { kOk = 0, kSuspect = 1, kExcluded = 2 };
+// The values of camera_health_t's STATE_ constants.
+enum class CameraState : int8_t { kOk = 0, kSuspect = 1, kExcluded = 2, kNotJudged = 3 };
 const char* CameraStateName(CameraState state);
 
 struct CameraHealth {
@@ -50,6 +55,7 @@ struct CameraHealth {
   double baseline_px = 0.0;
   double rejected_share = 0.0;  // over the last `window` judged frames
   int frames = 0;               // judged frames
+  int unjudged_frames = 0;      // frames it reported in while never judged (since the map)
   int64_t since_utime = 0;
   int64_t first_suspect_utime = -1;  // frame utime it first left ok since the map (-1: never)
 };
@@ -63,6 +69,9 @@ class HealthMonitor {
   double GatePx(const std::string& camera) const;
   // One judged frame; returns true when the camera's state changed.
   bool Update(const std::string& camera, int64_t utime, double rms_px, bool gated);
+  // A frame the camera reported in (a mapped marker) and could not be judged in; returns true when it
+  // became "not judged" (never judged since the map, unjudged_frames such frames).
+  bool NotJudged(const std::string& camera, int64_t utime);
   std::vector<CameraHealth> Snapshot() const;        // cameras in the order given
   CameraHealth Of(const std::string& camera) const;  // throws std::out_of_range for another camera
 

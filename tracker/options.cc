@@ -82,6 +82,10 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
            .Add("health_recover_frames", H(&HealthOptions::recover_frames), "frames",
                 "good this many judged frames in a row: an excluded camera is used again (no new map)",
                 AtLeast(1))
+           .Add("health_unjudged_frames", H(&HealthOptions::unjudged_frames), "frames",
+                "a camera that reported in this many frames and was never judged (never with two other "
+                "cameras within the sync tolerance) is 'not judged', said once with the cure",
+                AtLeast(1))
            .Other("channels", "",
                   "several bodies: channel per pose stream by its name, e.g. {tool: TOOL_POSE, "
                   "tool_in_patient: NAV} (default: channel_NAME, channel_OF_IN_IN)")
@@ -285,6 +289,15 @@ bool MotionModel::Predict(int64_t utime, Rigid3* predicted) const {
   Rigid3 out = step * pose_[0];
   out.linear() = Eigen::Quaterniond(out.linear()).normalized().toRotationMatrix();
   *predicted = out;
+  return true;
+}
+
+bool MotionModel::Motion(int64_t from, int64_t to, Rigid3* rig_motion) const {
+  const int64_t dt_prev = utime_[0] - utime_[1];
+  if (count_ < 2 || dt_prev <= 0 || dt_prev > max_gap_us_) return false;
+  Rigid3 at_from, at_to;
+  if (!Predict(from, &at_from) || !Predict(to, &at_to)) return false;
+  *rig_motion = at_to * Inverse(at_from);
   return true;
 }
 

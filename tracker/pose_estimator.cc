@@ -42,6 +42,7 @@ std::vector<MarkerObservation> ObservationsFromViews(const std::vector<detection
       MarkerObservation o;
       o.camera = v->camera;
       o.id = m.id;
+      o.utime = v->utime;
       for (int k = 0; k < 4; ++k) o.corners[k] = Eigen::Vector2d(m.corners[k][0], m.corners[k][1]);
       out.push_back(o);
     }
@@ -93,8 +94,7 @@ double PoseEstimator::ObservationRms(const Obs& obs, const Rigid3& pose) const {
   const Marker& mk = markers_[obs.marker];
   double sum = 0.0;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d p_cam =
-        cam.cam_from_rig.linear() * (pose * mk.corners_object[k]) + cam.cam_from_rig.translation();
+    const Eigen::Vector3d p_cam = *obs.cam_from_rig * (pose * mk.corners_object[k]);
     Eigen::Vector2d px;
     if (!cam.model.Project(p_cam, &px, nullptr)) return kInf;
     sum += (px - (*obs.pixels)[k]).squaredNorm();
@@ -125,7 +125,7 @@ std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
     const Camera& cam = cameras_[obs[i].camera];
     const Marker& mk = markers_[obs[i].marker];
     for (int c = 0; c < 4; ++c)
-      points.push_back({&cam.model, &cam.cam_from_rig, mk.corners_object[c], (*obs[i].pixels)[c]});
+      points.push_back({&cam.model, obs[i].cam_from_rig, mk.corners_object[c], (*obs[i].pixels)[c]});
   }
   return points;
 }
@@ -209,8 +209,17 @@ bool PoseEstimator::ToObs(const MarkerObservation& observation, Obs* obs) const 
   bool finite = true;
   for (const auto& p : observation.corners) finite = finite && p.allFinite();
   if (c == camera_index_.end() || m == marker_index_.end() || !finite) return false;
-  *obs = Obs{c->second, m->second, &observation.corners};
+  const Rigid3* cam_from_rig =
+      observation.moved ? &observation.cam_from_rig : &cameras_[c->second].cam_from_rig;
+  *obs = Obs{c->second, m->second, &observation.corners, cam_from_rig};
   return true;
+}
+
+void PoseEstimator::SeenAt(const Rigid3& rig_motion, MarkerObservation* observation) const {
+  const auto c = camera_index_.find(observation->camera);
+  if (c == camera_index_.end()) return;
+  observation->cam_from_rig = cameras_[c->second].cam_from_rig * rig_motion;
+  observation->moved = true;
 }
 
 std::vector<PosePoint> PoseEstimator::PosePoints(const MarkerObservation& observation) const {
@@ -268,8 +277,8 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
       if (!sp.ok) continue;
       for (int h = 0; h < sp.num_hypotheses; ++h) {
         Candidate c;
-        c.pose =
-            Normalized(cam.rig_from_cam * sp.hypotheses[h].cam_from_marker * Inverse(mk.object_from_marker));
+        c.pose = Normalized(Inverse(*obs[i].cam_from_rig) * sp.hypotheses[h].cam_from_marker *
+                            Inverse(mk.object_from_marker));
         c.ratio = sp.ratio;
         c.inliers = 0;
         c.cost = 0.0;

@@ -111,6 +111,11 @@ struct MarkerObservation {
   std::string camera;
   int id = 0;
   MarkerCorners2d corners;  // distorted pixels, ArUco order
+  int64_t utime = 0;        // its view's capture time (the reference camera's clock)
+  // Set by PoseEstimator::SeenAt for a view captured at another time than its frame's: the camera's pose
+  // for it, cam_from_rig x the object's motion from the frame's time to the view's.
+  bool moved = false;
+  Rigid3 cam_from_rig = Rigid3::Identity();
 };
 
 // All markers of a frame's views (views sorted by camera name, so the result never depends on the
@@ -148,6 +153,11 @@ class PoseEstimator {
 
   const RigMap& map() const { return map_; }
 
+  // The observation's object seen moved by rig_motion (the object at the view's capture time =
+  // rig_motion x rig_from_object at the frame's): its camera's pose for it becomes cam_from_rig x
+  // rig_motion (unchanged for a camera not in the map).
+  void SeenAt(const Rigid3& rig_motion, MarkerObservation* observation) const;
+
   // The observation's corners as core's rigid-pose points (world = rig, body = object; pointers into this
   // estimator and into `observation`), for the normal equations that judge cameras (tracker/health.cc);
   // empty when its camera or marker is not mapped or a corner is not finite.
@@ -174,6 +184,7 @@ class PoseEstimator {
     int camera = 0;
     int marker = 0;
     const MarkerCorners2d* pixels = nullptr;
+    const Rigid3* cam_from_rig = nullptr;  // the camera's, or the observation's when moved
   };
   struct Refined {
     Rigid3 pose;
@@ -218,6 +229,9 @@ class MotionModel {
   void Reset() { count_ = 0; }
   // False (no prediction) when nothing is known or the last pose is older than max_gap.
   bool Predict(int64_t utime, Rigid3* predicted) const;
+  // The object's motion in the rig frame from `from` to `to` at constant velocity (Predict(to) x
+  // Predict(from)^-1); false without a velocity (fewer than two poses, or too far apart).
+  bool Motion(int64_t from, int64_t to, Rigid3* rig_motion) const;
 
  private:
   int64_t max_gap_us_;
@@ -310,16 +324,31 @@ class TrackerNode {
   // The pose streams of `map` (PlanPoseStreams): bodies, relative poses, their partial files; a stream of
   // the same name keeps its trajectory across a map switch. Throws OptionError (bad channels, names).
   void SetStreams(const RigMap& map);
-  // Solves every moving body of the frame (the first one judging the cameras when health is on).
+  // Solves every moving body of the frame (each judging the cameras that see it when health is on: a
+  // camera's residuals pooled over the bodies it sees; excluded cameras left out of every body).
   std::vector<PoseSolution> SolveBodies(const std::vector<MarkerObservation>& obs, int64_t utime);
   // Keeps (trajectory, partial file) and publishes one stream's solution for the frame.
   void Emit(size_t stream, const SyncedFrame& frame, const PoseSolution& sol, double latency_ms);
   void CheckStaleCameras();
   void WarnOnce(const std::string& key, const std::string& text);
   void MaybePrintStatus();
-  // The frame's pose without excluded and gated cameras, every camera judged (tracker/health.cc).
-  PoseSolution SolveJudgingCameras(const std::vector<MarkerObservation>& obs, const Rigid3* prior,
-                                   int64_t utime);
+  // One camera's judgement in a frame, pooled over the bodies it was judged on.
+  struct CameraJudgement {
+    double squares = 0.0;  // sum over bodies of rms^2 x markers (rms under the pose from the others)
+    int markers = 0;
+    bool gated = false;  // its markers were left out of a body's pose in this frame
+  };
+  struct FrameJudgement {
+    std::map<std::string, CameraJudgement> cameras;  // the cameras judged
+    std::set<std::string> seen;                      // cameras with a mapped marker on a body with a pose
+    std::map<std::string, int> companions;           // of those: most other cameras on one of its bodies
+  };
+  // A body's pose without excluded and gated cameras, every camera of it judged under the pose from the
+  // others (tracker/health.cc); the judgements added to *frame.
+  PoseSolution SolveJudgingCameras(const PoseEstimator& estimator, const std::vector<MarkerObservation>& obs,
+                                   const Rigid3* prior, FrameJudgement* frame);
+  // The frame's judgements into the monitor; cameras never judged said once; MCMT_TRACKER_STATUS.
+  void UpdateHealth(const FrameJudgement& frame, int64_t utime);
   void PublishHealth(int64_t utime, const std::string& message);
 
   lcm::LCM& lcm_;
@@ -338,15 +367,17 @@ class TrackerNode {
     int in = -1;  // index in bodies_, -1: a static body at rig_from_in
     Rigid3 rig_from_in = Rigid3::Identity();
   };
-  const PoseEstimator* estimator_ = nullptr;  // the first moving body's (health judges cameras with it)
+  const PoseEstimator* estimator_ = nullptr;  // the first moving body's
   std::vector<Body> bodies_;
   std::vector<Relative> relatives_;
   std::map<int, size_t> body_of_marker_;  // marker id -> index in bodies_ (several bodies)
   std::vector<PoseStream> streams_;
   std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> stream_partials_;
-  std::unique_ptr<HealthMonitor> health_;  // per camera of the map
-  int64_t last_health_utime_ = INT64_MIN;  // last MCMT_TRACKER_STATUS (frame utime)
-  std::string health_change_;              // a map switch, for the next MCMT_TRACKER_STATUS
+  std::unique_ptr<HealthMonitor> health_;           // per camera of the map
+  int64_t last_health_utime_ = INT64_MIN;           // last MCMT_TRACKER_STATUS (frame utime)
+  std::string health_change_;                       // a map switch, for the next MCMT_TRACKER_STATUS
+  std::map<std::string, int> companions_;           // per camera: most other cameras seen with it on a body
+  std::map<std::string, int64_t> last_seen_utime_;  // per camera: last frame it saw a body with a pose
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
   int64_t last_published_utime_ = INT64_MIN;

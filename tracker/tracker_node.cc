@@ -179,7 +179,9 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   if (!switching) {
     FrameSyncOptions sync;
     sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
-    sync.deadline_us = static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0);
+    // A frame spans sync_tolerance_ms of capture time: its views cannot all have come before that.
+    sync.deadline_us =
+        std::max(static_cast<int64_t>(options_.tracker.deadline_ms * 1000.0), sync.tolerance_us);
     sync.camera_timeout_us = static_cast<int64_t>(options_.tracker.camera_timeout_s * 1e6);
     sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
     sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
@@ -192,6 +194,8 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     std::vector<std::string> names;
     for (const auto& c : map.cameras) names.push_back(c.name);
     health_ = std::make_unique<HealthMonitor>(names, options_.tracker.health);  // a new map: every camera ok
+    companions_.clear();
+    last_seen_utime_.clear();
     if (switching) health_change_ = "new map from " + origin + ": every camera judged afresh";
   }
   if (switching) stats_.map_switches++;
@@ -380,25 +384,27 @@ std::vector<PoseSolution> TrackerNode::SolveBodies(const std::vector<MarkerObser
     }
   }
   std::vector<PoseSolution> out;
+  FrameJudgement judged;
   for (size_t b = 0; b < bodies_.size(); ++b) {
     Body& body = bodies_[b];
     Rigid3 predicted;
     const Rigid3* prior = body.motion.Predict(utime, &predicted) ? &predicted : nullptr;
-    if (health_ && b == 0) {  // the cameras are judged on the first body
-      out.push_back(SolveJudgingCameras(mine[b], prior, utime));
-    } else if (health_) {  // the others leave out the excluded cameras
-      std::vector<MarkerObservation> kept;
-      for (const MarkerObservation& o : mine[b])
-        if (!health_->Excluded(o.camera)) kept.push_back(o);
-      out.push_back(body.estimator->Solve(kept, prior));
-    } else {
-      out.push_back(body.estimator->Solve(mine[b], prior));
+    // A view captured at another time than the frame's (within the sync tolerance; clocks corrected by
+    // the map's offsets) sees the body moved to its capture time along the body's velocity.
+    for (MarkerObservation& o : mine[b]) {
+      Rigid3 motion;
+      if (o.utime != utime && body.motion.Motion(utime, o.utime, &motion)) body.estimator->SeenAt(motion, &o);
     }
+    if (health_)  // every body judges the cameras that see it; excluded cameras are left out of all
+      out.push_back(SolveJudgingCameras(*body.estimator, mine[b], prior, &judged));
+    else
+      out.push_back(body.estimator->Solve(mine[b], prior));
     if (out.back().ok())
       body.motion.Update(utime, out.back().rig_from_object);
     else
       body.motion.Reset();
   }
+  if (health_) UpdateHealth(judged, utime);
   return out;
 }
 
@@ -559,14 +565,19 @@ void TrackerNode::MaybePrintStatus() {
 LogReadReport TrackerNode::RunLog(const std::string& path, const StopToken& stop) {
   struct Item {
     int64_t utime = 0, seq = 0;
+    int64_t capture = 0;  // utime on the reference clock (the map's offsets)
     std::string camera, channel;
     std::vector<uint8_t> bytes;
   };
   std::vector<Item> segment;  // detections since the last map event
   auto track_segment = [&] {
+    // Capture time on the reference clock: the map's clock offsets applied (a camera whose images are
+    // 122 ms older than its stamps joins the frames it was captured in, not a frame 122 ms later).
+    for (Item& i : segment)
+      i.capture = estimator_ ? estimator_->map().ReferenceUtime(i.camera, i.utime) : i.utime;
     std::sort(segment.begin(), segment.end(), [](const Item& a, const Item& b) {
-      return CaptureOrderKey(a.utime, a.camera, a.seq, a.bytes) <
-             CaptureOrderKey(b.utime, b.camera, b.seq, b.bytes);
+      return CaptureOrderKey(a.capture, a.camera, a.seq, a.bytes) <
+             CaptureOrderKey(b.capture, b.camera, b.seq, b.bytes);
     });
     for (const Item& item : segment) OnDetections(item.channel, item.bytes.data(), item.bytes.size());
     segment.clear();

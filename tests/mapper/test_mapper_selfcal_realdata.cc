@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "detector/detector.h"
 #include "mapper/mapper.h"
+#include "tests/support/caliscope.h"
 
 namespace mcmt {
 namespace {
@@ -45,22 +46,6 @@ BoardCheck CheckBoard(const RigMap& map) {
   return out;
 }
 
-// The session detected once per test program with each camera's own frame times (caliscope_time: camera).
-const std::vector<detections_t>& CameraTimeDetections(const RigConfig& rig) {
-  static const std::vector<detections_t> all = [&] {
-    RigConfig copy = rig;
-    YAML::Node detector = copy.detector.node();
-    detector["caliscope_time"] = "camera";
-    std::vector<detections_t> out;
-    for (const CameraConfig& c : copy.cameras) {
-      std::vector<detections_t> d = DetectRecording(copy, c.name);
-      out.insert(out.end(), d.begin(), d.end());
-    }
-    return out;
-  }();
-  return all;
-}
-
 MapResult MapSession(const RigConfig& rig, IntrinsicsRefinement refine, bool offsets,
                      int64_t tolerance_us = 0) {
   MapperOptions options = MapperOptions::FromConfig(rig);
@@ -68,7 +53,7 @@ MapResult MapSession(const RigConfig& rig, IntrinsicsRefinement refine, bool off
   options.estimate_time_offsets = offsets;
   if (tolerance_us > 0) options.sync_tolerance_ms = 1e-3 * static_cast<double>(tolerance_us);
   Mapper mapper(options);
-  for (const auto& d : CameraTimeDetections(rig)) mapper.Add(d);
+  for (const auto& d : test::CaliscopeCameraTimeDetections(rig)) mapper.Add(d);
   return mapper.Solve();
 }
 
