@@ -3,6 +3,8 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace mcmt {
 
@@ -42,10 +44,11 @@ namespace {
 constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
 constexpr int kRegions = kBoundaries + 1;
 enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
+const double kMinMarginContrast = std::getenv("MCMT_MMC") ? std::atof(std::getenv("MCMT_MMC")) : 0.25;  // TEMP
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kParams, kParams>* jtj,
+double Evaluate(const SideProfiles& s, const double* p, bool single, Eigen::Matrix<double, kParams, kParams>* jtj,
                 Eigen::Matrix<double, kParams, 1>* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
@@ -83,7 +86,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
     double level[kRegions];
-    level[0] = p[kS2], level[1] = p[kS1];
+    level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
       const double w = s.count[g * n + j];
@@ -122,7 +125,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
         grad[kSigma] -= d * zs[i];
         if (b == 0) grad[kQ] += d;
       }
-      grad[kS2] += indicator[0], grad[kS1] += indicator[1];
+      grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
       grad *= scale;
@@ -179,7 +182,7 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
 }
 
 // One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
-bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_contrast_out) {
+bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -219,10 +222,15 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
   const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
+  static const char* force_gamma = std::getenv("MCMT_FORCE_GAMMA");  // TEMP
+  if (force_gamma) lo[kGamma] = hi[kGamma] = std::atof(force_gamma);
+  static const char* qmin = std::getenv("MCMT_QMIN");  // TEMP
+  if (qmin) lo[kQ] = std::atof(qmin) * c;
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
+  if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
   Normal jtj;
   Vector jtr;
-  double cost = Evaluate(s, p, &jtj, &jtr);
+  double cost = Evaluate(s, p, single, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -244,7 +252,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
@@ -268,17 +276,49 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
   return true;
 }
 
+void DebugFit(const SideProfiles& s, const SideFit& f, bool ok) {  // TEMP
+  static const bool on = std::getenv("MCMT_SIDE_DEBUG") != nullptr;
+  if (!on) return;
+  std::fprintf(stderr, "SIDE ok %d cell %.2f e %+.3f sig %.2f L0 %.1f L1 %.1f S1 %.1f S2 %.1f q/c %.2f g %.2f\n", ok,
+               s.cell, f.params[0], f.params[1], f.params[2], f.params[3], f.params[4], f.params[5],
+               f.params[6] / s.cell, f.params[7]);
+}
 }  // namespace
 
-bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
-  // Gamma is fitted freely; on a side without code contrast a gamma at its bound is the valley of a
-  // single step (SideProfiles::gamma_hint), and the side is fitted again with the hint.
+// One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
+// code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
+// side is fitted again with the hint.
+bool FitSurround(const SideProfiles& s, bool single, SideFit* fit) {
   const SideFit start = *fit;
   bool code_contrast = true;
-  const bool ok = FitOnce(s, false, fit, &code_contrast);
+  const bool ok = FitOnce(s, false, single, fit, &code_contrast);
   if (code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, fit, &code_contrast);
+  return FitOnce(s, true, single, fit, &code_contrast);
+}
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  const SideFit start = *fit;
+  if (start.warm && start.single_surround) {
+    const bool ok = FitSurround(s, true, fit);
+    DebugFit(s, *fit, ok);
+    return ok;
+  }
+  bool ok = FitSurround(s, false, fit);
+  DebugFit(s, *fit, ok);
+  fit->single_surround = false;
+  if (!ok) return false;
+  // A margin of nearly the border's level is no margin that could be printed (it would be border):
+  // the fit has moved the edge inward into the border and let the "margin" make up the step, a valley
+  // where the marker has no margin. The side is fitted again with one surround level.
+  const double* p = fit->params.data();
+  if (std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])) return true;
+  *fit = start;
+  fit->warm = false;
+  ok = FitSurround(s, true, fit);
+  DebugFit(s, *fit, ok);
+  fit->single_surround = ok;
+  return ok;
 }
 
 }  // namespace mcmt

@@ -63,6 +63,7 @@ struct SideFit {
   double contrast = 0;        // |L1 - L0|
   double gamma = 1;           // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;  // gamma was free (fit_gamma and the side shows code contrast)
+  bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};
