@@ -3,8 +3,6 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace mcmt {
 
@@ -44,12 +42,14 @@ namespace {
 constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
 constexpr int kRegions = kBoundaries + 1;
 enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
-const double kMinMarginContrast = std::getenv("MCMT_MMC") ? std::atof(std::getenv("MCMT_MMC")) : 0.25;  // TEMP
+// A margin differs from the border's level by at least this fraction of the border-to-code contrast
+// (a print's margin is paper or ink of the other colour; FitSideProfiles).
+constexpr double kMinMarginContrast = 0.4;
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, bool single, Eigen::Matrix<double, kParams, kParams>* jtj,
-                Eigen::Matrix<double, kParams, 1>* jtr) {
+double Evaluate(const SideProfiles& s, const double* p, bool single,
+                Eigen::Matrix<double, kParams, kParams>* jtj, Eigen::Matrix<double, kParams, 1>* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
@@ -222,10 +222,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
-  static const char* force_gamma = std::getenv("MCMT_FORCE_GAMMA");  // TEMP
-  if (force_gamma) lo[kGamma] = hi[kGamma] = std::atof(force_gamma);
-  static const char* qmin = std::getenv("MCMT_QMIN");  // TEMP
-  if (qmin) lo[kQ] = std::atof(qmin) * c;
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
   if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
   Normal jtj;
@@ -276,13 +272,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   return true;
 }
 
-void DebugFit(const SideProfiles& s, const SideFit& f, bool ok) {  // TEMP
-  static const bool on = std::getenv("MCMT_SIDE_DEBUG") != nullptr;
-  if (!on) return;
-  std::fprintf(stderr, "SIDE ok %d cell %.2f e %+.3f sig %.2f L0 %.1f L1 %.1f S1 %.1f S2 %.1f q/c %.2f g %.2f\n", ok,
-               s.cell, f.params[0], f.params[1], f.params[2], f.params[3], f.params[4], f.params[5],
-               f.params[6] / s.cell, f.params[7]);
-}
 }  // namespace
 
 // One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
@@ -299,13 +288,9 @@ bool FitSurround(const SideProfiles& s, bool single, SideFit* fit) {
 
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   const SideFit start = *fit;
-  if (start.warm && start.single_surround) {
-    const bool ok = FitSurround(s, true, fit);
-    DebugFit(s, *fit, ok);
-    return ok;
-  }
+  // A side fitted with one surround level in the previous pass stays so (warm-started).
+  if (start.warm && start.single_surround) return FitSurround(s, true, fit);
   bool ok = FitSurround(s, false, fit);
-  DebugFit(s, *fit, ok);
   fit->single_surround = false;
   if (!ok) return false;
   // A margin of nearly the border's level is no margin that could be printed (it would be border):
@@ -316,7 +301,6 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   *fit = start;
   fit->warm = false;
   ok = FitSurround(s, true, fit);
-  DebugFit(s, *fit, ok);
   fit->single_surround = ok;
   return ok;
 }
