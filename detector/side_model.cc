@@ -277,30 +277,32 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
 // One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
 // code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
 // side is fitted again with the hint.
-bool FitSurround(const SideProfiles& s, bool single, SideFit* fit) {
+bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast) {
   const SideFit start = *fit;
-  bool code_contrast = true;
-  const bool ok = FitOnce(s, false, single, fit, &code_contrast);
-  if (code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
+  const bool ok = FitOnce(s, false, single, fit, code_contrast);
+  if (*code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, single, fit, &code_contrast);
+  return FitOnce(s, true, single, fit, code_contrast);
 }
 
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   const SideFit start = *fit;
   // A side fitted with one surround level in the previous pass stays so (warm-started).
-  if (start.warm && start.single_surround) return FitSurround(s, true, fit);
-  bool ok = FitSurround(s, false, fit);
+  bool code_contrast = true;
+  if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
+  bool ok = FitSurround(s, false, fit, &code_contrast);
   fit->single_surround = false;
   if (!ok) return false;
   // A margin of nearly the border's level is no margin that could be printed (it would be border):
   // the fit has moved the edge inward into the border and let the "margin" make up the step, a valley
   // where the marker has no margin. The side is fitted again with one surround level.
+  // Only where the side shows the code's level next to the border's (without, L1 is free).
   const double* p = fit->params.data();
-  if (std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])) return true;
+  if (!code_contrast || std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0]))
+    return true;
   *fit = start;
   fit->warm = false;
-  ok = FitSurround(s, true, fit);
+  ok = FitSurround(s, true, fit, &code_contrast);
   fit->single_surround = ok;
   return ok;
 }
