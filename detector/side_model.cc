@@ -210,7 +210,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   lo[kE] = -c, hi[kE] = c;
   lo[kSigma] = 0.15, hi[kSigma] = 4.0;
   for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
-  lo[kQ] = 0.4 * c, hi[kQ] = 4.0 * c;
+  // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
+  // sat 0.03 px further inward on the reference renderer's "hard" condition).
+  lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
   bool code_contrast = false;
