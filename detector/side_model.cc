@@ -42,11 +42,14 @@ namespace {
 constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
 constexpr int kRegions = kBoundaries + 1;
 enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
+// A margin differs from the border's level by at least this fraction of the border-to-code contrast
+// (a print's margin is paper or ink of the other colour; FitSideProfiles).
+constexpr double kMinMarginContrast = 0.4;
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kParams, kParams>* jtj,
-                Eigen::Matrix<double, kParams, 1>* jtr) {
+double Evaluate(const SideProfiles& s, const double* p, bool single,
+                Eigen::Matrix<double, kParams, kParams>* jtj, Eigen::Matrix<double, kParams, 1>* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
@@ -83,7 +86,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
     double level[kRegions];
-    level[0] = p[kS2], level[1] = p[kS1];
+    level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
       const double w = s.count[g * n + j];
@@ -122,7 +125,7 @@ double Evaluate(const SideProfiles& s, const double* p, Eigen::Matrix<double, kP
         grad[kSigma] -= d * zs[i];
         if (b == 0) grad[kQ] += d;
       }
-      grad[kS2] += indicator[0], grad[kS1] += indicator[1];
+      grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
       grad *= scale;
@@ -179,7 +182,7 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
 }
 
 // One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
-bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_contrast_out) {
+bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -207,7 +210,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
   lo[kE] = -c, hi[kE] = c;
   lo[kSigma] = 0.15, hi[kSigma] = 4.0;
   for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
-  lo[kQ] = 0.4 * c, hi[kQ] = 4.0 * c;
+  // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
+  // sat 0.03 px further inward on the reference renderer's "hard" condition).
+  lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
   bool code_contrast = false;
@@ -220,9 +225,10 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
+  if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
   Normal jtj;
   Vector jtr;
-  double cost = Evaluate(s, p, &jtj, &jtr);
+  double cost = Evaluate(s, p, single, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -244,7 +250,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
@@ -270,15 +276,37 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, SideFit* fit, bool* code_co
 
 }  // namespace
 
-bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
-  // Gamma is fitted freely; on a side without code contrast a gamma at its bound is the valley of a
-  // single step (SideProfiles::gamma_hint), and the side is fitted again with the hint.
+// One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
+// code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
+// side is fitted again with the hint.
+bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast) {
   const SideFit start = *fit;
-  bool code_contrast = true;
-  const bool ok = FitOnce(s, false, fit, &code_contrast);
-  if (code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
+  const bool ok = FitOnce(s, false, single, fit, code_contrast);
+  if (*code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, fit, &code_contrast);
+  return FitOnce(s, true, single, fit, code_contrast);
+}
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  const SideFit start = *fit;
+  // A side fitted with one surround level in the previous pass stays so (warm-started).
+  bool code_contrast = true;
+  if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
+  bool ok = FitSurround(s, false, fit, &code_contrast);
+  fit->single_surround = false;
+  if (!ok) return false;
+  // A margin of nearly the border's level is no margin that could be printed (it would be border):
+  // the fit has moved the edge inward into the border and let the "margin" make up the step, a valley
+  // where the marker has no margin. The side is fitted again with one surround level.
+  // Only where the side shows the code's level next to the border's (without, L1 is free).
+  const double* p = fit->params.data();
+  if (!code_contrast || std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0]))
+    return true;
+  *fit = start;
+  fit->warm = false;
+  ok = FitSurround(s, true, fit, &code_contrast);
+  fit->single_surround = ok;
+  return ok;
 }
 
 }  // namespace mcmt

@@ -13,6 +13,9 @@
 // along the side: the profiles are averaged per pattern of the rows (a group), and all groups share
 // e, sigma, L0, L1, S1, S2, q. The inner boundaries are edges known on both sides; the outer edge
 // brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
+// A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
+// that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
+// the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
 #include <array>
@@ -58,11 +61,12 @@ struct SideProfiles {
 };
 
 struct SideFit {
-  double e = 0;               // outer edge, px outward from the line the profiles were sampled about
-  double sigma = 0;           // blur, px
-  double contrast = 0;        // |L1 - L0|
-  double gamma = 1;           // fitted encoding gamma (1 unless fit_gamma)
-  bool gamma_fitted = false;  // gamma was free (fit_gamma and the side shows code contrast)
+  double e = 0;                  // outer edge, px outward from the line the profiles were sampled about
+  double sigma = 0;              // blur, px
+  double contrast = 0;           // |L1 - L0|
+  double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
+  bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
+  bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};

@@ -26,17 +26,20 @@ struct Bounds {
 // corners inward. A side without a clean mid-level crossing (a narrow margin between a dark border and a
 // dark surround) now keeps its line for the side model instead of failing the marker over to
 // cornerSubPix: offsets before -> after: no margin -0.055 -> -0.043, wood -0.069 -> -0.028, webcam
-// -0.082 -> -0.055 (the bounds of wood and webcam failed before).
+// -0.082 -> -0.055 (the bounds of wood and webcam failed before). No margin meets the targets since a
+// side whose fitted margin has the border's level is refitted with one surround level (side_model.h):
+// -0.043 / 0.076 px -> +0.008 / 0.074 (recall75 0.923 -> 0.949; fails the target bounds before); with
+// margins modelled down to 0.2 cells (was 0.4) hard -0.081 -> -0.052 (fails 0.06 before), wood -0.028
+// -> -0.021.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"no margin, grey surface", {0.05, 0.13, 0.99, 0.90}},
       {"half-cell margin, black tool", {1e9, 1e9, 0.0, 0.0}},
-      {"half-cell margin, wood", {0.04, 0.13, 0.2, 0.4}},
+      {"half-cell margin, wood", {0.03, 0.13, 0.2, 0.4}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.95, 0.65}},
       {"defocus r 1.5", {0.02, 0.10, 0.99, 0.85}},
       {"gamma 2.2", {0.02, 0.10, 0.99, 0.80}},
       {"webcam", {0.07, 0.10, 0.70, 0.60}},
-      {"hard", {0.09, 0.20, 0.90, 0.80}},
+      {"hard", {0.06, 0.20, 0.90, 0.80}},
   };
   return s;
 }
