@@ -560,6 +560,14 @@ MarkerDetector::~MarkerDetector() = default;
 
 void MarkerDetector::SetCamera(const CameraModel& camera) { camera_ = std::make_unique<CameraModel>(camera); }
 
+const cv::Mat& MarkerDetector::MarkerBits(int id) {
+  cv::Mat& bits = bits_[id];
+  if (bits.empty())
+    bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(id, id + 1),
+                                                      dictionary_->markerSize);
+  return bits;
+}
+
 void MarkerDetector::Reset() {
   last_.clear();
   frames_since_full_ = 0;
@@ -579,6 +587,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   p->maxMarkerPerimeterRate = max_perimeter / side;
   p->polygonalApproxAccuracyRate = options_.polygonal_approx_rate;
   p->minCornerDistanceRate = options_.min_corner_distance_rate;
+  p->minMarkerDistanceRate = options_.min_marker_distance_rate;
   p->minDistanceToBorder = options_.min_distance_to_border;
   p->errorCorrectionRate = options_.error_correction_rate;
   p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;
@@ -702,24 +711,46 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     frames_since_full_ = 0;
     ++stats_.full_searches;
   }
-  // Duplicated ids (regions overlapping in fast mode give the same marker twice: keep one; two
-  // distinct places with one id: one is wrong, drop both).
+  // Duplicated ids. One marker found twice (regions overlapping in fast mode, quads of one marker from
+  // two threshold windows, or the marker's and its narrow margin's quads both decoding): quads whose
+  // centres lie inside each other, kept once, the quad whose code reads best. Two distinct places
+  // with one id: one is wrong, both dropped (drop_duplicate_ids).
+  const int cells = dictionary_->markerSize + 2;
   std::map<int, std::vector<size_t>> by_id;
   for (size_t i = 0; i < raw.size(); ++i) by_id[raw[i].id].push_back(i);
   std::vector<Raw> unique;
   for (const auto& [id, indices] : by_id) {
+    if (indices.size() == 1) {
+      unique.push_back(raw[indices[0]]);
+      continue;
+    }
+    auto inside = [&](size_t a, size_t b) {  // the centre of quad a inside quad b
+      cv::Point2d centre(0, 0);
+      for (const auto& c : raw[a].corners) centre += 0.25 * c;
+      std::vector<cv::Point2f> quad;
+      for (const auto& c : raw[b].corners)
+        quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+      return cv::pointPolygonTest(
+                 quad, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
+    };
     bool same_place = true;
     for (size_t j = 1; j < indices.size(); ++j)
-      same_place = same_place && cv::norm(raw[indices[j]].corners[0] - raw[indices[0]].corners[0]) < 2.0;
-    if (indices.size() > 1 && !same_place && options_.drop_duplicate_ids) continue;
-    if (indices.size() > 1 && !same_place) {
-      for (size_t j : indices) unique.push_back(raw[j]);
-    } else {
-      unique.push_back(raw[indices[0]]);
+      same_place = same_place && inside(indices[j], indices[0]) && inside(indices[0], indices[j]);
+    if (!same_place) {
+      if (!options_.drop_duplicate_ids)
+        for (size_t j : indices) unique.push_back(raw[j]);
+      continue;
     }
+    const cv::Mat& bits = MarkerBits(id);
+    size_t best = indices[0];
+    int best_mismatches = cells * cells + 1;
+    for (size_t j : indices) {
+      const int mismatches = CodeMismatches(gray, raw[j].corners, bits, cells);
+      if (mismatches < best_mismatches) best = j, best_mismatches = mismatches;
+    }
+    unique.push_back(raw[best]);
   }
 
-  const int cells = dictionary_->markerSize + 2;
   // Inverted prints (markers.inverted): only white-bordered markers are real; the dark parts of an
   // inverted marker can look like a normal one.
   if (markers_.inverted && options_.inverted) {
@@ -756,10 +787,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   out.reserve(unique.size());
   for (Raw& r : unique) {
     if (options_.corner_refinement == "edges") {
-      cv::Mat& bits = bits_[r.id];
-      if (bits.empty())
-        bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(r.id, r.id + 1),
-                                                          dictionary_->markerSize);
+      const cv::Mat& bits = MarkerBits(r.id);
       // Sharp images (the camera's fitted blur below 0.55 px): interpolated edge profiles lock to the
       // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
       // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under

@@ -55,6 +55,13 @@ struct DetectorOptions {
   double max_perimeter_rate = 4.0;      // largest, relative to the image's larger side
   double polygonal_approx_rate = 0.05;  // contour -> quadrilateral tolerance, relative to perimeter
   double min_corner_distance_rate = 0.05;
+  // Candidates whose corners are closer than this (rms, relative to the smaller perimeter) are one
+  // candidate to OpenCV, which decodes only the biggest. OpenCV's default 0.05 puts a narrow margin's
+  // outer edge (a quad half a cell outside the marker, over a dark surround) with the marker and decodes
+  // only the margin's quad, whose border reads white: the marker is lost. 0.01 keeps margins of 0.2 cell
+  // and more apart; quads of one marker from two threshold windows then both decode (the same id at
+  // one place: kept once, the one whose code reads best).
+  double min_marker_distance_rate = 0.01;
   int min_distance_to_border = 1;           // pixels
   double error_correction_rate = 0.6;       // of the dictionary's correction capacity
   int perspective_pixels_per_cell = 6;      // bit sampling resolution
@@ -131,6 +138,7 @@ class MarkerDetector {
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max) const;
   std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
+  const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
 
   MarkerConfig markers_;
   DetectorOptions options_;

@@ -1,0 +1,132 @@
+// Why markers are missed: renders reference images of one imaging condition (the bench_accuracy
+// scenes), runs the detector, and for every marker it misses (>= 20 px, <= 75 deg) tells what OpenCV's
+// candidate search saw at each adaptive-threshold window: the nearest contour's polygon, whether it is
+// a quadrilateral near the true corners, and which check drops it. Writes each image with misses and
+// its threshold images to DIR (PNG) to look at.
+//   diag_recall CONDITION_SUBSTRING [images per cell (3)] [DIR (/tmp/recall_diag)]
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tests/detector/accuracy.h"
+
+using namespace mcmt;
+
+namespace {
+double MeanCornerDistance(const std::vector<cv::Point>& poly, const std::array<cv::Point2d, 4>& truth) {
+  double best = 1e9;
+  for (int rot = 0; rot < 4; ++rot)
+    for (int dir = 0; dir < 2; ++dir) {
+      double d = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int j = dir ? (rot + k) % 4 : (rot - k + 4) % 4;
+        d += cv::norm(cv::Point2d(poly[j].x, poly[j].y) - truth[k]) / 4;
+      }
+      best = std::min(best, d);
+    }
+  return best;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: diag_recall CONDITION [images per cell] [DIR]\n");
+    return 2;
+  }
+  const char* only = argv[1];
+  const int images = argc > 2 ? std::atoi(argv[2]) : 3;
+  const std::string dir = argc > 3 ? argv[3] : "/tmp/recall_diag";
+  mkdir(dir.c_str(), 0755);
+  cv::setNumThreads(1);
+  const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};
+  const double angles[3][2] = {{0, 40}, {40, 60}, {60, 75}};
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  const DetectorOptions options;
+  uint64_t seed = 1;
+  int dumped = 0, missed = 0, visible = 0;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    const bool selected = std::strstr(im.name.c_str(), only) != nullptr;
+    for (int s = 0; s < 3; ++s)
+      for (int g = 0; g < 3; ++g) {
+        ++seed;
+        if (!selected) continue;
+        testing::ReferenceScene scene;
+        scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
+        scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
+        MarkerDetector detector(mc, options);
+        std::mt19937_64 rng(seed);
+        for (int i = 0; i < images; ++i) {
+          std::vector<testing::RenderedMarker> truth;
+          const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+          const std::vector<marker_t> found = detector.Detect(image);
+          bool any = false;
+          for (const auto& t : truth) {
+            if (t.view_angle_deg > 75 || t.side_px < 20) continue;
+            ++visible;
+            bool hit = false;
+            for (const auto& m : found) hit = hit || m.id == t.id;
+            if (hit) continue;
+            ++missed;
+            any = true;
+            std::printf("seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f)\n",
+                        static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg,
+                        t.corners[0].x, t.corners[0].y);
+            double perimeter = 0;
+            for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
+            for (int w = options.adaptive_window_min; w <= options.adaptive_window_max;
+                 w += options.adaptive_window_step) {
+              cv::Mat thr;
+              cv::adaptiveThreshold(image, thr, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, w,
+                                    options.adaptive_constant);
+              std::vector<std::vector<cv::Point>> contours;
+              cv::findContours(thr, contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+              // The contour whose points come nearest the true outline (mean of its best 4 distances).
+              double best = 1e9;
+              std::vector<cv::Point> best_poly;
+              size_t best_size = 0;
+              for (const auto& c : contours) {
+                if (c.size() < 8) continue;
+                std::vector<cv::Point> poly;
+                cv::approxPolyDP(c, poly, c.size() * options.polygonal_approx_rate, true);
+                double d = 1e9;
+                if (poly.size() == 4) d = MeanCornerDistance(poly, t.corners);
+                // Contours that are not quads: distance of the contour's bounding box centre.
+                const cv::Rect box = cv::boundingRect(c);
+                cv::Point2d centre(0, 0);
+                for (const auto& k : t.corners) centre += 0.25 * k;
+                const double dc =
+                    cv::norm(cv::Point2d(box.x + box.width / 2.0, box.y + box.height / 2.0) - centre);
+                const double score = poly.size() == 4 ? d : 100 + dc + std::abs(double(c.size()) - perimeter);
+                if (score < best) best = score, best_poly = poly, best_size = c.size();
+              }
+              std::printf(
+                  "  window %2d: nearest contour %zu px (true perimeter %.0f), polygon %zu vertices, %s "
+                  "%.2f\n",
+                  w, best_size, perimeter, best_poly.size(), best < 100 ? "quad corner error" : "score",
+                  best);
+              if (!any || true) {
+                char name[256];
+                std::snprintf(name, sizeof(name), "%s/s%llu_i%d_w%d.png", dir.c_str(),
+                              static_cast<unsigned long long>(seed), i, w);
+                if (dumped < 40) cv::imwrite(name, thr);
+              }
+            }
+          }
+          if (any && dumped < 40) {
+            char name[256];
+            std::snprintf(name, sizeof(name), "%s/s%llu_i%d.png", dir.c_str(),
+                          static_cast<unsigned long long>(seed), i);
+            cv::imwrite(name, image);
+            ++dumped;
+          }
+        }
+      }
+  }
+  std::printf("missed %d of %d markers (>= 20 px, <= 75 deg)\n", missed, visible);
+  return 0;
+}
