@@ -68,6 +68,48 @@ TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   EXPECT_LE(all.MedianError(), 0.10);
 }
 
+// No wrong id on images without a dictionary marker: squares of random code patterns (every one at
+// least 7 bits from every id of the dictionary in every rotation: outside the correction margin)
+// printed like markers, on plain, wood-grain and dark surfaces, under the catalogue's imaging, where
+// the candidate search's relaxed grouping (min_marker_distance_rate) tries more candidates than
+// OpenCV's default does.
+TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  std::mt19937_64 rng(17);
+  std::vector<cv::Mat> patterns;
+  while (patterns.size() < 250) {
+    cv::Mat bits(dict->markerSize, dict->markerSize, CV_8U);
+    for (int i = 0; i < bits.rows * bits.cols; ++i) bits.at<uint8_t>(i) = rng() & 1;
+    int nearest = 1000;
+    for (int id = 0; id < dict->bytesList.rows; ++id)
+      nearest = std::min(nearest, dict->getDistanceToId(bits, id));
+    if (nearest >= 7) patterns.push_back(cv::aruco::Dictionary::getByteListFromBits(bits));
+  }
+  cv::Mat bytes;
+  cv::vconcat(patterns, bytes);
+  const cv::aruco::Dictionary fake(bytes, dict->markerSize, 0);
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  int stock_detections = 0, squares = 0;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    MarkerDetector detector(mc, DetectorOptions());
+    testing::ReferenceScene scene;
+    scene.min_side_px = 15, scene.max_side_px = 80, scene.markers = 12;
+    int detections = 0;
+    for (int i = 0; i < 4; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(fake, scene, im, rng, &truth);
+      squares += static_cast<int>(truth.size());
+      detections += static_cast<int>(detector.Detect(image).size());
+      stock_detections += static_cast<int>(testing::StockDetect(image, dict, false).size());
+    }
+    EXPECT_EQ(detections, 0) << im.name;
+  }
+  std::printf("%d squares of non-dictionary patterns: stock OpenCV found %d markers\n", squares,
+              stock_detections);
+  EXPECT_GT(squares, 400);
+}
+
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the
 // marker's size or on its view angle.
 TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
