@@ -603,9 +603,9 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   } else {
     p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
   }
-  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<std::vector<cv::Point2f>> corners, rejected;
   std::vector<int> ids;
-  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p);
+  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p, rejected);
   std::vector<Raw> out;
   out.reserve(ids.size());
   for (size_t i = 0; i < ids.size(); ++i) {
@@ -615,7 +615,82 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
     for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[i][k].x + roi.x, corners[i][k].y + roi.y);
     out.push_back(r);
   }
+  if (options_.reread_rejected && options_.corner_refinement == "edges") {
+    const size_t accepted = out.size();
+    for (const auto& c : rejected) {
+      std::array<cv::Point2d, 4> quad;
+      for (int k = 0; k < 4; ++k) quad[k] = cv::Point2d(c[k].x + roi.x, c[k].y + roi.y);
+      // Not where a marker was accepted (a margin's or a window's other quad of it).
+      cv::Point2d centre(0, 0);
+      for (const auto& q : quad) centre += 0.25 * q;
+      bool covered = false;
+      for (size_t j = 0; j < accepted && !covered; ++j) {
+        std::vector<cv::Point2f> a;
+        for (const auto& q : out[j].corners) a.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+        covered = cv::pointPolygonTest(
+                      a, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
+      }
+      if (covered) continue;
+      Raw r;
+      if (RereadCandidate(gray, quad, &r) && markers_.Accepts(r.id)) out.push_back(r);
+    }
+  }
   return out;
+}
+
+bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                                     Raw* r) const {
+  const int cells = dictionary_->markerSize + 2;
+  // A dark-bordered quad (or a bright-bordered one with inverted markers) against its ring.
+  const int polarity = MarkerPolarity(gray, quad, cells);
+  if (polarity == 0 || (polarity < 0 && !options_.inverted) || (polarity > 0 && markers_.inverted))
+    return false;
+  // The quad's sides located by mid-level crossings (no code known yet): the contour's polygon sits up
+  // to a cell inside a blurred marker, and its cells read a cell off.
+  std::array<cv::Point2d, 4> corners = quad;
+  if (!RefineMarkerCorners(gray, cells, cv::Mat(), camera_.get(), 1, &corners, false)) return false;
+  // Cell centres, bilinear; two classes split where the between-class variance is largest (Otsu on the
+  // cells' values).
+  const cv::Matx33d h = QuadFromUnitSquare(corners);
+  std::vector<float> values(static_cast<size_t>(cells) * cells);
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &values[row * cells + col])) return false;
+    }
+  std::vector<float> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t n = sorted.size();
+  double total = 0;
+  for (float v : sorted) total += v;
+  double below = 0, best = -1, threshold = 0;
+  for (size_t i = 0; i + 1 < n; ++i) {
+    below += sorted[i];
+    const double w0 = double(i + 1) / n, w1 = 1.0 - w0;
+    const double m0 = below / (i + 1), m1 = (total - below) / (n - i - 1);
+    const double between = w0 * w1 * (m1 - m0) * (m1 - m0);
+    if (between > best) best = between, threshold = 0.5 * (sorted[i] + sorted[i + 1]);
+  }
+  if (sorted.back() - sorted.front() < 20.f) return false;
+  // Bits relative to the border's colour; at most one border cell of the other colour.
+  const bool dark_border = polarity > 0;
+  cv::Mat bits(cells, cells, CV_8U);
+  int border_errors = 0;
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const bool bright = values[row * cells + col] > threshold;
+      const uint8_t bit = bright == dark_border ? 1 : 0;
+      bits.at<uint8_t>(row, col) = bit;
+      if (row == 0 || col == 0 || row == cells - 1 || col == cells - 1) border_errors += bit;
+    }
+  if (border_errors > 1) return false;
+  int id = -1, rotation = 0;
+  const cv::Mat inner = bits(cv::Rect(1, 1, cells - 2, cells - 2)).clone();
+  if (!dictionary_->identify(inner, id, rotation, options_.error_correction_rate)) return false;
+  r->id = id;
+  // OpenCV's corner order for the rotation it reports (corner 0: the code's top-left).
+  for (int k = 0; k < 4; ++k) r->corners[k] = quad[(k + 4 - rotation) % 4];
+  return true;
 }
 
 std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) {

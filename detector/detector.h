@@ -62,6 +62,10 @@ struct DetectorOptions {
   // and more apart; quads of one marker from two threshold windows then both decode (the same id at
   // one place: kept once, the one whose code reads best).
   double min_marker_distance_rate = 0.01;
+  // Candidates OpenCV could not decode (blurred small markers: the contour's polygon a pixel inside,
+  // its cells read half a cell off) are read again at their sides' mid-level crossings (cell centres,
+  // at most one border cell wrong, the id checked by the dictionary with error_correction_rate).
+  bool reread_rejected = true;
   int min_distance_to_border = 1;           // pixels
   double error_correction_rate = 0.6;       // of the dictionary's correction capacity
   int perspective_pixels_per_cell = 6;      // bit sampling resolution
@@ -138,7 +142,10 @@ class MarkerDetector {
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max) const;
   std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
-  const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
+  const cv::Mat& MarkerBits(int id);
+  // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
+  bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                       Raw* r) const;  // the dictionary's bits of `id` (cached)
 
   MarkerConfig markers_;
   DetectorOptions options_;

@@ -47,6 +47,8 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "candidates closer than this (rms corner distance / perimeter) are one (OpenCV keeps the "
                 "biggest)",
                 InRange(0, 1))
+           .Add("reread_rejected", &O::reread_rejected,
+                "read candidates OpenCV rejected again at their sides' mid-level crossings")
            .Add("min_distance_to_border", &O::min_distance_to_border, "px",
                 "smallest distance of a candidate to the image border")
            .Add("error_correction_rate", &O::error_correction_rate, "",
