@@ -575,7 +575,7 @@ void MarkerDetector::Reset() {
 
 std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, const cv::Rect& roi,
                                                         double min_perimeter, double max_perimeter,
-                                                        int window_min, int window_max) const {
+                                                        int window_min, int window_max) {
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
@@ -638,8 +638,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   return out;
 }
 
-bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
-                                     Raw* r) const {
+bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
   const int cells = dictionary_->markerSize + 2;
   // A dark-bordered quad (or a bright-bordered one with inverted markers) against its ring.
   const int polarity = MarkerPolarity(gray, quad, cells);
@@ -647,6 +646,7 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
     return false;
   // The quad's sides located by mid-level crossings (no code known yet): the contour's polygon sits up
   // to a cell inside a blurred marker, and its cells read a cell off.
+  ++stats_.rereads;
   std::array<cv::Point2d, 4> corners = quad;
   if (!RefineMarkerCorners(gray, cells, cv::Mat(), camera_.get(), 1, &corners, false)) return false;
   // Cell centres, bilinear; two classes split where the between-class variance is largest (Otsu on the
@@ -688,6 +688,7 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
   const cv::Mat inner = bits(cv::Rect(1, 1, cells - 2, cells - 2)).clone();
   if (!dictionary_->identify(inner, id, rotation, options_.error_correction_rate)) return false;
   r->id = id;
+  ++stats_.rereads_found;
   // OpenCV's corner order for the rotation it reports (corner 0: the code's top-left).
   for (int k = 0; k < 4; ++k) r->corners[k] = quad[(k + 4 - rotation) % 4];
   return true;

@@ -103,6 +103,8 @@ struct DetectorStats {
   long long refine_failures = 0;  // markers whose edges could not be fitted (cornerSubPix or dropped)
   long long dropped = 0;          // ... of which dropped
   long long region_retries = 0;   // fast mode: regions searched again with every window
+  long long rereads = 0;          // rejected candidates read again (reread_rejected) ...
+  long long rereads_found = 0;    // ... of which markers
 };
 
 // Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
@@ -140,12 +142,11 @@ class MarkerDetector {
     std::array<cv::Point2d, 4> corners;
   };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
-                          double max_perimeter, int window_min, int window_max) const;
+                          double max_perimeter, int window_min, int window_max);
   std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
-  const cv::Mat& MarkerBits(int id);
+  const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
-  bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
-                       Raw* r) const;  // the dictionary's bits of `id` (cached)
+  bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
 
   MarkerConfig markers_;
   DetectorOptions options_;
