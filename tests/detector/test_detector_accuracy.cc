@@ -21,22 +21,20 @@ struct Bounds {
   double offset = 0.02, median = 0.10, recall60 = 0.99, recall75 = 0.90;
 };
 
-// Measured shortfalls (8 images per condition, seed 11): candidates lost by OpenCV's search on narrow
-// margins, blur at grazing angles; no-margin surrounds and markers left to cv::cornerSubPix still pull
-// corners inward. A side without a clean mid-level crossing (a narrow margin between a dark border and a
-// dark surround) now keeps its line for the side model instead of failing the marker over to
-// cornerSubPix: offsets before -> after: no margin -0.055 -> -0.043, wood -0.069 -> -0.028, webcam
-// -0.082 -> -0.055 (the bounds of wood and webcam failed before).
+// Measured shortfalls (8 images per condition, seed 11), asserted at what they reach. Candidates are
+// no longer lost on narrow margins (min_marker_distance_rate: OpenCV decoded only the margin's quad)
+// nor on blur (reread_rejected): recall below 60 deg is 1.000 in every condition (it was 0.0-0.96 on
+// the half-cell margins, 0.95 under blur). Still short: recall at 60-75 deg under blur and gamma (the
+// code's cells ~1 px across under 1.2 px blur), and offsets where no margin, a half-cell one on a
+// black tool, or sharpening + JPEG leave edges the side model does not fit yet (-0.05 to -0.08 px).
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"no margin, grey surface", {0.05, 0.13, 0.99, 0.90}},
-      {"half-cell margin, black tool", {1e9, 1e9, 0.0, 0.0}},
-      {"half-cell margin, wood", {0.04, 0.13, 0.2, 0.4}},
-      {"gaussian blur 1.2", {0.02, 0.10, 0.95, 0.65}},
-      {"defocus r 1.5", {0.02, 0.10, 0.99, 0.85}},
-      {"gamma 2.2", {0.02, 0.10, 0.99, 0.80}},
-      {"webcam", {0.07, 0.10, 0.70, 0.60}},
-      {"hard", {0.09, 0.20, 0.90, 0.80}},
+      {"no margin, grey surface", {0.055, 0.10, 0.99, 0.92}},
+      {"half-cell margin, black tool", {0.07, 0.10, 0.99, 0.87}},
+      {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
+      {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
+      {"webcam", {0.05, 0.10, 0.99, 0.92}},
+      {"hard", {0.08, 0.17, 0.99, 0.94}},
   };
   return s;
 }
