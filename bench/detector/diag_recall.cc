@@ -71,23 +71,19 @@ int main(int argc, char** argv) {
   const std::string dir = argc > 3 ? argv[3] : "/tmp/recall_diag";
   mkdir(dir.c_str(), 0755);
   cv::setNumThreads(1);
-  const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};
-  const double angles[3][2] = {{0, 40}, {40, 60}, {60, 75}};
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
   mc.dictionary = "DICT_6X6_250";
   const DetectorOptions options;
-  uint64_t seed = 1;
   int dumped = 0, missed = 0, visible = 0;
-  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
-    const bool selected = std::strstr(im.name.c_str(), only) != nullptr;
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  for (size_t c = 0; c < catalogue.size(); ++c) {
+    const testing::Imaging& im = catalogue[c];
+    if (!std::strstr(im.name.c_str(), only)) continue;
     for (int s = 0; s < 3; ++s)
       for (int g = 0; g < 3; ++g) {
-        ++seed;
-        if (!selected) continue;
-        testing::ReferenceScene scene;
-        scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
-        scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
+        const testing::ReferenceScene scene = testing::BenchScene(s, g);
+        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
         MarkerDetector detector(mc, options);
         std::mt19937_64 rng(seed);
         for (int i = 0; i < images; ++i) {
