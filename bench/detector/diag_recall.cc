@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
         for (int i = 0; i < images; ++i) {
           std::vector<testing::RenderedMarker> truth;
           const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+          const DetectorStats before = detector.stats();
           const std::vector<marker_t> found = detector.Detect(image);
           bool any = false;
           for (const auto& t : truth) {
@@ -99,9 +100,12 @@ int main(int argc, char** argv) {
             if (hit) continue;
             ++missed;
             any = true;
-            std::printf("seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f)\n",
-                        static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg,
-                        t.corners[0].x, t.corners[0].y);
+            std::printf(
+                "seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f); image: %lld "
+                "refinements failed, %lld dropped (a cell off)\n",
+                static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg, t.corners[0].x,
+                t.corners[0].y, detector.stats().refine_failures - before.refine_failures,
+                detector.stats().dropped - before.dropped);
             double perimeter = 0;
             for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
             for (int w = options.adaptive_window_min; w <= options.adaptive_window_max;
