@@ -554,6 +554,16 @@ MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOption
   options_.Validate();
   dictionary_ = LoadDictionary(markers.dictionary);
   bits_.resize(dictionary_->bytesList.rows);
+  // Rejected candidates are read again only where a random pattern is rarely taken for an id: the
+  // chance that one lies within the correction margin of any id in any rotation below 1e-3 (DICT_6X6_250
+  // at error_correction_rate 0.6: 1.1e-4; DICT_4X4_*: 3e-3 to 0.06, never), and not for inverted markers
+  // (their dark inner areas are candidates too).
+  const int n = dictionary_->markerSize * dictionary_->markerSize;
+  const int correctable = static_cast<int>(dictionary_->maxCorrectionBits * options_.error_correction_rate);
+  double within = 0, binomial = 1;  // sum over k <= correctable of C(n, k)
+  for (int k = 0; k <= correctable; ++k) within += binomial, binomial = binomial * (n - k) / (k + 1);
+  const double chance = within * 4.0 * dictionary_->bytesList.rows / std::pow(2.0, n);
+  reread_ = options_.reread_rejected && !options_.inverted && chance < 1e-3;
 }
 
 MarkerDetector::~MarkerDetector() = default;
@@ -587,7 +597,11 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   p->maxMarkerPerimeterRate = max_perimeter / side;
   p->polygonalApproxAccuracyRate = options_.polygonal_approx_rate;
   p->minCornerDistanceRate = options_.min_corner_distance_rate;
-  p->minMarkerDistanceRate = options_.min_marker_distance_rate;
+  // With inverted markers OpenCV's grouping is what pairs a quad with the one just inside it (it reads
+  // the smaller as a white-bordered marker): its default is kept there (0.01 gave wrong ids on
+  // DICT_4X4_1000, DetectorAccuracy.InvertedMarkers).
+  p->minMarkerDistanceRate = options_.inverted ? std::max(0.05, options_.min_marker_distance_rate)
+                                               : options_.min_marker_distance_rate;
   p->minDistanceToBorder = options_.min_distance_to_border;
   p->errorCorrectionRate = options_.error_correction_rate;
   p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;
@@ -615,7 +629,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
     for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[i][k].x + roi.x, corners[i][k].y + roi.y);
     out.push_back(r);
   }
-  if (options_.reread_rejected && options_.corner_refinement == "edges") {
+  if (reread_ && options_.corner_refinement == "edges") {
     const size_t accepted = out.size();
     for (const auto& c : rejected) {
       std::array<cv::Point2d, 4> quad;

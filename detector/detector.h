@@ -64,7 +64,9 @@ struct DetectorOptions {
   double min_marker_distance_rate = 0.01;
   // Candidates OpenCV could not decode (blurred small markers: the contour's polygon a pixel inside,
   // its cells read half a cell off) are read again at their sides' mid-level crossings (cell centres,
-  // at most one border cell wrong, the id checked by the dictionary with error_correction_rate).
+  // at most one border cell wrong, the id checked by the dictionary with error_correction_rate). Only
+  // with dictionaries where a random pattern is within the correction margin of an id with a chance
+  // below 1e-3 (DICT_6X6_250: 1.1e-4; not DICT_4X4_*), and not with inverted markers.
   bool reread_rejected = true;
   int min_distance_to_border = 1;           // pixels
   double error_correction_rate = 0.6;       // of the dictionary's correction capacity
@@ -152,6 +154,7 @@ class MarkerDetector {
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
+  bool reread_ = false;         // reread_rejected, where the dictionary makes it safe
   std::vector<cv::Mat> bits_;   // per id, cached
   cv::Mat smooth_;              // smoothed marker regions (sharp_smoothing)
   cv::Mat linear_;              // linearised marker regions (gamma)
