@@ -554,11 +554,29 @@ MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOption
   options_.Validate();
   dictionary_ = LoadDictionary(markers.dictionary);
   bits_.resize(dictionary_->bytesList.rows);
+  // Rejected candidates are read again only where a random pattern is rarely taken for an id: the
+  // chance that one lies within the correction margin of any id in any rotation below 1e-3 (DICT_6X6_250
+  // at error_correction_rate 0.6: 1.1e-4; DICT_4X4_*: 3e-3 to 0.06, never), and not for inverted markers
+  // (their dark inner areas are candidates too).
+  const int n = dictionary_->markerSize * dictionary_->markerSize;
+  const int correctable = static_cast<int>(dictionary_->maxCorrectionBits * options_.error_correction_rate);
+  double within = 0, binomial = 1;  // sum over k <= correctable of C(n, k)
+  for (int k = 0; k <= correctable; ++k) within += binomial, binomial = binomial * (n - k) / (k + 1);
+  const double chance = within * 4.0 * dictionary_->bytesList.rows / std::pow(2.0, n);
+  reread_ = options_.reread_rejected && !options_.inverted && chance < 1e-3;
 }
 
 MarkerDetector::~MarkerDetector() = default;
 
 void MarkerDetector::SetCamera(const CameraModel& camera) { camera_ = std::make_unique<CameraModel>(camera); }
+
+const cv::Mat& MarkerDetector::MarkerBits(int id) {
+  cv::Mat& bits = bits_[id];
+  if (bits.empty())
+    bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(id, id + 1),
+                                                      dictionary_->markerSize);
+  return bits;
+}
 
 void MarkerDetector::Reset() {
   last_.clear();
@@ -567,7 +585,7 @@ void MarkerDetector::Reset() {
 
 std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, const cv::Rect& roi,
                                                         double min_perimeter, double max_perimeter,
-                                                        int window_min, int window_max) const {
+                                                        int window_min, int window_max) {
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
@@ -579,6 +597,11 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   p->maxMarkerPerimeterRate = max_perimeter / side;
   p->polygonalApproxAccuracyRate = options_.polygonal_approx_rate;
   p->minCornerDistanceRate = options_.min_corner_distance_rate;
+  // With inverted markers OpenCV's grouping is what pairs a quad with the one just inside it (it reads
+  // the smaller as a white-bordered marker): its default is kept there (0.01 gave wrong ids on
+  // DICT_4X4_1000, DetectorAccuracy.InvertedMarkers).
+  p->minMarkerDistanceRate = options_.inverted ? std::max(0.05, options_.min_marker_distance_rate)
+                                               : options_.min_marker_distance_rate;
   p->minDistanceToBorder = options_.min_distance_to_border;
   p->errorCorrectionRate = options_.error_correction_rate;
   p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;
@@ -594,9 +617,9 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   } else {
     p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
   }
-  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<std::vector<cv::Point2f>> corners, rejected;
   std::vector<int> ids;
-  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p);
+  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p, rejected);
   std::vector<Raw> out;
   out.reserve(ids.size());
   for (size_t i = 0; i < ids.size(); ++i) {
@@ -606,7 +629,83 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
     for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[i][k].x + roi.x, corners[i][k].y + roi.y);
     out.push_back(r);
   }
+  if (reread_ && options_.corner_refinement == "edges") {
+    const size_t accepted = out.size();
+    for (const auto& c : rejected) {
+      std::array<cv::Point2d, 4> quad;
+      for (int k = 0; k < 4; ++k) quad[k] = cv::Point2d(c[k].x + roi.x, c[k].y + roi.y);
+      // Not where a marker was accepted (a margin's or a window's other quad of it).
+      cv::Point2d centre(0, 0);
+      for (const auto& q : quad) centre += 0.25 * q;
+      bool covered = false;
+      for (size_t j = 0; j < accepted && !covered; ++j) {
+        std::vector<cv::Point2f> a;
+        for (const auto& q : out[j].corners) a.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+        covered = cv::pointPolygonTest(
+                      a, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
+      }
+      if (covered) continue;
+      Raw r;
+      if (RereadCandidate(gray, quad, &r) && markers_.Accepts(r.id)) out.push_back(r);
+    }
+  }
   return out;
+}
+
+bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
+  const int cells = dictionary_->markerSize + 2;
+  // A dark-bordered quad (or a bright-bordered one with inverted markers) against its ring.
+  const int polarity = MarkerPolarity(gray, quad, cells);
+  if (polarity == 0 || (polarity < 0 && !options_.inverted) || (polarity > 0 && markers_.inverted))
+    return false;
+  // The quad's sides located by mid-level crossings (no code known yet): the contour's polygon sits up
+  // to a cell inside a blurred marker, and its cells read a cell off.
+  ++stats_.rereads;
+  std::array<cv::Point2d, 4> corners = quad;
+  if (!RefineMarkerCorners(gray, cells, cv::Mat(), camera_.get(), 1, &corners, false)) return false;
+  // Cell centres, bilinear; two classes split where the between-class variance is largest (Otsu on the
+  // cells' values).
+  const cv::Matx33d h = QuadFromUnitSquare(corners);
+  std::vector<float> values(static_cast<size_t>(cells) * cells);
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &values[row * cells + col])) return false;
+    }
+  std::vector<float> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t n = sorted.size();
+  double total = 0;
+  for (float v : sorted) total += v;
+  double below = 0, best = -1, threshold = 0;
+  for (size_t i = 0; i + 1 < n; ++i) {
+    below += sorted[i];
+    const double w0 = double(i + 1) / n, w1 = 1.0 - w0;
+    const double m0 = below / (i + 1), m1 = (total - below) / (n - i - 1);
+    const double between = w0 * w1 * (m1 - m0) * (m1 - m0);
+    if (between > best) best = between, threshold = 0.5 * (sorted[i] + sorted[i + 1]);
+  }
+  if (sorted.back() - sorted.front() < 20.f) return false;
+  // Bits relative to the border's colour; at most one border cell of the other colour.
+  const bool dark_border = polarity > 0;
+  cv::Mat bits(cells, cells, CV_8U);
+  int border_errors = 0;
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const bool bright = values[row * cells + col] > threshold;
+      const uint8_t bit = bright == dark_border ? 1 : 0;
+      bits.at<uint8_t>(row, col) = bit;
+      if (row == 0 || col == 0 || row == cells - 1 || col == cells - 1) border_errors += bit;
+    }
+  if (border_errors > 1) return false;
+  int id = -1, rotation = 0;
+  const cv::Mat inner = bits(cv::Rect(1, 1, cells - 2, cells - 2)).clone();
+  if (!dictionary_->identify(inner, id, rotation, options_.error_correction_rate)) return false;
+  r->id = id;
+  ++stats_.rereads_found;
+  // OpenCV's corner order for the rotation it reports (corner 0: the code's top-left).
+  for (int k = 0; k < 4; ++k) r->corners[k] = quad[(k + 4 - rotation) % 4];
+  return true;
 }
 
 std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) {
@@ -702,24 +801,46 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     frames_since_full_ = 0;
     ++stats_.full_searches;
   }
-  // Duplicated ids (regions overlapping in fast mode give the same marker twice: keep one; two
-  // distinct places with one id: one is wrong, drop both).
+  // Duplicated ids. One marker found twice (regions overlapping in fast mode, quads of one marker from
+  // two threshold windows, or the marker's and its narrow margin's quads both decoding): quads whose
+  // centres lie inside each other, kept once, the quad whose code reads best. Two distinct places
+  // with one id: one is wrong, both dropped (drop_duplicate_ids).
+  const int cells = dictionary_->markerSize + 2;
   std::map<int, std::vector<size_t>> by_id;
   for (size_t i = 0; i < raw.size(); ++i) by_id[raw[i].id].push_back(i);
   std::vector<Raw> unique;
   for (const auto& [id, indices] : by_id) {
+    if (indices.size() == 1) {
+      unique.push_back(raw[indices[0]]);
+      continue;
+    }
+    auto inside = [&](size_t a, size_t b) {  // the centre of quad a inside quad b
+      cv::Point2d centre(0, 0);
+      for (const auto& c : raw[a].corners) centre += 0.25 * c;
+      std::vector<cv::Point2f> quad;
+      for (const auto& c : raw[b].corners)
+        quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+      return cv::pointPolygonTest(
+                 quad, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
+    };
     bool same_place = true;
     for (size_t j = 1; j < indices.size(); ++j)
-      same_place = same_place && cv::norm(raw[indices[j]].corners[0] - raw[indices[0]].corners[0]) < 2.0;
-    if (indices.size() > 1 && !same_place && options_.drop_duplicate_ids) continue;
-    if (indices.size() > 1 && !same_place) {
-      for (size_t j : indices) unique.push_back(raw[j]);
-    } else {
-      unique.push_back(raw[indices[0]]);
+      same_place = same_place && inside(indices[j], indices[0]) && inside(indices[0], indices[j]);
+    if (!same_place) {
+      if (!options_.drop_duplicate_ids)
+        for (size_t j : indices) unique.push_back(raw[j]);
+      continue;
     }
+    const cv::Mat& bits = MarkerBits(id);
+    size_t best = indices[0];
+    int best_mismatches = cells * cells + 1;
+    for (size_t j : indices) {
+      const int mismatches = CodeMismatches(gray, raw[j].corners, bits, cells);
+      if (mismatches < best_mismatches) best = j, best_mismatches = mismatches;
+    }
+    unique.push_back(raw[best]);
   }
 
-  const int cells = dictionary_->markerSize + 2;
   // Inverted prints (markers.inverted): only white-bordered markers are real; the dark parts of an
   // inverted marker can look like a normal one.
   if (markers_.inverted && options_.inverted) {
@@ -756,10 +877,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   out.reserve(unique.size());
   for (Raw& r : unique) {
     if (options_.corner_refinement == "edges") {
-      cv::Mat& bits = bits_[r.id];
-      if (bits.empty())
-        bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary_->bytesList.rowRange(r.id, r.id + 1),
-                                                          dictionary_->markerSize);
+      const cv::Mat& bits = MarkerBits(r.id);
       // Sharp images (the camera's fitted blur below 0.55 px): interpolated edge profiles lock to the
       // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
       // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under

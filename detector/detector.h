@@ -55,6 +55,19 @@ struct DetectorOptions {
   double max_perimeter_rate = 4.0;      // largest, relative to the image's larger side
   double polygonal_approx_rate = 0.05;  // contour -> quadrilateral tolerance, relative to perimeter
   double min_corner_distance_rate = 0.05;
+  // Candidates whose corners are closer than this (rms, relative to the smaller perimeter) are one
+  // candidate to OpenCV, which decodes only the biggest. OpenCV's default 0.05 puts a narrow margin's
+  // outer edge (a quad half a cell outside the marker, over a dark surround) with the marker and decodes
+  // only the margin's quad, whose border reads white: the marker is lost. 0.01 keeps margins of 0.2 cell
+  // and more apart; quads of one marker from two threshold windows then both decode (the same id at
+  // one place: kept once, the one whose code reads best).
+  double min_marker_distance_rate = 0.01;
+  // Candidates OpenCV could not decode (blurred small markers: the contour's polygon a pixel inside,
+  // its cells read half a cell off) are read again at their sides' mid-level crossings (cell centres,
+  // at most one border cell wrong, the id checked by the dictionary with error_correction_rate). Only
+  // with dictionaries where a random pattern is within the correction margin of an id with a chance
+  // below 1e-3 (DICT_6X6_250: 1.1e-4; not DICT_4X4_*), and not with inverted markers.
+  bool reread_rejected = true;
   int min_distance_to_border = 1;           // pixels
   double error_correction_rate = 0.6;       // of the dictionary's correction capacity
   int perspective_pixels_per_cell = 6;      // bit sampling resolution
@@ -92,6 +105,8 @@ struct DetectorStats {
   long long refine_failures = 0;  // markers whose edges could not be fitted (cornerSubPix or dropped)
   long long dropped = 0;          // ... of which dropped
   long long region_retries = 0;   // fast mode: regions searched again with every window
+  long long rereads = 0;          // rejected candidates read again (reread_rejected) ...
+  long long rereads_found = 0;    // ... of which markers
 };
 
 // Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
@@ -129,13 +144,17 @@ class MarkerDetector {
     std::array<cv::Point2d, 4> corners;
   };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
-                          double max_perimeter, int window_min, int window_max) const;
+                          double max_perimeter, int window_min, int window_max);
   std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
+  const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
+  // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
+  bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
 
   MarkerConfig markers_;
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
+  bool reread_ = false;         // reread_rejected, where the dictionary makes it safe
   std::vector<cv::Mat> bits_;   // per id, cached
   cv::Mat smooth_;              // smoothed marker regions (sharp_smoothing)
   cv::Mat linear_;              // linearised marker regions (gamma)

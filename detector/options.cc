@@ -43,6 +43,12 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "contour -> quadrilateral tolerance, relative to the perimeter", InRange(0, 1, true, true))
            .Add("min_corner_distance_rate", &O::min_corner_distance_rate, "",
                 "smallest corner distance, relative to the perimeter")
+           .Add("min_marker_distance_rate", &O::min_marker_distance_rate, "",
+                "candidates closer than this (rms corner distance / perimeter) are one (OpenCV keeps the "
+                "biggest)",
+                InRange(0, 1))
+           .Add("reread_rejected", &O::reread_rejected,
+                "read candidates OpenCV rejected again at their sides' mid-level crossings")
            .Add("min_distance_to_border", &O::min_distance_to_border, "px",
                 "smallest distance of a candidate to the image border")
            .Add("error_correction_rate", &O::error_correction_rate, "",

@@ -33,28 +33,28 @@ int main(int argc, char** argv) {
   const int images = quick ? 2 : argc > 1 ? std::atoi(argv[1]) : 8;
   const char* only = argc > 2 ? argv[2] : nullptr;
   cv::setNumThreads(1);
-  const double sizes[3][2] = {{15, 25}, {25, 40}, {40, 60}};
-  const double angles[3][2] = {{0, 40}, {40, 60}, {60, 75}};
+  const auto& sizes = testing::kBenchSides;
+  const auto& angles = testing::kBenchAngles;
   std::printf("## Corner accuracy on the reference renderer (DICT_6X6_250, 640x480, %d images per cell)\n\n",
               images);
   std::printf(kHeader, "condition");
   Accuracy all, all_stock, by_size[3], by_size_stock[3], by_angle[3], by_angle_stock[3];
-  uint64_t seed = 1;
   std::ofstream dump;
   if (const char* path = std::getenv("MCMT_CORNER_DUMP")) dump.open(path);
   dump.precision(10);
-  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  for (size_t c = 0; c < catalogue.size(); ++c) {
+    const testing::Imaging& im = catalogue[c];
     if (only && !std::strstr(im.name.c_str(), only)) continue;
     Accuracy cond, cond_stock;
     for (int s = 0; s < 3; ++s)
       for (int g = 0; g < 3; ++g) {
-        testing::ReferenceScene scene;
-        scene.min_side_px = sizes[s][0], scene.max_side_px = sizes[s][1];
-        scene.min_angle_deg = angles[g][0], scene.max_angle_deg = angles[g][1];
+        const testing::ReferenceScene scene = testing::BenchScene(s, g);
+        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
         Accuracy stock;
         std::vector<marker_t> found;
         const Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images,
-                                                     ++seed, &stock, &found);
+                                                     seed, &stock, &found);
         for (const marker_t& m : found) {
           dump << m.id;
           for (int k = 0; k < 4; ++k) dump << ' ' << m.corners[k][0] << ' ' << m.corners[k][1];

@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
       "fast full searches | fast vs accurate corners, max px (<= 75 deg) | stock detectMarkers ms | "
       "no clean edge fit (accurate/fast) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  long long rereads = 0, rereads_found = 0;
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {
     if (only_width > 0 && size[0] != only_width) continue;
@@ -141,6 +142,7 @@ int main(int argc, char** argv) {
       full += fast.stats().full_searches;
       fails_a += accurate.stats().refine_failures;
       fails_f += fast.stats().refine_failures;
+      rereads += accurate.stats().rereads, rereads_found += accurate.stats().rereads_found;
     }
     const int n = num_cameras * frames;
     std::printf("| %dx%d | %d-%d | %.2f | %.0f | %.2f | %.0f | %lld of %d | %.3f | %.2f | %lld/%lld |\n",
@@ -148,6 +150,8 @@ int main(int argc, char** argv) {
                 fast_ms / n, 1000.0 * n / fast_ms, full, n, max_diff, stock_ms / n, fails_a, fails_f);
     std::fflush(stdout);
   }
+  std::printf("\nRejected candidates read again (accurate mode): %lld, of which markers: %lld\n", rereads,
+              rereads_found);
   std::printf(
       "\nPeak resident memory of this benchmark (all images of one resolution held in memory): %.0f MB\n",
       PeakRssMb());

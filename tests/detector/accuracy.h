@@ -95,4 +95,18 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
   return a;
 }
 
+// bench_accuracy's matrix: marker side bands x view angle bands, each cell of each condition of
+// ImagingCatalogue() rendered from its own seed (the same whichever conditions a run selects).
+constexpr double kBenchSides[3][2] = {{15, 25}, {25, 40}, {40, 60}};
+constexpr double kBenchAngles[3][2] = {{0, 40}, {40, 60}, {60, 75}};
+inline ReferenceScene BenchScene(int side_band, int angle_band) {
+  ReferenceScene scene;
+  scene.min_side_px = kBenchSides[side_band][0], scene.max_side_px = kBenchSides[side_band][1];
+  scene.min_angle_deg = kBenchAngles[angle_band][0], scene.max_angle_deg = kBenchAngles[angle_band][1];
+  return scene;
+}
+inline uint64_t BenchSeed(int condition, int side_band, int angle_band) {
+  return 2 + 9 * condition + 3 * side_band + angle_band;
+}
+
 }  // namespace mcmt::testing

@@ -21,25 +21,23 @@ struct Bounds {
   double offset = 0.02, median = 0.10, recall60 = 0.99, recall75 = 0.90;
 };
 
-// Measured shortfalls (8 images per condition, seed 11): candidates lost by OpenCV's search on narrow
-// margins, blur at grazing angles; no-margin surrounds and markers left to cv::cornerSubPix still pull
-// corners inward. A side without a clean mid-level crossing (a narrow margin between a dark border and a
-// dark surround) now keeps its line for the side model instead of failing the marker over to
-// cornerSubPix: offsets before -> after: no margin -0.055 -> -0.043, wood -0.069 -> -0.028, webcam
-// -0.082 -> -0.055 (the bounds of wood and webcam failed before). No margin meets the targets since a
-// side whose fitted margin has the border's level is refitted with one surround level (side_model.h):
-// -0.043 / 0.076 px -> +0.008 / 0.074 (recall75 0.923 -> 0.949; fails the target bounds before); with
-// margins modelled down to 0.2 cells (was 0.4) hard -0.081 -> -0.052 (fails 0.06 before), wood -0.028
-// -> -0.021.
+// Measured shortfalls (8 images per condition, seed 11), asserted at what they reach. Candidates are
+// no longer lost on narrow margins (min_marker_distance_rate: OpenCV decoded only the margin's quad)
+// nor on blur (reread_rejected): recall below 60 deg is 1.000 in every condition (it was 0.0-0.96 on
+// the half-cell margins, 0.95 under blur). A side whose fitted margin has the border's level is refitted
+// with one surround level, and margins are modelled down to 0.2 cells (side_model.h): no margin
+// -0.043 -> +0.008 px, hard -0.081 -> -0.052, wood -0.028 -> -0.021. Still short: recall at 60-75 deg
+// under blur and gamma (the code's cells ~1 px across under 1.2 px blur), and offsets where a half-cell
+// margin on a black tool, or sharpening + JPEG leave edges the side model does not fit yet.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"half-cell margin, black tool", {1e9, 1e9, 0.0, 0.0}},
-      {"half-cell margin, wood", {0.03, 0.13, 0.2, 0.4}},
-      {"gaussian blur 1.2", {0.02, 0.10, 0.95, 0.65}},
-      {"defocus r 1.5", {0.02, 0.10, 0.99, 0.85}},
-      {"gamma 2.2", {0.02, 0.10, 0.99, 0.80}},
-      {"webcam", {0.07, 0.10, 0.70, 0.60}},
-      {"hard", {0.06, 0.20, 0.90, 0.80}},
+      {"no margin, grey surface", {0.055, 0.10, 0.99, 0.92}},
+      {"half-cell margin, black tool", {0.07, 0.10, 0.99, 0.87}},
+      {"half-cell margin, wood", {0.03, 0.13, 0.99, 0.90}},
+      {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
+      {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
+      {"webcam", {0.07, 0.10, 0.99, 0.92}},
+      {"hard", {0.08, 0.20, 0.99, 0.94}},
   };
   return s;
 }
@@ -69,6 +67,48 @@ TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   // Every condition that meets the targets, together.
   EXPECT_LE(std::abs(all.MeanOffset()), 0.02);
   EXPECT_LE(all.MedianError(), 0.10);
+}
+
+// No wrong id on images without a dictionary marker: squares of random code patterns (every one at
+// least 7 bits from every id of the dictionary in every rotation: outside the correction margin)
+// printed like markers, on plain, wood-grain and dark surfaces, under the catalogue's imaging, where
+// the candidate search's relaxed grouping (min_marker_distance_rate) tries more candidates than
+// OpenCV's default does.
+TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  std::mt19937_64 rng(17);
+  std::vector<cv::Mat> patterns;
+  while (patterns.size() < 250) {
+    cv::Mat bits(dict->markerSize, dict->markerSize, CV_8U);
+    for (int i = 0; i < bits.rows * bits.cols; ++i) bits.at<uint8_t>(i) = rng() & 1;
+    int nearest = 1000;
+    for (int id = 0; id < dict->bytesList.rows; ++id)
+      nearest = std::min(nearest, dict->getDistanceToId(bits, id));
+    if (nearest >= 7) patterns.push_back(cv::aruco::Dictionary::getByteListFromBits(bits));
+  }
+  cv::Mat bytes;
+  cv::vconcat(patterns, bytes);
+  const cv::aruco::Dictionary fake(bytes, dict->markerSize, 0);
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  int stock_detections = 0, squares = 0;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    MarkerDetector detector(mc, DetectorOptions());
+    testing::ReferenceScene scene;
+    scene.min_side_px = 15, scene.max_side_px = 80, scene.markers = 12;
+    int detections = 0;
+    for (int i = 0; i < 4; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(fake, scene, im, rng, &truth);
+      squares += static_cast<int>(truth.size());
+      detections += static_cast<int>(detector.Detect(image).size());
+      stock_detections += static_cast<int>(testing::StockDetect(image, dict, false).size());
+    }
+    EXPECT_EQ(detections, 0) << im.name;
+  }
+  std::printf("%d squares of non-dictionary patterns: stock OpenCV found %d markers\n", squares,
+              stock_detections);
+  EXPECT_GT(squares, 400);
 }
 
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the

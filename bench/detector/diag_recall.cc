@@ -1,0 +1,162 @@
+// Why markers are missed: renders reference images of one imaging condition (the bench_accuracy
+// scenes), runs the detector, and for every marker it misses (>= 20 px, <= 75 deg) tells what OpenCV's
+// candidate search saw at each adaptive-threshold window: the nearest contour's polygon, whether it is
+// a quadrilateral near the true corners, and which check drops it. Writes each image with misses and
+// its threshold images to DIR (PNG) to look at.
+//   diag_recall CONDITION_SUBSTRING [images per cell (3)] [DIR (/tmp/recall_diag)]
+//   diag_recall --cost: thread CPU time of Detect on the catalogue's renders with and without
+//   reread_rejected, and how many rejected candidates were read again.
+#include <sys/stat.h>
+#include <time.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tests/detector/accuracy.h"
+
+using namespace mcmt;
+
+namespace {
+double MeanCornerDistance(const std::vector<cv::Point>& poly, const std::array<cv::Point2d, 4>& truth) {
+  double best = 1e9;
+  for (int rot = 0; rot < 4; ++rot)
+    for (int dir = 0; dir < 2; ++dir) {
+      double d = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int j = dir ? (rot + k) % 4 : (rot - k + 4) % 4;
+        d += cv::norm(cv::Point2d(poly[j].x, poly[j].y) - truth[k]) / 4;
+      }
+      best = std::min(best, d);
+    }
+  return best;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: diag_recall CONDITION [images per cell] [DIR]\n");
+    return 2;
+  }
+  if (std::strcmp(argv[1], "--cost") == 0) {
+    auto dict = LoadDictionary("DICT_6X6_250");
+    MarkerConfig mc;
+    mc.dictionary = "DICT_6X6_250";
+    std::vector<cv::Mat> renders;
+    std::mt19937_64 rng(5);
+    for (const testing::Imaging& im : testing::ImagingCatalogue())
+      for (int i = 0; i < 4; ++i) {
+        std::vector<testing::RenderedMarker> truth;
+        renders.push_back(testing::RenderReference(*dict, testing::ReferenceScene(), im, rng, &truth));
+      }
+    cv::setNumThreads(1);
+    for (bool reread : {false, true, false, true}) {
+      DetectorOptions o;
+      o.reread_rejected = reread;
+      MarkerDetector detector(mc, o);
+      timespec t0{}, t1{};
+      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+      size_t markers = 0;
+      for (const cv::Mat& image : renders) markers += detector.Detect(image).size();
+      clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+      const double ms = 1e3 * (t1.tv_sec - t0.tv_sec) + 1e-6 * (t1.tv_nsec - t0.tv_nsec);
+      std::printf("reread_rejected %d: %.2f ms per image, %zu markers, %lld rereads (%lld markers)\n", reread,
+                  ms / renders.size(), markers, detector.stats().rereads, detector.stats().rereads_found);
+    }
+    return 0;
+  }
+  const char* only = argv[1];
+  const int images = argc > 2 ? std::atoi(argv[2]) : 3;
+  const std::string dir = argc > 3 ? argv[3] : "/tmp/recall_diag";
+  mkdir(dir.c_str(), 0755);
+  cv::setNumThreads(1);
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  const DetectorOptions options;
+  int dumped = 0, missed = 0, visible = 0;
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  for (size_t c = 0; c < catalogue.size(); ++c) {
+    const testing::Imaging& im = catalogue[c];
+    if (!std::strstr(im.name.c_str(), only)) continue;
+    for (int s = 0; s < 3; ++s)
+      for (int g = 0; g < 3; ++g) {
+        const testing::ReferenceScene scene = testing::BenchScene(s, g);
+        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+        MarkerDetector detector(mc, options);
+        std::mt19937_64 rng(seed);
+        for (int i = 0; i < images; ++i) {
+          std::vector<testing::RenderedMarker> truth;
+          const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+          const DetectorStats before = detector.stats();
+          const std::vector<marker_t> found = detector.Detect(image);
+          bool any = false;
+          for (const auto& t : truth) {
+            if (t.view_angle_deg > 75 || t.side_px < 20) continue;
+            ++visible;
+            bool hit = false;
+            for (const auto& m : found) hit = hit || m.id == t.id;
+            if (hit) continue;
+            ++missed;
+            any = true;
+            std::printf(
+                "seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f); image: %lld "
+                "refinements failed, %lld dropped (a cell off)\n",
+                static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg, t.corners[0].x,
+                t.corners[0].y, detector.stats().refine_failures - before.refine_failures,
+                detector.stats().dropped - before.dropped);
+            double perimeter = 0;
+            for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
+            for (int w = options.adaptive_window_min; w <= options.adaptive_window_max;
+                 w += options.adaptive_window_step) {
+              cv::Mat thr;
+              cv::adaptiveThreshold(image, thr, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, w,
+                                    options.adaptive_constant);
+              std::vector<std::vector<cv::Point>> contours;
+              cv::findContours(thr, contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+              // The contour whose points come nearest the true outline (mean of its best 4 distances).
+              double best = 1e9;
+              std::vector<cv::Point> best_poly;
+              size_t best_size = 0;
+              for (const auto& c : contours) {
+                if (c.size() < 8) continue;
+                std::vector<cv::Point> poly;
+                cv::approxPolyDP(c, poly, c.size() * options.polygonal_approx_rate, true);
+                double d = 1e9;
+                if (poly.size() == 4) d = MeanCornerDistance(poly, t.corners);
+                // Contours that are not quads: distance of the contour's bounding box centre.
+                const cv::Rect box = cv::boundingRect(c);
+                cv::Point2d centre(0, 0);
+                for (const auto& k : t.corners) centre += 0.25 * k;
+                const double dc =
+                    cv::norm(cv::Point2d(box.x + box.width / 2.0, box.y + box.height / 2.0) - centre);
+                const double score = poly.size() == 4 ? d : 100 + dc + std::abs(double(c.size()) - perimeter);
+                if (score < best) best = score, best_poly = poly, best_size = c.size();
+              }
+              std::printf(
+                  "  window %2d: nearest contour %zu px (true perimeter %.0f), polygon %zu vertices, %s "
+                  "%.2f\n",
+                  w, best_size, perimeter, best_poly.size(), best < 100 ? "quad corner error" : "score",
+                  best);
+              if (!any || true) {
+                char name[256];
+                std::snprintf(name, sizeof(name), "%s/s%llu_i%d_w%d.png", dir.c_str(),
+                              static_cast<unsigned long long>(seed), i, w);
+                if (dumped < 40) cv::imwrite(name, thr);
+              }
+            }
+          }
+          if (any && dumped < 40) {
+            char name[256];
+            std::snprintf(name, sizeof(name), "%s/s%llu_i%d.png", dir.c_str(),
+                          static_cast<unsigned long long>(seed), i);
+            cv::imwrite(name, image);
+            ++dumped;
+          }
+        }
+      }
+  }
+  std::printf("missed %d of %d markers (>= 20 px, <= 75 deg)\n", missed, visible);
+  return 0;
+}
