@@ -239,9 +239,9 @@ void Print(const std::vector<Row>& rows) {
   for (const Row& r : rows)
     if (!r.skipped)
       std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx | %.2f s | %.1fx |\n",
-                r.perturbation.c_str(), r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(),
-                r.seconds, r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0, r.cpu_s,
-                r.baseline_cpu_s > 0 ? r.cpu_s / r.baseline_cpu_s : 1.0);
+                  r.perturbation.c_str(), r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(),
+                  r.seconds, r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0, r.cpu_s,
+                  r.baseline_cpu_s > 0 ? r.cpu_s / r.baseline_cpu_s : 1.0);
 }
 
 int Main(int argc, char** argv) {
@@ -259,7 +259,9 @@ int Main(int argc, char** argv) {
     } else if (a == "--verbose") {
       verbose = true;
     } else {
-      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]\n");
+      std::fprintf(
+          stderr,
+          "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]\n");
       return 2;
     }
   }
