@@ -337,14 +337,7 @@ TEST(MapperSelfCal, SelfCalibrationCostJacobiansMatchNumeric) {
 // The observability test's covariances come from one information matrix with the held entries' rows and
 // columns dropped: they match the covariances computed afresh for the problem with those entries held.
 TEST(MapperSelfCal, CovarianceFromInformationMatchesAFreshOne) {
-  CameraModel model;
-  model.width = 640;
-  model.height = 480;
-  model.fx = model.fy = 500;
-  model.cx = 320;
-  model.cy = 240;
-  model.model = DistortionModel::kRadTan;
-  model.distortion = {0.02, -0.01, 0.0, 0.0, 0.0};
+  const CameraModel model = testing_util::TestCamera();  // radtan, 5 coefficients
   BundleProblem bp;
   for (int c = 0; c < 3; ++c) {
     Rigid3 cam_from_rig = Rigid3::Identity();
