@@ -377,6 +377,14 @@ int SetBlocks(std::vector<PoseBlock>* blocks, const std::vector<char>& used, con
   return n;
 }
 
+// Levenberg-Marquardt's first trust region (Ceres' default 1e4) with intrinsics or clocks among the
+// unknowns: a focal length trades with its camera's distance and an offset with the object's motion, weak
+// directions of J^T J that the default damping (1 / radius, relative to its diagonal) kept from moving
+// for many iterations while the radius grew 3x per step: bench_selfcal's everything row's solve with the
+// intrinsics took 9 iterations to the 1e-6 px stop (the RMS falling by 1e-4 px an iteration), 3 from
+// 1e8, to the same RMS (0.2791268 px) and cameras; a step that fails shrinks the radius as before.
+constexpr double kSelfCalibrationTrustRegionRadius = 1e8;
+
 // The linear solver ("auto": dense Schur for small reduced systems) and stopping rules.
 ceres::Solver::Options SolverOptions(const BundleSettings& settings, int num_reduced, std::string* solver) {
   ceres::Solver::Options options;
@@ -476,6 +484,8 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
 
   ceres::Solver::Options options = SolverOptions(settings, num_reduced, &out.linear_solver);
   options.linear_solver_ordering.reset(ordering);
+  if (!bp->intrinsics.empty() || bp->RefinesTime())
+    options.initial_trust_region_radius = kSelfCalibrationTrustRegionRadius;
   ProgressCallback callback(settings, num_corners);
   options.callbacks.push_back(&callback);
 
@@ -597,8 +607,10 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
 
 }  // namespace
 
-std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
-  std::vector<Eigen::MatrixXd> out(bp->cam_from_rig.size());
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int threads) {
+  IntrinsicsInformation out;
+  out.column.assign(bp->cam_from_rig.size(), -1);
+  out.entries.resize(bp->cam_from_rig.size());
   BuiltProblem built;
   BuildProblem(bp, 0.0, &built);
   delete built.ordering;
@@ -628,26 +640,73 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigm
   eo.num_threads = std::max(1, threads);
   ceres::CRSMatrix crs;
   if (!problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs)) return out;
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(FramesMarginalised(crs, num_reduced));
-  if (ldlt.info() != Eigen::Success) return out;
-  for (size_t c = 0; c < out.size(); ++c) {
+  out.information = FramesMarginalised(crs, num_reduced);
+  for (size_t c = 0; c < out.column.size(); ++c) {
     if (!bp->RefinesIntrinsics(static_cast<int>(c))) continue;
     const BundleIntrinsics& in = bp->intrinsics[c];
     const auto it = column.find(in.values.data());
-    const int n = static_cast<int>(in.values.size());
-    out[c] = Eigen::MatrixXd::Zero(n, n);
     if (it == column.end()) continue;
-    std::vector<int> entries;  // tangent index -> entry
-    for (int k = 0; k < n; ++k)
-      if (std::find(in.constant.begin(), in.constant.end(), k) == in.constant.end()) entries.push_back(k);
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_reduced, static_cast<int>(entries.size()));
-    for (size_t a = 0; a < entries.size(); ++a) rhs(it->second + static_cast<int>(a), a) = 1.0;
+    out.column[c] = it->second;
+    for (int k = 0; k < static_cast<int>(in.values.size()); ++k)
+      if (std::find(in.constant.begin(), in.constant.end(), k) == in.constant.end())
+        out.entries[c].push_back(k);
+  }
+  return out;
+}
+
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& info, const BundleProblem& bp,
+                                                  double sigma_px) {
+  std::vector<Eigen::MatrixXd> out(bp.cam_from_rig.size());
+  const int num_reduced = static_cast<int>(info.information.rows());
+  if (num_reduced == 0) return out;
+  // The unknowns still free: every column but those of the intrinsics entries held since (their rows and
+  // columns dropped: the frames' Schur complement of the rest is that submatrix).
+  std::vector<char> keep(num_reduced, 1);
+  for (size_t c = 0; c < out.size(); ++c) {
+    if (info.column[c] < 0) continue;
+    const std::vector<int>& entries = info.entries[c];
+    for (size_t a = 0; a < entries.size(); ++a) {
+      const std::vector<int>& constant = bp.intrinsics[c].constant;
+      const bool held = !bp.RefinesIntrinsics(static_cast<int>(c)) ||
+                        std::find(constant.begin(), constant.end(), entries[a]) != constant.end();
+      if (held) keep[info.column[c] + a] = 0;
+    }
+  }
+  std::vector<int> index(num_reduced, -1), kept;  // information column -> submatrix column
+  for (int i = 0; i < num_reduced; ++i)
+    if (keep[i]) {
+      index[i] = static_cast<int>(kept.size());
+      kept.push_back(i);
+    }
+  const int n_kept = static_cast<int>(kept.size());
+  Eigen::MatrixXd sub(n_kept, n_kept);
+  for (int a = 0; a < n_kept; ++a)
+    for (int b = 0; b < n_kept; ++b) sub(a, b) = info.information(kept[a], kept[b]);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(sub);
+  if (ldlt.info() != Eigen::Success) return out;
+  for (size_t c = 0; c < out.size(); ++c) {
+    if (!bp.RefinesIntrinsics(static_cast<int>(c))) continue;
+    const int n = static_cast<int>(bp.intrinsics[c].values.size());
+    out[c] = Eigen::MatrixXd::Zero(n, n);
+    if (info.column[c] < 0) continue;
+    std::vector<int> entries, columns;  // free entries and their submatrix columns
+    for (size_t a = 0; a < info.entries[c].size(); ++a)
+      if (index[info.column[c] + a] >= 0) {
+        entries.push_back(info.entries[c][a]);
+        columns.push_back(index[info.column[c] + a]);
+      }
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_kept, static_cast<int>(entries.size()));
+    for (size_t a = 0; a < entries.size(); ++a) rhs(columns[a], a) = 1.0;
     const Eigen::MatrixXd x = ldlt.solve(rhs);
     for (size_t a = 0; a < entries.size(); ++a)
       for (size_t b = 0; b < entries.size(); ++b)
-        out[c](entries[a], entries[b]) = sigma_px * sigma_px * x(it->second + static_cast<int>(a), b);
+        out[c](entries[a], entries[b]) = sigma_px * sigma_px * x(columns[a], b);
   }
   return out;
+}
+
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
+  return IntrinsicsCovariance(IntrinsicsInformationOf(bp, threads), *bp, sigma_px);
 }
 
 std::vector<double> ObservationRms(const BundleProblem& bp, std::vector<double>* max_corner_px) {

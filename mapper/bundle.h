@@ -208,6 +208,21 @@ BundleSummary SolveBundle(BundleProblem* problem, const BundleSettings& settings
 // noise sigma_px. Residuals with intrinsics given or constant do not need a block.
 std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* problem, double sigma_px, int threads);
 
+// The information behind IntrinsicsCovariance at the current parameters, for covariances after entries
+// are held: J^T J with the priors (unit corner noise) of every unknown but the frame poses, marginal over
+// the frames (their Schur complement); per camera the column of its intrinsics block (-1: none) and the
+// entries free there.
+struct IntrinsicsInformation {
+  Eigen::MatrixXd information;
+  std::vector<int> column;                // per camera
+  std::vector<std::vector<int>> entries;  // per camera: tangent index -> entry (IntrinsicsVector layout)
+};
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* problem, int threads);
+// IntrinsicsCovariance from `information` for the entries of `problem` free now (a subset of those free
+// when it was computed; the parameters not moved since): holding an entry drops its row and column.
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& information,
+                                                  const BundleProblem& problem, double sigma_px);
+
 // The object's pose observation k saw: its frame's pose moved to the capture time (ObservationTime).
 Rigid3 ObservedFramePose(const BundleProblem& problem, size_t k);
 

@@ -231,10 +231,11 @@ void PlacedAsIn(const RigMap& start, const Observations& observations,
 // The whole method on `messages` (their utimes as the frames' clocks). With `moves`, cameras that moved
 // are looked for after the first refinement: when there are any, the pass stops there with them and the
 // reference camera's name in *reference. With `start`, the layout and the cameras begin where that map
-// has them (PlacedAsIn) instead of from the graphs.
+// has them (PlacedAsIn) instead of from the graphs. velocity_passes: RefineWithRejection's.
 MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s, const MapperOptions& o,
                     std::vector<EpochSplit>* moves = nullptr, std::string* reference = nullptr,
-                    const std::vector<char>& split = {}, const RigMap* start = nullptr) {
+                    const std::vector<char>& split = {}, const RigMap* start = nullptr,
+                    int velocity_passes = 2) {
   const auto t_total = Clock::now();
   MapResult result;
   MapReport& report = result.report;
@@ -284,7 +285,7 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   if (o.refine) {
     const BundleSettings settings =
         WithProgress(BundleSettingsFor(o, threads), s.progress, o.max_iterations, &report.solves);
-    RefineWithRejection(observations, names, layout, o, settings, &bundle, &report);
+    RefineWithRejection(observations, names, layout, o, settings, &bundle, &report, velocity_passes);
     log.End("refine");
     if (moves && o.detect_moves) {
       *moves = FindCameraMoves(bundle.problem, frames, o, split);
@@ -356,15 +357,17 @@ int64_t SecondPassWindowUs(const std::vector<StoredMessage>& raw, const std::vec
 // Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
 // clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
 // the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
-// result. The first pass only finds the clocks: the intrinsics are refined in the second (refining them
-// in both took 2.2 of the 3.9 s of bench_selfcal's everything row; the clocks after the second pass are
-// the same within a few microseconds).
+// result. The first pass only finds the clocks the frames are re-assembled on: the intrinsics are refined
+// in the second (refining them in both took 2.2 of the 3.9 s of bench_selfcal's everything row; the clocks
+// after the second pass are the same within a few microseconds), and so are the velocities (the second
+// pass refines the clocks again from the first's). When the first pass's frames are the result, it is
+// solved again in full.
 MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const SolveInputs& s,
                                const MapperOptions& o) {
   MapperOptions first_options = o;
   first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   first_options.intrinsics.refine = IntrinsicsRefinement::kNone;
-  const MapResult first = SolvePass(messages, s, first_options);
+  const MapResult first = SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0);
   std::vector<StoredMessage> corrected = messages;
   for (StoredMessage& m : corrected) m.utime = first.map.ReferenceUtime(s.camera_names[m.camera], m.utime);
   MapperOptions second_options = o;
@@ -387,14 +390,11 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
     }
   }
   if (!worse.str().empty()) {
-    // The first pass's frames (and its offsets) are the result: solved again with the intrinsics when
-    // they are refined.
-    MapResult kept = first;
-    if (o.intrinsics.refine != IntrinsicsRefinement::kNone) {
-      first_options.intrinsics = o.intrinsics;
-      kept = SolvePass(messages, s, first_options);
-      kept.report.total_seconds += first.report.total_seconds;
-    }
+    // The first pass's frames (and its offsets) are the result: solved again in full (the velocities
+    // updated, the intrinsics refined when asked).
+    first_options.intrinsics = o.intrinsics;
+    MapResult kept = SolvePass(messages, s, first_options);
+    kept.report.total_seconds += first.report.total_seconds;
     kept.report.total_seconds += result.report.total_seconds;
     kept.report.warnings.push_back("time offsets: frames re-assembled on the corrected clocks " +
                                    worse.str() + ": the first pass's frames are kept");

@@ -162,7 +162,7 @@ bool RejectGrossResiduals(const Observations& observations, const ObservationNam
 
 void RefineWithRejection(const Observations& observations, const ObservationNames& names,
                          const MarkerLayout& layout, const MapperOptions& o, const BundleSettings& settings,
-                         MapperBundle* bundle, MapReport* report) {
+                         MapperBundle* bundle, MapReport* report, int velocity_passes) {
   double sigma_px = 0.0;
   BundleSettings solve_settings = settings;
   BundleProblem& bp = bundle->problem;
@@ -205,7 +205,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
   }
   // The velocities the offsets move poses along come from the poses: re-solve with them updated.
-  for (int pass = 0; bp.RefinesTime() && pass < 2; ++pass) {
+  for (int pass = 0; bp.RefinesTime() && pass < velocity_passes; ++pass) {
     UpdateFrameVelocities(VelocityGapS(bp), &bp);
     if (!Solve(solve_settings, bundle, report).usable) throw MapperError("refinement failed (time offsets)");
   }

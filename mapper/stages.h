@@ -187,10 +187,12 @@ MapperBundle MakeBundleProblem(const Observations& observations, const Observati
 BundleSettings BundleSettingsFor(const MapperOptions& options, int threads);
 
 // Solve, reject gross residuals (> outlier_px) and markers mostly rejected, re-solve, up to
-// max_rejection_rounds times. Throws MapperError when a solve fails.
+// max_rejection_rounds times; with clocks, re-solved velocity_passes times more with the frames'
+// velocities updated. Throws MapperError when a solve fails.
 void RefineWithRejection(const Observations& observations, const ObservationNames& names,
                          const MarkerLayout& layout, const MapperOptions& options,
-                         const BundleSettings& settings, MapperBundle* bundle, MapReport* report);
+                         const BundleSettings& settings, MapperBundle* bundle, MapReport* report,
+                         int velocity_passes = 2);
 
 // A camera whose observations mostly do not fit after refinement was placed wrongly: an error naming
 // it (which says when it is the reference), or with --allow-partial it is left out and the rest re-solved;

@@ -2,13 +2,15 @@
 // and drifts, both), the errors before and after refinement, the recovered values against the truth, and
 // the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
 //
-//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]
+//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]
 //
 // Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
 // noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
 // / --max-speed-m-s). --long: the quick-calibration rows again with that many frames (how the camera error
 // falls with more observations; 0: skipped). --seeds N: instead, the quick calibration over N sessions, why
-// the refined cameras' positions are worse (SeedRows). Prints a markdown table.
+// the refined cameras' positions are worse (SeedRows). --only TEXT: only the rows whose perturbation or
+// settings contain TEXT are mapped (besides their baselines), e.g. `--only clock_drift`. Prints a markdown
+// table.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,12 +30,14 @@ using testing::SelfCalRun;
 using testing::SelfCalSession;
 
 bool verbose = false;
+std::string only;  // --only
 
 struct Row {
   std::string perturbation, settings;
   double camera_mm = 0, object_mm = 0, seconds = 0, baseline_s = 0;
   double cpu_s = 0, baseline_cpu_s = 0;  // processor time of the mapping (all threads)
   std::string recovered;
+  bool skipped = false;  // --only
 };
 
 // Largest error of the refined focal lengths (%), principal points (px) and k1 over the cameras.
@@ -104,6 +108,11 @@ MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::st
 
 Row Measure(const SelfCalRun& run, const MapperOptions& options, const Row* baseline,
             const std::string& perturbation, const std::string& settings, const std::string& recovered_kind) {
+  if (baseline && !only.empty() && (perturbation + " " + settings).find(only) == std::string::npos) {
+    Row skipped;
+    skipped.skipped = true;
+    return skipped;
+  }
   double cpu_s = 0;
   const MapResult r = Map(run, options, perturbation + " / " + settings, &cpu_s);
   const sim::EvalResult e = sim::Evaluate(run.truth, &r.map, &r.trajectory);
@@ -228,10 +237,11 @@ void Print(const std::vector<Row>& rows) {
       "camera) | map time | vs defaults | processor time | vs defaults |\n");
   std::printf("|---|---|---:|---:|---|---:|---:|---:|---:|\n");
   for (const Row& r : rows)
-    std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx | %.2f s | %.1fx |\n",
-                r.perturbation.c_str(), r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(),
-                r.seconds, r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0, r.cpu_s,
-                r.baseline_cpu_s > 0 ? r.cpu_s / r.baseline_cpu_s : 1.0);
+    if (!r.skipped)
+      std::printf("| %s | %s | %.3f mm | %.3f mm | %s | %.2f s | %.1fx | %.2f s | %.1fx |\n",
+                  r.perturbation.c_str(), r.settings.c_str(), r.camera_mm, r.object_mm, r.recovered.c_str(),
+                  r.seconds, r.baseline_s > 0 ? r.seconds / r.baseline_s : 1.0, r.cpu_s,
+                  r.baseline_cpu_s > 0 ? r.cpu_s / r.baseline_cpu_s : 1.0);
 }
 
 int Main(int argc, char** argv) {
@@ -244,10 +254,14 @@ int Main(int argc, char** argv) {
       long_frames = std::atoi(argv[++i]);
     } else if (a == "--seeds" && i + 1 < argc) {
       seeds = std::atoi(argv[++i]);
+    } else if (a == "--only" && i + 1 < argc) {
+      only = argv[++i];
     } else if (a == "--verbose") {
       verbose = true;
     } else {
-      std::fprintf(stderr, "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--verbose]\n");
+      std::fprintf(
+          stderr,
+          "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]\n");
       return 2;
     }
   }

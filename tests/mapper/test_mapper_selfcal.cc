@@ -334,6 +334,77 @@ TEST(MapperSelfCal, SelfCalibrationCostJacobiansMatchNumeric) {
   }
 }
 
+// The observability test's covariances come from one information matrix with the held entries' rows and
+// columns dropped: they match the covariances computed afresh for the problem with those entries held.
+TEST(MapperSelfCal, CovarianceFromInformationMatchesAFreshOne) {
+  const CameraModel model = testing_util::TestCamera();  // radtan, 5 coefficients
+  BundleProblem bp;
+  for (int c = 0; c < 3; ++c) {
+    Rigid3 cam_from_rig = Rigid3::Identity();
+    cam_from_rig.linear() = Eigen::AngleAxisd(0.25 * (c - 1), Eigen::Vector3d::UnitY()).toRotationMatrix();
+    cam_from_rig.translation() = Eigen::Vector3d(0.3 * (c - 1), 0.02 * c, 0.0);
+    bp.cam_from_rig.push_back(BlockFromRigid(cam_from_rig));
+    bp.models.push_back(&model);
+  }
+  bp.camera_fixed = {1, 0, 0};
+  bp.object_from_marker = {BlockFromRigid(Rigid3::Identity())};
+  bp.marker_fixed = {1};
+  const double side = 0.12;
+  for (int f = 0; f < 30; ++f) {
+    const double t = 0.2 * f;
+    Rigid3 rig_from_object =
+        PerturbLeft(Rigid3::Identity(),
+                    (Vector6d() << 0.4 * std::sin(t), 0.3 * std::cos(1.3 * t), 0.2 * std::sin(0.7 * t),
+                     0.15 * std::sin(0.9 * t), 0.1 * std::cos(t), 1.0 + 0.25 * std::sin(0.5 * t))
+                        .finished());
+    bp.rig_from_object.push_back(BlockFromRigid(rig_from_object));
+    for (int c = 0; c < 3; ++c) {
+      const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[c].data()) * rig_from_object;
+      BundleObservation o;
+      o.camera = c;
+      o.frame = f;
+      o.side = side;
+      const MarkerCorners3d corners = MarkerCornersInMarker(side);
+      for (int k = 0; k < 4; ++k)
+        ASSERT_TRUE(model.Project(cam_from_marker * corners[k], &o.corners[k], nullptr));
+      bp.observations.push_back(o);
+    }
+  }
+  bp.active.assign(bp.observations.size(), 1);
+  bp.intrinsics.resize(3);
+  for (BundleIntrinsics& in : bp.intrinsics) {
+    in.refined = true;
+    in.values = in.prior = IntrinsicsVector(model);
+    in.sigma = {25, 25, 10, 10, 0.05, 0.05, 0.01, 0.01, 0.05};
+  }
+  const IntrinsicsInformation information = IntrinsicsInformationOf(&bp, 1);
+  // Held since: cam1's principal point and k3, all of cam2's entries.
+  bp.intrinsics[1].constant = {2, 3, 8};
+  bp.intrinsics[2].constant = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  bp.intrinsics[2].refined = false;
+  const std::vector<Eigen::MatrixXd> from_information = IntrinsicsCovariance(information, bp, 0.2);
+  const std::vector<Eigen::MatrixXd> fresh = IntrinsicsCovariance(&bp, 0.2, 1);
+  ASSERT_EQ(from_information.size(), 3u);
+  EXPECT_EQ(from_information[2].size(), 0);
+  for (int c = 0; c < 2; ++c) {
+    ASSERT_EQ(from_information[c].rows(), 9) << c;
+    ASSERT_EQ(fresh[c].rows(), 9) << c;
+    EXPECT_GT(from_information[c](0, 0), 0.0) << c;
+    EXPECT_LT((from_information[c] - fresh[c]).norm(), 1e-9 * fresh[c].norm()) << c;
+  }
+  EXPECT_EQ(from_information[1](2, 2), 0.0);  // held: no variance
+  // Holding cam2 changes cam0's covariance (the check is not trivially the unheld one).
+  const std::vector<Eigen::MatrixXd> none_held = [&] {
+    BundleProblem all = bp;
+    for (BundleIntrinsics& in : all.intrinsics) {
+      in.constant.clear();
+      in.refined = true;
+    }
+    return IntrinsicsCovariance(&all, 0.2, 1);
+  }();
+  EXPECT_GT((none_held[0] - fresh[0]).norm(), 1e-6 * fresh[0].norm());
+}
+
 }  // namespace
 }  // namespace mcmt
 
