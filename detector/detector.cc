@@ -227,12 +227,15 @@ cv::Vec3d UnitPoint(int side, double along, double depth) {
 
 // The side model's offset of side `side` (px, outward from `line`), or NaN. The rays (origins and
 // outward normals in raw pixels, ideal origins) are those of the crossing pass; only those in the
-// middle of a code column are used, grouped by the column's code rows.
+// middle of a code column are used, grouped by the column's code rows. `polarity`: the marker's
+// (SideProfiles::polarity). A fit of the wrong polarity took the first code row for the border (the
+// profiles lay about a cell inside the edge): the side is sampled and fitted again one cell outward.
 double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, double gamma_hint, SideProfiles* profiles, SideFit* fit) {
+               double sigma_along, bool fit_gamma, double gamma_hint, int polarity, SideProfiles* profiles,
+               SideFit* fit) {
   if (bits.empty()) return NAN;
   struct Ray {
     int index;
@@ -312,32 +315,48 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   const double du = std::clamp(cell / 4.0, 0.1, 0.5);
   const double u0 = -(SideProfiles::kRows - 0.4) * cell, u1 = 1.6 * cell + 1.0;
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
-  profiles->Reset(u0, du, bins, cell);
-  profiles->fit_gamma = fit_gamma;
-  profiles->gamma_hint = gamma_hint;
-  for (size_t r = 0; r < rays.size(); ++r) {
-    const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
-    const Eigen::Vector2d& o = origins[rays[r].index];
-    const Eigen::Vector2d& nrm = normals[rays[r].index];
-    for (int j = 0; j < bins; ++j) {
-      const double s = rays[r].delta + u0 + j * du;
-      float v;
-      if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+  // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
+  // the edge the model places, so they hold at any shift).
+  auto sample = [&](double shift) {
+    profiles->Reset(u0, du, bins, cell);
+    profiles->fit_gamma = fit_gamma;
+    profiles->gamma_hint = gamma_hint;
+    profiles->polarity = polarity;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
+      const Eigen::Vector2d& o = origins[rays[r].index];
+      const Eigen::Vector2d& nrm = normals[rays[r].index];
+      for (int j = 0; j < bins; ++j) {
+        const double s = rays[r].delta + shift + u0 + j * du;
+        float v;
+        if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+      }
     }
-  }
+  };
+  sample(0.0);
   // A previous pass's fit warm-starts this one (its edge moved to the line it found: e = 0 here).
   if (fit->warm) fit->e = 0.0;
-  if (!FitSideProfiles(*profiles, fit)) {
+  double shift = 0.0;
+  bool ok = FitSideProfiles(*profiles, fit);
+  if (!ok && fit->wrong_polarity) {
+    shift = cell;
+    sample(shift);
+    fit->warm = false;
+    fit->e = 0.0;
+    ok = FitSideProfiles(*profiles, fit);
+  }
+  if (!ok) {
     fit->warm = false;
     return NAN;
   }
   fit->warm = true;
+  fit->e += shift;
   return fit->e;
 }
 
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma, bool* kept_lines) {
+                bool fit_gamma, bool* kept_lines, int polarity) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -497,7 +516,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
         const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
                                  valid, origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint,
-                                 &side_profiles, &side_fits[side]);
+                                 polarity, &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) side_unfitted[side] = false;
         if (std::isfinite(e)) {
@@ -537,14 +556,14 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
-                         bool fit_gamma, bool* kept_lines) {
+                         bool fit_gamma, bool* kept_lines, int polarity) {
   if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
   return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma,
-                    kept_lines) ||
+                    kept_lines, polarity) ||
          RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma,
-                    kept_lines);
+                    kept_lines, polarity);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -927,9 +946,12 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool kept_lines = false;
+      // The border's polarity is known unless both prints are searched for (`inverted` without
+      // markers.inverted: a quad's border against its ring depends on the surround, not the print).
+      const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
       bool refined =
           RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
-                              options_.edge_model, &sigma, options_.gamma == 0, &kept_lines);
+                              options_.edge_model, &sigma, options_.gamma == 0, &kept_lines, polarity);
       // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
       // unrefined marker, not a confusing region.
       if (refined && !reads(r.corners)) refined = false, slid = !kept_lines;

@@ -115,10 +115,13 @@ struct DetectorStats {
 // top-left) may be empty; with it, edge samples next to bit cells of value 1 are skipped. `camera` may be
 // null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
 // A side without a clean mid-level crossing keeps the line through its current corners for the side
-// model to fit; `kept_lines` (optional) tells whether any side did.
+// model to fit; `kept_lines` (optional) tells whether any side did. `polarity`: +1 the border is darker
+// than the code's other colour, -1 brighter, 0 unknown (side fits of the wrong polarity are retried a
+// cell outward: SideProfiles::polarity).
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
-                         double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr);
+                         double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr,
+                         int polarity = 0);
 
 class MarkerDetector {
  public:

@@ -10,6 +10,7 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   u0 = u0_, du = du_, bins = bins_, cell = cell_;
   fit_gamma = false;
   gamma_hint = 1.0;
+  polarity = 0;
   patterns.clear();
   sum.reserve(static_cast<size_t>(16) * bins);
   count.reserve(static_cast<size_t>(16) * bins);
@@ -274,8 +275,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   return true;
 }
 
-}  // namespace
-
 // One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
 // code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
 // side is fitted again with the hint.
@@ -287,10 +286,13 @@ bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_co
   return FitOnce(s, true, single, fit, code_contrast);
 }
 
-bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+// The two-step surround model, refitted with one surround level where its margin has the border's level.
+// `code_contrast`: the side shows the code's level next to the border's.
+bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out) {
   const SideFit start = *fit;
   // A side fitted with one surround level in the previous pass stays so (warm-started).
-  bool code_contrast = true;
+  bool& code_contrast = *code_contrast_out;
+  code_contrast = true;
   if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
   bool ok = FitSurround(s, false, fit, &code_contrast);
   fit->single_surround = false;
@@ -307,6 +309,21 @@ bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   ok = FitSurround(s, true, fit, &code_contrast);
   fit->single_surround = ok;
   return ok;
+}
+
+}  // namespace
+
+bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
+  fit->wrong_polarity = false;
+  bool code_contrast = true;
+  const bool ok = FitSideModels(s, fit, &code_contrast);
+  // Without code contrast in the modelled rows the code's level L1 is free: no polarity to check.
+  if (!ok || s.polarity == 0 || !code_contrast) return ok;
+  // The border's level on the wrong side of the code's (the border darker than the other colour for
+  // polarity +1): the fit took the first code row for the border.
+  const double* p = fit->params.data();
+  fit->wrong_polarity = (p[kL1] - p[kL0]) * s.polarity < 0;
+  return !fit->wrong_polarity;
 }
 
 }  // namespace mcmt

@@ -39,6 +39,10 @@ struct SideProfiles {
   // moved half a pixel with gamma at its bound). The caller gives the marker's other sides' estimate.
   double gamma_hint = 1.0;
   double cell = 0;  // mean depth of one cell across this side, px
+  // The marker's polarity: +1 the border is darker than the code's other colour (a normal print), -1
+  // brighter (inverted), 0 unknown. A fit of the other polarity has taken a code row for the border (the
+  // profiles lie about a cell inside the edge) and is rejected (SideFit::wrong_polarity).
+  int polarity = 0;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
@@ -67,6 +71,7 @@ struct SideFit {
   double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
+  bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};
@@ -86,7 +91,8 @@ inline void PhiAndDensity(double z, double* big, double* small) {
 }
 
 // Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
-// sigma. Returns false when the fit fails or finds no contrast between the border and the code.
+// sigma. Returns false when the fit fails, finds no contrast between the border and the code, or finds
+// the border and code levels in the wrong order for SideProfiles::polarity (then fit->wrong_polarity).
 bool FitSideProfiles(const SideProfiles& profiles, SideFit* fit);
 
 }  // namespace mcmt
