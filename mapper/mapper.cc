@@ -1,14 +1,17 @@
 #include "mapper/mapper.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <thread>
+#include <tuple>
 #include <unordered_map>
 
 #include "core/lcm_util.h"
@@ -228,14 +231,49 @@ void PlacedAsIn(const RigMap& start, const Observations& observations,
   for (const auto& view : views) ++cameras->views[view.first];
 }
 
+// The square poses (step 1) depend on an observation's camera (its given intrinsics), corners and side
+// only, not on the frame its message joins: a pass on the same messages with other clocks takes them from
+// an earlier pass's observations (`earlier`, the same models and tau_e) and estimates the rest.
+void HypothesesAsIn(const std::vector<Observation>& earlier, const std::vector<CameraModel>& models,
+                    double tau_e, int threads, std::vector<Observation>* obs) {
+  using Key = std::tuple<int, double, std::array<double, 8>>;
+  auto key_of = [](const Observation& ob) {
+    Key key{ob.camera, ob.side, {}};
+    for (int i = 0; i < 4; ++i) {
+      std::get<2>(key)[2 * i] = ob.corners[i].x();
+      std::get<2>(key)[2 * i + 1] = ob.corners[i].y();
+    }
+    return key;
+  };
+  std::map<Key, const Observation*> found;
+  for (const Observation& ob : earlier) found.emplace(key_of(ob), &ob);
+  std::vector<Observation> missing;
+  std::vector<size_t> missing_at;
+  for (size_t i = 0; i < obs->size(); ++i) {
+    Observation& ob = (*obs)[i];
+    const auto it = found.find(key_of(ob));
+    if (it != found.end()) {
+      ob.pose = it->second->pose;
+      ob.kept = it->second->kept;
+    } else {
+      missing.push_back(ob);
+      missing_at.push_back(i);
+    }
+  }
+  EstimateHypotheses(models, tau_e, threads, &missing);
+  for (size_t j = 0; j < missing.size(); ++j) (*obs)[missing_at[j]] = missing[j];
+}
+
 // The whole method on `messages` (their utimes as the frames' clocks). With `moves`, cameras that moved
 // are looked for after the first refinement: when there are any, the pass stops there with them and the
 // reference camera's name in *reference. With `start`, the layout and the cameras begin where that map
-// has them (PlacedAsIn) instead of from the graphs. velocity_passes: RefineWithRejection's.
+// has them (PlacedAsIn) instead of from the graphs. velocity_passes: RefineWithRejection's. With
+// `square_poses` empty, it receives the observations with their square poses; non-empty, the poses are
+// taken from it (HypothesesAsIn).
 MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s, const MapperOptions& o,
                     std::vector<EpochSplit>* moves = nullptr, std::string* reference = nullptr,
                     const std::vector<char>& split = {}, const RigMap* start = nullptr,
-                    int velocity_passes = 2) {
+                    int velocity_passes = 2, std::vector<Observation>* square_poses = nullptr) {
   const auto t_total = Clock::now();
   MapResult result;
   MapReport& report = result.report;
@@ -253,7 +291,12 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   log.End("frames");
 
   log.Begin("hypotheses", "square poses of " + std::to_string(observations.obs.size()) + " observations");
-  EstimateHypotheses(s.models, o.tau_e, threads, &observations.obs);
+  if (square_poses && !square_poses->empty()) {
+    HypothesesAsIn(*square_poses, s.models, o.tau_e, threads, &observations.obs);
+  } else {
+    EstimateHypotheses(s.models, o.tau_e, threads, &observations.obs);
+    if (square_poses) *square_poses = observations.obs;
+  }
   for (const Observation& ob : observations.obs) report.ambiguous_observations += ob.kept == 2;
   log.End("hypotheses");
 
@@ -367,7 +410,9 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   MapperOptions first_options = o;
   first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   first_options.intrinsics.refine = IntrinsicsRefinement::kNone;
-  const MapResult first = SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0);
+  std::vector<Observation> square_poses;  // the first pass's, for the second (the same given intrinsics)
+  const MapResult first =
+      SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0, &square_poses);
   std::vector<StoredMessage> corrected = messages;
   for (StoredMessage& m : corrected) m.utime = first.map.ReferenceUtime(s.camera_names[m.camera], m.utime);
   MapperOptions second_options = o;
@@ -382,7 +427,7 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
     worse << "would spread the frames further";
   } else {
     try {
-      result = SolvePass(corrected, s, second_options, nullptr, nullptr, {}, &first.map);
+      result = SolvePass(corrected, s, second_options, nullptr, nullptr, {}, &first.map, 2, &square_poses);
       if (!(result.map.rms_px <= first.map.rms_px))
         worse << "fit worse (rms " << result.map.rms_px << " px against " << first.map.rms_px << " px)";
     } catch (const MapperError& e) {
@@ -393,7 +438,7 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
     // The first pass's frames (and its offsets) are the result: solved again in full (the velocities
     // updated, the intrinsics refined when asked).
     first_options.intrinsics = o.intrinsics;
-    MapResult kept = SolvePass(messages, s, first_options);
+    MapResult kept = SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 2, &square_poses);
     kept.report.total_seconds += first.report.total_seconds;
     kept.report.total_seconds += result.report.total_seconds;
     kept.report.warnings.push_back("time offsets: frames re-assembled on the corrected clocks " +
