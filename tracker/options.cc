@@ -229,6 +229,7 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   o.deadline_ms = sync.deadline_ms;
   o.camera_timeout_s = sync.camera_timeout_s;
   TrackerOptionTable().Load(rig.tracker, &o);
+  o.sync_tolerance_set = rig.tracker.Has("sync_tolerance_ms") || rig.sync.Has("tolerance_ms");
   LoadStreamOptions(rig.tracker, &o);
   CheckBetweenOptions(o, rig.tracker.file());
   CheckStreamOptions(o, rig.tracker.file());

@@ -244,6 +244,68 @@ TEST(VizRender, SuspectCamerasOrangeExcludedRedFromTheTrackerStatus) {
   EXPECT_EQ(ColouredNear(without, px[2], false), 0);
 }
 
+// Pixels within `radius` of px that look violet (B high, R above half of B, G below half of R): neither a
+// residual colour (B low), nor orange or red, nor the neutral light blue (G high).
+int VioletNear(const cv::Mat& bgr, const Eigen::Vector2d& px, int radius = 4) {
+  int n = 0;
+  for (int y = static_cast<int>(px.y()) - radius; y <= static_cast<int>(px.y()) + radius; ++y)
+    for (int x = static_cast<int>(px.x()) - radius; x <= static_cast<int>(px.x()) + radius; ++x) {
+      if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      const double b = p[0], g = p[1], r = p[2];
+      if (b > 100 && r > 0.5 * b && g < 0.5 * r) ++n;
+    }
+  return n;
+}
+
+TEST(VizRender, NotJudgedCamerasVioletFromTheTrackerStatus) {
+  const int w = 800, h = 450;
+  const auto rig = MakeTestRig(4, 12);
+  lcm::LCM lcm("memq://");
+  LcmCollector collector(lcm, 0);
+  tracker_status_t status;
+  for (size_t i = 0; i < rig.map.cameras.size(); ++i) {
+    camera_health_t c;
+    c.camera = rig.map.cameras[i].name;
+    c.state = i == 1   ? camera_health_t::STATE_NOT_JUDGED
+              : i == 2 ? camera_health_t::STATE_SUSPECT
+                       : camera_health_t::STATE_OK;
+    status.cameras.push_back(c);
+  }
+  status.num_cameras = static_cast<int32_t>(status.cameras.size());
+  const std::vector<uint8_t> bytes = Encode(status);
+  collector.Handle(kTrackerStatusChannel, bytes.data(), bytes.size());
+  ASSERT_EQ(collector.status_count(), 1);
+  EXPECT_EQ(collector.camera_states().at(rig.map.cameras[1].name), camera_health_t::STATE_NOT_JUDGED);
+  RigMap map = rig.map;  // no residuals: cameras neutral (light blue) unless flagged
+  for (MapCamera& c : map.cameras) c.rms_px = 0.0;
+  for (MapMarker& m : map.markers) m.rms_px = 0.0;
+  auto render = [&](const std::map<std::string, int>& states, VizScene* scene) {
+    scene->SetCameraStates(states);
+    scene->SetPanels({PanelInput{"map", map, rig.trajectory}});
+    scene->SetCurrentFrame(5);
+    return scene->Render(&Renderer(w, h));
+  };
+  VizScene flagged(BareOptions(w, h)), plain(BareOptions(w, h));
+  const cv::Mat with = render(collector.camera_states(), &flagged);
+  plain.SetView(flagged.view(0));
+  const cv::Mat without = render({}, &plain);
+  Dump(with, "camera_not_judged.png");
+  Eigen::Vector2d px[4];
+  for (int i = 0; i < 4; ++i)
+    ASSERT_TRUE(flagged.ProjectRigPoint(0, map.cameras[i].rig_from_cam.translation(), &px[i]));
+  EXPECT_GT(VioletNear(with, px[1]), 3) << "cam 1 (not judged) is not violet";
+  EXPECT_EQ(ColouredNear(with, px[1], true), 0) << "cam 1 (not judged) drawn as suspect";
+  EXPECT_EQ(ColouredNear(with, px[1], false), 0) << "cam 1 (not judged) drawn as excluded";
+  EXPECT_GT(ColouredNear(with, px[2], true), 3) << "cam 2 (suspect) is not orange";
+  EXPECT_EQ(VioletNear(with, px[2]), 0) << "cam 2 (suspect) drawn as not judged";
+  for (int i : {0, 3}) EXPECT_EQ(VioletNear(with, px[i]), 0) << i;
+  // Control: the same scene without the states has no violet there (the neutral blue is not violet).
+  EXPECT_EQ(VioletNear(without, px[1]), 0);
+  EXPECT_EQ(CameraStateSuffix(camera_health_t::STATE_NOT_JUDGED), " (not judged)");
+  EXPECT_EQ(CameraStateSuffix(camera_health_t::STATE_OK), "");
+}
+
 TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
   const int w = 640, h = 480;
   auto rig = MakeTestRig(2, 0);
