@@ -146,8 +146,8 @@ std::map<std::string, std::vector<int64_t>> Times(double fps, const std::vector<
   std::map<std::string, std::vector<int64_t>> out;
   for (size_t c = 0; c < phase_ms.size(); ++c)
     for (int f = 0; f < n; ++f)
-      out["cam" + std::to_string(c)].push_back(
-          std::llround(1e6 * f / fps + 1e3 * phase_ms[c] + 300.0 * ((f * 7 + c * 3) % 5 - 2) / 2.0));
+      out["cam" + std::to_string(c)].push_back(std::llround(
+          1e6 * f / fps + 1e3 * phase_ms[c] + 300.0 * ((f * 7 + static_cast<int>(c) * 3) % 5 - 2) / 2.0));
   return out;
 }
 
