@@ -157,7 +157,9 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   run.health = node.health()->Snapshot();
   run.poses = node.trajectory();
   run.frames = node.stats().frames;
-  std::cout << "[ health ] tolerance " << sync_tolerance_ms << " ms, offsets";
+  std::cout << "[ health ] tolerance "
+            << (sync_tolerance_ms >= 0 ? std::to_string(sync_tolerance_ms) + " ms" : std::string("chosen"))
+            << ", offsets";
   for (const MapCamera& c : map.cameras) std::cout << " " << c.name << " " << 1e-3 * c.time_offset_us;
   std::cout << " ms: " << run.frames << " frames\n";
   for (const CameraHealth& h : run.health)
