@@ -25,7 +25,10 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 "(default: sync.deadline_ms)",
                 Above(0))
            .Add("sync_tolerance_ms", &O::sync_tolerance_ms, "ms",
-                "detections this close in utime form one frame (default: sync.tolerance_ms)", AtLeast(0))
+                "detections this close in utime form one frame (default: sync.tolerance_ms; neither set and "
+                "the map has clock offsets: chosen from the cameras' phases over their first frames, half "
+                "the slowest frame interval, at most 100, when they are not triggered together)",
+                AtLeast(0))
            .Add("camera_timeout_s", &O::camera_timeout_s, "s",
                 "a camera silent this long is not waited for (default: sync.camera_timeout_s)", Above(0))
            .Add("max_wait_ms", &O::max_wait_ms, "ms",
@@ -229,6 +232,7 @@ TrackerOptions TrackerOptions::FromConfig(const RigConfig& rig) {
   o.deadline_ms = sync.deadline_ms;
   o.camera_timeout_s = sync.camera_timeout_s;
   TrackerOptionTable().Load(rig.tracker, &o);
+  o.sync_tolerance_set = rig.tracker.Has("sync_tolerance_ms") || rig.sync.Has("tolerance_ms");
   LoadStreamOptions(rig.tracker, &o);
   CheckBetweenOptions(o, rig.tracker.file());
   CheckStreamOptions(o, rig.tracker.file());

@@ -50,7 +50,11 @@ struct TrackerOptions {
   // after the frame's first detection; deadline_ms is the wait for cameras without a measured lag.
   double max_wait_ms = 100.0;
   double sync_tolerance_ms = 2.0;  // detections within this of a frame's utime belong to it
-  double camera_timeout_s = 1.0;   // a camera silent this long (message time) is not waited for
+  // Set by hand (tracker.sync_tolerance_ms or sync.tolerance_ms in the rig, or in code): used as it is.
+  // Otherwise, with a map that carries clock offsets, the tracker measures the cameras' phases over their
+  // first frames and widens the window when they are not triggered together (ChooseSyncWindow).
+  bool sync_tolerance_set = false;
+  double camera_timeout_s = 1.0;  // a camera silent this long (message time) is not waited for
   // A message whose utime is more than this ahead of its camera's clock (or of the other cameras', for
   // a camera's first messages) is rejected with a warning naming the camera; 0: no check.
   double max_clock_jump_s = 5.0;
@@ -84,6 +88,25 @@ struct TrackerOptions {
 template <class T>
 class OptionTable;
 const OptionTable<TrackerOptions>& TrackerOptionTable();
+
+// The frame assembly window chosen from the cameras' capture times (utime on the reference clock, the
+// map's offsets applied) over their first frames. Each camera's frame interval is the median step of its
+// times; the phase between two cameras the median distance from one's times to the nearest of the
+// other's; the spread the largest phase between two cameras. A spread within `tolerance_ms`: the cameras
+// are triggered together and the window stays `tolerance_ms`. Otherwise the window is half the frame
+// interval of the slowest camera (so that no camera has two views in one frame), at most
+// kMaxAutoSyncWindowMs; the views of a frame are then moved to their capture times along the body's
+// velocity (PoseEstimator::SeenAt).
+constexpr double kMaxAutoSyncWindowMs = 100.0;
+struct SyncWindowChoice {
+  double tolerance_ms = 0.0;
+  bool widened = false;
+  double spread_ms = 0.0;            // the largest phase between two cameras
+  double slowest_interval_ms = 0.0;  // the slowest camera's frame interval (0: none measured)
+  std::string reason;                // one line: what was measured, what was chosen
+};
+SyncWindowChoice ChooseSyncWindow(const std::map<std::string, std::vector<int64_t>>& capture_utimes,
+                                  double tolerance_ms);
 
 // A body the tracker knows of: from the map (or the rig's objects: list).
 struct BodyName {
@@ -332,6 +355,11 @@ class TrackerNode {
   void CheckStaleCameras();
   void WarnOnce(const std::string& key, const std::string& text);
   void MaybePrintStatus();
+  // A checked message (utime on the reference clock) into the frame synchronizer; frames due solved.
+  void AssembleDetections(const detections_t& msg, int64_t arrival_wall);
+  // The window measured (ChooseSyncWindow over the held messages): the synchronizer made with it, the
+  // held messages assembled in their order, the choice said once on stderr.
+  void ChooseWindowAndReplay();
   // One camera's judgement in a frame, pooled over the bodies it was judged on.
   struct CameraJudgement {
     double squares = 0.0;  // sum over bodies of rms^2 x markers (rms under the pose from the others)
@@ -380,6 +408,10 @@ class TrackerNode {
   std::map<std::string, int64_t> last_seen_utime_;  // per camera: last frame it saw a body with a pose
   int64_t map_utime_ = INT64_MIN;
   std::unique_ptr<FrameSynchronizer> sync_;  // over the map's cameras
+  FrameSyncOptions sync_options_;            // the synchronizer's (its tolerance chosen or set)
+  // Choosing the window (a map with clock offsets, tolerance not set): the first messages are held.
+  bool measuring_window_ = false;
+  std::vector<std::pair<detections_t, int64_t>> held_;  // message (reference clock), arrival wall time
   int64_t last_published_utime_ = INT64_MIN;
   std::vector<lcm::Subscription*> subscriptions_;
   std::set<std::string> warned_;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -177,7 +178,7 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
   // Frames are assembled over the map's cameras. A newer map (mcmt-mapper --maintain) keeps the frames
   // being assembled: they are solved with it, none is lost; a camera the new map adds joins as it reports.
   if (!switching) {
-    FrameSyncOptions sync;
+    FrameSyncOptions& sync = sync_options_;
     sync.tolerance_us = static_cast<int64_t>(options_.tracker.sync_tolerance_ms * 1000.0);
     // A frame spans sync_tolerance_ms of capture time: its views cannot all have come before that.
     sync.deadline_us =
@@ -186,8 +187,14 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     sync.max_clock_jump_us = static_cast<int64_t>(options_.tracker.max_clock_jump_s * 1e6);
     sync.max_wait_us = static_cast<int64_t>(options_.tracker.max_wait_ms * 1000.0);
     sync.arrival_is_wall_time = !options_.log_mode;
+    sync.cameras.clear();
     for (const auto& c : map.cameras) sync.cameras.push_back(c.name);  // waited for from the start
     sync_ = std::make_unique<FrameSynchronizer>(sync);
+    // Cameras whose clocks were mapped apart are often not triggered together either: their phases are
+    // measured over the first frames before any frame is assembled (a synchronised rig's map has none).
+    bool offsets = false;
+    for (const auto& c : map.cameras) offsets = offsets || c.time_offset_us != 0.0 || c.time_drift_ppm != 0.0;
+    measuring_window_ = offsets && !options_.tracker.sync_tolerance_set;
     reported_stale_.clear();
   }
   if (options_.tracker.camera_health) {
@@ -307,6 +314,105 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
   // The camera's clock against the map's reference camera (map.yaml time_offset_us and time_drift_ppm,
   // issue 18): frames are assembled by true capture time, utime - offset - drift * (utime - reference).
   msg.utime = estimator_->map().ReferenceUtime(msg.camera, msg.utime);
+  if (measuring_window_) {
+    held_.emplace_back(std::move(msg), arrival_wall);
+    // Enough to measure: every camera of the map in kMeasureFrames messages, or kMeasureSpanUs of capture
+    // time (a camera that never reports does not hold the others).
+    constexpr size_t kMeasureFrames = 12;
+    constexpr int64_t kMeasureSpanUs = 5000000;
+    std::map<std::string, size_t> count;
+    int64_t first = INT64_MAX, last = INT64_MIN;
+    for (const auto& [held, arrival] : held_) {
+      count[held.camera]++;
+      first = std::min(first, held.utime);
+      last = std::max(last, held.utime);
+    }
+    bool every = true;
+    for (const std::string& c : sync_options_.cameras) every = every && count[c] >= kMeasureFrames;
+    if (every || last - first >= kMeasureSpanUs) ChooseWindowAndReplay();
+    return;
+  }
+  AssembleDetections(msg, arrival_wall);
+}
+
+SyncWindowChoice ChooseSyncWindow(const std::map<std::string, std::vector<int64_t>>& capture_utimes,
+                                  double tolerance_ms) {
+  SyncWindowChoice out;
+  out.tolerance_ms = tolerance_ms;
+  std::map<std::string, std::vector<int64_t>> times;
+  for (const auto& [camera, utimes] : capture_utimes) {
+    std::vector<int64_t> t = utimes;
+    std::sort(t.begin(), t.end());
+    t.erase(std::unique(t.begin(), t.end()), t.end());
+    if (t.size() >= 2) times[camera] = std::move(t);
+  }
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(1);
+  for (const auto& [camera, t] : times) {
+    std::vector<double> steps;
+    for (size_t i = 1; i < t.size(); ++i) steps.push_back(1e-3 * static_cast<double>(t[i] - t[i - 1]));
+    const double interval = Percentile(steps, 0.5);
+    out.slowest_interval_ms = std::max(out.slowest_interval_ms, interval);
+    s << (s.tellp() > 0 ? ", " : "frame intervals ") << camera << " " << interval << " ms";
+  }
+  std::string worst;
+  for (auto a = times.begin(); a != times.end(); ++a)
+    for (auto b = std::next(a); b != times.end(); ++b) {
+      std::vector<double> distance;  // from each of a's times to the nearest of b's
+      for (const int64_t t : a->second) {
+        const auto it = std::lower_bound(b->second.begin(), b->second.end(), t);
+        int64_t d = INT64_MAX;
+        if (it != b->second.end()) d = *it - t;
+        if (it != b->second.begin()) d = std::min(d, t - *std::prev(it));
+        distance.push_back(1e-3 * static_cast<double>(d));
+      }
+      const double phase = Percentile(distance, 0.5);
+      if (phase > out.spread_ms) {
+        out.spread_ms = phase;
+        worst = a->first + " and " + b->first;
+      }
+    }
+  if (times.size() < 2) {
+    s << (s.tellp() > 0 ? "; " : "") << "fewer than two cameras with frames: window " << tolerance_ms
+      << " ms kept";
+  } else if (out.spread_ms <= tolerance_ms) {
+    s << "; phases within " << out.spread_ms << " ms: triggered together, window " << tolerance_ms
+      << " ms kept";
+  } else {
+    out.widened = true;
+    out.tolerance_ms = std::max(tolerance_ms, std::min(0.5 * out.slowest_interval_ms, kMaxAutoSyncWindowMs));
+    s << "; views of one instant up to " << out.spread_ms << " ms apart (" << worst
+      << "): not triggered together, window " << out.tolerance_ms
+      << " ms (half the slowest camera's frame interval, at most " << kMaxAutoSyncWindowMs
+      << " ms), each view moved to its capture time along the body's velocity";
+    if (out.spread_ms > out.tolerance_ms)
+      s << "; the phase exceeds the window: those cameras' views stay in frames of their own";
+  }
+  out.reason = s.str();
+  return out;
+}
+
+void TrackerNode::ChooseWindowAndReplay() {
+  measuring_window_ = false;
+  std::map<std::string, std::vector<int64_t>> capture;
+  for (const auto& [msg, arrival] : held_) capture[msg.camera].push_back(msg.utime);
+  const SyncWindowChoice choice = ChooseSyncWindow(capture, options_.tracker.sync_tolerance_ms);
+  if (choice.widened) {
+    options_.tracker.sync_tolerance_ms = choice.tolerance_ms;  // health's messages name the window used
+    sync_options_.tolerance_us = static_cast<int64_t>(choice.tolerance_ms * 1000.0);
+    sync_options_.deadline_us = std::max(sync_options_.deadline_us, sync_options_.tolerance_us);
+    sync_ = std::make_unique<FrameSynchronizer>(sync_options_);
+  }
+  std::cerr << "mcmt-tracker: sync window " << FormatMs(options_.tracker.sync_tolerance_ms)
+            << " ms (the map has clock offsets and tracker.sync_tolerance_ms is not set; over the first "
+            << held_.size() << " messages: " << choice.reason << ")" << std::endl;
+  std::vector<std::pair<detections_t, int64_t>> held = std::move(held_);
+  held_.clear();
+  for (const auto& [msg, arrival] : held) AssembleDetections(msg, arrival);
+}
+
+void TrackerNode::AssembleDetections(const detections_t& msg, int64_t arrival_wall) {
   std::vector<SyncedFrame> frames;
   const int64_t late_before = sync_->stats().out_of_order;
   frames = sync_->Add(msg, options_.log_mode ? msg.utime : arrival_wall);
@@ -335,12 +441,14 @@ void TrackerNode::OnDetections(const std::string& channel, const void* data, siz
 }
 
 void TrackerNode::Poll() {
-  if (options_.log_mode || !sync_) return;  // log mode: deadlines advance with the messages
+  if (options_.log_mode || !sync_ || measuring_window_)
+    return;  // log mode: deadlines advance with the messages
   const int64_t now = NowUtime();
   ProcessFrames(sync_->Poll(now), now);
 }
 
 void TrackerNode::Flush() {
+  if (measuring_window_) ChooseWindowAndReplay();  // a short session: measured over what came
   if (sync_) ProcessFrames(sync_->Flush(), NowUtime());
 }
 

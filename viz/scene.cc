@@ -154,7 +154,18 @@ bool CameraStateColor(int state, Eigen::Vector3d* rgb) {
     *rgb = Eigen::Vector3d(0.9, 0.0, 0.0);  // red
     return true;
   }
+  if (state == camera_health_t::STATE_NOT_JUDGED) {
+    *rgb = Eigen::Vector3d(0.7, 0.25, 1.0);  // violet: neither a residual colour nor the neutral blue
+    return true;
+  }
   return false;
+}
+
+std::string CameraStateSuffix(int state) {
+  if (state == camera_health_t::STATE_SUSPECT) return " (suspect)";
+  if (state == camera_health_t::STATE_EXCLUDED) return " (excluded)";
+  if (state == camera_health_t::STATE_NOT_JUDGED) return " (not judged)";
+  return "";
 }
 
 Rigid3 CamFromFrustum() {
@@ -362,9 +373,7 @@ void VizScene::BuildPanel(Panel* panel) {
     auto body = CBox::Create(mrpt::math::TPoint3D(-b, -b, -b), mrpt::math::TPoint3D(b, b, b));
     body->setColor(ToColor(color));
     set->insert(body);
-    auto label = CText::Create(
-        flagged ? cam.name + (state->second == camera_health_t::STATE_SUSPECT ? " (suspect)" : " (excluded)")
-                : cam.name);
+    auto label = CText::Create(flagged ? cam.name + CameraStateSuffix(state->second) : cam.name);
     label->setLocation(0, -2.5 * b, 0);  // above the camera (its -Y)
     label->setColor(1, 1, 1);
     set->insert(label);

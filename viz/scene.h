@@ -33,9 +33,12 @@ cv::Vec3b BackgroundBgr();
 // scale/4, yellow half-way, red at and above scale (the default scale, 2 px: green <= 0.5 px, red >= 2 px).
 // RGB in [0, 1].
 Eigen::Vector3d ResidualColor(double rms_px, double scale_px);
-// A camera the tracker reports suspect (orange) or excluded (red) (camera_health_t::STATE_*;
+// A camera the tracker reports suspect (orange), excluded (red) or not judged (violet: never judged since
+// the map, e.g. never within the sync window of two others) (camera_health_t::STATE_*;
 // MCMT_TRACKER_STATUS) is drawn in this colour, whatever its residual; false for ok (and unknown states).
 bool CameraStateColor(int state, Eigen::Vector3d* rgb);
+// What follows a flagged camera's name: " (suspect)", " (excluded)", " (not judged)"; "" otherwise.
+std::string CameraStateSuffix(int state);
 constexpr double kDefaultResidualScalePx = 2.0;
 
 // MRPT frustums look along their +X (Y left, Z up); OpenCV cameras along +Z (X right, Y down).
@@ -110,7 +113,8 @@ class VizScene {
   std::optional<Rigid3> CurrentPose(int panel) const;
 
   // The tracker's camera states (camera_health_t::STATE_* by name), used by the next SetPanels: suspect
-  // cameras orange, excluded ones red, "(suspect)" / "(excluded)" after the name.
+  // cameras orange, excluded ones red, not judged ones violet, "(suspect)" / "(excluded)" /
+  // "(not judged)" after the name.
   void SetCameraStates(const std::map<std::string, int>& states) { camera_states_ = states; }
   const std::map<std::string, int>& camera_states() const { return camera_states_; }
 

@@ -124,7 +124,8 @@ struct StatusSink {
 };
 
 // The detections written as a log (in camera order: mcmt-tracker --log sorts them by capture time) and
-// tracked with `map` and the sync tolerance.
+// tracked with `map` and the sync tolerance set to sync_tolerance_ms (< 0: the rig's options as they are,
+// the window chosen by the tracker).
 HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_tolerance_ms) {
   test::TempDir dir("tracker_realdata_health");
   std::string bytes;
@@ -136,7 +137,10 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   WriteFileAtomic(dir / "detections.lcmlog", bytes);
   TrackerNodeOptions options;
   options.tracker = TrackerOptions::FromConfig(rig);
-  options.tracker.sync_tolerance_ms = sync_tolerance_ms;
+  if (sync_tolerance_ms >= 0) {
+    options.tracker.sync_tolerance_ms = sync_tolerance_ms;
+    options.tracker.sync_tolerance_set = true;
+  }
   options.log_mode = true;
   options.keep_trajectory = true;
   options.quiet = true;
@@ -153,7 +157,9 @@ HealthRun TrackCameraTimes(const RigConfig& rig, const RigMap& map, double sync_
   run.health = node.health()->Snapshot();
   run.poses = node.trajectory();
   run.frames = node.stats().frames;
-  std::cout << "[ health ] tolerance " << sync_tolerance_ms << " ms, offsets";
+  std::cout << "[ health ] tolerance "
+            << (sync_tolerance_ms >= 0 ? std::to_string(sync_tolerance_ms) + " ms" : std::string("chosen"))
+            << ", offsets";
   for (const MapCamera& c : map.cameras) std::cout << " " << c.name << " " << 1e-3 * c.time_offset_us;
   std::cout << " ms: " << run.frames << " frames\n";
   for (const CameraHealth& h : run.health)
@@ -199,13 +205,8 @@ TEST(TrackerRealData, CameraTimesApartFromEachOtherLeaveHealthNotJudgedAndSaySo)
   EXPECT_TRUE(published);
 }
 
-// With the map's offsets and frames spanning the capture latencies (60 ms: cam1's views land 45 ms after
-// cam0's, between two of its frames), each view sees the board moved to its capture time along its
-// velocity: multi-camera frames, every camera judged, none suspect.
-TEST(TrackerRealData, CameraTimesWithTheMapsOffsetsJudgeEveryCameraOk) {
-  SKIP_WITHOUT_DATA();
-  const RigConfig rig = LoadRigConfig(kRig);
-  const HealthRun run = TrackCameraTimes(rig, MapWithOffsets(rig).map, 60.0);
+// Multi-camera frames, every camera judged, none suspect.
+void ExpectEveryCameraJudgedOk(const HealthRun& run) {
   ASSERT_EQ(run.health.size(), 4u);
   int multi = 0;
   for (const auto& [cameras, frames] : CamerasPerFrame(run)) {
@@ -224,6 +225,35 @@ TEST(TrackerRealData, CameraTimesWithTheMapsOffsetsJudgeEveryCameraOk) {
     EXPECT_EQ(h.first_suspect_utime, -1) << h.camera;
     EXPECT_GT(h.frames, 30) << h.camera;
   }
+}
+
+// With the map's offsets and frames spanning the capture latencies (60 ms set by hand: cam1's views land
+// 45 ms after cam0's, between two of its frames), each view sees the board moved to its capture time
+// along its velocity: multi-camera frames, every camera judged, none suspect.
+TEST(TrackerRealData, CameraTimesWithTheMapsOffsetsJudgeEveryCameraOk) {
+  SKIP_WITHOUT_DATA();
+  const RigConfig rig = LoadRigConfig(kRig);
+  const HealthRun run = TrackCameraTimes(rig, MapWithOffsets(rig).map, 60.0);
+  ExpectEveryCameraJudgedOk(run);
+  EXPECT_EQ(run.log.find("sync window"), std::string::npos) << "a window set by hand is not chosen";
+}
+
+// The same with the default options: the map has clock offsets, so the tracker measures the cameras'
+// phases over their first frames, finds them tens of ms apart at 6 fps (not triggered together) and
+// chooses the window itself (half the frame interval, 83 ms), saying so once.
+TEST(TrackerRealData, CameraTimesWithTheMapsOffsetsAtTheDefaultOptionsChooseTheWindow) {
+  SKIP_WITHOUT_DATA();
+  const RigConfig rig = LoadRigConfig(kRig);
+  ASSERT_FALSE(TrackerOptions::FromConfig(rig).sync_tolerance_set) << kRig << " sets the tolerance";
+  const HealthRun run = TrackCameraTimes(rig, MapWithOffsets(rig).map, -1.0);
+  ExpectEveryCameraJudgedOk(run);
+  const size_t said = run.log.find("mcmt-tracker: sync window ");
+  ASSERT_NE(said, std::string::npos) << run.log;
+  EXPECT_EQ(run.log.find("mcmt-tracker: sync window ", said + 1), std::string::npos) << "said more than once";
+  EXPECT_NE(run.log.find("not triggered together"), std::string::npos) << run.log;
+  const double window_ms = std::stod(run.log.substr(said + std::string("mcmt-tracker: sync window ").size()));
+  EXPECT_GT(window_ms, 45.0);
+  EXPECT_LE(window_ms, kMaxAutoSyncWindowMs);
 }
 
 }  // namespace

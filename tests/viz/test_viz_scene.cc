@@ -182,66 +182,112 @@ TEST(VizRender, CamerasAndObjectAppearWhereTheViewerCameraProjectsThem) {
   EXPECT_FALSE(NotBackgroundNear(img2, px2, bg, 1)) << "removed camera still drawn at " << px2.transpose();
 }
 
-// Pixels within `radius` of px that look orange (R high, G about half of R, B low) or red (G and B low).
-int ColouredNear(const cv::Mat& bgr, const Eigen::Vector2d& px, bool orange, int radius = 4) {
+// Pixels within `radius` of px whose colour passes `looks(r, g, b)`.
+template <class Looks>
+int PixelsNear(const cv::Mat& bgr, const Eigen::Vector2d& px, int radius, Looks looks) {
   int n = 0;
   for (int y = static_cast<int>(px.y()) - radius; y <= static_cast<int>(px.y()) + radius; ++y)
     for (int x = static_cast<int>(px.x()) - radius; x <= static_cast<int>(px.x()) + radius; ++x) {
       if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
       const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-      const double b = p[0], g = p[1], r = p[2];
-      if (r < 100 || b > 0.25 * r) continue;
-      if (orange ? (g > 0.3 * r && g < 0.8 * r) : g < 0.2 * r) ++n;
+      n += looks(static_cast<double>(p[2]), static_cast<double>(p[1]), static_cast<double>(p[0]));
     }
   return n;
 }
 
-TEST(VizRender, SuspectCamerasOrangeExcludedRedFromTheTrackerStatus) {
+// Pixels within `radius` of px that look orange (R high, G about half of R, B low) or red (G and B low).
+int ColouredNear(const cv::Mat& bgr, const Eigen::Vector2d& px, bool orange, int radius = 4) {
+  return PixelsNear(bgr, px, radius, [orange](double r, double g, double b) {
+    if (r < 100 || b > 0.25 * r) return false;
+    return orange ? (g > 0.3 * r && g < 0.8 * r) : g < 0.2 * r;
+  });
+}
+
+// Pixels within `radius` of px that look violet (B high, R above half of B, G below half of R): neither a
+// residual colour (B low), nor orange or red, nor the neutral light blue (G high).
+int VioletNear(const cv::Mat& bgr, const Eigen::Vector2d& px, int radius = 4) {
+  return PixelsNear(bgr, px, radius,
+                    [](double r, double g, double b) { return b > 100 && r > 0.5 * b && g < 0.5 * r; });
+}
+
+// A 4-camera rig rendered with the tracker's camera states (`states[i]` for camera i) as the live viewer
+// receives them (MCMT_TRACKER_STATUS through the collector), and the same view without them; the map has
+// no residuals (as from MCMT_MAP): cameras neutral unless flagged.
+struct StatesRender {
+  std::map<std::string, int> states;  // the collector's
+  std::vector<std::string> names;     // the cameras'
+  cv::Mat with, without;
+  Eigen::Vector2d px[4];  // the cameras in the image
+};
+StatesRender RenderCameraStates(const std::vector<int8_t>& states, const std::string& dump) {
   const int w = 800, h = 450;
   const auto rig = MakeTestRig(4, 12);
-  // The tracker's status as the live viewer receives it (MCMT_TRACKER_STATUS through the collector).
   lcm::LCM lcm("memq://");
   LcmCollector collector(lcm, 0);
+  StatesRender out;
   tracker_status_t status;
   for (size_t i = 0; i < rig.map.cameras.size(); ++i) {
     camera_health_t c;
     c.camera = rig.map.cameras[i].name;
-    c.state = i == 1   ? camera_health_t::STATE_SUSPECT
-              : i == 2 ? camera_health_t::STATE_EXCLUDED
-                       : camera_health_t::STATE_OK;
+    c.state = states.at(i);
     status.cameras.push_back(c);
+    out.names.push_back(c.camera);
   }
   status.num_cameras = static_cast<int32_t>(status.cameras.size());
   const std::vector<uint8_t> bytes = Encode(status);
   collector.Handle(kTrackerStatusChannel, bytes.data(), bytes.size());
-  ASSERT_EQ(collector.status_count(), 1);
-  // The map from MCMT_MAP has no residuals: cameras neutral unless flagged.
+  EXPECT_EQ(collector.status_count(), 1);
   RigMap map = rig.map;
   for (MapCamera& c : map.cameras) c.rms_px = 0.0;
   for (MapMarker& m : map.markers) m.rms_px = 0.0;
-  auto render = [&](const std::map<std::string, int>& states, VizScene* scene) {
-    scene->SetCameraStates(states);
+  auto render = [&](const std::map<std::string, int>& with_states, VizScene* scene) {
+    scene->SetCameraStates(with_states);
     scene->SetPanels({PanelInput{"map", map, rig.trajectory}});
     scene->SetCurrentFrame(5);
     return scene->Render(&Renderer(w, h));
   };
+  out.states = collector.camera_states();
   VizScene flagged(BareOptions(w, h)), plain(BareOptions(w, h));
-  const cv::Mat with = render(collector.camera_states(), &flagged);
+  out.with = render(out.states, &flagged);
   plain.SetView(flagged.view(0));
-  const cv::Mat without = render({}, &plain);
-  Dump(with, "camera_states.png");
-  Eigen::Vector2d px[4];
+  out.without = render({}, &plain);
+  Dump(out.with, dump);
   for (int i = 0; i < 4; ++i)
-    ASSERT_TRUE(flagged.ProjectRigPoint(0, map.cameras[i].rig_from_cam.translation(), &px[i]));
-  EXPECT_GT(ColouredNear(with, px[1], true), 3) << "cam 1 (suspect) is not orange";
-  EXPECT_GT(ColouredNear(with, px[2], false), 3) << "cam 2 (excluded) is not red";
+    EXPECT_TRUE(flagged.ProjectRigPoint(0, map.cameras[i].rig_from_cam.translation(), &out.px[i])) << i;
+  return out;
+}
+
+TEST(VizRender, SuspectCamerasOrangeExcludedRedFromTheTrackerStatus) {
+  const StatesRender r = RenderCameraStates({camera_health_t::STATE_OK, camera_health_t::STATE_SUSPECT,
+                                             camera_health_t::STATE_EXCLUDED, camera_health_t::STATE_OK},
+                                            "camera_states.png");
+  EXPECT_GT(ColouredNear(r.with, r.px[1], true), 3) << "cam 1 (suspect) is not orange";
+  EXPECT_GT(ColouredNear(r.with, r.px[2], false), 3) << "cam 2 (excluded) is not red";
   for (int i : {0, 3}) {
-    EXPECT_EQ(ColouredNear(with, px[i], true), 0) << i;
-    EXPECT_EQ(ColouredNear(with, px[i], false), 0) << i;
+    EXPECT_EQ(ColouredNear(r.with, r.px[i], true), 0) << i;
+    EXPECT_EQ(ColouredNear(r.with, r.px[i], false), 0) << i;
   }
   // Control: the same scene without the states has neither colour there.
-  EXPECT_EQ(ColouredNear(without, px[1], true), 0);
-  EXPECT_EQ(ColouredNear(without, px[2], false), 0);
+  EXPECT_EQ(ColouredNear(r.without, r.px[1], true), 0);
+  EXPECT_EQ(ColouredNear(r.without, r.px[2], false), 0);
+}
+
+TEST(VizRender, NotJudgedCamerasVioletFromTheTrackerStatus) {
+  const StatesRender r = RenderCameraStates({camera_health_t::STATE_OK, camera_health_t::STATE_NOT_JUDGED,
+                                             camera_health_t::STATE_SUSPECT, camera_health_t::STATE_OK},
+                                            "camera_not_judged.png");
+  ASSERT_EQ(r.states.size(), 4u);
+  EXPECT_EQ(r.states.at(r.names[1]), camera_health_t::STATE_NOT_JUDGED);
+  EXPECT_GT(VioletNear(r.with, r.px[1]), 3) << "cam 1 (not judged) is not violet";
+  EXPECT_EQ(ColouredNear(r.with, r.px[1], true), 0) << "cam 1 (not judged) drawn as suspect";
+  EXPECT_EQ(ColouredNear(r.with, r.px[1], false), 0) << "cam 1 (not judged) drawn as excluded";
+  EXPECT_GT(ColouredNear(r.with, r.px[2], true), 3) << "cam 2 (suspect) is not orange";
+  EXPECT_EQ(VioletNear(r.with, r.px[2]), 0) << "cam 2 (suspect) drawn as not judged";
+  for (int i : {0, 3}) EXPECT_EQ(VioletNear(r.with, r.px[i]), 0) << i;
+  // Control: the same scene without the states has no violet there (the neutral blue is not violet).
+  EXPECT_EQ(VioletNear(r.without, r.px[1]), 0);
+  EXPECT_EQ(CameraStateSuffix(camera_health_t::STATE_NOT_JUDGED), " (not judged)");
+  EXPECT_EQ(CameraStateSuffix(camera_health_t::STATE_OK), "");
 }
 
 TEST(VizRender, FrustumOpensAlongTheCameraZAxis) {
