@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <mutex>
@@ -29,7 +30,7 @@ struct Received {
   std::map<int64_t, object_pose_t> poses;  // by seq
   std::vector<tracker_status_t> statuses;
   struct Map {
-    MapMessage msg;  // the mapper publishes rig_map2_t (core's DecodeMapMessage)
+    MapMessage msg;              // the mapper publishes rig_map2_t (core's DecodeMapMessage)
     int64_t last_pose_seq = -1;  // newest pose seq received when the map arrived
   };
   std::vector<Map> maps;
@@ -93,6 +94,12 @@ struct PoseErrors {
   double worst_mm = 0.0;
   int64_t worst_seq = -1;
   int tracked = 0;
+  // The same in units of each pose's own published translation uncertainty (error / sqrt of the trace of
+  // its covariance's translation block): a frame seen by few cameras is allowed the error its covariance
+  // admits to; a pose pulled off by a bumped camera is not (its covariance stays that of a good frame).
+  double normal_ratio = 0.0;
+  double worst_ratio = 0.0;
+  int64_t worst_ratio_seq = -1;
 };
 inline PoseErrors CheckPoses(const std::map<int64_t, object_pose_t>& poses,
                              const std::map<int64_t, Rigid3>& truth_at, int64_t first_seq) {
@@ -102,6 +109,13 @@ inline PoseErrors CheckPoses(const std::map<int64_t, object_pose_t>& poses,
     ++out.tracked;
     const double e = 1000.0 * TranslationDistance(FromPose3d(p.rig_from_object), truth_at.at(seq));
     if (seq < first_seq) out.normal_mm = std::max(out.normal_mm, e);
+    const double sigma_mm = 1000.0 * std::sqrt(p.covariance[0][0] + p.covariance[1][1] + p.covariance[2][2]);
+    const double ratio = sigma_mm > 0.0 ? e / sigma_mm : 0.0;
+    if (seq < first_seq) out.normal_ratio = std::max(out.normal_ratio, ratio);
+    if (ratio > out.worst_ratio) {
+      out.worst_ratio = ratio;
+      out.worst_ratio_seq = seq;
+    }
     if (e > out.worst_mm) {
       out.worst_mm = e;
       out.worst_seq = seq;

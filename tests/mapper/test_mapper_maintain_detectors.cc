@@ -122,13 +122,19 @@ TEST(MapperMaintainDetectors, RenderedBumpFoundReestimatedAndNoPoseCorrupted) {
   EXPECT_TRUE(back_ok) << logs;
   std::cout << "cam2 suspect at frame " << suspect_seq << " (bumped at " << kBumpFrame << ")\n";
 
-  // Every pose near the truth: none more than twice the largest error before the bump.
+  // Every pose near the truth: none more than twice the largest error before the bump, each error in
+  // units of the pose's own published uncertainty. In millimetres alone a frame that only two cameras see
+  // after cam2 is excluded (seq 131 here: cam0 and cam3, two markers, 1.7 mm against 0.26 mm before the
+  // bump) would count as corrupted although its covariance says it is 10x less certain; a pose pulled off
+  // by the bumped camera keeps the covariance of a good frame and fails this bound.
   const test::PoseErrors errors = test::CheckPoses(got.poses, truth_at, kBumpFrame);
-  EXPECT_LE(errors.worst_mm, 2.0 * errors.normal_mm)
-      << "normal " << errors.normal_mm << " mm, worst at seq " << errors.worst_seq;
+  EXPECT_LE(errors.worst_ratio, 2.0 * errors.normal_ratio)
+      << "normal " << errors.normal_ratio << " of its sigma, worst at seq " << errors.worst_ratio_seq;
   EXPECT_GE(errors.tracked, kFrames - 9) << logs;  // udpm on loopback may drop a rare datagram
   std::cout << "poses: " << errors.tracked << " tracked, normal error " << errors.normal_mm << " mm, worst "
-            << errors.worst_mm << " mm (seq " << errors.worst_seq << ")\n";
+            << errors.worst_mm << " mm (seq " << errors.worst_seq << "); error / own sigma: normal "
+            << errors.normal_ratio << ", worst " << errors.worst_ratio << " (seq " << errors.worst_ratio_seq
+            << ")\n";
 }
 
 }  // namespace
