@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 #include "core/ippe.h"
 #include "core/options.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/tracker_sim.h"
+#include "tracker/relative.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
@@ -283,6 +285,36 @@ TEST(PoseEstimator, CovarianceMatchesTheActualError) {
   const double mean = sum / n;
   EXPECT_GT(mean, 4.0);
   EXPECT_LT(mean, 8.5);
+}
+
+// The object's position uncertainty is PositionCovariance, not the translation block: over noisy
+// frames the position error's squared Mahalanobis distance averages ~3, while the translation block
+// (which also holds the rotation's lever arm about the rig origin) is several times too wide.
+TEST(PoseEstimator, PositionCovarianceMatchesThePositionError) {
+  const TrackerSim s = SimulateTracking(TrackerSession(300, 7, 0.3));
+  const PoseEstimator est(s.map);
+  double nees = 0, block_sigma2 = 0, position_sigma2 = 0, error2 = 0;
+  int n = 0;
+  for (size_t f = 0; f < s.session.views.size(); ++f) {
+    const PoseSolution sol = est.Solve(ObservationsFromViews(s.session.views[f]), nullptr);
+    ASSERT_TRUE(sol.ok());
+    const Eigen::Vector3d e = s.truth[f].rig_from_object.translation() - sol.rig_from_object.translation();
+    const Eigen::Matrix3d c = PositionCovariance(sol.rig_from_object, sol.covariance);
+    nees += e.dot(c.ldlt().solve(e));
+    block_sigma2 += sol.covariance.topLeftCorner<3, 3>().trace();
+    position_sigma2 += c.trace();
+    error2 += e.squaredNorm();
+    ++n;
+  }
+  const double mean = nees / n;
+  std::printf(
+      "position NEES %.2f (3 expected); rms position error %.3f mm, predicted %.3f mm, "
+      "translation block %.3f mm\n",
+      mean, 1e3 * std::sqrt(error2 / n), 1e3 * std::sqrt(position_sigma2 / n),
+      1e3 * std::sqrt(block_sigma2 / n));
+  EXPECT_GT(mean, 2.0);
+  EXPECT_LT(mean, 4.5);
+  EXPECT_GT(block_sigma2, 4.0 * position_sigma2);
 }
 
 TEST(MotionModel, PredictsConstantVelocity) {
