@@ -110,10 +110,13 @@ int main(int argc, char** argv) {
         if (std::getenv("MCMT_BENCH_DEBUG"))
           for (const auto& m : f)
             for (const auto& r : a)
-              if (m.id == r.id && std::abs(m.corners[0][0] - r.corners[0][0]) +
-                                          std::abs(m.corners[1][0] - r.corners[1][0]) +
-                                          std::abs(m.corners[2][0] - r.corners[2][0]) >
-                                      0.1) {
+              if (m.id == r.id && [&] {
+                    double d = 0;
+                    for (int k = 0; k < 4; ++k)
+                      for (int x = 0; x < 2; ++x)
+                        d = std::max(d, std::abs(m.corners[k][x] - r.corners[k][x]));
+                    return d > 0.02;
+                  }()) {
                 const size_t fi = &image - &images[c][0];
                 for (const auto& v : sim::ProjectMarkers(cameras[c], object, trajectory[fi].rig_from_object))
                   if (v.id == m.id)
