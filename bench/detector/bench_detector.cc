@@ -2,6 +2,8 @@
 // accurate default mode and the fast mode (search near the previous frame's markers), on mcmt_sim
 // sequences (30 fps, box object: 2-8 markers in view), plus peak memory. Prints markdown tables.
 //   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
+// (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_DEBUG: markers whose fast-mode
+// corners differ from the accurate mode's by more than 0.02 px, on stderr.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -10,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "detector/detector.h"
 #include "sim/sim.h"
@@ -35,6 +38,8 @@ int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 60;
   const int num_cameras = argc > 2 ? std::atoi(argv[2]) : 2;
   const int only_width = argc > 3 ? std::atoi(argv[3]) : 0;
+  // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
+  const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
   cv::setNumThreads(1);
   sim::ObjectOptions oo;
   oo.kind = sim::ObjectKind::kBox;
@@ -94,13 +99,13 @@ int main(int argc, char** argv) {
       auto params = cv::aruco::DetectorParameters::create();
       for (const cv::Mat& image : images[c]) {
         auto t0 = ThreadSeconds();
-        const auto a = accurate.Detect(image);
+        const auto a = only != "fast" && only != "stock" ? accurate.Detect(image) : std::vector<marker_t>();
         auto t1 = ThreadSeconds();
-        const auto f = fast.Detect(image);
+        const auto f = only != "accurate" && only != "stock" ? fast.Detect(image) : std::vector<marker_t>();
         auto t2 = ThreadSeconds();
         std::vector<std::vector<cv::Point2f>> corners;
         std::vector<int> ids;
-        cv::aruco::detectMarkers(image, dict, corners, ids, params);
+        if (only.empty() || only == "stock") cv::aruco::detectMarkers(image, dict, corners, ids, params);
         auto t3 = ThreadSeconds();
         accurate_ms += 1000 * (t1 - t0);
         fast_ms += 1000 * (t2 - t1);
