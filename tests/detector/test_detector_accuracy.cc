@@ -205,6 +205,7 @@ struct ModeDiff {
   double max_px = 0;
   int compared = 0, extra = 0, missing = 0;
   std::string worst;
+  std::string extras;  // where fast mode found a marker the accurate mode did not
 };
 void CompareModes(const std::vector<marker_t>& accurate, const std::vector<marker_t>& fast,
                   const std::function<bool(int)>& comparable, const std::string& where, ModeDiff* d) {
@@ -215,6 +216,7 @@ void CompareModes(const std::vector<marker_t>& accurate, const std::vector<marke
     if (!comparable(f.id)) continue;
     if (!a) {
       ++d->extra;
+      d->extras += where + " id " + std::to_string(f.id) + "; ";
       continue;
     }
     ++d->compared;
@@ -275,14 +277,16 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnSim) {
     }
     std::printf("%dx%d: %d markers compared, fast vs accurate max %.4f px (%s), extra %d, missing %d\n",
                 width, width * 3 / 4, d.compared, d.max_px, d.worst.c_str(), d.extra, d.missing);
+    if (d.extra) std::printf("  extra: %s\n", d.extras.c_str());
     // 320x240: the markers are 8-14 px (none compared; an 11.8 px one at 43 deg differs by 0.2 px).
     if (width > 320) {
       EXPECT_GT(d.compared, 300);
     }
     EXPECT_LE(d.max_px, 0.02) << width << ": " << d.worst;
-    // Fast mode found one 640x480 marker (>= 15 px, <= 75 deg) in one frame that the accurate mode did
-    // not (measured; not understood yet).
-    EXPECT_LE(d.extra, width == 640 ? 1 : 0) << width;
+    // Fast mode finds one 640x480 marker the accurate mode does not (camera 0 frame 4 id 4): its region
+    // search (one threshold window of about three cells) has a candidate where the full search's windows
+    // (5 and 15 px) have none; a difference of what is found, not of where corners are.
+    EXPECT_LE(d.extra, width == 640 ? 1 : 0) << width << ": " << d.extras;
   }
 }
 
@@ -325,7 +329,7 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     const auto it = shortfalls.find(im.name);
     EXPECT_LE(d.max_px, it == shortfalls.end() ? 0.02 : it->second) << d.worst;
     // No margin on grey: 3 markers fast mode kept that the accurate mode's refinement dropped (measured).
-    EXPECT_LE(d.extra, im.name == "no margin, grey surface" ? 3 : 0) << im.name;
+    EXPECT_LE(d.extra, im.name == "no margin, grey surface" ? 3 : 0) << im.name << ": " << d.extras;
     EXPECT_EQ(d.missing, 0) << im.name;
   }
 }
