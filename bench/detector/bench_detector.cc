@@ -16,7 +16,7 @@
 
 #include "detector/detector.h"
 #include "sim/sim.h"
-#include "tests/detector/synthetic.h"
+#include "tests/detector/sim_eval.h"
 
 using namespace mcmt;
 
@@ -41,20 +41,11 @@ int main(int argc, char** argv) {
   // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
   const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
   cv::setNumThreads(1);
-  sim::ObjectOptions oo;
-  oo.kind = sim::ObjectKind::kBox;
-  oo.marker_size = 0.05;
-  const sim::SimObject object = sim::MakeObject(oo);
-  sim::TrajectoryOptions to;
-  to.frames = frames;
-  to.fps = 30;
-  const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
-  sim::RenderOptions ro;
-  ro.noise_sigma = 2.0;
-  sim::Renderer renderer(object, "DICT_6X6_250", ro);
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  for (const auto& m : object.markers) mc.ids.push_back(m.id);
+  const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(frames);
+  const sim::SimObject& object = scene.object;
+  const std::vector<sim::SimFrame>& trajectory = scene.trajectory;
+  const sim::Renderer& renderer = *scene.renderer;
+  const MarkerConfig& mc = scene.markers;
 
   std::printf("## mcmt detector: time per image, one thread (thread CPU time)\n\n");
   std::printf(
@@ -70,12 +61,7 @@ int main(int argc, char** argv) {
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {
     if (only_width > 0 && size[0] != only_width) continue;
-    sim::RigOptions ro2;
-    ro2.num_cameras = std::max(num_cameras, 3);
-    ro2.radius = 1.0;
-    ro2.width = size[0];
-    ro2.height = size[1];
-    const std::vector<sim::SimCamera> cameras = sim::MakeRig(ro2);
+    const std::vector<sim::SimCamera> cameras = scene.Cameras(num_cameras, size[0], size[1]);
     std::vector<std::vector<cv::Mat>> images(num_cameras);
     for (int c = 0; c < num_cameras; ++c)
       for (const auto& f : trajectory)

@@ -234,27 +234,12 @@ void CompareModes(const std::vector<marker_t>& accurate, const std::vector<marke
 }
 
 TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnSim) {
-  sim::ObjectOptions oo;
-  oo.kind = sim::ObjectKind::kBox;
-  oo.marker_size = 0.05;
-  const sim::SimObject object = sim::MakeObject(oo);
-  sim::TrajectoryOptions to;
-  to.frames = 60;
-  to.fps = 30;
-  const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
-  sim::RenderOptions ro;
-  ro.noise_sigma = 2.0;
-  sim::Renderer renderer(object, "DICT_6X6_250", ro);
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  for (const auto& m : object.markers) mc.ids.push_back(m.id);
+  const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(60);
+  const auto& object = scene.object;
+  const auto& trajectory = scene.trajectory;
+  const MarkerConfig& mc = scene.markers;
   for (const int width : {320, 640, 1280}) {
-    sim::RigOptions rig;
-    rig.num_cameras = 3;
-    rig.radius = 1.0;
-    rig.width = width;
-    rig.height = width * 3 / 4;
-    const std::vector<sim::SimCamera> cameras = sim::MakeRig(rig);
+    const std::vector<sim::SimCamera> cameras = scene.Cameras(2, width, width * 3 / 4);
     ModeDiff d;
     for (int c = 0; c < 2; ++c) {
       DetectorOptions fast_options;
@@ -264,7 +249,7 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnSim) {
       fast.SetCamera(cameras[c].model);
       for (size_t i = 0; i < trajectory.size(); ++i) {
         const cv::Mat image =
-            renderer.Render(cameras[c], c, trajectory[i].seq, trajectory[i].rig_from_object);
+            scene.renderer->Render(cameras[c], c, trajectory[i].seq, trajectory[i].rig_from_object);
         const auto views = sim::ProjectMarkers(cameras[c], object, trajectory[i].rig_from_object);
         auto comparable = [&](int id) {
           for (const auto& v : views)
