@@ -354,9 +354,11 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   return fit->e;
 }
 
+// One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
+// was located by the side model in the last pass (not by its crossings alone).
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma, bool* kept_lines, int polarity) {
+                bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -378,8 +380,11 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
   // crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
   // until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
-  // (the candidate, the previous frame) must not change where the corners end up.
-  constexpr int kMinModelPasses = 2, kMaxModelPasses = 4;
+  // (the candidate, the previous frame) must not change where the corners end up. Passes that do not
+  // settle are mostly a two-cycle (a poorly modelled side whose warm-started fits alternate between two
+  // valleys: 0.2 px apart on a 40 px marker at 74 deg); which of its two states the last pass is in
+  // depends on the start, their mean does not: the corners are the mean of the last two passes then.
+  constexpr int kMinModelPasses = 2, kMaxModelPasses = 6;
   bool converged = false, model_converged = false;
   int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
@@ -387,6 +392,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   std::array<SideFit, 4> side_fits;  // each side's model fit of the previous model pass
   // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
   std::array<bool, 4> side_unfitted{};
+  std::array<bool, 4> side_modelled{};            // located by the side model in the latest pass
+  std::array<Eigen::Vector2d, 4> previous = img;  // the corners before the latest pass
   for (int pass = 0;; ++pass) {
     // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
     // onto the edges (the model passes fix the offsets, and their crossings the directions).
@@ -519,6 +526,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
                                  polarity, &side_profiles, &side_fits[side]);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) side_unfitted[side] = false;
+        side_modelled[side] = std::isfinite(e);
         if (std::isfinite(e)) {
           Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
           for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
@@ -537,9 +545,16 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     double moved = 0;
     for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - img[k]).norm());
     converged = moved < 0.01;
+    previous = img;
     img = next;
     if (model_pass) ++model_passes;
     model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
+  }
+  if (model_fit && !model_converged && model_passes >= 2)
+    for (int k = 0; k < 4; ++k) img[k] = 0.5 * (img[k] + previous[k]);
+  if (model_everywhere) {
+    *model_everywhere = model_fit;
+    for (int side = 0; side < 4; ++side) *model_everywhere = *model_everywhere && side_modelled[side];
   }
   for (int side = 0; side < 4; ++side)
     if (side_unfitted[side]) return false;
@@ -559,11 +574,35 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
                          bool fit_gamma, bool* kept_lines, int polarity) {
   if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
-  // first profiles entirely on one side of the edge: retry with first profiles twice as wide.
-  return RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 1.0, fit_gamma,
-                    kept_lines, polarity) ||
-         RefineOnce(gray, cells, bits, camera, passes, corners, model_fit, blur_sigma, 2.0, fit_gamma,
-                    kept_lines, polarity);
+  // first profiles entirely on one side of the edge: retry with first profiles twice as wide. So can a
+  // candidate a pixel off on a marker of cells barely a pixel deep (15 px at 65 deg): the crossings lock
+  // onto the border's inner edge, the model cannot reach the outer edge from there and the side keeps
+  // its crossing line, a cell inside (2.4 px off in fast mode, whose candidate was one pixel from the
+  // accurate mode's). With the model, a refinement where some side was not located by it is retried
+  // wide too, and the wide one is taken where the model located every side.
+  std::array<cv::Point2d, 4> narrow = *corners;
+  double narrow_sigma = NAN;
+  bool narrow_kept = false, narrow_modelled = false;
+  const bool narrow_ok = RefineOnce(gray, cells, bits, camera, passes, &narrow, model_fit, &narrow_sigma, 1.0,
+                                    fit_gamma, &narrow_kept, polarity, &narrow_modelled);
+  auto take = [&](const std::array<cv::Point2d, 4>& c, double sigma, bool kept) {
+    *corners = c;
+    if (blur_sigma) *blur_sigma = sigma;
+    if (kept_lines) *kept_lines = kept;
+    return true;
+  };
+  if (narrow_ok && (narrow_modelled || !model_fit)) return take(narrow, narrow_sigma, narrow_kept);
+  std::array<cv::Point2d, 4> wide = *corners;
+  double wide_sigma = NAN;
+  bool wide_kept = false, wide_modelled = false;
+  const bool wide_ok = RefineOnce(gray, cells, bits, camera, passes, &wide, model_fit, &wide_sigma, 2.0,
+                                  fit_gamma, &wide_kept, polarity, &wide_modelled);
+  if (wide_ok && (wide_modelled || !narrow_ok))
+    return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
+  if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
+  if (blur_sigma) *blur_sigma = NAN;
+  if (kept_lines) *kept_lines = narrow_kept || wide_kept;
+  return false;
 }
 
 // ---------------------------------------------------------------------------------------------------

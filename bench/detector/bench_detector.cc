@@ -2,6 +2,8 @@
 // accurate default mode and the fast mode (search near the previous frame's markers), on mcmt_sim
 // sequences (30 fps, box object: 2-8 markers in view), plus peak memory. Prints markdown tables.
 //   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
+// (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_DEBUG: markers whose fast-mode
+// corners differ from the accurate mode's by more than 0.02 px, on stderr.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -10,10 +12,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "detector/detector.h"
 #include "sim/sim.h"
-#include "tests/detector/synthetic.h"
+#include "tests/detector/sim_eval.h"
 
 using namespace mcmt;
 
@@ -35,21 +38,14 @@ int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 60;
   const int num_cameras = argc > 2 ? std::atoi(argv[2]) : 2;
   const int only_width = argc > 3 ? std::atoi(argv[3]) : 0;
+  // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
+  const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
   cv::setNumThreads(1);
-  sim::ObjectOptions oo;
-  oo.kind = sim::ObjectKind::kBox;
-  oo.marker_size = 0.05;
-  const sim::SimObject object = sim::MakeObject(oo);
-  sim::TrajectoryOptions to;
-  to.frames = frames;
-  to.fps = 30;
-  const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
-  sim::RenderOptions ro;
-  ro.noise_sigma = 2.0;
-  sim::Renderer renderer(object, "DICT_6X6_250", ro);
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  for (const auto& m : object.markers) mc.ids.push_back(m.id);
+  const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(frames);
+  const sim::SimObject& object = scene.object;
+  const std::vector<sim::SimFrame>& trajectory = scene.trajectory;
+  const sim::Renderer& renderer = *scene.renderer;
+  const MarkerConfig& mc = scene.markers;
 
   std::printf("## mcmt detector: time per image, one thread (thread CPU time)\n\n");
   std::printf(
@@ -65,12 +61,7 @@ int main(int argc, char** argv) {
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {
     if (only_width > 0 && size[0] != only_width) continue;
-    sim::RigOptions ro2;
-    ro2.num_cameras = std::max(num_cameras, 3);
-    ro2.radius = 1.0;
-    ro2.width = size[0];
-    ro2.height = size[1];
-    const std::vector<sim::SimCamera> cameras = sim::MakeRig(ro2);
+    const std::vector<sim::SimCamera> cameras = scene.Cameras(num_cameras, size[0], size[1]);
     std::vector<std::vector<cv::Mat>> images(num_cameras);
     for (int c = 0; c < num_cameras; ++c)
       for (const auto& f : trajectory)
@@ -94,13 +85,13 @@ int main(int argc, char** argv) {
       auto params = cv::aruco::DetectorParameters::create();
       for (const cv::Mat& image : images[c]) {
         auto t0 = ThreadSeconds();
-        const auto a = accurate.Detect(image);
+        const auto a = only != "fast" && only != "stock" ? accurate.Detect(image) : std::vector<marker_t>();
         auto t1 = ThreadSeconds();
-        const auto f = fast.Detect(image);
+        const auto f = only != "accurate" && only != "stock" ? fast.Detect(image) : std::vector<marker_t>();
         auto t2 = ThreadSeconds();
         std::vector<std::vector<cv::Point2f>> corners;
         std::vector<int> ids;
-        cv::aruco::detectMarkers(image, dict, corners, ids, params);
+        if (only.empty() || only == "stock") cv::aruco::detectMarkers(image, dict, corners, ids, params);
         auto t3 = ThreadSeconds();
         accurate_ms += 1000 * (t1 - t0);
         fast_ms += 1000 * (t2 - t1);
@@ -110,10 +101,13 @@ int main(int argc, char** argv) {
         if (std::getenv("MCMT_BENCH_DEBUG"))
           for (const auto& m : f)
             for (const auto& r : a)
-              if (m.id == r.id && std::abs(m.corners[0][0] - r.corners[0][0]) +
-                                          std::abs(m.corners[1][0] - r.corners[1][0]) +
-                                          std::abs(m.corners[2][0] - r.corners[2][0]) >
-                                      0.1) {
+              if (m.id == r.id && [&] {
+                    double d = 0;
+                    for (int k = 0; k < 4; ++k)
+                      for (int x = 0; x < 2; ++x)
+                        d = std::max(d, std::abs(m.corners[k][x] - r.corners[k][x]));
+                    return d > 0.02;
+                  }()) {
                 const size_t fi = &image - &images[c][0];
                 for (const auto& v : sim::ProjectMarkers(cameras[c], object, trajectory[fi].rig_from_object))
                   if (v.id == m.id)

@@ -2,6 +2,8 @@
 // corner errors and signed offsets along the edge normals against the renderer's exact corners.
 #pragma once
 
+#include <algorithm>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -116,6 +118,41 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
     }
   }
   return r;
+}
+
+// bench_detector's sequences (also the fast-vs-accurate test's): the box object with 5 cm DICT_6X6_250
+// markers on a 30 fps trajectory of `frames`, rendered with noise 2, seen by cameras 1 m away.
+struct DetectorBenchScene {
+  sim::SimObject object;
+  std::vector<sim::SimFrame> trajectory;
+  std::unique_ptr<sim::Renderer> renderer;
+  MarkerConfig markers;  // the dictionary and the object's ids
+  // The rig's cameras (at least 3, as bench_detector always made) at width x height.
+  std::vector<sim::SimCamera> Cameras(int num_cameras, int width, int height) const {
+    sim::RigOptions rig;
+    rig.num_cameras = std::max(num_cameras, 3);
+    rig.radius = 1.0;
+    rig.width = width;
+    rig.height = height;
+    return sim::MakeRig(rig);
+  }
+};
+inline DetectorBenchScene MakeDetectorBenchScene(int frames) {
+  DetectorBenchScene scene;
+  sim::ObjectOptions oo;
+  oo.kind = sim::ObjectKind::kBox;
+  oo.marker_size = 0.05;
+  scene.object = sim::MakeObject(oo);
+  sim::TrajectoryOptions to;
+  to.frames = frames;
+  to.fps = 30;
+  scene.trajectory = sim::MakeTrajectory(to);
+  sim::RenderOptions ro;
+  ro.noise_sigma = 2.0;
+  scene.renderer = std::make_unique<sim::Renderer>(scene.object, "DICT_6X6_250", ro);
+  scene.markers.dictionary = "DICT_6X6_250";
+  for (const auto& m : scene.object.markers) scene.markers.ids.push_back(m.id);
+  return scene;
 }
 
 }  // namespace mcmt::testing
