@@ -240,7 +240,7 @@ void SeedRows(int num_seeds, int frames) {
 // signed towards the quick calibration's error: a pull towards the given values; RMS z: 1 when the posterior
 // is calibrated and the estimate efficient), the camera position error along the optical axis against what
 // the posterior focal sigma predicts (distance x sigma), and the mean camera error against the same
-// session mapped with exact intrinsics and the defaults.
+// session mapped with exact intrinsics and the defaults. (n): how many entries were refined (not held).
 struct Variant {
   std::string name;
   sim::IntrinsicsError cam1{0.03, 8.0, -6.0, 0.03}, cam3{-0.03, -8.0, 8.0, -0.03};
@@ -330,13 +330,17 @@ void AblationRows(int num_seeds, int frames) {
           s.predicted_axial_sq += distance_mm * distance_mm * sigma * sigma;
           ++s.n_fx;
         }
-        for (int k = 2; k <= 3; ++k) {
-          if (!ir.is_refined[k] || ir.posterior_sigma[k] <= 0) continue;
-          const double err = ir.refined[k] - (k == 2 ? t.model.cx : t.model.cy),
-                       sigma = ir.posterior_sigma[k];
-          s.z_cx += toward[k - 1] * err / sigma;
+        if (verbose)
+          for (const std::string& why : ir.held)
+            std::fprintf(stderr, "seed %d %s %s held: %s\n", 11 + k, variant.name.c_str(), ir.camera.c_str(),
+                         why.c_str());
+        for (int e = 2; e <= 3; ++e) {
+          if (!ir.is_refined[e] || ir.posterior_sigma[e] <= 0) continue;
+          const double err = ir.refined[e] - (e == 2 ? t.model.cx : t.model.cy),
+                       sigma = ir.posterior_sigma[e];
+          s.z_cx += toward[e - 1] * err / sigma;
           s.z_cx_sq += err * err / (sigma * sigma);
-          s.cx_err += toward[k - 1] * err;
+          s.cx_err += toward[e - 1] * err;
           s.cx_err_abs += std::abs(err);
           s.sigma_cx += sigma;
           ++s.n_cx;
@@ -360,13 +364,14 @@ void AblationRows(int num_seeds, int frames) {
     const double nf = std::max(1, s.n_fx), nc = std::max(1, s.n_cx), n = std::max(1, s.n);
     char fx[160] = "-", cx[200] = "-";
     if (s.n_fx)
-      std::snprintf(fx, sizeof(fx), "%.3f %% | %.3f %% | %+.2f / %.2f", 100 * std::sqrt(s.fx_err_sq / nf),
-                    100 * std::sqrt(s.sigma_fx_sq / nf), s.z_fx / nf, std::sqrt(s.z_fx_sq / nf));
+      std::snprintf(fx, sizeof(fx), "%.3f %% | %.3f %% | %+.2f / %.2f (%d)",
+                    100 * std::sqrt(s.fx_err_sq / nf), 100 * std::sqrt(s.sigma_fx_sq / nf), s.z_fx / nf,
+                    std::sqrt(s.z_fx_sq / nf), s.n_fx);
     else
       std::snprintf(fx, sizeof(fx), "- | - | -");
     if (s.n_cx)
-      std::snprintf(cx, sizeof(cx), "%+.2f / %.2f px | %.2f px | %+.2f / %.2f", s.cx_err / nc,
-                    s.cx_err_abs / nc, s.sigma_cx / nc, s.z_cx / nc, std::sqrt(s.z_cx_sq / nc));
+      std::snprintf(cx, sizeof(cx), "%+.2f / %.2f px | %.2f px | %+.2f / %.2f (%d)", s.cx_err / nc,
+                    s.cx_err_abs / nc, s.sigma_cx / nc, s.z_cx / nc, std::sqrt(s.z_cx_sq / nc), s.n_cx);
     else
       std::snprintf(cx, sizeof(cx), "- | - | -");
     std::printf("| %s | %.3f mm | %.3f mm | %.2fx | %s | %.3f mm | %.3f mm | %s |\n",
