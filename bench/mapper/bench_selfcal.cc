@@ -241,6 +241,7 @@ void SeedRows(int num_seeds, int frames) {
 // is calibrated and the estimate efficient), the camera position error along the optical axis against what
 // the posterior focal sigma predicts (distance x sigma), and the mean camera error against the same
 // session mapped with exact intrinsics and the defaults. (n): how many entries were refined (not held).
+// --only TEXT: the variants whose name contains it.
 struct Variant {
   std::string name;
   sim::IntrinsicsError cam1{0.03, 8.0, -6.0, 0.03}, cam3{-0.03, -8.0, 8.0, -0.03};
@@ -293,6 +294,7 @@ void AblationRows(int num_seeds, int frames) {
     object_mean /= static_cast<double>(exact.truth.frames.size());
     for (size_t v = 0; v < variants.size(); ++v) {
       const Variant& variant = variants[v];
+      if (!only.empty() && variant.name.find(only) == std::string::npos) continue;
       SelfCalRun run = exact;
       if (!variant.exact) {
         testing::PerturbIntrinsics("cam1", variant.cam1, &run);
@@ -361,6 +363,7 @@ void AblationRows(int num_seeds, int frames) {
   std::printf("|---|---:|---:|---:|---:|---:|---|---:|---:|---|---:|---|\n");
   for (size_t v = 0; v < variants.size(); ++v) {
     const VariantSums& s = sums[v];
+    if (s.seeds == 0) continue;  // --only
     const double nf = std::max(1, s.n_fx), nc = std::max(1, s.n_cx), n = std::max(1, s.n);
     char fx[160] = "-", cx[200] = "-";
     if (s.n_fx)

@@ -127,6 +127,38 @@ TEST(MapperSelfCal, QuickCalibrationErrorsAreRecovered) {
   }
 }
 
+// A camera whose intrinsics the data call wrong keeps the entries that changed free. Session 15 of the
+// quick calibration: cam1's cy (6 px off) refined 3.5 px from the given value against a marginal posterior
+// sigma of 2.0 px (inflated by p1 and p2, which agree with theirs) and cam3's cx (8 px off) 4.6 px against
+// 2.8 px; the entry-by-entry test on the marginal sigmas held both at the wrong given values (cameras
+// 0.79 mm, 4.2x the exact session). Tested one at a time given the entries held before (p1, p2 first),
+// they stay refined (0.55 mm).
+TEST(MapperSelfCal, ChangedEntriesOfAWrongCameraAreNotHeld) {
+  SelfCalSession session;
+  session.seed = 15;
+  const SelfCalRun exact = SimulateSelfCal(session);
+  SelfCalRun wrong = exact;
+  PerturbTwo(&wrong);
+  MapperOptions options = SelfCalOptions(exact.truth);
+  options.intrinsics.refine = IntrinsicsRefinement::kAll;
+  const MapResult r = MapDetections(wrong.detections, options);
+  std::printf("camera error %.3f mm\n",
+              sim::Evaluate(exact.truth, &r.map, &r.trajectory).camera_position_mm.mean);
+  for (const IntrinsicsReport& ir : r.report.intrinsics) {
+    if (ir.camera != "cam1" && ir.camera != "cam3") continue;
+    const CameraModel& t = TrueCamera(exact.truth, ir.camera).model;
+    const double truth[4] = {t.fx, t.fy, t.cx, t.cy};
+    for (const std::string& why : ir.held) std::printf("  %s held: %s\n", ir.camera.c_str(), why.c_str());
+    for (int k = 0; k < 4; ++k) {
+      std::printf("  %s %s: error %+.3f (posterior sigma %.3f)\n", ir.camera.c_str(), ir.names[k].c_str(),
+                  ir.refined[k] - truth[k], ir.posterior_sigma[k]);
+      EXPECT_TRUE(ir.is_refined[k]) << ir.camera << " " << ir.names[k];
+      EXPECT_LT(std::abs(ir.refined[k] - truth[k]), 3.0 * ir.posterior_sigma[k])
+          << ir.camera << " " << ir.names[k];
+    }
+  }
+}
+
 // Why the refined cameras are 3-5x the exact session's error at 300 frames (the issue asks 1.5x): the
 // information, not the method. Over sessions 11-13 the two refined cameras' fx, fy, cx, cy errors are the
 // size of their posterior sigmas (bench_selfcal --ablate 20: RMS z 1.15 for fx, 1.06 for the centre, no
