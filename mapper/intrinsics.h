@@ -38,7 +38,8 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
 // for the data's own noise). Per camera, first all its entries together: held when the changes'
 // Mahalanobis distance is within the chi-square level of a 5 % chance, family-wise over the cameras, of
 // changing a right calibration; a camera that differs keeps free only its entries changed by more than
-// 1.96 posterior sigmas. Returns true when an entry was held (the caller re-solves).
+// 1.96 posterior sigmas, tested one at a time given those held before. Returns true when an entry was
+// held (the caller re-solves).
 bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
                             BundleProblem* problem);
 

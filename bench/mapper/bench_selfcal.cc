@@ -2,15 +2,15 @@
 // and drifts, both), the errors before and after refinement, the recovered values against the truth, and
 // the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
 //
-//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]
+//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] [--verbose]
 //
 // Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
 // noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
 // / --max-speed-m-s). --long: the quick-calibration rows again with that many frames (how the camera error
 // falls with more observations; 0: skipped). --seeds N: instead, the quick calibration over N sessions, why
-// the refined cameras' positions are worse (SeedRows). --only TEXT: only the rows whose perturbation or
-// settings contain TEXT are mapped (besides their baselines), e.g. `--only clock_drift`. Prints a markdown
-// table.
+// the refined cameras' positions are worse (SeedRows). --ablate N: which entry's error makes it
+// (AblationRows). --only TEXT: only the rows whose perturbation or settings contain TEXT are mapped (besides
+// their baselines), e.g. `--only clock_drift`. Prints a markdown table.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -231,6 +231,159 @@ void SeedRows(int num_seeds, int frames) {
       n_z ? sum_abs_z / n_z : 0.0);
 }
 
+// What makes the refined cameras' positions worse (--ablate N): the quick calibration over N sessions
+// (seeds 11, 12, ...) refined with `all` as is and with one kind of entry given exactly and held there
+// (its error left out of the quick calibration and a prior sigma of 1e-6 (focal: relative; centre 1e-4 px),
+// so the observability test holds it at the given value, the truth; radial holds k1, k2 and k3), with a 10x
+// wider prior, and run to convergence (no paper stop). Per variant, over the two perturbed cameras and the
+// seeds: the errors of fx and of the principal point (cx and cy) against their posterior sigmas (mean z,
+// signed towards the quick calibration's error: a pull towards the given values; RMS z: 1 when the posterior
+// is calibrated and the estimate efficient), the camera position error along the optical axis against what
+// the posterior focal sigma predicts (distance x sigma), and the mean camera error against the same
+// session mapped with exact intrinsics and the defaults. (n): how many entries were refined (not held).
+// --only TEXT: the variants whose name contains it.
+struct Variant {
+  std::string name;
+  sim::IntrinsicsError cam1{0.03, 8.0, -6.0, 0.03}, cam3{-0.03, -8.0, 8.0, -0.03};
+  IntrinsicsSigma sigma;
+  bool paper_stop = true;
+  bool exact = false;  // the exact session refined
+};
+
+struct VariantSums {
+  int n = 0, seeds = 0;
+  double camera_mm = 0, exact_mm = 0;
+  double z_fx = 0, z_fx_sq = 0, fx_err_sq = 0, sigma_fx_sq = 0;
+  double z_cx = 0, z_cx_sq = 0, cx_err = 0, cx_err_abs = 0, sigma_cx = 0;
+  double axial_sq = 0, predicted_axial_sq = 0;
+  int n_cx = 0, n_fx = 0;
+};
+
+void AblationRows(int num_seeds, int frames) {
+  std::vector<Variant> variants(7);
+  variants[0].name = "`all` (the quick calibration's row)";
+  variants[1].name = "focal given exactly and held";
+  variants[1].cam1.focal_rel = variants[1].cam3.focal_rel = 0;
+  variants[1].sigma.focal_rel = 1e-6;
+  variants[2].name = "principal point given exactly and held";
+  variants[2].cam1.cx_px = variants[2].cam1.cy_px = variants[2].cam3.cx_px = variants[2].cam3.cy_px = 0;
+  variants[2].sigma.center_px = 1e-4;
+  variants[3].name = "k1 given exactly, k1 k2 k3 held";
+  variants[3].cam1.k1 = variants[3].cam3.k1 = 0;
+  variants[3].sigma.radial = 1e-6;
+  variants[4].name = "prior 10x wider";
+  variants[4].sigma.focal_rel *= 10;
+  variants[4].sigma.center_px *= 10;
+  variants[4].sigma.radial *= 10;
+  variants[4].sigma.tangential *= 10;
+  variants[5].name = "no paper stop (to Ceres' convergence)";
+  variants[5].paper_stop = false;
+  variants[6].name = "exact intrinsics refined";
+  variants[6].exact = true;
+  std::vector<VariantSums> sums(variants.size());
+  for (int k = 0; k < num_seeds; ++k) {
+    SelfCalSession session;
+    session.frames = frames;
+    session.seed = 11 + k;
+    const SelfCalRun exact = testing::SimulateSelfCal(session);
+    const MapperOptions defaults = testing::SelfCalOptions(exact.truth);
+    const MapResult r_exact = testing::MapDetections(exact.detections, defaults);
+    const sim::EvalResult e_exact = sim::Evaluate(exact.truth, &r_exact.map, &r_exact.trajectory);
+    Eigen::Vector3d object_mean = Eigen::Vector3d::Zero();
+    for (const sim::SimFrame& f : exact.truth.frames) object_mean += f.rig_from_object.translation();
+    object_mean /= static_cast<double>(exact.truth.frames.size());
+    for (size_t v = 0; v < variants.size(); ++v) {
+      const Variant& variant = variants[v];
+      if (!only.empty() && variant.name.find(only) == std::string::npos) continue;
+      SelfCalRun run = exact;
+      if (!variant.exact) {
+        testing::PerturbIntrinsics("cam1", variant.cam1, &run);
+        testing::PerturbIntrinsics("cam3", variant.cam3, &run);
+      }
+      MapperOptions o = defaults;
+      o.intrinsics.refine = IntrinsicsRefinement::kAll;
+      o.intrinsics.sigma = variant.sigma;
+      o.paper_stop = variant.paper_stop;
+      const MapResult r = testing::MapDetections(run.detections, o);
+      const sim::EvalResult e = sim::Evaluate(exact.truth, &r.map, &r.trajectory);
+      VariantSums& s = sums[v];
+      ++s.seeds;
+      s.camera_mm += e.camera_position_mm.mean;
+      s.exact_mm += e_exact.camera_position_mm.mean;
+      for (const IntrinsicsReport& ir : r.report.intrinsics) {
+        if (ir.camera != "cam1" && ir.camera != "cam3") continue;
+        const sim::SimCamera& t = *exact.truth.FindCamera(ir.camera);
+        const Eigen::Vector3d error =
+            e.gt_rig_from_est_rig * r.map.FindCamera(ir.camera)->rig_from_cam.translation() -
+            t.rig_from_cam.translation();
+        const double axial_mm = 1000 * error.dot(t.rig_from_cam.linear().col(2));
+        const double distance_mm = 1000 * (t.rig_from_cam.translation() - object_mean).norm();
+        // +1 where the quick calibration's error of fx, cx, cy is positive: signed errors towards it.
+        const double sign = ir.camera == "cam1" ? 1.0 : -1.0;
+        const double toward[3] = {sign, sign, -sign};
+        ++s.n;
+        s.axial_sq += axial_mm * axial_mm;
+        if (ir.is_refined[0] && ir.posterior_sigma[0] > 0) {
+          const double err = ir.refined[0] / t.model.fx - 1, sigma = ir.posterior_sigma[0] / ir.refined[0];
+          s.z_fx += toward[0] * err / sigma;
+          s.z_fx_sq += err * err / (sigma * sigma);
+          s.fx_err_sq += err * err;
+          s.sigma_fx_sq += sigma * sigma;
+          s.predicted_axial_sq += distance_mm * distance_mm * sigma * sigma;
+          ++s.n_fx;
+        }
+        if (verbose)
+          for (const std::string& why : ir.held)
+            std::fprintf(stderr, "seed %d %s %s held: %s\n", 11 + k, variant.name.c_str(), ir.camera.c_str(),
+                         why.c_str());
+        for (int e = 2; e <= 3; ++e) {
+          if (!ir.is_refined[e] || ir.posterior_sigma[e] <= 0) continue;
+          const double err = ir.refined[e] - (e == 2 ? t.model.cx : t.model.cy),
+                       sigma = ir.posterior_sigma[e];
+          s.z_cx += toward[e - 1] * err / sigma;
+          s.z_cx_sq += err * err / (sigma * sigma);
+          s.cx_err += toward[e - 1] * err;
+          s.cx_err_abs += std::abs(err);
+          s.sigma_cx += sigma;
+          ++s.n_cx;
+        }
+      }
+      if (verbose)
+        std::fprintf(stderr, "seed %d %s: %.3f mm (exact %.3f)\n", 11 + k, variant.name.c_str(),
+                     e.camera_position_mm.mean, e_exact.camera_position_mm.mean);
+    }
+  }
+  std::printf(
+      "| variant (%d sessions, %d frames) | camera error | exact, defaults | ratio | fx error RMS | fx "
+      "posterior "
+      "sigma RMS | fx z mean / RMS | axial error RMS (cam1, cam3) | distance x fx sigma RMS | centre error "
+      "mean "
+      "/ mean abs | centre posterior sigma mean | centre z mean / RMS |\n",
+      num_seeds, frames);
+  std::printf("|---|---:|---:|---:|---:|---:|---|---:|---:|---|---:|---|\n");
+  for (size_t v = 0; v < variants.size(); ++v) {
+    const VariantSums& s = sums[v];
+    if (s.seeds == 0) continue;  // --only
+    const double nf = std::max(1, s.n_fx), nc = std::max(1, s.n_cx), n = std::max(1, s.n);
+    char fx[160] = "-", cx[200] = "-";
+    if (s.n_fx)
+      std::snprintf(fx, sizeof(fx), "%.3f %% | %.3f %% | %+.2f / %.2f (%d)",
+                    100 * std::sqrt(s.fx_err_sq / nf), 100 * std::sqrt(s.sigma_fx_sq / nf), s.z_fx / nf,
+                    std::sqrt(s.z_fx_sq / nf), s.n_fx);
+    else
+      std::snprintf(fx, sizeof(fx), "- | - | -");
+    if (s.n_cx)
+      std::snprintf(cx, sizeof(cx), "%+.2f / %.2f px | %.2f px | %+.2f / %.2f (%d)", s.cx_err / nc,
+                    s.cx_err_abs / nc, s.sigma_cx / nc, s.z_cx / nc, std::sqrt(s.z_cx_sq / nc), s.n_cx);
+    else
+      std::snprintf(cx, sizeof(cx), "- | - | -");
+    std::printf("| %s | %.3f mm | %.3f mm | %.2fx | %s | %.3f mm | %.3f mm | %s |\n",
+                variants[v].name.c_str(), s.camera_mm / s.seeds, s.exact_mm / s.seeds,
+                s.camera_mm / s.exact_mm, fx, std::sqrt(s.axial_sq / n),
+                s.n_fx ? std::sqrt(s.predicted_axial_sq / nf) : 0.0, cx);
+  }
+}
+
 void Print(const std::vector<Row>& rows) {
   std::printf(
       "| perturbation | mapper settings | camera position error | object error | recovered vs truth (worst "
@@ -245,7 +398,7 @@ void Print(const std::vector<Row>& rows) {
 }
 
 int Main(int argc, char** argv) {
-  int frames = 300, long_frames = 1200, seeds = 0;
+  int frames = 300, long_frames = 1200, seeds = 0, ablate = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) {
@@ -254,16 +407,22 @@ int Main(int argc, char** argv) {
       long_frames = std::atoi(argv[++i]);
     } else if (a == "--seeds" && i + 1 < argc) {
       seeds = std::atoi(argv[++i]);
+    } else if (a == "--ablate" && i + 1 < argc) {
+      ablate = std::atoi(argv[++i]);
     } else if (a == "--only" && i + 1 < argc) {
       only = argv[++i];
     } else if (a == "--verbose") {
       verbose = true;
     } else {
-      std::fprintf(
-          stderr,
-          "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--only TEXT] [--verbose]\n");
+      std::fprintf(stderr,
+                   "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] "
+                   "[--verbose]\n");
       return 2;
     }
+  }
+  if (ablate > 0) {
+    AblationRows(ablate, frames);
+    return 0;
   }
   if (seeds > 0) {
     SeedRows(seeds, frames);

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <map>
 #include <random>
+#include <vector>
 
 #include "core/config.h"
 #include "mapper/bundle.h"
@@ -124,6 +125,108 @@ TEST(MapperSelfCal, QuickCalibrationErrorsAreRecovered) {
                 ir.camera.c_str(), refined_mm, exact_mm, focal_sigma_mm);
     EXPECT_LT(refined_mm, exact_mm + 2.0 * focal_sigma_mm) << ir.camera;
   }
+}
+
+// A camera whose intrinsics the data call wrong keeps the entries that changed free. Session 15 of the
+// quick calibration: cam1's cy (6 px off) refined 3.5 px from the given value against a marginal posterior
+// sigma of 2.0 px (inflated by p1 and p2, which agree with theirs) and cam3's cx (8 px off) 4.6 px against
+// 2.8 px; the entry-by-entry test on the marginal sigmas held both at the wrong given values (cameras
+// 0.79 mm, 4.2x the exact session). Tested one at a time given the entries held before (p1, p2 first),
+// they stay refined (0.55 mm).
+TEST(MapperSelfCal, ChangedEntriesOfAWrongCameraAreNotHeld) {
+  SelfCalSession session;
+  session.seed = 15;
+  const SelfCalRun exact = SimulateSelfCal(session);
+  SelfCalRun wrong = exact;
+  PerturbTwo(&wrong);
+  MapperOptions options = SelfCalOptions(exact.truth);
+  options.intrinsics.refine = IntrinsicsRefinement::kAll;
+  const MapResult r = MapDetections(wrong.detections, options);
+  std::printf("camera error %.3f mm\n",
+              sim::Evaluate(exact.truth, &r.map, &r.trajectory).camera_position_mm.mean);
+  for (const IntrinsicsReport& ir : r.report.intrinsics) {
+    if (ir.camera != "cam1" && ir.camera != "cam3") continue;
+    const CameraModel& t = TrueCamera(exact.truth, ir.camera).model;
+    const double truth[4] = {t.fx, t.fy, t.cx, t.cy};
+    for (const std::string& why : ir.held) std::printf("  %s held: %s\n", ir.camera.c_str(), why.c_str());
+    for (int k = 0; k < 4; ++k) {
+      std::printf("  %s %s: error %+.3f (posterior sigma %.3f)\n", ir.camera.c_str(), ir.names[k].c_str(),
+                  ir.refined[k] - truth[k], ir.posterior_sigma[k]);
+      EXPECT_TRUE(ir.is_refined[k]) << ir.camera << " " << ir.names[k];
+      EXPECT_LT(std::abs(ir.refined[k] - truth[k]), 3.0 * ir.posterior_sigma[k])
+          << ir.camera << " " << ir.names[k];
+    }
+  }
+}
+
+// Why the refined cameras are 3-5x the exact session's error at 300 frames (the issue asks 1.5x): the
+// information, not the method. Over sessions 11-13 the two refined cameras' fx, fy, cx, cy errors are the
+// size of their posterior sigmas (bench_selfcal --ablate 20: RMS z 1.15 for fx, 1.06 for the centre, no
+// pull towards the given values: mean z towards them -0.11 / -0.05), so no estimator does much better
+// with these data; a refined camera moves along its axis with its focal error (1.1 m x 0.16 % = 1.8 mm).
+// With the same sessions' focal lengths given exactly (held; the centre and k1 still wrong and refined)
+// the cameras are within 1.5x of the exact session (20 sessions: 1.07x on average, 1.55x the worst).
+TEST(MapperSelfCal, QuickCalibrationIsAtTheInformationLimit) {
+  std::vector<double> z_focal, z_centre, z_towards_given;
+  for (uint64_t seed : {11, 12, 13}) {
+    SelfCalSession session;
+    session.seed = seed;
+    const SelfCalRun exact = SimulateSelfCal(session);
+    SelfCalRun wrong = exact, focal_known = exact;
+    PerturbTwo(&wrong);
+    testing::PerturbIntrinsics("cam1", {0.0, 8.0, -6.0, 0.03}, &focal_known);
+    testing::PerturbIntrinsics("cam3", {0.0, -8.0, 8.0, -0.03}, &focal_known);
+    MapperOptions options = SelfCalOptions(exact.truth);
+    const MapResult r_exact = MapDetections(exact.detections, options);
+    options.intrinsics.refine = IntrinsicsRefinement::kAll;
+    const MapResult r_refined = MapDetections(wrong.detections, options);
+    options.intrinsics.sigma.focal_rel = 1e-6;  // the observability test holds fx, fy at the given values
+    const MapResult r_focal_known = MapDetections(focal_known.detections, options);
+    const double exact_mm =
+        sim::Evaluate(exact.truth, &r_exact.map, &r_exact.trajectory).camera_position_mm.mean;
+    const double refined_mm =
+        sim::Evaluate(exact.truth, &r_refined.map, &r_refined.trajectory).camera_position_mm.mean;
+    const double focal_known_mm =
+        sim::Evaluate(exact.truth, &r_focal_known.map, &r_focal_known.trajectory).camera_position_mm.mean;
+    std::printf("seed %d: camera error exact %.3f mm, refined %.3f mm (%.1fx), focal given %.3f mm (%.2fx)\n",
+                static_cast<int>(seed), exact_mm, refined_mm, refined_mm / exact_mm, focal_known_mm,
+                focal_known_mm / exact_mm);
+    EXPECT_LT(focal_known_mm, 1.5 * exact_mm) << "seed " << seed;
+    for (const IntrinsicsReport& ir : r_refined.report.intrinsics) {
+      if (ir.camera != "cam1" && ir.camera != "cam3") continue;
+      const CameraModel& t = TrueCamera(exact.truth, ir.camera).model;
+      const double truth[4] = {t.fx, t.fy, t.cx, t.cy};
+      // The sign of the quick calibration's error of fx, fy, cx, cy (PerturbTwo).
+      const double sign = ir.camera == "cam1" ? 1.0 : -1.0;
+      const double given_side[4] = {sign, sign, sign, -sign};
+      for (int k = 0; k < 4; ++k) {
+        ASSERT_TRUE(ir.is_refined[k]) << ir.camera << " " << ir.names[k];
+        const double z = (ir.refined[k] - truth[k]) / ir.posterior_sigma[k];
+        std::printf("  %s %s: error %+.3f px, posterior sigma %.3f px, z %+.2f\n", ir.camera.c_str(),
+                    ir.names[k].c_str(), ir.refined[k] - truth[k], ir.posterior_sigma[k], z);
+        EXPECT_LT(std::abs(z), 3.0) << "seed " << seed << " " << ir.camera << " " << ir.names[k];
+        (k < 2 ? z_focal : z_centre).push_back(z);
+        z_towards_given.push_back(given_side[k] * z);
+      }
+    }
+  }
+  auto rms = [](const std::vector<double>& v) {
+    double sq = 0;
+    for (double x : v) sq += x * x;
+    return std::sqrt(sq / v.size());
+  };
+  double towards = 0;
+  for (double z : z_towards_given) towards += z / z_towards_given.size();
+  std::printf("RMS z: focal %.2f, centre %.2f; mean z towards the given values %+.2f\n", rms(z_focal),
+              rms(z_centre), towards);
+  // Calibrated posteriors and an efficient estimate: RMS z near 1 (12 entries each: +-0.2 sampling);
+  // a prior or a stop that kept the entries near the given values would show as a mean z towards them
+  // (24 entries: standard error 0.2).
+  EXPECT_GT(rms(z_focal), 0.5);
+  EXPECT_LT(rms(z_focal), 1.6);
+  EXPECT_GT(rms(z_centre), 0.5);
+  EXPECT_LT(rms(z_centre), 1.6);
+  EXPECT_LT(std::abs(towards), 0.6);
 }
 
 }  // namespace
