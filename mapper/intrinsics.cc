@@ -199,8 +199,10 @@ void HoldAtGiven(size_t k, const std::string& why, IntrinsicsReport* r, BundleIn
 }  // namespace
 
 bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
-                            BundleProblem* bp) {
-  const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(bp, sigma_px, threads);
+                            BundleProblem* bp, IntrinsicsInformation* information) {
+  IntrinsicsInformation computed = IntrinsicsInformationOf(bp, threads);
+  const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(computed, *bp, sigma_px);
+  if (information) *information = std::move(computed);
   int tested = 0;
   for (const IntrinsicsReport& r : *reports)
     tested += bp->intrinsics[r.index].refined && covariance[r.index].size() > 0;
@@ -275,8 +277,11 @@ bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<Intrinsics
 }
 
 void FinishIntrinsicsReports(BundleProblem* bp, double sigma_px, int threads,
-                             std::vector<IntrinsicsReport>* reports) {
-  const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(bp, sigma_px, threads);
+                             std::vector<IntrinsicsReport>* reports,
+                             const IntrinsicsInformation* information) {
+  const std::vector<Eigen::MatrixXd> covariance = information
+                                                      ? IntrinsicsCovariance(*information, *bp, sigma_px)
+                                                      : IntrinsicsCovariance(bp, sigma_px, threads);
   for (IntrinsicsReport& r : *reports) {
     r.refined = IntrinsicsVector(bp->Model(r.index));
     r.posterior_sigma.assign(r.given.size(), 0.0);

@@ -39,13 +39,17 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
 // Mahalanobis distance is within the chi-square level of a 5 % chance, family-wise over the cameras, of
 // changing a right calibration; a camera that differs keeps free only its entries changed by more than
 // 1.96 posterior sigmas, tested one at a time given those held before. Returns true when an entry was
-// held (the caller re-solves).
+// held (the caller re-solves). `information` (optional): the information the test used (at the
+// parameters before any entry was held).
 bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
-                            BundleProblem* problem);
+                            BundleProblem* problem, IntrinsicsInformation* information = nullptr);
 
-// After the solve: the refined values and posterior sigmas into the reports.
+// After the solve: the refined values and posterior sigmas into the reports. The covariance from
+// `information` (KeepAgreeingIntrinsics', the entries held since dropped) when given, else from the
+// information at the current parameters.
 void FinishIntrinsicsReports(BundleProblem* problem, double sigma_px, int threads,
-                             std::vector<IntrinsicsReport>* reports);
+                             std::vector<IntrinsicsReport>* reports,
+                             const IntrinsicsInformation* information = nullptr);
 
 // report.json's "intrinsics" member (one line per camera considered; empty when none), each line
 // ending ",\n": given and refined values, prior and posterior sigmas, which entries were held and why.

@@ -400,16 +400,19 @@ int64_t SecondPassWindowUs(const std::vector<StoredMessage>& raw, const std::vec
 // Time offsets: a first pass with frames assembled over max_time_offset_ms, then the method again on the
 // clocks it found corrected (frames assembled at the sync tolerance, offsets refined once more from 0):
 // the offsets are the sum, the second pass's map and trajectory (in the reference camera's clock) the
-// result. The first pass only finds the clocks the frames are re-assembled on: the intrinsics are refined
-// in the second (refining them in both took 2.2 of the 3.9 s of bench_selfcal's everything row; the clocks
-// after the second pass are the same within a few microseconds), and so are the velocities (the second
-// pass refines the clocks again from the first's). When the first pass's frames are the result, it is
-// solved again in full.
+// result. The first pass only finds the clocks the frames are re-assembled on (it stops early): the
+// intrinsics are refined in the second (refining them in both took 2.2 of the 3.9 s of bench_selfcal's
+// everything row; the clocks after the second pass are the same within a few microseconds), and so are the
+// velocities (the second pass refines the clocks again from the first's). When the first pass's frames are
+// the result, it is solved again in full.
 MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const SolveInputs& s,
                                const MapperOptions& o) {
   MapperOptions first_options = o;
   first_options.sync_tolerance_ms = std::max(o.sync_tolerance_ms, o.max_time_offset_ms);
   first_options.intrinsics.refine = IntrinsicsRefinement::kNone;
+  // The clocks for re-assembly, not the result: the rough stop (bench_selfcal's everything row: 8 of its
+  // 11 iterations, the same errors and clocks to the table's digits but for a last one).
+  first_options.paper_stop_px = kRoughStopFactor * o.paper_stop_px;
   std::vector<Observation> square_poses;  // the first pass's, for the second (the same given intrinsics)
   const MapResult first =
       SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0, &square_poses);
@@ -438,6 +441,7 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
     // The first pass's frames (and its offsets) are the result: solved again in full (the velocities
     // updated, the intrinsics refined when asked).
     first_options.intrinsics = o.intrinsics;
+    first_options.paper_stop_px = o.paper_stop_px;
     MapResult kept = SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 2, &square_poses);
     kept.report.total_seconds += first.report.total_seconds;
     kept.report.total_seconds += result.report.total_seconds;

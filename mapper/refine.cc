@@ -119,7 +119,10 @@ double CurrentRms(const BundleProblem& bp) {
 
 // A re-solve whose updated velocities move the poses the observations are seen at by less than this
 // (metres, at the object's points) is not made: it would start where the last solve stopped.
-constexpr double kNegligibleVelocityShiftM = 1e-6;
+// 10 um: 0.01 px seen by a camera with a 1000 px focal length 1 m away, a twentieth of the sim sessions'
+// corner noise (bench_selfcal's everything row: 2.8 um after the agreement test's re-solve; the re-solve,
+// 1 iteration, changed the RMS by 2e-8 px and cost a tenth of the second pass).
+constexpr double kNegligibleVelocityShiftM = 1e-5;
 
 // How far updated velocities (bp.frame_velocity against `before`) move the pose each active observation
 // is seen at: the largest |dt| x (|dv| + |dw| x scale_m) over them, metres.
@@ -196,7 +199,12 @@ void RefineWithRejection(const Observations& observations, const ObservationName
       // that are not outliers), then the intrinsics the data can constrain join the unknowns. (The clocks
       // alone join at once: the poses-first solve took a fifth of the time-offset mapping and changed
       // the offsets by 1 us.)
-      const BundleSummary first = Solve(settings, bundle, report);
+      // Its result only scales the intrinsics' prior and information and starts the solve with them:
+      // it stops at 10 times the paper's threshold (bench_selfcal's everything row: 2 iterations of 3, the
+      // RMS the same to 1e-6 px).
+      BundleSettings poses_first = settings;
+      poses_first.paper_stop_px = kRoughStopFactor * settings.paper_stop_px;
+      const BundleSummary first = Solve(poses_first, bundle, report);
       if (!first.usable) throw MapperError("refinement failed: " + first.termination);
       // Corner noise per coordinate: the observations' RMS corner distance / sqrt(2).
       sigma_px = std::max(0.05, CurrentRms(bundle->problem) / std::sqrt(2.0));
@@ -221,24 +229,31 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     if (round >= o.max_rejection_rounds) break;
     if (!RejectGrossResiduals(observations, names, layout, o, bundle, report)) break;
   }
+  // The agreement test's information, for the posterior covariances at the end (held entries dropped):
+  // the agreement re-solve only brings back the poses the held entries had traded with (bench_selfcal's
+  // everything row: the largest focal sigma the same to 3 digits; computing it again was a fourteenth of the
+  // second pass). After a velocity re-solve it is computed again.
+  IntrinsicsInformation information;
+  bool information_current = !report->intrinsics.empty();
   if (!report->intrinsics.empty() &&
-      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp)) {
+      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp, &information)) {
     BundleSettings full = solve_settings;
     full.paper_stop = false;
     if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
   }
   // The velocities the offsets move poses along come from the poses: re-solve with them updated, until
-  // they move nothing (bench_selfcal's second time-offset pass: 3 um, then 0.01 um, a solve of 0
-  // iterations that cost 0.05-0.07 s of set-up).
+  // they move nothing (kNegligibleVelocityShiftM).
   for (int pass = 0; bp.RefinesTime() && pass < velocity_passes; ++pass) {
     const std::vector<std::array<double, 6>> before = bp.frame_velocity;
     UpdateFrameVelocities(VelocityGapS(bp), &bp);
     const double shift_m = VelocityShiftM(before, layout.ObjectScale(), bp);
     if (shift_m < kNegligibleVelocityShiftM) break;
     if (!Solve(solve_settings, bundle, report).usable) throw MapperError("refinement failed (time offsets)");
+    information_current = false;
   }
   if (!report->intrinsics.empty())
-    FinishIntrinsicsReports(&bundle->problem, sigma_px, settings.threads, &report->intrinsics);
+    FinishIntrinsicsReports(&bundle->problem, sigma_px, settings.threads, &report->intrinsics,
+                            information_current ? &information : nullptr);
 }
 
 namespace {

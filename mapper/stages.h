@@ -186,6 +186,11 @@ MapperBundle MakeBundleProblem(const Observations& observations, const Observati
 
 BundleSettings BundleSettingsFor(const MapperOptions& options, int threads);
 
+// A solve whose result only starts or scales a later one (the time offsets' first pass, which finds the
+// clocks the frames are re-assembled on; the poses-first solve before the intrinsics join) stops when the
+// RMS improves by less than this multiple of the paper's threshold.
+constexpr double kRoughStopFactor = 10.0;
+
 // Solve, reject gross residuals (> outlier_px) and markers mostly rejected, re-solve, up to
 // max_rejection_rounds times; with clocks, re-solved velocity_passes times more with the frames'
 // velocities updated. Throws MapperError when a solve fails.

@@ -2,7 +2,8 @@
 // and drifts, both), the errors before and after refinement, the recovered values against the truth, and
 // the mapping time against the same session mapped with the defaults (synchronised, exact intrinsics).
 //
-//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] [--verbose]
+//   bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] [--threads N]
+//                 [--verbose]
 //
 // Sessions: tests/mapper/selfcal_sim.h (the paper's rig, 5 cameras at 30 fps, box object, 0.2 px corner
 // noise; the simulator's detections, as mcmt-sim --detections-only --intrinsics-error / --clock
@@ -10,7 +11,8 @@
 // falls with more observations; 0: skipped). --seeds N: instead, the quick calibration over N sessions, why
 // the refined cameras' positions are worse (SeedRows). --ablate N: which entry's error makes it
 // (AblationRows). --only TEXT: only the rows whose perturbation or settings contain TEXT are mapped (besides
-// their baselines), e.g. `--only clock_drift`. Prints a markdown table.
+// their baselines), e.g. `--only clock_drift`. --threads N: the mappings' threads (0: the mapper's default;
+// 1 gives callgrind one call tree). Prints a markdown table.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +33,7 @@ using testing::SelfCalSession;
 
 bool verbose = false;
 std::string only;  // --only
+int threads = 0;   // --threads
 
 struct Row {
   std::string perturbation, settings;
@@ -94,8 +97,10 @@ double CpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
 
 MapResult Map(const SelfCalRun& run, const MapperOptions& options, const std::string& what,
               double* cpu_s = nullptr) {
+  MapperOptions o = options;
+  if (threads > 0) o.threads = threads;
   const double cpu_start = CpuSeconds();
-  const MapResult r = testing::MapDetections(run.detections, options);
+  const MapResult r = testing::MapDetections(run.detections, o);
   if (cpu_s) *cpu_s = CpuSeconds() - cpu_start;
   if (verbose) {
     std::fprintf(stderr, "%s: %.2f s, %d solves, %d iterations\n", what.c_str(), r.report.total_seconds,
@@ -411,12 +416,15 @@ int Main(int argc, char** argv) {
       ablate = std::atoi(argv[++i]);
     } else if (a == "--only" && i + 1 < argc) {
       only = argv[++i];
+    } else if (a == "--threads" && i + 1 < argc) {
+      threads = std::atoi(argv[++i]);
     } else if (a == "--verbose") {
       verbose = true;
     } else {
       std::fprintf(stderr,
                    "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] "
-                   "[--verbose]\n");
+                   "[--threads N] [--verbose]
+");
       return 2;
     }
   }
