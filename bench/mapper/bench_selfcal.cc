@@ -423,8 +423,7 @@ int Main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_selfcal [--frames 300] [--long 1200] [--seeds N] [--ablate N] [--only TEXT] "
-                   "[--threads N] [--verbose]
-");
+                   "[--threads N] [--verbose]\n");
       return 2;
     }
   }
