@@ -3,6 +3,9 @@
 // the undistorted image, fitted to the chessboard corners, predicts every marker's corners from the
 // board's geometry (5.4 cm squares, 4.05 cm markers). Prints the signed offsets (px, outward) of mcmt's
 // corners and of stock OpenCV's, per marker id and in all, and the relative size error.
+// Then maps the detections as test_mapper_realdata does, once as detected and once with every marker's
+// corners replaced by the chessboard's prediction (markers without one dropped), and prints the board's
+// marker spacing / marker size of both maps (board: 1.88562).
 //   diag_charuco RIG_YAML [max frames per camera (all)] [camera]
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +17,7 @@
 #include "core/config.h"
 #include "detector/detector.h"
 #include "detector/source.h"
+#include "mapper/mapper.h"
 
 using namespace mcmt;
 
@@ -44,6 +48,24 @@ struct Stats {
                 100 * rel_sum / markers);
   }
 };
+// test_mapper_realdata's measure: least-squares scale of the marker centres' distances against the
+// 5.4 cm grid's, as marker spacing (diagonal squares) / marker size.
+double SpacingOverSize(const RigMap& map) {
+  std::vector<Eigen::Vector3d> measured, ideal;
+  for (const MapMarker& m : map.markers) {
+    const Eigen::Vector3d p = m.object_from_marker.translation();
+    measured.push_back(p);
+    ideal.emplace_back(0.054 * std::round(p.x() / 0.054), 0.054 * std::round(p.y() / 0.054), 0.0);
+  }
+  double dot = 0, ideal_sq = 0;
+  for (size_t i = 0; i < measured.size(); ++i)
+    for (size_t j = i + 1; j < measured.size(); ++j) {
+      const double d_ideal = (ideal[i] - ideal[j]).norm();
+      dot += (measured[i] - measured[j]).norm() * d_ideal;
+      ideal_sq += d_ideal * d_ideal;
+    }
+  return dot / ideal_sq * 0.054 * std::sqrt(2.0) / 0.0405;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,6 +82,7 @@ int main(int argc, char** argv) {
   std::map<int, Stats> mcmt_by_size;  // marker side / 10 px
   double h_rms_sum = 0;
   int h_count = 0;
+  std::vector<detections_t> as_detected, predicted_all;
   for (const CameraConfig& cam : rig.cameras) {
     if (!only.empty() && cam.name != only) continue;
     SourceOptions so;
@@ -67,6 +90,7 @@ int main(int argc, char** argv) {
     auto source = FrameSource::Open(so);
     MarkerDetector detector(rig.markers, DetectorOptions::FromConfig(rig));
     detector.SetCamera(cam.model);
+    const std::vector<detections_t> recorded = DetectRecording(rig, cam.name, max_frames);
     const CameraModel& m = cam.model;
     cv::Mat K = (cv::Mat_<double>(3, 3) << m.fx, 0, m.cx, 0, m.fy, m.cy, 0, 0, 1);
     cv::Mat dist(m.distortion, true);
@@ -76,9 +100,22 @@ int main(int argc, char** argv) {
     };
     Frame frame;
     int frames = 0;
+    auto pixel = [&](const Eigen::Vector2d& ideal_px) {  // ideal pixel -> raw pixel
+      double xd, yd;
+      m.Distort((ideal_px.x() - m.cx) / m.fx, (ideal_px.y() - m.cy) / m.fy, &xd, &yd);
+      return Eigen::Vector2d(m.fx * xd + m.cx, m.fy * yd + m.cy);
+    };
     Stats cam_stats;
     while ((max_frames < 0 || frames < max_frames) && source->Read(&frame)) {
       ++frames;
+      const bool have_record = frames <= static_cast<int>(recorded.size());
+      if (have_record) as_detected.push_back(recorded[frames - 1]);
+      detections_t replaced;
+      if (have_record) {
+        replaced = recorded[frames - 1];
+        replaced.markers.clear();
+        replaced.num_markers = 0;
+      }
       cv::Mat gray;
       if (frame.image.channels() == 3)
         cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
@@ -126,6 +163,21 @@ int main(int argc, char** argv) {
         }
         return true;
       };
+      if (have_record)
+        for (const marker_t& mk : recorded[frames - 1].markers) {
+          std::array<Eigen::Vector2d, 4> want;
+          if (!predicted(mk.id, &want)) continue;
+          const Eigen::Vector2d c0 = ideal(mk.corners[0][0], mk.corners[0][1]);
+          if ((c0 - want[0]).norm() > 5) continue;
+          marker_t r = mk;
+          for (int k = 0; k < 4; ++k) {
+            const Eigen::Vector2d q = pixel(want[k]);
+            r.corners[k][0] = q.x(), r.corners[k][1] = q.y();
+          }
+          replaced.markers.push_back(r);
+        }
+      replaced.num_markers = static_cast<int>(replaced.markers.size());
+      if (have_record && replaced.num_markers > 0) predicted_all.push_back(replaced);
       for (const marker_t& mk : found) {
         std::array<Eigen::Vector2d, 4> want, got;
         if (!predicted(mk.id, &want)) continue;
@@ -152,5 +204,18 @@ int main(int argc, char** argv) {
   for (const auto& [id, s] : mcmt_by_id) s.Print(("id " + std::to_string(id)).c_str());
   for (const auto& [b, s] : mcmt_by_size)
     s.Print((std::to_string(b * 10) + "-" + std::to_string(b * 10 + 10) + " px").c_str());
+  for (int variant = 0; variant < 2; ++variant) {
+    Mapper mapper(MapperOptions::FromConfig(rig));
+    for (const auto& d : variant == 0 ? as_detected : predicted_all) mapper.Add(d);
+    try {
+      const MapResult result = mapper.Solve();
+      const double r = SpacingOverSize(result.map);
+      std::printf("map of %s: %zu markers, spacing / size %.5f (%+.3f %%)\n",
+                  variant == 0 ? "the detected corners" : "the chessboard-predicted corners",
+                  result.map.markers.size(), r, 100 * (r / 1.885618 - 1));
+    } catch (const std::exception& e) {
+      std::printf("map %d: %s\n", variant, e.what());
+    }
+  }
   return 0;
 }
