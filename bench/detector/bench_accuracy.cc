@@ -1,6 +1,7 @@
 // Corner accuracy of mcmt's detector and of stock OpenCV ArUco on the independent reference renderer
 // (tests/detector/reference_renderer.h): the imaging catalogue x marker sizes x view angles. Prints
-// markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band.
+// markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band,
+// and small markers (10-15 px, cells below 2 px) per condition.
 //   bench_accuracy [--quick | images per cell (default 8)] [condition name substring]
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
 // compare two builds' corners marker by marker.
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
               images);
   std::printf(kHeader, "condition");
   Accuracy all, all_stock, by_size[3], by_size_stock[3], by_angle[3], by_angle_stock[3];
+  std::vector<std::pair<std::string, std::pair<Accuracy, Accuracy>>> small;  // per condition: mcmt, stock
   std::ofstream dump;
   if (const char* path = std::getenv("MCMT_CORNER_DUMP")) dump.open(path);
   dump.precision(10);
@@ -65,6 +67,14 @@ int main(int argc, char** argv) {
       }
     Row(im.name.c_str(), cond, cond_stock);
     all.Add(cond), all_stock.Add(cond_stock);
+    Accuracy sm, sm_stock;
+    for (int g = 0; g < 3; ++g) {
+      Accuracy stock;
+      sm.Add(testing::MeasureReference("DICT_6X6_250", testing::SmallScene(g), im, DetectorOptions(), images,
+                                       testing::SmallSeed(static_cast<int>(c), g), &stock));
+      sm_stock.Add(stock);
+    }
+    small.push_back({im.name, {sm, sm_stock}});
   }
   Row("**all**", all, all_stock);
   std::printf("\n");
@@ -83,5 +93,22 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "\nRecall counts markers of 20 px and more; offsets and errors every marker found (15-60 px).\n");
+  std::printf("\n#### Small markers (%.0f-%.0f px, 0-75 deg, %d images per angle band)\n\n",
+              testing::kSmallSides[0], testing::kSmallSides[1], images);
+  std::printf(
+      "| condition | mcmt mean offset px | mcmt median error px | mcmt found | mcmt wrong ids | stock offset "
+      "px "
+      "| stock median px | stock found |\n|---|---|---|---|---|---|---|---|\n");
+  Accuracy small_all, small_all_stock;
+  auto small_row = [](const std::string& what, const Accuracy& a, const Accuracy& s) {
+    std::printf("| %s | %+.3f | %.3f | %d/%d | %d | %+.3f | %.3f | %d/%d |\n", what.c_str(), a.MeanOffset(),
+                a.MedianError(), a.found_small, a.visible_small, a.wrong_ids, s.MeanOffset(), s.MedianError(),
+                s.found_small, s.visible_small);
+  };
+  for (const auto& [name, acc] : small) {
+    small_row(name, acc.first, acc.second);
+    small_all.Add(acc.first), small_all_stock.Add(acc.second);
+  }
+  small_row("**all**", small_all, small_all_stock);
   return 0;
 }

@@ -17,14 +17,17 @@ namespace mcmt::testing {
 struct Accuracy {
   int visible60 = 0, found60 = 0, visible75 = 0, found75 = 0;  // markers >= 20 px
   int detections = 0, wrong_ids = 0;
+  int visible_small = 0, found_small = 0;  // markers below 20 px, <= 75 deg
   CornerErrors corners;
   double Recall60() const { return visible60 ? double(found60) / visible60 : 1.0; }
   double Recall75() const { return visible75 ? double(found75) / visible75 : 1.0; }
+  double RecallSmall() const { return visible_small ? double(found_small) / visible_small : 1.0; }
   double MeanOffset() const { return MeanOf(corners.offsets); }
   double MedianError() const { return MedianOf(corners.errors); }
   void Add(const Accuracy& o) {
     visible60 += o.visible60, found60 += o.found60, visible75 += o.visible75, found75 += o.found75;
     detections += o.detections, wrong_ids += o.wrong_ids;
+    visible_small += o.visible_small, found_small += o.found_small;
     corners.errors.insert(corners.errors.end(), o.corners.errors.begin(), o.corners.errors.end());
     corners.offsets.insert(corners.offsets.end(), o.corners.offsets.begin(), o.corners.offsets.end());
   }
@@ -42,9 +45,11 @@ inline void Score(const std::vector<RenderedMarker>& truth, const std::vector<ma
     if (t.view_angle_deg > 75) continue;
     const bool counted = t.side_px >= 20, in60 = t.view_angle_deg <= 60;
     a->visible75 += counted, a->visible60 += counted && in60;
+    a->visible_small += !counted;
     for (const marker_t& m : found) {
       if (m.id != t.id) continue;
       a->found75 += counted, a->found60 += counted && in60;
+      a->found_small += !counted;
       std::array<cv::Point2d, 4> got;
       for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
       AddCornerErrors(t, got, &a->corners);
@@ -108,5 +113,15 @@ inline ReferenceScene BenchScene(int side_band, int angle_band) {
 inline uint64_t BenchSeed(int condition, int side_band, int angle_band) {
   return 2 + 9 * condition + 3 * side_band + angle_band;
 }
+// Small markers (10-15 px: cells below 2 px with DICT_6X6_250), a band of their own beside the matrix
+// (its seeds apart from BenchSeed's, so the matrix's renders stay as they were).
+constexpr double kSmallSides[2] = {10, 15};
+inline ReferenceScene SmallScene(int angle_band) {
+  ReferenceScene scene = BenchScene(0, angle_band);
+  scene.min_side_px = kSmallSides[0], scene.max_side_px = kSmallSides[1];
+  scene.markers = 8;
+  return scene;
+}
+inline uint64_t SmallSeed(int condition, int angle_band) { return 1000 + 3 * condition + angle_band; }
 
 }  // namespace mcmt::testing

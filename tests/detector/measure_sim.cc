@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   if (getenv("MCMT_WMIN")) o.detector.adaptive_window_min = atoi(getenv("MCMT_WMIN"));
   if (getenv("MCMT_WMAX")) o.detector.adaptive_window_max = atoi(getenv("MCMT_WMAX"));
   if (getenv("MCMT_POLY")) o.detector.polygonal_approx_rate = atof(getenv("MCMT_POLY"));
+  if (getenv("MCMT_GAMMA")) o.detector.gamma = atof(getenv("MCMT_GAMMA"));
+  if (getenv("MCMT_SMOOTH")) o.detector.sharp_smoothing = atof(getenv("MCMT_SMOOTH"));
   if (getenv("MCMT_ECR")) o.detector.error_correction_rate = atof(getenv("MCMT_ECR"));
   auto r = testing::EvaluateOnSim(o);
   for (double lim : {2.0, 5.0, 90.0}) {
