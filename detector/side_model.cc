@@ -11,6 +11,7 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   fit_gamma = false;
   gamma_hint = 1.0;
   polarity = 0;
+  edge_only = false;
   patterns.clear();
   sum.reserve(static_cast<size_t>(16) * bins);
   count.reserve(static_cast<size_t>(16) * bins);
@@ -225,6 +226,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
+  if (s.edge_only && fit->warm)
+    for (int k = 0; k < kParams; ++k)
+      if (k != kE) lo[k] = hi[k] = p[k];
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
   if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
   Normal jtj;
@@ -265,7 +269,11 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
     if (!improved) break;
   }
   const double contrast = std::abs(p[kL1] - p[kL0]);
-  if (!std::isfinite(p[kE]) || std::abs(p[kE]) > 0.75 * c || contrast < 5.0) return false;
+  if (!std::isfinite(p[kE]) || contrast < 5.0) return false;
+  if (std::abs(p[kE]) > 0.75 * c) {
+    fit->beyond = true, fit->beyond_e = p[kE];
+    return false;
+  }
   fit->e = p[kE];
   fit->sigma = p[kSigma];
   fit->contrast = contrast;
@@ -314,8 +322,9 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
 }  // namespace
 
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
-  fit->wrong_polarity = false;
+  fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;
+  if (s.edge_only) return fit->warm && FitOnce(s, true, fit->single_surround, fit, &code_contrast);
   const bool ok = FitSideModels(s, fit, &code_contrast);
   // Without code contrast in the modelled rows the code's level L1 is free: no polarity to check.
   if (!ok || s.polarity == 0 || !code_contrast) return ok;

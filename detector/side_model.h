@@ -43,6 +43,10 @@ struct SideProfiles {
   // brighter (inverted), 0 unknown. A fit of the other polarity has taken a code row for the border (the
   // profiles lie about a cell inside the edge) and is rejected (SideFit::wrong_polarity).
   int polarity = 0;
+  // Only the edge e is fitted; every other parameter is held at the warm start's (SideFit::params): the
+  // edge of a part of the side (its direction, FitSide in detector.cc) with the whole side's levels,
+  // blur, margin and gamma.
+  bool edge_only = false;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
@@ -72,6 +76,10 @@ struct SideFit {
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
   bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
+  // The last fit failed only because its edge lay beyond 0.75 cell from the profiles' line (at
+  // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
+  bool beyond = false;
+  double beyond_e = 0;
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};

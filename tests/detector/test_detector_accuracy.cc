@@ -116,6 +116,51 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
   EXPECT_GT(squares, 400);
 }
 
+// A side whose crossings lie on the code's edge along part of it (a 27 px marker at 68 deg under the
+// webcam condition, image 5 of the accuracy test's seed 11: its left side's candidate line is turned by
+// about 5 px over 31 px, its crossings mix the border-to-code edge in, their levels are in the wrong order
+// for the print's polarity). The side model turns the line (each half of the side's rays fitted about the
+// whole side's edge), and an edge found beyond the profiles' middle is sampled again about it. Before,
+// the corners walked out of the refinement's reach and cornerSubPix took the marker: mean offset -0.75
+// px, largest corner error 1.98 px; now -0.22 / 0.77 px (the target, 0.1 px, is not met: its other
+// sides sit 0.3-0.6 px off under the sharpening, which the side model does not model).
+TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
+  testing::Imaging im;
+  for (const testing::Imaging& c : testing::ImagingCatalogue())
+    if (c.name == "webcam") im = c;
+  ASSERT_EQ(im.name, "webcam");
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  MarkerDetector detector(mc, DetectorOptions());
+  testing::ReferenceScene scene;
+  scene.min_side_px = 15, scene.max_side_px = 60;
+  std::mt19937_64 rng(11);
+  bool seen = false;
+  for (int i = 0; i <= 5; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+    const std::vector<marker_t> found = detector.Detect(image);
+    if (i < 5) continue;
+    for (const auto& t : truth)
+      for (const marker_t& m : found) {
+        if (m.id != 108 || t.id != 108) continue;
+        seen = true;
+        testing::CornerErrors e;
+        std::array<cv::Point2d, 4> got;
+        for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+        testing::AddCornerErrors(t, got, &e);
+        double worst = 0;
+        for (double x : e.errors) worst = std::max(worst, x);
+        std::printf("id 108: offset %+.3f px, largest corner error %.3f px\n", testing::MeanOf(e.offsets),
+                    worst);
+        EXPECT_LE(std::abs(testing::MeanOf(e.offsets)), 0.3);
+        EXPECT_LE(worst, 0.9);
+      }
+  }
+  EXPECT_TRUE(seen);
+}
+
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the
 // marker's size or on its view angle.
 TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
