@@ -34,15 +34,17 @@ struct Bounds {
 // is one marker (27 px, 68 deg) whose kept-line side moves ~1 px outward every model pass until the
 // corners pass the refinement's limit and cornerSubPix takes it (-0.75 px). Recall below 75 deg of the
 // black tool and webcam (0.846, 0.897) is what main measured at 9781c6a (its bounds 0.87 and 0.92 failed).
+// A side whose crossings lie on the code's edge is turned by the model, and an edge beyond the profiles'
+// middle is re-profiled about it (DetectorAccuracy.SideOnTheCodesEdgeIsTurned): webcam -0.024 -> -0.012
+// px, recall <75 deg 0.897 -> 0.923. No margin (+0.009 / 0.076 / 1.000), wood (-0.015 / 0.062 / 0.974)
+// and webcam (-0.012 / 0.085 / 0.923) now meet the targets and are asserted at them; bounds tightened to
+// what is measured: black tool -0.043 / 0.060 / 0.846, hard -0.052 / 0.168 / 0.947.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"no margin, grey surface", {0.055, 0.10, 0.99, 0.92}},
-      {"half-cell margin, black tool", {0.07, 0.10, 0.99, 0.84}},
-      {"half-cell margin, wood", {0.03, 0.13, 0.99, 0.90}},
+      {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
       {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
-      {"webcam", {0.03, 0.10, 0.99, 0.89}},
-      {"hard", {0.08, 0.20, 0.99, 0.94}},
+      {"hard", {0.06, 0.18, 0.99, 0.94}},
   };
   return s;
 }
