@@ -230,15 +230,24 @@ cv::Vec3d UnitPoint(int side, double along, double depth) {
 // middle of a code column are used, grouped by the column's code rows. `polarity`: the marker's
 // (SideProfiles::polarity). A fit of the wrong polarity took the first code row for the border (the
 // profiles lay about a cell inside the edge): the side is sampled and fitted again one cell outward.
+// The side's direction: `tilt` (optional) gets the model's change of the offset along the side (px per
+// unit of `along`, 0..1 from the side's start corner) and `tilt_at` the rays' mean `along`, where the
+// offset is the one returned; NaN when the halves cannot be fitted. Each half of the side's rays is
+// sampled about the whole side's edge and only its edge fitted (SideProfiles::edge_only): the line the
+// crossings (or the current corners) give may be turned a few pixels over a side where the crossings
+// mix the outer edge with the code's (a narrow margin on a dark surround, a candidate a cell off at one
+// end), and the model only moves it.
 double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
                double sigma_along, bool fit_gamma, double gamma_hint, int polarity, SideProfiles* profiles,
-               SideFit* fit) {
+               SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
+  if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   struct Ray {
     int index;
+    double along;  // 0..1 from the side's start corner
     double delta;  // offset from the ray's origin to the line along its normal, px
     std::array<uint8_t, SideProfiles::kRows> pattern;
     std::array<double, SideProfiles::kRows> depths, other;
@@ -270,7 +279,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
     const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
     const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
-    Ray ray{static_cast<int>(i), (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    Ray ray{static_cast<int>(i), along, (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
     // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
@@ -317,17 +326,20 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
   // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
   // the edge the model places, so they hold at any shift).
-  auto sample = [&](double shift) {
+  // `half`: -1 every ray, 0 / 1 those before / after `split` along the side.
+  // `tilt`: each ray's profile moved a further tilt * (along - split) px outward.
+  auto sample = [&](double shift, int half = -1, double split = 0.5, double tilt = 0.0) {
     profiles->Reset(u0, du, bins, cell);
     profiles->fit_gamma = fit_gamma;
     profiles->gamma_hint = gamma_hint;
     profiles->polarity = polarity;
     for (size_t r = 0; r < rays.size(); ++r) {
+      if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
       const Eigen::Vector2d& o = origins[rays[r].index];
       const Eigen::Vector2d& nrm = normals[rays[r].index];
       for (int j = 0; j < bins; ++j) {
-        const double s = rays[r].delta + shift + u0 + j * du;
+        const double s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0 + j * du;
         float v;
         if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
       }
@@ -345,12 +357,60 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     fit->e = 0.0;
     ok = FitSideProfiles(*profiles, fit);
   }
+  // An edge beyond the profiles' middle (more than 0.75 cell from their line: the line a cell inside or
+  // outside, on the code's edge or the margin's) is sampled and fitted again about where it was found.
+  if (!ok && fit->beyond) {
+    shift += fit->beyond_e;
+    sample(shift);
+    fit->warm = false;
+    fit->e = 0.0;
+    ok = FitSideProfiles(*profiles, fit);
+  }
   if (!ok) {
     fit->warm = false;
     return NAN;
   }
   fit->warm = true;
   fit->e += shift;
+  if (!tilt) return fit->e;
+  double split = 0;
+  for (const Ray& ray : rays) split += ray.along / rays.size();
+  double along_half[2];
+  for (int half = 0; half < 2; ++half) {
+    int n = 0;
+    along_half[half] = 0;
+    for (const Ray& ray : rays)
+      if ((ray.along >= split) == (half == 1)) along_half[half] += ray.along, ++n;
+    if (n < 3) return fit->e;
+    along_half[half] /= n;
+  }
+  // The halves' edges about the line turned by the estimate so far; a turn that moves the side's ends
+  // by more than a tenth of a cell is re-profiled about the turned line (the whole side fitted again,
+  // then its halves), at most twice. A turn that takes the ends beyond the profiles' reach is dropped.
+  double turn = 0.0;
+  for (int round = 0; round < 3; ++round) {
+    double e_half[2];
+    for (int half = 0; half < 2; ++half) {
+      sample(fit->e, half, split, turn);
+      profiles->edge_only = true;
+      SideFit part = *fit;
+      part.e = 0.0;
+      if (!FitSideProfiles(*profiles, &part)) return fit->e;
+      e_half[half] = part.e;
+    }
+    const double step = (e_half[1] - e_half[0]) / (along_half[1] - along_half[0]);
+    turn += step;
+    if (0.5 * std::abs(turn) > 1.5 * cell) return fit->e;
+    if (0.5 * std::abs(step) < 0.1 * cell || round == 2) break;
+    sample(fit->e, -1, split, turn);
+    SideFit again = *fit;
+    again.e = 0.0;
+    if (!FitSideProfiles(*profiles, &again)) break;
+    again.e += fit->e;
+    *fit = again;
+  }
+  *tilt = turn;
+  *tilt_at = split;
   return fit->e;
 }
 
@@ -521,9 +581,16 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
           if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
             gamma_sum += side_fits[other].gamma, ++gamma_count;
         const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
-        const double e = FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side],
-                                 valid, origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint,
-                                 polarity, &side_profiles, &side_fits[side]);
+        // The line's direction is the crossings' where their levels have the marker's polarity (the
+        // border's side darker for a normal print: the outer edge). Without a crossing, or with levels
+        // of the other order (the crossings mix the code's edge in: the line lies up to a cell inside
+        // along part of the side), the model turns the line too.
+        const bool turn_line = !crossed || (polarity != 0 && (level_out - level_in) * polarity < 0);
+        double tilt = NAN, tilt_at = 0.5;
+        const double e =
+            FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side], valid,
+                    origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint, polarity,
+                    &side_profiles, &side_fits[side], turn_line ? &tilt : nullptr, &tilt_at);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) side_unfitted[side] = false;
         side_modelled[side] = std::isfinite(e);
@@ -531,7 +598,23 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
           Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
           for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
           const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
-          lines[side].c += outward * e;
+          if (std::isfinite(tilt)) {
+            // The line through the side's points at along 0 and 1 (on the line, the marker's
+            // homography's points projected), moved by the offsets the tilt gives there.
+            Eigen::Vector2d q[2];
+            for (int end = 0; end < 2; ++end) {
+              const cv::Vec3d u = ideal_from_unit * UnitPoint(side, end, 0.0);
+              const Eigen::Vector2d x(u[0] / u[2], u[1] / u[2]);
+              q[end] = x - (lines[side].n.dot(x) - lines[side].c) * lines[side].n +
+                       outward * (e + tilt * (end - tilt_at)) * lines[side].n;
+            }
+            const Eigen::Vector2d d = (q[1] - q[0]).normalized();
+            Eigen::Vector2d n(-d.y(), d.x());
+            if (n.dot(lines[side].n) < 0) n = -n;
+            lines[side] = {n, n.dot(q[0])};
+          } else {
+            lines[side].c += outward * e;
+          }
           sigma_sum += sigma, ++sigma_count;
         }
       }

@@ -15,7 +15,11 @@
 // brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
 // A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
 // that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
-// the side is fitted again with one surround level (S2 = S1, no q).
+// the side is fitted again with one surround level (S2 = S1, no q). A margin a print can have is paper:
+// the level of the code's other colour. With the print's polarity known, a side that shows a margin is
+// fitted again with S1 = L1 (a narrow margin of low contrast to the surround is otherwise taken for a
+// wide one of the surround's level: the edge 0.03-0.05 px inward on the reference renderer's 0.3-cell
+// margins), and against one surround level, kept where that fits clearly better (no margin after all).
 #pragma once
 
 #include <array>
@@ -43,6 +47,10 @@ struct SideProfiles {
   // brighter (inverted), 0 unknown. A fit of the other polarity has taken a code row for the border (the
   // profiles lie about a cell inside the edge) and is rejected (SideFit::wrong_polarity).
   int polarity = 0;
+  // Only the edge e is fitted; every other parameter is held at the warm start's (SideFit::params): the
+  // edge of a part of the side (its direction, FitSide in detector.cc) with the whole side's levels,
+  // blur, margin and gamma.
+  bool edge_only = false;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
@@ -71,7 +79,13 @@ struct SideFit {
   double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
+  bool paper_margin = false;     // fitted with a margin of the code's other colour (S1 = L1)
+  double cost = 0;               // the fit's weighted squared residual sum
   bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
+  // The last fit failed only because its edge lay beyond 0.75 cell from the profiles' line (at
+  // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
+  bool beyond = false;
+  double beyond_e = 0;
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};

@@ -36,15 +36,19 @@ struct Bounds {
 // is one marker (27 px, 68 deg) whose kept-line side moves ~1 px outward every model pass until the
 // corners pass the refinement's limit and cornerSubPix takes it (-0.75 px). Recall below 75 deg of the
 // black tool and webcam (0.846, 0.897) is what main measured at 9781c6a (its bounds 0.87 and 0.92 failed).
+// A side whose crossings lie on the code's edge is turned by the model, and an edge beyond the profiles'
+// middle is re-profiled about it (DetectorAccuracy.SideOnTheCodesEdgeIsTurned): webcam -0.024 -> -0.012
+// px, recall <75 deg 0.897 -> 0.923. No margin (+0.009 / 0.076 / 1.000), wood (-0.015 / 0.062 / 0.974)
+// and webcam (-0.012 / 0.085 / 0.923) now meet the targets and are asserted at them; bounds tightened to
+// what is measured: black tool -0.043 / 0.060 / 0.846, hard -0.052 / 0.168 / 0.947. A side with a margin
+// is fitted with the margin at the paper's level (the code's other colour, side_model.h): black tool
+// -0.043 / 0.060 -> -0.023 / 0.047, hard -0.052 / 0.168 -> -0.032 / 0.150, webcam median 0.085 -> 0.066.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"no margin, grey surface", {0.055, 0.10, 0.99, 0.92}},
-      {"half-cell margin, black tool", {0.07, 0.10, 0.99, 0.84}},
-      {"half-cell margin, wood", {0.03, 0.13, 0.99, 0.90}},
+      {"half-cell margin, black tool", {0.03, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
       {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
-      {"webcam", {0.03, 0.10, 0.99, 0.89}},
-      {"hard", {0.08, 0.20, 0.99, 0.94}},
+      {"hard", {0.04, 0.16, 0.99, 0.94}},
   };
   return s;
 }
@@ -116,6 +120,51 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
   std::printf("%d squares of non-dictionary patterns: stock OpenCV found %d markers\n", squares,
               stock_detections);
   EXPECT_GT(squares, 400);
+}
+
+// A side whose crossings lie on the code's edge along part of it (a 27 px marker at 68 deg under the
+// webcam condition, image 5 of the accuracy test's seed 11: its left side's candidate line is turned by
+// about 5 px over 31 px, its crossings mix the border-to-code edge in, their levels are in the wrong order
+// for the print's polarity). The side model turns the line (each half of the side's rays fitted about the
+// whole side's edge), and an edge found beyond the profiles' middle is sampled again about it. Before,
+// the corners walked out of the refinement's reach and cornerSubPix took the marker: mean offset -0.75
+// px, largest corner error 1.98 px; now -0.17 / 0.71 px (the target, 0.1 px, is not met: its other
+// sides sit 0.3-0.6 px off under the sharpening, which the side model does not model).
+TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
+  testing::Imaging im;
+  for (const testing::Imaging& c : testing::ImagingCatalogue())
+    if (c.name == "webcam") im = c;
+  ASSERT_EQ(im.name, "webcam");
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  MarkerDetector detector(mc, DetectorOptions());
+  testing::ReferenceScene scene;
+  scene.min_side_px = 15, scene.max_side_px = 60;
+  std::mt19937_64 rng(11);
+  bool seen = false;
+  for (int i = 0; i <= 5; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+    const std::vector<marker_t> found = detector.Detect(image);
+    if (i < 5) continue;
+    for (const auto& t : truth)
+      for (const marker_t& m : found) {
+        if (m.id != 108 || t.id != 108) continue;
+        seen = true;
+        testing::CornerErrors e;
+        std::array<cv::Point2d, 4> got;
+        for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+        testing::AddCornerErrors(t, got, &e);
+        double worst = 0;
+        for (double x : e.errors) worst = std::max(worst, x);
+        std::printf("id 108: offset %+.3f px, largest corner error %.3f px\n", testing::MeanOf(e.offsets),
+                    worst);
+        EXPECT_LE(std::abs(testing::MeanOf(e.offsets)), 0.3);
+        EXPECT_LE(worst, 0.9);
+      }
+  }
+  EXPECT_TRUE(seen);
 }
 
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the

@@ -1,0 +1,62 @@
+// Which markers carry a condition's corner offset: renders the reference images test_detector_accuracy
+// renders (markers 15-60 px at 0-75 deg, one detector over all images of a condition, as
+// testing::MeasureReference) and prints, per marker found, its image, id, size, view angle, the mean
+// signed offset of its corners along the edge normals (+: outward) and its largest corner error; then
+// the condition's mean offset and median error.
+//   diag_corners CONDITION_SUBSTRING [images (8)] [seed (11)] [min offset px to print (0)]
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+
+#include "tests/detector/accuracy.h"
+
+using namespace mcmt;
+namespace mcmt {}
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: diag_corners CONDITION [images (8)] [seed (11)] [min |offset| px (0)]\n");
+    return 2;
+  }
+  const int images = argc > 2 ? std::atoi(argv[2]) : 8;
+  const uint64_t seed = argc > 3 ? std::strtoull(argv[3], nullptr, 10) : 11;
+  const double min_print = argc > 4 ? std::atof(argv[4]) : 0.0;
+  cv::setNumThreads(1);
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    if (!std::strstr(im.name.c_str(), argv[1])) continue;
+    testing::ReferenceScene scene;
+    scene.min_side_px = 15, scene.max_side_px = 60;
+    MarkerDetector detector(mc, DetectorOptions());
+    std::mt19937_64 rng(seed);
+    testing::Accuracy all;
+    for (int i = 0; i < images; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+      const std::vector<marker_t> found = detector.Detect(image);
+      testing::Score(truth, found, &all);
+      for (const auto& t : truth)
+        for (const marker_t& m : found) {
+          if (m.id != t.id) continue;
+          testing::CornerErrors e;
+          std::array<cv::Point2d, 4> got;
+          for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+          testing::AddCornerErrors(t, got, &e);
+          const double offset = testing::MeanOf(e.offsets);
+          double worst = 0;
+          for (double x : e.errors) worst = std::max(worst, x);
+          if (std::abs(offset) >= min_print)
+            std::printf(
+                "%s image %d id %3d side %5.1f px angle %4.1f deg: offset %+.3f px, max error %.3f px\n",
+                im.name.c_str(), i, t.id, t.side_px, t.view_angle_deg, offset, worst);
+        }
+    }
+    std::printf("%s: offset %+.4f px median %.4f px recall60 %.3f recall75 %.3f (%zu corners)\n",
+                im.name.c_str(), all.MeanOffset(), all.MedianError(), all.Recall60(), all.Recall75(),
+                all.corners.errors.size());
+  }
+  return 0;
+}
