@@ -44,27 +44,13 @@ namespace {
 constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
 constexpr int kRegions = kBoundaries + 1;
 enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
-// Surround models: a margin of a free level S1 and width q, then S2 beyond; one level S1 (no margin);
-// a margin of the paper's level (the code's other colour L1, S1 unused) and width q, then S2.
-enum Mode { kFree, kSingle, kPaper };
 // A margin differs from the border's level by at least this fraction of the border-to-code contrast
 // (a print's margin is paper or ink of the other colour; FitSideProfiles).
 constexpr double kMinMarginContrast = 0.4;
-// A side whose free margin is not the border's level is fitted with a paper margin and with one surround
-// level; one surround level is taken where the paper margin is at its narrowest (not resolved) or where
-// its residual is below this fraction of the paper margin's. On one side a 0.3-cell paper margin on a
-// light surface and no margin on one fit alike (single / paper residual ratios spread over 0.8-1.3 in
-// both on the reference renderer and mcmt-sim); on a grey surface without a margin mostly below 0.5.
-constexpr double kSingleOverPaper = 0.8;
-// A free margin level within this fraction of the border-to-code contrast of the code's other colour
-// is the paper's already (no paper-margin fit).
-constexpr double kPaperTolerance = 0.1;
-// The narrowest margin modelled, cells.
-constexpr double kMinMarginCells = 0.2;
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, int mode,
+double Evaluate(const SideProfiles& s, const double* p, bool single,
                 Eigen::Matrix<double, kParams, kParams>* jtj, Eigen::Matrix<double, kParams, 1>* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
@@ -102,8 +88,7 @@ double Evaluate(const SideProfiles& s, const double* p, int mode,
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
     double level[kRegions];
-    const bool single = mode == kSingle;
-    level[0] = single ? p[kS1] : p[kS2], level[1] = mode == kPaper ? p[kL1] : p[kS1];
+    level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
       const double w = s.count[g * n + j];
@@ -142,7 +127,7 @@ double Evaluate(const SideProfiles& s, const double* p, int mode,
         grad[kSigma] -= d * zs[i];
         if (b == 0) grad[kQ] += d;
       }
-      grad[single ? kS1 : kS2] += indicator[0], grad[mode == kPaper ? kL1 : kS1] += indicator[1];
+      grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
       grad *= scale;
@@ -199,8 +184,7 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
 }
 
 // One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
-bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, bool* code_contrast_out) {
-  const bool single = mode == kSingle;
+bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -230,7 +214,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, boo
   for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
   // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
   // sat 0.03 px further inward on the reference renderer's "hard" condition).
-  lo[kQ] = kMinMarginCells * c, hi[kQ] = 4.0 * c;
+  lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
   bool code_contrast = false;
@@ -247,10 +231,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, boo
       if (k != kE) lo[k] = hi[k] = p[k];
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
   if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
-  if (mode == kPaper) lo[kS1] = hi[kS1] = p[kS1];
   Normal jtj;
   Vector jtr;
-  double cost = Evaluate(s, p, mode, &jtj, &jtr);
+  double cost = Evaluate(s, p, single, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -272,7 +255,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, boo
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, mode, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
@@ -296,7 +279,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, boo
   fit->contrast = contrast;
   fit->gamma = p[kGamma];
   fit->gamma_fitted = free_gamma;
-  fit->cost = cost;
   std::copy(p, p + kParams, fit->params.begin());
   return true;
 }
@@ -304,67 +286,36 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, int mode, SideFit* fit, boo
 // One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
 // code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
 // side is fitted again with the hint.
-bool FitSurround(const SideProfiles& s, int mode, SideFit* fit, bool* code_contrast) {
+bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast) {
   const SideFit start = *fit;
-  const bool ok = FitOnce(s, false, mode, fit, code_contrast);
+  const bool ok = FitOnce(s, false, single, fit, code_contrast);
   if (*code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, mode, fit, code_contrast);
+  return FitOnce(s, true, single, fit, code_contrast);
 }
 
 // The two-step surround model, refitted with one surround level where its margin has the border's level.
 // `code_contrast`: the side shows the code's level next to the border's.
 bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out) {
   const SideFit start = *fit;
-  // A side fitted with one surround level or a paper margin in the previous pass stays so (warm-started).
+  // A side fitted with one surround level in the previous pass stays so (warm-started).
   bool& code_contrast = *code_contrast_out;
   code_contrast = true;
-  if (start.warm && start.single_surround) return FitSurround(s, kSingle, fit, &code_contrast);
-  if (start.warm && start.paper_margin) {
-    const bool ok = FitSurround(s, kPaper, fit, &code_contrast);
-    if (ok) return true;
-    *fit = start;
-    fit->warm = false;
-  }
-  bool ok = FitSurround(s, kFree, fit, &code_contrast);
-  fit->single_surround = fit->paper_margin = false;
+  if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
+  bool ok = FitSurround(s, false, fit, &code_contrast);
+  fit->single_surround = false;
   if (!ok) return false;
   // A margin of nearly the border's level is no margin that could be printed (it would be border):
   // the fit has moved the edge inward into the border and let the "margin" make up the step, a valley
   // where the marker has no margin. The side is fitted again with one surround level.
   // Only where the side shows the code's level next to the border's (without, L1 is free).
   const double* p = fit->params.data();
-  if (!code_contrast) return true;
-  if (std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])) {
-    // A free margin of the paper's level is resolved already.
-    if (s.polarity <= 0 || std::abs(p[kS1] - p[kL1]) < kPaperTolerance * std::abs(p[kL1] - p[kL0]))
-      return true;
-    const SideFit free = *fit;
-    fit->warm = true;  // from the free margin's fit
-    fit->e = p[kE];
-    if (!FitSurround(s, kPaper, fit, &code_contrast)) {
-      *fit = free;
-      return true;
-    }
-    fit->paper_margin = true;
-    const SideFit paper = *fit;
-    *fit = start;
-    fit->warm = false;
-    // A paper margin at its narrowest is not resolved (on markers without a margin on a light surface
-    // most paper fits end there; on the reference renderer's 0.3-cell margins they spread about 0.3).
-    const bool unresolved = paper.params[kQ] < (kMinMarginCells + 0.01) * s.cell;
-    if (FitSurround(s, kSingle, fit, &code_contrast) &&
-        (unresolved || fit->cost < kSingleOverPaper * paper.cost)) {
-      fit->single_surround = true, fit->paper_margin = false;
-      return true;
-    }
-    *fit = paper;
+  if (!code_contrast || std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0]))
     return true;
-  }
   *fit = start;
   fit->warm = false;
-  ok = FitSurround(s, kSingle, fit, &code_contrast);
-  fit->single_surround = ok, fit->paper_margin = false;
+  ok = FitSurround(s, true, fit, &code_contrast);
+  fit->single_surround = ok;
   return ok;
 }
 
@@ -373,12 +324,7 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;
-  if (s.edge_only)
-    return fit->warm && FitOnce(s, true,
-                                fit->single_surround ? kSingle
-                                : fit->paper_margin  ? kPaper
-                                                     : kFree,
-                                fit, &code_contrast);
+  if (s.edge_only) return fit->warm && FitOnce(s, true, fit->single_surround, fit, &code_contrast);
   const bool ok = FitSideModels(s, fit, &code_contrast);
   // Without code contrast in the modelled rows the code's level L1 is free: no polarity to check.
   if (!ok || s.polarity == 0 || !code_contrast) return ok;

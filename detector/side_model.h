@@ -15,11 +15,7 @@
 // brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
 // A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
 // that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
-// the side is fitted again with one surround level (S2 = S1, no q). A margin a print can have is paper:
-// the level of the code's other colour. With the print's polarity known, a side that shows a margin is
-// fitted again with S1 = L1 (a narrow margin of low contrast to the surround is otherwise taken for a
-// wide one of the surround's level: the edge 0.03-0.05 px inward on the reference renderer's 0.3-cell
-// margins), and against one surround level, kept where that fits clearly better (no margin after all).
+// the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
 #include <array>
@@ -79,8 +75,6 @@ struct SideFit {
   double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
-  bool paper_margin = false;     // fitted with a margin of the code's other colour (S1 = L1)
-  double cost = 0;               // the fit's weighted squared residual sum
   bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
   // The last fit failed only because its edge lay beyond 0.75 cell from the profiles' line (at
   // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
