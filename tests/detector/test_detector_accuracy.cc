@@ -375,11 +375,13 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     // Measured shortfalls (a regression guard, not the target): conditions where the side model's fits
     // of some side depend on where they start (a narrow or no margin on a dark or grey surface,
     // sharpening + JPEG), px.
+    // After the turned sides (issue 15 "offsets"): webcam 0.52 -> 0.028, black tool 1.37 -> 0.95, wood
+    // 0.24 -> 0.267 (its guard 0.25 -> 0.28).
     static const std::map<std::string, double> shortfalls = {{"no margin, grey surface", 1.6},
-                                                             {"half-cell margin, black tool", 1.4},
-                                                             {"half-cell margin, wood", 0.25},
+                                                             {"half-cell margin, black tool", 1.0},
+                                                             {"half-cell margin, wood", 0.28},
                                                              {"two-cell margin, white", 0.06},
-                                                             {"webcam", 0.53},
+                                                             {"webcam", 0.03},
                                                              {"hard", 0.24}};
     const auto it = shortfalls.find(im.name);
     EXPECT_LE(d.max_px, it == shortfalls.end() ? 0.02 : it->second) << d.worst;
