@@ -937,28 +937,70 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     unique.swap(kept);
   }
 
+  // "edges": the region a marker is refined on (gamma-encoded camera images linearised: edges are located
+  // on intensities proportional to light, where a blurred step crosses halfway at the true edge; in
+  // encoded values it shifts to the dark side) and its refinement from `corners`.
+  const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
+  const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
+    *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+    if (!linearise) return &gray;
+    if (gamma_lut_.empty()) {
+      gamma_lut_.create(1, 256, CV_8U);
+      for (int v = 0; v < 256; ++v)
+        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+    }
+    if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
+    cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+    return &linear_;
+  };
+  // The border's polarity is known unless both prints are searched for (`inverted` without
+  // markers.inverted: a quad's border against its ring depends on the surround, not the print).
+  auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
+                    bool* kept) {
+    return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
+                               options_.edge_model, blur, options_.gamma == 0, kept, polarity);
+  };
+  // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
+  // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
+  // crossing and model fit are unbiased under symmetric blur, the locking is gone. A blurred frame (the
+  // mean of its markers' blur from those fits, sqrt(sigma^2 - smoothing^2), 0.55 px or more) needs no
+  // smoothing: its markers are refined from their candidates on their unsmoothed regions. The choice
+  // rests on this frame's markers only: never on earlier frames (nor the detector's mode, whose
+  // histories differ). The mean, not the median: the sim's blur is 0.4-0.58 px per marker, and the
+  // upper median of a frame's two markers flipped the choice between the modes (0.13 px at 640x480).
+  struct Smoothed {
+    std::array<cv::Point2d, 4> corners;
+    bool refined = false, kept_lines = false;
+  };
+  std::vector<Smoothed> smoothed;
+  bool use_smoothed = false;
+  if (options_.corner_refinement == "edges" && options_.sharp_smoothing > 0) {
+    const double s = options_.sharp_smoothing;
+    std::vector<double> blurs;  // each smoothed fit's blur, px
+    for (const Raw& r : unique) {
+      cv::Rect roi;
+      const cv::Mat* source = region(r, &roi);
+      if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
+      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      Smoothed m;
+      m.corners = r.corners;
+      double sigma = NAN;
+      m.refined = refine(smooth_, r, &m.corners, &sigma, &m.kept_lines);
+      if (m.refined && std::isfinite(sigma)) blurs.push_back(std::sqrt(std::max(0.0, sigma * sigma - s * s)));
+      smoothed.push_back(m);
+    }
+    double mean = 0;
+    for (double b : blurs) mean += b / blurs.size();
+    use_smoothed = blurs.empty() || mean < 0.55;
+  }
+
   std::vector<marker_t> out;
   out.reserve(unique.size());
-  for (Raw& r : unique) {
+  for (size_t i = 0; i < unique.size(); ++i) {
+    Raw& r = unique[i];
     if (options_.corner_refinement == "edges") {
       const cv::Mat& bits = MarkerBits(r.id);
-      // Gamma-encoded camera images: edges are located on intensities proportional to light, where a
-      // blurred step crosses halfway at the true edge (in encoded values it shifts to the dark side).
-      const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
-      const cv::Rect roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-      const cv::Mat* source = &gray;
-      if (linearise) {
-        if (gamma_lut_.empty()) {
-          gamma_lut_.create(1, 256, CV_8U);
-          for (int v = 0; v < 256; ++v)
-            gamma_lut_.at<uint8_t>(v) =
-                cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-        }
-        if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-        cv::LUT(gray(roi), gamma_lut_, linear_(roi));
-        source = &linear_;
-      }
-      double sigma = NAN;
       // A refinement counts only if the code reads at the refined corners about as well as at the
       // candidate's (which decoded): not a cell off.
       const std::array<cv::Point2d, 4> candidate = r.corners;
@@ -969,25 +1011,13 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool kept_lines = false;
-      // The border's polarity is known unless both prints are searched for (`inverted` without
-      // markers.inverted: a quad's border against its ring depends on the surround, not the print).
-      const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
-      bool refined =
-          RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
-                              options_.edge_model, &sigma, options_.gamma == 0, &kept_lines, polarity);
-      // Sharp markers (this marker's own fitted blur below 0.55 px): interpolated edge profiles lock to
-      // the pixel grid (sides along an image axis keep one phase all along). They are refined again, from
-      // the raw fit's corners, on their region smoothed a little (sharp_smoothing): crossing and model fit
-      // are unbiased under symmetric blur, the locking is gone. The decision rests on the marker's own
-      // edges in this frame only: never on earlier frames nor on the detector's mode.
-      if (refined && options_.sharp_smoothing > 0 && std::isfinite(sigma) && sigma < 0.55) {
-        if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-        cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), options_.sharp_smoothing);
-        std::array<cv::Point2d, 4> smoothed = r.corners;
-        bool smoothed_kept = false;
-        if (RefineMarkerCorners(smooth_, cells, bits, camera_.get(), options_.edge_passes, &smoothed,
-                                options_.edge_model, nullptr, options_.gamma == 0, &smoothed_kept, polarity))
-          r.corners = smoothed, kept_lines = smoothed_kept;
+      bool refined = false;
+      if (use_smoothed) {
+        refined = smoothed[i].refined, kept_lines = smoothed[i].kept_lines;
+        if (refined) r.corners = smoothed[i].corners;
+      } else {
+        cv::Rect roi;
+        refined = refine(*region(r, &roi), r, &r.corners, nullptr, &kept_lines);
       }
       // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
       // unrefined marker, not a confusing region.
