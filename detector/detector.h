@@ -38,9 +38,9 @@ struct DetectorOptions {
   // "edges": correct each side's offset with a blurred-step model fitted to its mean profile (removes
   // the bias of narrow quiet zones under blur).
   bool edge_model = true;
-  // "edges" on sharp markers (the marker's own fitted blur < 0.55 px, this frame): refine again on the
-  // marker's region smoothed with this Gaussian sigma (px), which removes the pixel-grid locking of
-  // interpolated profiles. 0: off.
+  // "edges" on sharp frames (the mean fitted blur of the frame's markers, refined on smoothed regions,
+  // < 0.55 px; never earlier frames'): refine on each marker's region smoothed with this Gaussian sigma
+  // (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
   // "edges": the camera's transfer curve. 0 (default): estimated with each side's model (the model's
   // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
