@@ -186,6 +186,20 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
   if (std::abs(b - r) < 5.0) return 0;
   return b < r ? 1 : -1;
 }
+
+// The bounding box of `corners` grown by `rate` of its larger side plus `margin_px` on every side,
+// within an image of `size`.
+cv::Rect GrownBox(const std::array<cv::Point2d, 4>& corners, double rate, double margin_px, cv::Size size) {
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const cv::Point2d& c : corners) {
+    x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
+    y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
+  }
+  const double grow = rate * std::max(x1 - x0, y1 - y0) + margin_px;
+  return cv::Rect(cv::Point(static_cast<int>(std::floor(x0 - grow)), static_cast<int>(std::floor(y0 - grow))),
+                  cv::Point(static_cast<int>(std::ceil(x1 + grow)), static_cast<int>(std::ceil(y1 + grow)))) &
+         cv::Rect(cv::Point(0, 0), size);
+}
 }  // namespace
 
 namespace {
@@ -857,19 +871,11 @@ std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray
     double min_perimeter, max_perimeter;
     std::vector<int> ids;
   };
-  const cv::Rect image(0, 0, gray.cols, gray.rows);
   std::vector<Region> regions;
   for (const Raw& r : last_) {
-    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9, perimeter = 0;
-    for (int k = 0; k < 4; ++k) {
-      x0 = std::min(x0, r.corners[k].x), x1 = std::max(x1, r.corners[k].x);
-      y0 = std::min(y0, r.corners[k].y), y1 = std::max(y1, r.corners[k].y);
-      perimeter += cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
-    }
-    const double grow = 0.4 * std::max(x1 - x0, y1 - y0) + 4.0;
-    cv::Rect rect(cv::Point(static_cast<int>(std::floor(x0 - grow)), static_cast<int>(std::floor(y0 - grow))),
-                  cv::Point(static_cast<int>(std::ceil(x1 + grow)), static_cast<int>(std::ceil(y1 + grow))));
-    rect &= image;
+    double perimeter = 0;
+    for (int k = 0; k < 4; ++k) perimeter += cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
+    const cv::Rect rect = GrownBox(r.corners, 0.4, 4.0, gray.size());
     if (rect.area() <= 0) continue;
     regions.push_back({rect, 0.6 * perimeter, 1.6 * perimeter, {r.id}});
   }
@@ -1014,50 +1020,70 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     unique.swap(kept);
   }
 
+  // "edges": the region a marker is refined on (gamma-encoded camera images linearised: edges are located
+  // on intensities proportional to light, where a blurred step crosses halfway at the true edge; in
+  // encoded values it shifts to the dark side) and its refinement from `corners`.
+  const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
+  const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
+    *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+    if (!linearise) return &gray;
+    if (gamma_lut_.empty()) {
+      gamma_lut_.create(1, 256, CV_8U);
+      for (int v = 0; v < 256; ++v)
+        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+    }
+    if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
+    cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+    return &linear_;
+  };
+  // The border's polarity is known unless both prints are searched for (`inverted` without
+  // markers.inverted: a quad's border against its ring depends on the surround, not the print).
+  auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
+                    bool* kept) {
+    return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
+                               options_.edge_model, blur, options_.gamma == 0, kept, polarity);
+  };
+  // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
+  // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
+  // crossing and model fit are unbiased under symmetric blur, the locking is gone. A blurred frame (the
+  // mean of its markers' blur from those fits, sqrt(sigma^2 - smoothing^2), 0.55 px or more) needs no
+  // smoothing: its markers are refined from their candidates on their unsmoothed regions. The choice
+  // rests on this frame's markers only: never on earlier frames (nor the detector's mode, whose
+  // histories differ). The mean, not the median: the sim's blur is 0.4-0.58 px per marker, and the
+  // upper median of a frame's two markers flipped the choice between the modes (0.13 px at 640x480).
+  struct Smoothed {
+    std::array<cv::Point2d, 4> corners;
+    bool refined = false, kept_lines = false;
+  };
+  std::vector<Smoothed> smoothed;
+  bool use_smoothed = false;
+  if (options_.corner_refinement == "edges" && options_.sharp_smoothing > 0) {
+    const double s = options_.sharp_smoothing;
+    std::vector<double> blurs;  // each smoothed fit's blur, px
+    for (const Raw& r : unique) {
+      cv::Rect roi;
+      const cv::Mat* source = region(r, &roi);
+      if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
+      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      Smoothed m;
+      m.corners = r.corners;
+      double sigma = NAN;
+      m.refined = refine(smooth_, r, &m.corners, &sigma, &m.kept_lines);
+      if (m.refined && std::isfinite(sigma)) blurs.push_back(std::sqrt(std::max(0.0, sigma * sigma - s * s)));
+      smoothed.push_back(m);
+    }
+    double mean = 0;
+    for (double b : blurs) mean += b / blurs.size();
+    use_smoothed = blurs.empty() || mean < 0.55;
+  }
+
   std::vector<marker_t> out;
   out.reserve(unique.size());
-  for (Raw& r : unique) {
+  for (size_t i = 0; i < unique.size(); ++i) {
+    Raw& r = unique[i];
     if (options_.corner_refinement == "edges") {
       const cv::Mat& bits = MarkerBits(r.id);
-      // Sharp images (the camera's fitted blur below 0.55 px): interpolated edge profiles lock to the
-      // pixel grid (sides along an image axis keep one phase all along). Those markers are refined on
-      // their region smoothed a little (sharp_smoothing): crossing and model fit are unbiased under
-      // symmetric blur, the locking is gone. The camera's blur is tracked from every fit (on smoothed
-      // regions: sqrt(sigma^2 - smoothing^2)).
-      const bool smooth = options_.sharp_smoothing > 0 && blur_estimate_ < 0.55;
-      const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
-      const cv::Mat* source = &gray;
-      if (smooth || linearise) {
-        double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
-        for (const auto& c : r.corners) {
-          x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
-          y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
-        }
-        const double grow = 0.5 * std::max(x1 - x0, y1 - y0) + 6.0;
-        const cv::Rect roi =
-            cv::Rect(cv::Point(static_cast<int>(x0 - grow), static_cast<int>(y0 - grow)),
-                     cv::Point(static_cast<int>(x1 + grow) + 1, static_cast<int>(y1 + grow) + 1)) &
-            cv::Rect(0, 0, gray.cols, gray.rows);
-        if (linearise) {
-          // Gamma-encoded camera images: edges are located on intensities proportional to light, where a
-          // blurred step crosses halfway at the true edge (in encoded values it shifts to the dark side).
-          if (gamma_lut_.empty()) {
-            gamma_lut_.create(1, 256, CV_8U);
-            for (int v = 0; v < 256; ++v)
-              gamma_lut_.at<uint8_t>(v) =
-                  cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-          }
-          if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-          cv::LUT(gray(roi), gamma_lut_, linear_(roi));
-          source = &linear_;
-        }
-        if (smooth) {
-          if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-          cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), options_.sharp_smoothing);
-          source = &smooth_;
-        }
-      }
-      double sigma = NAN;
       // A refinement counts only if the code reads at the refined corners about as well as at the
       // candidate's (which decoded): not a cell off.
       const std::array<cv::Point2d, 4> candidate = r.corners;
@@ -1068,12 +1094,14 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       };
       bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
       bool kept_lines = false;
-      // The border's polarity is known unless both prints are searched for (`inverted` without
-      // markers.inverted: a quad's border against its ring depends on the surround, not the print).
-      const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
-      bool refined =
-          RefineMarkerCorners(*source, cells, bits, camera_.get(), options_.edge_passes, &r.corners,
-                              options_.edge_model, &sigma, options_.gamma == 0, &kept_lines, polarity);
+      bool refined = false;
+      if (use_smoothed) {
+        refined = smoothed[i].refined, kept_lines = smoothed[i].kept_lines;
+        if (refined) r.corners = smoothed[i].corners;
+      } else {
+        cv::Rect roi;
+        refined = refine(*region(r, &roi), r, &r.corners, nullptr, &kept_lines);
+      }
       // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
       // unrefined marker, not a confusing region.
       if (refined && !reads(r.corners)) refined = false, slid = !kept_lines;
@@ -1099,11 +1127,6 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
                          cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01));
         for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[k].x, corners[k].y);
-      } else if (std::isfinite(sigma)) {
-        const double s2 = options_.sharp_smoothing * options_.sharp_smoothing;
-        const double raw = smooth ? std::sqrt(std::max(0.0, sigma * sigma - s2)) : sigma;
-        blur_estimate_ =
-            std::isfinite(blur_estimate_) && blur_estimate_ < 1e8 ? 0.8 * blur_estimate_ + 0.2 * raw : raw;
       }
     }
     marker_t m;

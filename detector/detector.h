@@ -38,8 +38,9 @@ struct DetectorOptions {
   // "edges": correct each side's offset with a blurred-step model fitted to its mean profile (removes
   // the bias of narrow quiet zones under blur).
   bool edge_model = true;
-  // "edges" on sharp images (the camera's fitted blur < 0.55 px): refine on the marker's region smoothed
-  // with this Gaussian sigma (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
+  // "edges" on sharp frames (the mean fitted blur of the frame's markers, refined on smoothed regions,
+  // < 0.55 px; never earlier frames'): refine on each marker's region smoothed with this Gaussian sigma
+  // (px), which removes the pixel-grid locking of interpolated profiles. 0: off.
   double sharp_smoothing = 0.6;
   // "edges": the camera's transfer curve. 0 (default): estimated with each side's model (the model's
   // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
@@ -157,12 +158,11 @@ class MarkerDetector {
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
-  bool reread_ = false;         // reread_rejected, where the dictionary makes it safe
-  std::vector<cv::Mat> bits_;   // per id, cached
-  cv::Mat smooth_;              // smoothed marker regions (sharp_smoothing)
-  cv::Mat linear_;              // linearised marker regions (gamma)
-  cv::Mat gamma_lut_;           // encoded value -> linear value
-  double blur_estimate_ = 1e9;  // camera's edge blur (fitted sigma, px); unknown at first: refine raw
+  bool reread_ = false;        // reread_rejected, where the dictionary makes it safe
+  std::vector<cv::Mat> bits_;  // per id, cached
+  cv::Mat smooth_;             // smoothed marker regions (sharp_smoothing)
+  cv::Mat linear_;             // linearised marker regions (gamma)
+  cv::Mat gamma_lut_;          // encoded value -> linear value
   DetectorStats stats_;
   // Fast mode state.
   std::vector<Raw> last_;

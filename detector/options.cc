@@ -21,8 +21,9 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 InRange(1, 10))
            .Add("edge_model", &O::edge_model, "edges: correct each side with a fitted blurred-step model")
            .Add("sharp_smoothing", &O::sharp_smoothing, "px",
-                "edges on sharp images (blur < 0.55 px): Gaussian sigma the marker region is smoothed with "
-                "(0: off)",
+                "edges on sharp frames (the mean fitted blur of the frame's markers < 0.55 px): Gaussian "
+                "sigma "
+                "each marker's region is smoothed with (0: off)",
                 InRange(0, 3))
            .Add("gamma", &O::gamma, "",
                 "edges: the camera's transfer curve, 0: estimated per side, > 0: known (1: linear images)",

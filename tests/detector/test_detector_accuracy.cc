@@ -9,9 +9,13 @@
 // (a regression guard, not a target): see docs/detector.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/detector/accuracy.h"
 #include "tests/detector/sim_eval.h"
@@ -388,6 +392,62 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     // No margin on grey: 3 markers fast mode kept that the accurate mode's refinement dropped (measured).
     EXPECT_LE(d.extra, im.name == "no margin, grey surface" ? 3 : 0) << im.name << ": " << d.extras;
     EXPECT_EQ(d.missing, 0) << im.name;
+  }
+}
+
+// The refinement of a frame does not depend on the frames before it (the rule: results never depend on
+// the order frames arrive). The choice to smooth a sharp marker's region before refining it was made
+// on a running average of the fitted blur over each detector's history: the same sharp frame after
+// blurred frames was refined raw, after sharp frames smoothed (corners up to ~0.1 px apart; fast and
+// accurate modes, whose histories differ, disagreed the same way).
+TEST(DetectorAccuracy, CornersDoNotDependOnTheFramesBefore) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  testing::Imaging sharp, blurred;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    if (im.name == "plain") sharp = im;
+    if (im.name == "gaussian blur 1.2") blurred = im;
+  }
+  testing::ReferenceScene scene;
+  std::mt19937_64 rng(41);
+  auto render = [&](const testing::Imaging& im) {
+    std::vector<testing::RenderedMarker> truth;
+    return testing::RenderReference(*dict, scene, im, rng, &truth);
+  };
+  std::vector<cv::Mat> sharp_history, blurred_history;
+  for (int i = 0; i < 3; ++i) sharp_history.push_back(render(sharp));
+  for (int i = 0; i < 3; ++i) blurred_history.push_back(render(blurred));
+  std::vector<std::pair<std::string, cv::Mat>> targets;
+  for (int i = 0; i < 3; ++i) targets.emplace_back("sharp " + std::to_string(i), render(sharp));
+  for (int i = 0; i < 3; ++i) targets.emplace_back("blurred " + std::to_string(i), render(blurred));
+  for (const bool fast_mode : {false, true}) {
+    DetectorOptions options;
+    options.fast = fast_mode;
+    for (const auto& [name, target] : targets) {
+      const std::string what = std::string(fast_mode ? "fast" : "accurate") + ", " + name + " frame";
+      MarkerDetector fresh(mc, options), after_sharp(mc, options), after_blurred(mc, options);
+      for (const cv::Mat& image : sharp_history) after_sharp.Detect(image);
+      for (const cv::Mat& image : blurred_history) after_blurred.Detect(image);
+      after_sharp.Reset(), after_blurred.Reset();  // fast mode: no previous frame to track
+      const std::vector<marker_t> reference = fresh.Detect(target);
+      EXPECT_GE(reference.size(), 3u) << what;
+      for (const auto& [history, detector] :
+           {std::pair<std::string, MarkerDetector*>{"sharp", &after_sharp}, {"blurred", &after_blurred}}) {
+        const std::vector<marker_t> markers = detector->Detect(target);
+        ASSERT_EQ(markers.size(), reference.size()) << what << " after " << history << " frames";
+        double max_px = 0;
+        for (size_t j = 0; j < markers.size(); ++j) {
+          ASSERT_EQ(markers[j].id, reference[j].id) << what << " after " << history << " frames";
+          for (int k = 0; k < 4; ++k)
+            max_px = std::max(max_px, std::hypot(markers[j].corners[k][0] - reference[j].corners[k][0],
+                                                 markers[j].corners[k][1] - reference[j].corners[k][1]));
+        }
+        std::printf("%s after %s frames: %zu markers, max %.2e px from a fresh detector's\n", what.c_str(),
+                    history.c_str(), markers.size(), max_px);
+        EXPECT_LE(max_px, 1e-6) << what << " after " << history << " frames";
+      }
+    }
   }
 }
 
