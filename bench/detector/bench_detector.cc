@@ -2,8 +2,9 @@
 // accurate default mode and the fast mode (search near the previous frame's markers), on mcmt_sim
 // sequences (30 fps, box object: 2-8 markers in view), plus peak memory. Prints markdown tables.
 //   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
-// (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_DEBUG: markers whose fast-mode
-// corners differ from the accurate mode's by more than 0.02 px, on stderr.)
+// (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_BLUR=sigma: renders blurred by a
+// Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
+// by more than 0.02 px, on stderr.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -41,7 +42,8 @@ int main(int argc, char** argv) {
   // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
   const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
   cv::setNumThreads(1);
-  const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(frames);
+  const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(
+      frames, std::getenv("MCMT_BENCH_BLUR") ? std::atof(std::getenv("MCMT_BENCH_BLUR")) : 0.0);
   const sim::SimObject& object = scene.object;
   const std::vector<sim::SimFrame>& trajectory = scene.trajectory;
   const sim::Renderer& renderer = *scene.renderer;
