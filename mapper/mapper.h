@@ -169,7 +169,7 @@ struct MapperOptions {
   // Maintenance (mcmt-mapper --maintain, mapper/maintain.h): frames seen by the others collected before a
   // suspect camera is re-estimated (a new camera: maintain_added_frames); the result is published when the
   // camera's RMS is at most maintain_max_rms_ratio x the other cameras' median.
-  int maintain_frames = 150;
+  int maintain_frames = 200;
   int maintain_added_frames = 300;
   double maintain_max_rms_ratio = 2.0;
 

@@ -112,6 +112,7 @@ void Feed(const Session& s, MaintainNode* node, const std::string& suspect, int 
 MapperOptions Options(const std::string& dir) {
   MapperOptions o = MapperOptions::FromConfig(LoadRigConfig(dir + "/rig.yaml"));
   o.threads = 1;
+  o.maintain_frames = 150;  // these sessions are short: the attempts below are counted in 150 frames
   return o;
 }
 
