@@ -743,7 +743,8 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 }
 
 // One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
-// was located by the side model in the last pass (not by its crossings alone).
+// was located by the side model in the last pass (not by its crossings alone). `model_only` (with
+// model_fit): no crossing-only passes, for corners already on the edges (RefineMarkerCorners).
 // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
 // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
 // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
@@ -755,7 +756,8 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 // depends on the start, their mean does not: the corners are the mean of the last two passes then.
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
+                bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
+  CV_Assert(model_fit || !model_only);
   if (blur_sigma) *blur_sigma = NAN;
   CV_Assert(gray.type() == CV_8UC1);
   PixelMap map;
@@ -771,11 +773,11 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
   std::array<Eigen::Vector2d, 4> previous = r.img;  // the corners before the latest pass
-  for (int pass = 0;; ++pass) {
+  for (int pass = model_only ? 1 : 0;; ++pass) {
     // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
     // onto the edges (the model passes fix the offsets, and their crossings the directions).
     const bool crossings_done =
-        pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
+        model_only || pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
     if (crossings_done && (!model_fit || model_converged || model_passes >= kMaxModelPasses)) break;
     if (crossings_done) r.sigma_sum = 0, r.sigma_count = 0;  // the last model pass's blur is reported
     const bool model_pass = crossings_done && model_fit;
@@ -824,8 +826,40 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double narrow_sigma = NAN;
   bool narrow_kept = false, narrow_modelled = false;
   const bool narrow_ok = RefineOnce(gray, cells, bits, camera, passes, &narrow, model_fit, &narrow_sigma, 1.0,
-                                    fit_gamma, &narrow_kept, polarity, &narrow_modelled);
-  auto take = [&](const std::array<cv::Point2d, 4>& c, double sigma, bool kept) {
+                                    false, fit_gamma, &narrow_kept, polarity, &narrow_modelled);
+  // The model passes' fits are warm-started from the previous pass's: they keep the margin and surround
+  // their first fit found where the profiles show several that fit (a margin beyond the profiles' reach
+  // or as wide as the blur, a dark surround: the margin widths of one marker's sides came out 1 to 20
+  // px), and that first fit was made about corners that depend on the candidate (fast mode's region
+  // search gives another one). So the corners are refined again from where the passes ended, with model
+  // passes only and the fits started from the profiles about those corners, until such a round moves
+  // no corner by kSettledPx (at most kRounds). Rounds that do not settle are mostly a two-cycle (a side
+  // whose cold fit alternates between two margins); which state the last round is in depends on the
+  // start, the mean of the last two does not.
+  auto take = [&](std::array<cv::Point2d, 4> c, double sigma, bool kept) {
+    constexpr int kRounds = 4;
+    constexpr double kSettledPx = 0.01;
+    std::array<cv::Point2d, 4> before = c;
+    int unsettled = 0;
+    for (int round = 0; round < kRounds && model_fit; ++round) {
+      std::array<cv::Point2d, 4> again = c;
+      double again_sigma = NAN;
+      bool again_kept = false;
+      if (!RefineOnce(gray, cells, bits, camera, passes, &again, true, &again_sigma, 1.0, true, fit_gamma,
+                      &again_kept, polarity, nullptr))
+        break;
+      double moved = 0;
+      for (int k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(again[k] - c[k]));
+      before = c;
+      c = again, sigma = again_sigma, kept = again_kept;
+      if (moved < kSettledPx) {
+        unsettled = 0;
+        break;
+      }
+      ++unsettled;
+    }
+    if (unsettled >= 2)
+      for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
     if (kept_lines) *kept_lines = kept;
@@ -836,7 +870,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double wide_sigma = NAN;
   bool wide_kept = false, wide_modelled = false;
   const bool wide_ok = RefineOnce(gray, cells, bits, camera, passes, &wide, model_fit, &wide_sigma, 2.0,
-                                  fit_gamma, &wide_kept, polarity, &wide_modelled);
+                                  false, fit_gamma, &wide_kept, polarity, &wide_modelled);
   if (wide_ok && (wide_modelled || !narrow_ok))
     return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
   if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
