@@ -376,17 +376,12 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     }
     std::printf("%-30s %3d markers compared, fast vs accurate max %.4f px (%s), extra %d, missing %d\n",
                 im.name.c_str(), d.compared, d.max_px, d.worst.c_str(), d.extra, d.missing);
-    // Measured shortfalls (a regression guard, not the target): conditions where the side model's fits
-    // of some side depend on where they start (a narrow or no margin on a dark or grey surface,
-    // sharpening + JPEG), px.
-    // After the turned sides (issue 15 "offsets"): webcam 0.52 -> 0.028, black tool 1.37 -> 0.95, wood
-    // 0.24 -> 0.267 (its guard 0.25 -> 0.28).
-    static const std::map<std::string, double> shortfalls = {{"no margin, grey surface", 1.6},
-                                                             {"half-cell margin, black tool", 1.0},
-                                                             {"half-cell margin, wood", 0.28},
-                                                             {"two-cell margin, white", 0.06},
-                                                             {"webcam", 0.03},
-                                                             {"hard", 0.24}};
+    // Measured shortfalls (a regression guard, not the target), px. The side model's warm-started fits
+    // kept the margin and surround their first fit found about the candidate's corners: no margin on
+    // grey 1.54, black tool 0.95, wood 0.27, hard 0.23, two-cell 0.05, webcam 0.028 until the corners
+    // were refined again with fits started from the profiles about them (RefineMarkerCorners, issue 15
+    // "margin"). Left: the black tool's id 90 (image 1, 25.6 px at 71 deg) 0.080.
+    static const std::map<std::string, double> shortfalls = {{"half-cell margin, black tool", 0.09}};
     const auto it = shortfalls.find(im.name);
     EXPECT_LE(d.max_px, it == shortfalls.end() ? 0.02 : it->second) << d.worst;
     // No margin on grey: 3 markers fast mode kept that the accurate mode's refinement dropped (measured).
