@@ -255,8 +255,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, double gamma_hint, int polarity, SideProfiles* profiles,
-               SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
+               double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
+               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
   if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   struct Ray {
@@ -346,6 +346,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     profiles->Reset(u0, du, bins, cell);
     profiles->fit_gamma = fit_gamma;
     profiles->gamma_hint = gamma_hint;
+    profiles->hold_gamma = hold_gamma;
     profiles->polarity = polarity;
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
@@ -432,7 +433,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
 // was located by the side model in the last pass (not by its crossings alone).
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
+                bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere, double held_gamma) {
   double sigma_sum = 0;
   int sigma_count = 0;
   if (blur_sigma) *blur_sigma = NAN;
@@ -594,7 +595,10 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         for (int other = 0; other < 4; ++other)
           if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
             gamma_sum += side_fits[other].gamma, ++gamma_count;
-        const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
+        // A known gamma (held_gamma > 0) is held on every side.
+        const double gamma_hint = held_gamma > 0    ? held_gamma
+                                  : gamma_count > 0 ? gamma_sum / gamma_count
+                                                    : 1.0;
         // The line's direction is the crossings' where their levels have the marker's polarity (the
         // border's side darker for a normal print: the outer edge). Without a crossing, or with levels
         // of the other order (the crossings mix the code's edge in: the line lies up to a cell inside
@@ -603,8 +607,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
         double tilt = NAN, tilt_at = 0.5;
         const double e =
             FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side], valid,
-                    origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint, polarity,
-                    &side_profiles, &side_fits[side], turn_line ? &tilt : nullptr, &tilt_at);
+                    origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint, held_gamma > 0,
+                    polarity, &side_profiles, &side_fits[side], turn_line ? &tilt : nullptr, &tilt_at);
         const double sigma = side_fits[side].sigma;
         if (std::isfinite(e)) side_unfitted[side] = false;
         side_modelled[side] = std::isfinite(e);
@@ -668,7 +672,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
-                         bool fit_gamma, bool* kept_lines, int polarity) {
+                         bool fit_gamma, bool* kept_lines, int polarity, double held_gamma) {
   if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide. So can a
@@ -681,7 +685,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double narrow_sigma = NAN;
   bool narrow_kept = false, narrow_modelled = false;
   const bool narrow_ok = RefineOnce(gray, cells, bits, camera, passes, &narrow, model_fit, &narrow_sigma, 1.0,
-                                    fit_gamma, &narrow_kept, polarity, &narrow_modelled);
+                                    fit_gamma, &narrow_kept, polarity, &narrow_modelled, held_gamma);
   auto take = [&](const std::array<cv::Point2d, 4>& c, double sigma, bool kept) {
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
@@ -693,7 +697,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double wide_sigma = NAN;
   bool wide_kept = false, wide_modelled = false;
   const bool wide_ok = RefineOnce(gray, cells, bits, camera, passes, &wide, model_fit, &wide_sigma, 2.0,
-                                  fit_gamma, &wide_kept, polarity, &wide_modelled);
+                                  fit_gamma, &wide_kept, polarity, &wide_modelled, held_gamma);
   if (wide_ok && (wide_modelled || !narrow_ok))
     return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
   if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
@@ -1025,16 +1029,39 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   // encoded values it shifts to the dark side) and its refinement from `corners`.
   const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
   const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  // A camera's sharpening (unsharp_amount) undone: the region stays encoded, a known gamma is held in
+  // the side model (not applied through an 8-bit table) and fitted per side where unknown.
+  const double k = options_.unsharp_amount;
+  const bool unsharp = k > 0;
   auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
     *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-    if (!linearise) return &gray;
-    if (gamma_lut_.empty()) {
-      gamma_lut_.create(1, 256, CV_8U);
-      for (int v = 0; v < 256; ++v)
-        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-    }
+    if (!linearise && !unsharp) return &gray;
     if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-    cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+    if (!unsharp) {
+      if (gamma_lut_.empty()) {
+        gamma_lut_.create(1, 256, CV_8U);
+        for (int v = 0; v < 256; ++v)
+          gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+      }
+      cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+      return &linear_;
+    }
+    // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
+    // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones,
+    // encoded again.
+    gray(*roi).convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
+    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
+    if (in_linear) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
+    unsharp_in_.copyTo(unsharp_out_);
+    for (int it = 0; it < 8; ++it) {
+      cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
+      unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
+    }
+    if (in_linear) {
+      cv::max(unsharp_out_, 0.0, unsharp_out_);
+      cv::pow(unsharp_out_, 1.0 / options_.gamma, unsharp_out_);
+    }
+    unsharp_out_.convertTo(linear_(*roi), CV_8U, 255.0);
     return &linear_;
   };
   // The border's polarity is known unless both prints are searched for (`inverted` without
@@ -1042,7 +1069,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
                     bool* kept) {
     return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
-                               options_.edge_model, blur, options_.gamma == 0, kept, polarity);
+                               options_.edge_model, blur, options_.gamma == 0 || unsharp, kept, polarity,
+                               unsharp ? options_.gamma : 0.0);
   };
   // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
   // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
