@@ -1033,6 +1033,28 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   // the side model (not applied through an 8-bit table) and fitted per side where unknown.
   const double k = options_.unsharp_amount;
   const bool unsharp = k > 0;
+  // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
+  // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones;
+  // then smoothed by `smoothing` px (sharp_smoothing) in linear light where the gamma is known (the
+  // model's blur is linear light's), and encoded again.
+  auto UnsharpRegion = [&](const cv::Mat& from, double smoothing, cv::Mat to) {
+    from.convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
+    auto undo = [&]() {
+      unsharp_in_.copyTo(unsharp_out_);
+      for (int it = 0; it < 8; ++it) {
+        cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
+        unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
+      }
+      cv::max(unsharp_out_, 0.0, unsharp_in_);
+    };
+    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
+    if (!in_linear) undo();
+    if (options_.gamma > 0) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
+    if (in_linear) undo();
+    if (smoothing > 0) cv::GaussianBlur(unsharp_in_, unsharp_in_, cv::Size(0, 0), smoothing);
+    if (options_.gamma > 0) cv::pow(unsharp_in_, 1.0 / options_.gamma, unsharp_in_);
+    unsharp_in_.convertTo(to, CV_8U, 255.0);
+  };
   auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
     *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
     if (!linearise && !unsharp) return &gray;
@@ -1046,22 +1068,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
       return &linear_;
     }
-    // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
-    // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones,
-    // encoded again.
-    gray(*roi).convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
-    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
-    if (in_linear) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
-    unsharp_in_.copyTo(unsharp_out_);
-    for (int it = 0; it < 8; ++it) {
-      cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
-      unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
-    }
-    if (in_linear) {
-      cv::max(unsharp_out_, 0.0, unsharp_out_);
-      cv::pow(unsharp_out_, 1.0 / options_.gamma, unsharp_out_);
-    }
-    unsharp_out_.convertTo(linear_(*roi), CV_8U, 255.0);
+    UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
     return &linear_;
   };
   // The border's polarity is known unless both prints are searched for (`inverted` without
@@ -1091,9 +1098,14 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     std::vector<double> blurs;  // each smoothed fit's blur, px
     for (const Raw& r : unique) {
       cv::Rect roi;
-      const cv::Mat* source = region(r, &roi);
       if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      if (unsharp) {
+        roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+        UnsharpRegion(gray(roi), s, smooth_(roi));
+      } else {
+        const cv::Mat* source = region(r, &roi);
+        cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      }
       Smoothed m;
       m.corners = r.corners;
       double sigma = NAN;
