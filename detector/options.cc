@@ -113,6 +113,8 @@ void DetectorOptions::Validate(const std::string& file) const {
     table.Fail(file, "adaptive_window_max",
                "must be >= adaptive_window_min (" + std::to_string(adaptive_window_min) + "), got " +
                    std::to_string(adaptive_window_max));
+  if (unsharp_linear && unsharp_amount > 0 && gamma <= 0)
+    table.Fail(file, "unsharp_linear", "needs a known gamma (> 0), got gamma 0");
 }
 
 void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {
