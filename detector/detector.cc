@@ -262,6 +262,7 @@ struct SideRays {
   int bins = 0;
   bool fit_gamma = false;
   double gamma_hint = 1.0;
+  bool hold_gamma = false;
   int polarity = 0;
 
   // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
@@ -273,6 +274,7 @@ struct SideRays {
     profiles->Reset(u0, du, bins, cell);
     profiles->fit_gamma = fit_gamma;
     profiles->gamma_hint = gamma_hint;
+    profiles->hold_gamma = hold_gamma;
     profiles->polarity = polarity;
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
@@ -461,8 +463,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, double gamma_hint, int polarity, SideProfiles* profiles,
-               SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
+               double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
+               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
   if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   thread_local SideRays rays;
@@ -479,6 +481,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.bins = static_cast<int>(std::ceil((u1 - rays.u0) / rays.du)) + 1;
   rays.fit_gamma = fit_gamma;
   rays.gamma_hint = gamma_hint;
+  rays.hold_gamma = hold_gamma;
   rays.polarity = polarity;
   if (!FitWholeSide(rays, profiles, fit)) return NAN;
   if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
@@ -652,13 +655,14 @@ bool CornersFromLines(const std::array<Line, 4>& lines, const PixelMap& map,
 // One refinement's state across its passes (RefineOnce).
 struct Refinement {
   Refinement(const cv::Mat& gray, const cv::Mat& bits, int cells, const PixelMap& map, bool model_fit,
-             bool fit_gamma, int polarity, double first_width, bool* kept_lines)
+             bool fit_gamma, double held_gamma, int polarity, double first_width, bool* kept_lines)
       : gray(gray),
         bits(bits),
         cells(cells),
         map(map),
         model_fit(model_fit),
         fit_gamma(fit_gamma),
+        held_gamma(held_gamma),
         polarity(polarity),
         first_width(first_width),
         kept_lines(kept_lines) {}
@@ -667,6 +671,7 @@ struct Refinement {
   int cells;
   const PixelMap& map;
   bool model_fit, fit_gamma;
+  double held_gamma;  // > 0: the camera's gamma, known, held in every side's model
   int polarity;
   double first_width;
   bool* kept_lines;
@@ -712,10 +717,12 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   // side), the model turns the line too.
   const bool turn_line = !crossed || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
   double tilt = NAN, tilt_at = 0.5;
-  const double e = FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line,
-                           s.valid, s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma,
-                           OtherSidesGamma(r->side_fits, side), r->polarity, &r->side_profiles, &fit,
-                           turn_line ? &tilt : nullptr, &tilt_at);
+  // A known gamma (held_gamma > 0) is held on every side.
+  const double gamma_hint = r->held_gamma > 0 ? r->held_gamma : OtherSidesGamma(r->side_fits, side);
+  const double e =
+      FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line, s.valid,
+              s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma, gamma_hint, r->held_gamma > 0,
+              r->polarity, &r->side_profiles, &fit, turn_line ? &tilt : nullptr, &tilt_at);
   r->side_modelled[side] = std::isfinite(e);
   if (!std::isfinite(e)) return true;
   r->side_unfitted[side] = false;
@@ -756,13 +763,14 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 // depends on the start, their mean does not: the corners are the mean of the last two passes then.
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
+                bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere,
+                double held_gamma) {
   CV_Assert(model_fit || !model_only);
   if (blur_sigma) *blur_sigma = NAN;
   CV_Assert(gray.type() == CV_8UC1);
   PixelMap map;
   if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
-  Refinement r(gray, bits, cells, map, model_fit, fit_gamma, polarity, first_width, kept_lines);
+  Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
   double perimeter = 0;
@@ -813,7 +821,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
-                         bool fit_gamma, bool* kept_lines, int polarity) {
+                         bool fit_gamma, bool* kept_lines, int polarity, double held_gamma) {
   if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide. So can a
@@ -826,7 +834,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double narrow_sigma = NAN;
   bool narrow_kept = false, narrow_modelled = false;
   const bool narrow_ok = RefineOnce(gray, cells, bits, camera, passes, &narrow, model_fit, &narrow_sigma, 1.0,
-                                    false, fit_gamma, &narrow_kept, polarity, &narrow_modelled);
+                                    false, fit_gamma, &narrow_kept, polarity, &narrow_modelled, held_gamma);
   // The model passes' fits are warm-started from the previous pass's: they keep the margin and surround
   // their first fit found where the profiles show several that fit (a margin beyond the profiles' reach
   // or as wide as the blur, a dark surround: the margin widths of one marker's sides came out 1 to 20
@@ -846,7 +854,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       double again_sigma = NAN;
       bool again_kept = false;
       if (!RefineOnce(gray, cells, bits, camera, passes, &again, true, &again_sigma, 1.0, true, fit_gamma,
-                      &again_kept, polarity, nullptr))
+                      &again_kept, polarity, nullptr, held_gamma))
         break;
       double moved = 0;
       for (int k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(again[k] - c[k]));
@@ -870,7 +878,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double wide_sigma = NAN;
   bool wide_kept = false, wide_modelled = false;
   const bool wide_ok = RefineOnce(gray, cells, bits, camera, passes, &wide, model_fit, &wide_sigma, 2.0,
-                                  false, fit_gamma, &wide_kept, polarity, &wide_modelled);
+                                  false, fit_gamma, &wide_kept, polarity, &wide_modelled, held_gamma);
   if (wide_ok && (wide_modelled || !narrow_ok))
     return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
   if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
@@ -1202,16 +1210,46 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   // encoded values it shifts to the dark side) and its refinement from `corners`.
   const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
   const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  // A camera's sharpening (unsharp_amount) undone: the region stays encoded, a known gamma is held in
+  // the side model (not applied through an 8-bit table) and fitted per side where unknown.
+  const double k = options_.unsharp_amount;
+  const bool unsharp = k > 0;
+  // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
+  // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones;
+  // then smoothed by `smoothing` px (sharp_smoothing) in linear light where the gamma is known (the
+  // model's blur is linear light's), and encoded again.
+  auto UnsharpRegion = [&](const cv::Mat& from, double smoothing, cv::Mat to) {
+    from.convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
+    auto undo = [&]() {
+      unsharp_in_.copyTo(unsharp_out_);
+      for (int it = 0; it < 8; ++it) {
+        cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
+        unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
+      }
+      cv::max(unsharp_out_, 0.0, unsharp_in_);
+    };
+    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
+    if (!in_linear) undo();
+    if (options_.gamma > 0) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
+    if (in_linear) undo();
+    if (smoothing > 0) cv::GaussianBlur(unsharp_in_, unsharp_in_, cv::Size(0, 0), smoothing);
+    if (options_.gamma > 0) cv::pow(unsharp_in_, 1.0 / options_.gamma, unsharp_in_);
+    unsharp_in_.convertTo(to, CV_8U, 255.0);
+  };
   auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
     *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-    if (!linearise) return &gray;
-    if (gamma_lut_.empty()) {
-      gamma_lut_.create(1, 256, CV_8U);
-      for (int v = 0; v < 256; ++v)
-        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-    }
+    if (!linearise && !unsharp) return &gray;
     if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-    cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+    if (!unsharp) {
+      if (gamma_lut_.empty()) {
+        gamma_lut_.create(1, 256, CV_8U);
+        for (int v = 0; v < 256; ++v)
+          gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+      }
+      cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+      return &linear_;
+    }
+    UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
     return &linear_;
   };
   // The border's polarity is known unless both prints are searched for (`inverted` without
@@ -1219,7 +1257,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
                     bool* kept) {
     return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
-                               options_.edge_model, blur, options_.gamma == 0, kept, polarity);
+                               options_.edge_model, blur, options_.gamma == 0 || unsharp, kept, polarity,
+                               unsharp ? options_.gamma : 0.0);
   };
   // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
   // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
@@ -1240,9 +1279,14 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     std::vector<double> blurs;  // each smoothed fit's blur, px
     for (const Raw& r : unique) {
       cv::Rect roi;
-      const cv::Mat* source = region(r, &roi);
       if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      if (unsharp) {
+        roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+        UnsharpRegion(gray(roi), s, smooth_(roi));
+      } else {
+        const cv::Mat* source = region(r, &roi);
+        cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      }
       Smoothed m;
       m.corners = r.corners;
       double sigma = NAN;
