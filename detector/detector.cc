@@ -239,35 +239,68 @@ cv::Vec3d UnitPoint(int side, double along, double depth) {
   }
 }
 
-// The side model's offset of side `side` (px, outward from `line`), or NaN. The rays (origins and
-// outward normals in raw pixels, ideal origins) are those of the crossing pass; only those in the
-// middle of a code column are used, grouped by the column's code rows. `polarity`: the marker's
-// (SideProfiles::polarity). A fit of the wrong polarity took the first code row for the border (the
-// profiles lay about a cell inside the edge): the side is sampled and fitted again one cell outward.
-// The side's direction: `tilt` (optional) gets the model's change of the offset along the side (px per
-// unit of `along`, 0..1 from the side's start corner) and `tilt_at` the rays' mean `along`, where the
-// offset is the one returned; NaN when the halves cannot be fitted. Each half of the side's rays is
-// sampled about the whole side's edge and only its edge fitted (SideProfiles::edge_only): the line the
-// crossings (or the current corners) give may be turned a few pixels over a side where the crossings
-// mix the outer edge with the code's (a narrow margin on a dark surround, a candidate a cell off at one
-// end), and the model only moves it.
-double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
-               const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
-               const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
-               const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
-               double sigma_along, bool fit_gamma, double gamma_hint, int polarity, SideProfiles* profiles,
-               SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
-  if (tilt) *tilt = NAN;
-  if (bits.empty()) return NAN;
-  struct Ray {
-    int index;
-    double along;  // 0..1 from the side's start corner
-    double delta;  // offset from the ray's origin to the line along its normal, px
-    std::array<uint8_t, SideProfiles::kRows> pattern;
-    std::array<double, SideProfiles::kRows> depths, other;
-  };
-  thread_local std::vector<Ray> rays;
-  rays.clear();
+// One ray of a side's model fit: its index among the pass's rays, where it meets the side (`along`, 0..1
+// from the side's start corner), the offset from its origin to the line along its normal (`delta`, px),
+// and per code row the row's pattern, the depth of the row's outer boundary (px inward from the origin)
+// and the part of its level from cells of the other colour under blur along the side.
+struct SideRay {
+  int index;
+  double along;
+  double delta;
+  std::array<uint8_t, SideProfiles::kRows> pattern;
+  std::array<double, SideProfiles::kRows> depths, other;
+};
+
+// A side's rays (FitSide) and how their profiles are sampled.
+struct SideRays {
+  const cv::Mat* gray = nullptr;
+  const std::vector<Eigen::Vector2d>* origins = nullptr;  // raw pixels
+  const std::vector<Eigen::Vector2d>* normals = nullptr;  // outward, raw pixels
+  std::vector<SideRay> rays;
+  double cell = 0;        // mean depth of the border cell, px
+  double u0 = 0, du = 0;  // the profiles' first bin and bin width, px from the line
+  int bins = 0;
+  bool fit_gamma = false;
+  double gamma_hint = 1.0;
+  bool hold_gamma = false;
+  int polarity = 0;
+
+  // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
+  // the edge the model places, so they hold at any shift). `half`: -1 every ray, 0 / 1 those before /
+  // after `split` along the side. `tilt`: each ray's profile moved a further tilt * (along - split) px
+  // outward.
+  void SampleProfiles(SideProfiles* profiles, double shift, int half = -1, double split = 0.5,
+                      double tilt = 0.0) const {
+    profiles->Reset(u0, du, bins, cell);
+    profiles->fit_gamma = fit_gamma;
+    profiles->gamma_hint = gamma_hint;
+    profiles->hold_gamma = hold_gamma;
+    profiles->polarity = polarity;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
+      const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
+      const Eigen::Vector2d& o = (*origins)[rays[r].index];
+      const Eigen::Vector2d& nrm = (*normals)[rays[r].index];
+      for (int j = 0; j < bins; ++j) {
+        const double s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0 + j * du;
+        float v;
+        if (Sample(*gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+      }
+    }
+  }
+};
+
+// The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
+// depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
+// the corners, each followed inward across the marker's rows.
+double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap& map,
+                       const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
+                       const Line& line, const std::vector<char>& valid,
+                       const std::vector<Eigen::Vector2d>& origins,
+                       const std::vector<Eigen::Vector2d>& ideal_origins,
+                       const std::vector<Eigen::Vector2d>& normals, double sigma_along,
+                       std::vector<SideRay>* rays) {
+  rays->clear();
   double depth_sum = 0;
   // The boundaries between rows r-1 and r (r = 1..kRows + 1) as lines in ideal pixels: a point, a normal.
   Eigen::Vector2d row_point[SideProfiles::kRows + 2], row_normal[SideProfiles::kRows + 2];
@@ -293,7 +326,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
     const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
     const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
-    Ray ray{static_cast<int>(i), along, (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    SideRay ray{static_cast<int>(i), along, (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
     // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
@@ -330,93 +363,81 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
     }
     if (!ok) continue;
     depth_sum += ray.depths[0];
-    rays.push_back(ray);
+    rays->push_back(ray);
   }
-  if (rays.size() < 4) return NAN;
-  const double cell = depth_sum / rays.size();
-  if (!(cell > 0.5)) return NAN;
-  const double du = std::clamp(cell / 4.0, 0.1, 0.5);
-  const double u0 = -(SideProfiles::kRows - 0.4) * cell, u1 = 1.6 * cell + 1.0;
-  const int bins = static_cast<int>(std::ceil((u1 - u0) / du)) + 1;
-  // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
-  // the edge the model places, so they hold at any shift).
-  // `half`: -1 every ray, 0 / 1 those before / after `split` along the side.
-  // `tilt`: each ray's profile moved a further tilt * (along - split) px outward.
-  auto sample = [&](double shift, int half = -1, double split = 0.5, double tilt = 0.0) {
-    profiles->Reset(u0, du, bins, cell);
-    profiles->fit_gamma = fit_gamma;
-    profiles->gamma_hint = gamma_hint;
-    profiles->polarity = polarity;
-    for (size_t r = 0; r < rays.size(); ++r) {
-      if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
-      const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
-      const Eigen::Vector2d& o = origins[rays[r].index];
-      const Eigen::Vector2d& nrm = normals[rays[r].index];
-      for (int j = 0; j < bins; ++j) {
-        const double s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0 + j * du;
-        float v;
-        if (Sample(gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
-      }
-    }
-  };
-  sample(0.0);
-  // A previous pass's fit warm-starts this one (its edge moved to the line it found: e = 0 here).
+  if (rays->size() < 4) return NAN;
+  return depth_sum / rays->size();
+}
+
+// The whole side's model fit about its line (fit->e then px outward from it), false when it fails. A
+// previous pass's fit warm-starts it. A fit of the wrong polarity took the first code row for the border
+// (the profiles lay about a cell inside the edge): the side is sampled and fitted again one cell
+// outward. An edge beyond the profiles' middle (more than 0.75 cell from their line: the line a cell
+// inside or outside, on the code's edge or the margin's) is sampled and fitted again about where it was
+// found.
+bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
+  side.SampleProfiles(profiles, 0.0);
+  // The previous pass's edge was moved to the line it found: e = 0 here.
   if (fit->warm) fit->e = 0.0;
   double shift = 0.0;
   bool ok = FitSideProfiles(*profiles, fit);
   if (!ok && fit->wrong_polarity) {
-    shift = cell;
-    sample(shift);
+    shift = side.cell;
+    side.SampleProfiles(profiles, shift);
     fit->warm = false;
     fit->e = 0.0;
     ok = FitSideProfiles(*profiles, fit);
   }
-  // An edge beyond the profiles' middle (more than 0.75 cell from their line: the line a cell inside or
-  // outside, on the code's edge or the margin's) is sampled and fitted again about where it was found.
   if (!ok && fit->beyond) {
     shift += fit->beyond_e;
-    sample(shift);
+    side.SampleProfiles(profiles, shift);
     fit->warm = false;
     fit->e = 0.0;
     ok = FitSideProfiles(*profiles, fit);
   }
   if (!ok) {
     fit->warm = false;
-    return NAN;
+    return false;
   }
   fit->warm = true;
   fit->e += shift;
-  if (!tilt) return fit->e;
+  return true;
+}
+
+// The side's direction from the model (FitSide's `tilt`): each half of the side's rays is sampled about
+// the whole side's edge (fit->e) and only its edge fitted; the halves' edges about the line turned by the
+// estimate so far give the turn. A turn that moves the side's ends by more than a tenth of a cell is
+// re-profiled about the turned line (the whole side fitted again into `fit`, then its halves), at most
+// twice. Sets *tilt (px per unit of `along`) and *tilt_at (the rays' mean `along`) unless a half cannot
+// be fitted or the turn takes the ends beyond the profiles' reach (1.5 cells).
+void TurnSide(const SideRays& side, SideProfiles* profiles, SideFit* fit, double* tilt, double* tilt_at) {
   double split = 0;
-  for (const Ray& ray : rays) split += ray.along / rays.size();
+  for (const SideRay& ray : side.rays) split += ray.along / side.rays.size();
   double along_half[2];
   for (int half = 0; half < 2; ++half) {
     int n = 0;
     along_half[half] = 0;
-    for (const Ray& ray : rays)
+    for (const SideRay& ray : side.rays)
       if ((ray.along >= split) == (half == 1)) along_half[half] += ray.along, ++n;
-    if (n < 3) return fit->e;
+    if (n < 3) return;
     along_half[half] /= n;
   }
-  // The halves' edges about the line turned by the estimate so far; a turn that moves the side's ends
-  // by more than a tenth of a cell is re-profiled about the turned line (the whole side fitted again,
-  // then its halves), at most twice. A turn that takes the ends beyond the profiles' reach is dropped.
   double turn = 0.0;
   for (int round = 0; round < 3; ++round) {
     double e_half[2];
     for (int half = 0; half < 2; ++half) {
-      sample(fit->e, half, split, turn);
+      side.SampleProfiles(profiles, fit->e, half, split, turn);
       profiles->edge_only = true;
       SideFit part = *fit;
       part.e = 0.0;
-      if (!FitSideProfiles(*profiles, &part)) return fit->e;
+      if (!FitSideProfiles(*profiles, &part)) return;
       e_half[half] = part.e;
     }
     const double step = (e_half[1] - e_half[0]) / (along_half[1] - along_half[0]);
     turn += step;
-    if (0.5 * std::abs(turn) > 1.5 * cell) return fit->e;
-    if (0.5 * std::abs(step) < 0.1 * cell || round == 2) break;
-    sample(fit->e, -1, split, turn);
+    if (0.5 * std::abs(turn) > 1.5 * side.cell) return;
+    if (0.5 * std::abs(step) < 0.1 * side.cell || round == 2) break;
+    side.SampleProfiles(profiles, fit->e, -1, split, turn);
     SideFit again = *fit;
     again.e = 0.0;
     if (!FitSideProfiles(*profiles, &again)) break;
@@ -425,250 +446,382 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   }
   *tilt = turn;
   *tilt_at = split;
+}
+
+// The side model's offset of side `side` (px, outward from `line`), or NaN. The rays (origins and
+// outward normals in raw pixels, ideal origins) are those of the crossing pass; only those in the
+// middle of a code column are used, grouped by the column's code rows (CollectSideRays). `polarity`: the
+// marker's (SideProfiles::polarity); the fit about the line: FitWholeSide.
+// The side's direction: `tilt` (optional) gets the model's change of the offset along the side (px per
+// unit of `along`, 0..1 from the side's start corner) and `tilt_at` the rays' mean `along`, where the
+// offset is the one returned; NaN when the halves cannot be fitted (TurnSide). Each half of the side's
+// rays is sampled about the whole side's edge and only its edge fitted (SideProfiles::edge_only): the
+// line the crossings (or the current corners) give may be turned a few pixels over a side where the
+// crossings mix the outer edge with the code's (a narrow margin on a dark surround, a candidate a cell
+// off at one end), and the model only moves it.
+double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, const PixelMap& map,
+               const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal, const Line& line,
+               const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
+               const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
+               double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
+               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
+  if (tilt) *tilt = NAN;
+  if (bits.empty()) return NAN;
+  thread_local SideRays rays;
+  const double cell = CollectSideRays(bits, cells, side, map, ideal_from_unit, unit_from_ideal, line, valid,
+                                      origins, ideal_origins, normals, sigma_along, &rays.rays);
+  if (!(cell > 0.5)) return NAN;
+  rays.gray = &gray;
+  rays.origins = &origins;
+  rays.normals = &normals;
+  rays.cell = cell;
+  rays.du = std::clamp(cell / 4.0, 0.1, 0.5);
+  rays.u0 = -(SideProfiles::kRows - 0.4) * cell;
+  const double u1 = 1.6 * cell + 1.0;
+  rays.bins = static_cast<int>(std::ceil((u1 - rays.u0) / rays.du)) + 1;
+  rays.fit_gamma = fit_gamma;
+  rays.gamma_hint = gamma_hint;
+  rays.hold_gamma = hold_gamma;
+  rays.polarity = polarity;
+  if (!FitWholeSide(rays, profiles, fit)) return NAN;
+  if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
   return fit->e;
 }
 
-// One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
-// was located by the side model in the last pass (not by its crossings alone).
-bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
-                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
-                bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere) {
-  double sigma_sum = 0;
-  int sigma_count = 0;
-  if (blur_sigma) *blur_sigma = NAN;
-  CV_Assert(gray.type() == CV_8UC1);
-  PixelMap map;
-  if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
-  std::array<Eigen::Vector2d, 4> img, ideal;
-  for (int k = 0; k < 4; ++k) img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
-  const std::array<Eigen::Vector2d, 4> original = img;
-  double perimeter = 0;
-  for (int k = 0; k < 4; ++k) perimeter += (img[(k + 1) % 4] - img[k]).norm();
-  if (!(perimeter > 4 * 4.0)) return false;
+// The profiles across one side in one refinement pass (SampleSide): `n` rays along the side, each
+// sampled at `m` steps of `ds` px from -h to +h px along its outward normal.
+struct SideSamples {
+  int n = 0, m = 0;
+  double h = 0, ds = 0;
+  std::vector<float> profiles;  // n x m
+  std::vector<Eigen::Vector2d> origins, ideal_origins, normals;
+  std::vector<char> valid, clean;
+  int num_clean = 0, num_valid = 0;
+};
 
-  std::vector<float> profiles, inside, outside;
-  std::vector<Eigen::Vector2d> points, origins, ideal_origins, normals;
-  std::vector<char> clean;
-  // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
-  // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
-  // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
-  // crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
-  // until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
-  // (the candidate, the previous frame) must not change where the corners end up. Passes that do not
-  // settle are mostly a two-cycle (a poorly modelled side whose warm-started fits alternate between two
-  // valleys: 0.2 px apart on a 40 px marker at 74 deg); which of its two states the last pass is in
-  // depends on the start, their mean does not: the corners are the mean of the last two passes then.
-  constexpr int kMinModelPasses = 2, kMaxModelPasses = 6;
-  bool converged = false, model_converged = false;
-  int model_passes = 0;
-  const int max_passes = std::max(1, passes) + 4;
+// Samples the profiles across side `side` of the corners `img` (raw pixels; `ideal`: undistorted;
+// `centre`: their mean) in pass `pass` of a refinement (RefineOnce). False with fewer than 4 rays.
+bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const PixelMap& map,
+                const std::array<Eigen::Vector2d, 4>& img, const std::array<Eigen::Vector2d, 4>& ideal,
+                const Eigen::Vector2d& centre, int side, int pass, bool model_pass, double first_width,
+                SideSamples* s) {
+  const Eigen::Vector2d a = ideal[side], b = ideal[(side + 1) % 4];
+  const Eigen::Vector2d dir = (b - a).normalized();
+  const double length_img = (img[(side + 1) % 4] - img[side]).norm();
+  const double cell_along = length_img / cells;
+  // Cell depth across the edge: the marker's extent along this side's normal / cells.
+  const Eigen::Vector2d side_dir = (img[(side + 1) % 4] - img[side]) / length_img;
+  const Eigen::Vector2d side_normal(side_dir.y(), -side_dir.x());
+  const double extent = 0.5 * (std::abs(side_normal.dot(img[(side + 2) % 4] - img[side])) +
+                               std::abs(side_normal.dot(img[(side + 3) % 4] - img[side])));
+  const double cell = extent / cells;
+  // Half-width of the profile across the edge: half a cell, so that the level read on each side
+  // is the border's and the surround's, not the next cell's. The first pass searches wider (the
+  // initial corners may be a pixel or two off).
+  s->h = pass == 0
+             ? std::clamp(std::min(0.9 * cell * first_width, 2.0 * first_width), 0.75, 3.0 * first_width)
+             : std::clamp(0.5 * cell, 0.75, 3.0);
+  const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
+  // Model passes sample a fixed number of rays and steps (4 per cell, 5 per half-profile): their
+  // sampling then moves continuously with the estimate, so the passes converge to one place
+  // whatever the start.
+  s->n =
+      model_pass ? 4 * cells : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
+  const int steps = model_pass ? 5 : std::max(3, static_cast<int>(std::ceil(s->h / 0.25)));
+  s->m = 2 * steps + 1;
+  s->ds = s->h / steps;
+  const int n = s->n, m = s->m;
+  s->profiles.assign(static_cast<size_t>(n) * m, 0.f);
+  s->origins.assign(n, Eigen::Vector2d::Zero());
+  s->ideal_origins.assign(n, Eigen::Vector2d::Zero());
+  s->normals.assign(n, Eigen::Vector2d::Zero());
+  s->clean.assign(n, 0);
+  s->valid.assign(n, 0);
+  s->num_clean = 0, s->num_valid = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
+    const Eigen::Vector2d q = a + t * (b - a);
+    const Eigen::Vector2d p = map.ToImage(q);
+    Eigen::Vector2d tangent = map.camera ? (map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir)) : dir;
+    tangent.normalize();
+    Eigen::Vector2d normal(tangent.y(), -tangent.x());
+    if (normal.dot(p - centre) < 0) normal = -normal;
+    s->origins[i] = p;
+    s->ideal_origins[i] = q;
+    s->normals[i] = normal;
+    bool ok = true;
+    float* prof = &s->profiles[static_cast<size_t>(i) * m];
+    for (int j = 0; j < m && ok; ++j) {
+      const double step = -s->h + j * s->ds;
+      ok = Sample(gray, p.x() + step * normal.x(), p.y() + step * normal.y(), &prof[j]);
+    }
+    if (!ok) continue;
+    s->valid[i] = 1;
+    ++s->num_valid;
+    s->clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
+    s->num_clean += s->clean[i];
+  }
+  return s->num_valid >= 4;
+}
+
+// The line (ideal pixels) through the side's crossings of the mid level between its profiles' inner
+// and outer levels (`level_in`, `level_out`: medians over the rays next to clean code cells where there
+// are enough of them), false when the levels differ by less than 8 grey levels (no clean crossing: a
+// margin narrower than the profile between a dark border and a dark surround, or the candidate a pixel
+// or two off) or fewer than 4 rays cross.
+bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double* level_in,
+                  double* level_out) {
+  thread_local std::vector<float> inside, outside;
+  thread_local std::vector<Eigen::Vector2d> points;
+  const int n = s.n, m = s.m;
+  const bool use_clean = s.num_clean >= std::max(4, s.num_valid / 5);
+  inside.clear();
+  outside.clear();
+  for (int i = 0; i < n; ++i) {
+    if (!s.valid[i] || (use_clean && !s.clean[i])) continue;
+    inside.push_back(s.profiles[static_cast<size_t>(i) * m]);
+    outside.push_back(s.profiles[static_cast<size_t>(i) * m + m - 1]);
+  }
+  *level_in = Median(inside), *level_out = Median(outside);
+  if (!(std::abs(*level_out - *level_in) >= 8.0)) return false;
+  const float mid = static_cast<float>(0.5 * (*level_in + *level_out));
+  const float sign = *level_out > *level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
+  points.clear();
+  for (int i = 0; i < n; ++i) {
+    if (!s.valid[i] || (use_clean && !s.clean[i])) continue;
+    const float* prof = &s.profiles[static_cast<size_t>(i) * m];
+    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+    double best = 1e9;
+    for (int j = 0; j + 1 < m; ++j) {
+      const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+      if (v0 <= 0.f && v1 > 0.f) {
+        const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
+        if (std::abs(at) < std::abs(best)) best = at;
+      }
+    }
+    if (best > 1e8) continue;
+    points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));
+  }
+  return points.size() >= 4 && FitLine(points, line);
+}
+
+// The gamma of the marker's other sides (their latest fits with gamma free), for a side whose code
+// shows no contrast in its first rows; 1 without one.
+double OtherSidesGamma(const std::array<SideFit, 4>& side_fits, int side) {
+  double gamma_sum = 0;
+  int gamma_count = 0;
+  for (int other = 0; other < 4; ++other)
+    if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
+      gamma_sum += side_fits[other].gamma, ++gamma_count;
+  return gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
+}
+
+// Side `side`'s line moved `e` px outward (from the centre of the corners `ideal`); with a finite `tilt`
+// (FitSide) also turned: the line through the side's points at along 0 and 1 (on the line, the marker's
+// homography's points projected), moved by the offsets the tilt gives there.
+void MoveLine(const std::array<Eigen::Vector2d, 4>& ideal, const cv::Matx33d& ideal_from_unit, int side,
+              double e, double tilt, double tilt_at, Line* line) {
+  Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
+  const double outward = line->n.dot(ideal_centre) < line->c ? 1.0 : -1.0;
+  if (!std::isfinite(tilt)) {
+    line->c += outward * e;
+    return;
+  }
+  Eigen::Vector2d q[2];
+  for (int end = 0; end < 2; ++end) {
+    const cv::Vec3d u = ideal_from_unit * UnitPoint(side, end, 0.0);
+    const Eigen::Vector2d x(u[0] / u[2], u[1] / u[2]);
+    q[end] = x - (line->n.dot(x) - line->c) * line->n + outward * (e + tilt * (end - tilt_at)) * line->n;
+  }
+  const Eigen::Vector2d d = (q[1] - q[0]).normalized();
+  Eigen::Vector2d n(-d.y(), d.x());
+  if (n.dot(line->n) < 0) n = -n;
+  *line = {n, n.dot(q[0])};
+}
+
+// The corners (raw pixels) where consecutive sides' lines (ideal pixels) meet; false where two are
+// parallel.
+bool CornersFromLines(const std::array<Line, 4>& lines, const PixelMap& map,
+                      std::array<Eigen::Vector2d, 4>* corners) {
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Vector2d p;
+    if (!Intersect(lines[(k + 3) % 4], lines[k], &p)) return false;
+    (*corners)[k] = map.ToImage(p);
+  }
+  return true;
+}
+
+// One refinement's state across its passes (RefineOnce).
+struct Refinement {
+  Refinement(const cv::Mat& gray, const cv::Mat& bits, int cells, const PixelMap& map, bool model_fit,
+             bool fit_gamma, double held_gamma, int polarity, double first_width, bool* kept_lines)
+      : gray(gray),
+        bits(bits),
+        cells(cells),
+        map(map),
+        model_fit(model_fit),
+        fit_gamma(fit_gamma),
+        held_gamma(held_gamma),
+        polarity(polarity),
+        first_width(first_width),
+        kept_lines(kept_lines) {}
+  const cv::Mat& gray;
+  const cv::Mat& bits;
+  int cells;
+  const PixelMap& map;
+  bool model_fit, fit_gamma;
+  double held_gamma;  // > 0: the camera's gamma, known, held in every side's model
+  int polarity;
+  double first_width;
+  bool* kept_lines;
+  std::array<Eigen::Vector2d, 4> img;  // the corners, raw pixels
+  SideSamples samples;
   SideProfiles side_profiles;
   std::array<SideFit, 4> side_fits;  // each side's model fit of the previous model pass
   // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
   std::array<bool, 4> side_unfitted{};
-  std::array<bool, 4> side_modelled{};            // located by the side model in the latest pass
-  std::array<Eigen::Vector2d, 4> previous = img;  // the corners before the latest pass
-  for (int pass = 0;; ++pass) {
+  std::array<bool, 4> side_modelled{};  // located by the side model in the latest pass
+  double sigma_sum = 0;
+  int sigma_count = 0;
+};
+
+// Side `side`'s line in pass `pass` (its crossings', or with the model its model offset about them or
+// about the current side), false when it cannot be located without the model or has too few rays.
+bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
+                const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
+                const Eigen::Vector2d& centre, int side, int pass, bool model_pass, Line* line) {
+  SideSamples& s = r->samples;
+  if (!SampleSide(r->gray, r->bits, r->cells, r->map, r->img, ideal, centre, side, pass, model_pass,
+                  r->first_width, &s))
+    return false;
+  double level_in, level_out;
+  const bool crossed = CrossingLine(s, r->map, line, &level_in, &level_out);
+  // Without a clean crossing the side keeps the line through the current corners. A model pass fits
+  // its edge from there (its profiles reach over border, margin and surround); without the model it
+  // fails.
+  if (!crossed) {
+    if (!r->model_fit) return false;
+    const Eigen::Vector2d dir = (ideal[(side + 1) % 4] - ideal[side]).normalized();
+    const Eigen::Vector2d normal_ideal(-dir.y(), dir.x());
+    *line = {normal_ideal, normal_ideal.dot(ideal[side])};
+  }
+  r->side_unfitted[side] = !crossed;
+  if (!crossed && r->kept_lines) *r->kept_lines = true;
+  if (!model_pass) return true;
+  SideFit& fit = r->side_fits[side];
+  const double sigma_along = fit.warm ? fit.sigma : 0.8;
+  // The line's direction is the crossings' where their levels have the marker's polarity (the border's
+  // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
+  // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the
+  // side), the model turns the line too.
+  const bool turn_line = !crossed || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
+  double tilt = NAN, tilt_at = 0.5;
+  // A known gamma (held_gamma > 0) is held on every side.
+  const double gamma_hint = r->held_gamma > 0 ? r->held_gamma : OtherSidesGamma(r->side_fits, side);
+  const double e =
+      FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line, s.valid,
+              s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma, gamma_hint, r->held_gamma > 0,
+              r->polarity, &r->side_profiles, &fit, turn_line ? &tilt : nullptr, &tilt_at);
+  r->side_modelled[side] = std::isfinite(e);
+  if (!std::isfinite(e)) return true;
+  r->side_unfitted[side] = false;
+  MoveLine(ideal, ideal_from_unit, side, e, tilt, tilt_at, line);
+  r->sigma_sum += fit.sigma, ++r->sigma_count;
+  return true;
+}
+
+// One pass of a refinement: every side located (LocateSide) and the corners where their lines meet
+// into `next`; false when a side or a corner fails.
+bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vector2d, 4>* next) {
+  std::array<Eigen::Vector2d, 4> ideal;
+  for (int k = 0; k < 4; ++k) ideal[k] = r->map.ToIdeal(r->img[k]);
+  const cv::Matx33d ideal_from_unit =
+      QuadFromUnitSquare({cv::Point2d(ideal[0].x(), ideal[0].y()), cv::Point2d(ideal[1].x(), ideal[1].y()),
+                          cv::Point2d(ideal[2].x(), ideal[2].y()), cv::Point2d(ideal[3].x(), ideal[3].y())});
+  const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 4; ++k) centre += r->img[k] / 4.0;
+  std::array<Line, 4> lines;
+  for (int side = 0; side < 4; ++side)
+    if (!LocateSide(r, ideal, ideal_from_unit, unit_from_ideal, centre, side, pass, model_pass, &lines[side]))
+      return false;
+  return CornersFromLines(lines, r->map, next);
+}
+
+// One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
+// was located by the side model in the last pass (not by its crossings alone). `model_only` (with
+// model_fit): no crossing-only passes, for corners already on the edges (RefineMarkerCorners).
+// Passes of crossing-based line fits (`passes`; without the model until the corners move less than
+// 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
+// Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
+// crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
+// until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
+// (the candidate, the previous frame) must not change where the corners end up. Passes that do not
+// settle are mostly a two-cycle (a poorly modelled side whose warm-started fits alternate between two
+// valleys: 0.2 px apart on a 40 px marker at 74 deg); which of its two states the last pass is in
+// depends on the start, their mean does not: the corners are the mean of the last two passes then.
+bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
+                std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
+                bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere,
+                double held_gamma) {
+  CV_Assert(model_fit || !model_only);
+  if (blur_sigma) *blur_sigma = NAN;
+  CV_Assert(gray.type() == CV_8UC1);
+  PixelMap map;
+  if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
+  Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
+  for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
+  const std::array<Eigen::Vector2d, 4> original = r.img;
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += (r.img[(k + 1) % 4] - r.img[k]).norm();
+  if (!(perimeter > 4 * 4.0)) return false;
+  constexpr int kMinModelPasses = 2, kMaxModelPasses = 6;
+  bool converged = false, model_converged = false;
+  int model_passes = 0;
+  const int max_passes = std::max(1, passes) + 4;
+  std::array<Eigen::Vector2d, 4> previous = r.img;  // the corners before the latest pass
+  for (int pass = model_only ? 1 : 0;; ++pass) {
     // With the side model, `passes` crossing passes are enough: they only need to bring the profiles
     // onto the edges (the model passes fix the offsets, and their crossings the directions).
     const bool crossings_done =
-        pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
+        model_only || pass >= max_passes || (pass >= std::max(1, passes) && (converged || model_fit));
     if (crossings_done && (!model_fit || model_converged || model_passes >= kMaxModelPasses)) break;
-    if (crossings_done) sigma_sum = 0, sigma_count = 0;  // the last model pass's blur is reported
+    if (crossings_done) r.sigma_sum = 0, r.sigma_count = 0;  // the last model pass's blur is reported
     const bool model_pass = crossings_done && model_fit;
-    for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(img[k]);
-    const cv::Matx33d ideal_from_unit = QuadFromUnitSquare(
-        {cv::Point2d(ideal[0].x(), ideal[0].y()), cv::Point2d(ideal[1].x(), ideal[1].y()),
-         cv::Point2d(ideal[2].x(), ideal[2].y()), cv::Point2d(ideal[3].x(), ideal[3].y())});
-    const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (int k = 0; k < 4; ++k) centre += img[k] / 4.0;
-    std::array<Line, 4> lines;
-    for (int side = 0; side < 4; ++side) {
-      const Eigen::Vector2d a = ideal[side], b = ideal[(side + 1) % 4];
-      const Eigen::Vector2d dir = (b - a).normalized();
-      const double length_img = (img[(side + 1) % 4] - img[side]).norm();
-      const double cell_along = length_img / cells;
-      // Cell depth across the edge: the marker's extent along this side's normal / cells.
-      const Eigen::Vector2d side_dir = (img[(side + 1) % 4] - img[side]) / length_img;
-      const Eigen::Vector2d side_normal(side_dir.y(), -side_dir.x());
-      const double extent = 0.5 * (std::abs(side_normal.dot(img[(side + 2) % 4] - img[side])) +
-                                   std::abs(side_normal.dot(img[(side + 3) % 4] - img[side])));
-      const double cell = extent / cells;
-      // Half-width of the profile across the edge: half a cell, so that the level read on each side
-      // is the border's and the surround's, not the next cell's. The first pass searches wider (the
-      // initial corners may be a pixel or two off).
-      const double h = pass == 0 ? std::clamp(std::min(0.9 * cell * first_width, 2.0 * first_width), 0.75,
-                                              3.0 * first_width)
-                                 : std::clamp(0.5 * cell, 0.75, 3.0);
-      const double margin = std::min(0.3, std::max(0.6 * cell_along, 1.5) / length_img);
-      // Model passes sample a fixed number of rays and steps (4 per cell, 5 per half-profile): their
-      // sampling then moves continuously with the estimate, so the passes converge to one place
-      // whatever the start.
-      const int n = model_pass
-                        ? 4 * cells
-                        : std::clamp(static_cast<int>((1.0 - 2.0 * margin) * length_img / 0.7), 6, 240);
-      const int steps = model_pass ? 5 : std::max(3, static_cast<int>(std::ceil(h / 0.25)));
-      const int m = 2 * steps + 1;
-      const double ds = h / steps;
-      profiles.assign(static_cast<size_t>(n) * m, 0.f);
-      origins.assign(n, Eigen::Vector2d::Zero());
-      ideal_origins.assign(n, Eigen::Vector2d::Zero());
-      normals.assign(n, Eigen::Vector2d::Zero());
-      clean.assign(n, 0);
-      std::vector<char> valid(n, 0);
-      int num_clean = 0, num_valid = 0;
-      for (int i = 0; i < n; ++i) {
-        const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
-        const Eigen::Vector2d q = a + t * (b - a);
-        const Eigen::Vector2d p = map.ToImage(q);
-        Eigen::Vector2d tangent =
-            map.camera ? (map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir)) : dir;
-        tangent.normalize();
-        Eigen::Vector2d normal(tangent.y(), -tangent.x());
-        if (normal.dot(p - centre) < 0) normal = -normal;
-        origins[i] = p;
-        ideal_origins[i] = q;
-        normals[i] = normal;
-        bool ok = true;
-        float* prof = &profiles[static_cast<size_t>(i) * m];
-        for (int j = 0; j < m && ok; ++j) {
-          const double s = -h + j * ds;
-          ok = Sample(gray, p.x() + s * normal.x(), p.y() + s * normal.y(), &prof[j]);
-        }
-        if (!ok) continue;
-        valid[i] = 1;
-        ++num_valid;
-        clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
-        num_clean += clean[i];
-      }
-      if (num_valid < 4) return false;
-      const bool use_clean = num_clean >= std::max(4, num_valid / 5);
-      inside.clear();
-      outside.clear();
-      for (int i = 0; i < n; ++i) {
-        if (!valid[i] || (use_clean && !clean[i])) continue;
-        inside.push_back(profiles[static_cast<size_t>(i) * m]);
-        outside.push_back(profiles[static_cast<size_t>(i) * m + m - 1]);
-      }
-      const double level_in = Median(inside), level_out = Median(outside);
-      // No clean crossing on this side (its profile ends at similar levels: a margin narrower than
-      // the profile between a dark border and a dark surround, or the candidate a pixel or two off):
-      // the side keeps the line through the current corners. A model pass fits its edge from there
-      // (its profiles reach over border, margin and surround); without the model it fails.
-      bool crossed = std::abs(level_out - level_in) >= 8.0;
-      if (crossed) {
-        const float mid = static_cast<float>(0.5 * (level_in + level_out));
-        const float sign = level_out > level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
-        points.clear();
-        for (int i = 0; i < n; ++i) {
-          if (!valid[i] || (use_clean && !clean[i])) continue;
-          const float* prof = &profiles[static_cast<size_t>(i) * m];
-          // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
-          double best = 1e9;
-          for (int j = 0; j + 1 < m; ++j) {
-            const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
-            if (v0 <= 0.f && v1 > 0.f) {
-              const double s = -h + (j + v0 / (v0 - v1)) * ds;
-              if (std::abs(s) < std::abs(best)) best = s;
-            }
-          }
-          if (best > 1e8) continue;
-          points.push_back(map.ToIdeal(origins[i] + best * normals[i]));
-        }
-        crossed = points.size() >= 4 && FitLine(points, &lines[side]);
-      }
-      if (!crossed) {
-        if (!model_fit) return false;
-        const Eigen::Vector2d normal_ideal(-dir.y(), dir.x());
-        lines[side] = {normal_ideal, normal_ideal.dot(a)};
-      }
-      side_unfitted[side] = !crossed;
-      if (!crossed && kept_lines) *kept_lines = true;
-      if (model_pass) {
-        const double sigma_along = side_fits[side].warm ? side_fits[side].sigma : 0.8;
-        // The gamma of the marker's other sides (their latest fits with gamma free), for a side whose
-        // code shows no contrast in its first rows.
-        double gamma_sum = 0;
-        int gamma_count = 0;
-        for (int other = 0; other < 4; ++other)
-          if (other != side && side_fits[other].warm && side_fits[other].gamma_fitted)
-            gamma_sum += side_fits[other].gamma, ++gamma_count;
-        const double gamma_hint = gamma_count > 0 ? gamma_sum / gamma_count : 1.0;
-        // The line's direction is the crossings' where their levels have the marker's polarity (the
-        // border's side darker for a normal print: the outer edge). Without a crossing, or with levels
-        // of the other order (the crossings mix the code's edge in: the line lies up to a cell inside
-        // along part of the side), the model turns the line too.
-        const bool turn_line = !crossed || (polarity != 0 && (level_out - level_in) * polarity < 0);
-        double tilt = NAN, tilt_at = 0.5;
-        const double e =
-            FitSide(gray, bits, cells, side, map, ideal_from_unit, unit_from_ideal, lines[side], valid,
-                    origins, ideal_origins, normals, sigma_along, fit_gamma, gamma_hint, polarity,
-                    &side_profiles, &side_fits[side], turn_line ? &tilt : nullptr, &tilt_at);
-        const double sigma = side_fits[side].sigma;
-        if (std::isfinite(e)) side_unfitted[side] = false;
-        side_modelled[side] = std::isfinite(e);
-        if (std::isfinite(e)) {
-          Eigen::Vector2d ideal_centre = Eigen::Vector2d::Zero();
-          for (int k = 0; k < 4; ++k) ideal_centre += ideal[k] / 4.0;
-          const double outward = lines[side].n.dot(ideal_centre) < lines[side].c ? 1.0 : -1.0;
-          if (std::isfinite(tilt)) {
-            // The line through the side's points at along 0 and 1 (on the line, the marker's
-            // homography's points projected), moved by the offsets the tilt gives there.
-            Eigen::Vector2d q[2];
-            for (int end = 0; end < 2; ++end) {
-              const cv::Vec3d u = ideal_from_unit * UnitPoint(side, end, 0.0);
-              const Eigen::Vector2d x(u[0] / u[2], u[1] / u[2]);
-              q[end] = x - (lines[side].n.dot(x) - lines[side].c) * lines[side].n +
-                       outward * (e + tilt * (end - tilt_at)) * lines[side].n;
-            }
-            const Eigen::Vector2d d = (q[1] - q[0]).normalized();
-            Eigen::Vector2d n(-d.y(), d.x());
-            if (n.dot(lines[side].n) < 0) n = -n;
-            lines[side] = {n, n.dot(q[0])};
-          } else {
-            lines[side].c += outward * e;
-          }
-          sigma_sum += sigma, ++sigma_count;
-        }
-      }
-    }
     std::array<Eigen::Vector2d, 4> next;
-    for (int k = 0; k < 4; ++k) {
-      Eigen::Vector2d p;
-      if (!Intersect(lines[(k + 3) % 4], lines[k], &p)) return false;
-      next[k] = map.ToImage(p);
-    }
+    if (!RefinePass(&r, pass, model_pass, &next)) return false;
     double moved = 0;
-    for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - img[k]).norm());
+    for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - r.img[k]).norm());
     converged = moved < 0.01;
-    previous = img;
-    img = next;
+    previous = r.img;
+    r.img = next;
     if (model_pass) ++model_passes;
     model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
   }
+  std::array<Eigen::Vector2d, 4>& img = r.img;
   if (model_fit && !model_converged && model_passes >= 2)
     for (int k = 0; k < 4; ++k) img[k] = 0.5 * (img[k] + previous[k]);
   if (model_everywhere) {
     *model_everywhere = model_fit;
-    for (int side = 0; side < 4; ++side) *model_everywhere = *model_everywhere && side_modelled[side];
+    for (int side = 0; side < 4; ++side) *model_everywhere = *model_everywhere && r.side_modelled[side];
   }
   for (int side = 0; side < 4; ++side)
-    if (side_unfitted[side]) return false;
+    if (r.side_unfitted[side]) return false;
   const double limit = std::max(3.0, 0.2 * perimeter / 4.0);
   for (int k = 0; k < 4; ++k) {
     if (!std::isfinite(img[k].x()) || !std::isfinite(img[k].y()) || (img[k] - original[k]).norm() > limit)
       return false;
   }
   for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(img[k].x(), img[k].y());
-  if (blur_sigma && sigma_count > 0) *blur_sigma = sigma_sum / sigma_count;
+  if (blur_sigma && r.sigma_count > 0) *blur_sigma = r.sigma_sum / r.sigma_count;
   return true;
 }
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma,
-                         bool fit_gamma, bool* kept_lines, int polarity) {
+                         bool fit_gamma, bool* kept_lines, int polarity, double held_gamma) {
   if (kept_lines) *kept_lines = false;
   // A candidate quadrilateral a few pixels off (a corner cut by the threshold) can leave a side's
   // first profiles entirely on one side of the edge: retry with first profiles twice as wide. So can a
@@ -681,8 +834,40 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double narrow_sigma = NAN;
   bool narrow_kept = false, narrow_modelled = false;
   const bool narrow_ok = RefineOnce(gray, cells, bits, camera, passes, &narrow, model_fit, &narrow_sigma, 1.0,
-                                    fit_gamma, &narrow_kept, polarity, &narrow_modelled);
-  auto take = [&](const std::array<cv::Point2d, 4>& c, double sigma, bool kept) {
+                                    false, fit_gamma, &narrow_kept, polarity, &narrow_modelled, held_gamma);
+  // The model passes' fits are warm-started from the previous pass's: they keep the margin and surround
+  // their first fit found where the profiles show several that fit (a margin beyond the profiles' reach
+  // or as wide as the blur, a dark surround: the margin widths of one marker's sides came out 1 to 20
+  // px), and that first fit was made about corners that depend on the candidate (fast mode's region
+  // search gives another one). So the corners are refined again from where the passes ended, with model
+  // passes only and the fits started from the profiles about those corners, until such a round moves
+  // no corner by kSettledPx (at most kRounds). Rounds that do not settle are mostly a two-cycle (a side
+  // whose cold fit alternates between two margins); which state the last round is in depends on the
+  // start, the mean of the last two does not.
+  auto take = [&](std::array<cv::Point2d, 4> c, double sigma, bool kept) {
+    constexpr int kRounds = 4;
+    constexpr double kSettledPx = 0.01;
+    std::array<cv::Point2d, 4> before = c;
+    int unsettled = 0;
+    for (int round = 0; round < kRounds && model_fit; ++round) {
+      std::array<cv::Point2d, 4> again = c;
+      double again_sigma = NAN;
+      bool again_kept = false;
+      if (!RefineOnce(gray, cells, bits, camera, passes, &again, true, &again_sigma, 1.0, true, fit_gamma,
+                      &again_kept, polarity, nullptr, held_gamma))
+        break;
+      double moved = 0;
+      for (int k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(again[k] - c[k]));
+      before = c;
+      c = again, sigma = again_sigma, kept = again_kept;
+      if (moved < kSettledPx) {
+        unsettled = 0;
+        break;
+      }
+      ++unsettled;
+    }
+    if (unsettled >= 2)
+      for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
     if (kept_lines) *kept_lines = kept;
@@ -693,7 +878,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   double wide_sigma = NAN;
   bool wide_kept = false, wide_modelled = false;
   const bool wide_ok = RefineOnce(gray, cells, bits, camera, passes, &wide, model_fit, &wide_sigma, 2.0,
-                                  fit_gamma, &wide_kept, polarity, &wide_modelled);
+                                  false, fit_gamma, &wide_kept, polarity, &wide_modelled, held_gamma);
   if (wide_ok && (wide_modelled || !narrow_ok))
     return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
   if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
@@ -1025,16 +1210,46 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   // encoded values it shifts to the dark side) and its refinement from `corners`.
   const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
   const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  // A camera's sharpening (unsharp_amount) undone: the region stays encoded, a known gamma is held in
+  // the side model (not applied through an 8-bit table) and fitted per side where unknown.
+  const double k = options_.unsharp_amount;
+  const bool unsharp = k > 0;
+  // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
+  // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones;
+  // then smoothed by `smoothing` px (sharp_smoothing) in linear light where the gamma is known (the
+  // model's blur is linear light's), and encoded again.
+  auto UnsharpRegion = [&](const cv::Mat& from, double smoothing, cv::Mat to) {
+    from.convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
+    auto undo = [&]() {
+      unsharp_in_.copyTo(unsharp_out_);
+      for (int it = 0; it < 8; ++it) {
+        cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
+        unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
+      }
+      cv::max(unsharp_out_, 0.0, unsharp_in_);
+    };
+    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
+    if (!in_linear) undo();
+    if (options_.gamma > 0) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
+    if (in_linear) undo();
+    if (smoothing > 0) cv::GaussianBlur(unsharp_in_, unsharp_in_, cv::Size(0, 0), smoothing);
+    if (options_.gamma > 0) cv::pow(unsharp_in_, 1.0 / options_.gamma, unsharp_in_);
+    unsharp_in_.convertTo(to, CV_8U, 255.0);
+  };
   auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
     *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-    if (!linearise) return &gray;
-    if (gamma_lut_.empty()) {
-      gamma_lut_.create(1, 256, CV_8U);
-      for (int v = 0; v < 256; ++v)
-        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-    }
+    if (!linearise && !unsharp) return &gray;
     if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-    cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+    if (!unsharp) {
+      if (gamma_lut_.empty()) {
+        gamma_lut_.create(1, 256, CV_8U);
+        for (int v = 0; v < 256; ++v)
+          gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
+      }
+      cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+      return &linear_;
+    }
+    UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
     return &linear_;
   };
   // The border's polarity is known unless both prints are searched for (`inverted` without
@@ -1042,7 +1257,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
                     bool* kept) {
     return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
-                               options_.edge_model, blur, options_.gamma == 0, kept, polarity);
+                               options_.edge_model, blur, options_.gamma == 0 || unsharp, kept, polarity,
+                               unsharp ? options_.gamma : 0.0);
   };
   // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
   // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
@@ -1063,9 +1279,14 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     std::vector<double> blurs;  // each smoothed fit's blur, px
     for (const Raw& r : unique) {
       cv::Rect roi;
-      const cv::Mat* source = region(r, &roi);
       if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      if (unsharp) {
+        roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+        UnsharpRegion(gray(roi), s, smooth_(roi));
+      } else {
+        const cv::Mat* source = region(r, &roi);
+        cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+      }
       Smoothed m;
       m.corners = r.corners;
       double sigma = NAN;

@@ -46,6 +46,13 @@ struct DetectorOptions {
   // linear light is encoded as 255 (v / 255)^(1 / gamma), gamma fitted). > 0: known; the marker's region
   // is linearised as 255 * (v / 255)^gamma first (1: linear images).
   double gamma = 0.0;
+  // "edges": the camera's sharpening, an unsharp mask y = (1 + amount) x - amount G_sigma x on its
+  // encoded values (or, unsharp_linear with gamma > 0, on linear light before its transfer curve),
+  // undone on each marker's region before its sides are fitted. With it a known gamma is held in every
+  // side's model (the region stays encoded). amount 0: none.
+  double unsharp_amount = 0.0;
+  double unsharp_sigma = 1.0;  // px
+  bool unsharp_linear = false;
 
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
@@ -118,11 +125,12 @@ struct DetectorStats {
 // A side without a clean mid-level crossing keeps the line through its current corners for the side
 // model to fit; `kept_lines` (optional) tells whether any side did. `polarity`: +1 the border is darker
 // than the code's other colour, -1 brighter, 0 unknown (side fits of the wrong polarity are retried a
-// cell outward: SideProfiles::polarity).
+// cell outward: SideProfiles::polarity). `held_gamma` > 0 (with fit_gamma): the camera's gamma, known,
+// held in every side's model (SideProfiles::hold_gamma) instead of fitted per side.
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
                          int passes, std::array<cv::Point2d, 4>* corners, bool model_fit = true,
                          double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr,
-                         int polarity = 0);
+                         int polarity = 0, double held_gamma = 0.0);
 
 class MarkerDetector {
  public:
@@ -158,11 +166,12 @@ class MarkerDetector {
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
-  bool reread_ = false;        // reread_rejected, where the dictionary makes it safe
-  std::vector<cv::Mat> bits_;  // per id, cached
-  cv::Mat smooth_;             // smoothed marker regions (sharp_smoothing)
-  cv::Mat linear_;             // linearised marker regions (gamma)
-  cv::Mat gamma_lut_;          // encoded value -> linear value
+  bool reread_ = false;                              // reread_rejected, where the dictionary makes it safe
+  std::vector<cv::Mat> bits_;                        // per id, cached
+  cv::Mat smooth_;                                   // smoothed marker regions (sharp_smoothing)
+  cv::Mat linear_;                                   // linearised marker regions (gamma)
+  cv::Mat gamma_lut_;                                // encoded value -> linear value
+  cv::Mat unsharp_in_, unsharp_out_, unsharp_blur_;  // float regions of the unsharp mask's inverse
   DetectorStats stats_;
   // Fast mode state.
   std::vector<Raw> last_;

@@ -29,6 +29,14 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "edges: the camera's transfer curve, 0: estimated per side, > 0: known (1: linear images)",
                 NumberCheck{"must be 0 (estimated) or in [0.2, 5]",
                             [](const double& v) { return v == 0 || (v >= 0.2 && v <= 5); }})
+           .Add("unsharp_amount", &O::unsharp_amount, "",
+                "edges: the camera's sharpening (unsharp mask amount; 0: none), undone before the side fits; "
+                "a known gamma is then held in the side model",
+                InRange(0, 5))
+           .Add("unsharp_sigma", &O::unsharp_sigma, "px", "edges: the camera's unsharp mask's Gaussian sigma",
+                InRange(0.3, 5))
+           .Add("unsharp_linear", &O::unsharp_linear,
+                "edges: the camera sharpens linear light, before its transfer curve (needs gamma > 0)")
            .Add("adaptive_window_min", &O::adaptive_window_min, "px", "adaptive threshold window: smallest",
                 AtLeast(3))
            .Add("adaptive_window_max", &O::adaptive_window_max, "px",
@@ -105,6 +113,8 @@ void DetectorOptions::Validate(const std::string& file) const {
     table.Fail(file, "adaptive_window_max",
                "must be >= adaptive_window_min (" + std::to_string(adaptive_window_min) + "), got " +
                    std::to_string(adaptive_window_max));
+  if (unsharp_linear && unsharp_amount > 0 && gamma <= 0)
+    table.Fail(file, "unsharp_linear", "needs a known gamma (> 0), got gamma 0");
 }
 
 void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {

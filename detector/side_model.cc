@@ -10,6 +10,7 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   u0 = u0_, du = du_, bins = bins_, cell = cell_;
   fit_gamma = false;
   gamma_hint = 1.0;
+  hold_gamma = false;
   polarity = 0;
   edge_only = false;
   patterns.clear();
@@ -223,7 +224,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
       code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
                                         (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g]));
   *code_contrast_out = code_contrast;
-  const bool free_gamma = s.fit_gamma && (code_contrast || !hold_gamma);
+  const bool free_gamma = s.fit_gamma && !s.hold_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;
   lo[kGamma] = free_gamma ? 0.4 : held_gamma, hi[kGamma] = free_gamma ? 3.5 : held_gamma;
   if (s.edge_only && fit->warm)

@@ -38,6 +38,8 @@ struct SideProfiles {
   // one step between two free levels, and gamma, blur and edge trade for each other (a sharp edge
   // moved half a pixel with gamma at its bound). The caller gives the marker's other sides' estimate.
   double gamma_hint = 1.0;
+  // With fit_gamma: gamma is the camera's, known, and held at gamma_hint on every side (not fitted).
+  bool hold_gamma = false;
   double cell = 0;  // mean depth of one cell across this side, px
   // The marker's polarity: +1 the border is darker than the code's other colour (a normal print), -1
   // brighter (inverted), 0 unknown. A fit of the other polarity has taken a code row for the border (the

@@ -2,7 +2,8 @@
 // (tests/detector/reference_renderer.h): the imaging catalogue x marker sizes x view angles. Prints
 // markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band,
 // and small markers (10-15 px, cells below 2 px) per condition.
-//   bench_accuracy [--quick | images per cell (default 8)] [condition name substring]
+//   bench_accuracy [--quick | images per cell (default 8)] [condition name substring | all] [known]
+// "known": the detector is given each condition's gamma and sharpening (detector.gamma, unsharp_amount).
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
 // compare two builds' corners marker by marker.
 #include <cstdio>
@@ -32,7 +33,9 @@ const char* kHeader =
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   const int images = quick ? 2 : argc > 1 ? std::atoi(argv[1]) : 8;
-  const char* only = argc > 2 ? argv[2] : nullptr;
+  const char* only = argc > 2 && std::strcmp(argv[2], "all") != 0 ? argv[2] : nullptr;
+  // "known": each condition's camera given to the detector as known (gamma, sharpening), not estimated.
+  const bool known = argc > 3 && std::strcmp(argv[3], "known") == 0;
   cv::setNumThreads(1);
   const auto& sizes = testing::kBenchSides;
   const auto& angles = testing::kBenchAngles;
@@ -49,14 +52,17 @@ int main(int argc, char** argv) {
     const testing::Imaging& im = catalogue[c];
     if (only && !std::strstr(im.name.c_str(), only)) continue;
     Accuracy cond, cond_stock;
+    DetectorOptions options;
+    if (known && im.gamma != 1.0) options.gamma = im.gamma;
+    if (known && im.sharpen > 0) options.unsharp_amount = im.sharpen, options.unsharp_sigma = 1.0;
     for (int s = 0; s < 3; ++s)
       for (int g = 0; g < 3; ++g) {
         const testing::ReferenceScene scene = testing::BenchScene(s, g);
         const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
         Accuracy stock;
         std::vector<marker_t> found;
-        const Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), images,
-                                                     seed, &stock, &found);
+        const Accuracy a =
+            testing::MeasureReference("DICT_6X6_250", scene, im, options, images, seed, &stock, &found);
         for (const marker_t& m : found) {
           dump << m.id;
           for (int k = 0; k < 4; ++k) dump << ' ' << m.corners[k][0] << ' ' << m.corners[k][1];
@@ -70,7 +76,7 @@ int main(int argc, char** argv) {
     Accuracy sm, sm_stock;
     for (int g = 0; g < 3; ++g) {
       Accuracy stock;
-      sm.Add(testing::MeasureReference("DICT_6X6_250", testing::SmallScene(g), im, DetectorOptions(), images,
+      sm.Add(testing::MeasureReference("DICT_6X6_250", testing::SmallScene(g), im, options, images,
                                        testing::SmallSeed(static_cast<int>(c), g), &stock));
       sm_stock.Add(stock);
     }

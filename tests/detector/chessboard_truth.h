@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <map>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
@@ -57,9 +58,16 @@ inline void SideOffsets(const std::array<Eigen::Vector2d, 4>& got, const std::ar
   out->side_px = want_len / 4, out->offset_px = offset, out->size_rel = got_len / want_len - 1.0;
 }
 
-// Cameras of `rig` (all, or only `camera`), at most `max_frames` frames each (< 0: all).
+// A frame with its board-to-image mapping: the raw image pixel of the board's point (x, y), m.
+using ChessboardFrameHook =
+    std::function<void(const std::string& camera, const cv::Mat& gray,
+                       const std::function<Eigen::Vector2d(double, double)>& raw_from_board)>;
+
+// Cameras of `rig` (all, or only `camera`), at most `max_frames` frames each (< 0: all). `hook` (optional)
+// sees every frame with a homography.
 inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_frames = -1,
-                                                  const std::string& camera = "") {
+                                                  const std::string& camera = "",
+                                                  const ChessboardFrameHook& hook = nullptr) {
   auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000);
   auto board = cv::aruco::CharucoBoard::create(4, 5, 0.054, 0.0405, dict);
   std::map<int, int> marker_index;
@@ -121,6 +129,7 @@ inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_
       rms = std::sqrt(rms / plane.size());
       if (rms > 0.5) continue;
       rms_sum += rms, ++out.frames;
+      if (hook) hook(cam.name, gray, [&](double x, double y) { return raw(apply(x, y)); });
       // The prediction of marker `id` (undistorted pixels), if it is on the board and `first` (its
       // detected corner 0, undistorted) lies within 5 px of it.
       auto predict = [&](int id, const Eigen::Vector2d& first, std::array<Eigen::Vector2d, 4>* want) {

@@ -82,6 +82,32 @@ TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   EXPECT_LE(all.MedianError(), 0.10);
 }
 
+// A camera whose gamma and sharpening are known (detector.gamma, unsharp_amount: the renderer's unsharp
+// mask of encoded values, sigma 1 px) given to the detector instead of the per-side gamma fit: on the
+// webcam and gamma conditions the corners meet the targets and are not worse than with the fit.
+TEST(DetectorAccuracy, KnownCameraOnReferenceRenders) {
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    if (im.name != "webcam" && im.name != "gamma 2.2") continue;
+    testing::ReferenceScene scene;
+    scene.min_side_px = 15, scene.max_side_px = 60;
+    DetectorOptions known;
+    known.gamma = im.gamma, known.unsharp_amount = im.sharpen, known.unsharp_sigma = 1.0;
+    const testing::Accuracy fitted =
+        testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 8, 11);
+    const testing::Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, known, 8, 11);
+    std::printf(
+        "%-12s known: offset %+.3f px median %.3f px recall75 %.3f (%zu corners); fitted: %+.3f / %.3f / "
+        "%.3f\n",
+        im.name.c_str(), a.MeanOffset(), a.MedianError(), a.Recall75(), a.corners.errors.size(),
+        fitted.MeanOffset(), fitted.MedianError(), fitted.Recall75());
+    EXPECT_EQ(a.wrong_ids, 0) << im.name;
+    ASSERT_GT(a.corners.errors.size(), 40u) << im.name;
+    EXPECT_LE(std::abs(a.MeanOffset()), 0.02) << im.name;
+    EXPECT_LE(a.MedianError(), std::min(0.10, fitted.MedianError() + 0.005)) << im.name;
+    EXPECT_GE(a.Recall75(), fitted.Recall75() - 0.01) << im.name;
+  }
+}
+
 // No wrong id on images without a dictionary marker: squares of random code patterns (every one at
 // least 7 bits from every id of the dictionary in every rotation: outside the correction margin)
 // printed like markers, on plain, wood-grain and dark surfaces, under the catalogue's imaging, where
@@ -376,17 +402,12 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     }
     std::printf("%-30s %3d markers compared, fast vs accurate max %.4f px (%s), extra %d, missing %d\n",
                 im.name.c_str(), d.compared, d.max_px, d.worst.c_str(), d.extra, d.missing);
-    // Measured shortfalls (a regression guard, not the target): conditions where the side model's fits
-    // of some side depend on where they start (a narrow or no margin on a dark or grey surface,
-    // sharpening + JPEG), px.
-    // After the turned sides (issue 15 "offsets"): webcam 0.52 -> 0.028, black tool 1.37 -> 0.95, wood
-    // 0.24 -> 0.267 (its guard 0.25 -> 0.28).
-    static const std::map<std::string, double> shortfalls = {{"no margin, grey surface", 1.6},
-                                                             {"half-cell margin, black tool", 1.0},
-                                                             {"half-cell margin, wood", 0.28},
-                                                             {"two-cell margin, white", 0.06},
-                                                             {"webcam", 0.03},
-                                                             {"hard", 0.24}};
+    // Measured shortfalls (a regression guard, not the target), px. The side model's warm-started fits
+    // kept the margin and surround their first fit found about the candidate's corners: no margin on
+    // grey 1.54, black tool 0.95, wood 0.27, hard 0.23, two-cell 0.05, webcam 0.028 until the corners
+    // were refined again with fits started from the profiles about them (RefineMarkerCorners, issue 15
+    // "margin"). Left: the black tool's id 90 (image 1, 25.6 px at 71 deg) 0.080.
+    static const std::map<std::string, double> shortfalls = {{"half-cell margin, black tool", 0.09}};
     const auto it = shortfalls.find(im.name);
     EXPECT_LE(d.max_px, it == shortfalls.end() ? 0.02 : it->second) << d.worst;
     // No margin on grey: 3 markers fast mode kept that the accurate mode's refinement dropped (measured).

@@ -210,6 +210,8 @@ TEST(DetectorOptions, SectionLoadsBothTablesAndNamesFileAndKey) {
   };
   EXPECT_EQ(error("{gamma: 0.1}", false),
             "rig.yaml: detector.gamma: must be 0 (estimated) or in [0.2, 5], got 0.1");
+  EXPECT_EQ(error("{unsharp_amount: 0.5, unsharp_linear: true}", false),
+            "rig.yaml: detector.unsharp_linear: needs a known gamma (> 0), got gamma 0");
   EXPECT_EQ(error("{edge_passes: 11}", false), "rig.yaml: detector.edge_passes: must be in [1, 10], got 11");
   EXPECT_EQ(error("{image_quality: 0}", true),
             "rig.yaml: detector.image_quality: must be in [1, 100], got 0");
