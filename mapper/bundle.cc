@@ -504,11 +504,13 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
 }
 
 Rigid3 ObservedFramePose(const BundleProblem& bp, size_t k) {
-  const BundleObservation& o = bp.observations[k];
-  Rigid3 pose = RigidFromBlock(bp.rig_from_object[o.frame].data());
-  if (!bp.RefinesTime() || bp.frame_velocity.size() <= static_cast<size_t>(o.frame)) return pose;
-  const double dt = bp.ObservationDt(k);
-  const std::array<double, 6>& vel = bp.frame_velocity[o.frame];
+  return FramePoseAt(bp, bp.observations[k].frame, bp.ObservationDt(k));
+}
+
+Rigid3 FramePoseAt(const BundleProblem& bp, int frame, double dt) {
+  Rigid3 pose = RigidFromBlock(bp.rig_from_object[frame].data());
+  if (!bp.RefinesTime() || bp.frame_velocity.size() <= static_cast<size_t>(frame)) return pose;
+  const std::array<double, 6>& vel = bp.frame_velocity[frame];
   pose.linear() = RotationFromVector(dt * Eigen::Vector3d(vel[0], vel[1], vel[2])) * pose.linear();
   pose.translation() += dt * Eigen::Vector3d(vel[3], vel[4], vel[5]);
   return pose;

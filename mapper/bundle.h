@@ -225,6 +225,8 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& i
 
 // The object's pose observation k saw: its frame's pose moved to the capture time (ObservationTime).
 Rigid3 ObservedFramePose(const BundleProblem& problem, size_t k);
+// Frame `frame`'s pose moved by dt seconds along its velocity (the pose itself without clocks).
+Rigid3 FramePoseAt(const BundleProblem& problem, int frame, double dt);
 
 std::vector<double> ObservationRms(const BundleProblem& problem,
                                    std::vector<double>* max_corner_px = nullptr);

@@ -264,16 +264,57 @@ void HypothesesAsIn(const std::vector<Observation>& earlier, const std::vector<C
   for (size_t j = 0; j < missing.size(); ++j) (*obs)[missing_at[j]] = missing[j];
 }
 
+// The time offsets' first pass only finds the clocks the frames are re-assembled on (to about a
+// millisecond; the second pass refines them on every frame): on a session of more frames than this it
+// maps every stride-th frame (stride = ceil(frames / kFirstPassFrames)), and every frame that sees a
+// marker, a camera or a pair of cameras seen together that the thinned frames would leave with fewer than
+// kFirstPassRareFrames frames (the graphs and the second pass, which starts from the first pass's layout
+// and cameras, keep what the data have of them).
+constexpr size_t kFirstPassFrames = 150;
+constexpr size_t kFirstPassRareFrames = 20;
+
+std::vector<Frame> ThinnedFrames(const std::vector<Frame>& frames, const std::vector<StoredMessage>& messages,
+                                 int num_cameras) {
+  if (frames.size() <= kFirstPassFrames) return frames;
+  const size_t stride = (frames.size() + kFirstPassFrames - 1) / kFirstPassFrames;
+  // What each frame sees: marker ids, cameras, camera pairs (keys: id, -1 - camera, -1 - n - pair).
+  auto seen_in = [&](const Frame& f) {
+    std::set<int64_t> keys;
+    for (int a : f.messages) {
+      keys.insert(-1 - messages[a].camera);
+      for (int b : f.messages)
+        if (messages[a].camera < messages[b].camera)
+          keys.insert(-1 - num_cameras - (messages[a].camera * num_cameras + messages[b].camera));
+      for (const StoredMarker& mk : messages[a].markers) keys.insert(mk.id);
+    }
+    return keys;
+  };
+  std::vector<std::set<int64_t>> keys(frames.size());
+  std::map<int64_t, size_t> frames_of;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    keys[f] = seen_in(frames[f]);
+    for (int64_t k : keys[f]) ++frames_of[k];
+  }
+  std::vector<Frame> out;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    bool keep = f % stride == 0;
+    for (int64_t k : keys[f]) keep = keep || frames_of[k] < kFirstPassRareFrames * stride;
+    if (keep) out.push_back(frames[f]);
+  }
+  return out;
+}
+
 // The whole method on `messages` (their utimes as the frames' clocks). With `moves`, cameras that moved
 // are looked for after the first refinement: when there are any, the pass stops there with them and the
 // reference camera's name in *reference. With `start`, the layout and the cameras begin where that map
 // has them (PlacedAsIn) instead of from the graphs. velocity_passes: RefineWithRejection's. With
 // `square_poses` empty, it receives the observations with their square poses; non-empty, the poses are
-// taken from it (HypothesesAsIn).
+// taken from it (HypothesesAsIn). `thinned`: on ThinnedFrames (the time offsets' first pass).
 MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInputs& s, const MapperOptions& o,
                     std::vector<EpochSplit>* moves = nullptr, std::string* reference = nullptr,
                     const std::vector<char>& split = {}, const RigMap* start = nullptr,
-                    int velocity_passes = 2, std::vector<Observation>* square_poses = nullptr) {
+                    int velocity_passes = 2, std::vector<Observation>* square_poses = nullptr,
+                    bool thinned = false) {
   const auto t_total = Clock::now();
   MapResult result;
   MapReport& report = result.report;
@@ -284,8 +325,9 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
   StageLog log(s.progress, &report);
 
   log.Begin("frames", "assembling frames");
-  const std::vector<Frame> frames =
-      AssembleFrames(messages, static_cast<int>(s.camera_names.size()), o.sync_tolerance_us());
+  const int num_cameras = static_cast<int>(s.camera_names.size());
+  std::vector<Frame> frames = AssembleFrames(messages, num_cameras, o.sync_tolerance_us());
+  if (thinned) frames = ThinnedFrames(frames, messages, num_cameras);
   report.frames_assembled = static_cast<int>(frames.size());
   Observations observations = CollectObservations(messages, frames, s.camera_names, o, &report);
   log.End("frames");
@@ -415,7 +457,7 @@ MapResult SolveWithTimeOffsets(const std::vector<StoredMessage>& messages, const
   first_options.paper_stop_px = kRoughStopFactor * o.paper_stop_px;
   std::vector<Observation> square_poses;  // the first pass's, for the second (the same given intrinsics)
   const MapResult first =
-      SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0, &square_poses);
+      SolvePass(messages, s, first_options, nullptr, nullptr, {}, nullptr, 0, &square_poses, true);
   std::vector<StoredMessage> corrected = messages;
   for (StoredMessage& m : corrected) m.utime = first.map.ReferenceUtime(s.camera_names[m.camera], m.utime);
   MapperOptions second_options = o;

@@ -362,14 +362,24 @@ struct ResidualStats {
   std::vector<std::set<int>> fr_cams, fr_markers;
   double total_sq = 0;
   int total_n = 0;
+  std::vector<double> fr_dt;  // sum of the observations' capture times relative to the frame's pose, s
 };
 
 ResidualStats StatsOf(const BundleProblem& bp) {
   const size_t nc = bp.cam_from_rig.size(), nm = bp.object_from_marker.size(), nf = bp.rig_from_object.size();
-  ResidualStats s{std::vector<double>(nc, 0),    std::vector<double>(nc, 0), std::vector<double>(nm, 0),
-                  std::vector<double>(nm, 0),    std::vector<double>(nf, 0), std::vector<int>(nc, 0),
-                  std::vector<int>(nm, 0),       std::vector<int>(nf, 0),    std::vector<std::set<int>>(nf),
-                  std::vector<std::set<int>>(nf)};
+  ResidualStats s{std::vector<double>(nc, 0),
+                  std::vector<double>(nc, 0),
+                  std::vector<double>(nm, 0),
+                  std::vector<double>(nm, 0),
+                  std::vector<double>(nf, 0),
+                  std::vector<int>(nc, 0),
+                  std::vector<int>(nm, 0),
+                  std::vector<int>(nf, 0),
+                  std::vector<std::set<int>>(nf),
+                  std::vector<std::set<int>>(nf),
+                  0.0,
+                  0,
+                  std::vector<double>(nf, 0.0)};
   std::vector<double> max_corner;
   const std::vector<double> rms = ObservationRms(bp, &max_corner);
   for (size_t k = 0; k < bp.observations.size(); ++k) {
@@ -383,6 +393,7 @@ ResidualStats StatsOf(const BundleProblem& bp) {
     s.mk_max[b.marker] = std::max(s.mk_max[b.marker], max_corner[k]);
     ++s.mk_n[b.marker];
     s.fr_sq[b.frame] += sq;
+    s.fr_dt[b.frame] += bp.ObservationDt(k);
     ++s.fr_n[b.frame];
     s.fr_cams[b.frame].insert(b.camera);
     s.fr_markers[b.frame].insert(b.marker);
@@ -431,9 +442,14 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
   for (size_t f = 0; f < bp.rig_from_object.size(); ++f) {
     if (s.fr_n[f] == 0) continue;
     TrajectoryRow row;
-    row.utime = (*names.frames)[f].utime;
+    // With clocks, the row is at its observations' mean capture time on the reference clock (the frame's
+    // pose is at its first message's utime, on that camera's clock as the frames were assembled: with
+    // the time offsets' second pass, the first pass's clock error of that camera; at 0.5 m/s 1 ms is
+    // 0.5 mm of the object's trajectory).
+    const double dt_s = bp.RefinesTime() ? s.fr_dt[f] / s.fr_n[f] : 0.0;
+    row.utime = (*names.frames)[f].utime + std::llround(1e6 * dt_s);
     row.seq = (*names.frames)[f].seq;
-    row.rig_from_object = Normalized(RigidFromBlock(bp.rig_from_object[f].data()));
+    row.rig_from_object = Normalized(FramePoseAt(bp, static_cast<int>(f), dt_s));
     row.rms_px = std::sqrt(s.fr_sq[f] / s.fr_n[f]);
     row.cameras = static_cast<int>(s.fr_cams[f].size());
     row.markers = static_cast<int>(s.fr_markers[f].size());

@@ -273,6 +273,16 @@ TEST(MapperSelfCal, ClockOffsetsAreRecovered) {
   }
   EXPECT_LT(e_est.camera_position_mm.mean, 1.5 * e_synced.camera_position_mm.mean);
   EXPECT_LT(e_est.object_translation_mm.mean, 1.5 * e_synced.object_translation_mm.mean);
+  // Each trajectory row at its frame's capture time on the reference clock (cam0, the simulator's): it
+  // was at its first message's utime on that camera's clock as the first pass corrected it.
+  ASSERT_EQ(reference, "cam0");
+  std::map<int64_t, int64_t> true_utime;
+  for (const sim::SimFrame& f : late.truth.frames) true_utime[f.seq] = f.utime;
+  double worst_us = 0.0;
+  for (const TrajectoryRow& row : r_estimated.trajectory)
+    worst_us = std::max(worst_us, std::abs(static_cast<double>(row.utime - true_utime.at(row.seq))));
+  std::printf("trajectory rows within %.0f us of their frames' capture times\n", worst_us);
+  EXPECT_LT(worst_us, 100.0);
 }
 
 }  // namespace
