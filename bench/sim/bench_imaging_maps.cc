@@ -167,6 +167,10 @@ int main(int argc, char** argv) {
       const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
       sim::RenderOptions render = condition.render;
       sim::Renderer renderer(object, "DICT_6X6_250", render);
+      if (dump)
+        for (size_t c = 0; c < cameras.size(); ++c)
+          std::fprintf(stderr, "condition %zu camera %zu: %s\n", ci, c,
+                       sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
       MarkerConfig mc;
       mc.dictionary = "DICT_6X6_250";
       mc.size = 0.04;
