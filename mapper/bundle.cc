@@ -418,6 +418,7 @@ namespace {
 struct BuiltProblem {
   LeftPoseManifold manifold;
   std::unique_ptr<ceres::LossFunction> loss;
+  std::vector<std::unique_ptr<ceres::LossFunction>> weighted;  // per observation (view weighting)
   std::vector<std::unique_ptr<ceres::Manifold>> subsets;
   std::unique_ptr<ceres::Problem> problem;
   ceres::ParameterBlockOrdering* ordering = nullptr;  // owned by the solver options once solved
@@ -426,7 +427,20 @@ struct BuiltProblem {
   int num_reduced = 0;
 };
 
-void BuildProblem(BundleProblem* bp, double huber_px, BuiltProblem* out) {
+// cos of the angle between marker o's normal and the direction from its centre to the camera, at the
+// problem's current estimate (clamped to [0.05, 1]).
+double ViewCosine(const BundleProblem& bp, const BundleObservation& o) {
+  const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[o.camera].data()) *
+                                 RigidFromBlock(bp.rig_from_object[o.frame].data()) *
+                                 RigidFromBlock(bp.object_from_marker[o.marker].data());
+  const Eigen::Vector3d t = cam_from_marker.translation();
+  const double norm = t.norm();
+  if (norm <= 0) return 1.0;
+  const double c = std::abs(cam_from_marker.rotation().col(2).dot(t)) / norm;
+  return std::clamp(c, 0.05, 1.0);
+}
+
+void BuildProblem(BundleProblem* bp, double huber_px, double view_weight_power, BuiltProblem* out) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -441,12 +455,18 @@ void BuildProblem(BundleProblem* bp, double huber_px, BuiltProblem* out) {
   for (size_t i = 0; i < bp->observations.size(); ++i) {
     if (!bp->active[i]) continue;
     const BundleObservation& o = bp->observations[i];
+    ceres::LossFunction* loss = out->loss.get();
+    if (view_weight_power > 0) {
+      out->weighted.emplace_back(new ceres::ScaledLoss(loss, std::pow(ViewCosine(*bp, o), view_weight_power),
+                                                       ceres::DO_NOT_TAKE_OWNERSHIP));
+      loss = out->weighted.back().get();
+    }
     if (bp->RefinesIntrinsics(o.camera) || bp->RefinesTime()) {
-      AddSelfCalibrationResidual(bp, i, out->loss.get(), &problem);
+      AddSelfCalibrationResidual(bp, i, loss, &problem);
     } else {
-      problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side),
-                               out->loss.get(), bp->cam_from_rig[o.camera].data(),
-                               bp->object_from_marker[o.marker].data(), bp->rig_from_object[o.frame].data());
+      problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side), loss,
+                               bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
+                               bp->rig_from_object[o.frame].data());
     }
     out->camera_used[o.camera] = out->marker_used[o.marker] = out->frame_used[o.frame] = 1;
     out->num_corners += 4;
@@ -472,7 +492,7 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   const auto start = std::chrono::steady_clock::now();
   BundleSummary out;
   BuiltProblem built;
-  BuildProblem(bp, settings.huber_px, &built);
+  BuildProblem(bp, settings.huber_px, settings.view_weight_power, &built);
   if (built.num_corners == 0) {
     out.termination = "no observations";
     return out;
@@ -614,7 +634,7 @@ IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int threads) {
   out.column.assign(bp->cam_from_rig.size(), -1);
   out.entries.resize(bp->cam_from_rig.size());
   BuiltProblem built;
-  BuildProblem(bp, 0.0, &built);
+  BuildProblem(bp, 0.0, 0.0, &built);
   delete built.ordering;
   if (built.num_corners == 0) return out;
   ceres::Problem& problem = *built.problem;

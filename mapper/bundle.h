@@ -176,6 +176,8 @@ void UpdateFrameVelocities(double max_gap_s, BundleProblem* problem);
 
 struct BundleSettings {
   double huber_px = 1.0;  // <= 0: no robust loss
+  // Squared residuals of an observation weighted by cos(view angle)^this at the problem's start (0: none).
+  double view_weight_power = 0.0;
   int max_iterations = 100;
   bool paper_stop = true;
   double paper_stop_px = 1e-4;

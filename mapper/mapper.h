@@ -106,6 +106,13 @@ struct MapperOptions {
   double tau_n = 10.0;
   // Robust loss: an observation's Huber threshold on its RMS corner error, pixels.
   double huber_px = 1.0;
+  // Corners of a marker seen at a view angle theta (between its normal and the direction to the camera,
+  // from the current estimate) are located less precisely the more the marker is foreshortened: their
+  // squared residuals are weighted by cos(theta)^view_weight_power (2: sigma ~ 1 / cos theta; 0: no
+  // weighting). On renders of the paper's rig the detector's RMS corner error grows as 1 / cos^1.5-2 above
+  // 60 deg (issue 15); 3 takes mcmt-sim's default imaging at 1.0 m from 0.86 to 0.19 mm, but makes the
+  // conditions whose corners are biased (blur, no margin, webcam) worse (BENCHMARKS.md): off by default.
+  double view_weight_power = 0.0;
   // After the first solve, observations whose RMS corner error exceeds this are rejected (gross), pixels.
   double outlier_px = 5.0;
   // Outlier rounds: solve, reject, re-solve at most this many times.

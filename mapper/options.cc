@@ -22,6 +22,8 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
                 "graph edge cost (d / s) * max(1, tau_n / s): pairs seen together fewer times cost more",
                 Above(0))
            .Add("huber_px", &O::huber_px, "px", "Huber threshold on an observation's RMS corner error")
+           .Add("view_weight_power", &O::view_weight_power, "",
+                "squared corner residuals weighted by cos(view angle)^this (0: equal weights)", AtLeast(0))
            .Add("outlier_px", &O::outlier_px, "px",
                 "after a solve, observations with a larger RMS corner error are rejected and the problem "
                 "re-solved",

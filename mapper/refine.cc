@@ -81,6 +81,7 @@ MapperBundle MakeBundleProblem(const Observations& observations, const Observati
 BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
   BundleSettings settings;
   settings.huber_px = o.huber_px;
+  settings.view_weight_power = o.view_weight_power;
   settings.max_iterations = o.max_iterations;
   settings.paper_stop = o.paper_stop;
   settings.paper_stop_px = o.paper_stop_px;

@@ -8,8 +8,19 @@
 // the corners' bias costs is the difference, the rest is what the session's information allows.
 //   bench_imaging_maps [--quick | frames (default 300)] [radius, m (default: 1.0 and 1.3)]
 // (--quick: 100 frames at 1.0 m.)
+// Diagnosis (issue 15, systematic corner errors), environment:
+//   MCMT_IMAGING_CONDITIONS=0,3  only these conditions (indices into the table's rows per radius)
+//   MCMT_IMAGING_DUMP=FILE      one CSV line per detected corner: its error against the truth with the
+//                               marker's view angle, size, occlusion, distance to the image border
+//   MCMT_IMAGING_DROP=WHAT      map without the detections WHAT names: "occluded" (the truth says part of
+//                               the marker is hidden), "unseen" (not fully_visible), "err:PX" (any corner
+//                               farther than PX from the truth: an oracle, for measuring only), "angle:DEG"
+//                               (view angle above DEG)
+//   MCMT_VIEW_WEIGHT_POWER=P    the mapper's view_weight_power (both maps)
 #include <time.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -69,6 +80,39 @@ double ScaleError(const sim::GroundTruth& truth, const RigMap& map) {
   return gt_sq > 0 ? dot / gt_sq - 1.0 : NAN;
 }
 
+// The detections MCMT_IMAGING_DROP names are left out of the map (see the top of the file).
+struct DropRule {
+  bool occluded = false, unseen = false;
+  double err_px = 0.0;     // 0: no error rule
+  double angle_deg = 0.0;  // 0: no view-angle rule
+};
+
+DropRule ParseDropRule(const char* text) {
+  DropRule r;
+  if (!text || !*text) return r;
+  const std::string s = text;
+  if (s == "occluded")
+    r.occluded = true;
+  else if (s == "unseen")
+    r.unseen = true;
+  else if (s.rfind("err:", 0) == 0 && std::atof(s.c_str() + 4) > 0)
+    r.err_px = std::atof(s.c_str() + 4);
+  else if (s.rfind("angle:", 0) == 0 && std::atof(s.c_str() + 6) > 0)
+    r.angle_deg = std::atof(s.c_str() + 6);
+  else {
+    std::fprintf(stderr, "MCMT_IMAGING_DROP=%s: expected occluded, unseen, err:PX or angle:DEG (> 0)\n",
+                 text);
+    std::exit(2);
+  }
+  return r;
+}
+
+double BorderDistancePx(const MarkerCorners2d& c, int width, int height) {
+  double d = 1e9;
+  for (int k = 0; k < 4; ++k) d = std::min({d, c[k][0], c[k][1], width - 1 - c[k][0], height - 1 - c[k][1]});
+  return d;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,6 +122,25 @@ int main(int argc, char** argv) {
   if (quick) radii = {1.0};
   if (argc > 2) radii = {std::atof(argv[2])};
   cv::setNumThreads(1);
+  std::vector<int> only;
+  if (const char* e = std::getenv("MCMT_IMAGING_CONDITIONS"))
+    for (const char* p = e; *p;) {
+      only.push_back(std::atoi(p));
+      while (*p && *p != ',') ++p;
+      if (*p) ++p;
+    }
+  const DropRule drop = ParseDropRule(std::getenv("MCMT_IMAGING_DROP"));
+  FILE* dump = nullptr;
+  if (const char* path = std::getenv("MCMT_IMAGING_DUMP")) {
+    dump = std::fopen(path, "w");
+    if (!dump) {
+      std::fprintf(stderr, "MCMT_IMAGING_DUMP=%s: cannot write\n", path);
+      return 2;
+    }
+    std::fprintf(dump,
+                 "radius,condition,camera,seq,id,corner,dx,dy,err,view_deg,size_px,occluded,fully_visible,"
+                 "in_image,border_px,x,y\n");
+  }
   std::printf(
       "## Maps under varied imaging (paper's rig, 5 cameras, 640x480, four-sided object, 4 cm markers, %d "
       "frames)\n\n",
@@ -87,8 +150,11 @@ int main(int argc, char** argv) {
       "markers detected per frame | true corners + noise: scale error %% | true corners + noise: camera "
       "position mm (mean / max) |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
+  const std::vector<Condition> conditions = Conditions();
   for (double radius : radii)
-    for (const Condition& condition : Conditions()) {
+    for (size_t ci = 0; ci < conditions.size(); ++ci) {
+      if (!only.empty() && std::find(only.begin(), only.end(), static_cast<int>(ci)) == only.end()) continue;
+      const Condition& condition = conditions[ci];
       sim::RigOptions ro;
       ro.radius = radius;
       ro.camera_height = 0.5 * radius;
@@ -101,6 +167,10 @@ int main(int argc, char** argv) {
       const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
       sim::RenderOptions render = condition.render;
       sim::Renderer renderer(object, "DICT_6X6_250", render);
+      if (dump)
+        for (size_t c = 0; c < cameras.size(); ++c)
+          std::fprintf(stderr, "condition %zu camera %zu: %s\n", ci, c,
+                       sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
       MarkerConfig mc;
       mc.dictionary = "DICT_6X6_250";
       mc.size = 0.04;
@@ -109,6 +179,7 @@ int main(int argc, char** argv) {
       mo.sizes = object.Sizes();
       mo.dictionary = "DICT_6X6_250";
       mo.marker_ids = mc.ids;
+      if (const char* e = std::getenv("MCMT_VIEW_WEIGHT_POWER")) mo.view_weight_power = std::atof(e);
       Mapper mapper(mo), reference(mo);
       std::mt19937 rng(7);
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);
@@ -125,11 +196,34 @@ int main(int argc, char** argv) {
           d.dictionary = "DICT_6X6_250";
           d.camera_model = ToCameraModelMsg(cameras[c].model);
           d.markers = detector.Detect(image);
+          const std::vector<sim::MarkerView> views =
+              sim::ProjectMarkers(cameras[c], object, f.rig_from_object);
+          std::vector<marker_t> kept;
+          for (const marker_t& m : d.markers) {
+            const sim::MarkerView* v = nullptr;
+            for (const sim::MarkerView& w : views)
+              if (w.id == m.id) v = &w;
+            double max_err = 0;
+            for (int k = 0; k < 4 && v; ++k) {
+              const double dx = m.corners[k][0] - v->corners[k][0], dy = m.corners[k][1] - v->corners[k][1];
+              max_err = std::max(max_err, std::hypot(dx, dy));
+              if (dump)
+                std::fprintf(
+                    dump, "%.1f,%zu,%zu,%lld,%d,%d,%.4f,%.4f,%.4f,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%.2f\n",
+                    radius, ci, c, static_cast<long long>(f.seq), m.id, k, dx, dy, std::hypot(dx, dy),
+                    v->view_angle_deg, v->size_px, v->occluded, v->fully_visible, v->in_image,
+                    BorderDistancePx(v->corners, cameras[c].model.width, cameras[c].model.height),
+                    v->corners[k][0], v->corners[k][1]);
+            }
+            const bool dropped = v && ((drop.occluded && v->occluded) || (drop.unseen && !v->fully_visible) ||
+                                       (drop.err_px > 0 && max_err > drop.err_px) ||
+                                       (drop.angle_deg > 0 && v->view_angle_deg > drop.angle_deg));
+            if (!dropped) kept.push_back(m);
+          }
+          d.markers = kept;
           d.num_markers = static_cast<int32_t>(d.markers.size());
           detected += d.num_markers;
           mapper.Add(d);
-          const std::vector<sim::MarkerView> views =
-              sim::ProjectMarkers(cameras[c], object, f.rig_from_object);
           for (marker_t& m : d.markers)
             for (const sim::MarkerView& v : views)
               if (v.id == m.id)
