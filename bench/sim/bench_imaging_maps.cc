@@ -33,6 +33,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/mapper/rendered_session.h"
 
 using namespace mcmt;
 
@@ -155,47 +156,27 @@ int main(int argc, char** argv) {
     for (size_t ci = 0; ci < conditions.size(); ++ci) {
       if (!only.empty() && std::find(only.begin(), only.end(), static_cast<int>(ci)) == only.end()) continue;
       const Condition& condition = conditions[ci];
-      sim::RigOptions ro;
-      ro.radius = radius;
-      ro.camera_height = 0.5 * radius;
-      const std::vector<sim::SimCamera> cameras = sim::MakeRig(ro);
-      sim::ObjectOptions oo;
-      const sim::SimObject object = sim::MakeObject(oo);
-      sim::TrajectoryOptions to;
-      to.frames = frames;
-      to.position_radius = 0.15 * radius, to.vertical_range = 0.08 * radius;
-      const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
+      const testing::RenderedMapSession session = testing::MakeRenderedMapSession(radius, frames);
+      const std::vector<sim::SimCamera>& cameras = session.cameras;
+      const sim::SimObject& object = session.object;
+      const std::vector<sim::SimFrame>& trajectory = session.trajectory;
       sim::RenderOptions render = condition.render;
-      sim::Renderer renderer(object, "DICT_6X6_250", render);
+      sim::Renderer renderer(object, session.markers.dictionary, render);
       if (dump)
         for (size_t c = 0; c < cameras.size(); ++c)
           std::fprintf(stderr, "condition %zu camera %zu: %s\n", ci, c,
                        sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
-      MarkerConfig mc;
-      mc.dictionary = "DICT_6X6_250";
-      mc.size = 0.04;
-      for (const auto& m : object.markers) mc.ids.push_back(m.id);
-      MapperOptions mo;
-      mo.sizes = object.Sizes();
-      mo.dictionary = "DICT_6X6_250";
-      mo.marker_ids = mc.ids;
+      MapperOptions mo = session.Mapping();
       if (const char* e = std::getenv("MCMT_VIEW_WEIGHT_POWER")) mo.view_weight_power = std::atof(e);
       Mapper mapper(mo), reference(mo);
       std::mt19937 rng(7);
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);
       long long detected = 0;
       for (size_t c = 0; c < cameras.size(); ++c) {
-        MarkerDetector detector(mc, DetectorOptions());
+        MarkerDetector detector(session.markers, DetectorOptions());
         detector.SetCamera(cameras[c].model);
         for (const sim::SimFrame& f : trajectory) {
-          const cv::Mat image = renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object);
-          detections_t d;
-          d.utime = f.utime;
-          d.seq = f.seq;
-          d.camera = cameras[c].name;
-          d.dictionary = "DICT_6X6_250";
-          d.camera_model = ToCameraModelMsg(cameras[c].model);
-          d.markers = detector.Detect(image);
+          detections_t d = session.Detect(renderer, c, f, &detector);
           const std::vector<sim::MarkerView> views =
               sim::ProjectMarkers(cameras[c], object, f.rig_from_object);
           std::vector<marker_t> kept;
@@ -232,11 +213,7 @@ int main(int argc, char** argv) {
           reference.Add(d);
         }
       }
-      sim::GroundTruth truth;
-      truth.cameras = cameras;
-      truth.markers = object.markers;
-      truth.frames = trajectory;
-      truth.marker_size = 0.04;
+      const sim::GroundTruth truth = session.Truth();
       std::string reference_cells = "(no map) | ";
       try {
         const MapResult result = reference.Solve();

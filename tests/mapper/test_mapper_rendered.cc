@@ -11,6 +11,7 @@
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/mapper/rendered_session.h"
 #include "tests/support/temp_dir.h"
 
 namespace mcmt {
@@ -80,46 +81,17 @@ INSTANTIATE_TEST_SUITE_P(PapersObjectsAndRadii, MapperRendered,
 // dominated the cameras' error: 0.68 mm (scale +0.052 %) without the view weighting, 0.23 mm with power 3
 // (scale -0.017 %), against 0.27-0.38 mm from the true corners + 0.07 px noise.
 TEST(MapperRenderedViews, ForeshortenedMarkersWeightedByTheirPrecision) {
-  sim::RigOptions ro;
-  ro.radius = 1.0;
-  ro.camera_height = 0.5;
-  const std::vector<sim::SimCamera> cameras = sim::MakeRig(ro);
-  const sim::SimObject object = sim::MakeObject(sim::ObjectOptions());
-  sim::TrajectoryOptions to;
-  to.frames = 150;
-  to.position_radius = 0.15, to.vertical_range = 0.08;
-  const std::vector<sim::SimFrame> trajectory = sim::MakeTrajectory(to);
-  const sim::Renderer renderer(object, "DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  mc.size = 0.04;
-  for (const auto& m : object.markers) mc.ids.push_back(m.id);
-  MapperOptions mo;
-  mo.sizes = object.Sizes();
-  mo.dictionary = mc.dictionary;
-  mo.marker_ids = mc.ids;
+  const testing::RenderedMapSession s = testing::MakeRenderedMapSession(1.0, 150);
+  const sim::Renderer renderer(s.object, s.markers.dictionary);
+  MapperOptions mo = s.Mapping();
   mo.view_weight_power = 3;  // off by default: it costs the biased conditions (BENCHMARKS.md)
   Mapper mapper(mo);
-  for (size_t c = 0; c < cameras.size(); ++c) {
-    MarkerDetector detector(mc, DetectorOptions());
-    detector.SetCamera(cameras[c].model);
-    for (const sim::SimFrame& f : trajectory) {
-      detections_t d;
-      d.utime = f.utime;
-      d.seq = f.seq;
-      d.camera = cameras[c].name;
-      d.dictionary = mc.dictionary;
-      d.camera_model = ToCameraModelMsg(cameras[c].model);
-      d.markers = detector.Detect(renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object));
-      d.num_markers = static_cast<int32_t>(d.markers.size());
-      mapper.Add(d);
-    }
+  for (size_t c = 0; c < s.cameras.size(); ++c) {
+    MarkerDetector detector(s.markers, DetectorOptions());
+    detector.SetCamera(s.cameras[c].model);
+    for (const sim::SimFrame& f : s.trajectory) mapper.Add(s.Detect(renderer, c, f, &detector));
   }
-  sim::GroundTruth truth;
-  truth.cameras = cameras;
-  truth.markers = object.markers;
-  truth.frames = trajectory;
-  truth.marker_size = 0.04;
+  const sim::GroundTruth truth = s.Truth();
   const MapResult result = mapper.Solve();
   const sim::EvalResult e = sim::Evaluate(truth, &result.map, nullptr);
   EXPECT_EQ(e.mapped_cameras, 5);

@@ -1,0 +1,72 @@
+// The paper's rig rendered and detected in memory, frame by frame (no files, no LCM): the sessions of
+// bench_imaging_maps and MapperRenderedViews. 5 cameras on a circle of `radius` m at half its height,
+// 640x480, the default four-sided object with 4 cm markers (DICT_6X6_250), a trajectory scaled with
+// the radius.
+#pragma once
+
+#include <vector>
+
+#include "core/lcm_util.h"
+#include "detector/detector.h"
+#include "mapper/mapper.h"
+#include "sim/eval.h"
+#include "sim/sim.h"
+
+namespace mcmt::testing {
+
+struct RenderedMapSession {
+  std::vector<sim::SimCamera> cameras;
+  sim::SimObject object;
+  std::vector<sim::SimFrame> trajectory;
+  MarkerConfig markers;
+
+  // The mapper's options for this object (sizes, dictionary, ids); everything else default.
+  MapperOptions Mapping() const {
+    MapperOptions mo;
+    mo.sizes = object.Sizes();
+    mo.dictionary = markers.dictionary;
+    mo.marker_ids = markers.ids;
+    return mo;
+  }
+  sim::GroundTruth Truth() const {
+    sim::GroundTruth truth;
+    truth.cameras = cameras;
+    truth.markers = object.markers;
+    truth.frames = trajectory;
+    truth.marker_size = markers.size;
+    return truth;
+  }
+  // Camera `c`'s message for `frame`: its image rendered by `renderer` and detected by `detector`.
+  detections_t Detect(const sim::Renderer& renderer, size_t c, const sim::SimFrame& frame,
+                      MarkerDetector* detector) const {
+    detections_t d;
+    d.utime = frame.utime;
+    d.seq = frame.seq;
+    d.camera = cameras[c].name;
+    d.dictionary = markers.dictionary;
+    d.camera_model = ToCameraModelMsg(cameras[c].model);
+    d.markers =
+        detector->Detect(renderer.Render(cameras[c], static_cast<int>(c), frame.seq, frame.rig_from_object));
+    d.num_markers = static_cast<int32_t>(d.markers.size());
+    return d;
+  }
+};
+
+inline RenderedMapSession MakeRenderedMapSession(double radius, int frames) {
+  RenderedMapSession s;
+  sim::RigOptions ro;
+  ro.radius = radius;
+  ro.camera_height = 0.5 * radius;
+  s.cameras = sim::MakeRig(ro);
+  s.object = sim::MakeObject(sim::ObjectOptions());
+  sim::TrajectoryOptions to;
+  to.frames = frames;
+  to.position_radius = 0.15 * radius, to.vertical_range = 0.08 * radius;
+  s.trajectory = sim::MakeTrajectory(to);
+  s.markers.dictionary = "DICT_6X6_250";
+  s.markers.size = 0.04;
+  for (const auto& m : s.object.markers) s.markers.ids.push_back(m.id);
+  return s;
+}
+
+}  // namespace mcmt::testing
