@@ -47,6 +47,13 @@ struct DetectorOptions {
   // is linearised as 255 * (v / 255)^gamma first (1: linear images).
   double gamma = 0.0;
 
+  // Candidate search. "own" (default): detector/candidates.h, one binary image at the tiles' mid level,
+  // each quad's polarity and border checked and its cells read at their centres (ids by the
+  // dictionary); "opencv": cv::aruco::detectMarkers (always with corner_refinement other than "edges",
+  // aruco3 or inverted markers).
+  std::string candidate_search = "own";
+  int threshold_tile_px = 4;   // "own": threshold tile side (mid level over 3 x 3 tiles)
+  int min_tile_contrast = 16;  // "own": grey levels; tiles below this are neither dark nor bright
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
   int adaptive_window_max = 15;
@@ -153,12 +160,20 @@ class MarkerDetector {
   const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
+  // The code of a candidate read at the cell centres of `corners` (`quad`'s corners or refined ones),
+  // `polarity` as MarkerPolarity's; r->corners: `quad` in the order of the code's rotation.
+  bool ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors, Raw* r);
+  // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
+  std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
+                             double max_perimeter);
 
   MarkerConfig markers_;
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
   bool reread_ = false;        // reread_rejected, where the dictionary makes it safe
+  int own_border_errors_ = 0;  // candidate_search "own": border cells allowed of the other colour
   std::vector<cv::Mat> bits_;  // per id, cached
   cv::Mat smooth_;             // smoothed marker regions (sharp_smoothing)
   cv::Mat linear_;             // linearised marker regions (gamma)
