@@ -8,57 +8,74 @@
 namespace mcmt {
 namespace {
 
-// Tile minima and maxima over each tile and its 8 neighbours; per pixel, dark if below the mid level.
-void MidLevelBinary(const cv::Mat& gray, const QuadSearch& s, cv::Mat* binary) {
-  const int t = std::max(1, s.tile_px);
+// Each tile's minimum and maximum over it and its 8 neighbours (tw x th tiles of t x t pixels).
+void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi) {
   const int cols = gray.cols, rows = gray.rows;
   const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
-  std::vector<uint8_t> lo(static_cast<size_t>(tw) * th, 255), hi(static_cast<size_t>(tw) * th, 0);
-  for (int y = 0; y < rows; ++y) {
-    const uint8_t* row = gray.ptr<uint8_t>(y);
-    uint8_t* l = &lo[static_cast<size_t>(y / t) * tw];
-    uint8_t* h = &hi[static_cast<size_t>(y / t) * tw];
+  std::vector<uint8_t> tlo(static_cast<size_t>(tw) * th), thi(static_cast<size_t>(tw) * th);
+  std::vector<uint8_t> col_lo(static_cast<size_t>(tw) * t), col_hi(static_cast<size_t>(tw) * t);
+  for (int ty = 0; ty < th; ++ty) {
+    // Per column over the tile's rows (vectorised), then over the tile's columns.
+    std::fill(col_lo.begin(), col_lo.end(), 255);
+    std::fill(col_hi.begin(), col_hi.end(), 0);
+    uint8_t* __restrict l = col_lo.data();
+    uint8_t* __restrict h = col_hi.data();
+    for (int y = ty * t; y < std::min(rows, ty * t + t); ++y) {
+      const uint8_t* __restrict row = gray.ptr<uint8_t>(y);
+      for (int x = 0; x < cols; ++x) {
+        l[x] = std::min(l[x], row[x]);
+        h[x] = std::max(h[x], row[x]);
+      }
+    }
     for (int tx = 0; tx < tw; ++tx) {
-      const int x0 = tx * t, x1 = std::min(cols, x0 + t);
-      uint8_t mn = l[tx], mx = h[tx];
-      for (int x = x0; x < x1; ++x) mn = std::min(mn, row[x]), mx = std::max(mx, row[x]);
-      l[tx] = mn, h[tx] = mx;
+      uint8_t mn = 255, mx = 0;
+      for (int x = tx * t; x < tx * t + t; ++x) mn = std::min(mn, l[x]), mx = std::max(mx, h[x]);
+      tlo[ty * tw + tx] = mn, thi[ty * tw + tx] = mx;
     }
   }
   // 3 x 3 tile neighbourhoods: separable, rows then columns.
-  std::vector<uint8_t> lo2(lo.size()), hi2(hi.size());
+  std::vector<uint8_t> rlo(tlo.size()), rhi(thi.size());
   for (int ty = 0; ty < th; ++ty)
     for (int tx = 0; tx < tw; ++tx) {
       uint8_t mn = 255, mx = 0;
       for (int dx = std::max(0, tx - 1); dx <= std::min(tw - 1, tx + 1); ++dx) {
-        mn = std::min(mn, lo[ty * tw + dx]);
-        mx = std::max(mx, hi[ty * tw + dx]);
+        mn = std::min(mn, tlo[ty * tw + dx]);
+        mx = std::max(mx, thi[ty * tw + dx]);
       }
-      lo2[ty * tw + tx] = mn, hi2[ty * tw + tx] = mx;
+      rlo[ty * tw + tx] = mn, rhi[ty * tw + tx] = mx;
     }
-  binary->create(rows, cols, CV_8U);
-  std::vector<int16_t> threshold(static_cast<size_t>(cols));
-  for (int ty = 0; ty < th; ++ty) {
-    // Per pixel column of this tile row: 2 x the mid level, or a value no pixel passes.
-    for (int tx = 0; tx < tw; ++tx) {
-      uint8_t mn = 255, mx = 0;
+  lo->assign(tlo.size(), 255);
+  hi->assign(thi.size(), 0);
+  for (int ty = 0; ty < th; ++ty)
+    for (int tx = 0; tx < tw; ++tx)
       for (int dy = std::max(0, ty - 1); dy <= std::min(th - 1, ty + 1); ++dy) {
-        mn = std::min(mn, lo2[dy * tw + tx]);
-        mx = std::max(mx, hi2[dy * tw + tx]);
+        (*lo)[ty * tw + tx] = std::min((*lo)[ty * tw + tx], rlo[dy * tw + tx]);
+        (*hi)[ty * tw + tx] = std::max((*hi)[ty * tw + tx], rhi[dy * tw + tx]);
       }
-      int16_t value = static_cast<int16_t>(mn + mx);
-      if (mx - mn < s.min_contrast) value = s.bright ? 1024 : -1;
-      for (int x = tx * t; x < std::min(cols, tx * t + t); ++x) threshold[x] = value;
+}
+
+// Dark pixels (255): below min + level * (max - min) of their tile's range; none in tiles whose range is
+// below min_contrast.
+void LevelBinary(const cv::Mat& gray, int t, const std::vector<uint8_t>& lo, const std::vector<uint8_t>& hi,
+                 double level, int min_contrast, cv::Mat* binary) {
+  const int cols = gray.cols, rows = gray.rows;
+  const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
+  binary->create(rows, cols, CV_8U);
+  std::vector<uint8_t> threshold(static_cast<size_t>(tw) * t);
+  for (int ty = 0; ty < th; ++ty) {
+    for (int tx = 0; tx < tw; ++tx) {
+      const int mn = lo[ty * tw + tx], mx = hi[ty * tw + tx];
+      // Dark: v < value (v integer), i.e. v < min + level * (max - min); 0: no pixel.
+      const int value =
+          mx - mn < min_contrast ? 0 : static_cast<int>(std::ceil(mn + level * (mx - mn) - 1e-9));
+      std::fill(threshold.begin() + tx * t, threshold.begin() + tx * t + t,
+                static_cast<uint8_t>(std::min(value, 255)));
     }
+    const uint8_t* __restrict thr = threshold.data();
     for (int y = ty * t; y < std::min(rows, ty * t + t); ++y) {
-      const uint8_t* in = gray.ptr<uint8_t>(y);
-      uint8_t* out = binary->ptr<uint8_t>(y);
-      const int16_t* thr = threshold.data();
-      if (s.bright) {
-        for (int x = 0; x < cols; ++x) out[x] = 2 * in[x] > thr[x] ? 255 : 0;
-      } else {
-        for (int x = 0; x < cols; ++x) out[x] = 2 * in[x] < thr[x] ? 255 : 0;
-      }
+      const uint8_t* __restrict in = gray.ptr<uint8_t>(y);
+      uint8_t* __restrict out = binary->ptr<uint8_t>(y);
+      for (int x = 0; x < cols; ++x) out[x] = in[x] < thr[x] ? 255 : 0;
     }
   }
 }
@@ -103,8 +120,6 @@ bool QuadFromBoundary(const std::vector<cv::Point>& c, const QuadSearch& s, cv::
   }
   if (i1 < 0 || i3 < 0) return false;
   const double perimeter = static_cast<double>(n);
-  const double diag = cv::norm(diagonal);
-  if (d1 / diag < s.min_side_rate * perimeter || d3 / diag < s.min_side_rate * perimeter) return false;
   // Corners in boundary order.
   std::array<int, 4> idx = {i0, i1, i2, i3};
   std::sort(idx.begin(), idx.end());
@@ -158,23 +173,26 @@ bool QuadFromBoundary(const std::vector<cv::Point>& c, const QuadSearch& s, cv::
 
 }  // namespace
 
-std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search,
-                                                  cv::Mat* binary) {
+std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search) {
   CV_Assert(gray.type() == CV_8UC1);
-  cv::Mat local;
-  cv::Mat& bin = binary ? *binary : local;
-  MidLevelBinary(gray, search, &bin);
+  const int t = std::max(1, search.tile_px);
+  std::vector<uint8_t> lo, hi;
+  TileRanges(gray, t, &lo, &hi);
+  std::vector<std::array<cv::Point2d, 4>> quads;
+  cv::Mat binary;
   std::vector<std::vector<cv::Point>> contours;
   std::vector<cv::Vec4i> hierarchy;
-  // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
-  cv::findContours(bin, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
-  std::vector<std::array<cv::Point2d, 4>> quads;
-  for (size_t i = 0; i < contours.size(); ++i) {
-    if (hierarchy[i][3] >= 0) continue;
-    const double length = static_cast<double>(contours[i].size());
-    if (length < search.min_perimeter || length > search.max_perimeter) continue;
-    std::array<cv::Point2d, 4> quad;
-    if (QuadFromBoundary(contours[i], search, gray.size(), &quad)) quads.push_back(quad);
+  for (double level : search.levels) {
+    LevelBinary(gray, t, lo, hi, level, search.min_contrast, &binary);
+    // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
+    cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
+    for (size_t i = 0; i < contours.size(); ++i) {
+      if (hierarchy[i][3] >= 0) continue;
+      const double length = static_cast<double>(contours[i].size());
+      if (length < search.min_perimeter || length > search.max_perimeter) continue;
+      std::array<cv::Point2d, 4> quad;
+      if (QuadFromBoundary(contours[i], search, gray.size(), &quad)) quads.push_back(quad);
+    }
   }
   return quads;
 }

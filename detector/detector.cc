@@ -746,7 +746,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
                                                         double min_perimeter, double max_perimeter,
                                                         int window_min, int window_max) {
   if (options_.candidate_search == "own" && options_.corner_refinement == "edges" && !options_.aruco3 &&
-      !options_.inverted)
+      !options_.inverted && !markers_.inverted)
     return OwnSearch(gray, roi, min_perimeter, max_perimeter);
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
@@ -819,21 +819,23 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
   QuadSearch search;
   search.tile_px = options_.threshold_tile_px;
   search.min_contrast = options_.min_tile_contrast;
+  // A second binary image at another level: on a grey surface (no margin) a marker is one component
+  // with the surface at the mid level.
+  search.levels = {options_.threshold_level};
+  if (options_.second_threshold_level > 0) search.levels.push_back(options_.second_threshold_level);
   search.min_perimeter = min_perimeter;
   search.max_perimeter = max_perimeter;
   search.max_deviation_rate = options_.polygonal_approx_rate;
   search.min_side_rate = options_.min_corner_distance_rate;
   search.min_distance_to_border = options_.min_distance_to_border;
-  const int cells = dictionary_->markerSize + 2;
+  const std::vector<std::array<cv::Point2d, 4>> quads = FindQuads(gray(roi), search);
   std::vector<Raw> out;
-  for (std::array<cv::Point2d, 4> quad : FindQuads(gray(roi), search)) {
+  for (std::array<cv::Point2d, 4> quad : quads) {
     for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-    // Dark-bordered against its ring, then read at the quad's cell centres, or where that fails (and
-    // the dictionary makes it safe) at its sides' mid-level crossings.
-    const int polarity = MarkerPolarity(gray, quad, cells);
-    if (polarity <= 0 || markers_.inverted) continue;
+    // Read at the quad's cell centres with a dark border (at most own_border_errors_ border cells
+    // bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level crossings.
     Raw r;
-    if (ReadCode(gray, quad, quad, polarity, own_border_errors_, &r) ||
+    if (ReadCode(gray, quad, quad, 1, own_border_errors_, &r) ||
         (reread_ && RereadCandidate(gray, quad, &r))) {
       if (markers_.Accepts(r.id)) out.push_back(r);
     }

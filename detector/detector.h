@@ -52,8 +52,10 @@ struct DetectorOptions {
   // dictionary); "opencv": cv::aruco::detectMarkers (always with corner_refinement other than "edges",
   // aruco3 or inverted markers).
   std::string candidate_search = "own";
-  int threshold_tile_px = 4;   // "own": threshold tile side (mid level over 3 x 3 tiles)
-  int min_tile_contrast = 16;  // "own": grey levels; tiles below this are neither dark nor bright
+  int threshold_tile_px = 4;             // "own": threshold tile side (mid level over 3 x 3 tiles)
+  int min_tile_contrast = 30;            // "own": grey levels; tiles below this are neither dark nor bright
+  double threshold_level = 0.5;          // "own": dark below min + level * (max - min) of 3 x 3 tiles
+  double second_threshold_level = 0.35;  // "own": a second binary image at this level (0: none)
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
   int adaptive_window_max = 15;

@@ -37,6 +37,12 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "own candidate search: threshold tile side (mid level of 3 x 3 tiles)", InRange(2, 64))
            .Add("min_tile_contrast", &O::min_tile_contrast, "grey levels",
                 "own candidate search: tiles with less contrast are neither dark nor bright", InRange(1, 255))
+           .Add("threshold_level", &O::threshold_level, "",
+                "own candidate search: dark below min + level * (max - min) of the 3 x 3 tiles",
+                InRange(0, 1, true, true))
+           .Add("second_threshold_level", &O::second_threshold_level, "",
+                "own candidate search: a second binary image at this level (0: none)",
+                InRange(0, 1, false, true))
            .Add("adaptive_window_min", &O::adaptive_window_min, "px", "adaptive threshold window: smallest",
                 AtLeast(3))
            .Add("adaptive_window_max", &O::adaptive_window_max, "px",
