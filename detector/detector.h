@@ -47,11 +47,12 @@ struct DetectorOptions {
   // is linearised as 255 * (v / 255)^gamma first (1: linear images).
   double gamma = 0.0;
 
-  // Candidate search. "own" (default): detector/candidates.h, one binary image at the tiles' mid level,
-  // each quad's polarity and border checked and its cells read at their centres (ids by the
-  // dictionary); "opencv": cv::aruco::detectMarkers (always with corner_refinement other than "edges",
-  // aruco3 or inverted markers).
-  std::string candidate_search = "own";
+  // Candidate search. "opencv" (default): cv::aruco::detectMarkers, always used with corner_refinement
+  // other than "edges", aruco3 or inverted markers. "own": detector/candidates.h, binary images at two
+  // levels of the tiles' range, each quad read at its cell centres (dark border, ids by the dictionary).
+  // "own" takes about half the search's instructions but loses recall at 60-75 deg under blur, gamma
+  // and half-cell margins on black (BENCHMARKS.md, issue 15), hence not the default.
+  std::string candidate_search = "opencv";
   int threshold_tile_px = 4;             // "own": threshold tile side (mid level over 3 x 3 tiles)
   int min_tile_contrast = 30;            // "own": grey levels; tiles below this are neither dark nor bright
   double threshold_level = 0.5;          // "own": dark below min + level * (max - min) of 3 x 3 tiles

@@ -29,10 +29,9 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "edges: the camera's transfer curve, 0: estimated per side, > 0: known (1: linear images)",
                 NumberCheck{"must be 0 (estimated) or in [0.2, 5]",
                             [](const double& v) { return v == 0 || (v >= 0.2 && v <= 5); }})
-           .Add(
-               "candidate_search", &O::candidate_search,
-               "own (one mid-level binary image, detector/candidates.h) or opencv (cv::aruco::detectMarkers)",
-               OneOf({"own", "opencv"}))
+           .Add("candidate_search", &O::candidate_search,
+                "opencv (cv::aruco::detectMarkers) or own (tile-range binary images, detector/candidates.h)",
+                OneOf({"own", "opencv"}))
            .Add("threshold_tile_px", &O::threshold_tile_px, "px",
                 "own candidate search: threshold tile side (mid level of 3 x 3 tiles)", InRange(2, 64))
            .Add("min_tile_contrast", &O::min_tile_contrast, "grey levels",
