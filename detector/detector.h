@@ -53,8 +53,8 @@ struct DetectorOptions {
   // "own" takes about half the search's instructions but loses recall at 60-75 deg under blur, gamma
   // and half-cell margins on black (BENCHMARKS.md, issue 15), hence not the default.
   std::string candidate_search = "opencv";
-  int threshold_tile_px = 4;             // "own": threshold tile side (mid level over 3 x 3 tiles)
-  int min_tile_contrast = 30;            // "own": grey levels; tiles below this are neither dark nor bright
+  int threshold_tile_px = 4;             // "own": threshold tile side (range over 3 x 3 tiles)
+  int min_tile_contrast = 30;            // "own": grey levels; less range: no dark pixels
   double threshold_level = 0.5;          // "own": dark below min + level * (max - min) of 3 x 3 tiles
   double second_threshold_level = 0.35;  // "own": a second binary image at this level (0: none)
   // OpenCV candidate search.

@@ -33,9 +33,11 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "opencv (cv::aruco::detectMarkers) or own (tile-range binary images, detector/candidates.h)",
                 OneOf({"own", "opencv"}))
            .Add("threshold_tile_px", &O::threshold_tile_px, "px",
-                "own candidate search: threshold tile side (mid level of 3 x 3 tiles)", InRange(2, 64))
+                "own candidate search: threshold tile side (levels of the range over 3 x 3 tiles)",
+                InRange(2, 64))
            .Add("min_tile_contrast", &O::min_tile_contrast, "grey levels",
-                "own candidate search: tiles with less contrast are neither dark nor bright", InRange(1, 255))
+                "own candidate search: tiles (with their neighbours) of less contrast have no dark pixels",
+                InRange(1, 255))
            .Add("threshold_level", &O::threshold_level, "",
                 "own candidate search: dark below min + level * (max - min) of the 3 x 3 tiles",
                 InRange(0, 1, true, true))
