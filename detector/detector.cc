@@ -9,6 +9,7 @@
 
 #include "core/dictionary.h"
 #include "core/math.h"
+#include "detector/candidates.h"
 #include "detector/side_model.h"
 
 namespace mcmt {
@@ -904,6 +905,9 @@ MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOption
   for (int k = 0; k <= correctable; ++k) within += binomial, binomial = binomial * (n - k) / (k + 1);
   const double chance = within * 4.0 * dictionary_->bytesList.rows / std::pow(2.0, n);
   reread_ = options_.reread_rejected && !options_.inverted && chance < 1e-3;
+  // The own search reads every quad it finds: a border cell of the other colour only where random
+  // patterns are rarely ids.
+  own_border_errors_ = chance < 1e-3 ? 1 : 0;
 }
 
 MarkerDetector::~MarkerDetector() = default;
@@ -926,6 +930,9 @@ void MarkerDetector::Reset() {
 std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, const cv::Rect& roi,
                                                         double min_perimeter, double max_perimeter,
                                                         int window_min, int window_max) {
+  if (options_.candidate_search == "own" && options_.corner_refinement == "edges" && !options_.aruco3 &&
+      !options_.inverted && !markers_.inverted)
+    return OwnSearch(gray, roi, min_perimeter, max_perimeter);
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
@@ -992,6 +999,35 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   return out;
 }
 
+std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, const cv::Rect& roi,
+                                                           double min_perimeter, double max_perimeter) {
+  QuadSearch search;
+  search.tile_px = options_.threshold_tile_px;
+  search.min_contrast = options_.min_tile_contrast;
+  // A second binary image at another level: on a grey surface (no margin) a marker is one component
+  // with the surface at the mid level.
+  search.levels = {options_.threshold_level};
+  if (options_.second_threshold_level > 0) search.levels.push_back(options_.second_threshold_level);
+  search.min_perimeter = min_perimeter;
+  search.max_perimeter = max_perimeter;
+  search.max_deviation_rate = options_.polygonal_approx_rate;
+  search.min_side_rate = options_.min_corner_distance_rate;
+  search.min_distance_to_border = options_.min_distance_to_border;
+  const std::vector<std::array<cv::Point2d, 4>> quads = FindQuads(gray(roi), search);
+  std::vector<Raw> out;
+  for (std::array<cv::Point2d, 4> quad : quads) {
+    for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
+    // Read at the quad's cell centres with a dark border (at most own_border_errors_ border cells
+    // bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level crossings.
+    Raw r;
+    if (ReadCode(gray, quad, quad, 1, own_border_errors_, &r) ||
+        (reread_ && RereadCandidate(gray, quad, &r))) {
+      if (markers_.Accepts(r.id)) out.push_back(r);
+    }
+  }
+  return out;
+}
+
 bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
   const int cells = dictionary_->markerSize + 2;
   // A dark-bordered quad (or a bright-bordered one with inverted markers) against its ring.
@@ -1003,6 +1039,15 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
   ++stats_.rereads;
   std::array<cv::Point2d, 4> corners = quad;
   if (!RefineMarkerCorners(gray, cells, cv::Mat(), camera_.get(), 1, &corners, false)) return false;
+  if (!ReadCode(gray, quad, corners, polarity, 1, r)) return false;
+  ++stats_.rereads_found;
+  return true;
+}
+
+bool MarkerDetector::ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                              const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors,
+                              Raw* r) {
+  const int cells = dictionary_->markerSize + 2;
   // Cell centres, bilinear; two classes split where the between-class variance is largest (Otsu on the
   // cells' values).
   const cv::Matx33d h = QuadFromUnitSquare(corners);
@@ -1026,7 +1071,7 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
     if (between > best) best = between, threshold = 0.5 * (sorted[i] + sorted[i + 1]);
   }
   if (sorted.back() - sorted.front() < 20.f) return false;
-  // Bits relative to the border's colour; at most one border cell of the other colour.
+  // Bits relative to the border's colour; at most max_border_errors border cells of the other colour.
   const bool dark_border = polarity > 0;
   cv::Mat bits(cells, cells, CV_8U);
   int border_errors = 0;
@@ -1037,12 +1082,11 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
       bits.at<uint8_t>(row, col) = bit;
       if (row == 0 || col == 0 || row == cells - 1 || col == cells - 1) border_errors += bit;
     }
-  if (border_errors > 1) return false;
+  if (border_errors > max_border_errors) return false;
   int id = -1, rotation = 0;
   const cv::Mat inner = bits(cv::Rect(1, 1, cells - 2, cells - 2)).clone();
   if (!dictionary_->identify(inner, id, rotation, options_.error_correction_rate)) return false;
   r->id = id;
-  ++stats_.rereads_found;
   // OpenCV's corner order for the rotation it reports (corner 0: the code's top-left).
   for (int k = 0; k < 4; ++k) r->corners[k] = quad[(k + 4 - rotation) % 4];
   return true;

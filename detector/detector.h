@@ -54,6 +54,16 @@ struct DetectorOptions {
   double unsharp_sigma = 1.0;  // px
   bool unsharp_linear = false;
 
+  // Candidate search. "opencv" (default): cv::aruco::detectMarkers, always used with corner_refinement
+  // other than "edges", aruco3 or inverted markers. "own": detector/candidates.h, binary images at two
+  // levels of the tiles' range, each quad read at its cell centres (dark border, ids by the dictionary).
+  // "own" takes about half the search's instructions but loses recall at 60-75 deg under blur, gamma
+  // and half-cell margins on black (BENCHMARKS.md, issue 15), hence not the default.
+  std::string candidate_search = "opencv";
+  int threshold_tile_px = 4;             // "own": threshold tile side (range over 3 x 3 tiles)
+  int min_tile_contrast = 30;            // "own": grey levels; less range: no dark pixels
+  double threshold_level = 0.5;          // "own": dark below min + level * (max - min) of 3 x 3 tiles
+  double second_threshold_level = 0.35;  // "own": a second binary image at this level (0: none)
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
   int adaptive_window_max = 15;
@@ -161,16 +171,24 @@ class MarkerDetector {
   const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
+  // The code of a candidate read at the cell centres of `corners` (`quad`'s corners or refined ones),
+  // `polarity` as MarkerPolarity's; r->corners: `quad` in the order of the code's rotation.
+  bool ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors, Raw* r);
+  // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
+  std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
+                             double max_perimeter);
 
   MarkerConfig markers_;
   DetectorOptions options_;
   cv::Ptr<cv::aruco::Dictionary> dictionary_;
   std::unique_ptr<CameraModel> camera_;
-  bool reread_ = false;                              // reread_rejected, where the dictionary makes it safe
-  std::vector<cv::Mat> bits_;                        // per id, cached
-  cv::Mat smooth_;                                   // smoothed marker regions (sharp_smoothing)
-  cv::Mat linear_;                                   // linearised marker regions (gamma)
-  cv::Mat gamma_lut_;                                // encoded value -> linear value
+  bool reread_ = false;        // reread_rejected, where the dictionary makes it safe
+  int own_border_errors_ = 0;  // candidate_search "own": border cells allowed of the other colour
+  std::vector<cv::Mat> bits_;  // per id, cached
+  cv::Mat smooth_;             // smoothed marker regions (sharp_smoothing)
+  cv::Mat linear_;             // linearised marker regions (gamma)
+  cv::Mat gamma_lut_;          // encoded value -> linear value
   cv::Mat unsharp_in_, unsharp_out_, unsharp_blur_;  // float regions of the unsharp mask's inverse
   DetectorStats stats_;
   // Fast mode state.

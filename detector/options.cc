@@ -37,6 +37,21 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 InRange(0.3, 5))
            .Add("unsharp_linear", &O::unsharp_linear,
                 "edges: the camera sharpens linear light, before its transfer curve (needs gamma > 0)")
+           .Add("candidate_search", &O::candidate_search,
+                "opencv (cv::aruco::detectMarkers) or own (tile-range binary images, detector/candidates.h)",
+                OneOf({"own", "opencv"}))
+           .Add("threshold_tile_px", &O::threshold_tile_px, "px",
+                "own candidate search: threshold tile side (levels of the range over 3 x 3 tiles)",
+                InRange(2, 64))
+           .Add("min_tile_contrast", &O::min_tile_contrast, "grey levels",
+                "own candidate search: tiles (with their neighbours) of less contrast have no dark pixels",
+                InRange(1, 255))
+           .Add("threshold_level", &O::threshold_level, "",
+                "own candidate search: dark below min + level * (max - min) of the 3 x 3 tiles",
+                InRange(0, 1, true, true))
+           .Add("second_threshold_level", &O::second_threshold_level, "",
+                "own candidate search: a second binary image at this level (0: none)",
+                InRange(0, 1, false, true))
            .Add("adaptive_window_min", &O::adaptive_window_min, "px", "adaptive threshold window: smallest",
                 AtLeast(3))
            .Add("adaptive_window_max", &O::adaptive_window_max, "px",

@@ -8,6 +8,7 @@
 
 #include "core/dictionary.h"
 #include "core/options.h"
+#include "detector/candidates.h"
 #include "detector/detector.h"
 #include "detector/node.h"
 #include "detector/source.h"
@@ -153,6 +154,29 @@ TEST(DetectorAccuracy, WhitelistAndSortedOutput) {
   ASSERT_EQ(got.size(), 2u);
   EXPECT_LT(got[0].id, got[1].id);
   for (const auto& m : got) EXPECT_TRUE(m.id == truth[0].id || m.id == truth[2].id);
+}
+
+// The own candidate search's quads (detector/candidates.h) on a dark quadrilateral drawn on white: one
+// quad, OpenCV's corner order, corners at the boundary pixels' lines (the dark pixels' centres, up to
+// half a pixel inside the drawn edge), none on a flat or low-contrast image.
+TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
+  cv::Mat image(120, 160, CV_8U, cv::Scalar(220));
+  const std::vector<cv::Point> drawn = {{40, 30}, {110, 22}, {118, 90}, {35, 96}};
+  cv::fillConvexPoly(image, drawn, cv::Scalar(30));
+  QuadSearch search;
+  const auto quads = FindQuads(image, search);
+  ASSERT_EQ(quads.size(), 1u);
+  const auto& q = quads[0];
+  EXPECT_GE((q[1] - q[0]).cross(q[2] - q[0]), 0.0);  // clockwise on screen
+  for (const cv::Point& d : drawn) {
+    double nearest = 1e9;
+    for (const auto& c : q) nearest = std::min(nearest, cv::norm(c - cv::Point2d(d)));
+    EXPECT_LT(nearest, 1.0) << d;
+  }
+  EXPECT_TRUE(FindQuads(cv::Mat(120, 160, CV_8U, cv::Scalar(128)), search).empty());
+  cv::Mat faint(120, 160, CV_8U, cv::Scalar(140));
+  cv::fillConvexPoly(faint, drawn, cv::Scalar(120));  // 20 grey levels < min_contrast 30
+  EXPECT_TRUE(FindQuads(faint, search).empty());
 }
 
 TEST(DetectorOptions, ValidateNamesTheField) {

@@ -1,0 +1,34 @@
+// The marker detector's own candidate search (DetectorOptions::candidate_search "own"): quadrilaterals
+// in an 8-bit image, found in binary images whose threshold does not depend on scale.
+//
+// The image is cut into square tiles; each tile's minimum and maximum over it and its 8 neighbours give
+// the threshold, a level between them (AprilTag's scheme; one binary image per level). Pixels of tiles
+// whose contrast is below `min_contrast` are not dark. The outer boundaries of the dark connected
+// components are followed (cv::findContours); a boundary whose points all lie near the polygon of its
+// four extreme points becomes a quad, each side a line fitted to the boundary points between two
+// corners (a sixth of them left out at each end), the corners the intersections of adjacent lines.
+#pragma once
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace mcmt {
+
+struct QuadSearch {
+  int tile_px = 4;                     // threshold tile side, pixels
+  int min_contrast = 30;               // grey levels: tiles (with their neighbours) below this are skipped
+  std::vector<double> levels = {0.5};  // one binary image per level: dark below min + level (max - min)
+  double min_perimeter = 40;           // boundary length range of a quad, pixels
+  double max_perimeter = 1e9;
+  double max_deviation_rate = 0.05;  // boundary points' distance to the quad, relative to the perimeter
+  double min_side_rate = 0.05;       // shortest side, relative to the perimeter
+  int min_distance_to_border = 1;    // corners at least this far inside the image, pixels
+};
+
+// Quads of dark-bordered shapes in `gray` (8-bit, one channel), from every level's binary image, corners
+// in image pixels (pixel centres at integer coordinates), ordered with (c1 - c0) x (c2 - c0) >= 0 in
+// image coordinates (clockwise on screen, OpenCV's candidate order).
+std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search);
+
+}  // namespace mcmt
