@@ -1151,6 +1151,30 @@ std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray
   return out;
 }
 
+// The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
+// (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones;
+// then smoothed by `smoothing` px (sharp_smoothing) in linear light where the gamma is known (the
+// model's blur is linear light's), and encoded again into `to`.
+void MarkerDetector::UnsharpRegion(const cv::Mat& from, double smoothing, cv::Mat to) {
+  const double k = options_.unsharp_amount;
+  from.convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
+  auto undo = [&]() {
+    unsharp_in_.copyTo(unsharp_out_);
+    for (int it = 0; it < 8; ++it) {
+      cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
+      unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
+    }
+    cv::max(unsharp_out_, 0.0, unsharp_in_);
+  };
+  const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
+  if (!in_linear) undo();
+  if (options_.gamma > 0) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
+  if (in_linear) undo();
+  if (smoothing > 0) cv::GaussianBlur(unsharp_in_, unsharp_in_, cv::Size(0, 0), smoothing);
+  if (options_.gamma > 0) cv::pow(unsharp_in_, 1.0 / options_.gamma, unsharp_in_);
+  unsharp_in_.convertTo(to, CV_8U, 255.0);
+}
+
 std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   cv::Mat gray;
   if (image.channels() == 3)
@@ -1256,30 +1280,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
   // A camera's sharpening (unsharp_amount) undone: the region stays encoded, a known gamma is held in
   // the side model (not applied through an 8-bit table) and fitted per side where unknown.
-  const double k = options_.unsharp_amount;
-  const bool unsharp = k > 0;
-  // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
-  // (each step shrinks the error by k / (1 + k)), on encoded values or (unsharp_linear) on linear ones;
-  // then smoothed by `smoothing` px (sharp_smoothing) in linear light where the gamma is known (the
-  // model's blur is linear light's), and encoded again.
-  auto UnsharpRegion = [&](const cv::Mat& from, double smoothing, cv::Mat to) {
-    from.convertTo(unsharp_in_, CV_32F, 1.0 / 255.0);
-    auto undo = [&]() {
-      unsharp_in_.copyTo(unsharp_out_);
-      for (int it = 0; it < 8; ++it) {
-        cv::GaussianBlur(unsharp_out_, unsharp_blur_, cv::Size(0, 0), options_.unsharp_sigma);
-        unsharp_out_ = (unsharp_in_ + k * unsharp_blur_) * (1.0 / (1.0 + k));
-      }
-      cv::max(unsharp_out_, 0.0, unsharp_in_);
-    };
-    const bool in_linear = options_.unsharp_linear && options_.gamma > 0;
-    if (!in_linear) undo();
-    if (options_.gamma > 0) cv::pow(unsharp_in_, options_.gamma, unsharp_in_);
-    if (in_linear) undo();
-    if (smoothing > 0) cv::GaussianBlur(unsharp_in_, unsharp_in_, cv::Size(0, 0), smoothing);
-    if (options_.gamma > 0) cv::pow(unsharp_in_, 1.0 / options_.gamma, unsharp_in_);
-    unsharp_in_.convertTo(to, CV_8U, 255.0);
-  };
+  const bool unsharp = options_.unsharp_amount > 0;
   auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
     *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
     if (!linearise && !unsharp) return &gray;

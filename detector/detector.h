@@ -171,6 +171,8 @@ class MarkerDetector {
   const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
+  // A marker region with the camera's sharpening undone (unsharp_amount), smoothed by `smoothing` px.
+  void UnsharpRegion(const cv::Mat& from, double smoothing, cv::Mat to);
   // The code of a candidate read at the cell centres of `corners` (`quad`'s corners or refined ones),
   // `polarity` as MarkerPolarity's; r->corners: `quad` in the order of the code's rotation.
   bool ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
