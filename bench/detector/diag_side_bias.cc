@@ -1,0 +1,89 @@
+// The side model's corner error on small blurred markers, apart from the candidate search's recall:
+// each rendered marker is refined (RefineMarkerCorners) from its true corners moved by Gaussian noise,
+// with its known bits, and scored against the truth (signed offset along the edge normals, error).
+//   diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES
+// ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h.
+// Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
+// MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
+// the detector's default, 0: linear), SEED (1), PER (print each marker).
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "core/dictionary.h"
+#include "detector/detector.h"
+#include "tests/detector/accuracy.h"
+
+using namespace mcmt;
+
+namespace {
+double Env(const char* key, double fallback) {
+  return std::getenv(key) ? std::atof(std::getenv(key)) : fallback;
+}
+
+cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, double side0, double side1,
+               std::mt19937_64& rng, std::vector<testing::RenderedMarker>* truth) {
+  if (!reference) {
+    testing::SceneOptions scene;
+    scene.min_side_px = side0, scene.max_side_px = side1, scene.max_angle_deg = Env("ANGLE", 60);
+    scene.markers = static_cast<int>(Env("MARKERS", 10));
+    scene.blur_sigma = blur, scene.noise_sigma = Env("NOISE", 2);
+    return testing::RenderScene(dict, scene, rng, truth);
+  }
+  testing::ReferenceScene scene;
+  scene.min_side_px = side0, scene.max_side_px = side1, scene.max_angle_deg = Env("ANGLE", 60);
+  scene.markers = static_cast<int>(Env("MARKERS", 10));
+  testing::Imaging im;
+  im.blur_sigma = blur, im.read_noise = Env("NOISE", 2);
+  im.margin_cells = Env("MARGIN", 1.0), im.surface = Env("SURFACE", 0.5);
+  return testing::RenderReference(dict, scene, im, rng, truth);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES\n");
+    return 2;
+  }
+  const bool reference = std::string(argv[1]) == "ref";
+  const double blur = std::atof(argv[2]), side0 = std::atof(argv[3]), side1 = std::atof(argv[4]);
+  const int images = std::atoi(argv[5]);
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const int cells = dict->markerSize + 2;
+  std::mt19937_64 rng(static_cast<uint64_t>(Env("SEED", 1)));
+  std::normal_distribution<double> perturb(0.0, Env("PERTURB", 0.3));
+  testing::CornerErrors errors;
+  int total = 0, refined = 0;
+  double sigma_sum = 0;
+  for (int i = 0; i < images; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = Render(*dict, reference, blur, side0, side1, rng, &truth);
+    for (const testing::RenderedMarker& t : truth) {
+      ++total;
+      std::array<cv::Point2d, 4> c;
+      for (int k = 0; k < 4; ++k) c[k] = t.corners[k] + cv::Point2d(perturb(rng), perturb(rng));
+      const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+          dict->bytesList.rowRange(t.id, t.id + 1), dict->markerSize);
+      double sigma = NAN;
+      if (!RefineMarkerCorners(image, cells, bits, nullptr, 1, &c, true, &sigma, Env("FITGAMMA", 1) > 0,
+                               nullptr, 1))
+        continue;
+      ++refined, sigma_sum += sigma;
+      testing::CornerErrors one;
+      testing::AddCornerErrors(t, c, &one);
+      testing::AddCornerErrors(t, c, &errors);
+      if (std::getenv("PER"))
+        std::printf("id %d side %.1f px angle %.0f deg offset %+.3f px blur %.2f px\n", t.id, t.side_px,
+                    t.view_angle_deg, testing::MeanOf(one.offsets), sigma);
+    }
+  }
+  const double mean = testing::MeanOf(errors.offsets);
+  double var = 0;
+  for (double o : errors.offsets) var += (o - mean) * (o - mean) / errors.offsets.size();
+  std::printf(
+      "%s blur %.2f px, sides %.0f-%.0f px: refined %d of %d, offset %+.4f px (sd %.3f), median error %.3f "
+      "px, "
+      "fitted blur %.2f px\n",
+      argv[1], blur, side0, side1, refined, total, mean, std::sqrt(var), testing::MedianOf(errors.errors),
+      sigma_sum / refined);
+}
