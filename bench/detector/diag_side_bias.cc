@@ -2,17 +2,23 @@
 // each rendered marker is refined (RefineMarkerCorners) from its true corners moved by Gaussian noise,
 // with its known bits, and scored against the truth (signed offset along the edge normals, error).
 //   diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES
-// ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h.
+//   diag_side_bias sim BLUR_PX RADIUS_M MARKER_SIZE_M FRAMES
+// ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h; sim:
+// mcmt-sim's paper rig (5 cameras, 640x480) and object OBJECT (four_sided), markers >= 15 px within
+// 75 deg, print margin QUIET (cells, 1) and face albedo ALBEDO (< 0: the object's), offsets per id too.
 // Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
 // MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
 // the detector's default, 0: linear), SEED (1), PER (print each marker).
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <map>
 #include <string>
 
 #include "core/dictionary.h"
 #include "detector/detector.h"
 #include "tests/detector/accuracy.h"
+#include "tests/detector/sim_eval.h"
 
 using namespace mcmt;
 
@@ -38,11 +44,44 @@ cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, d
   im.margin_cells = Env("MARGIN", 1.0), im.surface = Env("SURFACE", 0.5);
   return testing::RenderReference(dict, scene, im, rng, truth);
 }
+
+// mcmt-sim's renders of the paper's rig as (image, truth) pairs for Refine below.
+void ForEachSimImage(
+    double blur, double radius, double marker_size, int frames,
+    const std::function<void(const cv::Mat&, const std::vector<testing::RenderedMarker>&)>& use) {
+  sim::RigOptions rig;
+  rig.num_cameras = 5, rig.radius = radius;
+  const std::vector<sim::SimCamera> cameras = sim::MakeRig(rig);
+  sim::ObjectOptions oo;
+  oo.kind = sim::ObjectKindFromName(std::getenv("OBJECT") ? std::getenv("OBJECT") : "four_sided");
+  oo.marker_size = marker_size;
+  const sim::SimObject object = sim::MakeObject(oo);
+  sim::TrajectoryOptions to;
+  to.frames = frames, to.seed = 3, to.fps = 3.0;
+  sim::RenderOptions ro;
+  ro.blur_sigma = blur, ro.noise_sigma = Env("NOISE", 2), ro.seed = 3;
+  ro.quiet_zone_cells = static_cast<int>(Env("QUIET", 1)), ro.surface_albedo = Env("ALBEDO", -1);
+  sim::Renderer renderer(object, "DICT_6X6_250", ro);
+  for (size_t c = 0; c < cameras.size(); ++c)
+    for (const sim::SimFrame& f : sim::MakeTrajectory(to)) {
+      std::vector<testing::RenderedMarker> truth;
+      for (const sim::MarkerView& v : sim::ProjectMarkers(cameras[c], object, f.rig_from_object)) {
+        if (!v.fully_visible || v.size_px < 15 || v.view_angle_deg > 75) continue;
+        testing::RenderedMarker t;
+        t.id = v.id, t.side_px = v.size_px, t.view_angle_deg = v.view_angle_deg;
+        for (int k = 0; k < 4; ++k) t.corners[k] = cv::Point2d(v.corners[k].x(), v.corners[k].y());
+        truth.push_back(t);
+      }
+      use(renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object), truth);
+    }
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES\n");
+    std::fprintf(stderr,
+                 "usage: diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES | sim BLUR_PX "
+                 "RADIUS_M SIZE_M FRAMES\n");
     return 2;
   }
   const bool reference = std::string(argv[1]) == "ref";
@@ -55,9 +94,8 @@ int main(int argc, char** argv) {
   testing::CornerErrors errors;
   int total = 0, refined = 0;
   double sigma_sum = 0;
-  for (int i = 0; i < images; ++i) {
-    std::vector<testing::RenderedMarker> truth;
-    const cv::Mat image = Render(*dict, reference, blur, side0, side1, rng, &truth);
+  std::map<int, std::vector<double>> per_id;
+  auto refine = [&](const cv::Mat& image, const std::vector<testing::RenderedMarker>& truth) {
     for (const testing::RenderedMarker& t : truth) {
       ++total;
       std::array<cv::Point2d, 4> c;
@@ -72,16 +110,27 @@ int main(int argc, char** argv) {
       testing::CornerErrors one;
       testing::AddCornerErrors(t, c, &one);
       testing::AddCornerErrors(t, c, &errors);
+      per_id[t.id].insert(per_id[t.id].end(), one.offsets.begin(), one.offsets.end());
       if (std::getenv("PER"))
         std::printf("id %d side %.1f px angle %.0f deg offset %+.3f px blur %.2f px\n", t.id, t.side_px,
                     t.view_angle_deg, testing::MeanOf(one.offsets), sigma);
     }
+  };
+  if (std::string(argv[1]) == "sim") {
+    ForEachSimImage(blur, side0, side1, images, refine);
+    for (const auto& [id, offsets] : per_id)
+      std::printf("id %d: %zu corners, offset %+.4f px\n", id, offsets.size(), testing::MeanOf(offsets));
+  }
+  for (int i = 0; i < images && std::string(argv[1]) != "sim"; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = Render(*dict, reference, blur, side0, side1, rng, &truth);
+    refine(image, truth);
   }
   const double mean = testing::MeanOf(errors.offsets);
   double var = 0;
   for (double o : errors.offsets) var += (o - mean) * (o - mean) / errors.offsets.size();
   std::printf(
-      "%s blur %.2f px, sides %.0f-%.0f px: refined %d of %d, offset %+.4f px (sd %.3f), median error %.3f "
+      "%s blur %.2f px, %.2f-%.2f: refined %d of %d, offset %+.4f px (sd %.3f), median error %.3f "
       "px, "
       "fitted blur %.2f px\n",
       argv[1], blur, side0, side1, refined, total, mean, std::sqrt(var), testing::MedianOf(errors.errors),
