@@ -13,7 +13,7 @@ namespace mcmt {
 namespace {
 
 constexpr int kRadius = 6;  // px, half width of every Gaussian (fixed: the model is smooth in its sigmas)
-constexpr int kSuper = 4;   // coverage samples per pixel and axis
+constexpr int kSuper = 8;   // coverage samples per pixel and axis
 constexpr int kPad = 8;     // px of surround around the marker's box
 // Shared parameters: gamma, amount, sigma; per marker: blur b, border level L0, white level L1, surround S.
 constexpr int kShared = 3, kOwn = 4;
@@ -116,9 +116,9 @@ std::string ToneEstimate::Describe() const {
   char line[320];
   std::snprintf(line, sizeof(line),
                 "gamma: %.2f, unsharp_amount: %.2f, unsharp_sigma: %.2f, unsharp_linear: %s (estimated from "
-                "%d markers%s; rms %.2f grey levels, the other order %.2f)",
+                "%d markers%s; rms %.2f grey levels; the other order %.2f / %.2f / %.2f px, rms %.2f)",
                 gamma, unsharp_amount, unsharp_sigma, unsharp_linear ? "true" : "false", markers,
-                ok ? "" : ", too few: not used", rms, rms_other);
+                ok ? "" : ", too few: not used", rms, other[0], other[1], other[2], rms_other);
   return line;
 }
 
@@ -196,7 +196,9 @@ ToneEstimate ToneEstimator::Estimate() const {
   e.ok = best.ok;
   e.gamma = best.shared[0], e.unsharp_amount = best.shared[1], e.unsharp_sigma = best.shared[2];
   e.unsharp_linear = use_linear;
-  e.rms = best.rms, e.rms_other = (use_linear ? encoded : linear).rms;
+  const OrderFit& other = use_linear ? encoded : linear;
+  e.rms = best.rms, e.rms_other = other.rms;
+  std::copy(other.shared.begin(), other.shared.end(), e.other.begin());
   return e;
 }
 

@@ -3,7 +3,7 @@
 //
 // Once a marker is decoded and its corners refined, every cell of it is known: its image inside the
 // outer edge is, in linear light, the border's level L0 with the code's white cells at L1, and outside
-// the marker some surround level S. The estimator renders that scene for each marker (4 x 4 samples per
+// the marker some surround level S. The estimator renders that scene for each marker (8 x 8 samples per
 // pixel through the homography of its corners), blurs it with the marker's own Gaussian blur b (optics
 // and defocus differ per marker), and puts it through the camera: an unsharp mask
 // y = (1 + amount) x - amount G_sigma x and the encoding 255 (x / 255)^(1 / gamma), in either order
@@ -27,11 +27,12 @@ struct ToneEstimate {
   bool ok = false;     // enough markers were fitted
   double gamma = 1.0;  // encoding 255 (v / 255)^(1 / gamma)
   double unsharp_amount = 0.0;
-  double unsharp_sigma = 1.0;   // px
-  bool unsharp_linear = false;  // sharpening of linear light (before the encoding)
-  int markers = 0;              // markers fitted
-  double rms = 0;               // residual of the chosen order, grey levels
-  double rms_other = 0;         // residual of the other order, grey levels
+  double unsharp_sigma = 1.0;     // px
+  bool unsharp_linear = false;    // sharpening of linear light (before the encoding)
+  int markers = 0;                // markers fitted
+  double rms = 0;                 // residual of the chosen order, grey levels
+  double rms_other = 0;           // residual of the other order, grey levels
+  std::array<double, 3> other{};  // the other order's gamma, amount, sigma
   // One line: the values as `detector:` keys (to put in a rig's config) and the fit's figures.
   std::string Describe() const;
   // The estimate as the detector's options: gamma (1 when within 0.1 of it: linear images), and the
