@@ -893,6 +893,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
     : markers_(markers), options_(options) {
   options_.Validate();
+  if (options_.tone == "auto") tone_ = std::make_unique<ToneEstimator>();
   dictionary_ = LoadDictionary(markers.dictionary);
   bits_.resize(dictionary_->bytesList.rows);
   // Rejected candidates are read again only where a random pattern is rarely taken for an id: the
@@ -1404,6 +1405,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     out.push_back(m);
   }
   stats_.markers += static_cast<long long>(out.size());
+  if (tone_) ObserveTone(gray, out);
   if (options_.fast) last_ = unique;
   return out;
 }

@@ -23,6 +23,7 @@
 
 #include "core/camera.h"
 #include "core/config.h"
+#include "detector/tone.h"
 #include "mcmt/detections_t.hpp"
 #include "mcmt/marker_t.hpp"
 
@@ -53,6 +54,12 @@ struct DetectorOptions {
   double unsharp_amount = 0.0;
   double unsharp_sigma = 1.0;  // px
   bool unsharp_linear = false;
+  // "edges": "given" (default): gamma and unsharp_* as above. "auto": estimated per camera from its
+  // first `tone_markers` decoded markers (at most 4 a frame, the largest; detector/tone.h: no board
+  // geometry), then used as if given; until then markers are refined with gamma 0 and no sharpening.
+  // The estimate is logged and kept in MarkerDetector::tone().
+  std::string tone = "given";
+  int tone_markers = 60;
 
   // Candidate search. "opencv" (default): cv::aruco::detectMarkers, always used with corner_refinement
   // other than "edges", aruco3 or inverted markers. "own": detector/candidates.h, binary images at two
@@ -159,6 +166,8 @@ class MarkerDetector {
   const DetectorStats& stats() const { return stats_; }
   const DetectorOptions& options() const { return options_; }
   const cv::aruco::Dictionary& dictionary() const { return *dictionary_; }
+  // tone "auto": the estimate once made (ok false before).
+  const ToneEstimate& tone() const { return tone_estimate_; }
 
  private:
   struct Raw {
@@ -193,6 +202,11 @@ class MarkerDetector {
   cv::Mat gamma_lut_;          // encoded value -> linear value
   cv::Mat unsharp_in_, unsharp_out_, unsharp_blur_;  // float regions of the unsharp mask's inverse
   DetectorStats stats_;
+  // tone "auto": the markers collected until the estimate is made (then null), frames seen.
+  void ObserveTone(const cv::Mat& gray, const std::vector<marker_t>& markers);
+  std::unique_ptr<ToneEstimator> tone_;
+  ToneEstimate tone_estimate_;
+  int tone_frames_seen_ = 0;
   // Fast mode state.
   std::vector<Raw> last_;
   int frames_since_full_ = 0;

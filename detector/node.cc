@@ -249,6 +249,8 @@ void DetectorNode::Run(const StopToken& stop) {
         stats_.frames ? stats_.detection_ms_total / stats_.frames : 0.0,
         static_cast<long long>(stats_.skipped), stop.stop_requested() ? " (stopped)" : "");
     std::cout << line << std::endl;
+    if (detector.options().tone == "auto")
+      std::cout << "camera " << options_.camera << ": tone auto: " << detector.tone().Describe() << std::endl;
   }
 }
 

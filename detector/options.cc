@@ -37,6 +37,12 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 InRange(0.3, 5))
            .Add("unsharp_linear", &O::unsharp_linear,
                 "edges: the camera sharpens linear light, before its transfer curve (needs gamma > 0)")
+           .Add("tone", &O::tone,
+                "edges: given (gamma, unsharp_* as set) or auto (estimated per camera from its first "
+                "tone_markers decoded markers, detector/tone.h)",
+                OneOf({"given", "auto"}))
+           .Add("tone_markers", &O::tone_markers, "markers",
+                "tone auto: markers fitted (at most 4 a frame, the largest)", InRange(kToneMinMarkers, 1000))
            .Add("candidate_search", &O::candidate_search,
                 "opencv (cv::aruco::detectMarkers) or own (tile-range binary images, detector/candidates.h)",
                 OneOf({"own", "opencv"}))
@@ -130,6 +136,8 @@ void DetectorOptions::Validate(const std::string& file) const {
                    std::to_string(adaptive_window_max));
   if (unsharp_linear && unsharp_amount > 0 && gamma <= 0)
     table.Fail(file, "unsharp_linear", "needs a known gamma (> 0), got gamma 0");
+  if (tone == "auto" && (gamma != 0 || unsharp_amount != 0))
+    table.Fail(file, "tone", "auto estimates gamma and unsharp_*: give neither with it");
 }
 
 void DetectorNodeOptions::LoadFromConfig(const RigConfig& rig) {

@@ -2,8 +2,10 @@
 // (tests/detector/reference_renderer.h): the imaging catalogue x marker sizes x view angles. Prints
 // markdown tables: per condition (all sizes 15-60 px and angles 0-75 deg), per size band and per angle band,
 // and small markers (10-15 px, cells below 2 px) per condition.
-//   bench_accuracy [--quick | images per cell (default 8)] [condition name substring | all] [known]
+//   bench_accuracy [--quick | images per cell (default 8)] [condition name substring | all] [known | auto]
 // "known": the detector is given each condition's gamma and sharpening (detector.gamma, unsharp_amount).
+// "auto": they are estimated per condition (detector.tone auto, detector/tone.h) from 48 markers of
+// renders of their own (seeds apart from the matrix's), printed, and given to the detector.
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
 // compare two builds' corners marker by marker.
 #include <cstdio>
@@ -36,6 +38,7 @@ int main(int argc, char** argv) {
   const char* only = argc > 2 && std::strcmp(argv[2], "all") != 0 ? argv[2] : nullptr;
   // "known": each condition's camera given to the detector as known (gamma, sharpening), not estimated.
   const bool known = argc > 3 && std::strcmp(argv[3], "known") == 0;
+  const bool automatic = argc > 3 && std::strcmp(argv[3], "auto") == 0;
   cv::setNumThreads(1);
   const auto& sizes = testing::kBenchSides;
   const auto& angles = testing::kBenchAngles;
@@ -43,6 +46,7 @@ int main(int argc, char** argv) {
               images);
   std::printf(kHeader, "condition");
   Accuracy all, all_stock, by_size[3], by_size_stock[3], by_angle[3], by_angle_stock[3];
+  std::vector<std::string> tones;  // "auto": each condition's estimate
   std::vector<std::pair<std::string, std::pair<Accuracy, Accuracy>>> small;  // per condition: mcmt, stock
   std::ofstream dump;
   if (const char* path = std::getenv("MCMT_CORNER_DUMP")) dump.open(path);
@@ -55,6 +59,11 @@ int main(int argc, char** argv) {
     DetectorOptions options;
     if (known && im.gamma != 1.0) options.gamma = im.gamma;
     if (known && im.sharpen > 0) options.unsharp_amount = im.sharpen, options.unsharp_sigma = 1.0;
+    if (automatic) {
+      const ToneEstimate tone = testing::EstimateToneOnReference(im, 48, 5000 + c);
+      tone.Apply(&options);
+      tones.push_back(im.name + ": " + tone.Describe());
+    }
     for (int s = 0; s < 3; ++s)
       for (int g = 0; g < 3; ++g) {
         const testing::ReferenceScene scene = testing::BenchScene(s, g);
@@ -116,5 +125,7 @@ int main(int argc, char** argv) {
     small_all.Add(acc.first), small_all_stock.Add(acc.second);
   }
   small_row("**all**", small_all, small_all_stock);
+  if (!tones.empty()) std::printf("\n#### Estimated tone (detector.tone auto, 48 markers per condition)\n\n");
+  for (const std::string& t : tones) std::printf("- %s\n", t.c_str());
   return 0;
 }

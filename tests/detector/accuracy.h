@@ -100,6 +100,26 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
   return a;
 }
 
+// The estimate a detector with tone auto (detector/tone.h) makes from its first `markers` markers
+// (at most 4 a frame) on reference renders of `imaging` (6 markers each, 25-60 px, 0-60 deg, from `seed`).
+inline ToneEstimate EstimateToneOnReference(const Imaging& imaging, int markers, uint64_t seed) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  DetectorOptions options;
+  options.tone = "auto";
+  options.tone_markers = markers;
+  MarkerDetector detector(mc, options);
+  ReferenceScene scene;
+  scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60;
+  std::mt19937_64 rng(seed);
+  for (int i = 0; i < 10 * markers && !detector.tone().ok; ++i) {
+    std::vector<RenderedMarker> truth;
+    detector.Detect(RenderReference(*dict, scene, imaging, rng, &truth));
+  }
+  return detector.tone();
+}
+
 // bench_accuracy's matrix: marker side bands x view angle bands, each cell of each condition of
 // ImagingCatalogue() rendered from its own seed (the same whichever conditions a run selects).
 constexpr double kBenchSides[3][2] = {{15, 25}, {25, 40}, {40, 60}};

@@ -38,6 +38,7 @@ struct Imaging {
   double shot_noise = 0.0;          // variance added per linear gray level (photon noise)
   double gamma = 1.0;               // encoding: 255 (v / 255)^(1 / gamma)
   double sharpen = 0.0;             // unsharp mask amount (sigma 1 px) after encoding
+  bool sharpen_linear = false;      // the unsharp mask on linear light, before the encoding
   int jpeg_quality = 0;             // 0: none
   double exposure = 255.0;          // linear gray level of a reflectance-1 surface in full light
 };
@@ -214,12 +215,19 @@ inline cv::Mat CameraPipeline(cv::Mat linear, const Imaging& im, std::mt19937_64
       v *= 1.0 - im.vignetting * ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2max;
       v += normal(rng) * std::sqrt(im.read_noise * im.read_noise + im.shot_noise * std::max(0.0, v));
       v = std::clamp(v, 0.0, 255.0);
-      encoded.at<double>(y, x) = 255.0 * std::pow(v / 255.0, 1.0 / im.gamma);
+      encoded.at<double>(y, x) = im.sharpen_linear ? v : 255.0 * std::pow(v / 255.0, 1.0 / im.gamma);
     }
-  if (im.sharpen > 0) {
+  auto sharpen = [&]() {
     cv::Mat smooth;
     cv::GaussianBlur(encoded, smooth, cv::Size(0, 0), 1.0);
     encoded = encoded + im.sharpen * (encoded - smooth);
+  };
+  if (im.sharpen_linear) {  // sharpened in linear light, then encoded
+    if (im.sharpen > 0) sharpen();
+    for (double& v : cv::Mat_<double>(encoded))
+      v = 255.0 * std::pow(std::max(v, 0.0) / 255.0, 1.0 / im.gamma);
+  } else if (im.sharpen > 0) {
+    sharpen();
   }
   cv::Mat out;
   encoded.convertTo(out, CV_8U);  // rounds and saturates
