@@ -567,12 +567,21 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
   int group_rows = 0, group_frame = -1;
+  Eigen::MatrixXd rr;                                                // a group's r^T r (upper triangle)
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt, xt;  // a frame's H_rf and H_rf H_ff^-1
   auto finish_group = [&]() {
     if (group_rows == 0) return;
     const auto r = jr.topRows(group_rows);
-    const Eigen::MatrixXd rr = r.transpose() * r;
-    for (size_t a = 0; a < cols.size(); ++a)
-      for (size_t b = 0; b < cols.size(); ++b) s(cols[a], cols[b]) += rr(a, b);
+    // Symmetric: the upper triangle, added to both halves.
+    rr.setZero(static_cast<int>(cols.size()), static_cast<int>(cols.size()));
+    rr.selfadjointView<Eigen::Upper>().rankUpdate(r.transpose());
+    for (size_t a = 0; a < cols.size(); ++a) {
+      s(cols[a], cols[a]) += rr(a, a);
+      for (size_t b = a + 1; b < cols.size(); ++b) {
+        s(cols[a], cols[b]) += rr(a, b);
+        s(cols[b], cols[a]) += rr(a, b);
+      }
+    }
     if (group_frame >= 0) {
       const auto f = jf.topRows(group_rows);
       hff += f.transpose() * f;
@@ -591,10 +600,18 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
   auto finish_frame = [&]() {
     finish_group();
     if (!seen.empty()) {
-      const Eigen::MatrixXd b = hrf.topRows(static_cast<int>(seen.size()));
-      const Eigen::MatrixXd update = b * Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(b.transpose());
-      for (size_t x = 0; x < seen.size(); ++x)
-        for (size_t y = 0; y < seen.size(); ++y) s(seen[x], seen[y]) -= update(x, y);
+      // B H_ff^-1 B^T, symmetric: each pair once, subtracted from both halves.
+      const int n = static_cast<int>(seen.size());
+      bt = hrf.topRows(n);
+      xt = Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(bt.transpose()).transpose();
+      for (int x = 0; x < n; ++x) {
+        s(seen[x], seen[x]) -= bt.row(x).dot(xt.row(x));
+        for (int y = x + 1; y < n; ++y) {
+          const double u = bt.row(x).dot(xt.row(y));
+          s(seen[x], seen[y]) -= u;
+          s(seen[y], seen[x]) -= u;
+        }
+      }
     }
     for (int c : seen) slot[c] = -1;
     seen.clear();
