@@ -567,32 +567,31 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
   int group_rows = 0, group_frame = -1;
-  Eigen::MatrixXd rr;                                                // a group's r^T r (upper triangle)
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt, xt;  // a frame's H_rf and H_rf H_ff^-1
   auto finish_group = [&]() {
     if (group_rows == 0) return;
-    const auto r = jr.topRows(group_rows);
-    // Symmetric: the upper triangle, added to both halves.
-    rr.setZero(static_cast<int>(cols.size()), static_cast<int>(cols.size()));
-    rr.selfadjointView<Eigen::Upper>().rankUpdate(r.transpose());
-    for (size_t a = 0; a < cols.size(); ++a) {
-      s(cols[a], cols[a]) += rr(a, a);
-      for (size_t b = a + 1; b < cols.size(); ++b) {
-        s(cols[a], cols[b]) += rr(a, b);
-        s(cols[b], cols[a]) += rr(a, b);
+    const int k = static_cast<int>(cols.size());
+    // Symmetric: each pair of columns once, added to both halves (plain loops: Eigen's products of these
+    // 8-row blocks of dynamic size cost several times their arithmetic).
+    for (int a = 0; a < k; ++a)
+      for (int b = a; b < k; ++b) {
+        double v = 0.0;
+        for (int i = 0; i < group_rows; ++i) v += jr(i, a) * jr(i, b);
+        s(cols[a], cols[b]) += v;
+        if (b != a) s(cols[b], cols[a]) += v;
       }
-    }
     if (group_frame >= 0) {
       const auto f = jf.topRows(group_rows);
       hff += f.transpose() * f;
-      const Eigen::MatrixXd rf = r.transpose() * f;
-      for (size_t a = 0; a < cols.size(); ++a) {
+      for (int a = 0; a < k; ++a) {
         if (slot[cols[a]] < 0) {
           slot[cols[a]] = static_cast<int>(seen.size());
           hrf.row(seen.size()).setZero();
           seen.push_back(cols[a]);
         }
-        hrf.row(slot[cols[a]]) += rf.row(a);
+        Eigen::Matrix<double, 1, 6> rf = Eigen::Matrix<double, 1, 6>::Zero();
+        for (int i = 0; i < group_rows; ++i) rf += jr(i, a) * jf.row(i);
+        hrf.row(slot[cols[a]]) += rf;
       }
     }
     group_rows = 0;
