@@ -119,24 +119,30 @@ std::vector<std::string> IntrinsicsNames(const CameraModel& model) {
   return names;
 }
 
-void IntrinsicsJacobian(const CameraModel& camera, double x, double y, double* out) {
-  const int n = 4 + static_cast<int>(camera.distortion.size());
+void IntrinsicsJacobian(CameraModel* camera, double x, double y, double* out) {
+  const int n = 4 + static_cast<int>(camera->distortion.size());
   Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>> j(out, 2, n);
   double xd, yd;
-  camera.Distort(x, y, &xd, &yd);
+  camera->Distort(x, y, &xd, &yd);
   j.leftCols<4>() << xd, 0, 1, 0, 0, yd, 0, 1;
-  if (n == 4) return;
-  CameraModel shifted = camera;
+  // Radtan with 4 or 5 coefficients and fisheye are affine in their coefficients: a forward difference is
+  // exact (n - 4 calls of Distort instead of 2 (n - 4)); the rational model's needs the central one.
+  const bool affine = !(camera->model == DistortionModel::kRadTan && camera->distortion.size() >= 8);
   const double h = 1e-4;
   for (int i = 0; i < n - 4; ++i) {
-    double xp = 0, yp = 0, xm = 0, ym = 0;
-    shifted.distortion[i] = camera.distortion[i] + h;
-    shifted.Distort(x, y, &xp, &yp);
-    shifted.distortion[i] = camera.distortion[i] - h;
-    shifted.Distort(x, y, &xm, &ym);
-    shifted.distortion[i] = camera.distortion[i];
-    j(0, 4 + i) = camera.fx * (xp - xm) / (2 * h);
-    j(1, 4 + i) = camera.fy * (yp - ym) / (2 * h);
+    double& coefficient = camera->distortion[i];
+    const double saved = coefficient;
+    double xp = 0, yp = 0, xm = xd, ym = yd;
+    coefficient = saved + h;
+    camera->Distort(x, y, &xp, &yp);
+    if (!affine) {
+      coefficient = saved - h;
+      camera->Distort(x, y, &xm, &ym);
+    }
+    coefficient = saved;
+    const double step = affine ? h : 2 * h;
+    j(0, 4 + i) = camera->fx * (xp - xm) / step;
+    j(1, 4 + i) = camera->fy * (yp - ym) / step;
   }
 }
 
@@ -162,7 +168,7 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
   const int intrinsics_block = with_intrinsics_ ? 3 : -1;
   const int time_block = with_time_ ? (with_intrinsics_ ? 4 : 3) : -1;
   const int drift_block = with_drift_ ? time_block + 1 : -1;
-  CameraModel refined;
+  CameraModel refined;  // also IntrinsicsJacobian's scratch (its coefficients shifted and restored)
   if (with_intrinsics_) refined = ModelWithIntrinsics(*camera_, parameters[intrinsics_block]);
   const CameraModel& camera = with_intrinsics_ ? refined : *camera_;
   const Rigid3 cam_from_rig = RigidFromBlock(parameters[0]);
@@ -217,7 +223,7 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
     }
     if (intrinsics_block >= 0 && jacobians[intrinsics_block]) {
       const double iz = 1.0 / p_cam.z();
-      IntrinsicsJacobian(camera, p_cam.x() * iz, p_cam.y() * iz,
+      IntrinsicsJacobian(&refined, p_cam.x() * iz, p_cam.y() * iz,
                          jacobians[intrinsics_block] + 2 * k * n_intr);
     }
     if (time_block >= 0 && (jacobians[time_block] || (drift_block >= 0 && jacobians[drift_block]))) {
@@ -561,23 +567,31 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
   int group_rows = 0, group_frame = -1;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt, xt;  // a frame's H_rf and H_rf H_ff^-1
   auto finish_group = [&]() {
     if (group_rows == 0) return;
-    const auto r = jr.topRows(group_rows);
-    const Eigen::MatrixXd rr = r.transpose() * r;
-    for (size_t a = 0; a < cols.size(); ++a)
-      for (size_t b = 0; b < cols.size(); ++b) s(cols[a], cols[b]) += rr(a, b);
+    const int k = static_cast<int>(cols.size());
+    // Symmetric: each pair of columns once, added to both halves (plain loops: Eigen's products of these
+    // 8-row blocks of dynamic size cost several times their arithmetic).
+    for (int a = 0; a < k; ++a)
+      for (int b = a; b < k; ++b) {
+        double v = 0.0;
+        for (int i = 0; i < group_rows; ++i) v += jr(i, a) * jr(i, b);
+        s(cols[a], cols[b]) += v;
+        if (b != a) s(cols[b], cols[a]) += v;
+      }
     if (group_frame >= 0) {
       const auto f = jf.topRows(group_rows);
       hff += f.transpose() * f;
-      const Eigen::MatrixXd rf = r.transpose() * f;
-      for (size_t a = 0; a < cols.size(); ++a) {
+      for (int a = 0; a < k; ++a) {
         if (slot[cols[a]] < 0) {
           slot[cols[a]] = static_cast<int>(seen.size());
           hrf.row(seen.size()).setZero();
           seen.push_back(cols[a]);
         }
-        hrf.row(slot[cols[a]]) += rf.row(a);
+        Eigen::Matrix<double, 1, 6> rf = Eigen::Matrix<double, 1, 6>::Zero();
+        for (int i = 0; i < group_rows; ++i) rf += jr(i, a) * jf.row(i);
+        hrf.row(slot[cols[a]]) += rf;
       }
     }
     group_rows = 0;
@@ -585,10 +599,18 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
   auto finish_frame = [&]() {
     finish_group();
     if (!seen.empty()) {
-      const Eigen::MatrixXd b = hrf.topRows(static_cast<int>(seen.size()));
-      const Eigen::MatrixXd update = b * Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(b.transpose());
-      for (size_t x = 0; x < seen.size(); ++x)
-        for (size_t y = 0; y < seen.size(); ++y) s(seen[x], seen[y]) -= update(x, y);
+      // B H_ff^-1 B^T, symmetric: each pair once, subtracted from both halves.
+      const int n = static_cast<int>(seen.size());
+      bt = hrf.topRows(n);
+      xt = Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(bt.transpose()).transpose();
+      for (int x = 0; x < n; ++x) {
+        s(seen[x], seen[x]) -= bt.row(x).dot(xt.row(x));
+        for (int y = x + 1; y < n; ++y) {
+          const double u = bt.row(x).dot(xt.row(y));
+          s(seen[x], seen[y]) -= u;
+          s(seen[y], seen[x]) -= u;
+        }
+      }
     }
     for (int c : seen) slot[c] = -1;
     seen.clear();
@@ -629,49 +651,178 @@ Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
 
 }  // namespace
 
-IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int threads) {
+namespace {
+
+// The unknowns of the information's Jacobian (JacobianForInformation): per parameter block its first
+// column (-1: held constant or unused) and its free entries' ambient indices (the tangent's order). Columns
+// in the order Ceres' Problem::GetParameterBlocks gives the blocks of BuildProblem (as first met among the
+// active observations' residual blocks), the frames' after the others (6 each).
+struct InformationColumns {
+  std::map<const double*, int> column;
+  std::map<const double*, std::vector<int>> free;
+  int num_reduced = 0;
+  int num_frames = 0;
+};
+
+// The parameter blocks of observation k's residual (AddSelfCalibrationResidual's order) and their sizes.
+std::vector<std::pair<double*, int>> ObservationBlocks(BundleProblem* bp, size_t k) {
+  const BundleObservation& o = bp->observations[k];
+  std::vector<std::pair<double*, int>> blocks = {{bp->cam_from_rig[o.camera].data(), 7},
+                                                 {bp->object_from_marker[o.marker].data(), 7},
+                                                 {bp->rig_from_object[o.frame].data(), 7}};
+  if (bp->RefinesIntrinsics(o.camera)) {
+    std::vector<double>& values = bp->intrinsics[o.camera].values;
+    blocks.push_back({values.data(), static_cast<int>(values.size())});
+  }
+  if (bp->RefinesTime()) blocks.push_back({&bp->time_offset_s[o.camera], 1});
+  if (bp->RefinesDrift()) blocks.push_back({&bp->time_drift[o.camera], 1});
+  return blocks;
+}
+
+// The free entries of a block of observation k's residual (empty: held constant), as BuildProblem holds
+// them (the gauge, time_offset_fixed, the intrinsics' constant entries).
+std::vector<int> FreeEntries(const BundleProblem& bp, size_t k, int block, int size) {
+  const BundleObservation& o = bp.observations[k];
+  auto fixed = [](const std::vector<char>& v, int i) { return static_cast<size_t>(i) < v.size() && v[i]; };
+  const bool intrinsics = bp.RefinesIntrinsics(o.camera);
+  bool constant = (block == 0 && fixed(bp.camera_fixed, o.camera)) ||
+                  (block == 1 && fixed(bp.marker_fixed, o.marker)) ||
+                  (block == 2 && fixed(bp.frame_fixed, o.frame)) ||
+                  (block > (intrinsics ? 3 : 2) && fixed(bp.time_offset_fixed, o.camera));
+  std::vector<int> free;
+  if (constant) return free;
+  const std::vector<int>* held = block == 3 && intrinsics ? &bp.intrinsics[o.camera].constant : nullptr;
+  for (int i = 0; i < (size == 7 ? 6 : size); ++i)
+    if (!held || std::find(held->begin(), held->end(), i) == held->end()) free.push_back(i);
+  return free;
+}
+
+InformationColumns ColumnsForInformation(BundleProblem* bp) {
+  InformationColumns out;
+  std::vector<const double*> frames;
+  for (size_t k = 0; k < bp->observations.size(); ++k) {
+    if (!bp->active[k]) continue;
+    const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      if (out.free.count(blocks[b].first)) continue;
+      out.free[blocks[b].first] = FreeEntries(*bp, k, static_cast<int>(b), blocks[b].second);
+      if (out.free[blocks[b].first].empty()) continue;
+      if (b == 2) {
+        frames.push_back(blocks[b].first);
+      } else {
+        out.column[blocks[b].first] = out.num_reduced;
+        out.num_reduced += static_cast<int>(out.free[blocks[b].first].size());
+      }
+    }
+  }
+  for (size_t f = 0; f < frames.size(); ++f)
+    out.column[frames[f]] = out.num_reduced + 6 * static_cast<int>(f);
+  out.num_frames = static_cast<int>(frames.size());
+  return out;
+}
+
+// Appends one residual block's rows to `j`: `jacobians` per block (ambient, row-major), the columns of
+// each block's free entries in increasing column order (as Ceres writes a CRS row).
+void AppendRows(int num_residuals, const std::vector<std::pair<const double*, int>>& blocks,
+                const std::vector<const double*>& jacobians, const InformationColumns& columns,
+                ceres::CRSMatrix* j) {
+  std::vector<std::pair<int, std::pair<int, int>>> entries;  // (column, (block, ambient index))
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const auto it = columns.column.find(blocks[b].first);
+    if (it == columns.column.end()) continue;
+    const std::vector<int>& free = columns.free.at(blocks[b].first);
+    for (size_t a = 0; a < free.size(); ++a)
+      entries.push_back({it->second + static_cast<int>(a), {static_cast<int>(b), free[a]}});
+  }
+  std::sort(entries.begin(), entries.end());
+  for (int r = 0; r < num_residuals; ++r) {
+    for (const auto& e : entries) {
+      j->cols.push_back(e.first);
+      j->values.push_back(jacobians[e.second.first][r * blocks[e.second.first].second + e.second.second]);
+    }
+    j->rows.push_back(static_cast<int>(j->cols.size()));
+  }
+  j->num_rows += num_residuals;
+}
+
+// Rows of the priors (AddSelfCalibrationBlocks' order: per camera in use, its intrinsics' then its drift's).
+void AppendPriorRows(BundleProblem* bp, const InformationColumns& columns, ceres::CRSMatrix* j) {
+  std::vector<char> used(bp->cam_from_rig.size(), 0);
+  for (size_t k = 0; k < bp->observations.size(); ++k)
+    if (bp->active[k]) used[bp->observations[k].camera] = 1;
+  for (size_t c = 0; c < used.size(); ++c) {
+    if (!used[c]) continue;
+    if (bp->RefinesIntrinsics(static_cast<int>(c))) {
+      const BundleIntrinsics& in = bp->intrinsics[c];
+      const int n = static_cast<int>(in.values.size());
+      std::vector<double> a(n * n, 0.0);
+      for (int k = 0; k < n; ++k)
+        if (in.sigma[k] > 0) a[k * n + k] = in.prior_scale_px / in.sigma[k];
+      AppendRows(n, {{in.values.data(), n}}, {a.data()}, columns, j);
+    }
+    if (bp->RefinesDrift() && !bp->time_offset_fixed[c]) {
+      const double a = 1.0 / kDriftPriorSigma;
+      AppendRows(1, {{&bp->time_drift[c], 1}}, {&a}, columns, j);
+    }
+  }
+}
+
+// The Jacobian (corner residuals without loss, then the priors) at the current parameters over the free
+// unknowns, in the CRS layout Ceres' Problem::Evaluate gives for BuildProblem's problem with the frames'
+// columns last: the same values and order, without building the problem. False when a corner is behind
+// its camera.
+bool JacobianForInformation(BundleProblem* bp, const InformationColumns& columns, ceres::CRSMatrix* j) {
+  j->num_cols = columns.num_reduced + 6 * columns.num_frames;
+  j->num_rows = 0;
+  j->rows = {0};
+  for (size_t k = 0; k < bp->observations.size(); ++k) {
+    if (!bp->active[k]) continue;
+    const BundleObservation& o = bp->observations[k];
+    ObservationTime time;
+    time.time_s = o.time_s;
+    time.with_drift = bp->RefinesDrift();
+    time.clock_s = o.clock_s;
+    if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
+    const SelfCalibrationCost cost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
+                                   bp->RefinesTime() ? &time : nullptr);
+    const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
+    std::vector<std::vector<double>> jacobian(blocks.size());
+    std::vector<const double*> parameters, jacobians;
+    std::vector<double*> writable;
+    std::vector<std::pair<const double*, int>> sizes;
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      jacobian[b].assign(8 * blocks[b].second, 0.0);
+      parameters.push_back(blocks[b].first);
+      writable.push_back(jacobian[b].data());
+      jacobians.push_back(jacobian[b].data());
+      sizes.push_back(blocks[b]);
+    }
+    double residuals[8];
+    if (!cost.Evaluate(parameters.data(), residuals, writable.data())) return false;
+    AppendRows(8, sizes, jacobians, columns, j);
+  }
+  AppendPriorRows(bp, columns, j);
+  return true;
+}
+
+}  // namespace
+
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/) {
   IntrinsicsInformation out;
   out.column.assign(bp->cam_from_rig.size(), -1);
   out.entries.resize(bp->cam_from_rig.size());
-  BuiltProblem built;
-  BuildProblem(bp, 0.0, 0.0, &built);
-  delete built.ordering;
-  if (built.num_corners == 0) return out;
-  ceres::Problem& problem = *built.problem;
-  std::vector<double*> all, blocks, frames;
-  problem.GetParameterBlocks(&all);
-  std::map<const double*, int> column;
-  int cols = 0;
-  const double* first_frame = bp->rig_from_object.empty() ? nullptr : bp->rig_from_object.front().data();
-  const double* end_frame = first_frame + 7 * bp->rig_from_object.size();
-  for (double* b : all) {
-    if (problem.IsParameterBlockConstant(b)) continue;
-    if (b >= first_frame && b < end_frame) {
-      frames.push_back(b);
-      continue;
-    }
-    blocks.push_back(b);
-    column[b] = cols;
-    cols += problem.ParameterBlockTangentSize(b);
-  }
-  const int num_reduced = cols;
-  blocks.insert(blocks.end(), frames.begin(), frames.end());  // the frames' columns last, 6 each
-  ceres::Problem::EvaluateOptions eo;
-  eo.parameter_blocks = blocks;
-  eo.apply_loss_function = false;
-  eo.num_threads = std::max(1, threads);
+  const InformationColumns columns = ColumnsForInformation(bp);
+  if (columns.column.empty()) return out;
   ceres::CRSMatrix crs;
-  if (!problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs)) return out;
-  out.information = FramesMarginalised(crs, num_reduced);
+  if (!JacobianForInformation(bp, columns, &crs)) return out;
+  out.information = FramesMarginalised(crs, columns.num_reduced);
   for (size_t c = 0; c < out.column.size(); ++c) {
     if (!bp->RefinesIntrinsics(static_cast<int>(c))) continue;
     const BundleIntrinsics& in = bp->intrinsics[c];
-    const auto it = column.find(in.values.data());
-    if (it == column.end()) continue;
+    const auto it = columns.column.find(in.values.data());
+    if (it == columns.column.end()) continue;
     out.column[c] = it->second;
-    for (int k = 0; k < static_cast<int>(in.values.size()); ++k)
-      if (std::find(in.constant.begin(), in.constant.end(), k) == in.constant.end())
-        out.entries[c].push_back(k);
+    out.entries[c] = columns.free.at(in.values.data());
   }
   return out;
 }

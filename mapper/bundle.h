@@ -68,8 +68,9 @@ struct ObservationTime {
 //   d p_rig / d drift = clock_s * d p_rig / d offset
 //   d pixel / d(fx, fy, cx, cy) = [[xd, 0, 1, 0], [0, yd, 0, 1]],  d pixel / d k_i = diag(fx, fy) d(xd, yd) /
 //   d k_i
-// (the distortion is affine in its coefficients for radtan with 4 or 5 and for fisheye: the central
-// difference of the public Distort is exact there; for the rational 8-coefficient model it is O(h^2)).
+// (the distortion is affine in its coefficients for radtan with 4 or 5 and for fisheye: a forward
+// difference of the public Distort is exact there; for the rational 8-coefficient model a central one,
+// O(h^2)).
 class SelfCalibrationCost : public ceres::CostFunction {
  public:
   SelfCalibrationCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
@@ -109,8 +110,9 @@ class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
   SelfCalibrationCost cost_;  // with the intrinsics given and no clock
 };
 
-// d pixel / d intrinsics (2 x (4 + n), row-major into `out`) at normalised coordinates (x, y).
-void IntrinsicsJacobian(const CameraModel& camera, double x, double y, double* out);
+// d pixel / d intrinsics (2 x (4 + n), row-major into `out`) at normalised coordinates (x, y). `camera`'s
+// distortion coefficients are shifted for the differences and restored (no copy of the model per corner).
+void IntrinsicsJacobian(CameraModel* camera, double x, double y, double* out);
 
 struct BundleObservation {
   int camera = 0;
