@@ -5,7 +5,8 @@
 //   bench_accuracy [--quick | images per cell (default 8)] [condition name substring | all] [known]
 // "known": the detector is given each condition's gamma and sharpening (detector.gamma, unsharp_amount).
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
-// compare two builds' corners marker by marker.
+// compare two builds' corners marker by marker. MCMT_CANDIDATE_SEARCH=opencv|own: the detector's
+// candidate_search.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
     if (only && !std::strstr(im.name.c_str(), only)) continue;
     Accuracy cond, cond_stock;
     DetectorOptions options;
+    if (const char* search = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = search;
     if (known && im.gamma != 1.0) options.gamma = im.gamma;
     if (known && im.sharpen > 0) options.unsharp_amount = im.sharpen, options.unsharp_sigma = 1.0;
     for (int s = 0; s < 3; ++s)
