@@ -173,26 +173,72 @@ bool QuadFromBoundary(const std::vector<cv::Point>& c, const QuadSearch& s, cv::
 
 }  // namespace
 
-std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search) {
+QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gray), search_(search) {
   CV_Assert(gray.type() == CV_8UC1);
-  const int t = std::max(1, search.tile_px);
-  std::vector<uint8_t> lo, hi;
-  TileRanges(gray, t, &lo, &hi);
-  std::vector<std::array<cv::Point2d, 4>> quads;
-  cv::Mat binary;
-  std::vector<std::vector<cv::Point>> contours;
-  std::vector<cv::Vec4i> hierarchy;
-  for (double level : search.levels) {
-    LevelBinary(gray, t, lo, hi, level, search.min_contrast, &binary);
-    // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
-    cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
-    for (size_t i = 0; i < contours.size(); ++i) {
-      if (hierarchy[i][3] >= 0) continue;
-      const double length = static_cast<double>(contours[i].size());
-      if (length < search.min_perimeter || length > search.max_perimeter) continue;
-      std::array<cv::Point2d, 4> quad;
-      if (QuadFromBoundary(contours[i], search, gray.size(), &quad)) quads.push_back(quad);
+  search_.tile_px = std::max(1, search.tile_px);
+  const int t = search_.tile_px;
+  tiles_wide_ = (gray.cols + t - 1) / t, tiles_high_ = (gray.rows + t - 1) / t;
+  TileRanges(gray, t, &lo_, &hi_);
+}
+
+std::vector<std::array<cv::Point2d, 4>> QuadFinder::Find(double level) {
+  LevelBinary(gray_, search_.tile_px, lo_, hi_, level, search_.min_contrast, &binary_);
+  return Quads();
+}
+
+std::vector<std::array<cv::Point2d, 4>> QuadFinder::FindBelowMean(int window_px, double offset) {
+  cv::adaptiveThreshold(gray_, binary_, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window_px,
+                        offset);
+  // Only tiles with contrast, not covered (a row of tile masks per row of tiles).
+  const int t = search_.tile_px;
+  std::vector<uint8_t> mask(static_cast<size_t>(tiles_wide_) * t);
+  for (int ty = 0; ty < tiles_high_; ++ty) {
+    for (int tx = 0; tx < tiles_wide_; ++tx) {
+      const bool on = hi_[ty * tiles_wide_ + tx] - lo_[ty * tiles_wide_ + tx] >= search_.min_contrast;
+      std::fill(mask.begin() + tx * t, mask.begin() + tx * t + t, on ? 255 : 0);
     }
+    const uint8_t* __restrict m = mask.data();
+    for (int y = ty * t; y < std::min(binary_.rows, ty * t + t); ++y) {
+      uint8_t* __restrict out = binary_.ptr<uint8_t>(y);
+      for (int x = 0; x < binary_.cols; ++x) out[x] &= m[x];
+    }
+  }
+  return Quads();
+}
+
+std::vector<std::array<cv::Point2d, 4>> QuadFinder::Quads() {
+  std::vector<std::array<cv::Point2d, 4>> quads;
+  // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
+  cv::findContours(binary_, contours_, hierarchy_, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
+  for (size_t i = 0; i < contours_.size(); ++i) {
+    if (hierarchy_[i][3] >= 0) continue;
+    const double length = static_cast<double>(contours_[i].size());
+    if (length < search_.min_perimeter || length > search_.max_perimeter) continue;
+    std::array<cv::Point2d, 4> quad;
+    if (QuadFromBoundary(contours_[i], search_, gray_.size(), &quad)) quads.push_back(quad);
+  }
+  return quads;
+}
+
+void QuadFinder::Cover(const std::array<cv::Point2d, 4>& quad, double grow_px) {
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const cv::Point2d& c : quad)
+    x0 = std::min(x0, c.x), y0 = std::min(y0, c.y), x1 = std::max(x1, c.x), y1 = std::max(y1, c.y);
+  const int t = search_.tile_px;
+  const int tx0 = std::max(0, static_cast<int>(std::floor((x0 - grow_px) / t)));
+  const int ty0 = std::max(0, static_cast<int>(std::floor((y0 - grow_px) / t)));
+  const int tx1 = std::min(tiles_wide_ - 1, static_cast<int>(std::floor((x1 + grow_px) / t)));
+  const int ty1 = std::min(tiles_high_ - 1, static_cast<int>(std::floor((y1 + grow_px) / t)));
+  for (int ty = ty0; ty <= ty1; ++ty)
+    for (int tx = tx0; tx <= tx1; ++tx) lo_[ty * tiles_wide_ + tx] = 255, hi_[ty * tiles_wide_ + tx] = 0;
+}
+
+std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search) {
+  QuadFinder finder(gray, search);
+  std::vector<std::array<cv::Point2d, 4>> quads;
+  for (double level : search.levels) {
+    const std::vector<std::array<cv::Point2d, 4>> found = finder.Find(level);
+    quads.insert(quads.end(), found.begin(), found.end());
   }
   return quads;
 }

@@ -31,4 +31,28 @@ struct QuadSearch {
 // image coordinates (clockwise on screen, OpenCV's candidate order).
 std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const QuadSearch& search);
 
+// The same search one level at a time, the tiles' ranges computed once: a caller that reads each
+// level's quads covers the markers it found (Cover), and later levels look only at the tiles left.
+class QuadFinder {
+ public:
+  QuadFinder(const cv::Mat& gray, const QuadSearch& search);
+  // Quads of the binary image at `level` (search.levels are not used), outside covered tiles.
+  std::vector<std::array<cv::Point2d, 4>> Find(double level);
+  // Quads of the binary image dark below the mean of a `window_px` square less `offset` grey levels
+  // (OpenCV's adaptive threshold), outside covered tiles and tiles below min_contrast.
+  std::vector<std::array<cv::Point2d, 4>> FindBelowMean(int window_px, double offset);
+  // The tiles the quad touches (its bounding box grown by `grow_px`) are searched no more.
+  void Cover(const std::array<cv::Point2d, 4>& quad, double grow_px);
+
+ private:
+  cv::Mat gray_;
+  QuadSearch search_;
+  int tiles_wide_ = 0, tiles_high_ = 0;
+  std::vector<uint8_t> lo_, hi_;  // per tile: range of its 3 x 3 tiles; covered tiles: lo_ 255, hi_ 0
+  cv::Mat binary_;
+  std::vector<std::array<cv::Point2d, 4>> Quads();  // of binary_
+  std::vector<std::vector<cv::Point>> contours_;
+  std::vector<cv::Vec4i> hierarchy_;
+};
+
 }  // namespace mcmt

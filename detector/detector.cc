@@ -908,7 +908,9 @@ MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOption
   reread_ = options_.reread_rejected && !options_.inverted && chance < 1e-3;
   // The own search reads every quad it finds: a border cell of the other colour only where random
   // patterns are rarely ids.
-  own_border_errors_ = chance < 1e-3 ? 1 : 0;
+  // Six of the 28 border cells of DICT_6X6 (blurred markers at 60-75 deg read their thin border's
+  // cells next to white code cells as white; OpenCV allows 35 % of them).
+  own_border_errors_ = chance < 1e-3 ? 6 : 0;
 }
 
 MarkerDetector::~MarkerDetector() = default;
@@ -1005,25 +1007,36 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
   QuadSearch search;
   search.tile_px = options_.threshold_tile_px;
   search.min_contrast = options_.min_tile_contrast;
-  // A second binary image at another level: on a grey surface (no margin) a marker is one component
-  // with the surface at the mid level.
-  search.levels = {options_.threshold_level};
-  if (options_.second_threshold_level > 0) search.levels.push_back(options_.second_threshold_level);
   search.min_perimeter = min_perimeter;
   search.max_perimeter = max_perimeter;
   search.max_deviation_rate = options_.polygonal_approx_rate;
   search.min_side_rate = options_.min_corner_distance_rate;
   search.min_distance_to_border = options_.min_distance_to_border;
-  const std::vector<std::array<cv::Point2d, 4>> quads = FindQuads(gray(roi), search);
+  QuadFinder finder(gray(roi), search);
+  // The mid level first; then, on the tiles where no marker was found yet, a lower level (on a grey
+  // surface without margin the marker is one component with the surface at the mid level), a still
+  // lower one (a thin blurred margin on a dark surface is dark at the others), a higher one (a blurred
+  // border breaks at the mid level where the code's bright cells touch it), and last a local mean's
+  // threshold (OpenCV's adaptive threshold: thin margins at 60-75 deg under gamma and sharpening).
   std::vector<Raw> out;
-  for (std::array<cv::Point2d, 4> quad : quads) {
-    for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-    // Read at the quad's cell centres with a dark border (at most own_border_errors_ border cells
-    // bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level crossings.
-    Raw r;
-    if (ReadCode(gray, quad, quad, 1, own_border_errors_, &r) ||
-        (reread_ && RereadCandidate(gray, quad, &r))) {
-      if (markers_.Accepts(r.id)) out.push_back(r);
+  for (double level : {options_.threshold_level, options_.second_threshold_level,
+                       options_.low_threshold_level, options_.high_threshold_level, -1.0}) {
+    if (level == 0 || (level < 0 && options_.mean_window_px == 0)) continue;
+    for (std::array<cv::Point2d, 4> quad :
+         level > 0 ? finder.Find(level)
+                   : finder.FindBelowMean(options_.mean_window_px, options_.adaptive_constant)) {
+      for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
+      // Read at the quad's cell centres with a dark border (at most own_border_errors_ border cells
+      // bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level crossings.
+      Raw r;
+      if (!ReadCode(gray, quad, quad, 1, own_border_errors_, &r) &&
+          !(reread_ && RereadCandidate(gray, quad, &r)))
+        continue;
+      if (!markers_.Accepts(r.id)) continue;
+      out.push_back(r);
+      std::array<cv::Point2d, 4> local = quad;
+      for (auto& c : local) c -= cv::Point2d(roi.x, roi.y);
+      finder.Cover(local, 0.0);
     }
   }
   return out;

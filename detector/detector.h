@@ -64,13 +64,17 @@ struct DetectorOptions {
   // Candidate search. "opencv" (default): cv::aruco::detectMarkers, always used with corner_refinement
   // other than "edges", aruco3 or inverted markers. "own": detector/candidates.h, binary images at two
   // levels of the tiles' range, each quad read at its cell centres (dark border, ids by the dictionary).
-  // "own" takes about half the search's instructions but loses recall at 60-75 deg under blur, gamma
-  // and half-cell margins on black (BENCHMARKS.md, issue 15), hence not the default.
+  // "own" takes fewer instructions; its recall is OpenCV's over the catalogue but not yet in every
+  // condition (bench/results/2026-12-04-search2.md: blur 1.2 and webcam at 60-75 deg), hence not the
+  // default.
   std::string candidate_search = "opencv";
   int threshold_tile_px = 4;             // "own": threshold tile side (range over 3 x 3 tiles)
   int min_tile_contrast = 30;            // "own": grey levels; less range: no dark pixels
   double threshold_level = 0.5;          // "own": dark below min + level * (max - min) of 3 x 3 tiles
-  double second_threshold_level = 0.35;  // "own": a second binary image at this level (0: none)
+  double second_threshold_level = 0.35;  // "own": a second binary image at this level (0: none) ...
+  double low_threshold_level = 0.25;     // "own": ... and these two, on the tiles where no marker was
+  double high_threshold_level = 0.65;    // found at the levels before (0: none)
+  int mean_window_px = 5;  // "own": last, there, dark below the mean of this window - adaptive_constant
   // OpenCV candidate search.
   int adaptive_window_min = 5;  // adaptive threshold window sizes: min, max, step (odd sizes)
   int adaptive_window_max = 15;

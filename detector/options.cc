@@ -58,6 +58,20 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
            .Add("second_threshold_level", &O::second_threshold_level, "",
                 "own candidate search: a second binary image at this level (0: none)",
                 InRange(0, 1, false, true))
+           .Add("low_threshold_level", &O::low_threshold_level, "",
+                "own candidate search: a binary image at this level on the tiles where no marker was found "
+                "at the levels before (0: none)",
+                InRange(0, 1, false, true))
+           .Add("high_threshold_level", &O::high_threshold_level, "",
+                "own candidate search: the last binary image's level, on the tiles where no marker was found "
+                "yet (0: none)",
+                InRange(0, 1, false, true))
+           .Add("mean_window_px", &O::mean_window_px, "px",
+                "own candidate search: last, on the tiles where no marker was found, dark below the mean of "
+                "this window less adaptive_constant (odd; 0: none)",
+                NumberCheck{
+                    "must be 0 or odd and >= 3",
+                    [](const double& v) { return v == 0 || (v >= 3 && static_cast<int>(v) % 2 == 1); }})
            .Add("adaptive_window_min", &O::adaptive_window_min, "px", "adaptive threshold window: smallest",
                 AtLeast(3))
            .Add("adaptive_window_max", &O::adaptive_window_max, "px",

@@ -7,7 +7,8 @@
 // "auto": they are estimated per condition (detector.tone auto, detector/tone.h) from 48 markers of
 // renders of their own (seeds apart from the matrix's), printed, and given to the detector.
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
-// compare two builds' corners marker by marker.
+// compare two builds' corners marker by marker. MCMT_CANDIDATE_SEARCH=opencv|own: the detector's
+// candidate_search.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
     if (only && !std::strstr(im.name.c_str(), only)) continue;
     Accuracy cond, cond_stock;
     DetectorOptions options;
+    if (const char* search = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = search;
     if (known && im.gamma != 1.0) options.gamma = im.gamma;
     if (known && im.sharpen > 0) options.unsharp_amount = im.sharpen, options.unsharp_sigma = 1.0;
     if (automatic) {

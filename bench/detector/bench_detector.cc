@@ -4,7 +4,7 @@
 //   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
 // (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_BLUR=sigma: renders blurred by a
 // Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
-// by more than 0.02 px, on stderr.)
+// by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -80,6 +80,8 @@ int main(int argc, char** argv) {
       if (std::getenv("MCMT_BENCH_PASSES"))
         accurate_options.edge_passes = std::atoi(std::getenv("MCMT_BENCH_PASSES"));
       fast_options.fast = true;
+      if (const char* search = std::getenv("MCMT_CANDIDATE_SEARCH"))
+        accurate_options.candidate_search = fast_options.candidate_search = search;
       MarkerDetector accurate(mc, accurate_options), fast(mc, fast_options);
       accurate.SetCamera(cameras[c].model);
       fast.SetCamera(cameras[c].model);

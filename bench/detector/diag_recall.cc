@@ -6,6 +6,9 @@
 //   diag_recall CONDITION_SUBSTRING [images per cell (3)] [DIR (/tmp/recall_diag)]
 //   diag_recall --cost: thread CPU time of Detect on the catalogue's renders with and without
 //   reread_rejected, and how many rejected candidates were read again.
+//   diag_recall --own CONDITION [images per cell (3)]: markers the OpenCV candidate search finds and the
+//   own one (candidate_search "own") misses, and the other way round, with the nearest quad FindQuads
+//   gives at each threshold level (mean corner distance to the truth, px).
 #include <sys/stat.h>
 #include <time.h>
 
@@ -14,6 +17,7 @@
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
 
+#include "detector/candidates.h"
 #include "tests/detector/accuracy.h"
 
 using namespace mcmt;
@@ -31,6 +35,83 @@ double MeanCornerDistance(const std::vector<cv::Point>& poly, const std::array<c
       best = std::min(best, d);
     }
   return best;
+}
+
+// Mean corner distance of the nearest quad of `quads` to `truth` (any rotation and direction).
+double NearestQuad(const std::vector<std::array<cv::Point2d, 4>>& quads,
+                   const std::array<cv::Point2d, 4>& truth) {
+  double best = 1e9;
+  for (const auto& q : quads) {
+    std::vector<cv::Point> poly;
+    for (const auto& c : q) poly.emplace_back(cvRound(c.x * 16), cvRound(c.y * 16));
+    std::array<cv::Point2d, 4> t16;
+    for (int k = 0; k < 4; ++k) t16[k] = truth[k] * 16;
+    best = std::min(best, MeanCornerDistance(poly, t16) / 16);
+  }
+  return best;
+}
+
+int CompareSearches(const char* only, int images) {
+  cv::setNumThreads(1);
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  DetectorOptions opencv, own;
+  own.candidate_search = "own";
+  int lost = 0, gained = 0;
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  for (size_t c = 0; c < catalogue.size(); ++c) {
+    const testing::Imaging& im = catalogue[c];
+    if (std::strcmp(only, "all") != 0 && !std::strstr(im.name.c_str(), only)) continue;
+    for (int s = 0; s < 3; ++s)
+      for (int g = 0; g < 3; ++g) {
+        const testing::ReferenceScene scene = testing::BenchScene(s, g);
+        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+        MarkerDetector a(mc, opencv), b(mc, own);
+        std::mt19937_64 rng(seed);
+        for (int i = 0; i < images; ++i) {
+          std::vector<testing::RenderedMarker> truth;
+          const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+          const std::vector<marker_t> fa = a.Detect(image), fb = b.Detect(image);
+          for (const auto& m : fb) {
+            bool known = false;
+            for (const auto& t : truth) known = known || t.id == m.id;
+            if (!known)
+              std::printf("%s: WRONG id %d seed %llu image %d\n", im.name.c_str(), m.id,
+                          static_cast<unsigned long long>(seed), i);
+          }
+          for (const auto& t : truth) {
+            if (t.view_angle_deg > 75 || t.side_px < 20) continue;
+            bool ha = false, hb = false;
+            for (const auto& m : fa) ha = ha || m.id == t.id;
+            for (const auto& m : fb) hb = hb || m.id == t.id;
+            if (ha == hb) continue;
+            (ha ? lost : gained) += 1;
+            std::printf(
+                "%s: %s seed %llu image %d id %d side %.1f px angle %.1f deg centre (%.0f, %.0f); quads:",
+                im.name.c_str(), ha ? "LOST" : "gained", static_cast<unsigned long long>(seed), i, t.id,
+                t.side_px, t.view_angle_deg, 0.5 * (t.corners[0].x + t.corners[2].x),
+                0.5 * (t.corners[0].y + t.corners[2].y));
+            for (double level : {own.threshold_level, own.second_threshold_level, 0.25, 0.65}) {
+              QuadSearch q;
+              q.tile_px = own.threshold_tile_px, q.min_contrast = own.min_tile_contrast, q.levels = {level};
+              q.min_perimeter = own.min_perimeter_px, q.max_deviation_rate = own.polygonal_approx_rate;
+              q.min_side_rate = own.min_corner_distance_rate;
+              std::printf(" %.2f: %.2f", level, NearestQuad(FindQuads(image, q), t.corners));
+            }
+            std::printf("\n");
+            char name[256];
+            std::snprintf(name, sizeof(name), "/tmp/recall_diag/own_s%llu_i%d.png",
+                          static_cast<unsigned long long>(seed), i);
+            mkdir("/tmp/recall_diag", 0755);
+            cv::imwrite(name, image);
+          }
+        }
+      }
+  }
+  std::printf("own search: lost %d, gained %d markers (>= 20 px, <= 75 deg) against opencv's\n", lost,
+              gained);
+  return 0;
 }
 }  // namespace
 
@@ -66,6 +147,8 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
+  if (std::strcmp(argv[1], "--own") == 0 && argc > 2)
+    return CompareSearches(argv[2], argc > 3 ? std::atoi(argv[3]) : 3);
   const char* only = argv[1];
   const int images = argc > 2 ? std::atoi(argv[2]) : 3;
   const std::string dir = argc > 3 ? argv[3] : "/tmp/recall_diag";

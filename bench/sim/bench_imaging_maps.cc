@@ -17,6 +17,7 @@
 //                               farther than PX from the truth: an oracle, for measuring only), "angle:DEG"
 //                               (view angle above DEG)
 //   MCMT_VIEW_WEIGHT_POWER=P    the mapper's view_weight_power (both maps)
+//   MCMT_CANDIDATE_SEARCH=S     the detector's candidate_search (opencv or own)
 #include <time.h>
 
 #include <algorithm>
@@ -173,7 +174,9 @@ int main(int argc, char** argv) {
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);
       long long detected = 0;
       for (size_t c = 0; c < cameras.size(); ++c) {
-        MarkerDetector detector(session.markers, DetectorOptions());
+        DetectorOptions options;
+        if (const char* e = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = e;
+        MarkerDetector detector(session.markers, options);
         detector.SetCamera(cameras[c].model);
         for (const sim::SimFrame& f : trajectory) {
           detections_t d = session.Detect(renderer, c, f, &detector);
