@@ -561,6 +561,25 @@ struct InformationRows {
 // unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). The
 // residual blocks are added frame by frame (the rows without a frame first), each frame's in the order of
 // the observations; consecutive blocks with the same columns are gathered and added as one product.
+// Adds J^T J of the first `rows` rows of column-major `j` (leading dimension `stride`, one column per entry
+// of `cols`) to s at rows and columns `cols`, symmetric: each pair of columns once, added to both halves.
+// kRows > 0: `rows` known at compile time (the sums unrolled; plain loops: Eigen's products of these 8-row
+// blocks of dynamic size cost several times their arithmetic).
+template <int kRows>
+void AddGram(const double* j, int stride, int rows, const std::vector<int>& cols, Eigen::MatrixXd* s) {
+  const int k = static_cast<int>(cols.size());
+  const int n = kRows > 0 ? kRows : rows;
+  for (int a = 0; a < k; ++a)
+    for (int b = a; b < k; ++b) {
+      const double* x = j + static_cast<size_t>(a) * stride;
+      const double* y = j + static_cast<size_t>(b) * stride;
+      double v = 0.0;
+      for (int i = 0; i < n; ++i) v += x[i] * y[i];
+      (*s)(cols[a], cols[b]) += v;
+      if (b != a) (*s)(cols[b], cols[a]) += v;
+    }
+}
+
 class FramesMarginaliser {
  public:
   explicit FramesMarginaliser(int num_reduced)
@@ -602,7 +621,7 @@ class FramesMarginaliser {
   Eigen::Matrix<double, Eigen::Dynamic, 6> hrf_;
   Eigen::Matrix<double, 6, 6> hff_;
   std::vector<int> cols_;
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr_;
+  Eigen::MatrixXd jr_;  // the group's rows over cols_ (column-major: AddGram)
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf_;
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt_, xt_;  // a frame's H_rf and H_rf H_ff^-1
   int group_rows_ = 0, frame_ = -1;
@@ -612,15 +631,10 @@ class FramesMarginaliser {
 void FramesMarginaliser::FinishGroup() {
   if (group_rows_ == 0) return;
   const int k = static_cast<int>(cols_.size());
-  // Symmetric: each pair of columns once, added to both halves (plain loops: Eigen's products of these
-  // 8-row blocks of dynamic size cost several times their arithmetic).
-  for (int a = 0; a < k; ++a)
-    for (int b = a; b < k; ++b) {
-      double v = 0.0;
-      for (int i = 0; i < group_rows_; ++i) v += jr_(i, a) * jr_(i, b);
-      s_(cols_[a], cols_[b]) += v;
-      if (b != a) s_(cols_[b], cols_[a]) += v;
-    }
+  if (group_rows_ == 8)  // one observation's rows: the usual group
+    AddGram<8>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
+  else
+    AddGram<0>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
   if (frame_ >= 0) {
     const auto f = jf_.topRows(group_rows_);
     hff_ += f.transpose() * f;
