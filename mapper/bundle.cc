@@ -544,116 +544,140 @@ Rigid3 FramePoseAt(const BundleProblem& bp, int frame, double dt) {
 
 namespace {
 
+// One residual block's rows of the information's Jacobian (at most 8 + the intrinsics' size): its reduced
+// unknowns' columns (increasing) with their values (row-major, rows x cols), and its frame (-1: none)
+// with that frame's 6 columns' values (row-major, rows x 6).
+struct InformationRows {
+  int frame = -1;
+  int rows = 0;
+  std::vector<int> cols;
+  std::vector<double> reduced;
+  std::vector<double> frame_values;
+};
+
 // The information (J^T J) of the unknowns other than the frame poses, marginal over the frames: each
 // residual touches one frame block, so the frames' part of J^T J is block-diagonal (6 x 6 per frame) and
 // the Schur complement S = H_rr - H_rf H_ff^-1 H_fr is formed frame by frame (dense, a few hundred
-// unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). `j` has
-// the reduced unknowns' columns first (num_reduced), then the frames' (6 each).
-Eigen::MatrixXd FramesMarginalised(const ceres::CRSMatrix& j, int num_reduced) {
-  // The rows of each frame (a row without a frame column: frame -1, first).
-  std::vector<int> row_frame(j.num_rows, -1), order(j.num_rows);
-  for (int row = 0; row < j.num_rows; ++row)
-    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k)
-      if (j.cols[k] >= num_reduced) row_frame[row] = (j.cols[k] - num_reduced) / 6;
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return row_frame[a] < row_frame[b]; });
-  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(num_reduced, num_reduced);
-  std::vector<int> slot(num_reduced, -1), seen;  // a frame's reduced unknowns and their rows in hrf
-  Eigen::Matrix<double, Eigen::Dynamic, 6> hrf(num_reduced, 6);
-  Eigen::Matrix<double, 6, 6> hff;
-  // Rows with the same columns (one residual block's 8) are gathered and added as one product.
-  std::vector<int> cols, row_cols;
-  std::vector<double> row_values;
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr;
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf;
-  int group_rows = 0, group_frame = -1;
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt, xt;  // a frame's H_rf and H_rf H_ff^-1
-  auto finish_group = [&]() {
-    if (group_rows == 0) return;
-    const int k = static_cast<int>(cols.size());
-    // Symmetric: each pair of columns once, added to both halves (plain loops: Eigen's products of these
-    // 8-row blocks of dynamic size cost several times their arithmetic).
-    for (int a = 0; a < k; ++a)
-      for (int b = a; b < k; ++b) {
-        double v = 0.0;
-        for (int i = 0; i < group_rows; ++i) v += jr(i, a) * jr(i, b);
-        s(cols[a], cols[b]) += v;
-        if (b != a) s(cols[b], cols[a]) += v;
-      }
-    if (group_frame >= 0) {
-      const auto f = jf.topRows(group_rows);
-      hff += f.transpose() * f;
-      for (int a = 0; a < k; ++a) {
-        if (slot[cols[a]] < 0) {
-          slot[cols[a]] = static_cast<int>(seen.size());
-          hrf.row(seen.size()).setZero();
-          seen.push_back(cols[a]);
-        }
-        Eigen::Matrix<double, 1, 6> rf = Eigen::Matrix<double, 1, 6>::Zero();
-        for (int i = 0; i < group_rows; ++i) rf += jr(i, a) * jf.row(i);
-        hrf.row(slot[cols[a]]) += rf;
-      }
+// unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). The
+// residual blocks are added frame by frame (the rows without a frame first), each frame's in the order of
+// the observations; consecutive blocks with the same columns are gathered and added as one product.
+// Adds J^T J of the first `rows` rows of column-major `j` (leading dimension `stride`, one column per entry
+// of `cols`) to s at rows and columns `cols`, symmetric: each pair of columns once, added to both halves.
+// kRows > 0: `rows` known at compile time (the sums unrolled; plain loops: Eigen's products of these 8-row
+// blocks of dynamic size cost several times their arithmetic).
+template <int kRows>
+void AddGram(const double* j, int stride, int rows, const std::vector<int>& cols, Eigen::MatrixXd* s) {
+  const int k = static_cast<int>(cols.size());
+  const int n = kRows > 0 ? kRows : rows;
+  for (int a = 0; a < k; ++a)
+    for (int b = a; b < k; ++b) {
+      const double* x = j + static_cast<size_t>(a) * stride;
+      const double* y = j + static_cast<size_t>(b) * stride;
+      double v = 0.0;
+      for (int i = 0; i < n; ++i) v += x[i] * y[i];
+      (*s)(cols[a], cols[b]) += v;
+      if (b != a) (*s)(cols[b], cols[a]) += v;
     }
-    group_rows = 0;
-  };
-  auto finish_frame = [&]() {
-    finish_group();
-    if (!seen.empty()) {
-      // B H_ff^-1 B^T, symmetric: each pair once, subtracted from both halves.
-      const int n = static_cast<int>(seen.size());
-      bt = hrf.topRows(n);
-      xt = Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff).solve(bt.transpose()).transpose();
-      for (int x = 0; x < n; ++x) {
-        s(seen[x], seen[x]) -= bt.row(x).dot(xt.row(x));
-        for (int y = x + 1; y < n; ++y) {
-          const double u = bt.row(x).dot(xt.row(y));
-          s(seen[x], seen[y]) -= u;
-          s(seen[y], seen[x]) -= u;
-        }
-      }
-    }
-    for (int c : seen) slot[c] = -1;
-    seen.clear();
-    hff.setZero();
-  };
-  hff.setZero();
-  for (size_t i = 0; i < order.size(); ++i) {
-    const int row = order[i];
-    if (i > 0 && row_frame[row] != row_frame[order[i - 1]]) finish_frame();
-    row_cols.clear();
-    row_values.clear();
-    Eigen::Matrix<double, 1, 6> row_jf = Eigen::Matrix<double, 1, 6>::Zero();
-    for (int k = j.rows[row]; k < j.rows[row + 1]; ++k) {
-      if (j.cols[k] < num_reduced) {
-        row_cols.push_back(j.cols[k]);
-        row_values.push_back(j.values[k]);
-      } else {
-        row_jf((j.cols[k] - num_reduced) % 6) = j.values[k];
-      }
-    }
-    if (group_rows > 0 && row_cols != cols) finish_group();
-    if (group_rows == 0) {
-      cols = row_cols;
-      group_frame = row_frame[row];
-      jr.resize(8, static_cast<int>(cols.size()));
-      jf.resize(8, 6);
-    } else if (group_rows == jr.rows()) {
-      jr.conservativeResize(2 * group_rows, Eigen::NoChange);
-      jf.conservativeResize(2 * group_rows, Eigen::NoChange);
-    }
-    for (size_t a = 0; a < cols.size(); ++a) jr(group_rows, static_cast<int>(a)) = row_values[a];
-    jf.row(group_rows) = row_jf;
-    ++group_rows;
+}
+
+class FramesMarginaliser {
+ public:
+  explicit FramesMarginaliser(int num_reduced)
+      : s_(Eigen::MatrixXd::Zero(num_reduced, num_reduced)), slot_(num_reduced, -1), hrf_(num_reduced, 6) {
+    hff_.setZero();
   }
-  finish_frame();
-  return s;
+  void Add(const InformationRows& r) {
+    if (started_ && r.frame != frame_) FinishFrame();
+    started_ = true;
+    frame_ = r.frame;
+    if (group_rows_ > 0 && r.cols != cols_) FinishGroup();
+    const int k = static_cast<int>(r.cols.size());
+    if (group_rows_ == 0) {
+      cols_ = r.cols;
+      jr_.resize(std::max(8, r.rows), k);
+      jf_.resize(std::max(8, r.rows), 6);
+    } else if (group_rows_ + r.rows > jr_.rows()) {
+      jr_.conservativeResize(std::max(2 * group_rows_, group_rows_ + r.rows), Eigen::NoChange);
+      jf_.conservativeResize(jr_.rows(), Eigen::NoChange);
+    }
+    for (int i = 0; i < r.rows; ++i) {
+      for (int a = 0; a < k; ++a) jr_(group_rows_ + i, a) = r.reduced[i * k + a];
+      if (frame_ >= 0)
+        for (int a = 0; a < 6; ++a) jf_(group_rows_ + i, a) = r.frame_values[i * 6 + a];
+    }
+    group_rows_ += r.rows;
+  }
+  Eigen::MatrixXd Finish() {
+    FinishFrame();
+    return std::move(s_);
+  }
+
+ private:
+  void FinishGroup();
+  void FinishFrame();
+
+  Eigen::MatrixXd s_;
+  std::vector<int> slot_, seen_;  // a frame's reduced unknowns and their rows in hrf_
+  Eigen::Matrix<double, Eigen::Dynamic, 6> hrf_;
+  Eigen::Matrix<double, 6, 6> hff_;
+  std::vector<int> cols_;
+  Eigen::MatrixXd jr_;  // the group's rows over cols_ (column-major: AddGram)
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf_;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt_, xt_;  // a frame's H_rf and H_rf H_ff^-1
+  int group_rows_ = 0, frame_ = -1;
+  bool started_ = false;
+};
+
+void FramesMarginaliser::FinishGroup() {
+  if (group_rows_ == 0) return;
+  const int k = static_cast<int>(cols_.size());
+  if (group_rows_ == 8)  // one observation's rows: the usual group
+    AddGram<8>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
+  else
+    AddGram<0>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
+  if (frame_ >= 0) {
+    const auto f = jf_.topRows(group_rows_);
+    hff_ += f.transpose() * f;
+    for (int a = 0; a < k; ++a) {
+      if (slot_[cols_[a]] < 0) {
+        slot_[cols_[a]] = static_cast<int>(seen_.size());
+        hrf_.row(seen_.size()).setZero();
+        seen_.push_back(cols_[a]);
+      }
+      Eigen::Matrix<double, 1, 6> rf = Eigen::Matrix<double, 1, 6>::Zero();
+      for (int i = 0; i < group_rows_; ++i) rf += jr_(i, a) * jf_.row(i);
+      hrf_.row(slot_[cols_[a]]) += rf;
+    }
+  }
+  group_rows_ = 0;
+}
+
+void FramesMarginaliser::FinishFrame() {
+  FinishGroup();
+  if (!seen_.empty()) {
+    // B H_ff^-1 B^T, symmetric: each pair once, subtracted from both halves.
+    const int n = static_cast<int>(seen_.size());
+    bt_ = hrf_.topRows(n);
+    xt_ = Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff_).solve(bt_.transpose()).transpose();
+    for (int x = 0; x < n; ++x) {
+      s_(seen_[x], seen_[x]) -= bt_.row(x).dot(xt_.row(x));
+      for (int y = x + 1; y < n; ++y) {
+        const double u = bt_.row(x).dot(xt_.row(y));
+        s_(seen_[x], seen_[y]) -= u;
+        s_(seen_[y], seen_[x]) -= u;
+      }
+    }
+  }
+  for (int c : seen_) slot_[c] = -1;
+  seen_.clear();
+  hff_.setZero();
 }
 
 }  // namespace
 
 namespace {
 
-// The unknowns of the information's Jacobian (JacobianForInformation): per parameter block its first
+// The unknowns of the information's Jacobian (IntrinsicsInformationOf): per parameter block its first
 // column (-1: held constant or unused) and its free entries' ambient indices (the tangent's order). Columns
 // in the order Ceres' Problem::GetParameterBlocks gives the blocks of BuildProblem (as first met among the
 // active observations' residual blocks), the frames' after the others (6 each).
@@ -721,11 +745,11 @@ InformationColumns ColumnsForInformation(BundleProblem* bp) {
   return out;
 }
 
-// Appends one residual block's rows to `j`: `jacobians` per block (ambient, row-major), the columns of
-// each block's free entries in increasing column order (as Ceres writes a CRS row).
-void AppendRows(int num_residuals, const std::vector<std::pair<const double*, int>>& blocks,
-                const std::vector<const double*>& jacobians, const InformationColumns& columns,
-                ceres::CRSMatrix* j) {
+// One residual block's rows (`num_residuals`; `jacobians` per block, ambient, row-major) over the free
+// unknowns: the reduced columns in increasing order, the frame's apart.
+void RowsOf(int num_residuals, const std::vector<std::pair<const double*, int>>& blocks,
+            const std::vector<const double*>& jacobians, const InformationColumns& columns,
+            InformationRows* out) {
   std::vector<std::pair<int, std::pair<int, int>>> entries;  // (column, (block, ambient index))
   for (size_t b = 0; b < blocks.size(); ++b) {
     const auto it = columns.column.find(blocks[b].first);
@@ -735,21 +759,32 @@ void AppendRows(int num_residuals, const std::vector<std::pair<const double*, in
       entries.push_back({it->second + static_cast<int>(a), {static_cast<int>(b), free[a]}});
   }
   std::sort(entries.begin(), entries.end());
-  for (int r = 0; r < num_residuals; ++r) {
+  out->frame = -1;
+  out->rows = num_residuals;
+  out->cols.clear();
+  out->reduced.clear();
+  out->frame_values.assign(6 * num_residuals, 0.0);
+  for (const auto& e : entries)
+    if (e.first < columns.num_reduced) out->cols.push_back(e.first);
+  for (int r = 0; r < num_residuals; ++r)
     for (const auto& e : entries) {
-      j->cols.push_back(e.first);
-      j->values.push_back(jacobians[e.second.first][r * blocks[e.second.first].second + e.second.second]);
+      const double v = jacobians[e.second.first][r * blocks[e.second.first].second + e.second.second];
+      if (e.first < columns.num_reduced) {
+        out->reduced.push_back(v);
+      } else {
+        out->frame = (e.first - columns.num_reduced) / 6;
+        out->frame_values[r * 6 + (e.first - columns.num_reduced) % 6] = v;
+      }
     }
-    j->rows.push_back(static_cast<int>(j->cols.size()));
-  }
-  j->num_rows += num_residuals;
 }
 
-// Rows of the priors (AddSelfCalibrationBlocks' order: per camera in use, its intrinsics' then its drift's).
-void AppendPriorRows(BundleProblem* bp, const InformationColumns& columns, ceres::CRSMatrix* j) {
+// The rows of the priors (AddSelfCalibrationBlocks' order: per camera in use, its intrinsics' then its
+// drift's), added to `m`.
+void AddPriorRows(BundleProblem* bp, const InformationColumns& columns, FramesMarginaliser* m) {
   std::vector<char> used(bp->cam_from_rig.size(), 0);
   for (size_t k = 0; k < bp->observations.size(); ++k)
     if (bp->active[k]) used[bp->observations[k].camera] = 1;
+  InformationRows rows;
   for (size_t c = 0; c < used.size(); ++c) {
     if (!used[c]) continue;
     if (bp->RefinesIntrinsics(static_cast<int>(c))) {
@@ -758,50 +793,43 @@ void AppendPriorRows(BundleProblem* bp, const InformationColumns& columns, ceres
       std::vector<double> a(n * n, 0.0);
       for (int k = 0; k < n; ++k)
         if (in.sigma[k] > 0) a[k * n + k] = in.prior_scale_px / in.sigma[k];
-      AppendRows(n, {{in.values.data(), n}}, {a.data()}, columns, j);
+      RowsOf(n, {{in.values.data(), n}}, {a.data()}, columns, &rows);
+      m->Add(rows);
     }
     if (bp->RefinesDrift() && !bp->time_offset_fixed[c]) {
       const double a = 1.0 / kDriftPriorSigma;
-      AppendRows(1, {{&bp->time_drift[c], 1}}, {&a}, columns, j);
+      RowsOf(1, {{&bp->time_drift[c], 1}}, {&a}, columns, &rows);
+      m->Add(rows);
     }
   }
 }
 
-// The Jacobian (corner residuals without loss, then the priors) at the current parameters over the free
-// unknowns, in the CRS layout Ceres' Problem::Evaluate gives for BuildProblem's problem with the frames'
-// columns last: the same values and order, without building the problem. False when a corner is behind
-// its camera.
-bool JacobianForInformation(BundleProblem* bp, const InformationColumns& columns, ceres::CRSMatrix* j) {
-  j->num_cols = columns.num_reduced + 6 * columns.num_frames;
-  j->num_rows = 0;
-  j->rows = {0};
-  for (size_t k = 0; k < bp->observations.size(); ++k) {
-    if (!bp->active[k]) continue;
-    const BundleObservation& o = bp->observations[k];
-    ObservationTime time;
-    time.time_s = o.time_s;
-    time.with_drift = bp->RefinesDrift();
-    time.clock_s = o.clock_s;
-    if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
-    const SelfCalibrationCost cost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
-                                   bp->RefinesTime() ? &time : nullptr);
-    const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
-    std::vector<std::vector<double>> jacobian(blocks.size());
-    std::vector<const double*> parameters, jacobians;
-    std::vector<double*> writable;
-    std::vector<std::pair<const double*, int>> sizes;
-    for (size_t b = 0; b < blocks.size(); ++b) {
-      jacobian[b].assign(8 * blocks[b].second, 0.0);
-      parameters.push_back(blocks[b].first);
-      writable.push_back(jacobian[b].data());
-      jacobians.push_back(jacobian[b].data());
-      sizes.push_back(blocks[b]);
-    }
-    double residuals[8];
-    if (!cost.Evaluate(parameters.data(), residuals, writable.data())) return false;
-    AppendRows(8, sizes, jacobians, columns, j);
+// Observation k's rows (corner residuals without loss) at the current parameters over the free unknowns.
+// False when a corner is behind its camera.
+bool ObservationRows(BundleProblem* bp, size_t k, const InformationColumns& columns, InformationRows* out) {
+  const BundleObservation& o = bp->observations[k];
+  ObservationTime time;
+  time.time_s = o.time_s;
+  time.with_drift = bp->RefinesDrift();
+  time.clock_s = o.clock_s;
+  if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
+  const SelfCalibrationCost cost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
+                                 bp->RefinesTime() ? &time : nullptr);
+  const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
+  std::vector<std::vector<double>> jacobian(blocks.size());
+  std::vector<const double*> parameters, jacobians;
+  std::vector<double*> writable;
+  std::vector<std::pair<const double*, int>> sizes;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    jacobian[b].assign(8 * blocks[b].second, 0.0);
+    parameters.push_back(blocks[b].first);
+    writable.push_back(jacobian[b].data());
+    jacobians.push_back(jacobian[b].data());
+    sizes.push_back(blocks[b]);
   }
-  AppendPriorRows(bp, columns, j);
+  double residuals[8];
+  if (!cost.Evaluate(parameters.data(), residuals, writable.data())) return false;
+  RowsOf(8, sizes, jacobians, columns, out);
   return true;
 }
 
@@ -813,9 +841,29 @@ IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/
   out.entries.resize(bp->cam_from_rig.size());
   const InformationColumns columns = ColumnsForInformation(bp);
   if (columns.column.empty()) return out;
-  ceres::CRSMatrix crs;
-  if (!JacobianForInformation(bp, columns, &crs)) return out;
-  out.information = FramesMarginalised(crs, columns.num_reduced);
+  // The Jacobian's rows (the corners', then the priors') frame by frame, those without a frame first.
+  std::vector<std::pair<int, size_t>> order;  // (frame, observation)
+  for (size_t k = 0; k < bp->observations.size(); ++k) {
+    if (!bp->active[k]) continue;
+    const auto it = columns.column.find(bp->rig_from_object[bp->observations[k].frame].data());
+    order.push_back({it == columns.column.end() ? -1 : (it->second - columns.num_reduced) / 6, k});
+  }
+  std::stable_sort(
+      order.begin(), order.end(),
+      [](const std::pair<int, size_t>& a, const std::pair<int, size_t>& b) { return a.first < b.first; });
+  FramesMarginaliser marginaliser(columns.num_reduced);
+  InformationRows rows;
+  bool priors = false;
+  for (const auto& [frame, k] : order) {
+    if (frame >= 0 && !priors) {
+      AddPriorRows(bp, columns, &marginaliser);
+      priors = true;
+    }
+    if (!ObservationRows(bp, k, columns, &rows)) return out;
+    marginaliser.Add(rows);
+  }
+  if (!priors) AddPriorRows(bp, columns, &marginaliser);
+  out.information = marginaliser.Finish();
   for (size_t c = 0; c < out.column.size(); ++c) {
     if (!bp->RefinesIntrinsics(static_cast<int>(c))) continue;
     const BundleIntrinsics& in = bp->intrinsics[c];
