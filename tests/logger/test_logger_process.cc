@@ -166,13 +166,16 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
     Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--lcm-url=" + Url(7767) + "&recv_buf_size=4000000",
                       "--flush-interval=20", again},
                      dir_ + "/g.out", dir_ + "/g.err");
-    ASSERT_TRUE(ProbeUntilRecorded(7767, again));
+    ASSERT_TRUE(ProbeUntilRecorded(7767, again))
+        << "lcm-logger recorded nothing in 20 s: " << ReadText(dir_ + "/g.err");
     ASSERT_EQ(RunProgram({"/usr/bin/lcm-logplayer", "--speed=1",
                           "--lcm-url=" + Url(7767) + "&recv_buf_size=4000000", ours},
                          nullptr, &err),
               0)
         << err;
-    ASSERT_TRUE(ProbeUntilRecorded(7767, again, traffic.size()));
+    ASSERT_TRUE(ProbeUntilRecorded(7767, again, traffic.size()))
+        << CountNonProbeEvents(again) << " of " << traffic.size()
+        << " messages recorded: " << ReadText(dir_ + "/g.err");
     lcm_logger.Signal(SIGINT);
     ASSERT_EQ(lcm_logger.Wait(20), 0);
   }
