@@ -184,10 +184,12 @@ void DetectorNode::Run(const StopToken& stop) {
         wall_start = Clock::now();
         first_utime = d.utime;
         if (options_.start_wall_utime > 0) {
-          // Wait for the shared start, in steady-clock terms.
+          // Wait for the shared start, in steady-clock terms. A detector that is ready only after it
+          // (slow start-up) paces from the shared start all the same: its first frames go out at once and
+          // it catches up, instead of lagging the other cameras by its start-up delay for the whole run.
           const int64_t wait_us = options_.start_wall_utime - NowUtime();
+          wall_start += std::chrono::microseconds(wait_us);
           if (wait_us > 0) {
-            wall_start += std::chrono::microseconds(wait_us);
             while (!stop.stop_requested() && Clock::now() < wall_start)
               std::this_thread::sleep_for(
                   std::min<Clock::duration>(wall_start - Clock::now(), std::chrono::milliseconds(50)));
