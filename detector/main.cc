@@ -1,4 +1,5 @@
 // mcmt-detector: one camera's frames -> marker detections on LCM channel MCMT_DETECTIONS_<CAMERA>.
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -68,8 +69,10 @@ int main(int argc, char** argv) {
     options.start_utime = start_utime;
     options.start_wall_utime = start_wall_utime;
     if (args.Given("fps")) {
-      if (!(fps > 0)) throw std::runtime_error("--fps: must be positive");
-      options.fps = fps;
+      if (!(fps >= 0) || !std::isfinite(fps))
+        throw std::runtime_error("--fps: expected a frame rate in Hz > 0, or 0 for the rig's own; got " +
+                                 std::to_string(fps));
+      if (fps > 0) options.fps = fps;
     }
     options.quiet = quiet;
     if (lcm_url.empty()) lcm_url = rig.lcm_url;

@@ -109,6 +109,7 @@ class Receiver {
     }
     EXPECT_EQ(channel, DetectionsChannel(d.camera));
     by_camera[d.camera].push_back(d);
+    receive_utime[d.camera].push_back(NowUtime());
   }
   // Handles messages until every camera has `frames` messages or the timeout passes.
   void Receive(int cameras, int frames, double timeout_s, const std::function<bool()>& also_done = nullptr) {
@@ -123,6 +124,7 @@ class Receiver {
   }
   lcm::LCM lcm_;
   std::map<std::string, std::vector<detections_t>> by_camera;
+  std::map<std::string, std::vector<int64_t>> receive_utime;  // wall clock (us) at which each arrived
   int bad = 0;
 };
 
@@ -159,7 +161,10 @@ TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
   for (int c = 0; c < Recording::kCameras; ++c) {
     const std::string cam = "cam" + std::to_string(c);
     children.push_back(
-        Spawn({kDetector, "--config", rec.rig, "--camera", cam, "--lcm-url", Url(7700), "--rate", "realtime"},
+        // --fps 0 is the rig's own rate (image folders: 30), as its help says (scripts/run-pipeline once
+        // passed it and the detector refused it).
+        Spawn({kDetector, "--config", rec.rig, "--camera", cam, "--lcm-url", Url(7700), "--rate", "realtime",
+               "--fps", "0"},
               (rec.dir / (cam + ".out")).string()));
     ASSERT_GT(children.back().pid, 0);
   }
@@ -170,6 +175,37 @@ TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
         << test::ReadText(c.out_path);
   }
   ExpectEveryFrameInOrder(rx, rec);
+}
+
+// --start-wall-utime already past when the detector is ready (a slow start-up): frame k is due at the
+// shared start + k / fps, so the frames already due go out at once and the rest on schedule. (The bug:
+// the detector paced from its own late start and published every frame late by its start-up delay, so a
+// tracker dropped its views as later than the other cameras'.)
+TEST(DetectorProcess, LateStartPacesFromTheSharedStart) {
+  Recording rec("late");
+  Receiver rx(Url(7712));
+  ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
+  constexpr double kFps = 5.0;
+  const int64_t start = NowUtime() - 1000000;  // 1 s before the process is even started
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7712), "--rate",
+                   "realtime", "--fps", "5", "--start-wall-utime", std::to_string(start), "--quiet"},
+                  (rec.dir / "late.out").string());
+  ASSERT_GT(c.pid, 0);
+  rx.Receive(1, Recording::kFrames, 30.0);
+  ASSERT_EQ(WaitExit(c, 20.0), 0) << test::ReadText(c.out_path);
+  ASSERT_EQ(static_cast<int>(rx.receive_utime["cam0"].size()), Recording::kFrames);
+  const std::vector<int64_t>& received = rx.receive_utime["cam0"];
+  const int64_t ready = received[0];  // the first frame goes out as soon as the detector is ready
+  EXPECT_GT(ready, start + 500000) << "the detector should be ready well after the shared start";
+  for (int k = 0; k < Recording::kFrames; ++k) {
+    SCOPED_TRACE("frame " + std::to_string(k));
+    const int64_t due = start + std::llround(k * 1e6 / kFps);
+    // Not before its time (the pace holds) ...
+    EXPECT_GE(received[k], due - 20000);
+    // ... and not later than when it was due or the detector was ready (the old code: 1 s and more late).
+    EXPECT_LE(received[k], std::max(due, ready) + 400000)
+        << "late by " << (received[k] - due) / 1000 << " ms";
+  }
 }
 
 TEST(DetectorProcess, SigintStopsALoopingDetectorCleanly) {
@@ -239,6 +275,12 @@ TEST(DetectorProcess, BadInputGivesOneLineNamingCameraAndFile) {
     const std::string out = RunFailing({"--config", bad_rig, "--camera", "cam0", "--lcm-url", url}, rec.dir);
     EXPECT_NE(out.find("DICT_6X6_999"), std::string::npos) << out;
     EXPECT_NE(out.find("bad_dict.yaml"), std::string::npos) << out;
+  }
+  {
+    const std::string out =
+        RunFailing({"--config", rec.rig, "--camera", "cam0", "--lcm-url", url, "--fps", "-5"}, rec.dir);
+    EXPECT_NE(out.find("--fps"), std::string::npos) << out;
+    EXPECT_NE(out.find("-5"), std::string::npos) << out;
   }
   {
     // An unreadable (not a video) source file.
