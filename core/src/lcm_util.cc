@@ -304,6 +304,58 @@ bool DuplicateFilter::Repeated(const detections_t& msg) {
   return false;
 }
 
+namespace {
+
+// rig_map_t and rig_map2_t hold the cameras with the same field names, rig_map_t and object_layout_t the
+// markers: one conversion each, for both.
+template <class Msg>
+void AddCamerasToMsg(const RigMap& map, Msg* msg) {
+  msg->num_cameras = static_cast<int32_t>(map.cameras.size());
+  for (const auto& c : map.cameras) {
+    msg->camera_names.push_back(c.name);
+    msg->camera_models.push_back(ToCameraModelMsg(c.model));
+    msg->rig_from_cam.push_back(ToPose3d(c.rig_from_cam));
+  }
+}
+
+template <class Msg>
+std::vector<MapCamera> CamerasFromMsg(const Msg& msg) {
+  std::vector<MapCamera> cameras;
+  for (int i = 0; i < msg.num_cameras; ++i) {
+    MapCamera c;
+    c.name = msg.camera_names[i];
+    c.model = FromCameraModelMsg(msg.camera_models[i]);
+    c.rig_from_cam = FromPose3d(msg.rig_from_cam[i]);
+    cameras.push_back(c);
+  }
+  return cameras;
+}
+
+template <class Msg>
+void AddMarkersToMsg(const std::vector<MapMarker>& markers, Msg* msg) {
+  msg->num_markers = static_cast<int32_t>(markers.size());
+  for (const MapMarker& m : markers) {
+    msg->marker_ids.push_back(m.id);
+    msg->marker_sizes.push_back(m.size);
+    msg->object_from_marker.push_back(ToPose3d(m.object_from_marker));
+  }
+}
+
+template <class Msg>
+std::vector<MapMarker> MarkersFromMsg(const Msg& msg) {
+  std::vector<MapMarker> markers;
+  for (int i = 0; i < msg.num_markers; ++i) {
+    MapMarker m;
+    m.id = msg.marker_ids[i];
+    m.size = msg.marker_sizes[i];
+    m.object_from_marker = FromPose3d(msg.object_from_marker[i]);
+    markers.push_back(m);
+  }
+  return markers;
+}
+
+}  // namespace
+
 rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime) {
   rig_map_t msg;
   msg.utime = utime;
@@ -311,18 +363,8 @@ rig_map_t ToRigMapMsg(const RigMap& map, int64_t utime) {
   msg.reference_camera = map.reference_camera;
   msg.reference_marker = map.reference_marker;
   msg.dictionary = map.dictionary;
-  msg.num_cameras = static_cast<int32_t>(map.cameras.size());
-  for (const auto& c : map.cameras) {
-    msg.camera_names.push_back(c.name);
-    msg.camera_models.push_back(ToCameraModelMsg(c.model));
-    msg.rig_from_cam.push_back(ToPose3d(c.rig_from_cam));
-  }
-  msg.num_markers = static_cast<int32_t>(map.markers.size());
-  for (const auto& m : map.markers) {
-    msg.marker_ids.push_back(m.id);
-    msg.marker_sizes.push_back(m.size);
-    msg.object_from_marker.push_back(ToPose3d(m.object_from_marker));
-  }
+  AddCamerasToMsg(map, &msg);
+  AddMarkersToMsg(map.markers, &msg);
   msg.rms_px = map.rms_px;
   msg.num_frames = map.num_frames;
   msg.num_observations = map.num_observations;
@@ -335,20 +377,8 @@ RigMap FromRigMapMsg(const rig_map_t& msg) {
   map.reference_camera = msg.reference_camera;
   map.reference_marker = msg.reference_marker;
   map.dictionary = msg.dictionary;
-  for (int i = 0; i < msg.num_cameras; ++i) {
-    MapCamera c;
-    c.name = msg.camera_names[i];
-    c.model = FromCameraModelMsg(msg.camera_models[i]);
-    c.rig_from_cam = FromPose3d(msg.rig_from_cam[i]);
-    map.cameras.push_back(c);
-  }
-  for (int i = 0; i < msg.num_markers; ++i) {
-    MapMarker m;
-    m.id = msg.marker_ids[i];
-    m.size = msg.marker_sizes[i];
-    m.object_from_marker = FromPose3d(msg.object_from_marker[i]);
-    map.markers.push_back(m);
-  }
+  map.cameras = CamerasFromMsg(msg);
+  map.markers = MarkersFromMsg(msg);
   map.rms_px = msg.rms_px;
   map.num_frames = msg.num_frames;
   map.num_observations = msg.num_observations;
@@ -363,29 +393,12 @@ object_layout_t ToLayoutMsg(const std::string& name, bool is_static, int referen
   msg.name = name;
   msg.is_static = is_static;
   msg.reference_marker = reference_marker;
-  msg.num_markers = static_cast<int32_t>(markers.size());
-  for (const MapMarker& m : markers) {
-    msg.marker_ids.push_back(m.id);
-    msg.marker_sizes.push_back(m.size);
-    msg.object_from_marker.push_back(ToPose3d(m.object_from_marker));
-  }
+  AddMarkersToMsg(markers, &msg);
   msg.rig_from_object = ToPose3d(Rigid3::Identity());
   msg.rms_px = 0.0;
   msg.num_frames = 0;
   msg.num_observations = 0;
   return msg;
-}
-
-std::vector<MapMarker> FromLayoutMarkers(const object_layout_t& msg) {
-  std::vector<MapMarker> markers;
-  for (int i = 0; i < msg.num_markers; ++i) {
-    MapMarker m;
-    m.id = msg.marker_ids[i];
-    m.size = msg.marker_sizes[i];
-    m.object_from_marker = FromPose3d(msg.object_from_marker[i]);
-    markers.push_back(m);
-  }
-  return markers;
 }
 
 }  // namespace
@@ -397,11 +410,8 @@ rig_map2_t ToRigMap2Msg(const RigMap& map, int64_t utime) {
   msg.reference_camera = map.reference_camera;
   msg.dictionary = map.dictionary;
   msg.rig_frame = map.rig_frame;
-  msg.num_cameras = static_cast<int32_t>(map.cameras.size());
+  AddCamerasToMsg(map, &msg);
   for (const auto& c : map.cameras) {
-    msg.camera_names.push_back(c.name);
-    msg.camera_models.push_back(ToCameraModelMsg(c.model));
-    msg.rig_from_cam.push_back(ToPose3d(c.rig_from_cam));
     msg.time_offset_us.push_back(c.time_offset_us);
     msg.time_drift_ppm.push_back(c.time_drift_ppm);
   }
@@ -431,14 +441,10 @@ RigMap FromRigMap2Msg(const rig_map2_t& msg) {
   map.reference_camera = msg.reference_camera;
   map.dictionary = msg.dictionary;
   map.rig_frame = msg.rig_frame;
+  map.cameras = CamerasFromMsg(msg);
   for (int i = 0; i < msg.num_cameras; ++i) {
-    MapCamera c;
-    c.name = msg.camera_names[i];
-    c.model = FromCameraModelMsg(msg.camera_models[i]);
-    c.rig_from_cam = FromPose3d(msg.rig_from_cam[i]);
-    c.time_offset_us = msg.time_offset_us[i];
-    c.time_drift_ppm = msg.time_drift_ppm[i];
-    map.cameras.push_back(c);
+    map.cameras[i].time_offset_us = msg.time_offset_us[i];
+    map.cameras[i].time_drift_ppm = msg.time_drift_ppm[i];
   }
   map.time_reference_utime = msg.time_reference_utime;
   if (msg.num_objects < 1) throw std::invalid_argument("rig_map2_t without any object");
@@ -446,7 +452,7 @@ RigMap FromRigMap2Msg(const rig_map2_t& msg) {
     if (msg.num_objects != 1)
       throw std::invalid_argument("rig_map2_t version 1 with " + std::to_string(msg.num_objects) +
                                   " objects (expected one)");
-    map.markers = FromLayoutMarkers(msg.objects[0]);
+    map.markers = MarkersFromMsg(msg.objects[0]);
     map.reference_marker = msg.objects[0].reference_marker;
   } else if (msg.version == kMapVersionBodies) {
     std::set<std::string> names;
@@ -457,7 +463,7 @@ RigMap FromRigMap2Msg(const rig_map2_t& msg) {
       o.name = layout.name;
       o.is_static = layout.is_static;
       o.reference_marker = layout.reference_marker;
-      o.markers = FromLayoutMarkers(layout);
+      o.markers = MarkersFromMsg(layout);
       o.rig_from_object = FromPose3d(layout.rig_from_object);
       o.rms_px = layout.rms_px;
       o.num_frames = layout.num_frames;

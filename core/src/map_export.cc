@@ -244,6 +244,22 @@ void WriteRosDir(const RigMap& map, const std::string& dir, const std::string& r
   for (const auto& [name, text] : files) WriteFileAtomic(dir + "/" + name, text);
 }
 
+namespace {
+// A `markers` sequence of the OpenCV map: id, size (m), object_from_marker (4x4).
+void WriteMarkers(const std::vector<MapMarker>& markers, cv::FileStorage& fs) {
+  fs << "markers"
+     << "[";
+  for (const MapMarker& mk : markers) {
+    fs << "{";
+    fs << "id" << mk.id;
+    fs << "size" << mk.size;
+    fs << "object_from_marker" << ToCvMat(mk.object_from_marker.matrix());
+    fs << "}";
+  }
+  fs << "]";
+}
+}  // namespace
+
 std::string OpenCvMapYaml(const RigMap& map) {
   cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
   fs << "mcmt_map_version" << map.version;
@@ -275,16 +291,7 @@ std::string OpenCvMapYaml(const RigMap& map) {
     fs << "}";
   }
   fs << "]";
-  fs << "markers"
-     << "[";
-  for (const MapMarker& mk : map.markers) {
-    fs << "{";
-    fs << "id" << mk.id;
-    fs << "size" << mk.size;
-    fs << "object_from_marker" << ToCvMat(mk.object_from_marker.matrix());
-    fs << "}";
-  }
-  fs << "]";
+  WriteMarkers(map.markers, fs);
   if (HasSeveralBodies(map)) {
     fs << "objects"
        << "[";
@@ -294,16 +301,7 @@ std::string OpenCvMapYaml(const RigMap& map) {
       fs << "static" << static_cast<int>(o.is_static);
       fs << "reference_marker" << o.reference_marker;
       if (o.is_static) fs << "rig_from_object" << ToCvMat(o.rig_from_object.matrix());
-      fs << "markers"
-         << "[";
-      for (const MapMarker& mk : o.markers) {
-        fs << "{";
-        fs << "id" << mk.id;
-        fs << "size" << mk.size;
-        fs << "object_from_marker" << ToCvMat(mk.object_from_marker.matrix());
-        fs << "}";
-      }
-      fs << "]";
+      WriteMarkers(o.markers, fs);
       fs << "}";
     }
     fs << "]";
