@@ -835,7 +835,7 @@ bool ObservationRows(BundleProblem* bp, size_t k, const InformationColumns& colu
 
 }  // namespace
 
-IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/) {
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp) {
   IntrinsicsInformation out;
   out.column.assign(bp->cam_from_rig.size(), -1);
   out.entries.resize(bp->cam_from_rig.size());
@@ -926,8 +926,8 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& i
   return out;
 }
 
-std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
-  return IntrinsicsCovariance(IntrinsicsInformationOf(bp, threads), *bp, sigma_px);
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px) {
+  return IntrinsicsCovariance(IntrinsicsInformationOf(bp), *bp, sigma_px);
 }
 
 std::vector<double> ObservationRms(const BundleProblem& bp, std::vector<double>* max_corner_px) {
