@@ -587,6 +587,18 @@ void AddGram(const double* j, int rows, const std::vector<int>& cols, Eigen::Mat
       for (int i = 0; i < kRows; ++i) x[i] = Lanes::Constant(j[i * k + a]);
     double* column = s->data() + static_cast<size_t>(cols[a]) * s->rows();
     int b = a;
+    for (; b + 3 < k; b += 4) {  // four columns: two packets
+      Lanes v = Lanes::Zero(), w = Lanes::Zero();
+      for (int i = 0; i < n; ++i) {
+        const Lanes xi = kRows > 0 ? x[i] : Lanes::Constant(j[i * k + a]);
+        v += xi * Eigen::Map<const Lanes>(j + i * k + b);
+        w += xi * Eigen::Map<const Lanes>(j + i * k + b + 2);
+      }
+      column[cols[b]] += v[0];
+      column[cols[b + 1]] += v[1];
+      column[cols[b + 2]] += w[0];
+      column[cols[b + 3]] += w[1];
+    }
     for (; b + 1 < k; b += 2) {
       Lanes v = Lanes::Zero();
       for (int i = 0; i < n; ++i)
@@ -623,13 +635,14 @@ class FramesMarginaliser {
       jr_.conservativeResize(std::max(2 * group_rows_, group_rows_ + r.rows), Eigen::NoChange);
       jf_.conservativeResize(jr_.rows(), Eigen::NoChange);
     }
-    for (int i = 0; i < r.rows; ++i) {
-      for (int a = 0; a < k; ++a)
-        jr_(group_rows_ + i, a) = r.jacobians[layout.block[a]][i * layout.width[a] + layout.entry[a]];
-      if (frame_ >= 0)
+    for (int a = 0; a < k; ++a) {
+      const double* from = r.jacobians[layout.block[a]] + layout.entry[a];
+      for (int i = 0; i < r.rows; ++i) jr_(group_rows_ + i, a) = from[i * layout.width[a]];
+    }
+    if (frame_ >= 0)
+      for (int i = 0; i < r.rows; ++i)
         for (int a = 0; a < 6; ++a)
           jf_(group_rows_ + i, a) = r.jacobians[r.frame_block][i * r.frame_width + a];
-    }
     group_rows_ += r.rows;
   }
   Eigen::MatrixXd Finish() {
