@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 
 #include "core/math.h"
@@ -544,15 +545,23 @@ Rigid3 FramePoseAt(const BundleProblem& bp, int frame, double dt) {
 
 namespace {
 
-// One residual block's rows of the information's Jacobian (at most 8 + the intrinsics' size): its reduced
-// unknowns' columns (increasing) with their values (row-major, rows x cols), and its frame (-1: none)
-// with that frame's 6 columns' values (row-major, rows x 6).
+// Where one residual block's rows of the information's Jacobian come from: its reduced unknowns' columns
+// (increasing) and per column the block and the entry of that block's Jacobian (row-major, `width`
+// entries a row) it reads.
+struct RowsLayout {
+  std::vector<int> cols;
+  std::vector<int> block, entry, width;
+};
+
+// One residual block's rows (`rows`, at most 8 + the intrinsics' size): its Jacobian per parameter block
+// (ambient, row-major), its reduced columns after `layout`, and its frame (-1: none) with that frame's 6
+// columns the first 6 entries of each row of block `frame_block` (`frame_width` a row).
 struct InformationRows {
   int frame = -1;
   int rows = 0;
-  std::vector<int> cols;
-  std::vector<double> reduced;
-  std::vector<double> frame_values;
+  const RowsLayout* layout = nullptr;
+  const double* const* jacobians = nullptr;
+  int frame_block = 2, frame_width = 7;
 };
 
 // The information (J^T J) of the unknowns other than the frame poses, marginal over the frames: each
@@ -561,23 +570,48 @@ struct InformationRows {
 // unknowns; the sparse factorisation of the whole J^T J it replaces took several times as long). The
 // residual blocks are added frame by frame (the rows without a frame first), each frame's in the order of
 // the observations; consecutive blocks with the same columns are gathered and added as one product.
-// Adds J^T J of the first `rows` rows of column-major `j` (leading dimension `stride`, one column per entry
-// of `cols`) to s at rows and columns `cols`, symmetric: each pair of columns once, added to both halves.
-// kRows > 0: `rows` known at compile time (the sums unrolled; plain loops: Eigen's products of these 8-row
-// blocks of dynamic size cost several times their arithmetic).
+// S is symmetric: only its lower triangle is accumulated (each pair of unknowns once), copied to the upper
+// one at the end.
+// Adds J^T J of the first `rows` rows of row-major `j` (one column per entry of `cols`, increasing) to the
+// lower triangle of s at rows and columns `cols`: each entry the sum over the rows in their order, two
+// columns at a time (Eigen's 2-lane packets; plain loops over these small blocks cost several times their
+// arithmetic). kRows > 0: `rows` known at compile time (column a's entries held in registers).
 template <int kRows>
-void AddGram(const double* j, int stride, int rows, const std::vector<int>& cols, Eigen::MatrixXd* s) {
+void AddGram(const double* j, int rows, const std::vector<int>& cols, Eigen::MatrixXd* s) {
+  using Lanes = Eigen::Array2d;
   const int k = static_cast<int>(cols.size());
   const int n = kRows > 0 ? kRows : rows;
-  for (int a = 0; a < k; ++a)
-    for (int b = a; b < k; ++b) {
-      const double* x = j + static_cast<size_t>(a) * stride;
-      const double* y = j + static_cast<size_t>(b) * stride;
-      double v = 0.0;
-      for (int i = 0; i < n; ++i) v += x[i] * y[i];
-      (*s)(cols[a], cols[b]) += v;
-      if (b != a) (*s)(cols[b], cols[a]) += v;
+  for (int a = 0; a < k; ++a) {
+    Lanes x[kRows > 0 ? kRows : 1];
+    if constexpr (kRows > 0)
+      for (int i = 0; i < kRows; ++i) x[i] = Lanes::Constant(j[i * k + a]);
+    double* column = s->data() + static_cast<size_t>(cols[a]) * s->rows();
+    int b = a;
+    for (; b + 3 < k; b += 4) {  // four columns: two packets
+      Lanes v = Lanes::Zero(), w = Lanes::Zero();
+      for (int i = 0; i < n; ++i) {
+        const Lanes xi = kRows > 0 ? x[i] : Lanes::Constant(j[i * k + a]);
+        v += xi * Eigen::Map<const Lanes>(j + i * k + b);
+        w += xi * Eigen::Map<const Lanes>(j + i * k + b + 2);
+      }
+      column[cols[b]] += v[0];
+      column[cols[b + 1]] += v[1];
+      column[cols[b + 2]] += w[0];
+      column[cols[b + 3]] += w[1];
     }
+    for (; b + 1 < k; b += 2) {
+      Lanes v = Lanes::Zero();
+      for (int i = 0; i < n; ++i)
+        v += (kRows > 0 ? x[i] : Lanes::Constant(j[i * k + a])) * Eigen::Map<const Lanes>(j + i * k + b);
+      column[cols[b]] += v[0];
+      column[cols[b + 1]] += v[1];
+    }
+    if (b < k) {
+      double v = 0.0;
+      for (int i = 0; i < n; ++i) v += j[i * k + a] * j[i * k + b];
+      column[cols[b]] += v;
+    }
+  }
 }
 
 class FramesMarginaliser {
@@ -590,25 +624,31 @@ class FramesMarginaliser {
     if (started_ && r.frame != frame_) FinishFrame();
     started_ = true;
     frame_ = r.frame;
-    if (group_rows_ > 0 && r.cols != cols_) FinishGroup();
-    const int k = static_cast<int>(r.cols.size());
+    const RowsLayout& layout = *r.layout;
+    if (group_rows_ > 0 && layout.cols != cols_) FinishGroup();
+    const int k = static_cast<int>(layout.cols.size());
     if (group_rows_ == 0) {
-      cols_ = r.cols;
+      cols_ = layout.cols;
       jr_.resize(std::max(8, r.rows), k);
       jf_.resize(std::max(8, r.rows), 6);
     } else if (group_rows_ + r.rows > jr_.rows()) {
       jr_.conservativeResize(std::max(2 * group_rows_, group_rows_ + r.rows), Eigen::NoChange);
       jf_.conservativeResize(jr_.rows(), Eigen::NoChange);
     }
-    for (int i = 0; i < r.rows; ++i) {
-      for (int a = 0; a < k; ++a) jr_(group_rows_ + i, a) = r.reduced[i * k + a];
-      if (frame_ >= 0)
-        for (int a = 0; a < 6; ++a) jf_(group_rows_ + i, a) = r.frame_values[i * 6 + a];
+    for (int a = 0; a < k; ++a) {
+      const double* from = r.jacobians[layout.block[a]] + layout.entry[a];
+      for (int i = 0; i < r.rows; ++i) jr_(group_rows_ + i, a) = from[i * layout.width[a]];
     }
+    if (frame_ >= 0)
+      for (int i = 0; i < r.rows; ++i)
+        for (int a = 0; a < 6; ++a)
+          jf_(group_rows_ + i, a) = r.jacobians[r.frame_block][i * r.frame_width + a];
     group_rows_ += r.rows;
   }
   Eigen::MatrixXd Finish() {
     FinishFrame();
+    for (int c = 1; c < s_.cols(); ++c)
+      for (int r = 0; r < c; ++r) s_(r, c) = s_(c, r);
     return std::move(s_);
   }
 
@@ -621,9 +661,11 @@ class FramesMarginaliser {
   Eigen::Matrix<double, Eigen::Dynamic, 6> hrf_;
   Eigen::Matrix<double, 6, 6> hff_;
   std::vector<int> cols_;
-  Eigen::MatrixXd jr_;  // the group's rows over cols_ (column-major: AddGram)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr_;  // the group's rows over cols_
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> jf_;
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> bt_, xt_;  // a frame's H_rf and H_rf H_ff^-1
+  Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> xk_;       // xt_ transposed
+  std::vector<size_t> column_;
   int group_rows_ = 0, frame_ = -1;
   bool started_ = false;
 };
@@ -632,9 +674,9 @@ void FramesMarginaliser::FinishGroup() {
   if (group_rows_ == 0) return;
   const int k = static_cast<int>(cols_.size());
   if (group_rows_ == 8)  // one observation's rows: the usual group
-    AddGram<8>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
+    AddGram<8>(jr_.data(), group_rows_, cols_, &s_);
   else
-    AddGram<0>(jr_.data(), static_cast<int>(jr_.rows()), group_rows_, cols_, &s_);
+    AddGram<0>(jr_.data(), group_rows_, cols_, &s_);
   if (frame_ >= 0) {
     const auto f = jf_.topRows(group_rows_);
     hff_ += f.transpose() * f;
@@ -655,17 +697,38 @@ void FramesMarginaliser::FinishGroup() {
 void FramesMarginaliser::FinishFrame() {
   FinishGroup();
   if (!seen_.empty()) {
-    // B H_ff^-1 B^T, symmetric: each pair once, subtracted from both halves.
+    // B H_ff^-1 B^T, symmetric: each pair (x <= y, in the order first seen) once into the lower triangle,
+    // bt_.row(x).dot(xt_.row(y)) summed as Eigen's 6-long dot does (even and odd entries apart), two y at
+    // a time.
     const int n = static_cast<int>(seen_.size());
     bt_ = hrf_.topRows(n);
     xt_ = Eigen::LDLT<Eigen::Matrix<double, 6, 6>>(hff_).solve(bt_.transpose()).transpose();
+    xk_ = xt_.transpose();
+    column_.resize(n);  // each unknown's column's start in s_
+    for (int y = 0; y < n; ++y) column_[y] = static_cast<size_t>(seen_[y]) * s_.rows();
+    double* s = s_.data();
+    // The lower triangle's entry of s_ for the unknowns of slots x and y.
+    auto at = [&](int x, int y) -> double& {
+      return s[seen_[y] > seen_[x] ? column_[x] + seen_[y] : column_[y] + seen_[x]];
+    };
+    using Lanes = Eigen::Array2d;
+    using Load = Eigen::Map<const Lanes>;
+    const double *x0 = &xk_(0, 0), *x1 = &xk_(1, 0), *x2 = &xk_(2, 0), *x3 = &xk_(3, 0), *x4 = &xk_(4, 0),
+                 *x5 = &xk_(5, 0);
     for (int x = 0; x < n; ++x) {
-      s_(seen_[x], seen_[x]) -= bt_.row(x).dot(xt_.row(x));
-      for (int y = x + 1; y < n; ++y) {
-        const double u = bt_.row(x).dot(xt_.row(y));
-        s_(seen_[x], seen_[y]) -= u;
-        s_(seen_[y], seen_[x]) -= u;
+      const double* b = &bt_(x, 0);
+      const Lanes p0 = Lanes::Constant(b[0]), p1 = Lanes::Constant(b[1]), p2 = Lanes::Constant(b[2]),
+                  p3 = Lanes::Constant(b[3]), p4 = Lanes::Constant(b[4]), p5 = Lanes::Constant(b[5]);
+      int y = x;
+      for (; y + 1 < n; y += 2) {
+        const Lanes v = (p0 * Load(x0 + y) + (p2 * Load(x2 + y) + p4 * Load(x4 + y))) +
+                        (p1 * Load(x1 + y) + (p3 * Load(x3 + y) + p5 * Load(x5 + y)));
+        at(x, y) -= v[0];
+        at(x, y + 1) -= v[1];
       }
+      if (y < n)
+        at(x, y) -=
+            (b[0] * x0[y] + (b[2] * x2[y] + b[4] * x4[y])) + (b[1] * x1[y] + (b[3] * x3[y] + b[5] * x5[y]));
     }
   }
   for (int c : seen_) slot_[c] = -1;
@@ -745,37 +808,27 @@ InformationColumns ColumnsForInformation(BundleProblem* bp) {
   return out;
 }
 
-// One residual block's rows (`num_residuals`; `jacobians` per block, ambient, row-major) over the free
-// unknowns: the reduced columns in increasing order, the frame's apart.
-void RowsOf(int num_residuals, const std::vector<std::pair<const double*, int>>& blocks,
-            const std::vector<const double*>& jacobians, const InformationColumns& columns,
-            InformationRows* out) {
+// The reduced columns of the rows of a residual block over `blocks` (its parameter blocks and their
+// ambient sizes): increasing, with where each reads its Jacobian. The frames' columns are left out.
+RowsLayout LayoutOf(const std::vector<std::pair<const double*, int>>& blocks,
+                    const InformationColumns& columns) {
   std::vector<std::pair<int, std::pair<int, int>>> entries;  // (column, (block, ambient index))
   for (size_t b = 0; b < blocks.size(); ++b) {
     const auto it = columns.column.find(blocks[b].first);
-    if (it == columns.column.end()) continue;
+    if (it == columns.column.end() || it->second >= columns.num_reduced) continue;
     const std::vector<int>& free = columns.free.at(blocks[b].first);
     for (size_t a = 0; a < free.size(); ++a)
       entries.push_back({it->second + static_cast<int>(a), {static_cast<int>(b), free[a]}});
   }
   std::sort(entries.begin(), entries.end());
-  out->frame = -1;
-  out->rows = num_residuals;
-  out->cols.clear();
-  out->reduced.clear();
-  out->frame_values.assign(6 * num_residuals, 0.0);
-  for (const auto& e : entries)
-    if (e.first < columns.num_reduced) out->cols.push_back(e.first);
-  for (int r = 0; r < num_residuals; ++r)
-    for (const auto& e : entries) {
-      const double v = jacobians[e.second.first][r * blocks[e.second.first].second + e.second.second];
-      if (e.first < columns.num_reduced) {
-        out->reduced.push_back(v);
-      } else {
-        out->frame = (e.first - columns.num_reduced) / 6;
-        out->frame_values[r * 6 + (e.first - columns.num_reduced) % 6] = v;
-      }
-    }
+  RowsLayout out;
+  for (const auto& e : entries) {
+    out.cols.push_back(e.first);
+    out.block.push_back(e.second.first);
+    out.entry.push_back(e.second.second);
+    out.width.push_back(blocks[e.second.first].second);
+  }
+  return out;
 }
 
 // The rows of the priors (AddSelfCalibrationBlocks' order: per camera in use, its intrinsics' then its
@@ -793,20 +846,37 @@ void AddPriorRows(BundleProblem* bp, const InformationColumns& columns, FramesMa
       std::vector<double> a(n * n, 0.0);
       for (int k = 0; k < n; ++k)
         if (in.sigma[k] > 0) a[k * n + k] = in.prior_scale_px / in.sigma[k];
-      RowsOf(n, {{in.values.data(), n}}, {a.data()}, columns, &rows);
+      const RowsLayout layout = LayoutOf({{in.values.data(), n}}, columns);
+      const double* jacobians[] = {a.data()};
+      rows.rows = n;
+      rows.layout = &layout;
+      rows.jacobians = jacobians;
       m->Add(rows);
     }
     if (bp->RefinesDrift() && !bp->time_offset_fixed[c]) {
       const double a = 1.0 / kDriftPriorSigma;
-      RowsOf(1, {{&bp->time_drift[c], 1}}, {&a}, columns, &rows);
+      const RowsLayout layout = LayoutOf({{&bp->time_drift[c], 1}}, columns);
+      const double* jacobians[] = {&a};
+      rows.rows = 1;
+      rows.layout = &layout;
+      rows.jacobians = jacobians;
       m->Add(rows);
     }
   }
 }
 
-// Observation k's rows (corner residuals without loss) at the current parameters over the free unknowns.
-// False when a corner is behind its camera.
-bool ObservationRows(BundleProblem* bp, size_t k, const InformationColumns& columns, InformationRows* out) {
+// An observation's Jacobian (per parameter block, ambient, row-major) and the reduced columns' layouts per
+// camera and marker (made when first needed).
+struct ObservationScratch {
+  std::vector<std::unique_ptr<RowsLayout>> layouts;
+  std::vector<double> jacobian;
+  double* blocks[6];
+};
+
+// Observation k's rows (corner residuals without loss) at the current parameters over the free unknowns,
+// its frame `frame` (-1: held), its Jacobian in `scratch`. False when a corner is behind its camera.
+bool ObservationRows(BundleProblem* bp, size_t k, int frame, const InformationColumns& columns,
+                     ObservationScratch* scratch, InformationRows* out) {
   const BundleObservation& o = bp->observations[k];
   ObservationTime time;
   time.time_s = o.time_s;
@@ -816,26 +886,32 @@ bool ObservationRows(BundleProblem* bp, size_t k, const InformationColumns& colu
   const SelfCalibrationCost cost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
                                  bp->RefinesTime() ? &time : nullptr);
   const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
-  std::vector<std::vector<double>> jacobian(blocks.size());
-  std::vector<const double*> parameters, jacobians;
-  std::vector<double*> writable;
-  std::vector<std::pair<const double*, int>> sizes;
+  std::unique_ptr<RowsLayout>& layout = scratch->layouts[o.camera * bp->object_from_marker.size() + o.marker];
+  if (!layout)
+    layout = std::make_unique<RowsLayout>(
+        LayoutOf(std::vector<std::pair<const double*, int>>(blocks.begin(), blocks.end()), columns));
+  int size = 0;
+  for (const auto& b : blocks) size += 8 * b.second;
+  scratch->jacobian.assign(size, 0.0);
+  const double* parameters[6];
+  size = 0;
   for (size_t b = 0; b < blocks.size(); ++b) {
-    jacobian[b].assign(8 * blocks[b].second, 0.0);
-    parameters.push_back(blocks[b].first);
-    writable.push_back(jacobian[b].data());
-    jacobians.push_back(jacobian[b].data());
-    sizes.push_back(blocks[b]);
+    parameters[b] = blocks[b].first;
+    scratch->blocks[b] = scratch->jacobian.data() + size;
+    size += 8 * blocks[b].second;
   }
   double residuals[8];
-  if (!cost.Evaluate(parameters.data(), residuals, writable.data())) return false;
-  RowsOf(8, sizes, jacobians, columns, out);
+  if (!cost.Evaluate(parameters, residuals, scratch->blocks)) return false;
+  out->frame = frame;
+  out->rows = 8;
+  out->layout = layout.get();
+  out->jacobians = scratch->blocks;
   return true;
 }
 
 }  // namespace
 
-IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/) {
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp) {
   IntrinsicsInformation out;
   out.column.assign(bp->cam_from_rig.size(), -1);
   out.entries.resize(bp->cam_from_rig.size());
@@ -852,6 +928,8 @@ IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/
       order.begin(), order.end(),
       [](const std::pair<int, size_t>& a, const std::pair<int, size_t>& b) { return a.first < b.first; });
   FramesMarginaliser marginaliser(columns.num_reduced);
+  ObservationScratch scratch;
+  scratch.layouts.resize(bp->cam_from_rig.size() * bp->object_from_marker.size());
   InformationRows rows;
   bool priors = false;
   for (const auto& [frame, k] : order) {
@@ -859,7 +937,7 @@ IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* bp, int /*threads*/
       AddPriorRows(bp, columns, &marginaliser);
       priors = true;
     }
-    if (!ObservationRows(bp, k, columns, &rows)) return out;
+    if (!ObservationRows(bp, k, frame, columns, &scratch, &rows)) return out;
     marginaliser.Add(rows);
   }
   if (!priors) AddPriorRows(bp, columns, &marginaliser);
@@ -926,8 +1004,8 @@ std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& i
   return out;
 }
 
-std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px, int threads) {
-  return IntrinsicsCovariance(IntrinsicsInformationOf(bp, threads), *bp, sigma_px);
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* bp, double sigma_px) {
+  return IntrinsicsCovariance(IntrinsicsInformationOf(bp), *bp, sigma_px);
 }
 
 std::vector<double> ObservationRms(const BundleProblem& bp, std::vector<double>* max_corner_px) {

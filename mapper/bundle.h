@@ -210,7 +210,7 @@ BundleSummary SolveBundle(BundleProblem* problem, const BundleSettings& settings
 // entries held constant are 0; empty for a camera not refined), marginal over every other unknown: the
 // inverse Gauss-Newton information (J^T J with the priors) at the current parameters, for corners with
 // noise sigma_px. Residuals with intrinsics given or constant do not need a block.
-std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* problem, double sigma_px, int threads);
+std::vector<Eigen::MatrixXd> IntrinsicsCovariance(BundleProblem* problem, double sigma_px);
 
 // The information behind IntrinsicsCovariance at the current parameters, for covariances after entries
 // are held: J^T J with the priors (unit corner noise) of every unknown but the frame poses, marginal over
@@ -221,7 +221,7 @@ struct IntrinsicsInformation {
   std::vector<int> column;                // per camera
   std::vector<std::vector<int>> entries;  // per camera: tangent index -> entry (IntrinsicsVector layout)
 };
-IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* problem, int threads);
+IntrinsicsInformation IntrinsicsInformationOf(BundleProblem* problem);
 // IntrinsicsCovariance from `information` for the entries of `problem` free now (a subset of those free
 // when it was computed; the parameters not moved since): holding an entry drops its row and column.
 std::vector<Eigen::MatrixXd> IntrinsicsCovariance(const IntrinsicsInformation& information,

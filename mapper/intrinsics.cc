@@ -124,7 +124,7 @@ bool HoldWorst(const std::vector<Eigen::MatrixXd>& covariance, double ratio,
 
 std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings& settings,
                                                        const std::vector<std::string>& camera_names,
-                                                       double sigma_px, int threads, BundleProblem* bp) {
+                                                       double sigma_px, BundleProblem* bp) {
   std::vector<IntrinsicsReport> reports;
   if (settings.refine == IntrinsicsRefinement::kNone) return reports;
   const int n_cameras = static_cast<int>(bp->cam_from_rig.size());
@@ -156,7 +156,7 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
   }
   // One information matrix for every round: holding entries does not move the parameters (computing it
   // again each round took a tenth of bench_selfcal's everything row).
-  const IntrinsicsInformation information = IntrinsicsInformationOf(bp, threads);
+  const IntrinsicsInformation information = IntrinsicsInformationOf(bp);
   while (HoldWorst(IntrinsicsCovariance(information, *bp, sigma_px), settings.observability_ratio, &reports,
                    bp)) {
   }
@@ -198,9 +198,9 @@ void HoldAtGiven(size_t k, const std::string& why, IntrinsicsReport* r, BundleIn
 
 }  // namespace
 
-bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
-                            BundleProblem* bp, IntrinsicsInformation* information) {
-  IntrinsicsInformation computed = IntrinsicsInformationOf(bp, threads);
+bool KeepAgreeingIntrinsics(double sigma_px, std::vector<IntrinsicsReport>* reports, BundleProblem* bp,
+                            IntrinsicsInformation* information) {
+  IntrinsicsInformation computed = IntrinsicsInformationOf(bp);
   const std::vector<Eigen::MatrixXd> covariance = IntrinsicsCovariance(computed, *bp, sigma_px);
   if (information) *information = std::move(computed);
   int tested = 0;
@@ -276,12 +276,10 @@ bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<Intrinsics
   return held;
 }
 
-void FinishIntrinsicsReports(BundleProblem* bp, double sigma_px, int threads,
-                             std::vector<IntrinsicsReport>* reports,
+void FinishIntrinsicsReports(BundleProblem* bp, double sigma_px, std::vector<IntrinsicsReport>* reports,
                              const IntrinsicsInformation* information) {
-  const std::vector<Eigen::MatrixXd> covariance = information
-                                                      ? IntrinsicsCovariance(*information, *bp, sigma_px)
-                                                      : IntrinsicsCovariance(bp, sigma_px, threads);
+  const std::vector<Eigen::MatrixXd> covariance =
+      information ? IntrinsicsCovariance(*information, *bp, sigma_px) : IntrinsicsCovariance(bp, sigma_px);
   for (IntrinsicsReport& r : *reports) {
     r.refined = IntrinsicsVector(bp->Model(r.index));
     r.posterior_sigma.assign(r.given.size(), 0.0);

@@ -31,7 +31,7 @@ double ImageCoverage(const BundleProblem& problem, int camera, int* views);
 // sigma_px: the corner noise the information is scaled by (the RMS of the solve before).
 std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings& settings,
                                                        const std::vector<std::string>& camera_names,
-                                                       double sigma_px, int threads, BundleProblem* problem);
+                                                       double sigma_px, BundleProblem* problem);
 
 // After a solve with the intrinsics free: changes from the given values that the data do not call for
 // are undone and the entries held at the given values (a calibration the data agree with is not traded
@@ -41,14 +41,13 @@ std::vector<IntrinsicsReport> PlanIntrinsicsRefinement(const IntrinsicsSettings&
 // 1.96 posterior sigmas, tested one at a time given those held before. Returns true when an entry was
 // held (the caller re-solves). `information` (optional): the information the test used (at the
 // parameters before any entry was held).
-bool KeepAgreeingIntrinsics(double sigma_px, int threads, std::vector<IntrinsicsReport>* reports,
-                            BundleProblem* problem, IntrinsicsInformation* information = nullptr);
+bool KeepAgreeingIntrinsics(double sigma_px, std::vector<IntrinsicsReport>* reports, BundleProblem* problem,
+                            IntrinsicsInformation* information = nullptr);
 
 // After the solve: the refined values and posterior sigmas into the reports. The covariance from
 // `information` (KeepAgreeingIntrinsics', the entries held since dropped) when given, else from the
 // information at the current parameters.
-void FinishIntrinsicsReports(BundleProblem* problem, double sigma_px, int threads,
-                             std::vector<IntrinsicsReport>* reports,
+void FinishIntrinsicsReports(BundleProblem* problem, double sigma_px, std::vector<IntrinsicsReport>* reports,
                              const IntrinsicsInformation* information = nullptr);
 
 // report.json's "intrinsics" member (one line per camera considered; empty when none), each line

@@ -209,8 +209,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
       if (!first.usable) throw MapperError("refinement failed: " + first.termination);
       // Corner noise per coordinate: the observations' RMS corner distance / sqrt(2).
       sigma_px = std::max(0.05, CurrentRms(bundle->problem) / std::sqrt(2.0));
-      report->intrinsics =
-          PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px, settings.threads, &bp);
+      report->intrinsics = PlanIntrinsicsRefinement(o.intrinsics, *names.camera_names, sigma_px, &bp);
       // An intrinsic trades with the camera's pose and barely moves the RMS per iteration: the paper's
       // stopping rule would end the solve long before the intrinsics arrive (cx 8 px off stayed 7.4
       // off): it stops at a 100 times smaller RMS improvement.
@@ -237,7 +236,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
   IntrinsicsInformation information;
   bool information_current = !report->intrinsics.empty();
   if (!report->intrinsics.empty() &&
-      KeepAgreeingIntrinsics(sigma_px, settings.threads, &report->intrinsics, &bp, &information)) {
+      KeepAgreeingIntrinsics(sigma_px, &report->intrinsics, &bp, &information)) {
     BundleSettings full = solve_settings;
     full.paper_stop = false;
     if (!Solve(full, bundle, report).usable) throw MapperError("refinement failed (intrinsics)");
@@ -253,7 +252,7 @@ void RefineWithRejection(const Observations& observations, const ObservationName
     information_current = false;
   }
   if (!report->intrinsics.empty())
-    FinishIntrinsicsReports(&bundle->problem, sigma_px, settings.threads, &report->intrinsics,
+    FinishIntrinsicsReports(&bundle->problem, sigma_px, &report->intrinsics,
                             information_current ? &information : nullptr);
 }
 

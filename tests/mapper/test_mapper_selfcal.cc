@@ -490,13 +490,13 @@ TEST(MapperSelfCal, CovarianceFromInformationMatchesAFreshOne) {
     in.values = in.prior = IntrinsicsVector(model);
     in.sigma = {25, 25, 10, 10, 0.05, 0.05, 0.01, 0.01, 0.05};
   }
-  const IntrinsicsInformation information = IntrinsicsInformationOf(&bp, 1);
+  const IntrinsicsInformation information = IntrinsicsInformationOf(&bp);
   // Held since: cam1's principal point and k3, all of cam2's entries.
   bp.intrinsics[1].constant = {2, 3, 8};
   bp.intrinsics[2].constant = {0, 1, 2, 3, 4, 5, 6, 7, 8};
   bp.intrinsics[2].refined = false;
   const std::vector<Eigen::MatrixXd> from_information = IntrinsicsCovariance(information, bp, 0.2);
-  const std::vector<Eigen::MatrixXd> fresh = IntrinsicsCovariance(&bp, 0.2, 1);
+  const std::vector<Eigen::MatrixXd> fresh = IntrinsicsCovariance(&bp, 0.2);
   ASSERT_EQ(from_information.size(), 3u);
   EXPECT_EQ(from_information[2].size(), 0);
   for (int c = 0; c < 2; ++c) {
@@ -513,7 +513,7 @@ TEST(MapperSelfCal, CovarianceFromInformationMatchesAFreshOne) {
       in.constant.clear();
       in.refined = true;
     }
-    return IntrinsicsCovariance(&all, 0.2, 1);
+    return IntrinsicsCovariance(&all, 0.2);
   }();
   EXPECT_GT((none_held[0] - fresh[0]).norm(), 1e-6 * fresh[0].norm());
 }
