@@ -908,9 +908,10 @@ MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOption
   reread_ = options_.reread_rejected && !options_.inverted && chance < 1e-3;
   // The own search reads every quad it finds: a border cell of the other colour only where random
   // patterns are rarely ids.
-  // Six of the 28 border cells of DICT_6X6 (blurred markers at 60-75 deg read their thin border's
-  // cells next to white code cells as white; OpenCV allows 35 % of them).
-  own_border_errors_ = chance < 1e-3 ? 6 : 0;
+  // Eight of the 28 border cells of DICT_6X6 (blurred markers read their thin border's cells next to
+  // white code cells as white: 7 and 8 on two markers OpenCV finds, bench_accuracy's blur 1.2 and webcam;
+  // OpenCV allows 12, 35 % of the 36 inner cells).
+  own_border_errors_ = chance < 1e-3 ? 8 : 0;
 }
 
 MarkerDetector::~MarkerDetector() = default;
