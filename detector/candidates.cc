@@ -12,46 +12,35 @@ namespace {
 void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi) {
   const int cols = gray.cols, rows = gray.rows;
   const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
-  std::vector<uint8_t> tlo(static_cast<size_t>(tw) * th), thi(static_cast<size_t>(tw) * th);
-  std::vector<uint8_t> col_lo(static_cast<size_t>(tw) * t), col_hi(static_cast<size_t>(tw) * t);
+  cv::Mat tlo(th, tw, CV_8U), thi(th, tw, CV_8U);
+  // Per column over the tile's rows (cv::min / cv::max, vectorised), then over the tile's columns (the
+  // last tile's columns beyond the image are the image's last column again).
+  cv::Mat col_lo(1, tw * t, CV_8U), col_hi(1, tw * t, CV_8U);
   for (int ty = 0; ty < th; ++ty) {
-    // Per column over the tile's rows (vectorised), then over the tile's columns.
-    std::fill(col_lo.begin(), col_lo.end(), 255);
-    std::fill(col_hi.begin(), col_hi.end(), 0);
-    uint8_t* __restrict l = col_lo.data();
-    uint8_t* __restrict h = col_hi.data();
-    for (int y = ty * t; y < std::min(rows, ty * t + t); ++y) {
-      const uint8_t* __restrict row = gray.ptr<uint8_t>(y);
-      for (int x = 0; x < cols; ++x) {
-        l[x] = std::min(l[x], row[x]);
-        h[x] = std::max(h[x], row[x]);
-      }
+    cv::Mat l = col_lo.colRange(0, cols), h = col_hi.colRange(0, cols);
+    gray.row(ty * t).copyTo(l);
+    gray.row(ty * t).copyTo(h);
+    for (int y = ty * t + 1; y < std::min(rows, ty * t + t); ++y) {
+      cv::min(gray.row(y), l, l);
+      cv::max(gray.row(y), h, h);
     }
+    uint8_t* __restrict pl = col_lo.ptr<uint8_t>();
+    uint8_t* __restrict ph = col_hi.ptr<uint8_t>();
+    for (int x = cols; x < tw * t; ++x) pl[x] = pl[cols - 1], ph[x] = ph[cols - 1];
+    uint8_t* __restrict out_lo = tlo.ptr<uint8_t>(ty);
+    uint8_t* __restrict out_hi = thi.ptr<uint8_t>(ty);
     for (int tx = 0; tx < tw; ++tx) {
       uint8_t mn = 255, mx = 0;
-      for (int x = tx * t; x < tx * t + t; ++x) mn = std::min(mn, l[x]), mx = std::max(mx, h[x]);
-      tlo[ty * tw + tx] = mn, thi[ty * tw + tx] = mx;
+      for (int x = tx * t; x < tx * t + t; ++x) mn = std::min(mn, pl[x]), mx = std::max(mx, ph[x]);
+      out_lo[tx] = mn, out_hi[tx] = mx;
     }
   }
-  // 3 x 3 tile neighbourhoods: separable, rows then columns.
-  std::vector<uint8_t> rlo(tlo.size()), rhi(thi.size());
-  for (int ty = 0; ty < th; ++ty)
-    for (int tx = 0; tx < tw; ++tx) {
-      uint8_t mn = 255, mx = 0;
-      for (int dx = std::max(0, tx - 1); dx <= std::min(tw - 1, tx + 1); ++dx) {
-        mn = std::min(mn, tlo[ty * tw + dx]);
-        mx = std::max(mx, thi[ty * tw + dx]);
-      }
-      rlo[ty * tw + tx] = mn, rhi[ty * tw + tx] = mx;
-    }
-  lo->assign(tlo.size(), 255);
-  hi->assign(thi.size(), 0);
-  for (int ty = 0; ty < th; ++ty)
-    for (int tx = 0; tx < tw; ++tx)
-      for (int dy = std::max(0, ty - 1); dy <= std::min(th - 1, ty + 1); ++dy) {
-        (*lo)[ty * tw + tx] = std::min((*lo)[ty * tw + tx], rlo[dy * tw + tx]);
-        (*hi)[ty * tw + tx] = std::max((*hi)[ty * tw + tx], rhi[dy * tw + tx]);
-      }
+  // 3 x 3 tile neighbourhoods (within the image: erosion and dilation ignore what is outside).
+  const cv::Mat square = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+  cv::erode(tlo, tlo, square);
+  cv::dilate(thi, thi, square);
+  lo->assign(tlo.datastart, tlo.dataend);
+  hi->assign(thi.datastart, thi.dataend);
 }
 
 double Cross(const cv::Point2d& a, const cv::Point2d& b) { return a.x * b.y - a.y * b.x; }
@@ -216,6 +205,7 @@ void QuadFinder::Threshold(const cv::Rect& tiles, const cv::Rect& px, double lev
   }
   // OpenCV's adaptive threshold: dark where v - mean <= -floor(offset), the mean rounded to 8 bits.
   const int delta = static_cast<int>(std::floor(offset));
+  const int width = px.width, x0 = px.x, y_end = gray_.rows;  // locals: uint8_t pointers alias all
   std::vector<uint8_t> threshold(static_cast<size_t>(tiles.width) * t);
   for (int ty = tiles.y; ty < tiles.br().y; ++ty) {
     // Per tile: dark below this value (the mean's pass: 255 marks the tile searched); 0: no pixel.
@@ -227,14 +217,14 @@ void QuadFinder::Threshold(const cv::Rect& tiles, const cv::Rect& px, double lev
       std::fill_n(threshold.begin() + (tx - tiles.x) * t, t, static_cast<uint8_t>(std::min(value, 255)));
     }
     const uint8_t* __restrict thr = threshold.data();
-    for (int y = ty * t; y < std::min(gray_.rows, ty * t + t); ++y) {
-      const uint8_t* __restrict in = gray_.ptr<uint8_t>(y) + px.x;
-      uint8_t* __restrict out = binary_.ptr<uint8_t>(y) + px.x;
+    for (int y = ty * t; y < std::min(y_end, ty * t + t); ++y) {
+      const uint8_t* __restrict in = gray_.ptr<uint8_t>(y) + x0;
+      uint8_t* __restrict out = binary_.ptr<uint8_t>(y) + x0;
       if (window_px > 0) {
-        const uint8_t* __restrict m = mean_.ptr<uint8_t>(y) + px.x;
-        for (int x = 0; x < px.width; ++x) out[x] = in[x] + delta <= m[x] ? thr[x] : 0;
+        const uint8_t* __restrict m = mean_.ptr<uint8_t>(y) + x0;
+        for (int x = 0; x < width; ++x) out[x] = in[x] + delta <= m[x] ? thr[x] : 0;
       } else {
-        for (int x = 0; x < px.width; ++x) out[x] = in[x] < thr[x] ? 255 : 0;
+        for (int x = 0; x < width; ++x) out[x] = in[x] < thr[x] ? 255 : 0;
       }
     }
   }
