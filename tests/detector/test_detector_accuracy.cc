@@ -157,8 +157,8 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
 
 // candidate_search "own" (detector/candidates.h): no wrong ids under any imaging condition of the
 // catalogue, and the recall it measured (4 images per condition: 1.000 / 0.934; bench_accuracy 3: <60
-// deg 0.998, <75 deg 0.970, against 0.999 / 0.970 with "opencv": it still loses a few under blur 1.2
-// and webcam at 60-75 deg, hence not the default).
+// deg 0.999, <75 deg 0.971, against 0.999 / 0.970 with "opencv": it still loses a few webcam markers at
+// 70-75 deg, 0.942 against 0.967, hence not the default).
 TEST(DetectorAccuracy, OwnCandidateSearchOnReferenceRenders) {
   DetectorOptions o;
   o.candidate_search = "own";
