@@ -12,72 +12,35 @@ namespace {
 void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi) {
   const int cols = gray.cols, rows = gray.rows;
   const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
-  std::vector<uint8_t> tlo(static_cast<size_t>(tw) * th), thi(static_cast<size_t>(tw) * th);
-  std::vector<uint8_t> col_lo(static_cast<size_t>(tw) * t), col_hi(static_cast<size_t>(tw) * t);
+  cv::Mat tlo(th, tw, CV_8U), thi(th, tw, CV_8U);
+  // Per column over the tile's rows (cv::min / cv::max, vectorised), then over the tile's columns (the
+  // last tile's columns beyond the image are the image's last column again).
+  cv::Mat col_lo(1, tw * t, CV_8U), col_hi(1, tw * t, CV_8U);
   for (int ty = 0; ty < th; ++ty) {
-    // Per column over the tile's rows (vectorised), then over the tile's columns.
-    std::fill(col_lo.begin(), col_lo.end(), 255);
-    std::fill(col_hi.begin(), col_hi.end(), 0);
-    uint8_t* __restrict l = col_lo.data();
-    uint8_t* __restrict h = col_hi.data();
-    for (int y = ty * t; y < std::min(rows, ty * t + t); ++y) {
-      const uint8_t* __restrict row = gray.ptr<uint8_t>(y);
-      for (int x = 0; x < cols; ++x) {
-        l[x] = std::min(l[x], row[x]);
-        h[x] = std::max(h[x], row[x]);
-      }
+    cv::Mat l = col_lo.colRange(0, cols), h = col_hi.colRange(0, cols);
+    gray.row(ty * t).copyTo(l);
+    gray.row(ty * t).copyTo(h);
+    for (int y = ty * t + 1; y < std::min(rows, ty * t + t); ++y) {
+      cv::min(gray.row(y), l, l);
+      cv::max(gray.row(y), h, h);
     }
+    uint8_t* __restrict pl = col_lo.ptr<uint8_t>();
+    uint8_t* __restrict ph = col_hi.ptr<uint8_t>();
+    for (int x = cols; x < tw * t; ++x) pl[x] = pl[cols - 1], ph[x] = ph[cols - 1];
+    uint8_t* __restrict out_lo = tlo.ptr<uint8_t>(ty);
+    uint8_t* __restrict out_hi = thi.ptr<uint8_t>(ty);
     for (int tx = 0; tx < tw; ++tx) {
       uint8_t mn = 255, mx = 0;
-      for (int x = tx * t; x < tx * t + t; ++x) mn = std::min(mn, l[x]), mx = std::max(mx, h[x]);
-      tlo[ty * tw + tx] = mn, thi[ty * tw + tx] = mx;
+      for (int x = tx * t; x < tx * t + t; ++x) mn = std::min(mn, pl[x]), mx = std::max(mx, ph[x]);
+      out_lo[tx] = mn, out_hi[tx] = mx;
     }
   }
-  // 3 x 3 tile neighbourhoods: separable, rows then columns.
-  std::vector<uint8_t> rlo(tlo.size()), rhi(thi.size());
-  for (int ty = 0; ty < th; ++ty)
-    for (int tx = 0; tx < tw; ++tx) {
-      uint8_t mn = 255, mx = 0;
-      for (int dx = std::max(0, tx - 1); dx <= std::min(tw - 1, tx + 1); ++dx) {
-        mn = std::min(mn, tlo[ty * tw + dx]);
-        mx = std::max(mx, thi[ty * tw + dx]);
-      }
-      rlo[ty * tw + tx] = mn, rhi[ty * tw + tx] = mx;
-    }
-  lo->assign(tlo.size(), 255);
-  hi->assign(thi.size(), 0);
-  for (int ty = 0; ty < th; ++ty)
-    for (int tx = 0; tx < tw; ++tx)
-      for (int dy = std::max(0, ty - 1); dy <= std::min(th - 1, ty + 1); ++dy) {
-        (*lo)[ty * tw + tx] = std::min((*lo)[ty * tw + tx], rlo[dy * tw + tx]);
-        (*hi)[ty * tw + tx] = std::max((*hi)[ty * tw + tx], rhi[dy * tw + tx]);
-      }
-}
-
-// Dark pixels (255): below min + level * (max - min) of their tile's range; none in tiles whose range is
-// below min_contrast.
-void LevelBinary(const cv::Mat& gray, int t, const std::vector<uint8_t>& lo, const std::vector<uint8_t>& hi,
-                 double level, int min_contrast, cv::Mat* binary) {
-  const int cols = gray.cols, rows = gray.rows;
-  const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
-  binary->create(rows, cols, CV_8U);
-  std::vector<uint8_t> threshold(static_cast<size_t>(tw) * t);
-  for (int ty = 0; ty < th; ++ty) {
-    for (int tx = 0; tx < tw; ++tx) {
-      const int mn = lo[ty * tw + tx], mx = hi[ty * tw + tx];
-      // Dark: v < value (v integer), i.e. v < min + level * (max - min); 0: no pixel.
-      const int value =
-          mx - mn < min_contrast ? 0 : static_cast<int>(std::ceil(mn + level * (mx - mn) - 1e-9));
-      std::fill(threshold.begin() + tx * t, threshold.begin() + tx * t + t,
-                static_cast<uint8_t>(std::min(value, 255)));
-    }
-    const uint8_t* __restrict thr = threshold.data();
-    for (int y = ty * t; y < std::min(rows, ty * t + t); ++y) {
-      const uint8_t* __restrict in = gray.ptr<uint8_t>(y);
-      uint8_t* __restrict out = binary->ptr<uint8_t>(y);
-      for (int x = 0; x < cols; ++x) out[x] = in[x] < thr[x] ? 255 : 0;
-    }
-  }
+  // 3 x 3 tile neighbourhoods (within the image: erosion and dilation ignore what is outside).
+  const cv::Mat square = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+  cv::erode(tlo, tlo, square);
+  cv::dilate(thi, thi, square);
+  lo->assign(tlo.datastart, tlo.dataend);
+  hi->assign(thi.datastart, thi.dataend);
 }
 
 double Cross(const cv::Point2d& a, const cv::Point2d& b) { return a.x * b.y - a.y * b.x; }
@@ -179,45 +142,101 @@ QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gr
   const int t = search_.tile_px;
   tiles_wide_ = (gray.cols + t - 1) / t, tiles_high_ = (gray.rows + t - 1) / t;
   TileRanges(gray, t, &lo_, &hi_);
+  // Regions: the bounding boxes (in tiles) of the 8-connected components of tiles with contrast, merged
+  // where they overlap, so that each holds whole components: a dark component lies in tiles with
+  // contrast, hence in one region, and no region cuts one.
+  cv::Mat contrast(tiles_high_, tiles_wide_, CV_8U);
+  for (int i = 0; i < tiles_high_ * tiles_wide_; ++i)
+    contrast.data[i] = hi_[i] - lo_[i] >= search_.min_contrast ? 255 : 0;
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(contrast, labels, stats, centroids, 8, CV_32S);
+  for (int i = 1; i < n; ++i)
+    regions_.emplace_back(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
+                          stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < regions_.size(); ++i)
+      for (size_t j = i + 1; j < regions_.size(); ++j)
+        if ((regions_[i] & regions_[j]).area() > 0) {
+          regions_[i] |= regions_[j];
+          regions_.erase(regions_.begin() + static_cast<long>(j));
+          merged = true, --j;
+        }
+  }
+  binary_.create(gray.size(), CV_8U);
 }
 
-std::vector<std::array<cv::Point2d, 4>> QuadFinder::Find(double level) {
-  LevelBinary(gray_, search_.tile_px, lo_, hi_, level, search_.min_contrast, &binary_);
-  return Quads();
-}
+std::vector<std::array<cv::Point2d, 4>> QuadFinder::Find(double level) { return Quads(level, 0, 0); }
 
 std::vector<std::array<cv::Point2d, 4>> QuadFinder::FindBelowMean(int window_px, double offset) {
-  cv::adaptiveThreshold(gray_, binary_, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window_px,
-                        offset);
-  // Only tiles with contrast, not covered (a row of tile masks per row of tiles).
-  const int t = search_.tile_px;
-  std::vector<uint8_t> mask(static_cast<size_t>(tiles_wide_) * t);
-  for (int ty = 0; ty < tiles_high_; ++ty) {
-    for (int tx = 0; tx < tiles_wide_; ++tx) {
-      const bool on = hi_[ty * tiles_wide_ + tx] - lo_[ty * tiles_wide_ + tx] >= search_.min_contrast;
-      std::fill(mask.begin() + tx * t, mask.begin() + tx * t + t, on ? 255 : 0);
-    }
-    const uint8_t* __restrict m = mask.data();
-    for (int y = ty * t; y < std::min(binary_.rows, ty * t + t); ++y) {
-      uint8_t* __restrict out = binary_.ptr<uint8_t>(y);
-      for (int x = 0; x < binary_.cols; ++x) out[x] &= m[x];
-    }
-  }
-  return Quads();
+  return Quads(0, window_px, offset);
 }
 
-std::vector<std::array<cv::Point2d, 4>> QuadFinder::Quads() {
+std::vector<std::array<cv::Point2d, 4>> QuadFinder::Quads(double level, int window_px, double offset) {
+  const int t = search_.tile_px;
   std::vector<std::array<cv::Point2d, 4>> quads;
-  // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
-  cv::findContours(binary_, contours_, hierarchy_, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
-  for (size_t i = 0; i < contours_.size(); ++i) {
-    if (hierarchy_[i][3] >= 0) continue;
-    const double length = static_cast<double>(contours_[i].size());
-    if (length < search_.min_perimeter || length > search_.max_perimeter) continue;
-    std::array<cv::Point2d, 4> quad;
-    if (QuadFromBoundary(contours_[i], search_, gray_.size(), &quad)) quads.push_back(quad);
+  for (const cv::Rect& region : regions_) {
+    const cv::Rect tiles = Uncovered(region);
+    const cv::Rect px(tiles.x * t, tiles.y * t, std::min(tiles.br().x * t, gray_.cols) - tiles.x * t,
+                      std::min(tiles.br().y * t, gray_.rows) - tiles.y * t);
+    // Too small to hold a quad's boundary (at most twice the box's width and height).
+    if (tiles.empty() || 4.0 * std::max(px.width, px.height) < search_.min_perimeter) continue;
+    Threshold(tiles, px, level, window_px, offset);
+    // Two levels: components' outer boundaries (no parent) and their holes' boundaries.
+    cv::findContours(binary_(px), contours_, hierarchy_, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE, px.tl());
+    for (size_t i = 0; i < contours_.size(); ++i) {
+      if (hierarchy_[i][3] >= 0) continue;
+      const double length = static_cast<double>(contours_[i].size());
+      if (length < search_.min_perimeter || length > search_.max_perimeter) continue;
+      std::array<cv::Point2d, 4> quad;
+      if (QuadFromBoundary(contours_[i], search_, gray_.size(), &quad)) quads.push_back(quad);
+    }
   }
   return quads;
+}
+
+void QuadFinder::Threshold(const cv::Rect& tiles, const cv::Rect& px, double level, int window_px,
+                           double offset) {
+  const int t = search_.tile_px;
+  if (window_px > 0) {
+    mean_.create(gray_.size(), CV_8U);
+    cv::Mat mean = mean_(px);
+    cv::blur(gray_(px), mean, cv::Size(window_px, window_px), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  }
+  // OpenCV's adaptive threshold: dark where v - mean <= -floor(offset), the mean rounded to 8 bits.
+  const int delta = static_cast<int>(std::floor(offset));
+  const int width = px.width, x0 = px.x, y_end = gray_.rows;  // locals: uint8_t pointers alias all
+  std::vector<uint8_t> threshold(static_cast<size_t>(tiles.width) * t);
+  for (int ty = tiles.y; ty < tiles.br().y; ++ty) {
+    // Per tile: dark below this value (the mean's pass: 255 marks the tile searched); 0: no pixel.
+    for (int tx = tiles.x; tx < tiles.br().x; ++tx) {
+      const int mn = lo_[ty * tiles_wide_ + tx], mx = hi_[ty * tiles_wide_ + tx];
+      const int value = mx - mn < search_.min_contrast ? 0
+                        : window_px > 0                ? 255
+                                        : static_cast<int>(std::ceil(mn + level * (mx - mn) - 1e-9));
+      std::fill_n(threshold.begin() + (tx - tiles.x) * t, t, static_cast<uint8_t>(std::min(value, 255)));
+    }
+    const uint8_t* __restrict thr = threshold.data();
+    for (int y = ty * t; y < std::min(y_end, ty * t + t); ++y) {
+      const uint8_t* __restrict in = gray_.ptr<uint8_t>(y) + x0;
+      uint8_t* __restrict out = binary_.ptr<uint8_t>(y) + x0;
+      if (window_px > 0) {
+        const uint8_t* __restrict m = mean_.ptr<uint8_t>(y) + x0;
+        for (int x = 0; x < width; ++x) out[x] = in[x] + delta <= m[x] ? thr[x] : 0;
+      } else {
+        for (int x = 0; x < width; ++x) out[x] = in[x] < thr[x] ? 255 : 0;
+      }
+    }
+  }
+}
+
+cv::Rect QuadFinder::Uncovered(const cv::Rect& region) const {
+  int x0 = region.br().x, y0 = region.br().y, x1 = region.x - 1, y1 = region.y - 1;
+  for (int ty = region.y; ty < region.br().y; ++ty)
+    for (int tx = region.x; tx < region.br().x; ++tx)
+      if (hi_[ty * tiles_wide_ + tx] - lo_[ty * tiles_wide_ + tx] >= search_.min_contrast)
+        x0 = std::min(x0, tx), y0 = std::min(y0, ty), x1 = std::max(x1, tx), y1 = std::max(y1, ty);
+  return x1 < x0 ? cv::Rect() : cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
 }
 
 void QuadFinder::Cover(const std::array<cv::Point2d, 4>& quad, double grow_px) {

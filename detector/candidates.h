@@ -3,8 +3,9 @@
 //
 // The image is cut into square tiles; each tile's minimum and maximum over it and its 8 neighbours give
 // the threshold, a level between them (AprilTag's scheme; one binary image per level). Pixels of tiles
-// whose contrast is below `min_contrast` are not dark. The outer boundaries of the dark connected
-// components are followed (cv::findContours); a boundary whose points all lie near the polygon of its
+// whose contrast is below `min_contrast` are not dark. Only boxes of tiles with contrast are thresholded
+// and searched (QuadFinder); the outer boundaries of the dark connected components are followed there
+// (cv::findContours); a boundary whose points all lie near the polygon of its
 // four extreme points becomes a quad, each side a line fitted to the boundary points between two
 // corners (a sixth of them left out at each end), the corners the intersections of adjacent lines.
 #pragma once
@@ -48,9 +49,15 @@ class QuadFinder {
   cv::Mat gray_;
   QuadSearch search_;
   int tiles_wide_ = 0, tiles_high_ = 0;
-  std::vector<uint8_t> lo_, hi_;  // per tile: range of its 3 x 3 tiles; covered tiles: lo_ 255, hi_ 0
-  cv::Mat binary_;
-  std::vector<std::array<cv::Point2d, 4>> Quads();  // of binary_
+  std::vector<uint8_t> lo_, hi_;   // per tile: range of its 3 x 3 tiles; covered tiles: lo_ 255, hi_ 0
+  std::vector<cv::Rect> regions_;  // tiles: disjoint boxes of whole components of tiles with contrast
+  cv::Mat binary_, mean_;          // written in the regions searched only
+  // Quads of the binary image (dark below `level` of the range, or with window_px below the mean less
+  // `offset`) in each region's box of uncovered tiles with contrast.
+  std::vector<std::array<cv::Point2d, 4>> Quads(double level, int window_px, double offset);
+  cv::Rect Uncovered(const cv::Rect& region) const;  // the box of its uncovered tiles with contrast
+  // binary_ over `px` (the pixels of `tiles`): dark pixels 255 in uncovered tiles with contrast.
+  void Threshold(const cv::Rect& tiles, const cv::Rect& px, double level, int window_px, double offset);
   std::vector<std::vector<cv::Point>> contours_;
   std::vector<cv::Vec4i> hierarchy_;
 };

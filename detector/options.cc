@@ -63,8 +63,8 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "at the levels before (0: none)",
                 InRange(0, 1, false, true))
            .Add("high_threshold_level", &O::high_threshold_level, "",
-                "own candidate search: the last binary image's level, on the tiles where no marker was found "
-                "yet (0: none)",
+                "own candidate search: a binary image at this level after low_threshold_level's, on the "
+                "tiles where no marker was found yet (0: none; the local mean's comes after it)",
                 InRange(0, 1, false, true))
            .Add("mean_window_px", &O::mean_window_px, "px",
                 "own candidate search: last, on the tiles where no marker was found, dark below the mean of "
