@@ -209,8 +209,9 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
   const std::string url = "udpm://239.255.76.67:7744?ttl=0";
   const std::string tracker_err = dir + "/tracker.txt";
   test::Child tracker(
-      // The detector processes start a few hundred ms apart and each replays the recording from its first
-      // frame: a generous frame deadline lets every frame wait for all three.
+      // The detector processes publish each frame at a shared wall-clock schedule (--start-wall-utime, 2 s
+      // ahead); one ready late (a loaded machine) publishes its frames already due at once: a generous
+      // frame deadline lets every frame wait for all three.
       {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url,
        "--deadline-ms", "3000"},
       tracker_err);
@@ -219,10 +220,12 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   std::vector<std::unique_ptr<test::Child>> detectors;
+  const std::string start = std::to_string(NowUtime() + 2000000);
   for (const auto& c : truth.cameras)
     detectors.push_back(std::make_unique<test::Child>(
         std::vector<std::string>{kBin + "/mcmt-detector", "--config", dir + "/rig.yaml", "--camera", c.name,
-                                 "--lcm-url", url, "--rate", "realtime", "--quiet"},
+                                 "--lcm-url", url, "--rate", "realtime", "--start-wall-utime", start,
+                                 "--quiet"},
         dir + "/detector_" + c.name + ".txt"));
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (collector.poses.size() < static_cast<size_t>(frames) && std::chrono::steady_clock::now() < end)
