@@ -15,10 +15,7 @@
 // brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
 // A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
 // that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
-// the side is fitted again with one surround level (S2 = S1, no q). A margin fit that leaves a residual
-// beyond the margin is fitted again with a further step B_{-1} = e + q + q2 (level S3 beyond it, q2 free):
-// a narrow face beyond the margin, then the object's edge within the blur's reach (a 1-cell margin on a
-// four-sided prism's 1.75-marker-wide faces, blur 0.65 cell, moved the edges 0.10 px outward).
+// the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
 #include <array>
@@ -80,16 +77,14 @@ struct SideFit {
   double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
-  bool further_step = false;     // fitted with a further surround step beyond the margin (S3, Q2)
   bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
   // The last fit failed only because its edge lay beyond 0.75 cell from the profiles' line (at
   // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
   bool beyond = false;
   double beyond_e = 0;
-  double cost = 0;  // the fit's weighted squared residual sum
-  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma, S3, q2); `warm`: start from them (e relative to
-  // the profiles' line as given in `e`) instead of from the profiles.
-  std::array<double, 10> params{};
+  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
+  // profiles' line as given in `e`) instead of from the profiles.
+  std::array<double, 8> params{};
   bool warm = false;
 };
 

@@ -3,9 +3,7 @@
 #pragma once
 
 #include <algorithm>
-#include <functional>
 #include <memory>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -43,14 +41,6 @@ struct SimEvalResult {
   double Recall75() const { return visible75 ? double(found75) / visible75 : 0; }
 };
 
-// mcmt-sim's object `kind` with markers `marker_size` m on a side.
-inline sim::SimObject MakeSimObject(sim::ObjectKind kind, double marker_size) {
-  sim::ObjectOptions oo;
-  oo.kind = kind;
-  oo.marker_size = marker_size;
-  return sim::MakeObject(oo);
-}
-
 inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
   sim::RigOptions rig;
   rig.num_cameras = o.cameras;
@@ -59,7 +49,10 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
   rig.height = o.height;
   rig.distortion = o.distortion;
   const std::vector<sim::SimCamera> cameras = sim::MakeRig(rig);
-  const sim::SimObject object = MakeSimObject(o.object, o.marker_size);
+  sim::ObjectOptions oo;
+  oo.kind = o.object;
+  oo.marker_size = o.marker_size;
+  const sim::SimObject object = sim::MakeObject(oo);
   sim::TrajectoryOptions to;
   to.frames = o.frames;
   to.seed = o.seed;
@@ -162,55 +155,6 @@ inline DetectorBenchScene MakeDetectorBenchScene(int frames, double blur_sigma_p
   scene.markers.dictionary = "DICT_6X6_250";
   for (const auto& m : scene.object.markers) scene.markers.ids.push_back(m.id);
   return scene;
-}
-
-// mcmt-sim's paper rig (5 cameras, 640x480) at `radius` m watching `object` (markers `marker_size` m, print
-// margin `quiet_zone_cells`, faces of albedo `albedo`, < 0: the object's) for `frames` frames at 3 fps:
-// each image with the truth of its fully visible markers >= 15 px within 75 deg.
-struct SimRigImaging {
-  double blur = 0, noise = 2.0, radius = 1.3, marker_size = 0.04, albedo = -1;
-  int frames = 40, quiet_zone_cells = 1;
-  sim::ObjectKind object = sim::ObjectKind::kFourSided;
-};
-inline void ForEachSimRigImage(
-    const SimRigImaging& o,
-    const std::function<void(const cv::Mat&, const std::vector<RenderedMarker>&)>& use) {
-  sim::RigOptions rig;
-  rig.num_cameras = 5, rig.radius = o.radius;
-  const std::vector<sim::SimCamera> cameras = sim::MakeRig(rig);
-  const sim::SimObject object = MakeSimObject(o.object, o.marker_size);
-  sim::TrajectoryOptions to;
-  to.frames = o.frames, to.seed = 3, to.fps = 3.0;
-  sim::RenderOptions ro;
-  ro.blur_sigma = o.blur, ro.noise_sigma = o.noise, ro.seed = 3;
-  ro.quiet_zone_cells = o.quiet_zone_cells, ro.surface_albedo = o.albedo;
-  sim::Renderer renderer(object, "DICT_6X6_250", ro);
-  for (size_t c = 0; c < cameras.size(); ++c)
-    for (const sim::SimFrame& f : sim::MakeTrajectory(to)) {
-      std::vector<RenderedMarker> truth;
-      for (const sim::MarkerView& v : sim::ProjectMarkers(cameras[c], object, f.rig_from_object)) {
-        if (!v.fully_visible || v.size_px < 15 || v.view_angle_deg > 75) continue;
-        RenderedMarker t;
-        t.id = v.id, t.side_px = v.size_px, t.view_angle_deg = v.view_angle_deg;
-        for (int k = 0; k < 4; ++k) t.corners[k] = cv::Point2d(v.corners[k].x(), v.corners[k].y());
-        truth.push_back(t);
-      }
-      use(renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object), truth);
-    }
-}
-
-// The side model apart from the candidate search's recall: marker `t` of `image` refined
-// (RefineMarkerCorners, polarity +1) from its true corners moved by `perturb` (px, drawn from `rng`), with
-// its known bits (dictionary `dict`), into `corners` and the fitted blur `sigma`; false when the
-// refinement fails.
-inline bool RefineFromTruth(const cv::Mat& image, const RenderedMarker& t, const cv::aruco::Dictionary& dict,
-                            bool fit_gamma, std::normal_distribution<double>* perturb, std::mt19937_64* rng,
-                            std::array<cv::Point2d, 4>* corners, double* sigma) {
-  for (int k = 0; k < 4; ++k) (*corners)[k] = t.corners[k] + cv::Point2d((*perturb)(*rng), (*perturb)(*rng));
-  const cv::Mat bits =
-      cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(t.id, t.id + 1), dict.markerSize);
-  return RefineMarkerCorners(image, dict.markerSize + 2, bits, nullptr, 1, corners, true, sigma, fit_gamma,
-                             nullptr, 1);
 }
 
 }  // namespace mcmt::testing

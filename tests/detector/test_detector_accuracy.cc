@@ -259,34 +259,6 @@ TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
   EXPECT_TRUE(seen);
 }
 
-// A narrow face beyond the print's margin: mcmt-sim's four-sided prism (faces 1.75 marker sides wide: a
-// 1-cell margin, then the prism's edge 2 cells further out) at blur 1.3 px on 2 px cells with dark faces
-// (albedo 0.1). The margin fit traded the margin's level and width against that further step and moved
-// the edges outward: +0.119 px; with the further step modelled (side_model.h) +0.078 px (the rest is the
-// model's error at blur / cell 0.65, bench/results/2026-12-04-sidemodel3.md). Refined from the true
-// corners (+ 0.3 px noise) so that the search's recall does not enter; a regression guard, not the target.
-TEST(DetectorAccuracy, FurtherSurroundStepOnSim) {
-  auto dict = LoadDictionary("DICT_6X6_250");
-  testing::SimRigImaging o;
-  o.blur = 1.3, o.albedo = 0.1;
-  std::mt19937_64 rng(1);
-  std::normal_distribution<double> perturb(0.0, 0.3);
-  testing::CornerErrors errors;
-  testing::ForEachSimRigImage(
-      o, [&](const cv::Mat& image, const std::vector<testing::RenderedMarker>& truth) {
-        for (const testing::RenderedMarker& t : truth) {
-          std::array<cv::Point2d, 4> c;
-          double sigma = NAN;
-          if (testing::RefineFromTruth(image, t, *dict, true, &perturb, &rng, &c, &sigma))
-            testing::AddCornerErrors(t, c, &errors);
-        }
-      });
-  std::printf("four-sided, blur 1.3 px, albedo 0.1: %zu corners, offset %+.4f px, median error %.3f px\n",
-              errors.offsets.size(), testing::MeanOf(errors.offsets), testing::MedianOf(errors.errors));
-  EXPECT_GE(errors.offsets.size(), 360u);
-  EXPECT_LE(std::abs(testing::MeanOf(errors.offsets)), 0.09);
-}
-
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the
 // marker's size or on its view angle.
 TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
