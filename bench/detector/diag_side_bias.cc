@@ -6,9 +6,11 @@
 // ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h; sim:
 // mcmt-sim's paper rig (5 cameras, 640x480) and object OBJECT (four_sided), markers >= 15 px within
 // 75 deg, print margin QUIET (cells, 1) and face albedo ALBEDO (< 0: the object's), offsets per id too.
+// exact: RenderExact below (fronto-parallel, the continuous blurred image point-sampled, no noise).
 // Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
 // MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
 // the detector's default, 0: linear), SEED (1), PER (print each marker).
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -43,6 +45,64 @@ cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, d
   im.blur_sigma = blur, im.read_noise = Env("NOISE", 2);
   im.margin_cells = Env("MARGIN", 1.0), im.surface = Env("SURFACE", 0.5);
   return testing::RenderReference(dict, scene, im, rng, truth);
+}
+
+// The exact image of fronto-parallel markers (random roll, size and position): every pixel the point
+// sample at its centre of the print (1-cell margin MARGIN, surface SURFEXT cells beyond it, on a
+// uniform background) blurred by a continuous Gaussian of `blur` px, in closed form (a blurred
+// rectangle is a product of two differences of Phi). BOX (n): each pixel the mean of n x n such samples.
+cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0, double side1,
+                    std::mt19937_64& rng, std::vector<testing::RenderedMarker>* truth) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const int cells = dict.markerSize + 2, box = static_cast<int>(Env("BOX", 1));
+  const double margin = Env("MARGIN", 1.0), ext = margin + Env("SURFEXT", 2.5);
+  const double bg = 0.4 * 255, surface = Env("SURFACE", 0.5) * 255, paper = 0.85 * 255, ink = 0.04 * 255;
+  cv::Mat linear(480, 640, CV_64F, cv::Scalar(bg));
+  truth->clear();
+  const int markers = static_cast<int>(Env("MARKERS", 10));
+  for (int i = 0; i < markers; ++i) {
+    testing::RenderedMarker m;
+    m.id = std::uniform_int_distribution<int>(0, dict.bytesList.rows - 1)(rng);
+    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll = 2 * M_PI * uni(rng);
+    const double cx = 80 + (i % 5) * 120 + uni(rng), cy = 120 + (i / 5) * 240 + uni(rng);
+    const double co = std::cos(roll), si = std::sin(roll), sb = blur / scale;
+    auto image = [&](double u, double v) {
+      const double x = (u - 0.5 * cells) * scale, y = (v - 0.5 * cells) * scale;
+      return cv::Point2d(cx + co * x - si * y, cy + si * x + co * y);
+    };
+    m.corners = {image(0, 0), image(cells, 0), image(cells, cells), image(0, cells)};
+    m.side_px = side, m.view_angle_deg = 0;
+    const cv::Mat bits =
+        cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(m.id, m.id + 1), dict.markerSize);
+    auto phi = [](double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); };
+    auto rect = [&](double u, double v, double u0, double v0, double u1, double v1) {
+      return (phi((u1 - u) / sb) - phi((u0 - u) / sb)) * (phi((v1 - v) / sb) - phi((v0 - v) / sb));
+    };
+    const int reach = static_cast<int>((ext + cells / 2.0 + 3) * scale * 1.5);
+    for (int y = std::max(0, static_cast<int>(cy) - reach); y <= std::min(linear.rows - 1.0, cy + reach); ++y)
+      for (int x = std::max(0, static_cast<int>(cx) - reach); x <= std::min(linear.cols - 1.0, cx + reach);
+           ++x) {
+        double sum = 0;
+        for (int a = 0; a < box; ++a)
+          for (int b = 0; b < box; ++b) {
+            const double px = x - 0.5 + (b + 0.5) / box - cx, py = y - 0.5 + (a + 0.5) / box - cy;
+            const double u = (co * px + si * py) / scale + 0.5 * cells,
+                         v = (-si * px + co * py) / scale + 0.5 * cells;
+            double f = bg + (surface - bg) * rect(u, v, -ext, -ext, cells + ext, cells + ext) +
+                       (paper - surface) * rect(u, v, -margin, -margin, cells + margin, cells + margin) +
+                       (ink - paper) * rect(u, v, 0, 0, cells, cells);
+            for (int r = 1; r + 1 < cells; ++r)
+              for (int c = 1; c + 1 < cells; ++c)
+                if (bits.at<uint8_t>(r - 1, c - 1)) f += (paper - ink) * rect(u, v, c, r, c + 1, r + 1);
+            sum += f;
+          }
+        linear.at<double>(y, x) = sum / (box * box);
+      }
+    truth->push_back(m);
+  }
+  cv::Mat out;
+  linear.convertTo(out, CV_8U);
+  return out;
 }
 
 // mcmt-sim's renders of the paper's rig as (image, truth) pairs for Refine below.
@@ -80,7 +140,7 @@ void ForEachSimImage(
 int main(int argc, char** argv) {
   if (argc < 6) {
     std::fprintf(stderr,
-                 "usage: diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES | sim BLUR_PX "
+                 "usage: diag_side_bias ref|syn|exact BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES | sim BLUR_PX "
                  "RADIUS_M SIZE_M FRAMES\n");
     return 2;
   }
@@ -94,6 +154,7 @@ int main(int argc, char** argv) {
   testing::CornerErrors errors;
   int total = 0, refined = 0;
   double sigma_sum = 0;
+  std::vector<double> side_mid, side_turn;
   std::map<int, std::vector<double>> per_id;
   auto refine = [&](const cv::Mat& image, const std::vector<testing::RenderedMarker>& truth) {
     for (const testing::RenderedMarker& t : truth) {
@@ -107,6 +168,16 @@ int main(int argc, char** argv) {
                                nullptr, 1))
         continue;
       ++refined, sigma_sum += sigma;
+      cv::Point2d centre(0, 0);
+      for (const auto& p : t.corners) centre += p * 0.25;
+      for (int k = 0; k < 4; ++k) {  // per side: the error of its middle and of its direction (corners)
+        const cv::Point2d a = t.corners[k], b = t.corners[(k + 1) % 4];
+        cv::Point2d n(b.y - a.y, a.x - b.x);
+        n *= 1.0 / cv::norm(n);
+        if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
+        const double d0 = n.dot(c[k] - a), d1 = n.dot(c[(k + 1) % 4] - b);
+        side_mid.push_back(std::abs(0.5 * (d0 + d1))), side_turn.push_back(std::abs(0.5 * (d1 - d0)));
+      }
       testing::CornerErrors one;
       testing::AddCornerErrors(t, c, &one);
       testing::AddCornerErrors(t, c, &errors);
@@ -123,7 +194,9 @@ int main(int argc, char** argv) {
   }
   for (int i = 0; i < images && std::string(argv[1]) != "sim"; ++i) {
     std::vector<testing::RenderedMarker> truth;
-    const cv::Mat image = Render(*dict, reference, blur, side0, side1, rng, &truth);
+    const cv::Mat image = std::string(argv[1]) == "exact"
+                              ? RenderExact(*dict, blur, side0, side1, rng, &truth)
+                              : Render(*dict, reference, blur, side0, side1, rng, &truth);
     refine(image, truth);
   }
   const double mean = testing::MeanOf(errors.offsets);
@@ -135,4 +208,6 @@ int main(int argc, char** argv) {
       "fitted blur %.2f px\n",
       argv[1], blur, side0, side1, refined, total, mean, std::sqrt(var), testing::MedianOf(errors.errors),
       sigma_sum / refined);
+  std::printf("per side: median |middle offset| %.3f px, median |corner offset from the turn| %.3f px\n",
+              testing::MedianOf(side_mid), testing::MedianOf(side_turn));
 }
