@@ -300,23 +300,47 @@ class ProgressCallback : public ceres::IterationCallback {
 
 namespace {
 
+// Observation k's times for SelfCalibrationCost (the frame's velocity when the clocks are refined).
+ObservationTime ObservationTimeOf(const BundleProblem& bp, size_t k) {
+  const BundleObservation& o = bp.observations[k];
+  ObservationTime time;
+  time.time_s = o.time_s;
+  time.with_drift = bp.RefinesDrift();
+  time.clock_s = o.clock_s;
+  if (bp.RefinesTime()) time.velocity = bp.frame_velocity[o.frame].data();
+  return time;
+}
+
+// The parameter blocks of observation k's residual (SelfCalibrationCost's order) and their sizes.
+std::vector<std::pair<double*, int>> ObservationBlocks(BundleProblem* bp, size_t k) {
+  const BundleObservation& o = bp->observations[k];
+  std::vector<std::pair<double*, int>> blocks = {{bp->cam_from_rig[o.camera].data(), 7},
+                                                 {bp->object_from_marker[o.marker].data(), 7},
+                                                 {bp->rig_from_object[o.frame].data(), 7}};
+  if (bp->RefinesIntrinsics(o.camera)) {
+    std::vector<double>& values = bp->intrinsics[o.camera].values;
+    blocks.push_back({values.data(), static_cast<int>(values.size())});
+  }
+  if (bp->RefinesTime()) blocks.push_back({&bp->time_offset_s[o.camera], 1});
+  if (bp->RefinesDrift()) blocks.push_back({&bp->time_drift[o.camera], 1});
+  return blocks;
+}
+
+// The square root of the intrinsics prior's information, entry k (0: no prior on it): pixels per unit.
+double IntrinsicsPriorWeight(const BundleIntrinsics& in, int k) {
+  return in.sigma[k] > 0 ? in.prior_scale_px / in.sigma[k] : 0.0;
+}
+
 void AddSelfCalibrationResidual(BundleProblem* bp, size_t i, ceres::LossFunction* loss,
                                 ceres::Problem* problem) {
   const BundleObservation& o = bp->observations[i];
-  const bool with_intrinsics = bp->RefinesIntrinsics(o.camera);
-  ObservationTime time;
-  time.time_s = o.time_s;
-  time.with_drift = bp->RefinesDrift();
-  time.clock_s = o.clock_s;
-  if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
-  std::vector<double*> blocks = {bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
-                                 bp->rig_from_object[o.frame].data()};
-  if (with_intrinsics) blocks.push_back(bp->intrinsics[o.camera].values.data());
-  if (bp->RefinesTime()) blocks.push_back(&bp->time_offset_s[o.camera]);
-  if (bp->RefinesDrift()) blocks.push_back(&bp->time_drift[o.camera]);
-  problem->AddResidualBlock(new SelfCalibrationCost(bp->models[o.camera], o.corners, o.side, with_intrinsics,
-                                                    bp->RefinesTime() ? &time : nullptr),
-                            loss, blocks);
+  const ObservationTime time = ObservationTimeOf(*bp, i);
+  std::vector<double*> blocks;
+  for (const auto& block : ObservationBlocks(bp, i)) blocks.push_back(block.first);
+  problem->AddResidualBlock(
+      new SelfCalibrationCost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
+                              bp->RefinesTime() ? &time : nullptr),
+      loss, blocks);
 }
 
 // Intrinsics blocks (entries held constant through a SubsetManifold, a Gaussian prior on the others) and
@@ -339,8 +363,7 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
         problem->SetManifold(block, subsets->back().get());
       }
       Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-      for (int k = 0; k < n; ++k)
-        if (in.sigma[k] > 0) a(k, k) = in.prior_scale_px / in.sigma[k];
+      for (int k = 0; k < n; ++k) a(k, k) = IntrinsicsPriorWeight(in, k);
       const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(in.prior.data(), n);
       problem->AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, block);
       ordering->AddElementToGroup(block, 3);  // intrinsics (see the note on groups in BuildProblem)
@@ -751,21 +774,6 @@ struct InformationColumns {
   int num_frames = 0;
 };
 
-// The parameter blocks of observation k's residual (AddSelfCalibrationResidual's order) and their sizes.
-std::vector<std::pair<double*, int>> ObservationBlocks(BundleProblem* bp, size_t k) {
-  const BundleObservation& o = bp->observations[k];
-  std::vector<std::pair<double*, int>> blocks = {{bp->cam_from_rig[o.camera].data(), 7},
-                                                 {bp->object_from_marker[o.marker].data(), 7},
-                                                 {bp->rig_from_object[o.frame].data(), 7}};
-  if (bp->RefinesIntrinsics(o.camera)) {
-    std::vector<double>& values = bp->intrinsics[o.camera].values;
-    blocks.push_back({values.data(), static_cast<int>(values.size())});
-  }
-  if (bp->RefinesTime()) blocks.push_back({&bp->time_offset_s[o.camera], 1});
-  if (bp->RefinesDrift()) blocks.push_back({&bp->time_drift[o.camera], 1});
-  return blocks;
-}
-
 // The free entries of a block of observation k's residual (empty: held constant), as BuildProblem holds
 // them (the gauge, time_offset_fixed, the intrinsics' constant entries).
 std::vector<int> FreeEntries(const BundleProblem& bp, size_t k, int block, int size) {
@@ -844,8 +852,7 @@ void AddPriorRows(BundleProblem* bp, const InformationColumns& columns, FramesMa
       const BundleIntrinsics& in = bp->intrinsics[c];
       const int n = static_cast<int>(in.values.size());
       std::vector<double> a(n * n, 0.0);
-      for (int k = 0; k < n; ++k)
-        if (in.sigma[k] > 0) a[k * n + k] = in.prior_scale_px / in.sigma[k];
+      for (int k = 0; k < n; ++k) a[k * n + k] = IntrinsicsPriorWeight(in, k);
       const RowsLayout layout = LayoutOf({{in.values.data(), n}}, columns);
       const double* jacobians[] = {a.data()};
       rows.rows = n;
@@ -878,11 +885,7 @@ struct ObservationScratch {
 bool ObservationRows(BundleProblem* bp, size_t k, int frame, const InformationColumns& columns,
                      ObservationScratch* scratch, InformationRows* out) {
   const BundleObservation& o = bp->observations[k];
-  ObservationTime time;
-  time.time_s = o.time_s;
-  time.with_drift = bp->RefinesDrift();
-  time.clock_s = o.clock_s;
-  if (bp->RefinesTime()) time.velocity = bp->frame_velocity[o.frame].data();
+  const ObservationTime time = ObservationTimeOf(*bp, k);
   const SelfCalibrationCost cost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
                                  bp->RefinesTime() ? &time : nullptr);
   const std::vector<std::pair<double*, int>> blocks = ObservationBlocks(bp, k);
