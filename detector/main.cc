@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     int max_frames = -1;
     long long start_utime = mcmt::kDefaultStartUtime;
     long long start_wall_utime = 0;
-    double fps = 0.0;
+    double fps = 0.0, max_lag_ms = 0.0;
     mcmt::ArgParser args("mcmt-detector",
                          "Detects the rig's markers in one camera's frames (image folder, video file or live "
                          "device) and publishes them as mcmt.detections_t on MCMT_DETECTIONS_<CAMERA>.");
@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
         "give several detectors the same value to publish each frame together");
     args.AddDouble("fps", &fps,
                    "frame rate of recordings (0: detector.fps of the rig, the video's own, or 30)");
+    args.AddDouble("max-lag-ms", &max_lag_ms,
+                   "with --rate realtime: drop frames already this late, as a live camera would (0: none; "
+                   "default: detector.max_lag_ms of the rig)");
     args.AddFlag("quiet", &quiet, "no status lines");
     args.AddEpilog(
         "Examples:\n"
@@ -73,6 +76,12 @@ int main(int argc, char** argv) {
         throw std::runtime_error("--fps: expected a frame rate in Hz > 0, or 0 for the rig's own; got " +
                                  std::to_string(fps));
       if (fps > 0) options.fps = fps;
+    }
+    if (args.Given("max-lag-ms")) {
+      if (!(max_lag_ms >= 0) || !std::isfinite(max_lag_ms))
+        throw std::runtime_error("--max-lag-ms: expected a lag in ms >= 0 (0: drop no frame); got " +
+                                 std::to_string(max_lag_ms));
+      options.max_lag_ms = max_lag_ms;
     }
     options.quiet = quiet;
     if (lcm_url.empty()) lcm_url = rig.lcm_url;

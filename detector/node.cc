@@ -22,6 +22,38 @@ double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// Realtime pacing of a recording: frame k is due at the start + (utime_k - utime_0). The start is the
+// shared --start-wall-utime when given (in steady-clock terms; a detector ready only after it paces
+// from it all the same: its first frames go out at once and it catches up, instead of lagging the other
+// cameras by its start-up delay for the whole run), else when the first frame is read.
+class RealtimePace {
+ public:
+  explicit RealtimePace(long long start_wall_utime) : start_wall_utime_(start_wall_utime) {}
+  Clock::time_point Due(int64_t utime) {
+    if (!started_) {
+      started_ = true;
+      first_utime_ = utime;
+      start_ = Clock::now();
+      if (start_wall_utime_ > 0) start_ += std::chrono::microseconds(start_wall_utime_ - NowUtime());
+    }
+    return start_ + std::chrono::microseconds(utime - first_utime_);
+  }
+  bool started() const { return started_; }
+  // Sleeps until `due`; false when stopped first.
+  static bool WaitUntil(Clock::time_point due, const StopToken& stop) {
+    while (!stop.stop_requested() && Clock::now() < due)
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
+    return !stop.stop_requested();
+  }
+
+ private:
+  long long start_wall_utime_;
+  bool started_ = false;
+  int64_t first_utime_ = 0;
+  Clock::time_point start_;
+};
+
 }  // namespace
 
 CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options) {
@@ -84,14 +116,33 @@ void CameraPipeline::CheckSize(const Frame& frame) {
 
 bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
   Frame frame;
+  if (!Read(&frame)) return false;
+  Detect(frame, d, image_out);
+  return true;
+}
+
+bool CameraPipeline::Read(Frame* frame) {
   if (has_pending_) {
-    frame = pending_;
+    *frame = pending_;
     pending_ = Frame();
     has_pending_ = false;
-  } else if (!source_->Read(&frame)) {
+  } else if (!source_->Read(frame)) {
     return false;
   }
-  CheckSize(frame);
+  CheckSize(*frame);
+  return true;
+}
+
+int64_t CameraPipeline::NextUtime() const { return has_pending_ ? pending_.utime : source_->NextUtime(); }
+
+bool CameraPipeline::Skip() {
+  if (!has_pending_) return source_->Skip();
+  pending_ = Frame();
+  has_pending_ = false;
+  return true;
+}
+
+void CameraPipeline::Detect(const Frame& frame, detections_t* d, cv::Mat* image_out) {
   const auto t0 = Clock::now();
   std::vector<marker_t> markers = detector_->Detect(frame.image);
   d->detection_ms = MsSince(t0);
@@ -103,7 +154,6 @@ bool CameraPipeline::Next(detections_t* d, cv::Mat* image_out) {
   d->markers = std::move(markers);
   d->num_markers = static_cast<int32_t>(d->markers.size());
   if (image_out) *image_out = frame.image;
-  return true;
 }
 
 std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::string& camera, int max_frames) {
@@ -161,54 +211,57 @@ void DetectorNode::PublishImage(const cv::Mat& image, const detections_t& d) {
   ++stats_.images;
 }
 
+void DetectorNode::DropLate(int64_t utime) {
+  if (stats_.late++ == 0)
+    std::cerr << "mcmt-detector: camera " << options_.camera << ": the frame of utime " << utime
+              << " is more than detector.max_lag_ms (" << options_.max_lag_ms
+              << ") past its time at the recording's pace: dropped undetected, as a live camera drops what "
+                 "a slow detector cannot take (this machine cannot keep up; further ones are counted as late "
+                 "in the status lines)"
+              << std::endl;
+}
+
 void DetectorNode::Run(const StopToken& stop) {
   FrameSource& source = pipeline_.source();
   if (!options_.quiet)
     std::cout << "camera " << options_.camera << ": " << source.description() << " -> " << channel_
               << (options_.images ? " (+ " + image_channel_ + ")" : "") << std::endl;
   const bool realtime = options_.rate == "realtime" && !source.live();
-  Clock::time_point wall_start;
-  int64_t first_utime = 0;
+  RealtimePace pace(options_.start_wall_utime);
   auto status_start = Clock::now();
   int64_t status_frames = 0, status_markers = 0;
   double status_ms = 0, status_max_ms = 0;
   detections_t d;
+  Frame frame;
   cv::Mat image;
   std::unique_ptr<Progress> progress;  // recordings: a bar on a terminal, a line every 5 s otherwise
   if (!options_.quiet && !source.live())
     progress = std::make_unique<Progress>("camera " + options_.camera, std::max<int64_t>(0, source.size()));
   while (!stop.stop_requested() && (options_.max_frames < 0 || stats_.frames < options_.max_frames)) {
-    if (!pipeline_.Next(&d, options_.images ? &image : nullptr)) break;
-    if (realtime) {
-      if (stats_.frames == 0) {
-        wall_start = Clock::now();
-        first_utime = d.utime;
-        if (options_.start_wall_utime > 0) {
-          // Wait for the shared start, in steady-clock terms. A detector that is ready only after it
-          // (slow start-up) paces from the shared start all the same: its first frames go out at once and
-          // it catches up, instead of lagging the other cameras by its start-up delay for the whole run.
-          const int64_t wait_us = options_.start_wall_utime - NowUtime();
-          wall_start += std::chrono::microseconds(wait_us);
-          if (wait_us > 0) {
-            while (!stop.stop_requested() && Clock::now() < wall_start)
-              std::this_thread::sleep_for(
-                  std::min<Clock::duration>(wall_start - Clock::now(), std::chrono::milliseconds(50)));
-            if (stop.stop_requested()) break;
-          }
-        }
-      } else {
-        const auto due = wall_start + std::chrono::microseconds(d.utime - first_utime);
-        while (!stop.stop_requested() && Clock::now() < due)
-          std::this_thread::sleep_for(
-              std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
-        if (stop.stop_requested()) break;
+    if (realtime && options_.max_lag_ms > 0 && pace.started()) {
+      // Frames already too late are passed over unread where the source knows their times beforehand.
+      int64_t next = pipeline_.NextUtime();
+      while (next != INT64_MIN && MsSince(pace.Due(next)) > options_.max_lag_ms && pipeline_.Skip()) {
+        DropLate(next);
+        next = pipeline_.NextUtime();
       }
     }
+    if (!pipeline_.Read(&frame)) break;
+    Clock::time_point due;
+    if (realtime) {
+      due = pace.Due(frame.utime);
+      if (options_.max_lag_ms > 0 && MsSince(due) > options_.max_lag_ms) {
+        DropLate(frame.utime);
+        continue;
+      }
+    }
+    pipeline_.Detect(frame, &d, options_.images ? &image : nullptr);
+    if (realtime && !RealtimePace::WaitUntil(due, stop)) break;
     const std::vector<uint8_t> bytes = Encode(d);
     lcm_.publish(channel_, bytes.data(), static_cast<unsigned int>(bytes.size()));
     if (options_.images) PublishImage(image, d);
     ++stats_.frames;
-    if (progress) progress->Update(stats_.frames);
+    if (progress) progress->Update(stats_.frames + stats_.late);
     stats_.markers += d.num_markers;
     stats_.detection_ms_total += d.detection_ms;
     ++status_frames;
@@ -220,10 +273,11 @@ void DetectorNode::Run(const StopToken& stop) {
       char line[256];
       std::snprintf(line, sizeof(line),
                     "camera %s: %lld frames, %.1f fps, %.2f markers/frame, detection %.2f ms (max %.2f), "
-                    "skipped %lld",
+                    "skipped %lld, late %lld",
                     options_.camera.c_str(), static_cast<long long>(stats_.frames), status_frames / elapsed,
                     static_cast<double>(status_markers) / status_frames, status_ms / status_frames,
-                    status_max_ms, static_cast<long long>(source.skipped()));
+                    status_max_ms, static_cast<long long>(source.skipped()),
+                    static_cast<long long>(stats_.late));
       if (progress && progress->terminal()) std::cerr << "\r\033[K" << std::flush;  // the bar redraws after
       std::cout << line << std::endl;
       status_start = Clock::now();
@@ -244,12 +298,13 @@ void DetectorNode::Run(const StopToken& stop) {
     std::snprintf(
         line, sizeof(line),
         "camera %s: done: %lld frames, %lld markers (%.2f/frame%s), mean detection %.2f ms, skipped "
-        "%lld%s",
+        "%lld, late %lld%s",
         options_.camera.c_str(), static_cast<long long>(stats_.frames),
         static_cast<long long>(stats_.markers),
         stats_.frames ? static_cast<double>(stats_.markers) / stats_.frames : 0.0, unrefined_text.c_str(),
         stats_.frames ? stats_.detection_ms_total / stats_.frames : 0.0,
-        static_cast<long long>(stats_.skipped), stop.stop_requested() ? " (stopped)" : "");
+        static_cast<long long>(stats_.skipped), static_cast<long long>(stats_.late),
+        stop.stop_requested() ? " (stopped)" : "");
     std::cout << line << std::endl;
     if (detector.options().tone == "auto")
       std::cout << "camera " << options_.camera << ": tone auto: " << detector.tone().Describe() << std::endl;

@@ -39,11 +39,15 @@ struct DetectorNodeOptions {
   double fps = 0.0;                     // recordings: frame rate (0: the video's own, image folders 30)
   std::string caliscope_time = "sync";  // see detector/source.h
   double status_period_s = 5.0;         // status line period (wall time); <= 0: none
-  bool quiet = false;                   // no status lines
+  // realtime pacing: a frame already this late (ms past its due time) when the detector gets to it is
+  // dropped undetected, as a live camera drops the frames a slow detector cannot take, so the messages
+  // stay within this of the rig's pace however loaded the machine. 0: every frame, however late.
+  double max_lag_ms = 0.0;
+  bool quiet = false;  // no status lines
 
   // Reads the process settings of the rig YAML `detector:` section (fps, images, image_rate,
-  // image_quality, image_scale, status_period_s, caliscope_time; declared in detector/options.cc) over
-  // the defaults above. Throws OptionError naming the file and key.
+  // image_quality, image_scale, status_period_s, caliscope_time, max_lag_ms; declared in
+  // detector/options.cc) over the defaults above. Throws OptionError naming the file and key.
   void LoadFromConfig(const RigConfig& rig);
 };
 // The process keys of the `detector:` section (DetectorOptionTable has the detector's).
@@ -56,8 +60,16 @@ class CameraPipeline {
   // unreadable source, unknown dictionary, bad detector settings.
   CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options);
   // Next frame's detections; false at the end. Throws when the frame size differs from the
-  // intrinsics' (naming camera, intrinsics file and source).
+  // intrinsics' (naming camera, intrinsics file and source). = Read + Detect.
   bool Next(detections_t* detections, cv::Mat* image = nullptr);
+  // The next frame, size-checked, not detected yet (a paced node may drop it unseen); false at the end.
+  bool Read(Frame* frame);
+  // The next frame's utime when the source knows it beforehand (FrameSource::NextUtime), and passing
+  // over it unread (FrameSource::Skip).
+  int64_t NextUtime() const;
+  bool Skip();
+  // The frame's detections (and its image when `image` is given).
+  void Detect(const Frame& frame, detections_t* detections, cv::Mat* image = nullptr);
   FrameSource& source() { return *source_; }
   MarkerDetector& detector() { return *detector_; }
   const CameraConfig& camera() const { return camera_; }
@@ -80,6 +92,7 @@ struct DetectorNodeStats {
   int64_t markers = 0;
   int64_t images = 0;   // published JPEGs
   int64_t skipped = 0;  // unreadable frames
+  int64_t late = 0;     // frames dropped undetected, later than max_lag_ms (realtime pacing)
   double detection_ms_total = 0.0;
 };
 
@@ -94,6 +107,7 @@ class DetectorNode {
 
  private:
   void PublishImage(const cv::Mat& image, const detections_t& detections);
+  void DropLate(int64_t utime);  // counts the frame, warns once
   DetectorNodeOptions options_;
   lcm::LCM& lcm_;
   CameraPipeline pipeline_;

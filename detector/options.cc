@@ -126,6 +126,10 @@ const OptionTable<DetectorNodeOptions>& DetectorNodeOptionTable() {
            .Add("image_quality", &O::image_quality, "", "JPEG quality", InRange(1, 100))
            .Add("image_scale", &O::image_scale, "", "images downscaled by this factor", InRange(0, 1, true))
            .Add("status_period_s", &O::status_period_s, "s", "status line period, wall time (<= 0: none)")
+           .Add("max_lag_ms", &O::max_lag_ms, "ms",
+                "--rate realtime: a frame already this late when the detector gets to it is dropped "
+                "undetected, as a live camera drops what a slow detector cannot take (0: every frame)",
+                AtLeast(0))
            .Add("caliscope_time", &O::caliscope_time,
                 "Caliscope recordings: sync (one shared time per synchronised frame) or camera (each "
                 "camera's own times)",

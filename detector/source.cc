@@ -72,13 +72,18 @@ class FolderSource : public FrameSource {
     period_ = *std::max_element(indices_.begin(), indices_.end()) + 1;
     fps_ = o.fps > 0 ? o.fps : 30.0;
   }
+  int64_t NextUtime() const override {
+    if (next_ >= files_.size() && !options_.loop) return INT64_MIN;
+    return next_ >= files_.size() ? UtimeOf(0, loops_ + 1) : UtimeOf(next_, loops_);
+  }
+  bool Skip() override {
+    if (!Wrap()) return false;
+    ++next_;
+    return true;
+  }
   bool Read(Frame* frame) override {
     while (true) {
-      if (next_ >= files_.size()) {
-        if (!options_.loop) return false;
-        next_ = 0;
-        ++loops_;
-      }
+      if (!Wrap()) return false;
       const size_t i = next_++;
       cv::Mat image = cv::imread(files_[i], cv::IMREAD_UNCHANGED);
       if (image.empty()) {
@@ -95,8 +100,7 @@ class FolderSource : public FrameSource {
       if (!SizeAccepted(options_, image, indices_[i])) continue;
       frame->image = image;
       frame->index = indices_[i] + loops_ * period_;
-      frame->utime = times_.empty() ? options_.start_utime + std::llround(frame->index * 1e6 / fps_)
-                                    : times_.Utime(indices_[i]) + loops_ * LoopSpanUs();
+      frame->utime = UtimeOf(i, loops_);
       return true;
     }
   }
@@ -109,6 +113,18 @@ class FolderSource : public FrameSource {
 
  private:
   int64_t LoopSpanUs() const { return times_.Utime(period_) - times_.Utime(0); }
+  // At the end: false, or back to the first file when looping.
+  bool Wrap() {
+    if (next_ < files_.size()) return true;
+    if (!options_.loop) return false;
+    next_ = 0;
+    ++loops_;
+    return true;
+  }
+  int64_t UtimeOf(size_t i, int64_t loops) const {
+    return times_.empty() ? options_.start_utime + std::llround((indices_[i] + loops * period_) * 1e6 / fps_)
+                          : times_.Utime(indices_[i]) + loops * LoopSpanUs();
+  }
   SourceOptions options_;
   FrameTimes times_;
   std::vector<std::string> files_;

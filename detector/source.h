@@ -80,6 +80,15 @@ class FrameSource {
   // Unreadable frames, frames that do not decode in a video, and frames of another size than
   // options.width x height (after the first) are skipped, counted and warned about.
   virtual bool Read(Frame* frame) = 0;
+  // Recordings: the utime of the frame Read returns next, INT64_MIN when not known beforehand (live
+  // sources, videos) or at the end.
+  virtual int64_t NextUtime() const { return INT64_MIN; }
+  // Passes over the next frame, decoding no more than the format needs (an image folder reads no
+  // file; a video decodes it, as its later frames need); false at the end.
+  virtual bool Skip() {
+    Frame frame;
+    return Read(&frame);
+  }
   virtual bool live() const = 0;
   virtual double fps() const = 0;  // recording's frame rate (live: the device's, 0 if unknown)
   virtual std::string description() const = 0;

@@ -288,6 +288,40 @@ TEST_F(SourceTest, NaturalOrderAndFileNumbers) {
   EXPECT_EQ(source->skipped(), 1);
 }
 
+// An image folder knows its next frame's time before reading it, and passes over frames unread (the
+// realtime pacing's --max-lag-ms), looping with seq and utime increasing as Read does.
+TEST_F(SourceTest, FolderNextUtimeAndSkipAgreeWithRead) {
+  const fs::path folder = dir_ / "loop";
+  fs::create_directories(folder);
+  for (int n : {0, 1, 2})
+    cv::imwrite((folder / (std::to_string(n) + ".png")).string(), cv::Mat::zeros(8, 8, CV_8U));
+  SourceOptions o;
+  o.source = folder.string();
+  o.camera = "cam0";
+  o.fps = 10;
+  o.loop = true;
+  auto source = FrameSource::Open(o);
+  std::vector<int64_t> read;
+  Frame f;
+  for (int k = 0; k < 8; ++k) {
+    const int64_t next = source->NextUtime();
+    if (k % 3 == 1) {  // every third frame passed over
+      ASSERT_TRUE(source->Skip());
+      continue;
+    }
+    ASSERT_TRUE(source->Read(&f));
+    EXPECT_EQ(f.utime, next) << "frame " << k;
+    read.push_back(f.index);
+  }
+  EXPECT_EQ(read, (std::vector<int64_t>{0, 2, 3, 5, 6}));
+  EXPECT_EQ(f.utime, kDefaultStartUtime + 600000);  // frame 6 = the third loop's first, at 10 fps
+  o.loop = false;
+  auto once = FrameSource::Open(o);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(once->Skip());
+  EXPECT_EQ(once->NextUtime(), INT64_MIN);
+  EXPECT_FALSE(once->Skip());
+}
+
 TEST_F(SourceTest, TimestampCsvLayouts) {
   {
     std::ofstream f(dir_ / "t.csv");
