@@ -311,6 +311,44 @@ ObservationTime ObservationTimeOf(const BundleProblem& bp, size_t k) {
   return time;
 }
 
+// The kinds of parameter block, in SelfCalibrationCost's order.
+enum class BlockKind { kCamera, kMarker, kFrame, kIntrinsics, kTimeOffset, kDrift };
+
+// Whether the solve holds the whole block `index` of `kind` constant: the gauge's fixed poses, a fixed
+// clock (its offset and drift), intrinsics with every entry constant. (Intrinsics with some entries
+// constant hold those through a SubsetManifold: BundleIntrinsics::constant.) The one rule BuildProblem
+// and the information's unknowns (FreeEntries) both follow.
+bool HeldWhole(const BundleProblem& bp, BlockKind kind, int index) {
+  auto fixed = [index](const std::vector<char>& v) {
+    return static_cast<size_t>(index) < v.size() && v[index];
+  };
+  switch (kind) {
+    case BlockKind::kCamera:
+      return fixed(bp.camera_fixed);
+    case BlockKind::kMarker:
+      return fixed(bp.marker_fixed);
+    case BlockKind::kFrame:
+      return fixed(bp.frame_fixed);
+    case BlockKind::kIntrinsics:
+      return bp.intrinsics[index].constant.size() >= bp.intrinsics[index].values.size();
+    case BlockKind::kTimeOffset:
+    case BlockKind::kDrift:
+      return fixed(bp.time_offset_fixed);
+  }
+  return false;
+}
+
+// The kind of block b of observation k's residual (ObservationBlocks' order) and its index.
+std::pair<BlockKind, int> ObservationBlockKind(const BundleProblem& bp, size_t k, int b) {
+  const BundleObservation& o = bp.observations[k];
+  if (b == 0) return {BlockKind::kCamera, o.camera};
+  if (b == 1) return {BlockKind::kMarker, o.marker};
+  if (b == 2) return {BlockKind::kFrame, o.frame};
+  if (bp.RefinesIntrinsics(o.camera) && b == 3) return {BlockKind::kIntrinsics, o.camera};
+  const int after = bp.RefinesIntrinsics(o.camera) ? 4 : 3;
+  return {b == after && bp.RefinesTime() ? BlockKind::kTimeOffset : BlockKind::kDrift, o.camera};
+}
+
 // The parameter blocks of observation k's residual (SelfCalibrationCost's order) and their sizes.
 std::vector<std::pair<double*, int>> ObservationBlocks(BundleProblem* bp, size_t k) {
   const BundleObservation& o = bp->observations[k];
@@ -356,7 +394,7 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
       BundleIntrinsics& in = bp->intrinsics[c];
       double* block = in.values.data();
       const int n = static_cast<int>(in.values.size());
-      if (static_cast<int>(in.constant.size()) >= n) {
+      if (HeldWhole(*bp, BlockKind::kIntrinsics, static_cast<int>(c))) {
         problem->SetParameterBlockConstant(block);
       } else if (!in.constant.empty()) {
         subsets->emplace_back(new ceres::SubsetManifold(n, in.constant));
@@ -371,13 +409,14 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
     }
     if (bp->RefinesTime()) {
       double* block = &bp->time_offset_s[c];
-      if (bp->time_offset_fixed[c]) problem->SetParameterBlockConstant(block);
+      if (HeldWhole(*bp, BlockKind::kTimeOffset, static_cast<int>(c)))
+        problem->SetParameterBlockConstant(block);
       ordering->AddElementToGroup(block, 4);  // clock offsets
       ++added;
     }
     if (bp->RefinesDrift()) {
       double* block = &bp->time_drift[c];
-      if (bp->time_offset_fixed[c]) {
+      if (HeldWhole(*bp, BlockKind::kDrift, static_cast<int>(c))) {
         problem->SetParameterBlockConstant(block);
       } else {
         Eigen::MatrixXd a(1, 1);
@@ -392,15 +431,15 @@ int AddSelfCalibrationBlocks(BundleProblem* bp, const std::vector<char>& camera_
 }
 
 // Manifold, constness and elimination group (`group`) of every used block of one kind; returns how many.
-int SetBlocks(std::vector<PoseBlock>* blocks, const std::vector<char>& used, const std::vector<char>& fixed,
-              int group, ceres::Manifold* manifold, ceres::Problem* problem,
+int SetBlocks(const BundleProblem& bp, BlockKind kind, std::vector<PoseBlock>* blocks,
+              const std::vector<char>& used, int group, ceres::Manifold* manifold, ceres::Problem* problem,
               ceres::ParameterBlockOrdering* ordering) {
   int n = 0;
   for (size_t k = 0; k < used.size(); ++k) {
     if (!used[k]) continue;
     double* block = (*blocks)[k].data();
     problem->SetManifold(block, manifold);
-    if (k < fixed.size() && fixed[k]) problem->SetParameterBlockConstant(block);
+    if (HeldWhole(bp, kind, static_cast<int>(k))) problem->SetParameterBlockConstant(block);
     ordering->AddElementToGroup(block, group);
     ++n;
   }
@@ -507,11 +546,11 @@ void BuildProblem(BundleProblem* bp, double huber_px, double view_weight_power, 
   // and the last bits of the solution -- do not depend on where the heap put them. Frames (group 0) are
   // eliminated first.
   out->ordering = new ceres::ParameterBlockOrdering;
-  out->num_reduced = SetBlocks(&bp->cam_from_rig, out->camera_used, bp->camera_fixed, 1, &out->manifold,
-                               &problem, out->ordering);
-  out->num_reduced += SetBlocks(&bp->object_from_marker, out->marker_used, bp->marker_fixed, 2,
+  out->num_reduced = SetBlocks(*bp, BlockKind::kCamera, &bp->cam_from_rig, out->camera_used, 1,
+                               &out->manifold, &problem, out->ordering);
+  out->num_reduced += SetBlocks(*bp, BlockKind::kMarker, &bp->object_from_marker, out->marker_used, 2,
                                 &out->manifold, &problem, out->ordering);
-  SetBlocks(&bp->rig_from_object, out->frame_used, bp->frame_fixed, 0, &out->manifold, &problem,
+  SetBlocks(*bp, BlockKind::kFrame, &bp->rig_from_object, out->frame_used, 0, &out->manifold, &problem,
             out->ordering);
   out->num_reduced += AddSelfCalibrationBlocks(bp, out->camera_used, out->ordering, &out->subsets, &problem);
 }
@@ -774,19 +813,13 @@ struct InformationColumns {
   int num_frames = 0;
 };
 
-// The free entries of a block of observation k's residual (empty: held constant), as BuildProblem holds
-// them (the gauge, time_offset_fixed, the intrinsics' constant entries).
-std::vector<int> FreeEntries(const BundleProblem& bp, size_t k, int block, int size) {
-  const BundleObservation& o = bp.observations[k];
-  auto fixed = [](const std::vector<char>& v, int i) { return static_cast<size_t>(i) < v.size() && v[i]; };
-  const bool intrinsics = bp.RefinesIntrinsics(o.camera);
-  bool constant = (block == 0 && fixed(bp.camera_fixed, o.camera)) ||
-                  (block == 1 && fixed(bp.marker_fixed, o.marker)) ||
-                  (block == 2 && fixed(bp.frame_fixed, o.frame)) ||
-                  (block > (intrinsics ? 3 : 2) && fixed(bp.time_offset_fixed, o.camera));
+// The free entries of block b of observation k's residual (empty: held constant), as BuildProblem holds
+// them (HeldWhole; the intrinsics' constant entries).
+std::vector<int> FreeEntries(const BundleProblem& bp, size_t k, int b, int size) {
+  const auto [kind, index] = ObservationBlockKind(bp, k, b);
   std::vector<int> free;
-  if (constant) return free;
-  const std::vector<int>* held = block == 3 && intrinsics ? &bp.intrinsics[o.camera].constant : nullptr;
+  if (HeldWhole(bp, kind, index)) return free;
+  const std::vector<int>* held = kind == BlockKind::kIntrinsics ? &bp.intrinsics[index].constant : nullptr;
   for (int i = 0; i < (size == 7 ? 6 : size); ++i)
     if (!held || std::find(held->begin(), held->end(), i) == held->end()) free.push_back(i);
   return free;
