@@ -3,9 +3,12 @@
 // with its known bits, and scored against the truth (signed offset along the edge normals, error).
 //   diag_side_bias ref|syn BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES
 //   diag_side_bias sim BLUR_PX RADIUS_M MARKER_SIZE_M FRAMES
+//   diag_side_bias cond NAME MIN_SIDE_PX MAX_SIDE_PX IMAGES
 // ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h; sim:
 // mcmt-sim's paper rig (5 cameras, 640x480) and object OBJECT (four_sided), markers >= 15 px within
 // 75 deg, print margin QUIET (cells, 1) and face albedo ALBEDO (< 0: the object's), offsets per id too.
+// cond: the reference renderer under the condition of tests/detector/reference_renderer.h's
+// ImagingCatalogue() whose name contains NAME (bench_accuracy's), 0-75 deg unless ANGLE.
 // exact: RenderExact below (fronto-parallel, the continuous blurred image point-sampled, no noise).
 // Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
 // MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
@@ -30,7 +33,8 @@ double Env(const char* key, double fallback) {
 }
 
 cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, double side0, double side1,
-               std::mt19937_64& rng, std::vector<testing::RenderedMarker>* truth) {
+               std::mt19937_64& rng, std::vector<testing::RenderedMarker>* truth,
+               const testing::Imaging* condition = nullptr) {
   if (!reference) {
     testing::SceneOptions scene;
     scene.min_side_px = side0, scene.max_side_px = side1, scene.max_angle_deg = Env("ANGLE", 60);
@@ -44,6 +48,7 @@ cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, d
   testing::Imaging im;
   im.blur_sigma = blur, im.read_noise = Env("NOISE", 2);
   im.margin_cells = Env("MARGIN", 1.0), im.surface = Env("SURFACE", 0.5);
+  if (condition) im = *condition, scene.max_angle_deg = Env("ANGLE", 75);
   return testing::RenderReference(dict, scene, im, rng, truth);
 }
 
@@ -141,11 +146,22 @@ int main(int argc, char** argv) {
   if (argc < 6) {
     std::fprintf(stderr,
                  "usage: diag_side_bias ref|syn|exact BLUR_PX MIN_SIDE_PX MAX_SIDE_PX IMAGES | sim BLUR_PX "
-                 "RADIUS_M SIZE_M FRAMES\n");
+                 "RADIUS_M SIZE_M FRAMES | cond NAME MIN_SIDE_PX MAX_SIDE_PX IMAGES\n");
     return 2;
   }
-  const bool reference = std::string(argv[1]) == "ref";
-  const double blur = std::atof(argv[2]), side0 = std::atof(argv[3]), side1 = std::atof(argv[4]);
+  const bool reference = std::string(argv[1]) == "ref" || std::string(argv[1]) == "cond";
+  const testing::Imaging* condition = nullptr;
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  if (std::string(argv[1]) == "cond") {
+    for (const testing::Imaging& im : catalogue)
+      if (!condition && im.name.find(argv[2]) != std::string::npos) condition = &im;
+    if (!condition) {
+      std::fprintf(stderr, "diag_side_bias: no condition named like '%s' in ImagingCatalogue()\n", argv[2]);
+      return 2;
+    }
+  }
+  const double blur = condition ? condition->blur_sigma : std::atof(argv[2]), side0 = std::atof(argv[3]),
+               side1 = std::atof(argv[4]);
   const int images = std::atoi(argv[5]);
   auto dict = LoadDictionary("DICT_6X6_250");
   const int cells = dict->markerSize + 2;
@@ -196,18 +212,18 @@ int main(int argc, char** argv) {
     std::vector<testing::RenderedMarker> truth;
     const cv::Mat image = std::string(argv[1]) == "exact"
                               ? RenderExact(*dict, blur, side0, side1, rng, &truth)
-                              : Render(*dict, reference, blur, side0, side1, rng, &truth);
+                              : Render(*dict, reference, blur, side0, side1, rng, &truth, condition);
     refine(image, truth);
   }
   const double mean = testing::MeanOf(errors.offsets);
   double var = 0;
   for (double o : errors.offsets) var += (o - mean) * (o - mean) / errors.offsets.size();
   std::printf(
-      "%s blur %.2f px, %.2f-%.2f: refined %d of %d, offset %+.4f px (sd %.3f), median error %.3f "
+      "%s%s blur %.2f px, %.2f-%.2f: refined %d of %d, offset %+.4f px (sd %.3f), median error %.3f "
       "px, "
       "fitted blur %.2f px\n",
-      argv[1], blur, side0, side1, refined, total, mean, std::sqrt(var), testing::MedianOf(errors.errors),
-      sigma_sum / refined);
+      argv[1], condition ? (" " + condition->name).c_str() : "", blur, side0, side1, refined, total, mean,
+      std::sqrt(var), testing::MedianOf(errors.errors), sigma_sum / refined);
   std::printf("per side: median |middle offset| %.3f px, median |corner offset from the turn| %.3f px\n",
               testing::MedianOf(side_mid), testing::MedianOf(side_turn));
 }
