@@ -66,8 +66,9 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double*
   const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
   double gauss = 0, ratio = 0;
   int run = -1;  // bins since the recurrence was restarted; -1: not running
+  const double u0 = s.u0, du = s.du;
   for (int j = 0; j < s.bins; ++j) {
-    const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
+    const double z = (bound - (u0 + j * du)) * inv_sigma;
     zs[j] = z;
     if (std::abs(z) > 7.0) {
       big_phi[j] = z > 0 ? 1.0 : 0.0, small_phi[j] = 0.0;
@@ -216,9 +217,19 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
   double cost = 0;
   size_t used = 0;
+  double* column[kParams];  // the Jacobian's, the weights' and the residuals' data (no reloads)
+  for (int k = 0; k < kParams; ++k) column[k] = jtj ? jacobian.data() + k * capacity : nullptr;
+  double* const weight_of = weights.data();
+  double* const residual_of = residuals.data();
   for (int g = 0; g < groups; ++g) {
-    int row_of[kBoundaries] = {0, 1};  // boundary b's row of big_phi
-    for (int r = 0; r < SideProfiles::kRows; ++r) row_of[2 + r] = 2 + g * SideProfiles::kRows + r;
+    // Boundary b's Phi, phi and z at the bins.
+    const double *big_of[kBoundaries], *small_of[kBoundaries], *z_of[kBoundaries];
+    for (int b = 0; b < kBoundaries; ++b) {
+      const size_t row = static_cast<size_t>(b < 2 ? b : 2 + g * SideProfiles::kRows + (b - 2)) * n;
+      big_of[b] = &big_phi[row], small_of[b] = &small_phi[row], z_of[b] = &zs[row];
+    }
+    const double* count = &s.count[static_cast<size_t>(g) * n];
+    const double* sum = &s.sum[static_cast<size_t>(g) * n];
     // Region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other.
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
@@ -226,12 +237,12 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
-      const double w = s.count[g * n + j];
+      const double w = count[j];
       if (w <= 0) continue;
       double f = 0, indicator[kRegions], gamma_grad = 0;
       for (int k = 0; k < kRegions; ++k) {
-        const double upper = k == 0 ? 1.0 : big_phi[static_cast<size_t>(row_of[k - 1]) * n + j];
-        const double lower = k == kRegions - 1 ? 0.0 : big_phi[static_cast<size_t>(row_of[k]) * n + j];
+        const double upper = k == 0 ? 1.0 : big_of[k - 1][j];
+        const double lower = k == kRegions - 1 ? 0.0 : big_of[k][j];
         indicator[k] = upper - lower;
         f += level[k] * indicator[k];
       }
@@ -251,23 +262,22 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
           f = enc;
         }
       }
-      const double r = f - s.sum[g * n + j] / w;
+      const double r = f - sum[j] / w;
       cost += w * r * r;
       if (!jtj) continue;
       double grad[kParams] = {};
       for (int b = 0; b < kBoundaries; ++b) {
-        const size_t i = static_cast<size_t>(row_of[b]) * n + j;
-        const double d = (level[b + 1] - level[b]) * small_phi[i] * inv_sigma;  // d f / d bound_b
+        const double d = (level[b + 1] - level[b]) * small_of[b][j] * inv_sigma;  // d f / d bound_b
         grad[kE] += d;
-        grad[kSigma] -= d * zs[i];
+        grad[kSigma] -= d * z_of[b][j];
         if (b == 0) grad[kQ] += d;
       }
       grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
-      for (int k = 0; k < kGamma; ++k) jacobian[k * capacity + used] = grad[k] * scale;
-      jacobian[kGamma * capacity + used] = gamma_grad;
-      weights[used] = w, residuals[used] = r;
+      for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
+      column[kGamma][used] = gamma_grad;
+      weight_of[used] = w, residual_of[used] = r;
       ++used;
     }
   }
@@ -309,7 +319,9 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
       rhs -= a.col(k) * held[k];
       m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
     }
-    step = m.ldlt().solve(rhs);
+    // The damped normal matrix is positive definite: Cholesky (LDLT where it is not, numerically).
+    const Eigen::LLT<Normal> llt(m);
+    step = llt.info() == Eigen::Success ? Vector(llt.solve(rhs)) : Vector(m.ldlt().solve(rhs));
     bool changed = false;
     for (int k = 0; k < kParams; ++k) {
       if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;
