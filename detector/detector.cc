@@ -15,17 +15,27 @@
 namespace mcmt {
 namespace {
 
-// Bilinear interpolation of an 8-bit image at (x, y), pixel centres at integer coordinates. Returns
-// false outside the image.
-inline bool Sample(const cv::Mat& gray, double x, double y, float* value) {
-  if (!(x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.001 && y <= gray.rows - 1.001)) return false;
+// Is (x, y) inside the area Sample interpolates in?
+inline bool Inside(const cv::Mat& gray, double x, double y) {
+  return x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.001 && y <= gray.rows - 1.001;
+}
+
+// Sample at a point known to be Inside.
+inline float SampleInside(const cv::Mat& gray, double x, double y) {
   const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
   const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
   const uint8_t* r1 = r0 + gray.step[0];
   const float top = r0[0] + fx * (r0[1] - r0[0]);
   const float bottom = r1[0] + fx * (r1[1] - r1[0]);
-  *value = top + fy * (bottom - top);
+  return top + fy * (bottom - top);
+}
+
+// Bilinear interpolation of an 8-bit image at (x, y), pixel centres at integer coordinates. Returns
+// false outside the image.
+inline bool Sample(const cv::Mat& gray, double x, double y, float* value) {
+  if (!Inside(gray, x, y)) return false;
+  *value = SampleInside(gray, x, y);
   return true;
 }
 
@@ -219,7 +229,9 @@ int InnerCell(const cv::Mat& bits, int cells, int side, int col, int row) {
   }
 }
 
+// Beyond 8.5 sigmas Phi is 1 to double precision and below 1e-17: no exponential.
 inline double Phi(double z) {
+  if (std::abs(z) > 8.5) return z > 0 ? 1.0 : 0.0;
   double big, small;
   PhiAndDensity(z, &big, &small);
   return big;
@@ -280,12 +292,26 @@ struct SideRays {
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
-      const Eigen::Vector2d& o = (*origins)[rays[r].index];
-      const Eigen::Vector2d& nrm = (*normals)[rays[r].index];
+      const double ox = (*origins)[rays[r].index].x(), oy = (*origins)[rays[r].index].y();
+      const double nx = (*normals)[rays[r].index].x(), ny = (*normals)[rays[r].index].y();
+      const double first_s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0;
+      // The group's profile sums and counts (SideProfiles::Add).
+      double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
+      double* count = &profiles->count[static_cast<size_t>(group) * bins];
+      // The points move monotonically along the ray: both ends inside, all inside.
+      const double last_s = first_s + (bins - 1) * du;
+      const bool inside = Inside(*gray, ox + first_s * nx, oy + first_s * ny) &&
+                          Inside(*gray, ox + last_s * nx, oy + last_s * ny);
       for (int j = 0; j < bins; ++j) {
-        const double s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0 + j * du;
+        const double s = first_s + j * du;
+        const double x = ox + s * nx, y = oy + s * ny;
         float v;
-        if (Sample(*gray, o.x() + s * nrm.x(), o.y() + s * nrm.y(), &v)) profiles->Add(group, j, v);
+        if (inside)
+          v = SampleInside(*gray, x, y);
+        else if (!Sample(*gray, x, y, &v))
+          continue;
+        sum[j] += v;
+        count[j] += 1.0;
       }
     }
   }
@@ -312,6 +338,13 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     const Eigen::Vector2d a1(p1[0] / p1[2], p1[1] / p1[2]);
     row_normal[r] = Eigen::Vector2d(a1.y() - row_point[r].y(), row_point[r].x() - a1.x());
   }
+  // The cells of rows 1..kRows along the side (InnerCell), read once.
+  thread_local std::vector<uint8_t> row_cells;  // row r's cell k at r * cells + k
+  row_cells.assign(static_cast<size_t>(SideProfiles::kRows + 1) * cells, 0);
+  for (int r = 1; r <= SideProfiles::kRows && r < cells; ++r)
+    for (int k = 0; k < cells; ++k)
+      row_cells[r * cells + k] = static_cast<uint8_t>(InnerCell(bits, cells, side, k, r));
+  auto cell_of = [&](int r, int k) { return k >= 0 && k < cells ? row_cells[r * cells + k] : 0; };
   for (size_t i = 0; i < valid.size(); ++i) {
     if (!valid[i]) continue;
     const Eigen::Vector2d& q = ideal_origins[i];
@@ -351,15 +384,20 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
       const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
       const int c = static_cast<int>(std::floor(at));
-      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? InnerCell(bits, cells, side, c, r) : 0);
+      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
       const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
       const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
       const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
       const double scale = column_px / sigma_along;
-      double other = 0;
+      // Phi at the cells' boundaries k - at, each computed once (NAN: not yet).
+      double other = 0, phi_at[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+      auto phi = [&](int k) {
+        double& v = phi_at[k - (c - 3)];
+        if (std::isnan(v)) v = Phi((k - at) * scale);
+        return v;
+      };
       for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
-        if (r < cells && InnerCell(bits, cells, side, k, r))
-          other += Phi((k + 1 - at) * scale) - Phi((k - at) * scale);
+        if (r < cells && cell_of(r, k)) other += phi(k + 1) - phi(k);
       ray.other[r - 1] = other;
     }
     if (!ok) continue;
@@ -550,11 +588,25 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
     s->origins[i] = p;
     s->ideal_origins[i] = q;
     s->normals[i] = normal;
-    bool ok = true;
     float* prof = &s->profiles[static_cast<size_t>(i) * m];
-    for (int j = 0; j < m && ok; ++j) {
+    auto at = [&](int j) {
       const double step = -s->h + j * s->ds;
-      ok = Sample(gray, p.x() + step * normal.x(), p.y() + step * normal.y(), &prof[j]);
+      return Eigen::Vector2d(p.x() + step * normal.x(), p.y() + step * normal.y());
+    };
+    // The points move monotonically along the ray: both ends inside, all inside.
+    const Eigen::Vector2d first = at(0), last = at(m - 1);
+    bool ok = Inside(gray, first.x(), first.y()) && Inside(gray, last.x(), last.y());
+    if (ok) {
+      for (int j = 0; j < m; ++j) {
+        const Eigen::Vector2d x = at(j);
+        prof[j] = SampleInside(gray, x.x(), x.y());
+      }
+    } else {
+      ok = true;
+      for (int j = 0; j < m && ok; ++j) {
+        const Eigen::Vector2d x = at(j);
+        ok = Sample(gray, x.x(), x.y(), &prof[j]);
+      }
     }
     if (!ok) continue;
     s->valid[i] = 1;

@@ -3,6 +3,10 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace mcmt {
 
@@ -49,42 +53,183 @@ enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
 // (a print's margin is paper or ink of the other colour; FitSideProfiles).
 constexpr double kMinMarginContrast = 0.4;
 
+using Normal = Eigen::Matrix<double, kParams, kParams>;
+using Vector = Eigen::Matrix<double, kParams, 1>;
+
+// Phi and phi of the boundary at `bound` at every bin (z = (bound - u) / sigma) into `zs`, `big_phi`,
+// `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
+// the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
+// exp(-(z - h)^2 / 2) = exp(-z^2 / 2) exp(z h - h^2 / 2)), restarted from std::exp every 16 bins (relative
+// error below 1e-13, far below PhiAndDensity's 1.5e-7).
+void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double* zs, double* big_phi,
+                  double* small_phi) {
+  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
+  double gauss = 0, ratio = 0;
+  int run = -1;  // bins since the recurrence was restarted; -1: not running
+  const double u0 = s.u0, du = s.du;
+  for (int j = 0; j < s.bins; ++j) {
+    const double z = (bound - (u0 + j * du)) * inv_sigma;
+    zs[j] = z;
+    if (std::abs(z) > 7.0) {
+      big_phi[j] = z > 0 ? 1.0 : 0.0, small_phi[j] = 0.0;
+      run = -1;
+      continue;
+    }
+    if (run < 0 || run == 16) {
+      gauss = std::exp(-0.5 * z * z), ratio = std::exp(z * h - 0.5 * h * h), run = 0;
+    } else {
+      gauss *= ratio, ratio *= step_ratio;
+    }
+    ++run;
+    const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
+    const double tail =
+        0.5 * t *
+        (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * gauss;
+    big_phi[j] = z >= 0 ? 1.0 - tail : tail;
+    small_phi[j] = 0.3989422804014327 * gauss;
+  }
+}
+
+// Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
+// b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
+// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers).
+template <int kA>
+void NormalRow(const double* const* columns, const double* weights, const double* residuals, size_t rows,
+               double (*sums)[2]) {
+#ifdef __SSE2__
+  __m128d acc[kA + 2];
+  for (int b = 0; b <= kA + 1; ++b) acc[b] = _mm_setzero_pd();
+  for (size_t i = 0; i < rows; i += 2) {
+    const __m128d wa = _mm_mul_pd(_mm_loadu_pd(weights + i), _mm_loadu_pd(columns[kA] + i));
+    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_loadu_pd(columns[b] + i)));
+    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_loadu_pd(residuals + i)));
+  }
+  for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums[b], acc[b]);
+#else
+  for (int b = 0; b <= kA + 1; ++b) sums[b][0] = sums[b][1] = 0.0;
+  for (size_t i = 0; i < rows; ++i) {
+    const double wa = weights[i] * columns[kA][i];
+    for (int b = 0; b <= kA; ++b) sums[b][i % 2] += wa * columns[b][i];
+    sums[kA + 1][i % 2] += wa * residuals[i];
+  }
+#endif
+}
+
+// The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
+// jacobian + k * stride, `used` rows, zero from there to an even count), the weights and the
+// residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
+// profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
+void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
+                     size_t used, bool single, bool fit_gamma, Normal* jtj, Vector* jtr) {
+  int active[kParams], count = 0;
+  const double* columns[kParams];
+  for (int k = 0; k < kParams; ++k)
+    if (!((single && (k == kS2 || k == kQ)) || (!fit_gamma && k == kGamma)))
+      columns[count] = jacobian + k * stride, active[count++] = k;
+  jtj->setZero(), jtr->setZero();
+  const size_t rows = (used + 1) / 2 * 2;
+  using Row = void (*)(const double* const*, const double*, const double*, size_t, double(*)[2]);
+  static constexpr Row kRowOf[kParams] = {NormalRow<0>, NormalRow<1>, NormalRow<2>, NormalRow<3>,
+                                          NormalRow<4>, NormalRow<5>, NormalRow<6>, NormalRow<7>};
+  for (int a = 0; a < count; ++a) {
+    double sums[kParams + 1][2];  // with columns b <= a, then with the residuals
+    kRowOf[a](columns, weights, residuals, rows, sums);
+    for (int b = 0; b <= a; ++b)
+      (*jtj)(active[a], active[b]) = (*jtj)(active[b], active[a]) = sums[b][0] + sums[b][1];
+    (*jtr)[active[a]] = sums[a + 1][0] + sums[a + 1][1];
+  }
+}
+
+// exp(x) for |x| below 700 within about 2 ulp, without a library call: x = k ln 2 + r with |r| <= ln 2 / 2
+// (ln 2 in two parts, the first exact times k), e^r by its Taylor series to r^13 (truncation below
+// 1e-17), times 2^k set in the exponent's bits.
+inline double ExpInline(double x) {
+  if (!(std::abs(x) < 700.0)) return std::exp(x);  // also NaN
+  constexpr double kRound = 6755399441055744.0;  // 1.5 * 2^52: adding and subtracting it rounds to an integer
+  const double k = (x * 1.4426950408889634 + kRound) - kRound;
+  const double r = (x - k * 0.6931471803691238) - k * 1.9082149292705877e-10;
+  constexpr double kInverseFactorial[14] = {1.0,
+                                            1.0,
+                                            1.0 / 2,
+                                            1.0 / 6,
+                                            1.0 / 24,
+                                            1.0 / 120,
+                                            1.0 / 720,
+                                            1.0 / 5040,
+                                            1.0 / 40320,
+                                            1.0 / 362880,
+                                            1.0 / 3628800,
+                                            1.0 / 39916800,
+                                            1.0 / 479001600,
+                                            1.0 / 6227020800};
+  double e = kInverseFactorial[13];
+  for (int i = 12; i >= 0; --i) e = kInverseFactorial[i] + r * e;
+  const uint64_t bits = static_cast<uint64_t>(static_cast<int64_t>(k) + 1023) << 52;
+  double two_k;
+  std::memcpy(&two_k, &bits, sizeof two_k);
+  return e * two_k;
+}
+
+// log(x) for a positive normal x within about 2 ulp, without a library call: x = m 2^e with m within
+// [sqrt(1/2), sqrt(2)), log m = 2 atanh(s), s = (m - 1) / (m + 1) (|s| <= 0.172), by its series to s^21
+// (truncation below 1e-17).
+inline double LogInline(double x) {
+  if (!(x >= 2.2250738585072014e-308 && x <= 1.7976931348623157e308)) return std::log(x);  // also NaN
+  uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  int exponent = static_cast<int>((bits >> 52) & 0x7ff) - 1023;
+  bits = (bits & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL;
+  double m;
+  std::memcpy(&m, &bits, sizeof m);
+  if (m > M_SQRT2) m *= 0.5, ++exponent;
+  const double f = m - 1.0, s = f / (2.0 + f), s2 = s * s;
+  double series = 1.0 / 21;
+  for (int odd = 19; odd >= 3; odd -= 2) series = 1.0 / odd + s2 * series;
+  const double k = exponent;
+  return k * 0.6931471803691238 + (2.0 * s + 2.0 * s * s2 * series + k * 1.9082149292705877e-10);
+}
+
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, bool single,
-                Eigen::Matrix<double, kParams, kParams>* jtj, Eigen::Matrix<double, kParams, 1>* jtr) {
+double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj, Vector* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
   // by all groups, the inner boundaries are per group (their depths differ under perspective).
   const int rows_per_group = kBoundaries + (groups - 1) * SideProfiles::kRows;
-  thread_local std::vector<double> big_phi, small_phi, zs;
+  // The Jacobian's columns (one per parameter, `used` rows each: the bins with a weight) and the
+  // weights and residuals of those bins.
+  thread_local std::vector<double> big_phi, small_phi, zs, jacobian, weights, residuals;
   big_phi.resize(static_cast<size_t>(rows_per_group) * n);
   small_phi.resize(big_phi.size());
   zs.resize(big_phi.size());
+  const size_t capacity = static_cast<size_t>(groups) * n + 1;  // + 1: an even count of rows
+  if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
   const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
   auto fill = [&](int row, double bound) {
-    for (int j = 0; j < n; ++j) {
-      const double z = (bound - (s.u0 + j * s.du)) * inv_sigma;
-      const size_t i = static_cast<size_t>(row) * n + j;
-      zs[i] = z;
-      // Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential.
-      if (std::abs(z) > 7.0)
-        big_phi[i] = z > 0 ? 1.0 : 0.0, small_phi[i] = 0.0;
-      else
-        PhiAndDensity(z, &big_phi[i], &small_phi[i]);
-    }
+    const size_t i = static_cast<size_t>(row) * n;
+    FillBoundary(s, bound, inv_sigma, &zs[i], &big_phi[i], &small_phi[i]);
   };
   fill(0, p[kE] + p[kQ]);
   fill(1, p[kE]);
   for (int g = 0; g < groups; ++g)
     for (int r = 0; r < SideProfiles::kRows; ++r)
       fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
-  if (jtj) jtj->setZero(), jtr->setZero();
   double cost = 0;
+  size_t used = 0;
+  double* column[kParams];  // the Jacobian's, the weights' and the residuals' data (no reloads)
+  for (int k = 0; k < kParams; ++k) column[k] = jtj ? jacobian.data() + k * capacity : nullptr;
+  double* const weight_of = weights.data();
+  double* const residual_of = residuals.data();
   for (int g = 0; g < groups; ++g) {
-    int row_of[kBoundaries] = {0, 1};  // boundary b's row of big_phi
-    for (int r = 0; r < SideProfiles::kRows; ++r) row_of[2 + r] = 2 + g * SideProfiles::kRows + r;
+    // Boundary b's Phi, phi and z at the bins.
+    const double *big_of[kBoundaries], *small_of[kBoundaries], *z_of[kBoundaries];
+    for (int b = 0; b < kBoundaries; ++b) {
+      const size_t row = static_cast<size_t>(b < 2 ? b : 2 + g * SideProfiles::kRows + (b - 2)) * n;
+      big_of[b] = &big_phi[row], small_of[b] = &small_phi[row], z_of[b] = &zs[row];
+    }
+    const double* count = &s.count[static_cast<size_t>(g) * n];
+    const double* sum = &s.sum[static_cast<size_t>(g) * n];
     // Region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other.
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
@@ -92,12 +237,12 @@ double Evaluate(const SideProfiles& s, const double* p, bool single,
     level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
-      const double w = s.count[g * n + j];
+      const double w = count[j];
       if (w <= 0) continue;
       double f = 0, indicator[kRegions], gamma_grad = 0;
       for (int k = 0; k < kRegions; ++k) {
-        const double upper = k == 0 ? 1.0 : big_phi[static_cast<size_t>(row_of[k - 1]) * n + j];
-        const double lower = k == kRegions - 1 ? 0.0 : big_phi[static_cast<size_t>(row_of[k]) * n + j];
+        const double upper = k == 0 ? 1.0 : big_of[k - 1][j];
+        const double lower = k == kRegions - 1 ? 0.0 : big_of[k][j];
         indicator[k] = upper - lower;
         f += level[k] * indicator[k];
       }
@@ -106,8 +251,8 @@ double Evaluate(const SideProfiles& s, const double* p, bool single,
         // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
         // model at 0.5 where an image's black is 0, push the dark level below 0 and with it the edge
         // towards the dark side (0.09 px on a sharp printed sheet).
-        const double at = std::max(f, 0.5), log_lin = std::log(at * (1.0 / 255.0));
-        const double enc = 255.0 * std::exp(log_lin * inv_gamma);
+        const double at = std::max(f, 0.5), log_lin = LogInline(at * (1.0 / 255.0));
+        const double enc = 255.0 * ExpInline(log_lin * inv_gamma);
         scale = enc * inv_gamma / at;
         gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
         if (f < at) {
@@ -117,26 +262,32 @@ double Evaluate(const SideProfiles& s, const double* p, bool single,
           f = enc;
         }
       }
-      const double r = f - s.sum[g * n + j] / w;
+      const double r = f - sum[j] / w;
       cost += w * r * r;
       if (!jtj) continue;
-      Eigen::Matrix<double, kParams, 1> grad = Eigen::Matrix<double, kParams, 1>::Zero();
+      double grad[kParams] = {};
       for (int b = 0; b < kBoundaries; ++b) {
-        const size_t i = static_cast<size_t>(row_of[b]) * n + j;
-        const double d = (level[b + 1] - level[b]) * small_phi[i] * inv_sigma;  // d f / d bound_b
+        const double d = (level[b + 1] - level[b]) * small_of[b][j] * inv_sigma;  // d f / d bound_b
         grad[kE] += d;
-        grad[kSigma] -= d * zs[i];
+        grad[kSigma] -= d * z_of[b][j];
         if (b == 0) grad[kQ] += d;
       }
       grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
-      grad *= scale;
-      grad[kGamma] = gamma_grad;
-      *jtj += w * grad * grad.transpose();
-      *jtr += w * r * grad;
+      for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
+      column[kGamma][used] = gamma_grad;
+      weight_of[used] = w, residual_of[used] = r;
+      ++used;
     }
   }
+  if (!jtj) return cost;
+  if (used % 2) {  // the pad row: no weight
+    for (int k = 0; k < kParams; ++k) jacobian[k * capacity + used] = 0.0;
+    weights[used] = 0.0, residuals[used] = 0.0;
+  }
+  NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
+                  jtr);
   return cost;
 }
 
@@ -153,9 +304,6 @@ double LevelNear(const SideProfiles& s, double u, int row, int colour) {
   return count > 0 ? sum / count : NAN;
 }
 
-using Normal = Eigen::Matrix<double, kParams, kParams>;
-using Vector = Eigen::Matrix<double, kParams, 1>;
-
 // The damped Gauss-Newton step from p that stays within [lo, hi]: a parameter whose step would cross
 // its bound is held at the bound and the others are solved again (a plain clamp after the solve would
 // leave the free parameters compensating for a move that did not happen, and the fit crawls along the
@@ -171,7 +319,9 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
       rhs -= a.col(k) * held[k];
       m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
     }
-    step = m.ldlt().solve(rhs);
+    // The damped normal matrix is positive definite: Cholesky (LDLT where it is not, numerically).
+    const Eigen::LLT<Normal> llt(m);
+    step = llt.info() == Eigen::Success ? Vector(llt.solve(rhs)) : Vector(m.ldlt().solve(rhs));
     bool changed = false;
     for (int k = 0; k < kParams; ++k) {
       if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;
