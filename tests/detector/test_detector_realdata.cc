@@ -124,6 +124,30 @@ TEST(DetectorRealData, CaliscopeCornersAgreeWithTheChessboard) {
   }
 }
 
+// The same comparison with detector.tone auto (configs/caliscope_charuco_tone_auto.yaml, 120 markers):
+// each camera's gamma and sharpening estimated from its own markers, then (DetectRecording's first pass)
+// used on every frame. The four webcams differ (cam0 and cam1 soft, cam2 and cam3 sharpened;
+// bench/results/2026-12-04-calib3.md), so one tone for all cannot be right. Measured (2026-12-04):
+// cam0-3 -0.046 / +0.171 / -0.061 / +0.039 %, mean |size| 0.079 % (the estimate used only from the frame
+// after it, as live: -0.123 / +0.167 / -0.005 / +0.132 %, mean 0.107 %; the config's one tone for all:
+// 0.189 %). Bounds: the mean 0.09 % and each camera 0.2 % (cam1 misses the 0.1 % target; the chessboard
+// truth itself is good to about 0.1 % per camera on cams 1-3).
+TEST(DetectorRealData, CaliscopeCornersWithAutoToneAgreeWithTheChessboardPerCamera) {
+  if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
+  RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco_tone_auto.yaml");
+  const testing::ChessboardComparison c = testing::CompareWithChessboard(rig);
+  double mean_abs = 0;
+  for (const CameraConfig& cam : rig.cameras) {
+    const testing::ChessboardMean m = testing::CameraMean(c.mcmt, cam.name);
+    std::printf("  %s: size %+.3f %% (%d markers)\n", cam.name.c_str(), 100 * m.size_rel, m.n);
+    EXPECT_GE(m.n, 200) << cam.name;
+    EXPECT_LE(std::abs(m.size_rel), 0.002) << cam.name;
+    mean_abs += std::abs(m.size_rel) / rig.cameras.size();
+  }
+  std::printf("mean |size error| %.3f %%\n", 100 * mean_abs);
+  EXPECT_LE(mean_abs, 0.0009);
+}
+
 TEST(DetectorRealData, Caliscope4CamRecordingOpens) {
   if (!fs::exists(kData + "/4_cam_recording/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
   const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_4cam.yaml");
