@@ -172,6 +172,8 @@ class MarkerDetector {
   const cv::aruco::Dictionary& dictionary() const { return *dictionary_; }
   // tone "auto": the estimate once made (ok false before).
   const ToneEstimate& tone() const { return tone_estimate_; }
+  // tone "auto": `tone` (ok) used from the next frame on instead of an estimate of its own.
+  void UseTone(const ToneEstimate& tone);
 
  private:
   struct Raw {
@@ -218,7 +220,9 @@ class MarkerDetector {
 
 // Offline: every frame of one camera's recorded source (rig YAML), detected at full speed with the
 // camera's intrinsics and the rig's detector settings, as the messages mcmt-detector would publish
-// (utime, seq, camera, dictionary, camera model, markers, detection_ms). max_frames < 0: all.
+// (utime, seq, camera, dictionary, camera model, markers, detection_ms). max_frames < 0: all. With
+// tone auto the recording is read twice: the estimate (from its first frames' markers) is then used on
+// every frame, the first ones too (live, only on the frames after it).
 // Throws std::runtime_error naming the camera and file on bad input (see DetectorNode).
 std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::string& camera,
                                           int max_frames = -1);

@@ -166,6 +166,12 @@ std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::strin
                              pipeline.source().description());
   std::vector<detections_t> out;
   detections_t d;
+  if (pipeline.detector().options().tone == "auto") {  // a first pass until the estimate is made
+    CameraPipeline first(rig, options);
+    while (!first.detector().tone().ok && first.Next(&d)) {
+    }
+    if (first.detector().tone().ok) pipeline.detector().UseTone(first.detector().tone());
+  }
   while ((max_frames < 0 || static_cast<int>(out.size()) < max_frames) && pipeline.Next(&d)) out.push_back(d);
   return out;
 }

@@ -227,12 +227,16 @@ void MarkerDetector::ObserveTone(const cv::Mat& gray, const std::vector<marker_t
     added += tone_->Add(gray, corners, MarkerBits(m->id), dictionary_->markerSize + 2);
   }
   if (tone_->markers() < options_.tone_markers) return;
-  tone_estimate_ = tone_->Estimate();
+  UseTone(tone_->Estimate());
+  std::fprintf(stderr, "detector: tone auto after %d frames: %s\n", tone_frames_seen_,
+               tone_estimate_.Describe().c_str());
+}
+
+void MarkerDetector::UseTone(const ToneEstimate& tone) {
+  tone_estimate_ = tone;
   tone_.reset();
   tone_estimate_.Apply(&options_);
   gamma_lut_.release();  // built for the gamma in force at the first linearised region
-  std::fprintf(stderr, "detector: tone auto after %d frames: %s\n", tone_frames_seen_,
-               tone_estimate_.Describe().c_str());
 }
 
 }  // namespace mcmt

@@ -1,11 +1,15 @@
 // The caliscope board's marker corners against its ChArUco chessboard corners
 // (tests/detector/chessboard_truth.h): the signed offsets (px, outward) and relative size errors of mcmt's
-// corners and of stock OpenCV's, per camera, per marker id and per marker size. Then maps the detections
-// as test_mapper_realdata does, once as detected and once with every marker's corners replaced by the
+// corners and of stock OpenCV's, per camera, per marker id and per marker size; per camera split by
+// marker size, view angle, distance from the image centre and brightness, with the size error against
+// two other predictions (a homography from the nearby X-corners only; one in raw pixels, without the lens
+// model) and the offsets of the horizontal and vertical sides apart. Then maps the detections as
+// test_mapper_realdata does, once as detected and once with every marker's corners replaced by the
 // chessboard's prediction, and prints the board's marker spacing / marker size of both maps (1.88562).
-//   diag_charuco RIG_YAML [max frames per camera (all)] [camera]
+//   diag_charuco RIG_YAML [max frames per camera (all)] [camera ("-": all)] [per-marker CSV]
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <functional>
 #include <map>
 
@@ -18,24 +22,51 @@ using testing::ChessboardMarker;
 namespace {
 void Print(const std::string& what, const std::vector<ChessboardMarker>& markers,
            const std::function<bool(const ChessboardMarker&)>& take) {
-  double offset = 0, size = 0;
-  int n = 0;
-  for (const ChessboardMarker& m : markers)
-    if (take(m)) offset += m.offset_px, size += m.size_rel, ++n;
-  if (n)
-    std::printf("%-14s %5d markers: offset %+.4f px  size %+.3f %%\n", what.c_str(), n, offset / n,
-                100 * size / n);
+  const testing::ChessboardMean m = testing::MeanOf(markers, take);
+  if (m.n)
+    std::printf(
+        "%-22s %5d markers: offset %+.4f px  size %+.3f %% (local %+.3f %% of %d, raw %+.3f %%)  "
+        "horizontal sides %+.4f px, vertical %+.4f px\n",
+        what.c_str(), m.n, m.offset_px, 100 * m.size_rel, 100 * m.size_rel_local, m.n_local,
+        100 * m.size_rel_raw, m.horizontal_px, m.vertical_px);
+}
+
+// Per camera, markers split into bands of `width` of `value`.
+void PrintSplit(const RigConfig& rig, const std::vector<ChessboardMarker>& markers, const std::string& name,
+                double width, const std::function<double(const ChessboardMarker&)>& value) {
+  for (const CameraConfig& cam : rig.cameras)
+    for (int b = 0; b < 20; ++b)
+      Print(cam.name + " " + name + " " + std::to_string(static_cast<int>(b * width)) + "+", markers,
+            [&](const ChessboardMarker& m) {
+              return m.camera == cam.name && static_cast<int>(value(m) / width) == b;
+            });
+}
+
+void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& markers) {
+  std::ofstream out(path);
+  out << "camera,frame,id,side_px,offset_px,size_rel,size_rel_local,size_rel_raw,x_px,y_px,view_deg,white";
+  for (int s = 0; s < 4; ++s) out << ",side" << s << "_px,side" << s << "_horizontal";
+  out << "\n";
+  for (const ChessboardMarker& m : markers) {
+    out << m.camera << "," << m.frame << "," << m.id << "," << m.side_px << "," << m.offset_px << ","
+        << m.size_rel << "," << m.size_rel_local << "," << m.size_rel_raw << "," << m.x_px << "," << m.y_px
+        << "," << m.view_deg << "," << m.white;
+    for (int s = 0; s < 4; ++s) out << "," << m.side_offset_px[s] << "," << m.side_horizontal[s];
+    out << "\n";
+  }
 }
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: diag_charuco RIG_YAML [max frames per camera] [camera]\n");
+    std::fprintf(stderr, "usage: diag_charuco RIG_YAML [max frames per camera] [camera|-] [csv]\n");
     return 2;
   }
   const RigConfig rig = LoadRigConfig(argv[1]);
+  const std::string camera = argc > 3 && std::string(argv[3]) != "-" ? argv[3] : "";
   const testing::ChessboardComparison c =
-      testing::CompareWithChessboard(rig, argc > 2 ? std::atoi(argv[2]) : -1, argc > 3 ? argv[3] : "");
+      testing::CompareWithChessboard(rig, argc > 2 ? std::atoi(argv[2]) : -1, camera);
+  if (argc > 4) WriteCsv(argv[4], c.mcmt);
   std::printf("homography rms on chessboard corners: %.3f px (mean of %d frames)\n", c.homography_rms_px,
               c.frames);
   for (const CameraConfig& cam : rig.cameras)
@@ -47,6 +78,11 @@ int main(int argc, char** argv) {
   for (int b = 1; b < 8; ++b)
     Print(std::to_string(10 * b) + "-" + std::to_string(10 * b + 10) + " px", c.mcmt,
           [&](const ChessboardMarker& m) { return static_cast<int>(m.side_px / 10) == b; });
+  PrintSplit(rig, c.mcmt, "side px", 10, [](const ChessboardMarker& m) { return m.side_px; });
+  PrintSplit(rig, c.mcmt, "view deg", 15, [](const ChessboardMarker& m) { return m.view_deg; });
+  PrintSplit(rig, c.mcmt, "radius px", 150,
+             [](const ChessboardMarker& m) { return std::hypot(m.x_px - 640, m.y_px - 360); });
+  PrintSplit(rig, c.mcmt, "white", 40, [](const ChessboardMarker& m) { return m.white; });
   for (int variant = 0; variant < 2; ++variant) {
     Mapper mapper(MapperOptions::FromConfig(rig));
     for (const auto& d : variant == 0 ? c.detected : c.predicted) mapper.Add(d);

@@ -2,11 +2,14 @@
 // across the chessboard's edges between a solid square and a marker's square (white square | one cell of
 // black margin | the marker's white border | code), located by the chessboard's homography
 // (tests/detector/chessboard_truth.h), averaged per band of cell size (px). u in cells from the square's
-// edge, positive into the solid square; the marker's outer edge is at u = -1.
-//   diag_tone RIG_YAML [max frames per camera (all)] [camera]
+// edge, positive into the solid square; the marker's outer edge is at u = -1. With `orientation`, the
+// columns are the edges running closer to the image's x axis (profiles along y) and those closer to its
+// y axis (profiles along x), cells of 3-9 px: webcams can sharpen rows and columns differently.
+//   diag_tone RIG_YAML [max frames per camera (all)] [camera] [orientation]
 #include <cstdio>
 #include <cstdlib>
 #include <set>
+#include <string>
 
 #include "tests/detector/chessboard_truth.h"
 
@@ -14,7 +17,7 @@ using namespace mcmt;
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: diag_tone RIG_YAML [max frames per camera] [camera]\n");
+    std::fprintf(stderr, "usage: diag_tone RIG_YAML [max frames per camera] [camera] [orientation]\n");
     return 2;
   }
   const RigConfig rig = LoadRigConfig(argv[1]);
@@ -29,6 +32,7 @@ int main(int argc, char** argv) {
     marked.insert({static_cast<int>(c.x / sq), static_cast<int>(c.y / sq)});
   }
   constexpr int kBands = 5, kSteps = 37;  // u = -2.5 .. +2 cells by 1/8
+  const bool by_orientation = argc > 4 && std::string(argv[4]) == "orientation";
   const double band_lo = 3.0, band_step = 1.5;
   std::vector<std::vector<double>> sum(kBands, std::vector<double>(kSteps, 0.0)), n = sum;
   int calls = 0;
@@ -58,7 +62,9 @@ int main(int argc, char** argv) {
             const Eigen::Vector2d a = raw_from_board(px, py);
             const Eigen::Vector2d b = raw_from_board(px + dx[k] * cell, py + dy[k] * cell);
             const double cell_px = (b - a).norm();
-            const int band = static_cast<int>((cell_px - band_lo) / band_step);
+            int band = static_cast<int>((cell_px - band_lo) / band_step);
+            if (by_orientation)  // 0: the edge runs along x (its profile along y)
+              band = band < 0 || band >= 4 ? -1 : std::abs((b - a).x()) < std::abs((b - a).y()) ? 0 : 1;
             if (band < 0 || band >= kBands) continue;
             for (int j = 0; j < kSteps; ++j) {
               const double u = (-2.5 + j / 8.0) * cell;
@@ -73,7 +79,10 @@ int main(int argc, char** argv) {
   testing::CompareWithChessboard(rig, argc > 2 ? std::atoi(argv[2]) : -1, argc > 3 ? argv[3] : "", hook);
   std::printf("u/cell");
   for (int b = 0; b < kBands; ++b)
-    std::printf("  %4.1f-%4.1f", band_lo + b * band_step, band_lo + (b + 1) * band_step);
+    if (by_orientation)
+      std::printf("  %9s", b == 0 ? "edge-x" : b == 1 ? "edge-y" : "-");
+    else
+      std::printf("  %4.1f-%4.1f", band_lo + b * band_step, band_lo + (b + 1) * band_step);
   std::printf("\n");
   for (int j = 0; j < kSteps; ++j) {
     std::printf("%+6.3f", -2.5 + j / 8.0);

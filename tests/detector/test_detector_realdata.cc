@@ -86,6 +86,11 @@ TEST(DetectorRealData, CaliscopeTimestampsFollowTheCsv) {
 // every size band of 100 markers or more. Measured (2026-12-03): all -0.006 px (+0.015 % of size);
 // cameras -0.034..+0.025 px; 10-20 px +0.028, 20-30 px +0.009, 30-40 px -0.038, 40-50 px -0.019 px.
 // Stock OpenCV on the same frames: -0.386 px (the check can tell a biased detector).
+// Each camera's marker size error (detected perimeter / predicted - 1), the quantity issue 15's 0.1 %
+// target is about: NOT met per camera. Measured (2026-12-04, configs/caliscope_charuco.yaml as is) cam0-3
+// +0.047 / -0.208 / +0.240 / +0.259 %; the bound 0.30 % is that measured shortfall plus a margin, a
+// regression guard, not the target. The map meets 0.1 % (test_mapper_realdata) by cancellation between
+// cameras (bench/results/2026-12-04-caliscope-corners.md).
 TEST(DetectorRealData, CaliscopeCornersAgreeWithTheChessboard) {
   if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
   const RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco.yaml");
@@ -94,31 +99,53 @@ TEST(DetectorRealData, CaliscopeCornersAgreeWithTheChessboard) {
   ASSERT_GT(c.frames, 100);
   EXPECT_LT(c.homography_rms_px, 0.25);
   ASSERT_GT(c.mcmt.size(), 1000u);
-  auto mean = [](const std::vector<testing::ChessboardMarker>& v, const std::string& camera, int band) {
-    double sum = 0;
-    int n = 0;
-    for (const auto& m : v)
-      if ((camera.empty() || m.camera == camera) && (band < 0 || static_cast<int>(m.side_px / 10) == band))
-        sum += m.offset_px, ++n;
-    return std::make_pair(n ? sum / n : 0.0, n);
-  };
-  const auto all = mean(c.mcmt, "", -1), stock = mean(c.stock, "", -1);
-  std::printf("offset along the edge normals: mcmt %+.4f px (%d markers), stock %+.4f px (%d)\n", all.first,
-              all.second, stock.first, stock.second);
-  EXPECT_LE(std::abs(all.first), 0.02);
-  EXPECT_LT(stock.first, -0.2);
+  const testing::ChessboardMean all = testing::CameraMean(c.mcmt, ""),
+                                stock = testing::CameraMean(c.stock, "");
+  std::printf("offset along the edge normals: mcmt %+.4f px (%d markers), stock %+.4f px (%d)\n",
+              all.offset_px, all.n, stock.offset_px, stock.n);
+  EXPECT_LE(std::abs(all.offset_px), 0.02);
+  EXPECT_LT(stock.offset_px, -0.2);
   for (const CameraConfig& cam : rig.cameras) {
-    const auto m = mean(c.mcmt, cam.name, -1);
-    std::printf("  %s: %+.4f px (%d markers)\n", cam.name.c_str(), m.first, m.second);
-    EXPECT_LE(std::abs(m.first), 0.05) << cam.name;
+    const testing::ChessboardMean m = testing::CameraMean(c.mcmt, cam.name);
+    std::printf("  %s: %+.4f px, size %+.3f %% (%d markers)\n", cam.name.c_str(), m.offset_px,
+                100 * m.size_rel, m.n);
+    EXPECT_GE(m.n, 200) << cam.name;
+    EXPECT_LE(std::abs(m.offset_px), 0.05) << cam.name;
+    EXPECT_LE(std::abs(m.size_rel), 0.0030) << cam.name << " (target 0.1 %, measured shortfall)";
+    RecordProperty("size_error_percent_" + cam.name, std::to_string(100 * m.size_rel));
   }
   for (int band = 1; band < 8; ++band) {
-    const auto m = mean(c.mcmt, "", band);
-    std::printf("  %d-%d px: %+.4f px (%d markers)\n", 10 * band, 10 * band + 10, m.first, m.second);
-    if (m.second >= 100) {
-      EXPECT_LE(std::abs(m.first), 0.05) << 10 * band << " px";
+    const testing::ChessboardMean m = testing::MeanOf(
+        c.mcmt, [&](const testing::ChessboardMarker& k) { return static_cast<int>(k.side_px / 10) == band; });
+    std::printf("  %d-%d px: %+.4f px (%d markers)\n", 10 * band, 10 * band + 10, m.offset_px, m.n);
+    if (m.n >= 100) {
+      EXPECT_LE(std::abs(m.offset_px), 0.05) << 10 * band << " px";
     }
   }
+}
+
+// The same comparison with detector.tone auto (configs/caliscope_charuco_tone_auto.yaml, 120 markers):
+// each camera's gamma and sharpening estimated from its own markers, then (DetectRecording's first pass)
+// used on every frame. The four webcams differ (cam0 and cam1 soft, cam2 and cam3 sharpened;
+// bench/results/2026-12-04-calib3.md), so one tone for all cannot be right. Measured (2026-12-04):
+// cam0-3 -0.046 / +0.171 / -0.061 / +0.039 %, mean |size| 0.079 % (the estimate used only from the frame
+// after it, as live: -0.123 / +0.167 / -0.005 / +0.132 %, mean 0.107 %; the config's one tone for all:
+// 0.189 %). Bounds: the mean 0.09 % and each camera 0.2 % (cam1 misses the 0.1 % target; the chessboard
+// truth itself is good to about 0.1 % per camera on cams 1-3).
+TEST(DetectorRealData, CaliscopeCornersWithAutoToneAgreeWithTheChessboardPerCamera) {
+  if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
+  RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco_tone_auto.yaml");
+  const testing::ChessboardComparison c = testing::CompareWithChessboard(rig);
+  double mean_abs = 0;
+  for (const CameraConfig& cam : rig.cameras) {
+    const testing::ChessboardMean m = testing::CameraMean(c.mcmt, cam.name);
+    std::printf("  %s: size %+.3f %% (%d markers)\n", cam.name.c_str(), 100 * m.size_rel, m.n);
+    EXPECT_GE(m.n, 200) << cam.name;
+    EXPECT_LE(std::abs(m.size_rel), 0.002) << cam.name;
+    mean_abs += std::abs(m.size_rel) / rig.cameras.size();
+  }
+  std::printf("mean |size error| %.3f %%\n", 100 * mean_abs);
+  EXPECT_LE(mean_abs, 0.0009);
 }
 
 TEST(DetectorRealData, Caliscope4CamRecordingOpens) {
