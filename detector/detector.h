@@ -221,8 +221,8 @@ class MarkerDetector {
 // Offline: every frame of one camera's recorded source (rig YAML), detected at full speed with the
 // camera's intrinsics and the rig's detector settings, as the messages mcmt-detector would publish
 // (utime, seq, camera, dictionary, camera model, markers, detection_ms). max_frames < 0: all. With
-// tone auto the recording is read twice: the estimate (from its first frames' markers) is then used on
-// every frame, the first ones too (live, only on the frames after it).
+// tone auto the recording is read twice, as mcmt-detector reads one: the estimate (from its first
+// frames' markers) is then used on every frame, the first ones too (live, only on the frames after it).
 // Throws std::runtime_error naming the camera and file on bad input (see DetectorNode).
 std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::string& camera,
                                           int max_frames = -1);

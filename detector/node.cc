@@ -54,6 +54,20 @@ class RealtimePace {
   Clock::time_point start_;
 };
 
+// tone "auto" on a recording: a first pass over it until the estimate is made (from its first frames'
+// markers), which `pipeline` then uses on every frame, the first ones too, so that a recording's
+// detections are the same whichever process reads it (DetectRecording, mcmt-detector at any rate). Live
+// sources estimate on the way, from the frames after the estimate.
+void PrimeTone(const RigConfig& rig, DetectorNodeOptions options, CameraPipeline* pipeline) {
+  if (pipeline->detector().options().tone != "auto" || pipeline->source().live()) return;
+  options.loop = false;  // a recording too short for the estimate ends the pass
+  CameraPipeline first(rig, options);
+  detections_t d;
+  while (!first.detector().tone().ok && first.Next(&d)) {
+  }
+  if (first.detector().tone().ok) pipeline->detector().UseTone(first.detector().tone());
+}
+
 }  // namespace
 
 CameraPipeline::CameraPipeline(const RigConfig& rig, const DetectorNodeOptions& options) {
@@ -164,14 +178,9 @@ std::vector<detections_t> DetectRecording(const RigConfig& rig, const std::strin
   if (pipeline.source().live())
     throw std::runtime_error("camera " + camera + ": DetectRecording needs a recorded source, not " +
                              pipeline.source().description());
+  PrimeTone(rig, options, &pipeline);
   std::vector<detections_t> out;
   detections_t d;
-  if (pipeline.detector().options().tone == "auto") {  // a first pass until the estimate is made
-    CameraPipeline first(rig, options);
-    while (!first.detector().tone().ok && first.Next(&d)) {
-    }
-    if (first.detector().tone().ok) pipeline.detector().UseTone(first.detector().tone());
-  }
   while ((max_frames < 0 || static_cast<int>(out.size()) < max_frames) && pipeline.Next(&d)) out.push_back(d);
   return out;
 }
@@ -198,6 +207,7 @@ DetectorNode::DetectorNode(const RigConfig& rig, const DetectorNodeOptions& opti
     : options_(options), lcm_(lcm), pipeline_(rig, options) {
   if (options_.rate != "max" && options_.rate != "realtime")
     throw std::runtime_error("--rate: expected max or realtime, got '" + options_.rate + "'");
+  PrimeTone(rig, options_, &pipeline_);
   channel_ = DetectionsChannel(options_.camera);
   image_channel_ = ImageChannel(options_.camera);
 }

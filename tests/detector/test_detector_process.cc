@@ -21,6 +21,7 @@
 #include "core/config.h"
 #include "core/dictionary.h"
 #include "core/lcm_util.h"
+#include "detector/detector.h"
 #include "mcmt/detections_t.hpp"
 #include "tests/detector/synthetic.h"
 #include "tests/support/process.h"
@@ -251,6 +252,32 @@ TEST(DetectorProcess, MaxLagDropsFramesASlowDetectorCannotTake) {
   // The median, so that a machine's scheduling hiccup does not decide (without dropping: ~100 ms and
   // more, growing with every frame).
   EXPECT_LE(lag_ms[lag_ms.size() / 2], kMaxLagMs + 10.0);
+}
+
+// tone auto on a recording: mcmt-detector reads it once until the estimate is made and then uses the
+// estimate on every frame, as DetectRecording (the mapper's and the tests' offline path) does, so the
+// published detections are byte-equal to DetectRecording's (the bug: the process used the default tone
+// until its estimate, DetectRecording the estimate from the first frame on).
+TEST(DetectorProcess, ToneAutoPublishesWhatDetectRecordingGives) {
+  Recording rec("tone");
+  std::ofstream(rec.rig, std::ios::app) << "detector:\n  tone: auto\n  tone_markers: 12\n";
+  Receiver rx(Url(7716));
+  ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", Url(7716), "--quiet"},
+                  (rec.dir / "tone.out").string());
+  ASSERT_GT(c.pid, 0);
+  rx.Receive(1, Recording::kFrames, 60.0);
+  ASSERT_EQ(WaitExit(c, 30.0), 0) << test::ReadText(c.out_path);
+  const std::string out = test::ReadText(c.out_path);
+  EXPECT_NE(out.find("tone auto after"), std::string::npos) << "no estimate was made: " << out;
+  const std::vector<detections_t> offline = DetectRecording(LoadRigConfig(rec.rig), "cam1");
+  const std::vector<detections_t>& published = rx.by_camera["cam1"];
+  ASSERT_EQ(published.size(), offline.size()) << out;
+  for (size_t k = 0; k < offline.size(); ++k) {
+    detections_t a = published[k], b = offline[k];
+    a.detection_ms = b.detection_ms = 0;  // the one field that is the run's own
+    EXPECT_EQ(Encode(a), Encode(b)) << "frame " << k;
+  }
 }
 
 TEST(DetectorProcess, SigintStopsALoopingDetectorCleanly) {
