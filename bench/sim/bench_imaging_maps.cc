@@ -18,6 +18,9 @@
 //                               (view angle above DEG)
 //   MCMT_VIEW_WEIGHT_POWER=P    the mapper's view_weight_power (both maps)
 //   MCMT_CANDIDATE_SEARCH=S     the detector's candidate_search (opencv or own)
+//   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
+//                               mapping (an oracle: what an isotropic size bias of the corners costs the
+//                               map's scale; negative P enlarges)
 #include <time.h>
 
 #include <algorithm>
@@ -82,6 +85,15 @@ double ScaleError(const sim::GroundTruth& truth, const RigMap& map) {
   return gt_sq > 0 ? dot / gt_sq - 1.0 : NAN;
 }
 
+// The marker's corners scaled by `factor` about their centroid (MCMT_IMAGING_SHRINK_PCT).
+void ScaleAboutCentroid(double factor, marker_t* m) {
+  if (factor == 1.0) return;
+  for (int x = 0; x < 2; ++x) {
+    const double c = (m->corners[0][x] + m->corners[1][x] + m->corners[2][x] + m->corners[3][x]) / 4.0;
+    for (int k = 0; k < 4; ++k) m->corners[k][x] = c + (m->corners[k][x] - c) * factor;
+  }
+}
+
 // The detections MCMT_IMAGING_DROP names are left out of the map (see the top of the file).
 struct DropRule {
   bool occluded = false, unseen = false;
@@ -132,6 +144,8 @@ int main(int argc, char** argv) {
       if (*p) ++p;
     }
   const DropRule drop = ParseDropRule(std::getenv("MCMT_IMAGING_DROP"));
+  const char* shrink_env = std::getenv("MCMT_IMAGING_SHRINK_PCT");
+  const double shrink_pct = shrink_env ? std::atof(shrink_env) : 0.0;
   FILE* dump = nullptr;
   if (const char* path = std::getenv("MCMT_IMAGING_DUMP")) {
     dump = std::fopen(path, "w");
@@ -205,6 +219,7 @@ int main(int argc, char** argv) {
             if (!dropped) kept.push_back(m);
           }
           d.markers = kept;
+          for (marker_t& m : d.markers) ScaleAboutCentroid(1.0 - shrink_pct / 100.0, &m);
           d.num_markers = static_cast<int32_t>(d.markers.size());
           detected += d.num_markers;
           mapper.Add(d);
