@@ -81,12 +81,7 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double*
       gauss *= ratio, ratio *= step_ratio;
     }
     ++run;
-    const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
-    const double tail =
-        0.5 * t *
-        (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * gauss;
-    big_phi[j] = z >= 0 ? 1.0 - tail : tail;
-    small_phi[j] = 0.3989422804014327 * gauss;
+    PhiAndDensityOf(z, gauss, &big_phi[j], &small_phi[j]);
   }
 }
 

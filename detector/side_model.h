@@ -88,16 +88,20 @@ struct SideFit {
   bool warm = false;
 };
 
-// The standard normal distribution Phi(z) and density phi(z) with one exponential: Abramowitz and
+// The standard normal distribution Phi(z) and density phi(z) given gauss = exp(-z^2 / 2): Abramowitz and
 // Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
-inline void PhiAndDensity(double z, double* big, double* small) {
-  const double e = std::exp(-0.5 * z * z);
+inline void PhiAndDensityOf(double z, double gauss, double* big, double* small) {
   const double x = std::abs(z) * M_SQRT1_2, t = 1.0 / (1.0 + 0.3275911 * x);
   const double tail =
       0.5 * t *
-      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * e;
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * gauss;
   *big = z >= 0 ? 1.0 - tail : tail;
-  *small = 0.3989422804014327 * e;
+  *small = 0.3989422804014327 * gauss;
+}
+
+// The same with its one exponential.
+inline void PhiAndDensity(double z, double* big, double* small) {
+  PhiAndDensityOf(z, std::exp(-0.5 * z * z), big, small);
 }
 
 // Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
