@@ -39,6 +39,28 @@ inline bool Sample(const cv::Mat& gray, double x, double y, float* value) {
   return true;
 }
 
+// Samples of n points along a line, point(j) (an Eigen::Vector2d), handed to visit(j, value) where
+// inside the image; returns how many were. The points move monotonically: both ends inside, all inside,
+// with no check per sample.
+template <class Point, class Visit>
+int SampleLine(const cv::Mat& gray, int n, const Point& point, const Visit& visit) {
+  const Eigen::Vector2d first = point(0), last = point(n - 1);
+  if (Inside(gray, first.x(), first.y()) && Inside(gray, last.x(), last.y())) {
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector2d x = point(j);
+      visit(j, SampleInside(gray, x.x(), x.y()));
+    }
+    return n;
+  }
+  int sampled = 0;
+  for (int j = 0; j < n; ++j) {
+    const Eigen::Vector2d x = point(j);
+    float v;
+    if (Sample(gray, x.x(), x.y(), &v)) visit(j, v), ++sampled;
+  }
+  return sampled;
+}
+
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
 struct PixelMap {
   const CameraModel* camera = nullptr;
@@ -298,21 +320,13 @@ struct SideRays {
       // The group's profile sums and counts (SideProfiles::Add).
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
-      // The points move monotonically along the ray: both ends inside, all inside.
-      const double last_s = first_s + (bins - 1) * du;
-      const bool inside = Inside(*gray, ox + first_s * nx, oy + first_s * ny) &&
-                          Inside(*gray, ox + last_s * nx, oy + last_s * ny);
-      for (int j = 0; j < bins; ++j) {
-        const double s = first_s + j * du;
-        const double x = ox + s * nx, y = oy + s * ny;
-        float v;
-        if (inside)
-          v = SampleInside(*gray, x, y);
-        else if (!Sample(*gray, x, y, &v))
-          continue;
-        sum[j] += v;
-        count[j] += 1.0;
-      }
+      SampleLine(
+          *gray, bins,
+          [&](int j) {
+            const double s = first_s + j * du;
+            return Eigen::Vector2d(ox + s * nx, oy + s * ny);
+          },
+          [&](int j, float v) { sum[j] += v, count[j] += 1.0; });
     }
   }
 };
@@ -593,22 +607,7 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
       const double step = -s->h + j * s->ds;
       return Eigen::Vector2d(p.x() + step * normal.x(), p.y() + step * normal.y());
     };
-    // The points move monotonically along the ray: both ends inside, all inside.
-    const Eigen::Vector2d first = at(0), last = at(m - 1);
-    bool ok = Inside(gray, first.x(), first.y()) && Inside(gray, last.x(), last.y());
-    if (ok) {
-      for (int j = 0; j < m; ++j) {
-        const Eigen::Vector2d x = at(j);
-        prof[j] = SampleInside(gray, x.x(), x.y());
-      }
-    } else {
-      ok = true;
-      for (int j = 0; j < m && ok; ++j) {
-        const Eigen::Vector2d x = at(j);
-        ok = Sample(gray, x.x(), x.y(), &prof[j]);
-      }
-    }
-    if (!ok) continue;
+    if (SampleLine(gray, m, at, [&](int j, float v) { prof[j] = v; }) < m) continue;
     s->valid[i] = 1;
     ++s->num_valid;
     s->clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
