@@ -146,8 +146,7 @@ QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gr
   // where they overlap, so that each holds whole components: a dark component lies in tiles with
   // contrast, hence in one region, and no region cuts one.
   cv::Mat contrast(tiles_high_, tiles_wide_, CV_8U);
-  for (int i = 0; i < tiles_high_ * tiles_wide_; ++i)
-    contrast.data[i] = hi_[i] - lo_[i] >= search_.min_contrast ? 255 : 0;
+  for (int i = 0; i < tiles_high_ * tiles_wide_; ++i) contrast.data[i] = HasContrast(i) ? 255 : 0;
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(contrast, labels, stats, centroids, 8, CV_32S);
   for (int i = 1; i < n; ++i)
@@ -211,8 +210,8 @@ void QuadFinder::Threshold(const cv::Rect& tiles, const cv::Rect& px, double lev
     // Per tile: dark below this value (the mean's pass: 255 marks the tile searched); 0: no pixel.
     for (int tx = tiles.x; tx < tiles.br().x; ++tx) {
       const int mn = lo_[ty * tiles_wide_ + tx], mx = hi_[ty * tiles_wide_ + tx];
-      const int value = mx - mn < search_.min_contrast ? 0
-                        : window_px > 0                ? 255
+      const int value = !HasContrast(ty * tiles_wide_ + tx) ? 0
+                        : window_px > 0                     ? 255
                                         : static_cast<int>(std::ceil(mn + level * (mx - mn) - 1e-9));
       std::fill_n(threshold.begin() + (tx - tiles.x) * t, t, static_cast<uint8_t>(std::min(value, 255)));
     }
@@ -234,7 +233,7 @@ cv::Rect QuadFinder::Uncovered(const cv::Rect& region) const {
   int x0 = region.br().x, y0 = region.br().y, x1 = region.x - 1, y1 = region.y - 1;
   for (int ty = region.y; ty < region.br().y; ++ty)
     for (int tx = region.x; tx < region.br().x; ++tx)
-      if (hi_[ty * tiles_wide_ + tx] - lo_[ty * tiles_wide_ + tx] >= search_.min_contrast)
+      if (HasContrast(ty * tiles_wide_ + tx))
         x0 = std::min(x0, tx), y0 = std::min(y0, ty), x1 = std::max(x1, tx), y1 = std::max(y1, ty);
   return x1 < x0 ? cv::Rect() : cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
 }

@@ -49,7 +49,9 @@ class QuadFinder {
   cv::Mat gray_;
   QuadSearch search_;
   int tiles_wide_ = 0, tiles_high_ = 0;
-  std::vector<uint8_t> lo_, hi_;   // per tile: range of its 3 x 3 tiles; covered tiles: lo_ 255, hi_ 0
+  std::vector<uint8_t> lo_, hi_;  // per tile: range of its 3 x 3 tiles; covered tiles: lo_ 255, hi_ 0
+  // Tile i (row-major) is searched: its range reaches min_contrast (a covered tile's never does).
+  bool HasContrast(int i) const { return hi_[i] - lo_[i] >= search_.min_contrast; }
   std::vector<cv::Rect> regions_;  // tiles: disjoint boxes of whole components of tiles with contrast
   cv::Mat binary_, mean_;          // written in the regions searched only
   // Quads of the binary image (dark below `level` of the range, or with window_px below the mean less
