@@ -57,9 +57,12 @@ struct DetectorOptions {
   // "edges": "given" (default): gamma and unsharp_* as above. "auto": estimated per camera from its
   // first `tone_markers` decoded markers (at most 4 a frame, the largest; detector/tone.h: no board
   // geometry), then used as if given; until then markers are refined with gamma 0 and no sharpening.
-  // The estimate is logged and kept in MarkerDetector::tone().
+  // The estimate is logged and kept in MarkerDetector::tone(). It is made after `tone_frames` frames at
+  // the latest, from the markers those gave if at least kToneMinMarkers; with fewer the given tone stays
+  // (logged), so a recording's first pass (DetectRecording, mcmt-detector) reads at most that many.
   std::string tone = "given";
   int tone_markers = 60;
+  int tone_frames = 300;
 
   // Candidate search. "opencv" (default): cv::aruco::detectMarkers, always used with corner_refinement
   // other than "edges", aruco3 or inverted markers. "own": detector/candidates.h, binary images at two
@@ -174,6 +177,8 @@ class MarkerDetector {
   const ToneEstimate& tone() const { return tone_estimate_; }
   // tone "auto": `tone` (ok) used from the next frame on instead of an estimate of its own.
   void UseTone(const ToneEstimate& tone);
+  // tone "auto": still collecting markers (false once estimated or given up after tone_frames).
+  bool ToneEstimating() const { return tone_ != nullptr; }
 
  private:
   struct Raw {

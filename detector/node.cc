@@ -55,15 +55,15 @@ class RealtimePace {
 };
 
 // tone "auto" on a recording: a first pass over it until the estimate is made (from its first frames'
-// markers), which `pipeline` then uses on every frame, the first ones too, so that a recording's
-// detections are the same whichever process reads it (DetectRecording, mcmt-detector at any rate). Live
-// sources estimate on the way, from the frames after the estimate.
+// markers, tone_frames at most), which `pipeline` then uses on every frame, the first ones too, so that a
+// recording's detections are the same whichever process reads it (DetectRecording, mcmt-detector at any
+// rate). Live sources estimate on the way, from the frames after the estimate.
 void PrimeTone(const RigConfig& rig, DetectorNodeOptions options, CameraPipeline* pipeline) {
   if (pipeline->detector().options().tone != "auto" || pipeline->source().live()) return;
   options.loop = false;  // a recording too short for the estimate ends the pass
   CameraPipeline first(rig, options);
   detections_t d;
-  while (!first.detector().tone().ok && first.Next(&d)) {
+  while (first.detector().ToneEstimating() && first.Next(&d)) {
   }
   if (first.detector().tone().ok) pipeline->detector().UseTone(first.detector().tone());
 }

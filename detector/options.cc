@@ -43,6 +43,10 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 OneOf({"given", "auto"}))
            .Add("tone_markers", &O::tone_markers, "markers",
                 "tone auto: markers fitted (at most 4 a frame, the largest)", InRange(kToneMinMarkers, 1000))
+           .Add("tone_frames", &O::tone_frames, "frames",
+                "tone auto: the estimate is made after this many frames at the latest (from at least 8 "
+                "markers, else the given tone stays)",
+                InRange(1, 100000))
            .Add("candidate_search", &O::candidate_search,
                 "opencv (cv::aruco::detectMarkers) or own (tile-range binary images, detector/candidates.h)",
                 OneOf({"own", "opencv"}))

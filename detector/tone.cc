@@ -207,7 +207,7 @@ ToneEstimate ToneEstimator::Estimate() const {
 namespace mcmt {
 
 // The largest markers of each frame (at most kTonePerFrame of them, spread over the frames) until
-// tone_markers are in, then the estimate, used from the next frame on.
+// tone_markers are in or tone_frames frames are seen, then the estimate, used from the next frame on.
 void MarkerDetector::ObserveTone(const cv::Mat& gray, const std::vector<marker_t>& markers) {
   constexpr int kTonePerFrame = 4;
   ++tone_frames_seen_;
@@ -226,9 +226,18 @@ void MarkerDetector::ObserveTone(const cv::Mat& gray, const std::vector<marker_t
     for (int k = 0; k < 4; ++k) corners[k] = {m->corners[k][0], m->corners[k][1]};
     added += tone_->Add(gray, corners, MarkerBits(m->id), dictionary_->markerSize + 2);
   }
-  if (tone_->markers() < options_.tone_markers) return;
+  const int collected = tone_->markers();
+  if (collected < options_.tone_markers && tone_frames_seen_ < options_.tone_frames) return;
+  if (collected < kToneMinMarkers) {
+    tone_.reset();
+    std::fprintf(stderr,
+                 "detector: tone auto: %d markers fit for it in the first %d frames (tone_frames), fewer "
+                 "than %d: the given tone is kept\n",
+                 collected, tone_frames_seen_, kToneMinMarkers);
+    return;
+  }
   UseTone(tone_->Estimate());
-  std::fprintf(stderr, "detector: tone auto after %d frames: %s\n", tone_frames_seen_,
+  std::fprintf(stderr, "detector: tone auto after %d frames (%d markers): %s\n", tone_frames_seen_, collected,
                tone_estimate_.Describe().c_str());
 }
 

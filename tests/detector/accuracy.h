@@ -109,6 +109,7 @@ inline ToneEstimate EstimateToneOnReference(const Imaging& imaging, int markers,
   DetectorOptions options;
   options.tone = "auto";
   options.tone_markers = markers;
+  options.tone_frames = 10 * markers;
   MarkerDetector detector(mc, options);
   ReferenceScene scene;
   scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60;

@@ -51,5 +51,48 @@ TEST(DetectorTone, EstimatesTheWebcamCondition) {
       ExpectTone(testing::EstimateToneOnReference(im, 48, 24), im.gamma, im.sharpen, false, 0.35);
 }
 
+// tone_frames bounds the collection: with tone_markers out of reach the estimate is made after
+// tone_frames frames from what they gave (6 markers an image, at most 4 kept a frame), and with fewer than
+// kToneMinMarkers the given tone stays and collecting stops, so a recording's first pass (PrimeTone) ends
+// there instead of reading the whole recording (the bug: it read on until tone_markers, i.e. to the end).
+void DetectFrames(MarkerDetector* detector, const testing::ReferenceScene& scene, const testing::Imaging& im,
+                  int frames, uint64_t seed) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  std::mt19937_64 rng(seed);
+  for (int i = 0; i < frames; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    detector->Detect(testing::RenderReference(*dict, scene, im, rng, &truth));
+  }
+}
+
+TEST(DetectorTone, EstimatesAfterToneFramesFromTheMarkersTheyGave) {
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  DetectorOptions options;
+  options.tone = "auto", options.tone_markers = 1000, options.tone_frames = 4;
+  MarkerDetector detector(mc, options);
+  testing::ReferenceScene scene;
+  scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60;
+  DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 3, 25);
+  EXPECT_TRUE(detector.ToneEstimating());
+  DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 1, 26);
+  EXPECT_FALSE(detector.ToneEstimating());
+  ExpectTone(detector.tone(), 2.2, 0.6, false, 0.2);
+}
+
+TEST(DetectorTone, KeepsTheGivenToneWhenToneFramesGiveTooFewMarkers) {
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  DetectorOptions options;
+  options.tone = "auto", options.tone_markers = 60, options.tone_frames = 5;
+  MarkerDetector detector(mc, options);
+  testing::ReferenceScene scene;
+  scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60, scene.markers = 1;
+  DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 5, 27);
+  EXPECT_FALSE(detector.ToneEstimating());
+  EXPECT_FALSE(detector.tone().ok);
+  EXPECT_EQ(detector.options().gamma, 0.0);  // the given tone: none
+}
+
 }  // namespace
 }  // namespace mcmt
