@@ -123,6 +123,15 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
   }
   r.camera_position_mm = ComputeStats(cam_pos);
   r.camera_rotation_deg = ComputeStats(cam_rot);
+  double dot = 0, gt_sq = 0;
+  for (size_t i = 0; i < gt_cams.size(); ++i)
+    for (size_t j = i + 1; j < gt_cams.size(); ++j) {
+      const double gt =
+          (gt_cams[i]->rig_from_cam.translation() - gt_cams[j]->rig_from_cam.translation()).norm();
+      dot += gt * (est_cams[i]->rig_from_cam.translation() - est_cams[j]->rig_from_cam.translation()).norm();
+      gt_sq += gt * gt;
+    }
+  if (gt_sq > 0) r.scale_error = dot / gt_sq - 1.0;
 
   // --- Markers: ids must belong to the ground truth.
   std::vector<const SimMarker*> gt_marks;

@@ -16,6 +16,7 @@
 // (deg) errors per frame; each with mean / median / max / RMS; fraction of frames with a pose.
 #pragma once
 
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -49,6 +50,9 @@ struct EvalResult {
   std::vector<std::string> missing_cameras;
   std::vector<CameraError> cameras;
   Stats camera_position_mm, camera_rotation_deg;
+  // Metric scale: the least-squares ratio of all camera-to-camera distances, estimate over truth, minus
+  // 1 (NAN with fewer than 2 cameras).
+  double scale_error = NAN;
   // Object configuration
   int gt_markers = 0, mapped_markers = 0;
   std::vector<int> missing_markers;

@@ -18,6 +18,10 @@
 //                               (view angle above DEG)
 //   MCMT_VIEW_WEIGHT_POWER=P    the mapper's view_weight_power (both maps)
 //   MCMT_CANDIDATE_SEARCH=S     the detector's candidate_search (opencv or own)
+//   MCMT_IMAGING_RENDERER=reference  the sessions drawn by the independent reference renderer
+//                               (tests/mapper/reference_rig_view.h) under the conditions of its catalogue
+//                               (tests/detector/reference_renderer.h) instead of mcmt-sim's; the rows are
+//                               the catalogue's conditions
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
 //                               mapping (an oracle: what an isotropic size bias of the corners costs the
 //                               map's scale; negative P enlarges)
@@ -32,11 +36,13 @@
 #include <string>
 #include <vector>
 
+#include "core/dictionary.h"
 #include "core/lcm_util.h"
 #include "detector/detector.h"
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
+#include "tests/mapper/reference_rig_view.h"
 #include "tests/mapper/rendered_session.h"
 
 using namespace mcmt;
@@ -49,10 +55,19 @@ constexpr double kReferenceNoisePx = 0.07;
 struct Condition {
   std::string name;
   sim::RenderOptions render;
+  const testing::Imaging* reference = nullptr;  // drawn by the reference renderer under this instead
 };
 
 std::vector<Condition> Conditions() {
   std::vector<Condition> c;
+  if (const char* e = std::getenv("MCMT_IMAGING_RENDERER"); e && std::string(e) == "reference") {
+    static const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+    for (const testing::Imaging& im : catalogue) c.push_back({"reference renderer: " + im.name, {}, &im});
+    return c;
+  } else if (e && std::string(e) != "sim") {
+    std::fprintf(stderr, "MCMT_IMAGING_RENDERER=%s: expected sim or reference\n", e);
+    std::exit(2);
+  }
   sim::RenderOptions plain;
   c.push_back({"mcmt-sim default (linear, 1-cell margin)", plain});
   sim::RenderOptions webcam = plain;
@@ -68,21 +83,6 @@ std::vector<Condition> Conditions() {
     c.push_back({"--imaging random, seed " + std::to_string(seed), r});
   }
   return c;
-}
-
-double ScaleError(const sim::GroundTruth& truth, const RigMap& map) {
-  double dot = 0, gt_sq = 0;
-  for (size_t i = 0; i < map.cameras.size(); ++i)
-    for (size_t j = i + 1; j < map.cameras.size(); ++j) {
-      const sim::SimCamera* a = truth.FindCamera(map.cameras[i].name);
-      const sim::SimCamera* b = truth.FindCamera(map.cameras[j].name);
-      if (!a || !b) continue;
-      const double gt = (a->rig_from_cam.translation() - b->rig_from_cam.translation()).norm();
-      const double est =
-          (map.cameras[i].rig_from_cam.translation() - map.cameras[j].rig_from_cam.translation()).norm();
-      dot += est * gt, gt_sq += gt * gt;
-    }
-  return gt_sq > 0 ? dot / gt_sq - 1.0 : NAN;
 }
 
 // The marker's corners scaled by `factor` about their centroid (MCMT_IMAGING_SHRINK_PCT).
@@ -177,7 +177,8 @@ int main(int argc, char** argv) {
       const std::vector<sim::SimFrame>& trajectory = session.trajectory;
       sim::RenderOptions render = condition.render;
       sim::Renderer renderer(object, session.markers.dictionary, render);
-      if (dump)
+      const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(session.markers.dictionary);
+      if (dump && !condition.reference)
         for (size_t c = 0; c < cameras.size(); ++c)
           std::fprintf(stderr, "condition %zu camera %zu: %s\n", ci, c,
                        sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
@@ -193,7 +194,12 @@ int main(int argc, char** argv) {
         MarkerDetector detector(session.markers, options);
         detector.SetCamera(cameras[c].model);
         for (const sim::SimFrame& f : trajectory) {
-          detections_t d = session.Detect(renderer, c, f, &detector);
+          detections_t d = condition.reference
+                               ? session.Detect(testing::RenderReferenceRigView(
+                                                    *dictionary, object, cameras[c], f.rig_from_object,
+                                                    *condition.reference, 1000003 * ci + 1009 * c + f.seq),
+                                                c, f, &detector)
+                               : session.Detect(renderer, c, f, &detector);
           const std::vector<sim::MarkerView> views =
               sim::ProjectMarkers(cameras[c], object, f.rig_from_object);
           std::vector<marker_t> kept;
@@ -237,7 +243,7 @@ int main(int argc, char** argv) {
         const MapResult result = reference.Solve();
         const sim::EvalResult e = sim::Evaluate(truth, &result.map, nullptr);
         char cells[96];
-        std::snprintf(cells, sizeof(cells), "%+.3f | %.2f / %.2f", 100.0 * ScaleError(truth, result.map),
+        std::snprintf(cells, sizeof(cells), "%+.3f | %.2f / %.2f", 100.0 * e.scale_error,
                       e.camera_position_mm.mean, e.camera_position_mm.max);
         reference_cells = cells;
       } catch (const std::exception&) {
@@ -246,9 +252,9 @@ int main(int argc, char** argv) {
         const MapResult result = mapper.Solve();
         const sim::EvalResult e = sim::Evaluate(truth, &result.map, nullptr);
         std::printf("| %s | %.1f | %+.3f | %.2f / %.2f | %.3f | %.2f | %s |\n", condition.name.c_str(),
-                    radius, 100.0 * ScaleError(truth, result.map), e.camera_position_mm.mean,
-                    e.camera_position_mm.max, e.configuration_mm.mean,
-                    double(detected) / (frames * cameras.size()), reference_cells.c_str());
+                    radius, 100.0 * e.scale_error, e.camera_position_mm.mean, e.camera_position_mm.max,
+                    e.configuration_mm.mean, double(detected) / (frames * cameras.size()),
+                    reference_cells.c_str());
       } catch (const std::exception& ex) {
         std::printf("| %s | %.1f | (no map: %s) | | | %.2f | %s |\n", condition.name.c_str(), radius,
                     ex.what(), double(detected) / (frames * cameras.size()), reference_cells.c_str());

@@ -149,9 +149,11 @@ inline cv::Point2d Apply(const cv::Matx33d& h, double x, double y) {
 }
 
 // The quads of one marker seen through image_from_plane (plane coordinates: the marker's black square
-// is [0, cells]^2 in cells, row 0 at the top), printed with a margin on a surface, lit by `light`.
+// is [0, cells]^2 in cells, row 0 at the top), printed with a margin on a surface (margin_cells + 2.5
+// cells of it around the print; none with `with_surface` false: drawn already), lit by `light`.
 inline std::vector<Quad> MarkerQuads(const cv::Mat& bits, int cells, const cv::Matx33d& image_from_plane,
-                                     const Imaging& im, double light, bool inverted) {
+                                     const Imaging& im, double light, bool inverted,
+                                     bool with_surface = true) {
   auto quad = [&](double x0, double y0, double x1, double y1, double reflectance, double grain) {
     Quad q;
     q.p = {Apply(image_from_plane, x0, y0), Apply(image_from_plane, x1, y0), Apply(image_from_plane, x1, y1),
@@ -163,7 +165,7 @@ inline std::vector<Quad> MarkerQuads(const cv::Mat& bits, int cells, const cv::M
   const double dark = inverted ? im.paper : im.ink, bright = inverted ? im.ink : im.paper;
   std::vector<Quad> quads;
   const double s = im.margin_cells + 2.5;  // surface extent around the print
-  quads.push_back(quad(-s, -s, cells + s, cells + s, im.surface, im.surface_texture));
+  if (with_surface) quads.push_back(quad(-s, -s, cells + s, cells + s, im.surface, im.surface_texture));
   const double m = im.margin_cells;
   if (m > 0) quads.push_back(quad(-m, -m, cells + m, cells + m, im.paper, 0));
   quads.push_back(quad(0, 0, cells, cells, dark, 0));

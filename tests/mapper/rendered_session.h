@@ -39,14 +39,19 @@ struct RenderedMapSession {
   // Camera `c`'s message for `frame`: its image rendered by `renderer` and detected by `detector`.
   detections_t Detect(const sim::Renderer& renderer, size_t c, const sim::SimFrame& frame,
                       MarkerDetector* detector) const {
+    return Detect(renderer.Render(cameras[c], static_cast<int>(c), frame.seq, frame.rig_from_object), c,
+                  frame, detector);
+  }
+  // Camera `c`'s message for `frame` from its image rendered elsewhere (tests/mapper/reference_rig_view.h).
+  detections_t Detect(const cv::Mat& image, size_t c, const sim::SimFrame& frame,
+                      MarkerDetector* detector) const {
     detections_t d;
     d.utime = frame.utime;
     d.seq = frame.seq;
     d.camera = cameras[c].name;
     d.dictionary = markers.dictionary;
     d.camera_model = ToCameraModelMsg(cameras[c].model);
-    d.markers =
-        detector->Detect(renderer.Render(cameras[c], static_cast<int>(c), frame.seq, frame.rig_from_object));
+    d.markers = detector->Detect(image);
     d.num_markers = static_cast<int32_t>(d.markers.size());
     return d;
   }
