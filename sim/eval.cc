@@ -343,6 +343,8 @@ void CamerasMapped(std::ostringstream& s, const EvalResult& r) {
     for (const auto& n : r.missing_cameras) s << " " << n;
     s << ")";
   }
+  if (!std::isnan(r.scale_error))
+    s << ", metric scale error " << (r.scale_error >= 0 ? "+" : "") << Fmt(100.0 * r.scale_error) << " %";
 }
 
 void MarkersMapped(std::ostringstream& s, const EvalResult& r) {
@@ -365,7 +367,8 @@ std::string JsonCameras(const EvalResult& r) {
   s << "{\"ground_truth\": " << r.gt_cameras << ", \"mapped\": " << r.mapped_cameras << ", \"missing\": [";
   for (size_t i = 0; i < r.missing_cameras.size(); ++i)
     s << (i ? ", " : "") << JsonString(r.missing_cameras[i]);
-  s << "],\n    \"position_mm\": " << JsonStats(r.camera_position_mm)
+  s << "],\n    \"scale_error_pct\": " << JsonNumber(100.0 * r.scale_error)
+    << ",\n    \"position_mm\": " << JsonStats(r.camera_position_mm)
     << ",\n    \"rotation_deg\": " << JsonStats(r.camera_rotation_deg) << ",\n    \"per_camera\": [";
   for (size_t i = 0; i < r.cameras.size(); ++i)
     s << (i ? ", " : "") << "{\"name\": " << JsonString(r.cameras[i].name)

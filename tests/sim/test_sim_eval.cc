@@ -233,6 +233,19 @@ TEST(SimEval, OneMillimetreRadialShiftOfOneCamera) {
   }
 }
 
+// The metric scale error: every camera position of the estimate scaled 1.002 about its rig origin reads
+// +0.2 % (whatever the estimate's frames), in the table and the JSON; the truth against itself reads 0.
+TEST(SimEval, ScaledCameraPositionsGiveTheScaleError) {
+  const GroundTruth t = MakeTruth(5, 10);
+  Estimate e = ToEstimate(t, 2, 1);
+  EXPECT_NEAR(Evaluate(t, &e.map, &e.trajectory).scale_error, 0.0, 1e-12);
+  for (MapCamera& c : e.map.cameras) c.rig_from_cam.translation() *= 1.002;
+  const EvalResult r = Evaluate(t, &e.map, &e.trajectory);
+  EXPECT_NEAR(r.scale_error, 0.002, 1e-12);
+  EXPECT_NE(FormatTable(r).find("metric scale error +0.200 %"), std::string::npos) << FormatTable(r);
+  EXPECT_NE(FormatJson(r).find("\"scale_error_pct\": 0.2"), std::string::npos) << FormatJson(r);
+}
+
 // A shift in a random direction: the alignment rotates too; compare with Eigen's own Umeyama.
 TEST(SimEval, CameraShiftInAnyDirectionMatchesAnIndependentUmeyama) {
   const int n = 5;
