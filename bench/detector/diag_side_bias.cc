@@ -5,14 +5,19 @@
 //   diag_side_bias sim BLUR_PX RADIUS_M MARKER_SIZE_M FRAMES
 //   diag_side_bias cond NAME MIN_SIDE_PX MAX_SIDE_PX IMAGES
 // ref: tests/detector/reference_renderer.h (1-cell white margin, surface 0.5); syn: synthetic.h; sim:
-// mcmt-sim's paper rig (5 cameras, 640x480) and object OBJECT (four_sided), markers >= 15 px within
-// 75 deg, print margin QUIET (cells, 1) and face albedo ALBEDO (< 0: the object's), offsets per id too.
+// mcmt-sim's paper rig (5 cameras, 640x480) and object OBJECT (four_sided), markers >= MINPX px (15) within
+// 75 deg, print margin QUIET (cells, 1) and face albedo ALBEDO (< 0: the object's), offsets per id too,
+// SUPERSAMPLING (sim::RenderOptions::supersampling, 0: exact area), FLAT (bits: 1 no light gradient, 2 no
+// shading, 4 no background texture).
 // cond: the reference renderer under the condition of tests/detector/reference_renderer.h's
 // ImagingCatalogue() whose name contains NAME (bench_accuracy's), 0-75 deg unless ANGLE.
 // exact: RenderExact below (fronto-parallel, the continuous blurred image point-sampled, no noise).
 // Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
 // MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
-// the detector's default, 0: linear), SEED (1), PER (print each marker).
+// the detector's default, 0: linear), SEED (1), PER (print each marker),
+// SMOOTH (px: each image smoothed by a Gaussian of this sigma first, as the detector's sharp_smoothing).
+// The last line: each side's signed offset (the mean of its ends' along its normal) by the marker's extent
+// across the side (px along the side's normal: its cells' depth x cells).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -126,12 +131,17 @@ void ForEachSimImage(
   sim::RenderOptions ro;
   ro.blur_sigma = blur, ro.noise_sigma = Env("NOISE", 2), ro.seed = 3;
   ro.quiet_zone_cells = static_cast<int>(Env("QUIET", 1)), ro.surface_albedo = Env("ALBEDO", -1);
+  ro.supersampling = static_cast<int>(Env("SUPERSAMPLING", 0));
+  const int flat = static_cast<int>(Env("FLAT", 0));
+  if (flat & 1) ro.lighting_gradient = 0;
+  if (flat & 2) ro.shading = 0;
+  if (flat & 4) ro.textured_background = false;
   sim::Renderer renderer(object, "DICT_6X6_250", ro);
   for (size_t c = 0; c < cameras.size(); ++c)
     for (const sim::SimFrame& f : sim::MakeTrajectory(to)) {
       std::vector<testing::RenderedMarker> truth;
       for (const sim::MarkerView& v : sim::ProjectMarkers(cameras[c], object, f.rig_from_object)) {
-        if (!v.fully_visible || v.size_px < 15 || v.view_angle_deg > 75) continue;
+        if (!v.fully_visible || v.size_px < Env("MINPX", 15) || v.view_angle_deg > 75) continue;
         testing::RenderedMarker t;
         t.id = v.id, t.side_px = v.size_px, t.view_angle_deg = v.view_angle_deg;
         for (int k = 0; k < 4; ++k) t.corners[k] = cv::Point2d(v.corners[k].x(), v.corners[k].y());
@@ -139,6 +149,13 @@ void ForEachSimImage(
       }
       use(renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object), truth);
     }
+}
+// The standard error of the values' mean.
+double StandardError(const std::vector<double>& values) {
+  const double mean = testing::MeanOf(values);
+  double var = 0;
+  for (double v : values) var += (v - mean) * (v - mean);
+  return values.size() > 1 ? std::sqrt(var / (values.size() - 1) / values.size()) : NAN;
 }
 }  // namespace
 
@@ -171,8 +188,16 @@ int main(int argc, char** argv) {
   int total = 0, refined = 0;
   double sigma_sum = 0;
   std::vector<double> side_mid, side_turn;
+  // Per band of the marker's extent across a side (px along its normal; kExtentBands): the sides'
+  // signed middle offsets (outward +).
+  constexpr double kExtentBands[] = {0, 8, 10, 12, 14, 16, 20, 30, 1e9};
+  constexpr int kBands = sizeof(kExtentBands) / sizeof(kExtentBands[0]) - 1;
+  std::vector<double> side_by_extent[kBands];
   std::map<int, std::vector<double>> per_id;
-  auto refine = [&](const cv::Mat& image, const std::vector<testing::RenderedMarker>& truth) {
+  auto refine = [&](const cv::Mat& rendered, const std::vector<testing::RenderedMarker>& truth) {
+    // SMOOTH: as the detector's refinement on sharp frames (DetectorOptions::sharp_smoothing).
+    cv::Mat image = rendered;
+    if (Env("SMOOTH", 0) > 0) cv::GaussianBlur(rendered, image, cv::Size(0, 0), Env("SMOOTH", 0));
     for (const testing::RenderedMarker& t : truth) {
       ++total;
       std::array<cv::Point2d, 4> c;
@@ -193,6 +218,11 @@ int main(int argc, char** argv) {
         if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
         const double d0 = n.dot(c[k] - a), d1 = n.dot(c[(k + 1) % 4] - b);
         side_mid.push_back(std::abs(0.5 * (d0 + d1))), side_turn.push_back(std::abs(0.5 * (d1 - d0)));
+        const double extent =
+            0.5 * (std::abs(n.dot(t.corners[(k + 2) % 4] - a)) + std::abs(n.dot(t.corners[(k + 3) % 4] - a)));
+        for (int band = 0; band < kBands; ++band)
+          if (extent >= kExtentBands[band] && extent < kExtentBands[band + 1])
+            side_by_extent[band].push_back(0.5 * (d0 + d1));
       }
       testing::CornerErrors one;
       testing::AddCornerErrors(t, c, &one);
@@ -226,4 +256,11 @@ int main(int argc, char** argv) {
       std::sqrt(var), testing::MedianOf(errors.errors), sigma_sum / refined);
   std::printf("per side: median |middle offset| %.3f px, median |corner offset from the turn| %.3f px\n",
               testing::MedianOf(side_mid), testing::MedianOf(side_turn));
+  std::printf("side offset (mean of its ends, outward +) by the marker's extent across it:");
+  for (int band = 0; band < kBands; ++band)
+    if (!side_by_extent[band].empty())
+      std::printf(" %g-%g px %+.4f (%zu, se %.4f);", kExtentBands[band], kExtentBands[band + 1],
+                  testing::MeanOf(side_by_extent[band]), side_by_extent[band].size(),
+                  StandardError(side_by_extent[band]));
+  std::printf("\n");
 }
