@@ -45,12 +45,18 @@ struct Bounds {
 // px, recall <75 deg 0.897 -> 0.923. No margin (+0.009 / 0.076 / 1.000), wood (-0.015 / 0.062 / 0.974)
 // and webcam (-0.012 / 0.085 / 0.923) now meet the targets and are asserted at them; bounds tightened to
 // what is measured: black tool -0.043 / 0.060 / 0.846, hard -0.052 / 0.168 / 0.947.
+// A margin narrower than the blur shows only the product of its width and its contrast with the
+// surround: the free fit stopped on wide, dim margins with the edge inward. Sides whose free margin level
+// is near the code's other colour are refitted with it tied to that colour (the print's paper,
+// side_model.h): hard -0.046 / 0.160 -> -0.012 / 0.142 px (its offset now within the target), black tool
+// -0.042 / 0.064 / 0.846 -> -0.041 / 0.065 / 0.872 (the rest of its offset is not the margin's:
+// bench_accuracy 3 reads -0.005 px); bounds at what is measured.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
+      {"half-cell margin, black tool", {0.045, 0.10, 0.99, 0.87}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
       {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
-      {"hard", {0.06, 0.18, 0.99, 0.94}},
+      {"hard", {0.02, 0.15, 0.99, 0.94}},
   };
   return s;
 }
