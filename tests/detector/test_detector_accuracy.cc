@@ -183,6 +183,22 @@ TEST(DetectorAccuracy, OwnCandidateSearchOnReferenceRenders) {
   EXPECT_GE(all.Recall75(), 0.95);  // measured 0.959 (0.934 before unmixed reads)
 }
 
+// Image `image` (from 0) of bench_accuracy's cell (side band, angle band) of the catalogue's condition
+// named `condition`, and its markers' truth; an empty image if no condition has that name.
+cv::Mat BenchImage(const cv::aruco::Dictionary& dict, const std::string& condition, int side_band,
+                   int angle_band, int image, std::vector<testing::RenderedMarker>* truth) {
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  size_t c = 0;
+  while (c < catalogue.size() && catalogue[c].name != condition) ++c;
+  if (c == catalogue.size()) return cv::Mat();
+  std::mt19937_64 rng(testing::BenchSeed(static_cast<int>(c), side_band, angle_band));
+  cv::Mat out;
+  for (int i = 0; i <= image; ++i)
+    out =
+        testing::RenderReference(dict, testing::BenchScene(side_band, angle_band), catalogue[c], rng, truth);
+  return out;
+}
+
 // Markers the own candidate search lost and OpenCV's found (bench_accuracy's renders, build/bench/
 // diag_recall --own): a half-cell margin on a black tool at 57 deg, whose blurred margin is dark at the
 // range's levels 0.5 and 0.35 (found at 0.25); a 35 px marker at 70 deg under 1.2 px blur, whose border
@@ -206,17 +222,10 @@ TEST(DetectorAccuracy, OwnCandidateSearchFindsThinMarginsAndBlurredBorders) {
   mc.dictionary = "DICT_6X6_250";
   DetectorOptions own;
   own.candidate_search = "own";
-  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
   for (const Case& k : cases) {
-    size_t c = 0;
-    while (c < catalogue.size() && catalogue[c].name != k.condition) ++c;
-    ASSERT_LT(c, catalogue.size()) << k.condition;
-    std::mt19937_64 rng(testing::BenchSeed(static_cast<int>(c), k.side_band, k.angle_band));
-    cv::Mat image;
     std::vector<testing::RenderedMarker> truth;
-    for (int i = 0; i <= k.image; ++i)
-      image = testing::RenderReference(*dict, testing::BenchScene(k.side_band, k.angle_band), catalogue[c],
-                                       rng, &truth);
+    const cv::Mat image = BenchImage(*dict, k.condition, k.side_band, k.angle_band, k.image, &truth);
+    ASSERT_FALSE(image.empty()) << k.condition;
     MarkerDetector detector(mc, own);
     bool found = false;
     for (const marker_t& m : detector.Detect(image)) found = found || m.id == k.id;
@@ -239,17 +248,10 @@ TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
   mc.dictionary = "DICT_6X6_250";
-  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
-  size_t c = 0;
-  while (c < catalogue.size() && catalogue[c].name != "gaussian blur 1.2") ++c;
-  ASSERT_LT(c, catalogue.size());
   for (const Case& k : cases) {
-    std::mt19937_64 rng(testing::BenchSeed(static_cast<int>(c), k.side_band, k.angle_band));
-    cv::Mat image;
     std::vector<testing::RenderedMarker> truth;
-    for (int i = 0; i <= k.image; ++i)
-      image = testing::RenderReference(*dict, testing::BenchScene(k.side_band, k.angle_band), catalogue[c],
-                                       rng, &truth);
+    const cv::Mat image = BenchImage(*dict, "gaussian blur 1.2", k.side_band, k.angle_band, k.image, &truth);
+    ASSERT_FALSE(image.empty());
     MarkerDetector detector(mc, DetectorOptions());
     testing::CornerErrors e;
     for (const marker_t& m : detector.Detect(image))
