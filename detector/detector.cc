@@ -251,7 +251,9 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
     }
   double mean = 0;
   for (int row = 0; row < rows; ++row) {
-    a(row, n - 1) = 1.0 - a.row(row).head(n - 1).sum();
+    double covered = 0;  // summed in order: Eigen's sum depends on the row's alignment in memory
+    for (int j = 0; j < n - 1; ++j) covered += a(row, j);
+    a(row, n - 1) = 1.0 - covered;
     mean += observed[row] / rows;
   }
   // The normal equations' lower triangle from each row's few cells within the Gaussian's reach.
