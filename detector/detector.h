@@ -139,6 +139,8 @@ struct DetectorStats {
   long long region_retries = 0;   // fast mode: regions searched again with every window
   long long rereads = 0;          // rejected candidates read again (reread_rejected) ...
   long long rereads_found = 0;    // ... of which markers
+  // Codes read from unmixed cell levels (cells as narrow as the blur: MarkerDetector::ReadCode).
+  long long deconvolved_reads = 0;
 };
 
 // Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
@@ -184,6 +186,7 @@ class MarkerDetector {
   struct Raw {
     int id;
     std::array<cv::Point2d, 4> corners;
+    bool deconvolved = false;  // read from unmixed cell levels (DeconvolvedCells)
   };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max);
@@ -197,6 +200,9 @@ class MarkerDetector {
   // `polarity` as MarkerPolarity's; r->corners: `quad` in the order of the code's rotation.
   bool ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
                 const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors, Raw* r);
+  // The code of the cells' levels `values` (cells x cells, row-major) thresholded, as ReadCode's.
+  bool IdentifyCells(const std::vector<float>& values, const std::array<cv::Point2d, 4>& quad, int polarity,
+                     int max_border_errors, Raw* r);
   // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
   std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                              double max_perimeter);

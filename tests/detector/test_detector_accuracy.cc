@@ -51,12 +51,16 @@ struct Bounds {
 // side_model.h): hard -0.046 / 0.160 -> -0.012 / 0.142 px (its offset now within the target), black tool
 // -0.042 / 0.064 / 0.846 -> -0.041 / 0.065 / 0.872 (the rest of its offset is not the margin's:
 // bench_accuracy 3 reads -0.005 px); bounds at what is measured.
+// Codes whose cells are about as narrow as the blur are read from their cells' levels unmixed
+// (DetectorAccuracy.CellsAsNarrowAsTheBlurAreRead): recall <75 deg blur 0.74 -> 0.829, gamma 0.88 -> 0.971
+// (now meets the targets: -0.002 / 0.043 / 1.000), hard 0.947 -> 1.000. Blur's markers still lost at
+// 60-75 deg have no candidate quad (their thin blurred border breaks where white cells touch it); the
+// black tool's neither (the half-cell margin under blur joins the border to the dark surface).
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"half-cell margin, black tool", {0.045, 0.10, 0.99, 0.87}},
-      {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.74}},
-      {"gamma 2.2", {0.02, 0.10, 0.99, 0.88}},
-      {"hard", {0.02, 0.15, 0.99, 0.94}},
+      {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
+      {"hard", {0.02, 0.15, 0.99, 1.00}},
   };
   return s;
 }
@@ -164,7 +168,9 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
 // candidate_search "own" (detector/candidates.h): no wrong ids under any imaging condition of the
 // catalogue, and the recall it measured (4 images per condition: 1.000 / 0.934; bench_accuracy 3: <60
 // deg 0.999, <75 deg 0.971, against 0.999 / 0.970 with "opencv": it still loses a few webcam markers at
-// 70-75 deg, 0.942 against 0.967, hence not the default).
+// 70-75 deg, 0.942 against 0.967, hence not the default). With codes read from unmixed cell levels where
+// their centres do not read (ReadCode): 1.000 / 0.959 here; bench_accuracy 3 1.000 / 0.985 (opencv
+// 1.000 / 0.984), webcam still 0.950 against 0.967, no margin's offset +0.035 px against +0.019.
 TEST(DetectorAccuracy, OwnCandidateSearchOnReferenceRenders) {
   DetectorOptions o;
   o.candidate_search = "own";
@@ -180,7 +186,23 @@ TEST(DetectorAccuracy, OwnCandidateSearchOnReferenceRenders) {
   }
   std::printf("all: recall60 %.3f recall75 %.3f\n", all.Recall60(), all.Recall75());
   EXPECT_GE(all.Recall60(), 0.99);  // measured 1.000
-  EXPECT_GE(all.Recall75(), 0.93);  // measured 0.934 (0.897 with levels 0.5 and 0.35 only)
+  EXPECT_GE(all.Recall75(), 0.95);  // measured 0.959 (0.934 before unmixed reads)
+}
+
+// Image `image` (from 0) of bench_accuracy's cell (side band, angle band) of the catalogue's condition
+// named `condition`, and its markers' truth; an empty image if no condition has that name.
+cv::Mat BenchImage(const cv::aruco::Dictionary& dict, const std::string& condition, int side_band,
+                   int angle_band, int image, std::vector<testing::RenderedMarker>* truth) {
+  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  size_t c = 0;
+  while (c < catalogue.size() && catalogue[c].name != condition) ++c;
+  if (c == catalogue.size()) return cv::Mat();
+  std::mt19937_64 rng(testing::BenchSeed(static_cast<int>(c), side_band, angle_band));
+  cv::Mat out;
+  for (int i = 0; i <= image; ++i)
+    out =
+        testing::RenderReference(dict, testing::BenchScene(side_band, angle_band), catalogue[c], rng, truth);
+  return out;
 }
 
 // Markers the own candidate search lost and OpenCV's found (bench_accuracy's renders, build/bench/
@@ -206,21 +228,54 @@ TEST(DetectorAccuracy, OwnCandidateSearchFindsThinMarginsAndBlurredBorders) {
   mc.dictionary = "DICT_6X6_250";
   DetectorOptions own;
   own.candidate_search = "own";
-  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
   for (const Case& k : cases) {
-    size_t c = 0;
-    while (c < catalogue.size() && catalogue[c].name != k.condition) ++c;
-    ASSERT_LT(c, catalogue.size()) << k.condition;
-    std::mt19937_64 rng(testing::BenchSeed(static_cast<int>(c), k.side_band, k.angle_band));
-    cv::Mat image;
     std::vector<testing::RenderedMarker> truth;
-    for (int i = 0; i <= k.image; ++i)
-      image = testing::RenderReference(*dict, testing::BenchScene(k.side_band, k.angle_band), catalogue[c],
-                                       rng, &truth);
+    const cv::Mat image = BenchImage(*dict, k.condition, k.side_band, k.angle_band, k.image, &truth);
+    ASSERT_FALSE(image.empty()) << k.condition;
     MarkerDetector detector(mc, own);
     bool found = false;
     for (const marker_t& m : detector.Detect(image)) found = found || m.id == k.id;
     EXPECT_TRUE(found) << k.condition << " id " << k.id;
+  }
+}
+
+// Markers whose code cells are about as narrow as the blur (bench_accuracy's renders, build/bench/
+// diag_recall): under 1.2 px Gaussian blur at 59-71 deg (21-24 px, cells of 1.5-2.5 px across) OpenCV's
+// candidate, refined by mid-level crossings, read 3-8 inner bits and up to 13 border cells wrong at the
+// cells' centres (so did the true corners). Their levels unmixed under a model of the blur (ReadCode,
+// DeconvolvedCells) read 0-3 wrong. Before, none of these was found (recall <60 deg 0.988). Their corners:
+// offsets within 0.2 px except id 84's (a thin rhombus at 71 deg: -0.57 to +0.51 px, corners up to 1.76 px
+// along its long diagonal; the refinement's, not the read's; with the paper-margin refit (side_model.h)
+// its largest offset is 0.608 px, hence the bound 0.65).
+TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
+  struct Case {
+    int side_band, angle_band, image, id;
+  };
+  const std::vector<Case> cases = {{1, 1, 1, 66}, {1, 2, 0, 189}, {1, 2, 1, 84}, {1, 2, 1, 149}};
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  for (const Case& k : cases) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = BenchImage(*dict, "gaussian blur 1.2", k.side_band, k.angle_band, k.image, &truth);
+    ASSERT_FALSE(image.empty());
+    MarkerDetector detector(mc, DetectorOptions());
+    testing::CornerErrors e;
+    for (const marker_t& m : detector.Detect(image))
+      for (const auto& t : truth) {
+        if (m.id != k.id || t.id != k.id) continue;
+        std::array<cv::Point2d, 4> got;
+        for (int j = 0; j < 4; ++j) got[j] = {m.corners[j][0], m.corners[j][1]};
+        testing::AddCornerErrors(t, got, &e);
+      }
+    ASSERT_EQ(e.errors.size(), 4u) << "id " << k.id << " not found";
+    double worst = 0, worst_offset = 0;
+    for (int j = 0; j < 4; ++j)
+      worst = std::max(worst, e.errors[j]), worst_offset = std::max(worst_offset, std::abs(e.offsets[j]));
+    std::printf("id %d: largest corner error %.2f px, largest offset %.3f px\n", k.id, worst, worst_offset);
+    EXPECT_LE(worst, 2.0) << "id " << k.id;
+    EXPECT_LE(worst_offset, 0.65) << "id " << k.id;
+    EXPECT_GE(detector.stats().deconvolved_reads, 1) << "id " << k.id;
   }
 }
 
