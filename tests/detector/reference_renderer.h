@@ -252,6 +252,18 @@ struct ReferenceScene {
   bool inverted = false;
 };
 
+namespace reference {
+// The linear background: smooth clutter (an 8 x 6 grid of random levels, bicubic).
+inline cv::Mat Clutter(int width, int height, const Imaging& im, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  cv::Mat small(6, 8, CV_64F), linear;
+  for (int i = 0; i < small.rows * small.cols; ++i)
+    small.at<double>(i) = im.exposure * (0.15 + 0.6 * uni(rng));
+  cv::resize(small, linear, cv::Size(width, height), 0, 0, cv::INTER_CUBIC);
+  return linear;
+}
+}  // namespace reference
+
 // A random image of markers (random ids, sizes, view angles, in-plane rotations) under one imaging
 // condition, with the exact corners (ArUco order) of every marker drawn.
 inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const ReferenceScene& scene,
@@ -259,13 +271,7 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
   using reference::Apply;
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const int cells = dict.markerSize + 2;
-  cv::Mat linear(scene.height, scene.width, CV_64F);
-  {  // background: smooth clutter
-    cv::Mat small(6, 8, CV_64F);
-    for (int i = 0; i < small.rows * small.cols; ++i)
-      small.at<double>(i) = im.exposure * (0.15 + 0.6 * uni(rng));
-    cv::resize(small, linear, linear.size(), 0, 0, cv::INTER_CUBIC);
-  }
+  cv::Mat linear = reference::Clutter(scene.width, scene.height, im, rng);
   truth->clear();
   std::vector<cv::Rect> used;
   const cv::Matx33d K(scene.focal, 0, scene.width / 2.0, 0, scene.focal, scene.height / 2.0, 0, 0, 1);

@@ -65,14 +65,23 @@ void DetectFrames(MarkerDetector* detector, const testing::ReferenceScene& scene
   }
 }
 
-TEST(DetectorTone, EstimatesAfterToneFramesFromTheMarkersTheyGave) {
+// A tone-auto detector of DICT_6X6_250 with these tone_markers and tone_frames, and its scene.
+MarkerDetector ToneAutoDetector(int tone_markers, int tone_frames) {
   MarkerConfig mc;
   mc.dictionary = "DICT_6X6_250";
   DetectorOptions options;
-  options.tone = "auto", options.tone_markers = 1000, options.tone_frames = 4;
-  MarkerDetector detector(mc, options);
+  options.tone = "auto", options.tone_markers = tone_markers, options.tone_frames = tone_frames;
+  return MarkerDetector(mc, options);
+}
+testing::ReferenceScene ToneScene() {
   testing::ReferenceScene scene;
   scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60;
+  return scene;
+}
+
+TEST(DetectorTone, EstimatesAfterToneFramesFromTheMarkersTheyGave) {
+  MarkerDetector detector = ToneAutoDetector(1000, 4);
+  const testing::ReferenceScene scene = ToneScene();
   DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 3, 25);
   EXPECT_TRUE(detector.ToneEstimating());
   DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 1, 26);
@@ -81,13 +90,9 @@ TEST(DetectorTone, EstimatesAfterToneFramesFromTheMarkersTheyGave) {
 }
 
 TEST(DetectorTone, KeepsTheGivenToneWhenToneFramesGiveTooFewMarkers) {
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  DetectorOptions options;
-  options.tone = "auto", options.tone_markers = 60, options.tone_frames = 5;
-  MarkerDetector detector(mc, options);
-  testing::ReferenceScene scene;
-  scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60, scene.markers = 1;
+  MarkerDetector detector = ToneAutoDetector(60, 5);
+  testing::ReferenceScene scene = ToneScene();
+  scene.markers = 1;
   DetectFrames(&detector, scene, Camera(2.2, 0.6, false), 5, 27);
   EXPECT_FALSE(detector.ToneEstimating());
   EXPECT_FALSE(detector.tone().ok);

@@ -54,14 +54,7 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
   if (model.model != DistortionModel::kNone)
     throw std::invalid_argument("RenderReferenceRigView: camera " + camera.name + " has distortion");
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
-  cv::Mat linear(model.height, model.width, CV_64F);
-  {  // background: smooth clutter
-    cv::Mat small(6, 8, CV_64F);
-    for (int i = 0; i < small.rows * small.cols; ++i)
-      small.at<double>(i) = im.exposure * (0.15 + 0.6 * uni(rng));
-    cv::resize(small, linear, linear.size(), 0, 0, cv::INTER_CUBIC);
-  }
+  cv::Mat linear = reference::Clutter(model.width, model.height, im, rng);
   const Rigid3 cam_from_object = camera.rig_from_cam.inverse() * rig_from_object;
   const Eigen::Vector3d light_in_rig = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
   const int cells = dict.markerSize + 2;
