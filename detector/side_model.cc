@@ -52,13 +52,6 @@ enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
 // A margin differs from the border's level by at least this fraction of the border-to-code contrast
 // (a print's margin is paper or ink of the other colour; FitSideProfiles).
 constexpr double kMinMarginContrast = 0.4;
-// The margin's level is tied to the code's other colour (SideFit::paper_margin) where the free fit put it
-// within kPaperMarginLevel of the border-to-code contrast from that colour, and the tied fit is kept
-// unless its residual sum exceeds the free fit's by kPaperMarginCost times or its margin is narrower than
-// kPaperMarginCells (no margin, or a surround whose further steps the free margin stood for: a paper
-// margin forced where the profiles show none; without the width guard mcmt-sim's random imaging seed 13
-// moved +0.008 -> +0.044 px). The guard also rejects most true 0.3-cell margins seen face on.
-constexpr double kPaperMarginLevel = 0.25, kPaperMarginCost = 1.5, kPaperMarginCells = 0.5;
 
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
@@ -120,14 +113,13 @@ void NormalRow(const double* const* columns, const double* weights, const double
 // The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
 // jacobian + k * stride, `used` rows, zero from there to an even count), the weights and the
 // residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
-// profiles, S1 with the margin's level tied to L1: `paper`) are left out: their rows and columns are
-// zero. Each symmetric pair is formed once.
+// profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
 void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
-                     size_t used, bool single, bool fit_gamma, Normal* jtj, Vector* jtr, bool paper) {
+                     size_t used, bool single, bool fit_gamma, Normal* jtj, Vector* jtr) {
   int active[kParams], count = 0;
   const double* columns[kParams];
   for (int k = 0; k < kParams; ++k)
-    if (!((single && (k == kS2 || k == kQ)) || (!fit_gamma && k == kGamma) || (paper && k == kS1)))
+    if (!((single && (k == kS2 || k == kQ)) || (!fit_gamma && k == kGamma)))
       columns[count] = jacobian + k * stride, active[count++] = k;
   jtj->setZero(), jtr->setZero();
   const size_t rows = (used + 1) / 2 * 2;
@@ -193,9 +185,8 @@ inline double LogInline(double x) {
 }
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
-// squared residual sum. `paper`: the margin's level is L1's (SideFit::paper_margin; S1 unused).
-double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj, Vector* jtr,
-                bool paper = false) {
+// squared residual sum.
+double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj, Vector* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
@@ -238,8 +229,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     double other[kRegions] = {0, 0, 0};
     for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
     double level[kRegions];
-    const int margin = paper ? kL1 : kS1;  // the margin's level's parameter
-    level[0] = single ? p[margin] : p[kS2], level[1] = p[margin];
+    level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
     for (int j = 0; j < n; ++j) {
       const double w = count[j];
@@ -277,7 +267,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
         grad[kSigma] -= d * z_of[b][j];
         if (b == 0) grad[kQ] += d;
       }
-      grad[single ? margin : kS2] += indicator[0], grad[margin] += indicator[1];
+      grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
       for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
@@ -292,7 +282,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     weights[used] = 0.0, residuals[used] = 0.0;
   }
   NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
-                  jtr, paper);
+                  jtr);
   return cost;
 }
 
@@ -339,10 +329,8 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
   return step;
 }
 
-// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast;
-// `paper`: the margin's level tied to L1 (SideFit::paper_margin).
-bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out,
-             bool paper = false) {
+// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
+bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -389,10 +377,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
       if (k != kE) lo[k] = hi[k] = p[k];
   for (int k = 0; k < kParams; ++k) p[k] = std::clamp(p[k], lo[k], hi[k]);
   if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
-  if (paper) lo[kS1] = hi[kS1] = p[kS1];
   Normal jtj;
   Vector jtr;
-  double cost = Evaluate(s, p, single, &jtj, &jtr, paper);
+  double cost = Evaluate(s, p, single, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -414,7 +401,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr, paper);
+      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
@@ -438,34 +425,19 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   fit->contrast = contrast;
   fit->gamma = p[kGamma];
   fit->gamma_fitted = free_gamma;
-  fit->cost = cost;
   std::copy(p, p + kParams, fit->params.begin());
-  if (paper) fit->params[kS1] = p[kL1];  // the tied model in the free one's parameters (edge_only fits)
   return true;
 }
 
 // One surround model (`single`: one level beyond the edge) with gamma fitted freely; on a side without
 // code contrast a gamma at its bound is the valley of a single step (SideProfiles::gamma_hint), and the
 // side is fitted again with the hint.
-bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast, bool paper = false) {
+bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast) {
   const SideFit start = *fit;
-  const bool ok = FitOnce(s, false, single, fit, code_contrast, paper);
+  const bool ok = FitOnce(s, false, single, fit, code_contrast);
   if (*code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, single, fit, code_contrast, paper);
-}
-
-// The two-level surround's fit `fit` (the margin's level S1 free) fitted again from where it ended with
-// the margin's level tied to the code's other colour (SideFit::paper_margin); started from the pass's warm
-// start instead, fast mode's corners left the accurate mode's by up to 0.25 px. The free fit is kept
-// where the tie fails, raises the residual sum or leaves a margin narrower than kPaperMarginCells.
-void TieMarginToPaper(const SideProfiles& s, SideFit* fit, bool* code_contrast) {
-  const SideFit free_fit = *fit;
-  fit->warm = true;
-  const bool ok = FitSurround(s, false, fit, code_contrast, true);
-  fit->paper_margin =
-      ok && fit->cost <= kPaperMarginCost * free_fit.cost && fit->params[kQ] >= kPaperMarginCells * s.cell;
-  if (!fit->paper_margin) *fit = free_fit;
+  return FitOnce(s, true, single, fit, code_contrast);
 }
 
 // The two-step surround model, refitted with one surround level where its margin has the border's level.
@@ -476,25 +448,16 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   bool& code_contrast = *code_contrast_out;
   code_contrast = true;
   if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
-  // So does a side fitted with the margin's level tied to the code's other colour.
-  if (start.warm && start.paper_margin) return FitSurround(s, false, fit, &code_contrast, true);
   bool ok = FitSurround(s, false, fit, &code_contrast);
-  fit->single_surround = fit->paper_margin = false;
+  fit->single_surround = false;
   if (!ok) return false;
   // A margin of nearly the border's level is no margin that could be printed (it would be border):
   // the fit has moved the edge inward into the border and let the "margin" make up the step, a valley
   // where the marker has no margin. The side is fitted again with one surround level.
   // Only where the side shows the code's level next to the border's (without, L1 is free).
   const double* p = fit->params.data();
-  if (!code_contrast) return true;
-  // A margin is the print's paper, of the code's other colour: narrower than the blur, its level and
-  // width trade for each other and the edge follows them (SideFit::paper_margin).
-  const double contrast = std::abs(p[kL1] - p[kL0]);
-  if (std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * contrast) {
-    if (s.polarity > 0 && std::abs(p[kS1] - p[kL1]) <= kPaperMarginLevel * contrast)
-      TieMarginToPaper(s, fit, &code_contrast);
+  if (!code_contrast || std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0]))
     return true;
-  }
   *fit = start;
   fit->warm = false;
   ok = FitSurround(s, true, fit, &code_contrast);
@@ -507,8 +470,7 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;
-  if (s.edge_only)
-    return fit->warm && FitOnce(s, true, fit->single_surround, fit, &code_contrast, fit->paper_margin);
+  if (s.edge_only) return fit->warm && FitOnce(s, true, fit->single_surround, fit, &code_contrast);
   const bool ok = FitSideModels(s, fit, &code_contrast);
   // Without code contrast in the modelled rows the code's level L1 is free: no polarity to check.
   if (!ok || s.polarity == 0 || !code_contrast) return ok;

@@ -16,14 +16,6 @@
 // A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
 // that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
 // the side is fitted again with one surround level (S2 = S1, no q).
-// A margin is the print's paper, the code's other colour. Narrower than the blur, it shows only the
-// product of its width and its contrast with the surround: S1, q and e trade along a flat valley, and the
-// fit stopped on wide, dim margins (0.3-cell margin: q 0.7 cell, S1 at 0.93 of L0 -> L1) with the edge
-// inward. On a normal print (polarity +1), where the free fit put S1 within a quarter of the contrast from
-// L1, the side is fitted again with S1 = L1 from where the free fit ended, and that fit kept unless its
-// residual sum is 1.5 times the free fit's or its margin narrower than 0.5 cell (no margin: the surround
-// next to the border is not paper); a side so fitted stays so in the next passes (warm-started), like one
-// with one surround level.
 #pragma once
 
 #include <array>
@@ -85,11 +77,7 @@ struct SideFit {
   double gamma = 1;              // fitted encoding gamma (1 unless fit_gamma)
   bool gamma_fitted = false;     // gamma was free (fit_gamma and the side shows code contrast)
   bool single_surround = false;  // fitted with one surround level (S1 = S2: no margin)
-  // Fitted with the margin's level tied to the code's other colour (S1 = L1: the print's paper), which
-  // a margin narrower than the blur cannot show (FitSideProfiles).
-  bool paper_margin = false;
-  double cost = 0;              // the fit's weighted squared residual sum
-  bool wrong_polarity = false;  // the last fit failed only on SideProfiles::polarity
+  bool wrong_polarity = false;   // the last fit failed only on SideProfiles::polarity
   // The last fit failed only because its edge lay beyond 0.75 cell from the profiles' line (at
   // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
   bool beyond = false;

@@ -45,12 +45,8 @@ struct Bounds {
 // px, recall <75 deg 0.897 -> 0.923. No margin (+0.009 / 0.076 / 1.000), wood (-0.015 / 0.062 / 0.974)
 // and webcam (-0.012 / 0.085 / 0.923) now meet the targets and are asserted at them; bounds tightened to
 // what is measured: black tool -0.043 / 0.060 / 0.846, hard -0.052 / 0.168 / 0.947.
-// A margin narrower than the blur shows only the product of its width and its contrast with the
-// surround: the free fit stopped on wide, dim margins with the edge inward. Sides whose free margin level
-// is near the code's other colour are refitted with it tied to that colour (the print's paper,
-// side_model.h): hard -0.046 / 0.160 -> -0.012 / 0.142 px (its offset now within the target), black tool
-// -0.042 / 0.064 / 0.846 -> -0.041 / 0.065 / 0.872 (the rest of its offset is not the margin's:
-// bench_accuracy 3 reads -0.005 px); bounds at what is measured.
+// (A paper-margin refit, bench/results/2026-12-05-margin.md, reached hard -0.012 / 0.142 px but made the
+// maps of an independent renderer of the paper's rig worse: MapperReferenceRenders. Not applied.)
 // Codes whose cells are about as narrow as the blur are read from their cells' levels unmixed
 // (DetectorAccuracy.CellsAsNarrowAsTheBlurAreRead): recall <75 deg blur 0.74 -> 0.829, gamma 0.88 -> 0.971
 // (now meets the targets: -0.002 / 0.043 / 1.000), hard 0.947 -> 1.000. Blur's markers still lost at
@@ -58,9 +54,9 @@ struct Bounds {
 // black tool's neither (the half-cell margin under blur joins the border to the dark surface).
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"half-cell margin, black tool", {0.045, 0.10, 0.99, 0.87}},
+      {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
-      {"hard", {0.02, 0.15, 0.99, 1.00}},
+      {"hard", {0.06, 0.18, 0.99, 1.00}},
   };
   return s;
 }
@@ -245,8 +241,7 @@ TEST(DetectorAccuracy, OwnCandidateSearchFindsThinMarginsAndBlurredBorders) {
 // cells' centres (so did the true corners). Their levels unmixed under a model of the blur (ReadCode,
 // DeconvolvedCells) read 0-3 wrong. Before, none of these was found (recall <60 deg 0.988). Their corners:
 // offsets within 0.2 px except id 84's (a thin rhombus at 71 deg: -0.57 to +0.51 px, corners up to 1.76 px
-// along its long diagonal; the refinement's, not the read's; with the paper-margin refit (side_model.h)
-// its largest offset is 0.608 px, hence the bound 0.65).
+// along its long diagonal; the refinement's, not the read's).
 TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
   struct Case {
     int side_band, angle_band, image, id;
@@ -274,7 +269,7 @@ TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
       worst = std::max(worst, e.errors[j]), worst_offset = std::max(worst_offset, std::abs(e.offsets[j]));
     std::printf("id %d: largest corner error %.2f px, largest offset %.3f px\n", k.id, worst, worst_offset);
     EXPECT_LE(worst, 2.0) << "id " << k.id;
-    EXPECT_LE(worst_offset, 0.65) << "id " << k.id;
+    EXPECT_LE(worst_offset, 0.6) << "id " << k.id;
     EXPECT_GE(detector.stats().deconvolved_reads, 1) << "id " << k.id;
   }
 }
