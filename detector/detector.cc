@@ -133,6 +133,20 @@ cv::Matx33d QuadFromUnitSquare(const std::array<cv::Point2d, 4>& corners) {
   return cv::getPerspectiveTransform(square, quad);
 }
 
+// The grey level at every cell centre of the quad `corners` (cells x cells, row-major, border included),
+// bilinear through the quad's homography; false where one leaves the image.
+bool SampleCellCentres(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells,
+                       std::vector<float>* values) {
+  const cv::Matx33d h = QuadFromUnitSquare(corners);
+  values->resize(static_cast<size_t>(cells) * cells);
+  for (int row = 0; row < cells; ++row)
+    for (int col = 0; col < cells; ++col) {
+      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
+      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &(*values)[row * cells + col])) return false;
+    }
+  return true;
+}
+
 // How many of the cells' levels `values` (cells x cells, row-major) read wrong, as CodeMismatches counts.
 int LevelMismatches(const std::vector<float>& values, const cv::Mat& bits, int cells) {
   double sum[2] = {0, 0};
@@ -164,13 +178,8 @@ int LevelMismatches(const std::vector<float>& values, const cv::Mat& bits, int c
 int CodeMismatches(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, const cv::Mat& bits,
                    int cells) {
   if (bits.empty()) return 0;
-  const cv::Matx33d h = QuadFromUnitSquare(corners);
-  std::vector<float> values(static_cast<size_t>(cells) * cells);
-  for (int row = 0; row < cells; ++row)
-    for (int col = 0; col < cells; ++col) {
-      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
-      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &values[row * cells + col])) return cells * cells;
-    }
+  std::vector<float> values;
+  if (!SampleCellCentres(gray, corners, cells, &values)) return cells * cells;
   return LevelMismatches(values, bits, cells);
 }
 
@@ -1221,14 +1230,8 @@ bool MarkerDetector::ReadCode(const cv::Mat& gray, const std::array<cv::Point2d,
                               const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors,
                               Raw* r) {
   const int cells = dictionary_->markerSize + 2;
-  // Cell centres, bilinear.
-  const cv::Matx33d h = QuadFromUnitSquare(corners);
-  std::vector<float> values(static_cast<size_t>(cells) * cells);
-  for (int row = 0; row < cells; ++row)
-    for (int col = 0; col < cells; ++col) {
-      const cv::Vec3d p = h * cv::Vec3d((col + 0.5) / cells, (row + 0.5) / cells, 1.0);
-      if (!Sample(gray, p[0] / p[2], p[1] / p[2], &values[row * cells + col])) return false;
-    }
+  std::vector<float> values;
+  if (!SampleCellCentres(gray, corners, cells, &values)) return false;
   if (IdentifyCells(values, quad, polarity, max_border_errors, r)) return true;
   // Cells about as narrow as the optics' blur (a blurred marker at 60-75 deg: 1.4-3 px across under
   // 1.2 px blur) read 3-8 bits wrong at their centres even at the true corners; their levels unmixed
