@@ -189,16 +189,15 @@ constexpr double kDeconvolvedCellPx2 = 9.0;
 // 1.2 px blur read 0-1 inner bits wrong on 10 with 1.0 (0.6: 5, 0.8: 7, 1.2 with ridge 0.3: 4 of 11).
 constexpr double kDeconvolutionSigmaPx = 1.0;
 
-// The levels of a marker's cells (cells x cells, row-major, border included) unmixed from the pixels
-// about the quad `corners` (those within half a cell of it): each pixel modelled as the sum of every
-// cell's level and one level for all outside, each weighted by the cell's area under a Gaussian of
+// DeconvolvedCells' linear model of the pixels about the quad `corners` (those within half a cell of it):
+// their grey levels `observed`, and per pixel (row of `a`) the weight of every cell's level (cells x cells,
+// row-major, border included) and last of one level for all outside, each cell's area under a Gaussian of
 // `sigma_px` (with the pixel's box) about the pixel (each cell as 3 x 3 points through the quad's
-// homography), solved by least squares with a small ridge toward the pixels' mean. False where the
-// region leaves the image.
-bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells,
-                      double sigma_px, std::vector<float>* values) {
-  constexpr int kSub = 3;         // points per cell and axis
-  constexpr double kRidge = 0.1;  // toward the mean, in the normal equations' units (weights <= 1)
+// homography). False where the region leaves the image or has fewer pixels than levels.
+using CellMixingRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+bool CellMixing(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells, double sigma_px,
+                CellMixingRows* a, std::vector<double>* observed) {
+  constexpr int kSub = 3;  // points per cell and axis
   const double s2 = sigma_px * sigma_px + 1.0 / 12.0, reach = 3.0 * std::sqrt(s2);
   const cv::Matx33d h = QuadFromUnitSquare(corners), unit_from_image = h.inv();
   auto at = [&](double u, double v) {
@@ -217,19 +216,17 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
   if (bx < 0 || by < 0 || bx + bw > gray.cols || by + bh > gray.rows) return false;
   // The pixels modelled (rows of the system), by their place in the box.
   std::vector<int> row_of(static_cast<size_t>(bw) * bh, -1);
-  std::vector<double> observed;
   for (int y = 0; y < bh; ++y)
     for (int x = 0; x < bw; ++x) {
       const cv::Vec3d m = unit_from_image * cv::Vec3d(bx + x, by + y, 1.0);
       const double u = m[0] / m[2], v = m[1] / m[2];
       if (u < -grow || v < -grow || u > 1 + grow || v > 1 + grow) continue;
-      row_of[y * bw + x] = static_cast<int>(observed.size());
-      observed.push_back(gray.at<uint8_t>(by + y, bx + x));
+      row_of[y * bw + x] = static_cast<int>(observed->size());
+      observed->push_back(gray.at<uint8_t>(by + y, bx + x));
     }
-  const int n = cells * cells + 1, rows = static_cast<int>(observed.size());
+  const int n = cells * cells + 1, rows = static_cast<int>(observed->size());
   if (rows < n) return false;
-  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  Rows a = Rows::Zero(rows, n);  // each pixel's weights of the cells (and last, of all outside)
+  *a = CellMixingRows::Zero(rows, n);
   // scale * exp(-d^2 / (2 s2)) at d = d0, d0 + 1, ...: a product recurrence (the ratio of neighbours
   // falls by exp(-1 / s2) a step).
   const double fall = std::exp(-1.0 / s2);
@@ -255,17 +252,23 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
       for (int y = ya; y <= yb; ++y)
         for (int x = xa; x <= xb; ++x) {
           const int row = row_of[y * bw + x];
-          if (row >= 0) a(row, cell) += wy[y - ya] * wx[x - xa];
+          if (row >= 0) (*a)(row, cell) += wy[y - ya] * wx[x - xa];
         }
     }
-  double mean = 0;
   for (int row = 0; row < rows; ++row) {
     double covered = 0;  // summed in order: Eigen's sum depends on the row's alignment in memory
-    for (int j = 0; j < n - 1; ++j) covered += a(row, j);
-    a(row, n - 1) = 1.0 - covered;
-    mean += observed[row] / rows;
+    for (int j = 0; j < n - 1; ++j) covered += (*a)(row, j);
+    (*a)(row, n - 1) = 1.0 - covered;
   }
-  // The normal equations' lower triangle from each row's few cells within the Gaussian's reach.
+  return true;
+}
+
+// The least-squares levels x of a x = observed, with a ridge `ridge` toward the observed levels' mean;
+// the normal equations' lower triangle from each row's few nonzero weights.
+Eigen::VectorXd RidgeLevels(const CellMixingRows& a, const std::vector<double>& observed, double ridge) {
+  const int rows = static_cast<int>(a.rows()), n = static_cast<int>(a.cols());
+  double mean = 0;
+  for (int row = 0; row < rows; ++row) mean += observed[row] / rows;
   Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   std::vector<int> near;
@@ -279,8 +282,20 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
       for (size_t k = 0; k <= i; ++k) normal(near[i], near[k]) += w * a(row, near[k]);
     }
   }
-  for (int j = 0; j < n; ++j) normal(j, j) += kRidge, rhs(j) += kRidge * mean;
-  const Eigen::VectorXd levels = normal.selfadjointView<Eigen::Lower>().ldlt().solve(rhs);
+  for (int j = 0; j < n; ++j) normal(j, j) += ridge, rhs(j) += ridge * mean;
+  return normal.selfadjointView<Eigen::Lower>().ldlt().solve(rhs);
+}
+
+// The levels of a marker's cells (cells x cells, row-major, border included) unmixed from the pixels
+// about the quad `corners` (CellMixing's model), solved by least squares with a small ridge toward the
+// pixels' mean. False where the region leaves the image.
+bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells,
+                      double sigma_px, std::vector<float>* values) {
+  constexpr double kRidge = 0.1;  // toward the mean, in the normal equations' units (weights <= 1)
+  CellMixingRows a;
+  std::vector<double> observed;
+  if (!CellMixing(gray, corners, cells, sigma_px, &a, &observed)) return false;
+  const Eigen::VectorXd levels = RidgeLevels(a, observed, kRidge);
   values->resize(static_cast<size_t>(cells) * cells);
   for (int j = 0; j < cells * cells; ++j) (*values)[j] = static_cast<float>(levels(j));
   return true;
