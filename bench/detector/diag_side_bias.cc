@@ -49,6 +49,7 @@ cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, d
   }
   testing::ReferenceScene scene;
   scene.min_side_px = side0, scene.max_side_px = side1, scene.max_angle_deg = Env("ANGLE", 60);
+  scene.min_angle_deg = Env("ANGLE0", 0);
   scene.markers = static_cast<int>(Env("MARKERS", 10));
   testing::Imaging im;
   im.blur_sigma = blur, im.read_noise = Env("NOISE", 2);
@@ -150,6 +151,48 @@ void ForEachSimImage(
       use(renderer.Render(cameras[c], static_cast<int>(c), f.seq, f.rig_from_object), truth);
     }
 }
+// The shape errors of refined markers per view angle band (the header's last table).
+struct ShapeByAngle {
+  static constexpr double kBands[] = {0, 20, 40, 60, 65, 70, 75};
+  static constexpr int kCount = sizeof(kBands) / sizeof(kBands[0]) - 1;
+  std::vector<double> long_diag[kCount], short_diag[kCount], acute[kCount], obtuse[kCount], turn[kCount];
+
+  void Add(const testing::RenderedMarker& t, const std::array<cv::Point2d, 4>& c) {
+    int band = 0;
+    while (band + 1 < kCount && t.view_angle_deg >= kBands[band + 1]) ++band;
+    const double d02 = cv::norm(t.corners[2] - t.corners[0]), d13 = cv::norm(t.corners[3] - t.corners[1]);
+    const double e02 = cv::norm(c[2] - c[0]) / d02 - 1, e13 = cv::norm(c[3] - c[1]) / d13 - 1;
+    long_diag[band].push_back(100 * (d02 >= d13 ? e02 : e13));
+    short_diag[band].push_back(100 * (d02 >= d13 ? e13 : e02));
+    cv::Point2d centre(0, 0);
+    for (const auto& p : t.corners) centre += p * 0.25;
+    auto cosine = [&](int k) {  // of the interior angle at corner k
+      const cv::Point2d a = t.corners[(k + 3) % 4] - t.corners[k], b = t.corners[(k + 1) % 4] - t.corners[k];
+      return a.dot(b) / (cv::norm(a) * cv::norm(b));
+    };
+    for (int k = 0; k < 4; ++k) {
+      const cv::Point2d a = t.corners[k], b = t.corners[(k + 1) % 4];
+      cv::Point2d n(b.y - a.y, a.x - b.x);
+      n *= 1.0 / cv::norm(n);
+      if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
+      const double d0 = n.dot(c[k] - a), d1 = n.dot(c[(k + 1) % 4] - b);
+      const bool first_acute = cosine(k) > cosine((k + 1) % 4);
+      acute[band].push_back(first_acute ? d0 : d1), obtuse[band].push_back(first_acute ? d1 : d0);
+      turn[band].push_back(1000 * (first_acute ? d0 - d1 : d1 - d0) / cv::norm(b - a));
+    }
+  }
+  void Print() const {
+    std::printf(
+        "view deg: markers, diagonal long / short %%, side end offset acute / obtuse px, turn mrad\n");
+    for (int band = 0; band < kCount; ++band)
+      if (!long_diag[band].empty())
+        std::printf("%g-%g: %zu, %+.3f / %+.3f %%, %+.4f / %+.4f px, %+.2f mrad\n", kBands[band],
+                    kBands[band + 1], long_diag[band].size(), testing::MeanOf(long_diag[band]),
+                    testing::MeanOf(short_diag[band]), testing::MeanOf(acute[band]),
+                    testing::MeanOf(obtuse[band]), testing::MeanOf(turn[band]));
+  }
+};
+
 // The standard error of the values' mean.
 double StandardError(const std::vector<double>& values) {
   const double mean = testing::MeanOf(values);
@@ -194,10 +237,16 @@ int main(int argc, char** argv) {
   constexpr int kBands = sizeof(kExtentBands) / sizeof(kExtentBands[0]) - 1;
   std::vector<double> side_by_extent[kBands];
   std::map<int, std::vector<double>> per_id;
+  ShapeByAngle shape;
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  MarkerDetector detector(mc, DetectorOptions());
+  const bool detect = Env("DETECT", 0) > 0;
   auto refine = [&](const cv::Mat& rendered, const std::vector<testing::RenderedMarker>& truth) {
     // SMOOTH: as the detector's refinement on sharp frames (DetectorOptions::sharp_smoothing).
     cv::Mat image = rendered;
     if (Env("SMOOTH", 0) > 0) cv::GaussianBlur(rendered, image, cv::Size(0, 0), Env("SMOOTH", 0));
+    const std::vector<marker_t> found = detect ? detector.Detect(rendered) : std::vector<marker_t>();
     for (const testing::RenderedMarker& t : truth) {
       ++total;
       std::array<cv::Point2d, 4> c;
@@ -205,10 +254,18 @@ int main(int argc, char** argv) {
       const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
           dict->bytesList.rowRange(t.id, t.id + 1), dict->markerSize);
       double sigma = NAN;
-      if (!RefineMarkerCorners(image, cells, bits, nullptr, 1, &c, true, &sigma, Env("FITGAMMA", 1) > 0,
-                               nullptr, 1))
+      if (detect) {
+        const marker_t* m = nullptr;
+        for (const marker_t& f : found) m = f.id == t.id ? &f : m;
+        if (!m) continue;
+        for (int k = 0; k < 4; ++k) c[k] = cv::Point2d(m->corners[k][0], m->corners[k][1]);
+        sigma = 0;
+      } else if (!RefineMarkerCorners(image, cells, bits, nullptr, 1, &c, true, &sigma,
+                                      Env("FITGAMMA", 1) > 0, nullptr, 1)) {
         continue;
+      }
       ++refined, sigma_sum += sigma;
+      shape.Add(t, c);
       cv::Point2d centre(0, 0);
       for (const auto& p : t.corners) centre += p * 0.25;
       for (int k = 0; k < 4; ++k) {  // per side: the error of its middle and of its direction (corners)
@@ -263,4 +320,5 @@ int main(int argc, char** argv) {
                   testing::MeanOf(side_by_extent[band]), side_by_extent[band].size(),
                   StandardError(side_by_extent[band]));
   std::printf("\n");
+  shape.Print();
 }
