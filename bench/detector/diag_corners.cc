@@ -10,10 +10,20 @@
 // candidates); per marker of the second frame whose corners differ by the given px or more: the
 // difference and each mode's mean signed offset and largest corner error.
 //   diag_corners --modes CONDITION_SUBSTRING [images (3)] [seed (31)] [min difference px (0.02)]
+// With --dump: the per-corner errors bench_imaging_maps writes (MCMT_IMAGING_DUMP=FILE), per band of view
+// angle and condition (all when none given): each marker's sides' signed offset along their normals
+// (+: outward; the mean of a side's two ends), the thin pair (the smaller extent across: the sides the
+// view foreshortens) and the wide pair apart, and its long and short diagonals' length errors (%, the
+// long diagonal sets the view's distance in a map).
+//   diag_corners --dump FILE [condition index]
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <vector>
 
 #include "tests/detector/accuracy.h"
 
@@ -32,6 +42,95 @@ void MarkerErrors(const testing::RenderedMarker& t, const marker_t& m, double* o
   for (double x : e.errors) *worst = std::max(*worst, x);
 }
 
+// One marker's four corners from a bench_imaging_maps dump: true corners and errors, view angle.
+struct DumpedMarker {
+  std::array<Eigen::Vector2d, 4> truth, error;
+  int seen = 0;  // bits of the corners read
+  double view_deg = 0;
+};
+
+// The dump's markers of condition `condition` (-1: all).
+std::vector<DumpedMarker> ReadDump(const char* path, int condition) {
+  std::map<std::array<long long, 4>, DumpedMarker> markers;
+  FILE* f = std::fopen(path, "r");
+  if (!f) {
+    std::fprintf(stderr, "diag_corners --dump %s: cannot read\n", path);
+    std::exit(2);
+  }
+  char line[512];
+  if (!std::fgets(line, sizeof line, f)) line[0] = 0;  // the header
+  while (std::fgets(line, sizeof line, f)) {
+    double radius, dx, dy, err, view, size, border, x, y;
+    int cond, camera, id, corner, occluded, visible, in_image;
+    long long seq;
+    if (std::sscanf(line, "%lf,%d,%d,%lld,%d,%d,%lf,%lf,%lf,%lf,%lf,%d,%d,%d,%lf,%lf,%lf", &radius, &cond,
+                    &camera, &seq, &id, &corner, &dx, &dy, &err, &view, &size, &occluded, &visible, &in_image,
+                    &border, &x, &y) != 17 ||
+        (condition >= 0 && cond != condition) || corner < 0 || corner > 3)
+      continue;
+    DumpedMarker& m = markers[{cond, camera, seq, id}];
+    m.truth[corner] = {x, y}, m.error[corner] = {dx, dy}, m.seen |= 1 << corner, m.view_deg = view;
+  }
+  std::fclose(f);
+  std::vector<DumpedMarker> out;
+  for (const auto& [key, m] : markers)
+    if (m.seen == 15) out.push_back(m);
+  return out;
+}
+
+// Per view band: the sides' offsets (thin and wide pairs) and the diagonals' errors of the dump's markers.
+void PrintDumpBands(const std::vector<DumpedMarker>& markers) {
+  const double edges[] = {0, 30, 45, 60, 67, 75, 90};
+  constexpr int kBands = 6;
+  // Per band (and all, at kBands): count, thin and wide extent, thin and wide offset, long and short error.
+  double sums[kBands + 1][7] = {};
+  for (const DumpedMarker& m : markers) {
+    const Eigen::Vector2d centre = 0.25 * (m.truth[0] + m.truth[1] + m.truth[2] + m.truth[3]);
+    double extent[4], offset[4];
+    for (int s = 0; s < 4; ++s) {
+      const Eigen::Vector2d a = m.truth[s], b = m.truth[(s + 1) % 4];
+      Eigen::Vector2d n = Eigen::Vector2d(b.y() - a.y(), a.x() - b.x()).normalized();
+      if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
+      extent[s] =
+          0.5 * (std::abs(n.dot(m.truth[(s + 2) % 4] - a)) + std::abs(n.dot(m.truth[(s + 3) % 4] - a)));
+      offset[s] = 0.5 * n.dot(m.error[s] + m.error[(s + 1) % 4]);
+    }
+    const int thin = extent[0] + extent[2] < extent[1] + extent[3] ? 0 : 1;
+    double diagonal[2], error[2];
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector2d d = m.truth[k + 2] - m.truth[k];
+      diagonal[k] = d.norm();
+      error[k] = 100.0 * (m.error[k + 2] - m.error[k]).dot(d) / d.squaredNorm();
+    }
+    const int longer = diagonal[0] >= diagonal[1] ? 0 : 1;
+    const double row[7] = {1,
+                           0.5 * (extent[thin] + extent[thin + 2]),
+                           0.5 * (extent[1 - thin] + extent[3 - thin]),
+                           0.5 * (offset[thin] + offset[thin + 2]),
+                           0.5 * (offset[1 - thin] + offset[3 - thin]),
+                           error[longer],
+                           error[1 - longer]};
+    int band = 0;
+    while (band + 1 < kBands && m.view_deg >= edges[band + 1]) ++band;
+    for (int k = 0; k < 7; ++k) sums[band][k] += row[k], sums[kBands][k] += row[k];
+  }
+  std::printf(
+      "| view deg | markers | extent across thin / wide sides px | offset thin sides px | offset wide sides "
+      "px "
+      "| long / short diagonal %% |\n|---|---|---|---|---|---|\n");
+  for (int b = 0; b <= kBands; ++b) {
+    const double* x = sums[b];
+    if (x[0] == 0) continue;
+    char name[32];
+    if (b < kBands)
+      std::snprintf(name, sizeof name, "%.0f-%.0f", edges[b], edges[b + 1]);
+    else
+      std::snprintf(name, sizeof name, "all");
+    std::printf("| %s | %.0f | %.1f / %.1f | %+.4f | %+.4f | %+.3f / %+.3f |\n", name, x[0], x[1] / x[0],
+                x[2] / x[0], x[3] / x[0], x[4] / x[0], x[5] / x[0], x[6] / x[0]);
+  }
+}
+
 const marker_t* Find(const std::vector<marker_t>& found, int id) {
   for (const marker_t& m : found)
     if (m.id == id) return &m;
@@ -40,6 +139,10 @@ const marker_t* Find(const std::vector<marker_t>& found, int id) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 2 && std::strcmp(argv[1], "--dump") == 0) {
+    PrintDumpBands(ReadDump(argv[2], argc > 3 ? std::atoi(argv[3]) : -1));
+    return 0;
+  }
   const bool modes = argc > 1 && std::strcmp(argv[1], "--modes") == 0;
   if (modes) --argc, ++argv;
   if (argc < 2) {
