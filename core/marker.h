@@ -13,6 +13,17 @@ using MarkerCorners2d = std::array<Eigen::Vector2d, 4>;
 
 MarkerCorners3d MarkerCornersInMarker(double side);
 
+// Square-root information of each observed corner when the corners are intersections of the quad's fitted
+// sides (what the detector's refinement does) and each side is located to the same precision along its
+// normal at both of its ends. Corner k lies on the sides towards k - 1 and k + 1, with unit normals n1, n2:
+//   Omega_k = (n1 n1^T + n2 n2^T + floor I) * 2 / (2 + 2 floor),   W_k^T W_k = Omega_k   (trace 2)
+// A corner where the sides meet at a right angle gets W = I (the plain pixel residual); where they meet
+// at a narrow angle (a marker seen at a steep angle, the corners of its long diagonal and also the obtuse
+// ones) the direction along both sides is barely measured and gets little weight, the one across them
+// more. `floor` (>= 0, relative) keeps every direction's weight above floor / (1 + floor).
+using CornerWeights = std::array<Eigen::Matrix2d, 4>;
+CornerWeights CornerSqrtInformation(const MarkerCorners2d& corners, double floor);
+
 // Side lengths: a default plus per-id overrides.
 struct MarkerSizes {
   double default_size = 0.0;

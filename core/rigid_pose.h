@@ -2,10 +2,11 @@
 // frame and the mapper's cam_from_object of a camera frame with several markers.
 //
 // Points x_i (body frame) seen by cameras: p_world = T x_i with T = world_from_body, p_cam = cam_from_world
-// p_world, residual r_i = Project(p_cam) - u_i (pixels). Cost E(T) = sum rho(|r_i|^2) (Huber, or plain
-// squares). A step rotates about a pivot c (world frame) then translates, delta = (w, v):
+// p_world, residual r_i = W_i (Project(p_cam) - u_i) (pixels; W_i the point's square-root information, I
+// unless given). Cost E(T) = sum rho(|r_i|^2) (Huber, or plain squares). A step rotates about a pivot c
+// (world frame) then translates, delta = (w, v):
 //   p_world <- R(w) (p_world - c) + c + v,    d p_world / d delta = [-[p_world - c]x | I],
-//   d r_i / d delta = (d pixel / d p_cam) cam_R_world [-[p_world - c]x | I]   (analytic, 2x6 per point).
+//   d r_i / d delta = W_i (d pixel / d p_cam) cam_R_world [-[p_world - c]x | I]   (analytic, 2x6 per point).
 // Levenberg-Marquardt pivots about the body's origin (c = T's translation): with the world origin far
 // from the body (a rig in its reference camera's frame, a camera frame for the mapper) rotation and
 // translation steps stay decoupled; rotating about the world origin coupled them and left poses degrees
@@ -24,13 +25,15 @@ struct PosePoint {
   const Rigid3* cam_from_world = nullptr;           // nullptr: the world frame is the camera's
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  // body frame
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  // observed
+  // W: the residual is W (projection - pixel), e.g. a marker corner's CornerSqrtInformation (core/marker.h).
+  Eigen::Matrix2d sqrt_information = Eigen::Matrix2d::Identity();
 };
 
 // Added to the cost for every point that falls behind its camera, so that a step leading there is refused.
 constexpr double kBehindCameraPenalty = 1e12;
 
 // Robust cost at world_from_body (huber_px <= 0: plain squares), with J^T W J in *h and J^T W r in *g for
-// a step rotating about `pivot`; *plain_cost (optional) gets the unweighted sum of squares.
+// a step rotating about `pivot`; *plain_cost (optional) gets the sum of squares without the robust weights.
 double PoseNormalEquations(const std::vector<PosePoint>& points, const Rigid3& world_from_body,
                            const Eigen::Vector3d& pivot, double huber_px, Matrix6d* h, Vector6d* g,
                            double* plain_cost = nullptr);

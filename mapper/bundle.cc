@@ -87,8 +87,9 @@ bool LeftPoseManifold::MinusJacobian(const double*, double* jacobian) const {
   return true;
 }
 
-ReprojectionCost::ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side)
-    : cost_(camera, observed, side, false, nullptr) {}
+ReprojectionCost::ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
+                                   const CornerWeights* weights)
+    : cost_(camera, observed, side, false, nullptr, weights) {}
 
 bool ReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
                                 double** jacobians) const {
@@ -148,10 +149,13 @@ void IntrinsicsJacobian(CameraModel* camera, double x, double y, double* out) {
 }
 
 SelfCalibrationCost::SelfCalibrationCost(const CameraModel* camera, const MarkerCorners2d& observed,
-                                         double side, bool with_intrinsics, const ObservationTime* time)
+                                         double side, bool with_intrinsics, const ObservationTime* time,
+                                         const CornerWeights* weights)
     : camera_(camera),
       observed_(observed),
       corners_(MarkerCornersInMarker(side)),
+      weighted_(weights != nullptr),
+      weights_(weights ? *weights : CornerWeights()),
       with_intrinsics_(with_intrinsics),
       time_(time ? *time : ObservationTime{}),
       with_time_(time != nullptr),
@@ -239,7 +243,24 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
       }
     }
   }
+  if (weighted_) Weigh(residuals, jacobians);
   return true;
+}
+
+void SelfCalibrationCost::Weigh(double* residuals, double** jacobians) const {
+  const std::vector<int32_t>& sizes = parameter_block_sizes();
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Matrix2d& w = weights_[k];
+    Eigen::Map<Eigen::Vector2d> r(residuals + 2 * k);
+    r = w * r;
+    if (!jacobians) continue;
+    for (size_t b = 0; b < sizes.size(); ++b) {
+      if (!jacobians[b]) continue;
+      Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>> rows(
+          jacobians[b] + 2 * k * sizes[b], 2, sizes[b]);
+      rows = w * rows;
+    }
+  }
 }
 
 CameraModel BundleProblem::Model(int camera) const {
@@ -369,15 +390,15 @@ double IntrinsicsPriorWeight(const BundleIntrinsics& in, int k) {
   return in.sigma[k] > 0 ? in.prior_scale_px / in.sigma[k] : 0.0;
 }
 
-void AddSelfCalibrationResidual(BundleProblem* bp, size_t i, ceres::LossFunction* loss,
-                                ceres::Problem* problem) {
+void AddSelfCalibrationResidual(BundleProblem* bp, size_t i, const CornerWeights* weights,
+                                ceres::LossFunction* loss, ceres::Problem* problem) {
   const BundleObservation& o = bp->observations[i];
   const ObservationTime time = ObservationTimeOf(*bp, i);
   std::vector<double*> blocks;
   for (const auto& block : ObservationBlocks(bp, i)) blocks.push_back(block.first);
   problem->AddResidualBlock(
       new SelfCalibrationCost(bp->models[o.camera], o.corners, o.side, bp->RefinesIntrinsics(o.camera),
-                              bp->RefinesTime() ? &time : nullptr),
+                              bp->RefinesTime() ? &time : nullptr, weights),
       loss, blocks);
 }
 
@@ -509,7 +530,8 @@ double ViewCosine(const BundleProblem& bp, const BundleObservation& o) {
   return std::clamp(c, 0.05, 1.0);
 }
 
-void BuildProblem(BundleProblem* bp, double huber_px, double view_weight_power, BuiltProblem* out) {
+void BuildProblem(BundleProblem* bp, const BundleSettings& settings, BuiltProblem* out) {
+  const double huber_px = settings.huber_px, view_weight_power = settings.view_weight_power;
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -530,10 +552,14 @@ void BuildProblem(BundleProblem* bp, double huber_px, double view_weight_power, 
                                                        ceres::DO_NOT_TAKE_OWNERSHIP));
       loss = out->weighted.back().get();
     }
+    CornerWeights weights;
+    if (settings.corner_weight_floor >= 0)
+      weights = CornerSqrtInformation(o.corners, settings.corner_weight_floor);
+    const CornerWeights* w = settings.corner_weight_floor >= 0 ? &weights : nullptr;
     if (bp->RefinesIntrinsics(o.camera) || bp->RefinesTime()) {
-      AddSelfCalibrationResidual(bp, i, loss, &problem);
+      AddSelfCalibrationResidual(bp, i, w, loss, &problem);
     } else {
-      problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side), loss,
+      problem.AddResidualBlock(ReprojectionCost::Create(bp->models[o.camera], o.corners, o.side, w), loss,
                                bp->cam_from_rig[o.camera].data(), bp->object_from_marker[o.marker].data(),
                                bp->rig_from_object[o.frame].data());
     }
@@ -561,7 +587,7 @@ BundleSummary SolveBundle(BundleProblem* bp, const BundleSettings& settings) {
   const auto start = std::chrono::steady_clock::now();
   BundleSummary out;
   BuiltProblem built;
-  BuildProblem(bp, settings.huber_px, settings.view_weight_power, &built);
+  BuildProblem(bp, settings, &built);
   if (built.num_corners == 0) {
     out.termination = "no observations";
     return out;

@@ -74,13 +74,19 @@ struct ObservationTime {
 class SelfCalibrationCost : public ceres::CostFunction {
  public:
   SelfCalibrationCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
-                      bool with_intrinsics, const ObservationTime* time);
+                      bool with_intrinsics, const ObservationTime* time,
+                      const CornerWeights* weights = nullptr);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
+  // Residuals and Jacobian rows of each corner k multiplied by weights_[k].
+  void Weigh(double* residuals, double** jacobians) const;
+
   const CameraModel* camera_;  // size and distortion model (and the intrinsics when they are not a block)
   MarkerCorners2d observed_;
   MarkerCorners3d corners_;
+  bool weighted_;
+  CornerWeights weights_;
   bool with_intrinsics_;
   ObservationTime time_;
   bool with_time_;
@@ -89,7 +95,8 @@ class SelfCalibrationCost : public ceres::CostFunction {
 
 // Residual of one marker observation, 8 values:
 //   p_cam(k) = cam_from_rig * rig_from_object * object_from_marker * u_k      (u_k: corner k, ArUco order)
-//   r(2k..2k+1) = Project(p_cam(k)) - observed_k                                (pixels, distorted)
+//   r(2k..2k+1) = W_k (Project(p_cam(k)) - observed_k)                        (pixels, distorted)
+// with W_k the corner's square-root information (CornerSqrtInformation; I when no weights are given).
 // Parameter blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each). Analytic
 // Jacobians with respect to the left perturbations:
 //   d p_cam / d(dr_cam, dt_cam)   = [ -[p_cam - t_cam]x , I ]
@@ -99,10 +106,11 @@ class SelfCalibrationCost : public ceres::CostFunction {
 // falls behind the camera.
 class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
  public:
-  ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side);
-  static ceres::CostFunction* Create(const CameraModel* camera, const MarkerCorners2d& observed,
-                                     double side) {
-    return new ReprojectionCost(camera, observed, side);
+  ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
+                   const CornerWeights* weights = nullptr);
+  static ceres::CostFunction* Create(const CameraModel* camera, const MarkerCorners2d& observed, double side,
+                                     const CornerWeights* weights = nullptr) {
+    return new ReprojectionCost(camera, observed, side, weights);
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
@@ -180,6 +188,8 @@ struct BundleSettings {
   double huber_px = 1.0;  // <= 0: no robust loss
   // Squared residuals of an observation weighted by cos(view angle)^this at the problem's start (0: none).
   double view_weight_power = 0.0;
+  // >= 0: each corner's residual weighed by CornerSqrtInformation(observed corners, this floor); < 0: equal.
+  double corner_weight_floor = -1.0;
   int max_iterations = 100;
   bool paper_stop = true;
   double paper_stop_px = 1e-4;

@@ -113,6 +113,11 @@ struct MapperOptions {
   // 60 deg (issue 15); 3 takes mcmt-sim's default imaging at 1.0 m from 0.86 to 0.19 mm, but makes the
   // conditions whose corners are biased (blur, no margin, webcam) worse (BENCHMARKS.md): off by default.
   double view_weight_power = 0.0;
+  // How a corner's x and y residuals weigh: "equal", or "sides": the detector's corners are intersections
+  // of the marker's fitted sides, each located along its normal; a corner where two sides meet at a
+  // narrow angle (a marker seen steeply) is barely located along them (CornerSqrtInformation, core/marker.h).
+  std::string corner_weights = "equal";
+  double corner_weight_floor = 0.05;  // relative: the least weight of a direction (sides)
   // After the first solve, observations whose RMS corner error exceeds this are rejected (gross), pixels.
   double outlier_px = 5.0;
   // Outlier rounds: solve, reject, re-solve at most this many times.

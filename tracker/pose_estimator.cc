@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/ippe.h"
+#include "core/marker.h"
 #include "core/rigid_pose.h"
 #include "tracker/tracker.h"
 
@@ -124,8 +125,13 @@ std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
     if (!active[i]) continue;
     const Camera& cam = cameras_[obs[i].camera];
     const Marker& mk = markers_[obs[i].marker];
-    for (int c = 0; c < 4; ++c)
+    const bool sides = options_.corner_weights == "sides";
+    const CornerWeights weights =
+        sides ? CornerSqrtInformation(*obs[i].pixels, options_.corner_weight_floor) : CornerWeights();
+    for (int c = 0; c < 4; ++c) {
       points.push_back({&cam.model, obs[i].cam_from_rig, mk.corners_object[c], (*obs[i].pixels)[c]});
+      if (sides) points.back().sqrt_information = weights[c];
+    }
   }
   return points;
 }

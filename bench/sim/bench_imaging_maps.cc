@@ -17,6 +17,8 @@
 //                               farther than PX from the truth: an oracle, for measuring only), "angle:DEG"
 //                               (view angle above DEG)
 //   MCMT_VIEW_WEIGHT_POWER=P    the mapper's view_weight_power (both maps)
+//   MCMT_CORNER_WEIGHTS=W       the mapper's corner_weights (equal or sides; both maps)
+//   MCMT_CORNER_WEIGHT_FLOOR=F  the mapper's corner_weight_floor
 //   MCMT_CANDIDATE_SEARCH=S     the detector's candidate_search (opencv or own)
 //   MCMT_IMAGING_RENDERER=reference  the sessions drawn by the independent reference renderer
 //                               (tests/mapper/reference_rig_view.h) under the conditions of its catalogue
@@ -184,6 +186,8 @@ int main(int argc, char** argv) {
                        sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
       MapperOptions mo = session.Mapping();
       if (const char* e = std::getenv("MCMT_VIEW_WEIGHT_POWER")) mo.view_weight_power = std::atof(e);
+      if (const char* e = std::getenv("MCMT_CORNER_WEIGHTS")) mo.corner_weights = e;
+      if (const char* e = std::getenv("MCMT_CORNER_WEIGHT_FLOOR")) mo.corner_weight_floor = std::atof(e);
       Mapper mapper(mo), reference(mo);
       std::mt19937 rng(7);
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);

@@ -53,13 +53,14 @@ double PoseNormalEquations(const std::vector<PosePoint>& points, const Rigid3& w
       plain += kBehindCameraPenalty;
       continue;
     }
-    const Eigen::Vector2d res = px - p.pixel;
+    const Eigen::Vector2d res = p.sqrt_information * (px - p.pixel);
     const double sq = res.squaredNorm();
     double w = 1.0;
     cost += huber_px > 0 ? Huber(sq, huber_px, &w) : sq;
     plain += sq;
     const Eigen::Matrix<double, 2, 3> a =
-        p.cam_from_world ? Eigen::Matrix<double, 2, 3>(jp * p.cam_from_world->linear()) : jp;
+        p.sqrt_information *
+        (p.cam_from_world ? Eigen::Matrix<double, 2, 3>(jp * p.cam_from_world->linear()) : jp);
     Eigen::Matrix<double, 2, 6> j;
     j.leftCols<3>() = -a * Skew(p_world - pivot);
     j.rightCols<3>() = a;

@@ -162,7 +162,8 @@ TEST(MapperBundle, ManifoldPlusMinusRoundTrip) {
 }
 
 TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
-  for (int distortion = 0; distortion < 3; ++distortion) {
+  for (int distortion = 0; distortion < 6; ++distortion) {
+    const bool weighted = distortion >= 3;  // corners weighed by their sides (CornerSqrtInformation)
     CameraModel model;
     model.width = 1280;
     model.height = 720;
@@ -170,10 +171,10 @@ TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
     model.fy = 905;
     model.cx = 640;
     model.cy = 360;
-    if (distortion == 1) {
+    if (distortion % 3 == 1) {
       model.model = DistortionModel::kRadTan;
       model.distortion = {-0.3, 0.05, -0.004, 0.004, 0.06};
-    } else if (distortion == 2) {
+    } else if (distortion % 3 == 2) {
       model.model = DistortionModel::kFisheye;
       model.distortion = {0.05, -0.01, 0.002, -0.001};
     }
@@ -182,7 +183,11 @@ TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
     const Rigid3 rig_from_object = Pose(-0.2, 0.1, 0.3, 0.1, 0.0, 0.3);
     MarkerCorners2d observed;
     for (int k = 0; k < 4; ++k) observed[k] = Eigen::Vector2d(600 + 10 * k, 350 - 5 * k);
-    std::unique_ptr<ceres::CostFunction> cost(ReprojectionCost::Create(&model, observed, 0.04));
+    const CornerWeights weights = CornerSqrtInformation(
+        {Eigen::Vector2d(0, 0), Eigen::Vector2d(20, 3), Eigen::Vector2d(40, 0), Eigen::Vector2d(20, -3)},
+        0.05);
+    std::unique_ptr<ceres::CostFunction> cost(
+        ReprojectionCost::Create(&model, observed, 0.04, weighted ? &weights : nullptr));
     std::array<PoseBlock, 3> blocks = {BlockFromRigid(cam_from_rig), BlockFromRigid(object_from_marker),
                                        BlockFromRigid(rig_from_object)};
     const double* params[3] = {blocks[0].data(), blocks[1].data(), blocks[2].data()};
@@ -190,10 +195,13 @@ TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
     Eigen::Matrix<double, 8, 7, Eigen::RowMajor> jac[3];
     double* jacobians[3] = {jac[0].data(), jac[1].data(), jac[2].data()};
     ASSERT_TRUE(cost->Evaluate(params, residuals, jacobians));
-    // The residual itself: projection minus observation.
+    // The residual itself: projection minus observation (weighed by the corner's W).
     const Eigen::Vector3d p =
         cam_from_rig * rig_from_object * object_from_marker * MarkerCornersInMarker(0.04)[2];
-    EXPECT_NEAR(residuals[4], model.Project(p).x() - observed[2].x(), 1e-9);
+    const Eigen::Vector2d r =
+        (weighted ? weights[2] : Eigen::Matrix2d::Identity()) * (model.Project(p) - observed[2]);
+    EXPECT_NEAR(residuals[4], r.x(), 1e-9);
+    EXPECT_NEAR(residuals[5], r.y(), 1e-9);
     LeftPoseManifold manifold;
     for (int b = 0; b < 3; ++b) {
       for (int k = 0; k < 6; ++k) {
