@@ -105,22 +105,9 @@ void CheckRejectedDeclaredMarkers(const MarkerLayout& layout, const std::vector<
   report->warnings.push_back(msg.str() + ": mapped without them (--allow-partial)");
 }
 
-void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& ids, const MapperOptions& o,
-                           MapReport* report) {
-  std::vector<int> disconnected;
-  std::vector<std::pair<int, std::string>> rejected;
-  for (int m = 0; m < static_cast<int>(ids.size()); ++m) {
-    if (layout.placed[m]) continue;
-    const std::string why = WhyNotPlaced(m, layout, ids, o);
-    if (why.empty()) {
-      disconnected.push_back(m);
-      continue;
-    }
-    report->rejected_markers.push_back({ids[m], layout.observations[m], why});
-    rejected.emplace_back(m, why);
-  }
-  CheckRejectedDeclaredMarkers(layout, ids, rejected, o, report);
-  if (disconnected.empty()) return;
+void ReportDisconnectedMarkers(const MarkerLayout& layout, const std::vector<int>& ids,
+                               const std::vector<int>& disconnected, const MapperOptions& o,
+                               MapReport* report) {
   std::vector<int> lost, placed_ids;
   for (int m : disconnected) lost.push_back(ids[m]);
   for (int m = 0; m < static_cast<int>(ids.size()); ++m)
@@ -136,6 +123,25 @@ void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& i
   for (int m : disconnected)
     report->rejected_markers.push_back(
         {ids[m], layout.observations[m], "disconnected (left out by --allow-partial)"});
+}
+
+void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& ids, const MapperOptions& o,
+                           MapReport* report) {
+  std::vector<int> disconnected;
+  std::vector<std::pair<int, std::string>> rejected;
+  for (int m = 0; m < static_cast<int>(ids.size()); ++m) {
+    if (layout.placed[m]) continue;
+    const std::string why = WhyNotPlaced(m, layout, ids, o);
+    if (why.empty()) {
+      disconnected.push_back(m);
+      continue;
+    }
+    report->rejected_markers.push_back({ids[m], layout.observations[m], why});
+    rejected.emplace_back(m, why);
+  }
+  // A disconnected marker's error first (what would connect it); the rejected ones' after it.
+  if (!disconnected.empty()) ReportDisconnectedMarkers(layout, ids, disconnected, o, report);
+  CheckRejectedDeclaredMarkers(layout, ids, rejected, o, report);
 }
 
 }  // namespace
