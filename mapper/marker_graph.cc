@@ -1,4 +1,5 @@
 // Stage: the marker graph (the paper's step 3), which also finds the ids that are not on the object.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -64,19 +65,49 @@ std::string WhyNotPlaced(int m, const MarkerLayout& layout, const std::vector<in
   return "";
 }
 
-void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& ids, const MapperOptions& o,
-                           MapReport* report) {
-  std::vector<int> disconnected;
-  for (int m = 0; m < static_cast<int>(ids.size()); ++m) {
-    if (layout.placed[m]) continue;
-    const std::string why = WhyNotPlaced(m, layout, ids, o);
-    if (why.empty()) {
-      disconnected.push_back(m);
-      continue;
+bool Declared(int id, const MapperOptions& o) {
+  return std::find(o.marker_ids.begin(), o.marker_ids.end(), id) != o.marker_ids.end();
+}
+
+// Markers the rig declares (markers.ids) rejected as not rigidly attached or unverifiable: when they hold
+// more of the declared markers' observations than the placed ones, the square poses of this session
+// disagree more often than they agree (ambiguous at grazing views, biased corners), and the placed
+// markers' layout rests on the same kind of poses: an error (a warning with --allow-partial), not a map.
+void CheckRejectedDeclaredMarkers(const MarkerLayout& layout, const std::vector<int>& ids,
+                                  const std::vector<std::pair<int, std::string>>& rejected,
+                                  const MapperOptions& o, MapReport* report) {
+  int64_t placed_obs = 0, rejected_obs = 0;
+  std::vector<int> placed_ids, rejected_ids;
+  for (int m = 0; m < static_cast<int>(ids.size()); ++m)
+    if (layout.placed[m] && Declared(ids[m], o)) {
+      placed_obs += layout.observations[m];
+      placed_ids.push_back(ids[m]);
     }
-    report->rejected_markers.push_back({ids[m], layout.observations[m], why});
-  }
-  if (disconnected.empty()) return;
+  for (const auto& [m, why] : rejected)
+    if (Declared(ids[m], o)) {
+      rejected_obs += layout.observations[m];
+      rejected_ids.push_back(ids[m]);
+    }
+  if (rejected_obs <= placed_obs) return;
+  std::sort(rejected_ids.begin(), rejected_ids.end());
+  const auto first = std::find_if(rejected.begin(), rejected.end(),
+                                  [&](const auto& r) { return Declared(ids[r.first], o); });
+  std::ostringstream msg;
+  msg << "marker" << (rejected_ids.size() > 1 ? "s " : " ") << JoinIds(rejected_ids)
+      << " of markers.ids cannot be placed on the object (marker " << ids[first->first] << ": "
+      << first->second << ") and hold " << rejected_obs << " of the " << rejected_obs + placed_obs
+      << " observations of the object's markers: the markers' poses seen together disagree more than they "
+         "agree, so the layout of marker"
+      << (placed_ids.size() > 1 ? "s " : " ") << JoinIds(placed_ids)
+      << " rests on the same doubtful poses; record frames where a camera sees two markers at once less "
+         "obliquely";
+  if (!o.allow_partial) throw MapperError(msg.str() + " (or use --allow-partial to map without them)");
+  report->warnings.push_back(msg.str() + ": mapped without them (--allow-partial)");
+}
+
+void ReportDisconnectedMarkers(const MarkerLayout& layout, const std::vector<int>& ids,
+                               const std::vector<int>& disconnected, const MapperOptions& o,
+                               MapReport* report) {
   std::vector<int> lost, placed_ids;
   for (int m : disconnected) lost.push_back(ids[m]);
   for (int m = 0; m < static_cast<int>(ids.size()); ++m)
@@ -92,6 +123,25 @@ void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& i
   for (int m : disconnected)
     report->rejected_markers.push_back(
         {ids[m], layout.observations[m], "disconnected (left out by --allow-partial)"});
+}
+
+void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& ids, const MapperOptions& o,
+                           MapReport* report) {
+  std::vector<int> disconnected;
+  std::vector<std::pair<int, std::string>> rejected;
+  for (int m = 0; m < static_cast<int>(ids.size()); ++m) {
+    if (layout.placed[m]) continue;
+    const std::string why = WhyNotPlaced(m, layout, ids, o);
+    if (why.empty()) {
+      disconnected.push_back(m);
+      continue;
+    }
+    report->rejected_markers.push_back({ids[m], layout.observations[m], why});
+    rejected.emplace_back(m, why);
+  }
+  // A disconnected marker's error first (what would connect it); the rejected ones' after it.
+  if (!disconnected.empty()) ReportDisconnectedMarkers(layout, ids, disconnected, o, report);
+  CheckRejectedDeclaredMarkers(layout, ids, rejected, o, report);
 }
 
 }  // namespace

@@ -24,6 +24,13 @@
 //                               (tests/mapper/reference_rig_view.h) under the conditions of its catalogue
 //                               (tests/detector/reference_renderer.h) instead of mcmt-sim's; the rows are
 //                               the catalogue's conditions
+//   MCMT_IMAGING_REPORT=1       print the mapper's report for each map of mcmt's detector to stderr: its
+//                               warnings, rejected markers, RMS, per-camera verdicts, and each camera's
+//                               and marker's error against the truth
+//   MCMT_IMAGING_SAVE=FILE      the detections each map of mcmt's detector is given, written to FILE (a new
+//                               LCM log, channels MCMT_DETECTIONS_<camera>: mcmt-mapper reads it too)
+//   MCMT_IMAGING_LOAD=FILE      map the detections MCMT_IMAGING_SAVE wrote instead of rendering (one
+//                               condition; no reference map)
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
 //                               mapping (an oracle: what an isotropic size bias of the corners costs the
 //                               map's scale; negative P enlarges)
@@ -34,13 +41,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "core/dictionary.h"
 #include "core/lcm_util.h"
+#include "core/log_reader.h"
+#include "core/log_writer.h"
 #include "detector/detector.h"
+#include "mapper/diagnostics.h"
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "sim/sim.h"
@@ -129,6 +140,36 @@ double BorderDistancePx(const MarkerCorners2d& c, int width, int height) {
   return d;
 }
 
+// MCMT_IMAGING_LOAD: the detections messages of an LCM log (MCMT_IMAGING_SAVE wrote it).
+std::vector<detections_t> LoadDetections(const char* path) {
+  std::vector<detections_t> all;
+  for (const LogEvent& ev : ReadEventLog(path)) {
+    if (!IsDetectionsChannel(ev.channel)) continue;
+    all.emplace_back();
+    if (!Decode(ev.data.data(), ev.data.size(), &all.back())) all.pop_back();
+  }
+  return all;
+}
+
+// MCMT_IMAGING_REPORT: what the mapper said about a map, beside its errors against the truth.
+void PrintReport(const MapResult& result, const sim::EvalResult& e) {
+  const MapReport& r = result.report;
+  std::fprintf(stderr,
+               "mapper: rms %.3f px (initial %.3f), %d of %d observations used, %zu rejected, %d ambiguous\n",
+               r.final_rms_px, r.initial_rms_px, r.observations_used, r.observations_total,
+               r.rejected_observations.size(), r.ambiguous_observations);
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "mapper warning: %s\n", w.c_str());
+  for (const RejectedMarker& m : r.rejected_markers)
+    std::fprintf(stderr, "mapper rejected marker %d (%d observations): %s\n", m.id, m.observations,
+                 m.reason.c_str());
+  std::fprintf(stderr, "%s", VerdictLines(ComputeDiagnostics(result)).c_str());
+  for (const sim::CameraError& c : e.cameras)
+    std::fprintf(stderr, "truth: camera %s %.2f mm %.3f deg\n", c.name.c_str(), c.position_mm,
+                 c.rotation_deg);
+  for (const sim::MarkerError& m : e.markers)
+    std::fprintf(stderr, "truth: marker %d corners %.2f mm, side %+.2f mm\n", m.id, m.corner_mm, m.size_mm);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -145,9 +186,13 @@ int main(int argc, char** argv) {
       while (*p && *p != ',') ++p;
       if (*p) ++p;
     }
+  const char* report_env = std::getenv("MCMT_IMAGING_REPORT");
+  const bool report = report_env && std::atoi(report_env) != 0;
   const DropRule drop = ParseDropRule(std::getenv("MCMT_IMAGING_DROP"));
   const char* shrink_env = std::getenv("MCMT_IMAGING_SHRINK_PCT");
   const double shrink_pct = shrink_env ? std::atof(shrink_env) : 0.0;
+  std::unique_ptr<EventLogWriter> save;
+  if (const char* path = std::getenv("MCMT_IMAGING_SAVE")) save = std::make_unique<EventLogWriter>(path);
   FILE* dump = nullptr;
   if (const char* path = std::getenv("MCMT_IMAGING_DUMP")) {
     dump = std::fopen(path, "w");
@@ -189,6 +234,22 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("MCMT_CORNER_WEIGHTS")) mo.corner_weights = e;
       if (const char* e = std::getenv("MCMT_CORNER_WEIGHT_FLOOR")) mo.corner_weight_floor = std::atof(e);
       Mapper mapper(mo), reference(mo);
+      if (const char* path = std::getenv("MCMT_IMAGING_LOAD")) {
+        const std::vector<detections_t> loaded = LoadDetections(path);
+        for (const detections_t& d : loaded) mapper.Add(d);
+        try {
+          const MapResult result = mapper.Solve();
+          const sim::EvalResult e = sim::Evaluate(session.Truth(), &result.map, nullptr);
+          if (report) PrintReport(result, e);
+          std::printf("| %s (loaded) | %.1f | %+.3f | %.2f / %.2f | %.3f | | |\n", condition.name.c_str(),
+                      radius, 100.0 * e.scale_error, e.camera_position_mm.mean, e.camera_position_mm.max,
+                      e.configuration_mm.mean);
+        } catch (const std::exception& ex) {
+          std::printf("| %s (loaded) | %.1f | (no map: %s) | | | | |\n", condition.name.c_str(), radius,
+                      ex.what());
+        }
+        return 0;
+      }
       std::mt19937 rng(7);
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);
       long long detected = 0;
@@ -233,6 +294,10 @@ int main(int argc, char** argv) {
           d.num_markers = static_cast<int32_t>(d.markers.size());
           detected += d.num_markers;
           mapper.Add(d);
+          if (save) {
+            const std::vector<uint8_t> data = Encode(d);
+            save->Write(d.utime, DetectionsChannel(d.camera), data.data(), data.size());
+          }
           for (marker_t& m : d.markers)
             for (const sim::MarkerView& v : views)
               if (v.id == m.id)
@@ -255,6 +320,7 @@ int main(int argc, char** argv) {
       try {
         const MapResult result = mapper.Solve();
         const sim::EvalResult e = sim::Evaluate(truth, &result.map, nullptr);
+        if (report) PrintReport(result, e);
         std::printf("| %s | %.1f | %+.3f | %.2f / %.2f | %.3f | %.2f | %s |\n", condition.name.c_str(),
                     radius, 100.0 * e.scale_error, e.camera_position_mm.mean, e.camera_position_mm.max,
                     e.configuration_mm.mean, double(detected) / (frames * cameras.size()),
@@ -265,5 +331,6 @@ int main(int argc, char** argv) {
       }
       std::fflush(stdout);
     }
+  if (save) save->Close();
   return 0;
 }
