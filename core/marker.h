@@ -23,6 +23,12 @@ MarkerCorners3d MarkerCornersInMarker(double side);
 // more. `floor` (>= 0, relative) keeps every direction's weight above floor / (1 + floor).
 using CornerWeights = std::array<Eigen::Matrix2d, 4>;
 CornerWeights CornerSqrtInformation(const MarkerCorners2d& corners, double floor);
+// The help of the options that choose it (mapper and tracker: corner_weights, corner_weight_floor).
+inline constexpr const char* kCornerWeightsHelp =
+    "equal (each corner's x and y residual weighs the same) or sides (corners as intersections of the "
+    "marker's fitted sides: along two sides meeting at a narrow angle a corner weighs little)";
+inline constexpr const char* kCornerWeightFloorHelp =
+    "with corner_weights sides: the least weight of a direction, relative";
 
 // Side lengths: a default plus per-id overrides.
 struct MarkerSizes {

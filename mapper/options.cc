@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/marker.h"
 #include "mapper/bodies.h"
 #include "mapper/mapper.h"
 
@@ -24,13 +25,8 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
            .Add("huber_px", &O::huber_px, "px", "Huber threshold on an observation's RMS corner error")
            .Add("view_weight_power", &O::view_weight_power, "",
                 "squared corner residuals weighted by cos(view angle)^this (0: equal weights)", AtLeast(0))
-           .Add("corner_weights", &O::corner_weights,
-                "equal (each corner's x and y residual weighs the same) or sides (corners as intersections "
-                "of the marker's fitted sides: along two sides meeting at a narrow angle a corner weighs "
-                "little)",
-                OneOf({"equal", "sides"}))
-           .Add("corner_weight_floor", &O::corner_weight_floor, "",
-                "with corner_weights sides: the least weight of a direction, relative", AtLeast(0))
+           .Add("corner_weights", &O::corner_weights, kCornerWeightsHelp, OneOf({"equal", "sides"}))
+           .Add("corner_weight_floor", &O::corner_weight_floor, "", kCornerWeightFloorHelp, AtLeast(0))
            .Add("outlier_px", &O::outlier_px, "px",
                 "after a solve, observations with a larger RMS corner error are rejected and the problem "
                 "re-solved",

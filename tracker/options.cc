@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/marker.h"
 #include "core/objects.h"
 #include "tracker/tracker.h"
 
@@ -42,13 +43,8 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 Above(0))
            .Add("outlier_px", &O::outlier_px, "px",
                 "a marker observation whose RMS corner error exceeds this is dropped", Above(0))
-           .Add("corner_weights", &O::corner_weights,
-                "equal (each corner's x and y residual weighs the same) or sides (corners as intersections "
-                "of the marker's fitted sides: along two sides meeting at a narrow angle a corner weighs "
-                "little)",
-                OneOf({"equal", "sides"}))
-           .Add("corner_weight_floor", &O::corner_weight_floor, "",
-                "with corner_weights sides: the least weight of a direction, relative", AtLeast(0))
+           .Add("corner_weights", &O::corner_weights, kCornerWeightsHelp, OneOf({"equal", "sides"}))
+           .Add("corner_weight_floor", &O::corner_weight_floor, "", kCornerWeightFloorHelp, AtLeast(0))
            .Add("ambiguity_ratio", &O::ambiguity_ratio, "",
                 "tau_e: a single square with IPPE ratio below it is ambiguous", AtLeast(1))
            .Add("max_gap_s", &O::max_gap_s, "s", "no prediction across a longer gap (re-initialise)",
