@@ -553,9 +553,11 @@ void BuildProblem(BundleProblem* bp, const BundleSettings& settings, BuiltProble
       loss = out->weighted.back().get();
     }
     CornerWeights weights;
-    if (settings.corner_weight_floor >= 0)
+    const CornerWeights* w = nullptr;
+    if (settings.corner_weight_floor >= 0) {
       weights = CornerSqrtInformation(o.corners, settings.corner_weight_floor);
-    const CornerWeights* w = settings.corner_weight_floor >= 0 ? &weights : nullptr;
+      w = &weights;
+    }
     if (bp->RefinesIntrinsics(o.camera) || bp->RefinesTime()) {
       AddSelfCalibrationResidual(bp, i, w, loss, &problem);
     } else {

@@ -121,11 +121,11 @@ double PoseEstimator::RmsAt(const std::vector<MarkerObservation>& observations, 
 std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
                                              const std::vector<char>& active) const {
   std::vector<PosePoint> points;
+  const bool sides = options_.corner_weights == "sides";
   for (size_t i = 0; i < obs.size(); ++i) {
     if (!active[i]) continue;
     const Camera& cam = cameras_[obs[i].camera];
     const Marker& mk = markers_[obs[i].marker];
-    const bool sides = options_.corner_weights == "sides";
     const CornerWeights weights =
         sides ? CornerSqrtInformation(*obs[i].pixels, options_.corner_weight_floor) : CornerWeights();
     for (int c = 0; c < 4; ++c) {
