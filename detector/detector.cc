@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -927,15 +928,35 @@ struct Refinement {
   // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
   std::array<bool, 4> side_unfitted{};
   std::array<bool, 4> side_modelled{};  // located by the side model in the latest pass
+  // How far each side's line moved in the latest model pass (px, at its corners; infinite before one).
+  std::array<double, 4> side_moved;
   double sigma_sum = 0;
   int sigma_count = 0;
 };
+
+// The line of side `side` through the corners `ideal`.
+Line LineThrough(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
+  const Eigen::Vector2d dir = (ideal[(side + 1) % 4] - ideal[side]).normalized();
+  const Eigen::Vector2d normal(-dir.y(), dir.x());
+  return {normal, normal.dot(ideal[side])};
+}
+
+// A side whose line moved less than this in a model pass (px, at its corners) is settled: the next
+// model passes of the refinement keep its line and fit (LocateSide) while the other sides go on. Its
+// next fit would move it by about a fifth of that (the passes converge linearly).
+constexpr double kSideSettledPx = 3e-4;
 
 // Side `side`'s line in pass `pass` (its crossings', or with the model its model offset about them or
 // about the current side), false when it cannot be located without the model or has too few rays.
 bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                 const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
                 const Eigen::Vector2d& centre, int side, int pass, bool model_pass, Line* line) {
+  if (model_pass && r->side_modelled[side] && r->side_fits[side].warm &&
+      r->side_moved[side] < kSideSettledPx) {
+    *line = LineThrough(ideal, side);
+    r->sigma_sum += r->side_fits[side].sigma, ++r->sigma_count;
+    return true;
+  }
   SideSamples& s = r->samples;
   if (!SampleSide(r->gray, r->bits, r->cells, r->map, r->img, ideal, centre, side, pass, model_pass,
                   r->first_width, &s))
@@ -947,9 +968,7 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   // fails.
   if (!crossed) {
     if (!r->model_fit) return false;
-    const Eigen::Vector2d dir = (ideal[(side + 1) % 4] - ideal[side]).normalized();
-    const Eigen::Vector2d normal_ideal(-dir.y(), dir.x());
-    *line = {normal_ideal, normal_ideal.dot(ideal[side])};
+    *line = LineThrough(ideal, side);
   }
   r->side_unfitted[side] = !crossed;
   if (!crossed && r->kept_lines) *r->kept_lines = true;
@@ -991,6 +1010,11 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
   for (int side = 0; side < 4; ++side)
     if (!LocateSide(r, ideal, ideal_from_unit, unit_from_ideal, centre, side, pass, model_pass, &lines[side]))
       return false;
+  for (int side = 0; side < 4 && model_pass; ++side) {
+    const Line& l = lines[side];
+    r->side_moved[side] =
+        std::max(std::abs(l.n.dot(ideal[side]) - l.c), std::abs(l.n.dot(ideal[(side + 1) % 4]) - l.c));
+  }
   return CornersFromLines(lines, r->map, next);
 }
 
@@ -1000,8 +1024,9 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
 // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
 // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
-// crossings' (each with the cell depths of the previous one's corners), at least kMinModelPasses,
-// until the corners move less than 0.004 px (at most kMaxModelPasses): where the search started
+// crossings' (each with the cell depths of the previous one's corners), at least two (one in a
+// model-only round), until the corners move less than kSettledPx (at most kMaxModelPasses); a side
+// whose line has settled (kSideSettledPx) keeps it meanwhile: where the search started
 // (the candidate, the previous frame) must not change where the corners end up. Passes that do not
 // settle are mostly a two-cycle (a poorly modelled side whose warm-started fits alternate between two
 // valleys: 0.2 px apart on a 40 px marker at 74 deg); which of its two states the last pass is in
@@ -1016,12 +1041,18 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   PixelMap map;
   if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
   Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
+  r.side_moved.fill(std::numeric_limits<double>::infinity());
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
   double perimeter = 0;
   for (int k = 0; k < 4; ++k) perimeter += (r.img[(k + 1) % 4] - r.img[k]).norm();
   if (!(perimeter > 4 * 4.0)) return false;
-  constexpr int kMinModelPasses = 2, kMaxModelPasses = 6;
+  constexpr int kMaxModelPasses = 6;
+  // A model-only round (RefineMarkerCorners) starts from corners settled by the passes before it: its
+  // first (cold) pass moving them less than kSettledPx ends it (a second pass moved them by 1e-4 to
+  // 1e-3 px more: bench/results/2026-12-05-speed4.md).
+  constexpr double kSettledPx = 0.004;
+  const int min_model_passes = model_only ? 1 : 2;
   bool converged = false, model_converged = false;
   int model_passes = 0;
   const int max_passes = std::max(1, passes) + 4;
@@ -1042,7 +1073,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     previous = r.img;
     r.img = next;
     if (model_pass) ++model_passes;
-    model_converged = model_pass && model_passes >= kMinModelPasses && moved < 0.004;
+    model_converged = model_pass && model_passes >= min_model_passes && moved < kSettledPx;
   }
   std::array<Eigen::Vector2d, 4>& img = r.img;
   if (model_fit && !model_converged && model_passes >= 2)
