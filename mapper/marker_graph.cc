@@ -334,7 +334,13 @@ MarkerLayout BuildMarkerGraph(const Observations& observations, const MapperOpti
   layout.edges = BuildGraphEdges(MarkerItems(observations.obs), n, edge_options, threads);
   const RigCheck rig(observations, edge_options, o, threads);
   const std::vector<GraphEdge> verified = rig.Verified(layout.edges, observations.marker_ids, report);
-  layout.reference = ReferenceMarker(observations, verified, layout.observations, o);
+  // The reference as the paper chooses it, from the edges one camera verifies (the rig's edges count
+  // their candidates differently): a session whose edges the rig confirms keeps its frame.
+  std::vector<GraphEdge> seen_verified;
+  for (const GraphEdge& e : layout.edges)
+    if (IsVerified(e, o)) seen_verified.push_back(e);
+  layout.reference =
+      ReferenceMarker(observations, seen_verified.empty() ? verified : seen_verified, layout.observations, o);
   layout.placed = ComponentOf(n, layout.reference, verified);
   // Pairs that no camera saw together join only markers the other edges leave unplaced.
   std::vector<GraphEdge> bridges;
