@@ -31,4 +31,8 @@ SquarePose EstimateSquarePose(const CameraModel& camera, const MarkerCorners2d& 
 // The hypotheses worth keeping under the paper's rule: only the best when ratio >= tau_e, else both.
 int NumKeptHypotheses(const SquarePose& pose, double tau_e);
 
+// Cosine of the angle between the square's normal and the direction from its centre to the camera
+// (1: seen face-on; 1 also for a square at the camera's centre).
+double FacingCosine(const Rigid3& cam_from_marker);
+
 }  // namespace mcmt

@@ -12,6 +12,7 @@
 #include <memory>
 #include <numeric>
 
+#include "core/ippe.h"
 #include "core/math.h"
 
 namespace mcmt {
@@ -523,11 +524,7 @@ double ViewCosine(const BundleProblem& bp, const BundleObservation& o) {
   const Rigid3 cam_from_marker = RigidFromBlock(bp.cam_from_rig[o.camera].data()) *
                                  RigidFromBlock(bp.rig_from_object[o.frame].data()) *
                                  RigidFromBlock(bp.object_from_marker[o.marker].data());
-  const Eigen::Vector3d t = cam_from_marker.translation();
-  const double norm = t.norm();
-  if (norm <= 0) return 1.0;
-  const double c = std::abs(cam_from_marker.rotation().col(2).dot(t)) / norm;
-  return std::clamp(c, 0.05, 1.0);
+  return std::clamp(FacingCosine(cam_from_marker), 0.05, 1.0);
 }
 
 void BuildProblem(BundleProblem* bp, const BundleSettings& settings, BuiltProblem* out) {

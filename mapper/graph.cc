@@ -25,9 +25,6 @@ bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& opti
   return TranslationDistance(x, y) <= options.max_distance_m + options.max_distance_rel * scale;
 }
 
-namespace {
-
-// Events (not candidates) with a candidate consistent with x: each co-observation votes once.
 int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyOptions& consistency) {
   int support = 0, last_supported = -1;
   for (size_t i = 0; i < pair.a_from_b.size(); ++i) {
@@ -39,6 +36,8 @@ int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyO
   }
   return support;
 }
+
+namespace {
 
 double SummedProbeDistance(const std::vector<Rigid3>& candidates, const Rigid3& x, double scale) {
   const Eigen::Vector3d u[3] = {Eigen::Vector3d(scale, 0, 0), Eigen::Vector3d(0, scale, 0),
@@ -188,9 +187,8 @@ void ForEachPair(const std::vector<GraphItem>& items, const Fn& fn) {
 
 }  // namespace
 
-std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
-                                       const EdgeOptions& options, int threads) {
-  PairCollector collector(std::max(1, num_nodes), options.max_events);
+std::vector<PairCandidates> CollectPairs(const std::vector<GraphItem>& items, int num_nodes, int max_events) {
+  PairCollector collector(std::max(1, num_nodes), max_events);
   ForEachPair(items, [&](const GraphItem& a, const GraphItem& b) {
     collector.Count(a.node, b.node,
                     static_cast<int64_t>(a.node_from_common.size() * b.common_from_node.size()));
@@ -205,12 +203,23 @@ std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int 
         candidates.push_back(a_from_common * common_from_b);
     collector.Store(a.node, b.node, candidates);
   });
-  const std::vector<PairCandidates*> pairs = collector.Pairs();
+  std::vector<PairCandidates> pairs;
+  for (PairCandidates* p : collector.Pairs()) pairs.push_back(std::move(*p));
+  return pairs;
+}
+
+std::vector<GraphEdge> EvaluateEdges(const std::vector<PairCandidates>& pairs, const EdgeOptions& options,
+                                     int threads) {
   std::vector<GraphEdge> edges(pairs.size());
   ParallelFor(static_cast<int>(pairs.size()), threads, [&](int k) {
-    edges[k] = EvaluateEdge(*pairs[k], options.medoid, options.tau_n, options.consistency);
+    edges[k] = EvaluateEdge(pairs[k], options.medoid, options.tau_n, options.consistency);
   });
   return edges;
+}
+
+std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
+                                       const EdgeOptions& options, int threads) {
+  return EvaluateEdges(CollectPairs(items, num_nodes, options.max_events), options, threads);
 }
 
 namespace {
@@ -231,11 +240,13 @@ struct UnionFind {
 };
 }  // namespace
 
-std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges) {
+std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges,
+                                           const std::vector<GraphEdge>& forest) {
   std::sort(edges.begin(), edges.end(), [](const GraphEdge& x, const GraphEdge& y) {
     const bool x_unconfirmed = !x.Confirmed(), y_unconfirmed = !y.Confirmed();
     return std::tie(x_unconfirmed, x.cost, x.a, x.b) < std::tie(y_unconfirmed, y.cost, y.a, y.b);
   });
+  edges.insert(edges.begin(), forest.begin(), forest.end());
   UnionFind uf(n);
   std::vector<GraphEdge> tree;
   for (const GraphEdge& e : edges) {

@@ -47,6 +47,9 @@ struct GraphEdge {
   bool Confirmed() const { return support >= 2; }
 };
 
+// Events (not candidates) of the pair with a candidate consistent with x: each co-observation votes once.
+int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyOptions& consistency);
+
 // Medoid of the pair's candidates and the paper's edge cost; support against `consistency`.
 GraphEdge EvaluateEdge(const PairCandidates& pair, const MedoidOptions& medoid_options, double tau_n,
                        const ConsistencyOptions& consistency);
@@ -73,11 +76,17 @@ struct EdgeOptions {
 
 std::vector<GraphEdge> BuildGraphEdges(const std::vector<GraphItem>& items, int num_nodes,
                                        const EdgeOptions& options, int threads);
+// BuildGraphEdges in two steps: the candidates of every pair (sorted by (a, b)), then their edges.
+std::vector<PairCandidates> CollectPairs(const std::vector<GraphItem>& items, int num_nodes, int max_events);
+std::vector<GraphEdge> EvaluateEdges(const std::vector<PairCandidates>& pairs, const EdgeOptions& options,
+                                     int threads);
 
 // Kruskal's minimum spanning forest over nodes 0..n-1: confirmed edges (GraphEdge::Confirmed) first by
 // cost, then the others by cost, so an unconfirmed edge joins only what no confirmed path joins (ties broken
-// by (a, b)). Edges of infinite cost (no candidate) are left out.
-std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges);
+// by (a, b)). Edges of infinite cost (no candidate) are left out. `forest` (optional): edges of a forest
+// joined before all others (extending a tree with more edges).
+std::vector<GraphEdge> MinimumSpanningTree(int n, std::vector<GraphEdge> edges,
+                                           const std::vector<GraphEdge>& forest = {});
 
 // The node with the largest summed number of candidates over its edges (the paper's "best connected"),
 // -1 if there are no edges. `eligible` (optional, size n) restricts the choice.

@@ -1,8 +1,10 @@
 // Stage: the marker graph (the paper's step 3), which also finds the ids that are not on the object.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
+#include "core/math.h"
 #include "mapper/stages.h"
 
 namespace mcmt {
@@ -144,6 +146,143 @@ void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& i
   CheckRejectedDeclaredMarkers(layout, ids, rejected, o, report);
 }
 
+bool IsVerified(const GraphEdge& e, const MapperOptions& o) {
+  return e.support >= o.min_marker_support && e.SupportFraction() >= o.marker_inlier_fraction;
+}
+
+// The paper's step 2 on single markers: two cameras that see one marker in one frame give candidates of
+// their relative pose, whatever the layout. A preliminary rig (only confirmed edges), used only to check
+// the layout against the views of different cameras.
+TreePoses CamerasFromSingleMarkers(const Observations& observations, EdgeOptions options, int threads) {
+  const std::vector<Observation>& obs = observations.obs;
+  std::vector<int> order;
+  std::vector<double> depths;
+  int num_cameras = 0;
+  for (int i = 0; i < static_cast<int>(obs.size()); ++i) {
+    if (obs[i].kept == 0) continue;
+    order.push_back(i);
+    num_cameras = std::max(num_cameras, obs[i].camera + 1);
+    depths.push_back(obs[i].pose.best().cam_from_marker.translation().norm());
+  }
+  const auto key = [&](int i) { return std::make_pair(obs[i].frame, obs[i].marker); };
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return key(x) < key(y); });
+  std::vector<GraphItem> items(order.size());
+  for (size_t k = 0; k < order.size(); ++k) {
+    const Observation& ob = obs[order[k]];
+    items[k].group = k == 0 ? 0 : items[k - 1].group + (key(order[k]) != key(order[k - 1]));
+    items[k].node = ob.camera;
+    for (int h = 0; h < ob.kept; ++h) {
+      items[k].node_from_common.push_back(ob.pose.hypotheses[h].cam_from_marker);
+      items[k].common_from_node.push_back(Inverse(ob.pose.hypotheses[h].cam_from_marker));
+    }
+  }
+  options.medoid.point_scale = std::max(0.1, Median(depths));
+  std::vector<GraphEdge> confirmed;
+  for (const GraphEdge& e : BuildGraphEdges(items, num_cameras, options, threads))
+    if (e.Confirmed()) confirmed.push_back(e);
+  return PosesFromTree(num_cameras, BestConnectedNode(num_cameras, confirmed),
+                       MinimumSpanningTree(num_cameras, confirmed));
+}
+
+// Marker pairs seen in one frame by the preliminary rig's cameras: per frame and marker the observation
+// that sees it most face-on (where its square pose is surest), rig_from_marker per kept hypothesis.
+std::vector<PairCandidates> RigPairs(const Observations& observations, const TreePoses& rig, int max_events) {
+  std::vector<GraphItem> items;
+  std::vector<double> facing;  // per item
+  for (const Observation& ob : observations.obs) {
+    if (ob.kept == 0 || ob.camera >= static_cast<int>(rig.placed.size()) || !rig.placed[ob.camera]) continue;
+    int same = -1;
+    for (int k = static_cast<int>(items.size()) - 1; k >= 0 && items[k].group == ob.frame; --k)
+      if (items[k].node == ob.marker) same = k;
+    const double cosine = FacingCosine(ob.pose.best().cam_from_marker);
+    if (same >= 0 && facing[same] >= cosine) continue;
+    GraphItem item;
+    item.group = ob.frame;
+    item.node = ob.marker;
+    for (int h = 0; h < ob.kept; ++h) {
+      item.common_from_node.push_back(rig.root_from_node[ob.camera] * ob.pose.hypotheses[h].cam_from_marker);
+      item.node_from_common.push_back(Inverse(item.common_from_node.back()));
+    }
+    if (same >= 0) {
+      items[same] = std::move(item);
+      facing[same] = cosine;
+    } else {
+      items.push_back(std::move(item));
+      facing.push_back(cosine);
+    }
+  }
+  return CollectPairs(items, observations.NumMarkers(), max_events);
+}
+
+// Issue 15: neighbouring faces seen together by one camera only at grazing angles, where one square's pose
+// flips the same way in most of their shared frames, give a verified but wrong relative pose. Each pair is
+// checked against the rig's views (the pair seen in one frame by any cameras, each marker where its pose
+// is surest): a verified edge that they clearly contradict is replaced by theirs (the rig's edge verified,
+// different, and supported by more than twice the rig's frames that support the edge), an unverified one
+// they verify is taken from them. The rig's edges are evaluated only where they can decide.
+class RigCheck {
+ public:
+  RigCheck(const Observations& observations, const EdgeOptions& options, const MapperOptions& o, int threads)
+      : options_(options), o_(o), threads_(threads) {
+    pairs_ =
+        RigPairs(observations, CamerasFromSingleMarkers(observations, options, threads), options.max_events);
+    for (size_t k = 0; k < pairs_.size(); ++k) index_[{pairs_[k].a, pairs_[k].b}] = k;
+  }
+
+  std::vector<GraphEdge> Verified(const std::vector<GraphEdge>& edges, const std::vector<int>& ids,
+                                  MapReport* report) const {
+    std::vector<GraphEdge> out;
+    for (const GraphEdge& e : edges) {
+      const auto it = index_.find({e.a, e.b});
+      const PairCandidates* pair = it == index_.end() ? nullptr : &pairs_[it->second];
+      const bool verified = IsVerified(e, o_);
+      const int rig_support = pair && verified ? EventSupport(*pair, e.a_from_b, options_.consistency) : 0;
+      if (!pair || (verified && 2 * rig_support >= pair->num_events)) {
+        if (verified) out.push_back(e);
+        continue;
+      }
+      const GraphEdge r = EvaluateEdge(*pair, options_.medoid, options_.tau_n, options_.consistency);
+      if (!IsVerified(r, o_)) {
+        if (verified) out.push_back(e);
+      } else if (!verified) {
+        out.push_back(r);
+      } else if (Consistent(e.a_from_b, r.a_from_b, options_.consistency) || 2 * rig_support >= r.support) {
+        out.push_back(e);
+      } else {
+        report->warnings.push_back(
+            "markers " + std::to_string(ids[e.a]) + " and " + std::to_string(ids[e.b]) +
+            ": their relative pose seen by one camera (agreeing in " + std::to_string(e.support) + " of " +
+            std::to_string(e.stored_events) + " frames) is contradicted by the views of several cameras (" +
+            std::to_string(r.support) + " of " + std::to_string(r.stored_events) +
+            " frames agree on another, " + std::to_string(rig_support) +
+            " with it): taken from those (square poses flipped at grazing views)");
+        out.push_back(r);
+      }
+    }
+    return out;
+  }
+
+  // The rig's verified edges of pairs that no camera saw together (not in `edges`).
+  std::vector<GraphEdge> Bridges(const std::vector<GraphEdge>& edges) const {
+    std::vector<PairCandidates> unseen;
+    for (const PairCandidates& pair : pairs_)
+      if (std::none_of(edges.begin(), edges.end(),
+                       [&](const GraphEdge& e) { return e.a == pair.a && e.b == pair.b; }))
+        unseen.push_back(pair);
+    std::vector<GraphEdge> bridges;
+    for (const GraphEdge& r : EvaluateEdges(unseen, options_, threads_))
+      if (IsVerified(r, o_)) bridges.push_back(r);
+    return bridges;
+  }
+
+ private:
+  EdgeOptions options_;
+  const MapperOptions& o_;
+  int threads_;
+  std::vector<PairCandidates> pairs_;
+  std::map<std::pair<int, int>, size_t> index_;
+};
+
 }  // namespace
 
 std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs) {
@@ -193,18 +332,35 @@ MarkerLayout BuildMarkerGraph(const Observations& observations, const MapperOpti
   edge_options.tau_n = o.tau_n;
   edge_options.consistency = ConsistencyFor(o);
   layout.edges = BuildGraphEdges(MarkerItems(observations.obs), n, edge_options, threads);
-  std::vector<GraphEdge> verified;
+  const RigCheck rig(observations, edge_options, o, threads);
+  const std::vector<GraphEdge> verified = rig.Verified(layout.edges, observations.marker_ids, report);
+  // The reference as the paper chooses it, from the edges one camera verifies (the rig's edges count
+  // their candidates differently): a session whose edges the rig confirms keeps its frame.
+  std::vector<GraphEdge> seen_verified;
   for (const GraphEdge& e : layout.edges)
-    if (e.support >= o.min_marker_support && e.SupportFraction() >= o.marker_inlier_fraction)
-      verified.push_back(e);
-  layout.reference = ReferenceMarker(observations, verified, layout.observations, o);
+    if (IsVerified(e, o)) seen_verified.push_back(e);
+  layout.reference =
+      ReferenceMarker(observations, seen_verified.empty() ? verified : seen_verified, layout.observations, o);
   layout.placed = ComponentOf(n, layout.reference, verified);
+  // Pairs that no camera saw together join only markers the other edges leave unplaced.
+  std::vector<GraphEdge> bridges;
+  if (std::count(layout.placed.begin(), layout.placed.end(), false) > 0) {
+    bridges = rig.Bridges(layout.edges);
+    std::vector<GraphEdge> all = verified;
+    all.insert(all.end(), bridges.begin(), bridges.end());
+    layout.placed = ComponentOf(n, layout.reference, all);
+  }
   ReportUnplacedMarkers(layout, observations.marker_ids, o, report);
-  std::vector<GraphEdge> inside;
-  for (const GraphEdge& e : verified)
-    if (layout.placed[e.a] && layout.placed[e.b]) inside.push_back(e);
-  layout.object_from_marker =
-      PosesFromTree(n, layout.reference, MinimumSpanningTree(n, inside)).root_from_node;
+  const auto inside = [&](std::vector<GraphEdge> edges) {
+    edges.erase(
+        std::remove_if(edges.begin(), edges.end(),
+                       [&](const GraphEdge& e) { return !layout.placed[e.a] || !layout.placed[e.b]; }),
+        edges.end());
+    return edges;
+  };
+  const std::vector<GraphEdge> tree =
+      MinimumSpanningTree(n, inside(bridges), MinimumSpanningTree(n, inside(verified)));
+  layout.object_from_marker = PosesFromTree(n, layout.reference, tree).root_from_node;
   return layout;
 }
 

@@ -98,4 +98,11 @@ int NumKeptHypotheses(const SquarePose& pose, double tau_e) {
   return 2;
 }
 
+double FacingCosine(const Rigid3& cam_from_marker) {
+  const Eigen::Vector3d t = cam_from_marker.translation();
+  const double norm = t.norm();
+  if (norm <= 0) return 1.0;
+  return std::abs(cam_from_marker.rotation().col(2).dot(t)) / norm;
+}
+
 }  // namespace mcmt

@@ -5,7 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
 
+#include "core/ippe.h"
 #include "mapper/mapper.h"
 #include "sim/eval.h"
 #include "tests/support/mapper_sim.h"
@@ -172,6 +175,88 @@ TEST(MapperSynthetic, DeclaredMarkersThatMostlyDisagreeAreAnError) {
   options.allow_partial = false;
   options.marker_ids.clear();
   EXPECT_NO_THROW(MapMessages(messages, options));
+}
+
+// Issue 15 (reference renderer, 1.3 m, black tool): neighbouring faces are seen together by one camera
+// rarely and only at grazing angles, where one square's pose (IPPE) flipped the same way in 5 of their 6
+// shared frames: the mapper placed them 37 deg apart instead of 90 and published a map 936 mm off. Here a
+// camera frame sees two markers in one frame of five (the higher id is dropped in the others), and there
+// the higher id's corners are those of a wrong pose, the only one kept: `wrong` gives it from the true
+// cam_from_marker and the pose of the square IPPE finds in the true corners. The cameras' views of single
+// markers are right and outvote it.
+MapResult ExpectNeighboursSeenTogetherOutvoted(
+    const std::function<Rigid3(const Rigid3& cam_from_marker, const SquarePose& square)>& wrong,
+    const std::string& what, bool refined_too) {
+  sim::SessionOptions o = MapperSession(150, 43);
+  o.object.kind = sim::ObjectKind::kFourSided;
+  const Scene scene(o);
+  std::vector<detections_t> messages = scene.messages;
+  int wrong_poses = 0;
+  for (detections_t& d : messages) {
+    if (d.markers.size() < 2) continue;
+    const auto higher = std::max_element(d.markers.begin(), d.markers.end(),
+                                         [](const marker_t& x, const marker_t& y) { return x.id < y.id; });
+    if (d.seq % 5 != 0) {
+      d.markers.erase(higher);
+      d.num_markers = static_cast<int32_t>(d.markers.size());
+      continue;
+    }
+    const sim::SimCamera& camera = *scene.truth.FindCamera(d.camera);
+    const sim::SimMarker& marker = *scene.truth.FindMarker(higher->id);
+    const Rigid3 cam_from_marker =
+        camera.rig_from_cam.inverse() * scene.truth.frames[d.seq].rig_from_object * marker.object_from_marker;
+    MarkerCorners2d corners;
+    for (int k = 0; k < 4; ++k) corners[k] = Eigen::Vector2d(higher->corners[k][0], higher->corners[k][1]);
+    const Rigid3 shown = wrong(cam_from_marker, EstimateSquarePose(camera.model, corners, marker.size));
+    const MarkerCorners3d square = MarkerCornersInMarker(marker.size);
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d p = camera.model.Project(shown * square[k]);
+      higher->corners[k][0] = p.x();
+      higher->corners[k][1] = p.y();
+    }
+    ++wrong_poses;
+  }
+  EXPECT_GT(wrong_poses, 50) << what;
+  const MapResult result = MapMessages(messages, scene.Options());
+  // The graphs' layout: every marker, none turned (a wrong relative pose moves corners by 20-40 mm; the
+  // cameras' views place a marker to a few mm).
+  const sim::EvalResult initial = sim::Evaluate(scene.truth, &result.initial_map, &result.initial_trajectory);
+  EXPECT_EQ(initial.mapped_markers, initial.gt_markers) << what;
+  EXPECT_LT(initial.configuration_mm.max, 10.0) << what;
+  if (!refined_too) return result;
+  const sim::EvalResult e = sim::Evaluate(scene.truth, &result.map, &result.trajectory);
+  EXPECT_LT(e.camera_position_mm.max, 3.0) << what;
+  EXPECT_LT(e.configuration_mm.max, 0.5) << what;
+  return result;
+}
+
+TEST(MapperSynthetic, NeighboursSeenTogetherInWrongSquarePosesAreOutvoted) {
+  // The other IPPE pose of the square (its normal mirrored about the line of sight).
+  ExpectNeighboursSeenTogetherOutvoted(
+      [](const Rigid3& cam_from_marker, const SquarePose& square) {
+        const Rigid3& a = square.hypotheses[0].cam_from_marker;
+        return RotationAngle(a, cam_from_marker) <
+                       RotationAngle(square.hypotheses[1].cam_from_marker, cam_from_marker)
+                   ? square.hypotheses[1].cam_from_marker
+                   : a;
+      },
+      "flipped square poses", true);
+}
+
+TEST(MapperSynthetic, NeighboursSeenTogetherInOneWrongRelativePoseAreOutvoted) {
+  // The same wrong pose in every shared frame: turned 50 deg about its horizontal axis, so that the pair's
+  // relative pose seen by one camera agrees with itself (a verified but wrong edge of the marker graph).
+  // Its corners are far from the true ones, unlike a flipped square's: the graphs' layout is what is
+  // tested (the refinement's handling of 12 % gross observations is another matter).
+  const MapResult result = ExpectNeighboursSeenTogetherOutvoted(
+      [](const Rigid3& cam_from_marker, const SquarePose&) {
+        return cam_from_marker * Rigid3(Eigen::AngleAxisd(50.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()));
+      },
+      "turned 50 deg in every shared frame", false);
+  // Said, with the pair.
+  ASSERT_FALSE(result.report.warnings.empty());
+  EXPECT_NE(result.report.warnings[0].find("contradicted by the views of several cameras"), std::string::npos)
+      << result.report.warnings[0];
 }
 
 TEST(MapperSynthetic, DuplicateIdsInOneFrameAreDroppedAndReported) {
