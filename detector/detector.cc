@@ -144,13 +144,6 @@ struct PixelMap {
   Eigen::Vector2d ToIdeal(const Eigen::Vector2d& p) const { return camera ? camera->Undistort(p) : p; }
 };
 
-// The map of `camera` (none: identity; so is a camera without distortion).
-PixelMap MapOf(const CameraModel* camera) {
-  PixelMap map;
-  if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
-  return map;
-}
-
 // A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
 struct Line {
   Eigen::Vector2d n;
@@ -508,7 +501,6 @@ struct SideRays {
   double gamma_hint = 1.0;
   bool hold_gamma = false;
   int polarity = 0;
-  bool skew_pass = false;  // TurnSkewedSides's: TurnSide always takes its three rounds
 
   // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
   // the edge the model places, so they hold at any shift). `half`: -1 every ray, 0 / 1 those before /
@@ -538,13 +530,13 @@ struct SideRays {
 
 // The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
 // depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
-// the corners, each followed inward across the marker's rows (`skew_pass`: TurnSkewedSides's).
+// the corners, each followed inward across the marker's rows.
 double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap& map,
                        const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
                        const Line& line, const std::vector<char>& valid,
                        const std::vector<Eigen::Vector2d>& origins,
                        const std::vector<Eigen::Vector2d>& ideal_origins,
-                       const std::vector<Eigen::Vector2d>& normals, double sigma_along, bool skew_pass,
+                       const std::vector<Eigen::Vector2d>& normals, double sigma_along,
                        std::vector<SideRay>* rays) {
   rays->clear();
   double depth_sum = 0;
@@ -603,14 +595,6 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
       const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
       const int c = static_cast<int>(std::floor(at));
-      // Beyond the marker's outline (a ray near an acute corner drifts across the perpendicular side's
-      // border into its margin) the row is not the code the model takes it for: in the skew pass
-      // (TurnSkewedSides) the ray is not used. (Elsewhere too it would move the corners of passes that
-      // settle: fast mode's corners then left the accurate mode's, black tool 3 markers lost.)
-      if (skew_pass && (at < 0.0 || at > cells)) {
-        ok = false;
-        break;
-      }
       ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
       const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
       const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
@@ -702,7 +686,7 @@ void TurnSide(const SideRays& side, SideProfiles* profiles, SideFit* fit, double
     const double step = (e_half[1] - e_half[0]) / (along_half[1] - along_half[0]);
     turn += step;
     if (0.5 * std::abs(turn) > 1.5 * side.cell) return;
-    if ((!side.skew_pass && 0.5 * std::abs(step) < 0.1 * side.cell) || round == 2) break;
+    if (0.5 * std::abs(step) < 0.1 * side.cell || round == 2) break;
     side.SampleProfiles(profiles, fit->e, -1, split, turn);
     SideFit again = *fit;
     again.e = 0.0;
@@ -730,13 +714,12 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
                double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
-               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr,
-               bool skew_pass = false) {
+               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr) {
   if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   thread_local SideRays rays;
   const double cell = CollectSideRays(bits, cells, side, map, ideal_from_unit, unit_from_ideal, line, valid,
-                                      origins, ideal_origins, normals, sigma_along, skew_pass, &rays.rays);
+                                      origins, ideal_origins, normals, sigma_along, &rays.rays);
   if (!(cell > 0.5)) return NAN;
   rays.gray = &gray;
   rays.origins = &origins;
@@ -750,7 +733,6 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.gamma_hint = gamma_hint;
   rays.hold_gamma = hold_gamma;
   rays.polarity = polarity;
-  rays.skew_pass = skew_pass;
   if (!FitWholeSide(rays, profiles, fit)) return NAN;
   if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
   return fit->e;
@@ -945,31 +927,9 @@ struct Refinement {
   // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
   std::array<bool, 4> side_unfitted{};
   std::array<bool, 4> side_modelled{};  // located by the side model in the latest pass
-  bool skew_turn = false;  // the model turns the sides of a skewed quad (SkewTurnWeight; TurnSkewedSides)
   double sigma_sum = 0;
   int sigma_count = 0;
 };
-
-// How far side `side` of the quad `ideal` is turned by the model (LocateSide) where its crossings alone
-// would give its direction: 0 to 1 as the larger |cosine| of the quad's angles at the side's ends grows
-// from kSkewTurnFrom to kSkewTurnFull (smoothly: the corners must not depend on the start; angles below
-// 60 to 46 deg). On a quad that skewed (views beyond about 65 deg with the tilt's axis off the sides) the
-// crossings' line turns its end at the acute angle inward: the perpendicular side's border and margin
-// lie within the blur and the rows' reach there, and the code cells next to the border are narrower than
-// the blur (bench/results/2026-12-05-steep.md, 2026-12-05-steep2.md). Below, the crossings' direction is
-// the better one (their rays are twice the halves' the model turns by: from 0.3 / 0.5 the median corner
-// errors of ImagingCatalogueOnReferenceRenders grew by 0.01-0.025 px).
-constexpr double kSkewTurnFrom = 0.5, kSkewTurnFull = 0.7;
-double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
-  double skew = 0;
-  for (int k : {side, (side + 1) % 4}) {
-    const Eigen::Vector2d a = (ideal[(k + 3) % 4] - ideal[k]).normalized();
-    const Eigen::Vector2d b = (ideal[(k + 1) % 4] - ideal[k]).normalized();
-    skew = std::max(skew, std::abs(a.dot(b)));
-  }
-  const double x = std::clamp((skew - kSkewTurnFrom) / (kSkewTurnFull - kSkewTurnFrom), 0.0, 1.0);
-  return x * x * (3.0 - 2.0 * x);
-}
 
 // Side `side`'s line in pass `pass` (its crossings', or with the model its model offset about them or
 // about the current side), false when it cannot be located without the model or has too few rays.
@@ -999,21 +959,18 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   // The line's direction is the crossings' where their levels have the marker's polarity (the border's
   // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
   // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the
-  // side), the model turns the line too. So it does on the sides of a skewed quad in the skew pass
-  // (TurnSkewedSides).
+  // side), the model turns the line too.
   const bool turn_line = !crossed || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
-  const double turn_weight = turn_line ? 1.0 : r->skew_turn ? SkewTurnWeight(ideal, side) : 0.0;
   double tilt = NAN, tilt_at = 0.5;
   // A known gamma (held_gamma > 0) is held on every side.
   const double gamma_hint = r->held_gamma > 0 ? r->held_gamma : OtherSidesGamma(r->side_fits, side);
-  const double e = FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line,
-                           s.valid, s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma,
-                           gamma_hint, r->held_gamma > 0, r->polarity, &r->side_profiles, &fit,
-                           turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn);
+  const double e =
+      FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line, s.valid,
+              s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma, gamma_hint, r->held_gamma > 0,
+              r->polarity, &r->side_profiles, &fit, turn_line ? &tilt : nullptr, &tilt_at);
   r->side_modelled[side] = std::isfinite(e);
   if (!std::isfinite(e)) return true;
   r->side_unfitted[side] = false;
-  tilt *= turn_weight;
   MoveLine(ideal, ideal_from_unit, side, e, tilt, tilt_at, line);
   r->sigma_sum += fit.sigma, ++r->sigma_count;
   return true;
@@ -1056,7 +1013,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   CV_Assert(model_fit || !model_only);
   if (blur_sigma) *blur_sigma = NAN;
   CV_Assert(gray.type() == CV_8UC1);
-  const PixelMap map = MapOf(camera);
+  PixelMap map;
+  if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
   Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
@@ -1104,37 +1062,6 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   if (blur_sigma && r.sigma_count > 0) *blur_sigma = r.sigma_sum / r.sigma_count;
   return true;
 }
-
-// The corners of a refinement's end `corners` with the sides of a skewed quad turned by the model
-// (SkewTurnWeight): one model pass to start the fits from the profiles about them, then kSkewPasses that
-// also turn those sides; false (corners unchanged) when the quad is not skewed or a pass fails. A fixed
-// number of passes, not passes until the corners settle: turned by the model, a skewed side's line has
-// two fixed points on some markers (no margin on grey, 25.6 px at 71 deg: 0.65 px apart), and which one
-// passes that settle reach depends on where they start (fast mode's candidates are not the accurate
-// mode's). These passes start from the refinement's end, which does not depend on the start, and in
-// them TurnSide always takes its three rounds (no choice that jumps with the corners).
-constexpr int kSkewPasses = 2;
-bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                     std::array<cv::Point2d, 4>* corners, bool fit_gamma, int polarity, double held_gamma) {
-  std::array<Eigen::Vector2d, 4> ideal;
-  const PixelMap map = MapOf(camera);
-  for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(Eigen::Vector2d((*corners)[k].x, (*corners)[k].y));
-  double weight = 0;
-  for (int side = 0; side < 4; ++side) weight = std::max(weight, SkewTurnWeight(ideal, side));
-  if (weight <= 0) return false;
-  Refinement r(gray, bits, cells, map, true, fit_gamma, held_gamma, polarity, 1.0, nullptr);
-  for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
-  for (int pass = 1; pass <= 1 + kSkewPasses; ++pass) {
-    r.skew_turn = pass >= 2;
-    std::array<Eigen::Vector2d, 4> next;
-    if (!RefinePass(&r, pass, true, &next)) return false;
-    r.img = next;
-  }
-  for (int k = 0; k < 4; ++k)
-    if (r.side_unfitted[k] || !std::isfinite(r.img[k].x()) || !std::isfinite(r.img[k].y())) return false;
-  for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(r.img[k].x(), r.img[k].y());
-  return true;
-}
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
@@ -1159,14 +1086,12 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   // px), and that first fit was made about corners that depend on the candidate (fast mode's region
   // search gives another one). So the corners are refined again from where the passes ended, with model
   // passes only and the fits started from the profiles about those corners, until such a round moves
-  // no corner by kSettledPx (at most kRounds; 0.01 px left fast mode's corners of a wood-mounted marker at
-  // 70 deg 0.018 px from the accurate mode's, which the skew pass took to 0.024). Rounds that do not
-  // settle are mostly a two-cycle (a side whose cold fit alternates between two margins); which state
-  // the last round is in depends on the start, the mean of the last two does not. Last, the sides of a
-  // skewed quad are turned by the model (TurnSkewedSides).
+  // no corner by kSettledPx (at most kRounds). Rounds that do not settle are mostly a two-cycle (a side
+  // whose cold fit alternates between two margins); which state the last round is in depends on the
+  // start, the mean of the last two does not.
   auto take = [&](std::array<cv::Point2d, 4> c, double sigma, bool kept) {
     constexpr int kRounds = 4;
-    constexpr double kSettledPx = 0.005;
+    constexpr double kSettledPx = 0.01;
     std::array<cv::Point2d, 4> before = c;
     int unsettled = 0;
     for (int round = 0; round < kRounds && model_fit; ++round) {
@@ -1188,7 +1113,6 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
     }
     if (unsettled >= 2)
       for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
-    if (model_fit) TurnSkewedSides(gray, cells, bits, camera, &c, fit_gamma, polarity, held_gamma);
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
     if (kept_lines) *kept_lines = kept;

@@ -319,49 +319,6 @@ TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
   EXPECT_TRUE(seen);
 }
 
-// Steep views keep their shape (issue 15): markers of the paper's rig's size (20-25 px head-on) at 65-75
-// deg, plain prints, detected with the defaults; each marker's long and short diagonal against the truth.
-// With the sides' directions from their crossings alone, the line of each side turned its end at the
-// quad's acute angle inward (the perpendicular side's border and margin within the blur there): the long
-// diagonal came out short and the short one long (these 83 markers: mean -0.34 / +1.49 %; such errors set
-// each steep view's distance and so the map's scale: MapperReferenceRenders). The model turns the sides of
-// skewed quads (SkewTurnWeight in detector.cc): +0.18 / +0.52 %. Bounds: the long diagonal within 0.25 %,
-// the short one within 0.7 % of the long one's error (the quad's shape).
-TEST(DetectorAccuracy, SteepViewsKeepTheirDiagonals) {
-  auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  MarkerDetector detector(mc, DetectorOptions());
-  testing::ReferenceScene scene;
-  scene.min_side_px = 20, scene.max_side_px = 25, scene.min_angle_deg = 65, scene.max_angle_deg = 75;
-  scene.markers = 8;
-  std::mt19937_64 rng(5);
-  std::vector<double> long_error, short_error;  // relative, per marker found
-  for (int i = 0; i < 12; ++i) {
-    std::vector<testing::RenderedMarker> truth;
-    const cv::Mat image = testing::RenderReference(*dict, scene, testing::Imaging(), rng, &truth);
-    for (const marker_t& m : detector.Detect(image))
-      for (const auto& t : truth) {
-        if (t.id != m.id) continue;
-        auto diagonal = [](const cv::Point2d& a, const cv::Point2d& b) { return cv::norm(b - a); };
-        const cv::Point2d got[4] = {{m.corners[0][0], m.corners[0][1]},
-                                    {m.corners[1][0], m.corners[1][1]},
-                                    {m.corners[2][0], m.corners[2][1]},
-                                    {m.corners[3][0], m.corners[3][1]}};
-        const double true02 = diagonal(t.corners[0], t.corners[2]),
-                     true13 = diagonal(t.corners[1], t.corners[3]);
-        const double e02 = diagonal(got[0], got[2]) / true02 - 1, e13 = diagonal(got[1], got[3]) / true13 - 1;
-        long_error.push_back(true02 >= true13 ? e02 : e13),
-            short_error.push_back(true02 >= true13 ? e13 : e02);
-      }
-  }
-  std::printf("%zu markers at 65-75 deg: long / short diagonal %+.3f / %+.3f %%\n", long_error.size(),
-              100 * testing::MeanOf(long_error), 100 * testing::MeanOf(short_error));
-  EXPECT_GE(long_error.size(), 40u);
-  EXPECT_LE(std::abs(testing::MeanOf(long_error)), 0.0025);
-  EXPECT_LE(std::abs(testing::MeanOf(short_error) - testing::MeanOf(long_error)), 0.007);
-}
-
 // Sizes x angles of the plain condition and the webcam-like one: the bias does not depend on the
 // marker's size or on its view angle.
 TEST(DetectorAccuracy, SizesAndAnglesOnReferenceRenders) {
