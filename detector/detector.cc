@@ -929,7 +929,9 @@ struct Refinement {
         held_gamma(held_gamma),
         polarity(polarity),
         first_width(first_width),
-        kept_lines(kept_lines) {}
+        kept_lines(kept_lines) {
+    side_moved.fill(std::numeric_limits<double>::infinity());
+  }
   const cv::Mat& gray;
   const cv::Mat& bits;
   int cells;
@@ -1085,7 +1087,6 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   CV_Assert(gray.type() == CV_8UC1);
   const PixelMap map = MapOf(camera);
   Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
-  r.side_moved.fill(std::numeric_limits<double>::infinity());
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
   double perimeter = 0;
