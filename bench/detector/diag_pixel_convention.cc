@@ -6,29 +6,22 @@
 //   diag_pixel_convention RIG_YAML [CAMERA_INDEX (0)]
 #include <cstdio>
 #include <map>
-#include <opencv2/aruco/charuco.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "detector/detector.h"
 #include "detector/source.h"
+#include "tests/detector/chessboard_truth.h"
 
 using namespace mcmt;
 
 namespace {
 
-// The chessboard corners of the caliscope board (inverted print) in `gray`, by id.
+// The chessboard corners of the caliscope board in `gray`, by id (no camera model: pixel positions only).
 std::map<int, cv::Point2f> CharucoCorners(const cv::Mat& gray) {
-  static const auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000);
-  static const auto board = cv::aruco::CharucoBoard::create(4, 5, 0.054, 0.0405, dict);
-  const cv::Mat inv = 255 - gray;
-  std::vector<std::vector<cv::Point2f>> markers;
-  std::vector<int> marker_ids, ids;
-  std::vector<cv::Point2f> corners;
-  cv::aruco::detectMarkers(inv, dict, markers, marker_ids);
-  if (marker_ids.size() >= 3)
-    cv::aruco::interpolateCornersCharuco(markers, marker_ids, inv, board, corners, ids);
+  static const auto board = testing::CaliscopeCharucoBoard();
+  const testing::CharucoDetection d = testing::DetectCharuco(gray, board, cv::Mat(), cv::Mat());
   std::map<int, cv::Point2f> out;
-  for (size_t i = 0; i < ids.size(); ++i) out[ids[i]] = corners[i];
+  for (size_t i = 0; i < d.corner_ids.size(); ++i) out[d.corner_ids[i]] = d.corners[i];
   return out;
 }
 

@@ -21,8 +21,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const RigConfig rig = LoadRigConfig(argv[1]);
-  auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000);
-  auto board = cv::aruco::CharucoBoard::create(4, 5, 0.054, 0.0405, dict);
+  const auto board = testing::CaliscopeCharucoBoard();
   const double sq = 0.054, cell = 0.0405 / 6;
   // Squares holding a marker (from the markers' centres).
   std::set<std::pair<int, int>> marked;

@@ -100,12 +100,6 @@ double ScaleErrorPercent(const RigConfig& rig, const Frames& frames, bool sides,
 
 std::string Key(const detections_t& d) { return d.camera + "/" + std::to_string(d.utime); }
 
-MarkerCorners2d Corners(const marker_t& m) {
-  MarkerCorners2d c;
-  for (int k = 0; k < 4; ++k) c[k] = Eigen::Vector2d(m.corners[k][0], m.corners[k][1]);
-  return c;
-}
-
 // Corner k's weak (along both sides) and strong unit directions, signed outward, and their eigenvalues
 // of n1 n1^T + n2 n2^T; its angle, deg.
 struct CornerFrame {
@@ -174,7 +168,7 @@ Frames Hybrid(const Frames& predicted, const std::map<std::string, const detecti
     for (marker_t& m : d.markers)
       for (const marker_t& g : det->markers) {
         if (g.id != m.id) continue;
-        const MarkerCorners2d got = Corners(g), want = Corners(m);
+        const MarkerCorners2d got = CornersOf(g), want = CornersOf(m);
         for (int k = 0; k < 4; ++k) {
           const Eigen::Vector2d p =
               want[k] + part(FrameOf(got, k), got[k] - want[k] - shift.at(d.camera), shift.at(d.camera));
@@ -212,7 +206,7 @@ Shifts MeanShifts(const Frames& predicted, const ByKey& by_key) {
         if (g.id == m.id)
           for (int k = 0; k < 4; ++k) {
             auto [it, added] = shift.try_emplace(p.camera, Eigen::Vector2d::Zero());
-            it->second += Corners(g)[k] - Corners(m)[k], ++count[p.camera];
+            it->second += CornersOf(g)[k] - CornersOf(m)[k], ++count[p.camera];
           }
   for (auto& [camera, s] : shift) {
     s /= count[camera];
@@ -234,7 +228,7 @@ Frames PrintCornerErrors(const Frames& predicted, const ByKey& by_key, const Shi
       for (const marker_t& g : by_key.at(Key(p))->markers) {
         if (g.id != m.id) continue;
         kept.markers.push_back(g);
-        const MarkerCorners2d got = Corners(g), want = Corners(m);
+        const MarkerCorners2d got = CornersOf(g), want = CornersOf(m);
         for (int k = 0; k < 4; ++k) {
           const CornerFrame f = FrameOf(got, k);
           const int band = std::clamp(static_cast<int>(std::floor(f.angle_deg / 15)), 3, 8);

@@ -181,13 +181,38 @@ struct ChessboardCorners {
   std::vector<cv::Point2d> plane, ideal, raw;
 };
 
+// The caliscope recordings' ChArUco board: 4 x 5 squares of 5.4 cm, markers of 4.05 cm, DICT_4X4_1000.
+inline cv::Ptr<cv::aruco::CharucoBoard> CaliscopeCharucoBoard() {
+  return cv::aruco::CharucoBoard::create(4, 5, 0.054, 0.0405,
+                                         cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000));
+}
+
+// OpenCV's detection of the board in `gray` (the print is inverted): its markers, and its chessboard
+// corners by ChArUco interpolation with the camera's matrix and distortion where given (empty Mats:
+// none); no corners where fewer than 3 markers are found.
+struct CharucoDetection {
+  std::vector<std::vector<cv::Point2f>> markers;
+  std::vector<int> marker_ids;
+  std::vector<cv::Point2f> corners;
+  std::vector<int> corner_ids;
+};
+inline CharucoDetection DetectCharuco(const cv::Mat& gray, const cv::Ptr<cv::aruco::CharucoBoard>& board,
+                                      const cv::Mat& K, const cv::Mat& dist) {
+  CharucoDetection d;
+  const cv::Mat inv = 255 - gray;
+  cv::aruco::detectMarkers(inv, board->dictionary, d.markers, d.marker_ids);
+  if (d.marker_ids.size() >= 3)
+    cv::aruco::interpolateCornersCharuco(d.markers, d.marker_ids, inv, board, d.corners, d.corner_ids, K,
+                                         dist);
+  return d;
+}
+
 // Cameras of `rig` (all, or only `camera`), at most `max_frames` frames each (< 0: all). `hook` (optional)
 // sees every frame with a homography.
 inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_frames = -1,
                                                   const std::string& camera = "",
                                                   const ChessboardFrameHook& hook = nullptr) {
-  auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000);
-  auto board = cv::aruco::CharucoBoard::create(4, 5, 0.054, 0.0405, dict);
+  const auto board = CaliscopeCharucoBoard();
   std::map<int, int> marker_index;
   for (size_t i = 0; i < board->ids.size(); ++i) marker_index[board->ids[i]] = static_cast<int>(i);
   ChessboardComparison out;
@@ -218,15 +243,12 @@ inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_
         cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
       else
         gray = frame.image;
-      const cv::Mat inv = 255 - gray;  // the print is inverted
-      std::vector<std::vector<cv::Point2f>> corners;
-      std::vector<int> ids;
-      cv::aruco::detectMarkers(inv, dict, corners, ids);
-      if (ids.size() < 3) continue;
-      std::vector<cv::Point2f> cc;
-      std::vector<int> cids;
-      cv::aruco::interpolateCornersCharuco(corners, ids, inv, board, cc, cids, K, dist);
-      if (cc.size() < 6) continue;
+      const CharucoDetection detection = DetectCharuco(gray, board, K, dist);
+      const std::vector<std::vector<cv::Point2f>>& corners = detection.markers;
+      const std::vector<int>& ids = detection.marker_ids;
+      const std::vector<cv::Point2f>& cc = detection.corners;
+      const std::vector<int>& cids = detection.corner_ids;
+      if (ids.size() < 3 || cc.size() < 6) continue;
       ChessboardCorners xc;
       for (size_t i = 0; i < cc.size(); ++i) {
         const cv::Point3f p = board->chessboardCorners[cids[i]];
