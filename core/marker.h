@@ -5,6 +5,8 @@
 #include <Eigen/Core>
 #include <array>
 #include <map>
+#include <optional>
+#include <string>
 
 namespace mcmt {
 
@@ -23,7 +25,19 @@ MarkerCorners3d MarkerCornersInMarker(double side);
 // more. `floor` (>= 0, relative) keeps every direction's weight above floor / (1 + floor).
 using CornerWeights = std::array<Eigen::Matrix2d, 4>;
 CornerWeights CornerSqrtInformation(const MarkerCorners2d& corners, double floor);
-// The help of the options that choose it (mapper and tracker: corner_weights, corner_weight_floor).
+// How the corners' residuals weigh in a pose or bundle solve: the options corner_weights (`mode`) and
+// corner_weight_floor (`floor`) of the mapper and the tracker, one struct in both option sets.
+struct CornerWeighting {
+  std::string mode = "equal";  // "equal" or "sides" (kCornerWeightsHelp)
+  double floor = 0.05;         // relative (kCornerWeightFloorHelp)
+  bool BySides() const { return mode == "sides"; }
+  // By sides: CornerSqrtInformation(corners, floor); equal: nullopt (the plain pixel residual).
+  std::optional<CornerWeights> For(const MarkerCorners2d& corners) const {
+    if (!BySides()) return std::nullopt;
+    return CornerSqrtInformation(corners, floor);
+  }
+};
+// The help of the options that choose it.
 inline constexpr const char* kCornerWeightsHelp =
     "equal (each corner's x and y residual weighs the same) or sides (corners as intersections of the "
     "marker's fitted sides: along two sides meeting at a narrow angle a corner weighs little)";

@@ -166,9 +166,11 @@ class OptionTable {
   }
   const std::string& section() const { return section_; }
 
-  // A Markdown table: | key | unit | default | allowed | meaning |, defaults from T{}.
+  // A Markdown table: | key | unit | default | allowed | meaning |, defaults from T{}. (On the heap: GCC 12
+  // warns that the string members of a nested option struct on the stack "may be used uninitialized".)
   std::string Markdown() const {
-    const T defaults{};
+    const auto defaults_owner = std::make_unique<const T>();
+    const T& defaults = *defaults_owner;
     std::ostringstream out;
     out << "| `" << section_ << ":` key | unit | default | allowed | meaning |\n|---|---|---|---|---|\n";
     for (const Entry& e : entries_) {

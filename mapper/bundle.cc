@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 
 #include "core/ippe.h"
 #include "core/math.h"
@@ -549,12 +550,8 @@ void BuildProblem(BundleProblem* bp, const BundleSettings& settings, BuiltProble
                                                        ceres::DO_NOT_TAKE_OWNERSHIP));
       loss = out->weighted.back().get();
     }
-    CornerWeights weights;
-    const CornerWeights* w = nullptr;
-    if (settings.corner_weight_floor >= 0) {
-      weights = CornerSqrtInformation(o.corners, settings.corner_weight_floor);
-      w = &weights;
-    }
+    const std::optional<CornerWeights> weights = settings.corner_weighting.For(o.corners);
+    const CornerWeights* w = weights ? &*weights : nullptr;
     if (bp->RefinesIntrinsics(o.camera) || bp->RefinesTime()) {
       AddSelfCalibrationResidual(bp, i, w, loss, &problem);
     } else {

@@ -188,8 +188,8 @@ struct BundleSettings {
   double huber_px = 1.0;  // <= 0: no robust loss
   // Squared residuals of an observation weighted by cos(view angle)^this at the problem's start (0: none).
   double view_weight_power = 0.0;
-  // >= 0: each corner's residual weighed by CornerSqrtInformation(observed corners, this floor); < 0: equal.
-  double corner_weight_floor = -1.0;
+  // Each corner's residual weighed by corner_weighting.For(observed corners) (none when equal).
+  CornerWeighting corner_weighting;
   int max_iterations = 100;
   bool paper_stop = true;
   double paper_stop_px = 1e-4;

@@ -77,8 +77,7 @@ int Run(int argc, char** argv) {
                "reports suspect or excluded (MCMT_TRACKER_STATUS) from frames of object poses seen by the "
                "others, add a rig camera that publishes and is not in the map, publish each new map on "
                "MCMT_MAP (mapper.maintain_frames, maintain_added_frames)");
-  args.AddString("pose-channel", &pose_channel,
-                 "with --maintain: the tracker's object_pose_t channel");
+  args.AddString("pose-channel", &pose_channel, "with --maintain: the tracker's object_pose_t channel");
   args.AddEpilog(
       "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
       "mapper_command_t\n"

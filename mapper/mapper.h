@@ -116,8 +116,8 @@ struct MapperOptions {
   // How a corner's x and y residuals weigh: "equal", or "sides": the detector's corners are intersections
   // of the marker's fitted sides, each located along its normal; a corner where two sides meet at a
   // narrow angle (a marker seen steeply) is barely located along them (CornerSqrtInformation, core/marker.h).
-  std::string corner_weights = "equal";
-  double corner_weight_floor = 0.05;  // relative: the least weight of a direction (sides)
+  // Keys corner_weights (mode) and corner_weight_floor (floor).
+  CornerWeighting corner_weighting;
   // After the first solve, observations whose RMS corner error exceeds this are rejected (gross), pixels.
   double outlier_px = 5.0;
   // Outlier rounds: solve, reject, re-solve at most this many times.

@@ -25,8 +25,10 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
            .Add("huber_px", &O::huber_px, "px", "Huber threshold on an observation's RMS corner error")
            .Add("view_weight_power", &O::view_weight_power, "",
                 "squared corner residuals weighted by cos(view angle)^this (0: equal weights)", AtLeast(0))
-           .Add("corner_weights", &O::corner_weights, kCornerWeightsHelp, OneOf({"equal", "sides"}))
-           .Add("corner_weight_floor", &O::corner_weight_floor, "", kCornerWeightFloorHelp, AtLeast(0))
+           .Add("corner_weights", OptionTable<O>::Of(&O::corner_weighting, &CornerWeighting::mode),
+                kCornerWeightsHelp, OneOf({"equal", "sides"}))
+           .Add("corner_weight_floor", OptionTable<O>::Of(&O::corner_weighting, &CornerWeighting::floor), "",
+                kCornerWeightFloorHelp, AtLeast(0))
            .Add("outlier_px", &O::outlier_px, "px",
                 "after a solve, observations with a larger RMS corner error are rejected and the problem "
                 "re-solved",

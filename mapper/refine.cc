@@ -82,7 +82,7 @@ BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
   BundleSettings settings;
   settings.huber_px = o.huber_px;
   settings.view_weight_power = o.view_weight_power;
-  settings.corner_weight_floor = o.corner_weights == "sides" ? o.corner_weight_floor : -1.0;
+  settings.corner_weighting = o.corner_weighting;
   settings.max_iterations = o.max_iterations;
   settings.paper_stop = o.paper_stop;
   settings.paper_stop_px = o.paper_stop_px;

@@ -43,8 +43,10 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 Above(0))
            .Add("outlier_px", &O::outlier_px, "px",
                 "a marker observation whose RMS corner error exceeds this is dropped", Above(0))
-           .Add("corner_weights", &O::corner_weights, kCornerWeightsHelp, OneOf({"equal", "sides"}))
-           .Add("corner_weight_floor", &O::corner_weight_floor, "", kCornerWeightFloorHelp, AtLeast(0))
+           .Add("corner_weights", OptionTable<O>::Of(&O::corner_weighting, &CornerWeighting::mode),
+                kCornerWeightsHelp, OneOf({"equal", "sides"}))
+           .Add("corner_weight_floor", OptionTable<O>::Of(&O::corner_weighting, &CornerWeighting::floor), "",
+                kCornerWeightFloorHelp, AtLeast(0))
            .Add("ambiguity_ratio", &O::ambiguity_ratio, "",
                 "tau_e: a single square with IPPE ratio below it is ambiguous", AtLeast(1))
            .Add("max_gap_s", &O::max_gap_s, "s", "no prediction across a longer gap (re-initialise)",

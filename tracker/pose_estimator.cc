@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -121,16 +122,14 @@ double PoseEstimator::RmsAt(const std::vector<MarkerObservation>& observations, 
 std::vector<PosePoint> PoseEstimator::Points(const std::vector<Obs>& obs,
                                              const std::vector<char>& active) const {
   std::vector<PosePoint> points;
-  const bool sides = options_.corner_weights == "sides";
   for (size_t i = 0; i < obs.size(); ++i) {
     if (!active[i]) continue;
     const Camera& cam = cameras_[obs[i].camera];
     const Marker& mk = markers_[obs[i].marker];
-    const CornerWeights weights =
-        sides ? CornerSqrtInformation(*obs[i].pixels, options_.corner_weight_floor) : CornerWeights();
+    const std::optional<CornerWeights> weights = options_.corner_weighting.For(*obs[i].pixels);
     for (int c = 0; c < 4; ++c) {
       points.push_back({&cam.model, obs[i].cam_from_rig, mk.corners_object[c], (*obs[i].pixels)[c]});
-      if (sides) points.back().sqrt_information = weights[c];
+      if (weights) points.back().sqrt_information = (*weights)[c];
     }
   }
   return points;

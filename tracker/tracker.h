@@ -66,11 +66,9 @@ struct TrackerOptions {
   double max_gap_s = 0.5;        // no prediction across a gap longer than this (re-initialise)
   double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
   int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
-  // How a corner's x and y residuals weigh: "equal" or "sides" (CornerSqrtInformation, core/marker.h: a
-  // corner where the marker's sides meet at a narrow angle is barely located along them); the floor is the
-  // least weight of a direction, relative.
-  std::string corner_weights = "equal";
-  double corner_weight_floor = 0.05;
+  // How a corner's x and y residuals weigh (keys corner_weights and corner_weight_floor; core/marker.h: a
+  // corner where the marker's sides meet at a narrow angle is barely located along them).
+  CornerWeighting corner_weighting;
   double status_period_s = 5.0;  // status line period (wall time); 0: none
   // Per-camera health (tracker/health.h), published on MCMT_TRACKER_STATUS; false: every camera is used.
   // Keys camera_health and health_* (health_gate_px, health_window_frames, ...).

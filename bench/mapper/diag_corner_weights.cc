@@ -84,8 +84,7 @@ double ScaleErrorPercent(const RigConfig& rig, const Frames& frames, bool sides,
                                     [&](const CameraConfig& c) { return !seen.count(c.name); }),
                      used.cameras.end());
   MapperOptions options = MapperOptions::FromConfig(used);
-  options.corner_weights = sides ? "sides" : "equal";
-  options.corner_weight_floor = floor;
+  options.corner_weighting = {sides ? "sides" : "equal", floor};
   Mapper mapper(options);
   for (const detections_t& d : frames) mapper.Add(d);
   try {

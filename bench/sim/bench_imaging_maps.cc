@@ -231,8 +231,8 @@ int main(int argc, char** argv) {
                        sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
       MapperOptions mo = session.Mapping();
       if (const char* e = std::getenv("MCMT_VIEW_WEIGHT_POWER")) mo.view_weight_power = std::atof(e);
-      if (const char* e = std::getenv("MCMT_CORNER_WEIGHTS")) mo.corner_weights = e;
-      if (const char* e = std::getenv("MCMT_CORNER_WEIGHT_FLOOR")) mo.corner_weight_floor = std::atof(e);
+      if (const char* e = std::getenv("MCMT_CORNER_WEIGHTS")) mo.corner_weighting.mode = e;
+      if (const char* e = std::getenv("MCMT_CORNER_WEIGHT_FLOOR")) mo.corner_weighting.floor = std::atof(e);
       Mapper mapper(mo), reference(mo);
       if (const char* path = std::getenv("MCMT_IMAGING_LOAD")) {
         const std::vector<detections_t> loaded = LoadDetections(path);

@@ -41,11 +41,14 @@ TEST(MapperOptions, ReadsMapperAndSyncSections) {
       MapperOptions::FromConfig(LoadRigConfig(PinnedRigWith("read",
                                                             "  tau_e: 3\n  linear_solver: dense_schur\n"
                                                             "  reference_camera: cam2\n"
+                                                            "  corner_weights: sides\n"
                                                             "sync: {tolerance_ms: 4.5}\n")));
   EXPECT_EQ(o.tau_e, 3.0);
   EXPECT_EQ(o.outlier_px, 0.55);
   EXPECT_EQ(o.linear_solver, "dense_schur");
   EXPECT_EQ(o.reference_camera, "cam2");
+  EXPECT_TRUE(o.corner_weighting.BySides());
+  EXPECT_EQ(o.corner_weighting.floor, CornerWeighting().floor);
   EXPECT_EQ(o.sync_tolerance_ms, 4.5);
   EXPECT_EQ(o.sync_tolerance_us(), 4500);
   EXPECT_EQ(o.cameras.size(), 5u);
@@ -60,6 +63,10 @@ TEST(MapperOptions, FileErrorsNameTheKey) {
             "'cholesky'");
   EXPECT_EQ(FromConfigError("ref", "  reference_camera: cam7\n"),
             "mapper.reference_camera: no camera named 'cam7' (cameras: cam0, cam1, cam2, cam3, cam4)");
+  EXPECT_EQ(FromConfigError("weights", "  corner_weights: diagonal\n"),
+            "mapper.corner_weights: expected one of equal, sides, got 'diagonal'");
+  EXPECT_EQ(FromConfigError("floor", "  corner_weight_floor: -0.1\n"),
+            "mapper.corner_weight_floor: must be >= 0, got -0.1");
   EXPECT_EQ(FromConfigError("sync", "sync: {tolerance_ms: -1}\n"), "sync.tolerance_ms: must be >= 0, got -1");
   // Self-calibration keys: declared in the table or read beside it, the same error form.
   EXPECT_EQ(FromConfigError("ratio", "  observability_ratio: 1.5\n"),

@@ -157,7 +157,7 @@ TEST_F(MapperRealData, CornerWeightsBySidesDoNotBringTheBoardsScaleCloser) {
     double error_pct[2];
     for (int sides = 0; sides < 2; ++sides) {
       MapperOptions options = MapperOptions::FromConfig(rig);
-      options.corner_weights = sides ? "sides" : "equal";
+      options.corner_weighting.mode = sides ? "sides" : "equal";
       Mapper mapper(options);
       for (const auto& d : DetectAll(rig)) mapper.Add(d);
       const MapResult result = mapper.Solve();

@@ -119,7 +119,7 @@ TEST(MapperReferenceRenders, PaperRigFromAnIndependentRenderer) {
   const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(s.markers.dictionary);
   const testing::Imaging plain = testing::ImagingCatalogue()[0];
   MapperOptions by_sides = s.Mapping();
-  by_sides.corner_weights = "sides";
+  by_sides.corner_weighting.mode = "sides";
   Mapper mapper(s.Mapping()), mapper_by_sides(by_sides);
   for (size_t c = 0; c < s.cameras.size(); ++c) {
     MarkerDetector detector(s.markers, DetectorOptions());

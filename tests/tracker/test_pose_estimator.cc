@@ -74,6 +74,33 @@ TEST(PoseEstimator, AccurateOnFiveCamerasWithPredictionAndFromScratch) {
   }
 }
 
+// corner_weights sides (core/marker.h CornerWeighting) reaches the solver: on noisy corners its poses are
+// not the equal weights' (the residuals weigh differently) and as accurate; on exact corners both are exact.
+TEST(PoseEstimator, CornerWeightsBySidesReachTheSolver) {
+  TrackerOptions by_sides;
+  by_sides.corner_weighting.mode = "sides";
+  for (double noise_px : {0.3, 0.0}) {
+    SCOPED_TRACE(noise_px);
+    const TrackerSim s = SimulateTracking(TrackerSession(40, 1, noise_px));
+    const PoseEstimator equal(s.map), sides(s.map, by_sides);
+    const RunResult r = Track(s, sides, false);
+    EXPECT_EQ(r.posed, r.with_markers);
+    EXPECT_LT(r.mean_t, noise_px > 0 ? 0.5e-3 : 1e-9) << "mean translation error, m";
+    double largest_difference_m = 0;
+    for (size_t f = 0; f < s.session.views.size(); ++f) {
+      const auto obs = ObservationsFromViews(s.session.views[f]);
+      const PoseSolution a = equal.Solve(obs, nullptr), b = sides.Solve(obs, nullptr);
+      ASSERT_TRUE(a.ok() && b.ok());
+      largest_difference_m =
+          std::max(largest_difference_m, TranslationDistance(a.rig_from_object, b.rig_from_object));
+    }
+    if (noise_px > 0)
+      EXPECT_GT(largest_difference_m, 1e-6);
+    else
+      EXPECT_LT(largest_difference_m, 1e-9);
+  }
+}
+
 TEST(PoseEstimator, ExactDataGivesExactPose) {
   const TrackerSim s = SimulateTracking(TrackerSession(10, 1, 0.0));
   const PoseEstimator est(s.map);
@@ -350,6 +377,25 @@ TEST(TrackerOptions, FromConfigReadsAndChecksKeys) {
     EXPECT_EQ(o.deadline_ms, 5.0);
     EXPECT_EQ(o.outlier_px, 3.0);
     EXPECT_EQ(o.channel, "POSE_X");
+    EXPECT_EQ(o.corner_weighting.mode, "equal");
+  }
+  {
+    const std::string rig_path = sim::WriteSessionRig(
+        dir, s.session, "tracker:\n  corner_weights: sides\n  corner_weight_floor: 0.2\n");
+    const TrackerOptions o = TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+    EXPECT_TRUE(o.corner_weighting.BySides());
+    EXPECT_EQ(o.corner_weighting.floor, 0.2);
+  }
+  {
+    const std::string rig_path =
+        sim::WriteSessionRig(dir, s.session, "tracker:\n  corner_weights: diagonal\n");
+    try {
+      TrackerOptions::FromConfig(LoadRigConfig(rig_path));
+      FAIL() << "an unknown corner weighting must be refused";
+    } catch (const OptionError& e) {
+      EXPECT_NE(std::string(e.what()).find("tracker.corner_weights"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'diagonal'"), std::string::npos) << e.what();
+    }
   }
   {
     // The shared sync: section gives defaults, tracker: keys override them.
