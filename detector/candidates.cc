@@ -1,5 +1,10 @@
 #include "detector/candidates.h"
 
+#include <dlfcn.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -134,6 +139,119 @@ bool QuadFromBoundary(const std::vector<cv::Point>& c, const QuadSearch& s, cv::
   return true;
 }
 
+// cv::boxFilter's mean of a k x k window of 8-bit pixels where area = k * k <= 256 (its 16-bit sums,
+// OpenCV's ColumnSum<ushort, uchar>) is the window sum s scaled as ((s + add) * mul) >> 23, mul 2^23 /
+// area rounded and add area / 2 or area / 2 + 1 against its rounding. That mean is at least v exactly
+// where s >= area * v - offset for one offset (a pixel's comparison with its window's mean is then one of
+// the window sum with a threshold linear in the pixel): the offset, or -1 if not so for every
+// v = 1..255 or if the mean could exceed 255.
+int BoxMeanThresholdOffset(int area) {
+  double exact = static_cast<double>(1 << 23) / area;
+  int mul = cvFloor(exact), add = area / 2;
+  exact -= mul;
+  if (exact < 0.5)
+    ++add;
+  else
+    ++mul;
+  auto mean = [&](int sum) { return static_cast<int>((static_cast<uint32_t>(sum + add) * mul) >> 23); };
+  int first = 0;  // the smallest sum of mean 1
+  while (first <= area && mean(first) < 1) ++first;
+  const int offset = area - first;
+  if (offset < 0 || offset >= area || mean(255 * area) > 255) return -1;
+  for (int v = 1; v <= 255; ++v) {
+    const int t = area * v - offset;
+    if (mean(t) < v || mean(t - 1) >= v) return -1;
+  }
+  return offset;
+}
+
+// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves.
+void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+  int x = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128();
+  for (; x + 8 <= w; x += 8) {
+    const __m128i add = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in + x)), zero);
+    const __m128i sub = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(out + x)), zero);
+    __m128i* c = reinterpret_cast<__m128i*>(column + x);
+    _mm_storeu_si128(c, _mm_sub_epi16(_mm_add_epi16(_mm_loadu_si128(c), add), sub));
+  }
+#endif
+  for (; x < w; ++x) column[x] = static_cast<uint16_t>(column[x] + in[x] - out[x]);
+}
+
+// sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R).
+template <int R>
+void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+  int x = 0;
+#ifdef __SSE2__
+  for (; x + 8 <= w; x += 8) {
+    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x - R));
+    for (int i = 1 - R; i <= R; ++i)
+      sum = _mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x + i)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x), sum);
+  }
+#endif
+  for (; x < w; ++x) {
+    int sum = 0;
+    for (int i = -R; i <= R; ++i) sum += column[x + i];
+    sums[x] = static_cast<uint16_t>(sum);
+  }
+}
+
+// d[x] = `below` where the window sum sums[x] >= area * (p - at) - offset (p = s[x]; p - at <= 0: always,
+// p - at >= 256: never, as the sum is at most 255 * area), else `above`.
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int w, int at, int area, int offset,
+                           uint8_t below, uint8_t above, uint8_t* d) {
+  int x = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
+  const __m128i area16 = _mm_set1_epi16(static_cast<int16_t>(area)), limit = _mm_set1_epi16(256);
+  const __m128i offset16 = _mm_set1_epi16(static_cast<int16_t>(offset));
+  const __m128i below8 = _mm_set1_epi8(static_cast<char>(below)),
+                above8 = _mm_set1_epi8(static_cast<char>(above));
+  for (; x + 8 <= w; x += 8) {
+    const __m128i p = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x)), zero);
+    const __m128i v = _mm_min_epi16(_mm_max_epi16(_mm_sub_epi16(p, at16), zero), limit);
+    const __m128i t = _mm_subs_epu16(_mm_mullo_epi16(v, area16), offset16);
+    const __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + x));
+    const __m128i is_below = _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
+    const __m128i mask = _mm_packs_epi16(is_below, is_below);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(d + x),
+                     _mm_or_si128(_mm_and_si128(mask, below8), _mm_andnot_si128(mask, above8)));
+  }
+#endif
+  for (; x < w; ++x)
+    d[x] = sums[x] >= std::max(0, area * std::clamp(s[x] - at, 0, 256) - offset) ? below : above;
+}
+
+// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15,
+// edges replicated within src) rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset):
+// 16-bit column sums slid down the image, their window sums compared with a threshold linear in the
+// pixel. dst must not be src.
+void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                             cv::Mat& dst) {
+  const int r = k / 2, w = src.cols, h = src.rows, area = k * k;
+  if (w == 0 || h == 0) return;
+  thread_local std::vector<uint16_t> padded, sums;
+  padded.assign(static_cast<size_t>(w) + 2 * r, 0);
+  sums.resize(w);
+  uint16_t* column = padded.data() + r;  // column[-r..w + r): this row's column sums, edges replicated
+  auto row = [&](int y) { return src.ptr<uint8_t>(std::clamp(y, 0, h - 1)); };
+  for (int y = -r; y <= r; ++y)
+    for (int x = 0; x < w; ++x) column[x] += row(y)[x];
+  using Sums = void (*)(const uint16_t*, int, uint16_t*);
+  static constexpr Sums kSumsOf[8] = {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>,
+                                      WindowSums<4>, WindowSums<5>, WindowSums<6>, WindowSums<7>};
+  for (int y = 0; y < h; ++y) {
+    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), w, column);
+    for (int x = 1; x <= r; ++x) column[-x] = column[0], column[w - 1 + x] = column[w - 1];
+    kSumsOf[r](column, w, sums.data());
+    CompareWithWindowSums(src.ptr<uint8_t>(y), sums.data(), w, at, area, offset, below, above,
+                          dst.ptr<uint8_t>(y));
+  }
+}
+
 }  // namespace
 
 QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gray), search_(search) {
@@ -262,3 +380,70 @@ std::vector<std::array<cv::Point2d, 4>> FindQuads(const cv::Mat& gray, const Qua
 }
 
 }  // namespace mcmt
+
+// OpenCV's cv::adaptiveThreshold, which cv::aruco::detectMarkers calls once per window size (a quarter of
+// an accurate-mode frame's instructions): for 8-bit images and the local mean, the same box filter
+// (cv::boxFilter, as OpenCV calls it) and then the same comparison, src - mean <= -floor(delta) for
+// THRESH_BINARY_INV and src - mean > -ceil(delta) for THRESH_BINARY, vectorised, where OpenCV looks each
+// pixel up in a 768-entry table one at a time (6 M instructions per 640 x 480 frame for two windows).
+// Same binary image bit for bit (test_detector_unit, AdaptiveThresholdIsOpenCVs), hence the same contours
+// and candidates. Defined in the program, it takes the place of the shared library's definition for every
+// caller, the aruco module's included (the executable's symbols come first in the dynamic linker's
+// lookup); every other case (Gaussian mean, other types, UMat) goes to OpenCV's own, the next definition.
+namespace cv {
+
+void adaptiveThreshold(InputArray src_array, OutputArray dst_array, double max_value, int method, int type,
+                       int block_size, double delta) {
+  if (method != ADAPTIVE_THRESH_MEAN_C || (type != THRESH_BINARY && type != THRESH_BINARY_INV) ||
+      !src_array.isMat() || !dst_array.isMat() || src_array.type() != CV_8UC1 || block_size % 2 != 1 ||
+      block_size <= 1 || max_value < 0) {
+    using Function = void (*)(InputArray, OutputArray, double, int, int, int, double);
+    static const Function opencv = reinterpret_cast<Function>(
+        dlsym(RTLD_NEXT, "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid"));
+    CV_Assert(opencv != nullptr);
+    opencv(src_array, dst_array, max_value, method, type, block_size, delta);
+    return;
+  }
+  Mat src = src_array.getMat();
+  dst_array.create(src.size(), src.type());
+  Mat dst = dst_array.getMat();
+  const bool inverted = type == THRESH_BINARY_INV;
+  // Set where src - mean <= `at` (inverted) or > `at`; differences lie within [-255, 255].
+  const int at = std::clamp(inverted ? -cvFloor(delta) : -cvCeil(delta), -256, 256);
+  const uint8_t on = saturate_cast<uint8_t>(max_value), below = inverted ? on : 0, above = inverted ? 0 : on;
+  const int area = block_size * block_size;
+  const int offset = block_size <= 15 ? mcmt::BoxMeanThresholdOffset(area) : -1;
+  if (offset >= 0) {
+    if (src.data == dst.data) src = src.clone();
+    mcmt::ThresholdAgainstBoxMean(src, block_size, at, offset, below, above, dst);
+    return;
+  }
+  Mat mean;
+  if (src.data != dst.data) mean = dst;
+  boxFilter(src, mean, src.type(), Size(block_size, block_size), Point(-1, -1), true,
+            BORDER_REPLICATE | BORDER_ISOLATED);
+  for (int y = 0; y < src.rows; ++y) {
+    // The mean is written into dst (or dst is src): each pixel is read before it is written.
+    const uint8_t* s = src.ptr<uint8_t>(y);
+    const uint8_t* m = mean.ptr<uint8_t>(y);
+    uint8_t* d = dst.ptr<uint8_t>(y);
+    int x = 0;
+#ifdef __SSE2__
+    const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
+    const __m128i below8 = _mm_set1_epi8(static_cast<char>(below)),
+                  above8 = _mm_set1_epi8(static_cast<char>(above));
+    for (; x + 16 <= src.cols; x += 16) {
+      const __m128i sv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x));
+      const __m128i mv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(m + x));
+      const __m128i low = _mm_sub_epi16(_mm_unpacklo_epi8(sv, zero), _mm_unpacklo_epi8(mv, zero));
+      const __m128i high = _mm_sub_epi16(_mm_unpackhi_epi8(sv, zero), _mm_unpackhi_epi8(mv, zero));
+      const __m128i over = _mm_packs_epi16(_mm_cmpgt_epi16(low, at16), _mm_cmpgt_epi16(high, at16));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(d + x),
+                       _mm_or_si128(_mm_and_si128(over, above8), _mm_andnot_si128(over, below8)));
+    }
+#endif
+    for (; x < src.cols; ++x) d[x] = s[x] - m[x] <= at ? below : above;
+  }
+}
+
+}  // namespace cv

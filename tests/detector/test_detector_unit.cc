@@ -1,5 +1,6 @@
 // Unit tests of the detector library on this folder's exact synthetic renders (tests/detector/synthetic.h),
 // of its options, and of the frame sources' ordering and timestamps.
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -177,6 +178,47 @@ TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
   cv::Mat faint(120, 160, CV_8U, cv::Scalar(140));
   cv::fillConvexPoly(faint, drawn, cv::Scalar(120));  // 20 grey levels < min_contrast 30
   EXPECT_TRUE(FindQuads(faint, search).empty());
+}
+
+// The detector's cv::adaptiveThreshold (detector/candidates.cc) is the one the program calls, the aruco
+// module's search included, and its binary images are OpenCV's own bit for bit: both threshold types,
+// fractional and negative offsets, the windows whose means it rounds as cv::boxFilter does (3 to 15 px)
+// and larger ones up to larger than the image, a view into a larger image and the image thresholded in
+// place; other methods go to OpenCV's.
+TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
+  const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
+  using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name),
+            reinterpret_cast<void*>(static_cast<Function>(&cv::adaptiveThreshold)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));  // the library's is another
+  cv::Mat large(260, 341, CV_8U);
+  cv::randu(large, 0, 256);
+  cv::GaussianBlur(large, large, cv::Size(0, 0), 1.5);  // edges of every contrast, as in a frame
+  cv::rectangle(large, cv::Rect(40, 30, 60, 50), cv::Scalar(0), cv::FILLED);
+  cv::rectangle(large, cv::Rect(140, 60, 40, 70), cv::Scalar(255), cv::FILLED);
+  cv::Mat noise(37, 13, CV_8U);  // narrower than the windows, every sum of pixels
+  cv::randu(noise, 0, 256);
+  for (const cv::Mat& image : {large, large(cv::Rect(3, 5, 300, 201)), noise})
+    for (int type : {cv::THRESH_BINARY, cv::THRESH_BINARY_INV})
+      for (int window : {3, 5, 7, 9, 11, 13, 15, 17, 23, 301})
+        for (double delta : {7.0, 7.5, 0.0, -3.2, 255.0, 300.0}) {
+          SCOPED_TRACE(::testing::Message()
+                       << image.size() << " type " << type << " window " << window << " delta " << delta);
+          cv::Mat ours, theirs;
+          cv::adaptiveThreshold(image, ours, 255, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          opencv(image, theirs, 255, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          ASSERT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
+          cv::Mat in_place = image.clone();
+          cv::adaptiveThreshold(in_place, in_place, 100.4, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          opencv(image, theirs, 100.4, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          ASSERT_EQ(cv::norm(in_place, theirs, cv::NORM_INF), 0.0);
+        }
+  cv::Mat ours, theirs;
+  cv::adaptiveThreshold(large, ours, 255, cv::ADAPTIVE_THRESH_GAUSSIAN_C, cv::THRESH_BINARY_INV, 7, 7.0);
+  opencv(large, theirs, 255, cv::ADAPTIVE_THRESH_GAUSSIAN_C, cv::THRESH_BINARY_INV, 7, 7.0);
+  EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
 TEST(DetectorOptions, ValidateNamesTheField) {
