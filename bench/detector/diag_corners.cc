@@ -4,6 +4,8 @@
 // signed offset of its corners along the edge normals (+: outward) and its largest corner error; then
 // the condition's mean offset and median error.
 //   diag_corners CONDITION_SUBSTRING [images (8)] [seed (11)] [min offset px to print (0)]
+// Environment: MIN_PX / MAX_PX (the markers' side, px: 15 / 60); SIDES=1: also one line per side of each
+// marker found (PrintSides: its length, extent across, signed offset, and the marker's radial offset).
 // With --modes: where fast mode's corners differ from the accurate mode's, on the images
 // DetectorAccuracy.FastModeCornersAreTheAccurateModesOnReferenceRenders renders (each image detected
 // twice by a fresh detector of each mode: fast mode's second frame is refined from its region search's
@@ -131,6 +133,29 @@ void PrintDumpBands(const std::vector<DumpedMarker>& markers) {
   }
 }
 
+// One line per side of a found marker (SIDES=1): its length and extent across (px), its signed offset
+// (px, +: outward; the mean of its ends' along its outward normal), the marker's size and view angle.
+void PrintSides(const testing::RenderedMarker& t, const marker_t& m) {
+  Eigen::Vector2d truth[4], error[4], centre = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 4; ++k) {
+    truth[k] = {t.corners[k].x, t.corners[k].y};
+    error[k] = Eigen::Vector2d(m.corners[k][0], m.corners[k][1]) - truth[k];
+    centre += 0.25 * truth[k];
+  }
+  double radial = 0;  // the mean of the corners' errors along the direction from the marker's centre
+  for (int k = 0; k < 4; ++k) radial += 0.25 * error[k].dot((truth[k] - centre).normalized());
+  for (int s = 0; s < 4; ++s) {
+    const Eigen::Vector2d a = truth[s], b = truth[(s + 1) % 4];
+    Eigen::Vector2d n = Eigen::Vector2d(b.y() - a.y(), a.x() - b.x()).normalized();
+    if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
+    const double across =
+        0.5 * (std::abs(n.dot(truth[(s + 2) % 4] - a)) + std::abs(n.dot(truth[(s + 3) % 4] - a)));
+    std::printf("side %d size %.1f angle %.1f length %.2f across %.2f offset %+.4f radial %+.4f\n", s,
+                t.side_px, t.view_angle_deg, (b - a).norm(), across,
+                0.5 * n.dot(error[s] + error[(s + 1) % 4]), radial);
+  }
+}
+
 const marker_t* Find(const std::vector<marker_t>& found, int id) {
   for (const marker_t& m : found)
     if (m.id == id) return &m;
@@ -143,6 +168,7 @@ int main(int argc, char** argv) {
     PrintDumpBands(ReadDump(argv[2], argc > 3 ? std::atoi(argv[3]) : -1));
     return 0;
   }
+  const bool sides = std::getenv("SIDES") && std::atoi(std::getenv("SIDES")) != 0;
   const bool modes = argc > 1 && std::strcmp(argv[1], "--modes") == 0;
   if (modes) --argc, ++argv;
   if (argc < 2) {
@@ -164,7 +190,10 @@ int main(int argc, char** argv) {
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     if (!std::strstr(im.name.c_str(), argv[1])) continue;
     testing::ReferenceScene scene;
-    if (!modes) scene.min_side_px = 15, scene.max_side_px = 60;
+    if (!modes) {
+      scene.min_side_px = std::getenv("MIN_PX") ? std::atof(std::getenv("MIN_PX")) : 15;
+      scene.max_side_px = std::getenv("MAX_PX") ? std::atof(std::getenv("MAX_PX")) : 60;
+    }
     MarkerDetector detector(mc, DetectorOptions());
     std::mt19937_64 rng(seed);
     testing::Accuracy all;
@@ -200,6 +229,7 @@ int main(int argc, char** argv) {
           if (m.id != t.id) continue;
           double offset, worst;
           MarkerErrors(t, m, &offset, &worst);
+          if (sides) PrintSides(t, m);
           if (std::abs(offset) >= min_print)
             std::printf(
                 "%s image %d id %3d side %5.1f px angle %4.1f deg: offset %+.3f px, max error %.3f px\n",
