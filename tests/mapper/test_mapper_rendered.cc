@@ -102,56 +102,82 @@ TEST(MapperRenderedViews, ForeshortenedMarkersWeightedByTheirPrecision) {
   RecordProperty("camera_mm", std::to_string(e.camera_position_mm.mean));
 }
 
-// Issue 15, truth from outside mcmt-sim: the same session (the paper's rig at 1.0 m, 150 frames) drawn by
-// the independent reference renderer (tests/mapper/reference_rig_view.h) under its plain condition,
-// detected with the defaults and mapped twice. Beyond 60 deg each marker's corners came out turned along
-// its sides on these renders (long diagonal 0.9 % short, short one 1.6 % long), and the map's scale
-// followed those long diagonals: +0.101 %, cameras 1.06 / 1.31 mm with every corner weighing the same.
-// The detector now turns the sides of skewed quads (detector.cc TurnSkewedSides; DetectorAccuracy.
-// SteepViewsKeepTheirDiagonals):
+// The paper's rig at 1.0 m, 150 frames, drawn by the independent reference renderer
+// (tests/mapper/reference_rig_view.h) under `imaging`, detected with the defaults and mapped once per
+// corner weighting (corner_weights: equal, sides); prints and returns each map's errors against the truth.
+std::vector<sim::EvalResult> MapReferenceSession(const testing::Imaging& imaging,
+                                                 const std::vector<std::string>& corner_weights) {
+  const testing::RenderedMapSession s = testing::MakeRenderedMapSession(1.0, 150);
+  const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(s.markers.dictionary);
+  std::vector<std::unique_ptr<Mapper>> mappers;
+  for (const std::string& weights : corner_weights) {
+    MapperOptions o = s.Mapping();
+    o.corner_weighting.mode = weights;
+    mappers.push_back(std::make_unique<Mapper>(o));
+  }
+  for (size_t c = 0; c < s.cameras.size(); ++c) {
+    MarkerDetector detector(s.markers, DetectorOptions());
+    detector.SetCamera(s.cameras[c].model);
+    for (const sim::SimFrame& f : s.trajectory) {
+      const cv::Mat image = testing::RenderReferenceRigView(*dictionary, s.object, s.cameras[c],
+                                                            f.rig_from_object, imaging, 1009 * c + f.seq);
+      const auto detections = s.Detect(image, c, f, &detector);
+      for (auto& mapper : mappers) mapper->Add(detections);
+    }
+  }
+  std::vector<sim::EvalResult> errors;
+  for (size_t i = 0; i < mappers.size(); ++i) {
+    const MapResult result = mappers[i]->Solve();
+    errors.push_back(sim::Evaluate(s.Truth(), &result.map, nullptr));
+    const sim::EvalResult& e = errors.back();
+    std::printf(
+        "reference renderer, %s, 1.0 m, corner weights %s: scale %+.3f %%, cameras %.2f / %.2f mm, "
+        "configuration %.3f mm\n",
+        imaging.name.c_str(), corner_weights[i].c_str(), 100 * e.scale_error, e.camera_position_mm.mean,
+        e.camera_position_mm.max, e.configuration_mm.mean);
+  }
+  return errors;
+}
+
+struct MapBounds {
+  double scale, camera_mm, configuration_mm;
+};
+void ExpectWithin(const sim::EvalResult& e, const MapBounds& b) {
+  EXPECT_EQ(e.mapped_cameras, 5);
+  EXPECT_EQ(e.mapped_markers, e.gt_markers);
+  EXPECT_LT(std::abs(e.scale_error), b.scale);
+  EXPECT_LT(e.camera_position_mm.mean, b.camera_mm);
+  EXPECT_LT(e.configuration_mm.mean, b.configuration_mm);
+}
+
+// Issue 15, truth from outside mcmt-sim: the plain condition. Beyond 60 deg each marker's corners came out
+// turned along its sides on these renders (long diagonal 0.9 % short, short one 1.6 % long), and the
+// map's scale followed those long diagonals: +0.101 %, cameras 1.06 / 1.31 mm with every corner weighing
+// the same. The detector now turns the sides of skewed quads (detector.cc TurnSkewedSides;
+// DetectorAccuracy.SteepViewsKeepTheirDiagonals):
 // - corner_weights equal (the default): measured +0.038 %, cameras 0.50 / 0.60 mm, configuration 0.059 mm;
 // - corner_weights sides (a corner is barely located along two sides that meet at a narrow angle; not the
 //   default: on the real caliscope board it moves the scale by +0.03 %, test_mapper_realdata): measured
 //   +0.019 %, 0.30 / 0.44 mm, 0.047 mm.
 // Bounds: the issue's scale target (0.05 %), the cameras and configuration at what is measured with room.
 TEST(MapperReferenceRenders, PaperRigFromAnIndependentRenderer) {
-  const testing::RenderedMapSession s = testing::MakeRenderedMapSession(1.0, 150);
-  const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(s.markers.dictionary);
-  const testing::Imaging plain = testing::ImagingCatalogue()[0];
-  MapperOptions by_sides = s.Mapping();
-  by_sides.corner_weighting.mode = "sides";
-  Mapper mapper(s.Mapping()), mapper_by_sides(by_sides);
-  for (size_t c = 0; c < s.cameras.size(); ++c) {
-    MarkerDetector detector(s.markers, DetectorOptions());
-    detector.SetCamera(s.cameras[c].model);
-    for (const sim::SimFrame& f : s.trajectory) {
-      const cv::Mat image = testing::RenderReferenceRigView(*dictionary, s.object, s.cameras[c],
-                                                            f.rig_from_object, plain, 1009 * c + f.seq);
-      const auto detections = s.Detect(image, c, f, &detector);
-      mapper.Add(detections);
-      mapper_by_sides.Add(detections);
-    }
-  }
-  struct Bounds {
-    Mapper* mapper;
-    const char* weights;
-    double scale, camera_mm, configuration_mm;
-  };
-  for (const Bounds& b :
-       {Bounds{&mapper, "equal", 0.0005, 0.7, 0.08}, Bounds{&mapper_by_sides, "sides", 0.0005, 0.5, 0.07}}) {
-    const MapResult result = b.mapper->Solve();
-    const sim::EvalResult e = sim::Evaluate(s.Truth(), &result.map, nullptr);
-    std::printf(
-        "reference renderer, plain, 1.0 m, corner weights %s: scale %+.3f %%, cameras %.2f / %.2f mm, "
-        "configuration %.3f mm\n",
-        b.weights, 100 * e.scale_error, e.camera_position_mm.mean, e.camera_position_mm.max,
-        e.configuration_mm.mean);
-    EXPECT_EQ(e.mapped_cameras, 5) << b.weights;
-    EXPECT_EQ(e.mapped_markers, e.gt_markers) << b.weights;
-    EXPECT_LT(std::abs(e.scale_error), b.scale) << b.weights;
-    EXPECT_LT(e.camera_position_mm.mean, b.camera_mm) << b.weights;
-    EXPECT_LT(e.configuration_mm.mean, b.configuration_mm) << b.weights;
-  }
+  const std::vector<sim::EvalResult> e =
+      MapReferenceSession(testing::ImagingCatalogue()[0], {"equal", "sides"});
+  ExpectWithin(e[0], {0.0005, 0.7, 0.08});
+  ExpectWithin(e[1], {0.0005, 0.5, 0.07});
+}
+
+// Issue 15: markers printed without a margin on a grey surface. About a third of their sides' fits put a
+// faint bright strip beyond the edge (a margin under half a cell barely above the surround, no print's),
+// paired with a per-side gamma off the image's, which moved the edge outward; this map came out -0.327 %,
+// cameras 3.29 / 3.52 mm, configuration 0.127 mm. Such a strip is now refitted with one surround level
+// (side_model.cc kMinMarginExcess): measured -0.255 %, 2.58 / 2.88 mm, 0.098 mm. Not yet the issue's
+// 0.05 %: the single-surround fits keep an outward bias of their own (bench/results/2026-12-05-strip.md).
+// Bounds: between the two.
+TEST(MapperReferenceRenders, NoMarginIsNotShrunkByAFaintStrip) {
+  const testing::Imaging no_margin = testing::ImagingCatalogue()[1];
+  ASSERT_EQ(no_margin.name, "no margin, grey surface");
+  ExpectWithin(MapReferenceSession(no_margin, {"equal"})[0], {0.0027, 3.0, 0.2});
 }
 
 }  // namespace
