@@ -57,7 +57,8 @@ int Run(int argc, char** argv) {
   args.AddDouble("seconds", &seconds,
                  "stop collecting after this many seconds (log: of message time; 0: no limit)");
   args.AddFlag("allow-partial", &allow_partial,
-               "map the connected cameras and markers, leaving out the others");
+               "map the connected cameras and markers, leaving out the others; write a map no camera "
+               "supports (mapper.unsupported_rms_ratio) with a warning");
   args.AddFlag("publish", &publish,
                "with --log: also publish status and the map on --lcm-url (live: always)");
   args.AddString("reference-camera", &reference_camera,
@@ -77,8 +78,7 @@ int Run(int argc, char** argv) {
                "reports suspect or excluded (MCMT_TRACKER_STATUS) from frames of object poses seen by the "
                "others, add a rig camera that publishes and is not in the map, publish each new map on "
                "MCMT_MAP (mapper.maintain_frames, maintain_added_frames)");
-  args.AddString("pose-channel", &pose_channel,
-                 "with --maintain: the tracker's object_pose_t channel");
+  args.AddString("pose-channel", &pose_channel, "with --maintain: the tracker's object_pose_t channel");
   args.AddEpilog(
       "Live: collects MCMT_DETECTIONS_* with a progress line until SIGINT/SIGTERM/SIGUSR1, a "
       "mapper_command_t\n"
