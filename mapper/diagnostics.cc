@@ -13,6 +13,7 @@
 #include "core/json.h"
 #include "core/lcm_util.h"
 #include "core/math.h"
+#include "mapper/bodies.h"
 #include "mapper/bundle.h"
 #include "mapper/stages.h"
 
@@ -379,6 +380,27 @@ Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions
   CameraStatistics(result, d.observations, &d);
   if (options.covariance) PoseCovariance(r, &d);
   return d;
+}
+
+Diagnostics ComputeObjectDiagnostics(const MapResult& result, const DiagnosticsOptions& options) {
+  return result.map.objects.empty() ? ComputeDiagnostics(result, options)
+                                    : ComputeDiagnostics(DiagnosticsView(result), options);
+}
+
+std::string UnsupportedMapText(const Diagnostics& d, double rms_ratio, double side_fraction) {
+  if (rms_ratio <= 0) return "";
+  std::string cameras;
+  for (const CameraDiagnostics& c : d.cameras) {
+    if (c.inliers < d.options.poor_observations) continue;
+    if (!(c.rms_px > rms_ratio * c.predicted_rms_px && c.rms_px > side_fraction * c.median_side_px))
+      return "";  // this camera supports the map
+    cameras += (cameras.empty() ? "" : ", ") + c.name + " " + Fixed(c.rms_px, 2) + " px (predicted " +
+               Fixed(c.predicted_rms_px, 2) + " px, markers " + Fixed(c.median_side_px, 0) + " px)";
+  }
+  if (cameras.empty()) return "";
+  return "no camera supports the map: every camera's reprojection RMS is over " + Fixed(rms_ratio, 1) +
+         "x the RMS its corner noise predicts and over " + Fixed(100 * side_fraction, 1) +
+         "% of its markers' median side: " + cameras;
 }
 
 const char kResidualsHeader[] = "utime,seq,camera,id,corner,x,y,dx,dy,status,reason";

@@ -76,6 +76,15 @@ struct Diagnostics {
 };
 
 Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions& options = {});
+// The same of the map's object, with several bodies of the first moving one (DiagnosticsView).
+Diagnostics ComputeObjectDiagnostics(const MapResult& result, const DiagnosticsOptions& options = {});
+
+// A map no camera supports: when every camera with at least options.poor_observations inliers has a
+// reprojection RMS above both rms_ratio x its predicted RMS (more than its corner noise explains) and
+// side_fraction x its markers' median side (pixels: residuals that grow with the markers' apparent size,
+// as a marker pose's error does), one line naming each with its RMS, the prediction and the median side;
+// "" otherwise (also when no camera has that many inliers, or rms_ratio is 0).
+std::string UnsupportedMapText(const Diagnostics& d, double rms_ratio, double side_fraction);
 
 // residuals.csv: utime,seq,camera,id,corner,x,y,dx,dy,status,reason (one row per corner).
 extern const char kResidualsHeader[];

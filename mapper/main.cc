@@ -57,7 +57,8 @@ int Run(int argc, char** argv) {
   args.AddDouble("seconds", &seconds,
                  "stop collecting after this many seconds (log: of message time; 0: no limit)");
   args.AddFlag("allow-partial", &allow_partial,
-               "map the connected cameras and markers, leaving out the others");
+               "map the connected cameras and markers, leaving out the others; write a map no camera "
+               "supports (mapper.unsupported_rms_ratio) with a warning");
   args.AddFlag("publish", &publish,
                "with --log: also publish status and the map on --lcm-url (live: always)");
   args.AddString("reference-camera", &reference_camera,

@@ -16,6 +16,7 @@
 
 #include "core/lcm_util.h"
 #include "mapper/bodies.h"
+#include "mapper/diagnostics.h"
 #include "mapper/epochs.h"
 #include "mapper/intrinsics.h"
 #include "mapper/stages.h"
@@ -553,6 +554,27 @@ MapResult SolveWithEpochs(const std::vector<StoredMessage>& messages, const Solv
   }
 }
 
+// A refined map that no camera supports (mapper/diagnostics.h UnsupportedMapText) is an error, a warning
+// in report.warnings under --allow-partial. Nothing is written then (as for the other MapperErrors); a
+// live session's detections are kept by the node, and --allow-partial maps them again with the warning.
+void CheckSupported(const MapperOptions& o, MapResult* result) {
+  // Not with time offsets: the diagnostics pair detections with frames by the cameras' own clocks, without
+  // the offsets (caliscope's 122 ms late cam1 looked 15.7x its predicted RMS in a good map).
+  if (!o.refine || o.unsupported_rms_ratio <= 0 || o.estimate_time_offsets) return;
+  DiagnosticsOptions d;
+  d.covariance = false;
+  const std::string problem = UnsupportedMapText(ComputeObjectDiagnostics(*result, d),
+                                                 o.unsupported_rms_ratio, o.unsupported_side_fraction);
+  if (problem.empty()) return;
+  const std::string advice =
+      ": it is likely wrong (markers placed in a wrong relative pose, or intrinsics or markers.sizes that do "
+      "not fit the images); check those, record frames where a camera sees two markers at once less "
+      "obliquely";
+  if (!o.allow_partial)
+    throw MapperError(problem + advice + ", or use --allow-partial to write it with this warning");
+  result->report.warnings.push_back(problem + advice);
+}
+
 }  // namespace
 
 void Mapper::SetBaseMap(const RigMap& old_map, bool refine_layout,
@@ -569,6 +591,7 @@ MapResult Mapper::Solve() {
   if (!options_.bodies.empty()) {
     MapResult result = SolveBodies(s.messages, inputs, options_);
     result.detections = s.inputs;
+    CheckSupported(options_, &result);
     return result;
   }
   std::vector<EpochSplit> splits;
@@ -579,6 +602,7 @@ MapResult Mapper::Solve() {
                          : SolveWithEpochs(s.messages, inputs, options_, &splits);
   result.detections = s.inputs;  // for the diagnostics (mapper/diagnostics.h)
   MergeCameraEpochs(splits, s.camera_names, &result);
+  CheckSupported(options_, &result);
   return result;
 }
 

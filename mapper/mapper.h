@@ -150,8 +150,14 @@ struct MapperOptions {
   // sync.tolerance_ms).
   double sync_tolerance_ms = 2.0;
   int64_t sync_tolerance_us() const { return static_cast<int64_t>(std::llround(sync_tolerance_ms * 1000.0)); }
-  // Map the connected part instead of failing on a camera or marker that cannot be connected.
+  // Map the connected part instead of failing on a camera or marker that cannot be connected (and write a
+  // map no camera supports, with a warning).
   bool allow_partial = false;
+  // A map is an error (mapper/diagnostics.h UnsupportedMapText) when every camera with enough inliers has
+  // a reprojection RMS above unsupported_rms_ratio x the RMS its corner noise predicts and above
+  // unsupported_side_fraction x its markers' median side (0: no check).
+  double unsupported_rms_ratio = 3.0;
+  double unsupported_side_fraction = 0.04;
 
   // Marker ids that do not belong to the rigid object: a marker must be seen together with another
   // marker (same camera, same frame) in at least min_marker_support frames, in at least

@@ -48,7 +48,16 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
            .Add("reference_camera", &O::reference_camera, "the rig frame's camera (empty: best connected)")
            .Add("reference_marker", &O::reference_marker, "",
                 "the object frame's marker (-1: best connected)")
-           .Add("allow_partial", &O::allow_partial, "map the connected part instead of failing")
+           .Add("allow_partial", &O::allow_partial,
+                "map the connected part instead of failing (and write a map no camera supports, with a "
+                "warning)")
+           .Add("unsupported_rms_ratio", &O::unsupported_rms_ratio, "",
+                "the map is an error (a warning with allow_partial) when every camera with 10 or more "
+                "inlier observations has a reprojection RMS above this multiple of the RMS its corner noise "
+                "predicts (report.json diagnostics predicted_rms_px; 0: no check) ...",
+                AtLeast(0))
+           .Add("unsupported_side_fraction", &O::unsupported_side_fraction, "",
+                "... and above this fraction of its markers' median side in pixels (0.04: 4 %)", AtLeast(0))
            .Add("min_marker_support", &O::min_marker_support, "frames",
                 "a marker must be seen with another (same camera, same frame) this often to be placed",
                 AtLeast(1))

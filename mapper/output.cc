@@ -221,9 +221,7 @@ std::string ReportJson(const MapResult& result) {
 }
 
 std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) {
-  // mapper/diagnostics.h (several bodies: the first moving body's)
-  const Diagnostics diagnostics =
-      result.map.objects.empty() ? ComputeDiagnostics(result) : ComputeDiagnostics(DiagnosticsView(result));
+  const Diagnostics diagnostics = ComputeObjectDiagnostics(result);  // mapper/diagnostics.h
   const std::string verdicts = VerdictLines(diagnostics);
   fs::path out = fs::absolute(outdir).lexically_normal();
   if (!out.has_filename()) out = out.parent_path();

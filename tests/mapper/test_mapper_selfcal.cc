@@ -252,7 +252,10 @@ TEST(MapperSelfCal, ClockOffsetsAreRecovered) {
   // Offsets ignored: frames assembled over +-25 ms (the default 2 ms joins no camera to another).
   MapperOptions wide = options;
   wide.sync_tolerance_ms = 25.0;
+  wide.allow_partial = true;  // the same map, written with a warning: no camera supports it
   const MapResult r_late = MapDetections(late.detections, wide);
+  ASSERT_FALSE(r_late.report.warnings.empty());
+  EXPECT_NE(r_late.report.warnings.back().find("no camera supports the map"), std::string::npos);
   options.estimate_time_offsets = true;
   const MapResult r_estimated = MapDetections(late.detections, options);
   auto errors = [&](const MapResult& r) { return sim::Evaluate(late.truth, &r.map, &r.trajectory); };
