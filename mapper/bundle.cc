@@ -277,6 +277,19 @@ double BundleProblem::ObservationDt(size_t k) const {
   return o.time_s - time_offset_s[o.camera] - drift;
 }
 
+// Frames further apart than this many typical frame intervals do not give each other a velocity (time
+// offsets). Relative to the session's own frame rate (a fixed 0.1 s left every frame of a 6 fps recording
+// without a velocity, so its offsets were unobservable).
+constexpr double kVelocityGapFrames = 2.5;
+
+double VelocityGapS(const BundleProblem& bp) {
+  std::vector<double> intervals;
+  for (size_t f = 1; f < bp.frame_time_s.size(); ++f)
+    if (bp.frame_time_s[f] > bp.frame_time_s[f - 1])
+      intervals.push_back(bp.frame_time_s[f] - bp.frame_time_s[f - 1]);
+  return kVelocityGapFrames * Median(intervals, 0.0);
+}
+
 void UpdateFrameVelocities(double max_gap_s, BundleProblem* bp) {
   const size_t n = bp->rig_from_object.size();
   bp->frame_velocity.assign(n, {0, 0, 0, 0, 0, 0});

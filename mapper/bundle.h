@@ -183,6 +183,9 @@ constexpr double kDriftPriorSigma = 1e-3;
 // Frame velocities by differences of neighbouring frame poses (problem->frame_time_s, sorted): frames
 // further apart than max_gap_s are not used (velocity 0 for an isolated frame).
 void UpdateFrameVelocities(double max_gap_s, BundleProblem* problem);
+// The largest gap between frames that give each other a velocity: a few of the session's typical frame
+// intervals (a dropped frame or two is bridged, a pause is not).
+double VelocityGapS(const BundleProblem& problem);
 
 struct BundleSettings {
   double huber_px = 1.0;  // <= 0: no robust loss

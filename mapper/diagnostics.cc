@@ -29,9 +29,11 @@ struct Rebuilt {
   int reference_camera = -1, reference_marker = -1;
 };
 
-// Index of the trajectory row of the frame a detection at `utime` belongs to, -1 if none: the
-// latest row at or before it, within half the median frame interval (at least 2 ms, the default
-// sync tolerance).
+// Index of the trajectory row of the frame a detection at `utime` (on the reference camera's clock)
+// belongs to, -1 if none: the nearest row within half the median frame interval (at least 2 ms, the
+// default sync tolerance). Frames are stamped with their first message's time, so with synchronised
+// clocks that is the latest row at or before it; with clocks corrected (time offsets) a message may come
+// a little before its row.
 class FrameLookup {
  public:
   explicit FrameLookup(const std::vector<TrajectoryRow>& rows) {
@@ -45,10 +47,13 @@ class FrameLookup {
     }
   }
   int Find(int64_t utime) const {
-    auto it = std::upper_bound(order_.begin(), order_.end(), std::make_pair(utime, INT32_MAX));
-    if (it == order_.begin()) return -1;
-    --it;
-    return utime - it->first <= tolerance_ ? it->second : -1;
+    auto after = std::upper_bound(order_.begin(), order_.end(), std::make_pair(utime, INT32_MAX));
+    int64_t best = tolerance_ + 1;
+    int row = -1;
+    if (after != order_.begin() && utime - std::prev(after)->first < best)
+      best = utime - std::prev(after)->first, row = std::prev(after)->second;
+    if (after != order_.end() && after->first - utime < best) row = after->second;
+    return row;
   }
 
  private:
@@ -88,6 +93,15 @@ void InitialBlocks(const MapResult& result, Rebuilt* rebuilt, std::map<std::stri
   }
   for (const TrajectoryRow& t : result.trajectory)
     r.bp.rig_from_object.push_back(BlockFromRigid(t.rig_from_object));
+  // Clocks that are not the reference camera's (mapper.time_offsets): each observation sees its frame's
+  // pose moved along the frame's velocity to its capture time, as in the bundle (BundleProblem).
+  bool clocks = false;
+  for (const MapCamera& c : map.cameras) clocks = clocks || c.time_offset_us != 0 || c.time_drift_ppm != 0;
+  if (clocks && !result.trajectory.empty()) {
+    r.bp.time_offset_s.assign(map.cameras.size(), 0.0);  // the observations' times are corrected already
+    for (const TrajectoryRow& t : result.trajectory)
+      r.bp.frame_time_s.push_back(1e-6 * static_cast<double>(t.utime - result.trajectory.front().utime));
+  }
 }
 
 // Observations of the input, classified, and the bundle problem of the usable ones.
@@ -107,7 +121,9 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
     std::map<int, int> count;
     for (const marker_t& mk : d.markers) ++count[mk.id];
     const auto cam = camera_index.find(d.camera);
-    const int frame = frames.Find(d.utime);
+    // On the reference camera's clock (the trajectory's).
+    const int64_t utime = cam != camera_index.end() ? map.ReferenceUtime(d.camera, d.utime) : d.utime;
+    const int frame = frames.Find(utime);
     for (const marker_t& mk : d.markers) {
       ObservationResidual o;
       o.utime = d.utime;
@@ -130,12 +146,15 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
         o.reason = "no object pose for its frame";
       if (o.reason.empty()) {
         o.reason = FindRejection(rejections, d.camera, mk.id, result.trajectory[frame].utime, d.utime);
+        if (o.reason.empty() && utime != d.utime)  // recorded on the corrected clock
+          o.reason = FindRejection(rejections, d.camera, mk.id, result.trajectory[frame].utime, utime);
         BundleObservation b;
         b.camera = cam->second;
         b.marker = marker->second;
         b.frame = frame;
         b.corners = o.observed;
         b.side = map.markers[marker->second].size;
+        b.time_s = 1e-6 * static_cast<double>(utime - result.trajectory[frame].utime);
         r.bp.observations.push_back(b);
         r.bp.active.push_back(o.reason.empty());
         r.row_of_observation.push_back(static_cast<int>(rows->size()));
@@ -144,6 +163,7 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
       rows->push_back(o);
     }
   }
+  if (r.bp.RefinesTime()) UpdateFrameVelocities(VelocityGapS(r.bp), &r.bp);
   return r;
 }
 
@@ -154,8 +174,9 @@ void FillResiduals(const Rebuilt& r, std::vector<ObservationResidual>* rows) {
     const BundleObservation& b = r.bp.observations[k];
     ObservationResidual& o = (*rows)[r.row_of_observation[k]];
     ReprojectionCost cost(r.bp.models[b.camera], b.corners, b.side);
+    const auto seen = BlockFromRigid(ObservedFramePose(r.bp, k));  // the frame's pose at its capture time
     const double* params[3] = {r.bp.cam_from_rig[b.camera].data(), r.bp.object_from_marker[b.marker].data(),
-                               r.bp.rig_from_object[b.frame].data()};
+                               seen.data()};
     double res[8];
     if (!cost.Evaluate(params, res, nullptr)) {
       if (o.inlier) o.reason = "behind the camera";

@@ -93,19 +93,6 @@ BundleSettings BundleSettingsFor(const MapperOptions& o, int threads) {
 
 namespace {
 
-// Frames further apart than this many typical frame intervals do not give each other a velocity (time
-// offsets): a dropped frame or two is bridged, a pause is not. Relative to the session's own frame rate (a
-// fixed 0.1 s left every frame of a 6 fps recording without a velocity, so its offsets were unobservable).
-constexpr double kVelocityGapFrames = 2.5;
-
-double VelocityGapS(const BundleProblem& bp) {
-  std::vector<double> intervals;
-  for (size_t f = 1; f < bp.frame_time_s.size(); ++f)
-    if (bp.frame_time_s[f] > bp.frame_time_s[f - 1])
-      intervals.push_back(bp.frame_time_s[f] - bp.frame_time_s[f - 1]);
-  return kVelocityGapFrames * Median(intervals, 0.0);
-}
-
 // RMS corner error over the active observations.
 double CurrentRms(const BundleProblem& bp) {
   const std::vector<double> rms = ObservationRms(bp);
