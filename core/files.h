@@ -100,6 +100,8 @@ struct RigMap {
   // ClockUs(utime), rounded (the tracker's frames, the mapper's passes, the maintenance's frames); utime
   // itself for a camera the map lacks.
   int64_t ReferenceUtime(const std::string& camera, int64_t utime) const;
+  // Some camera's clock is not the reference camera's (a time offset or drift was mapped).
+  bool HasClocks() const;
   // The map of body k alone, as a version 1 map (the cameras and its markers).
   RigMap ObjectMap(size_t k) const;
 };

@@ -95,9 +95,7 @@ void InitialBlocks(const MapResult& result, Rebuilt* rebuilt, std::map<std::stri
     r.bp.rig_from_object.push_back(BlockFromRigid(t.rig_from_object));
   // Clocks that are not the reference camera's (mapper.time_offsets): each observation sees its frame's
   // pose moved along the frame's velocity to its capture time, as in the bundle (BundleProblem).
-  bool clocks = false;
-  for (const MapCamera& c : map.cameras) clocks = clocks || c.time_offset_us != 0 || c.time_drift_ppm != 0;
-  if (clocks && !result.trajectory.empty()) {
+  if (map.HasClocks() && !result.trajectory.empty()) {
     r.bp.time_offset_s.assign(map.cameras.size(), 0.0);  // the observations' times are corrected already
     for (const TrajectoryRow& t : result.trajectory)
       r.bp.frame_time_s.push_back(1e-6 * static_cast<double>(t.utime - result.trajectory.front().utime));
@@ -174,7 +172,9 @@ void FillResiduals(const Rebuilt& r, std::vector<ObservationResidual>* rows) {
     const BundleObservation& b = r.bp.observations[k];
     ObservationResidual& o = (*rows)[r.row_of_observation[k]];
     ReprojectionCost cost(r.bp.models[b.camera], b.corners, b.side);
-    const auto seen = BlockFromRigid(ObservedFramePose(r.bp, k));  // the frame's pose at its capture time
+    // The frame's pose at the observation's capture time (with clocks; else the frame's own).
+    const PoseBlock seen =
+        r.bp.RefinesTime() ? BlockFromRigid(ObservedFramePose(r.bp, k)) : r.bp.rig_from_object[b.frame];
     const double* params[3] = {r.bp.cam_from_rig[b.camera].data(), r.bp.object_from_marker[b.marker].data(),
                                seen.data()};
     double res[8];

@@ -192,9 +192,7 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
     sync_ = std::make_unique<FrameSynchronizer>(sync);
     // Cameras whose clocks were mapped apart are often not triggered together either: their phases are
     // measured over the first frames before any frame is assembled (a synchronised rig's map has none).
-    bool offsets = false;
-    for (const auto& c : map.cameras) offsets = offsets || c.time_offset_us != 0.0 || c.time_drift_ppm != 0.0;
-    measuring_window_ = offsets && !options_.tracker.sync_tolerance_set;
+    measuring_window_ = map.HasClocks() && !options_.tracker.sync_tolerance_set;
     reported_stale_.clear();
   }
   if (options_.tracker.camera_health) {

@@ -262,6 +262,12 @@ int64_t RigMap::ReferenceUtime(const std::string& camera, int64_t utime) const {
   return c ? utime - std::llround(c->ClockUs(utime, time_reference_utime)) : utime;
 }
 
+bool RigMap::HasClocks() const {
+  for (const MapCamera& c : cameras)
+    if (c.time_offset_us != 0 || c.time_drift_ppm != 0) return true;
+  return false;
+}
+
 void ComposeClocks(const RigMap& applied, RigMap* map) {
   const int64_t reference =
       map->time_reference_utime != 0 ? map->time_reference_utime : applied.time_reference_utime;
