@@ -2,7 +2,9 @@
 // Doubles are written with 17 significant digits so files round-trip exactly.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -118,7 +120,9 @@ void WriteMap(const std::string& path, const RigMap& map);
 RigMap ReadMap(const std::string& path);  // throws FileFormatError naming file and key; checks version
 
 // trajectory.csv: header "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers", one row per frame
-// with a solution; the pose is rig_from_object.
+// with a solution; the pose is rig_from_object. The mapper's with time offsets adds the columns
+// "wx,wy,wz,vx,vy,vz" (kTrajectoryVelocityHeader): the velocity its bundle adjustment moved the frame's
+// pose along to each observation's capture time.
 struct TrajectoryRow {
   int64_t utime = 0;
   int64_t seq = 0;
@@ -126,12 +130,24 @@ struct TrajectoryRow {
   double rms_px = 0.0;
   int cameras = 0;
   int markers = 0;
+  // (wx, wy, wz) rad/s, (vx, vy, vz) m/s, a twist in the rig frame: the pose dt seconds after utime is
+  // (Exp(dt w) R, t + dt v) with (R, t) = rig_from_object. None: the row has no velocity.
+  std::optional<std::array<double, 6>> velocity;
 };
 
+// The row re-expressed in another rig frame: pose and velocity (rotated) of new_rig_from_rig * pose.
+void MoveToRig(const Rigid3& new_rig_from_rig, TrajectoryRow* row);
+
 extern const char kTrajectoryHeader[];
-std::string TrajectoryCsvLine(const TrajectoryRow& row);  // no newline
+extern const char kTrajectoryVelocityHeader[];  // kTrajectoryHeader + ",wx,wy,wz,vx,vy,vz"
+// Either of the two headers (a trailing '\r' allowed).
+bool IsTrajectoryHeader(const std::string& line);
+// No newline; with `velocity`, the six velocity columns follow (empty when the row has none).
+std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity = false);
+// With the velocity columns when some row has a velocity.
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
-std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);  // throws naming file and line
+// Either header; throws FileFormatError naming the file, the line and the column.
+std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);
 
 // A body's file beside the asked one: "dir/name.ext" + "tool" -> "dir/name_tool.ext" (no extension:
 // "dir/name_tool"): the tracker's poses_<body>.csv for --out poses.csv, the exporter's per-body files.

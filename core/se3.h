@@ -46,6 +46,10 @@ double TranslationDistance(const Rigid3& a, const Rigid3& b);
 // rotation about the rig-frame origin then a translation.
 Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta);
 
+// The pose dt seconds on along a constant twist (wx, wy, wz rad/s, vx, vy, vz m/s, in the frame the pose
+// maps into): (Exp(dt w) R, t + dt v) (the mapper's frame velocities with time offsets).
+Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt);
+
 // A random transform: rotation uniform on SO(3), translation uniform in [-max_translation,
 // max_translation]^3.
 Rigid3 RandomRigid(std::mt19937_64& rng, double max_translation);

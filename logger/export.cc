@@ -216,8 +216,7 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
 bool IsTrajectoryCsv(const std::string& path) {
   std::ifstream in(path);
   std::string first;
-  return std::getline(in, first) &&
-         (first == kTrajectoryHeader || first == std::string(kTrajectoryHeader) + "\r");
+  return std::getline(in, first) && IsTrajectoryHeader(first);
 }
 
 LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequest& request) {

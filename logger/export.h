@@ -52,8 +52,8 @@ struct LogExportResult {
 // event, byte offset and channel. Channels nobody asked for are ignored.
 LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& request);
 
-// Is this file a trajectory CSV (first line kTrajectoryHeader: mcmt-mapper's trajectory.csv, mcmt-tracker's
-// or mcmt-export's poses.csv)?
+// Is this file a trajectory CSV (first line core's IsTrajectoryHeader: mcmt-mapper's trajectory.csv,
+// mcmt-tracker's or mcmt-export's poses.csv)?
 bool IsTrajectoryCsv(const std::string& path);
 // request.poses_csv / request.tum from a trajectory CSV (pose_rows counts its rows), or from the mapper's
 // OUTDIR (core's MapperTrajectories: one file per moving body). Throws FileFormatError naming the file and

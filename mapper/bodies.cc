@@ -286,7 +286,7 @@ void ToRigFrame(const std::string& rig_frame, RigMap* map,
   for (MapObject& o : map->objects)
     if (o.is_static) o.rig_from_object = Normalized(new_from_rig * o.rig_from_object);
   for (auto& rows : *trajectories)
-    for (TrajectoryRow& row : rows) row.rig_from_object = Normalized(new_from_rig * row.rig_from_object);
+    for (TrajectoryRow& row : rows) MoveToRig(new_from_rig, &row);
   map->rig_frame = rig_frame;
 }
 

@@ -632,12 +632,9 @@ Rigid3 ObservedFramePose(const BundleProblem& bp, size_t k) {
 }
 
 Rigid3 FramePoseAt(const BundleProblem& bp, int frame, double dt) {
-  Rigid3 pose = RigidFromBlock(bp.rig_from_object[frame].data());
+  const Rigid3 pose = RigidFromBlock(bp.rig_from_object[frame].data());
   if (!bp.RefinesTime() || bp.frame_velocity.size() <= static_cast<size_t>(frame)) return pose;
-  const std::array<double, 6>& vel = bp.frame_velocity[frame];
-  pose.linear() = RotationFromVector(dt * Eigen::Vector3d(vel[0], vel[1], vel[2])) * pose.linear();
-  pose.translation() += dt * Eigen::Vector3d(vel[3], vel[4], vel[5]);
-  return pose;
+  return MovedAlong(pose, bp.frame_velocity[frame], dt);
 }
 
 namespace {

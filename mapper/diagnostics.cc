@@ -61,15 +61,38 @@ class FrameLookup {
   int64_t tolerance_ = 2000;
 };
 
-// Reasons the mapper gave, by (camera, id), with the frame utime they name.
-using RejectionIndex = std::map<std::pair<std::string, int>, std::vector<std::pair<int64_t, std::string>>>;
+// Reasons the mapper gave, by (camera, id), with the trajectory row of the frame they name.
+using RejectionIndex = std::map<std::pair<std::string, int>, std::vector<std::pair<int, std::string>>>;
 
-std::string FindRejection(const RejectionIndex& index, const std::string& camera, int id, int64_t frame_utime,
-                          int64_t utime) {
+// The mapper names a rejected observation's frame by the frame's utime as assembled and its seq (Frame):
+// the row of that frame (FrameMembership), else the row with that seq nearest that utime (with
+// synchronised clocks the row's utime is the frame's).
+RejectionIndex IndexRejections(const MapResult& result, const FrameLookup& frames) {
+  const std::vector<int64_t>& frame_utimes = result.membership.frame_utime_of_row;
+  const bool known = frame_utimes.size() == result.trajectory.size();
+  std::map<std::pair<int64_t, int64_t>, int> row_of_frame;  // (utime, seq) -> row
+  for (size_t row = 0; known && row < frame_utimes.size(); ++row)
+    row_of_frame[{frame_utimes[row], result.trajectory[row].seq}] = static_cast<int>(row);
+  RejectionIndex index;
+  for (const RejectedObservation& o : result.report.rejected_observations) {
+    int row = -1;
+    if (known) {
+      const auto it = row_of_frame.find({o.utime, o.seq});
+      row = it != row_of_frame.end() ? it->second : -1;
+    } else {
+      row = frames.Find(o.utime);
+      if (row >= 0 && result.trajectory[row].seq != o.seq) row = -1;
+    }
+    if (row >= 0) index[{o.camera, o.id}].emplace_back(row, o.reason);
+  }
+  return index;
+}
+
+std::string FindRejection(const RejectionIndex& index, const std::string& camera, int id, int row) {
   auto it = index.find({camera, id});
   if (it == index.end()) return "";
-  for (const auto& [u, reason] : it->second)
-    if (u == frame_utime || u == utime) return reason;
+  for (const auto& [r, reason] : it->second)
+    if (r == row) return reason;
   return "";
 }
 
@@ -94,11 +117,15 @@ void InitialBlocks(const MapResult& result, Rebuilt* rebuilt, std::map<std::stri
   for (const TrajectoryRow& t : result.trajectory)
     r.bp.rig_from_object.push_back(BlockFromRigid(t.rig_from_object));
   // Clocks that are not the reference camera's (mapper.time_offsets): each observation sees its frame's
-  // pose moved along the frame's velocity to its capture time, as in the bundle (BundleProblem).
+  // pose moved along the frame's velocity to its capture time, as in the bundle (BundleProblem): the
+  // bundle's velocities, kept with the rows (a trajectory without them: differences of its rows, Rebuild).
   if (map.HasClocks() && !result.trajectory.empty()) {
     r.bp.time_offset_s.assign(map.cameras.size(), 0.0);  // the observations' times are corrected already
-    for (const TrajectoryRow& t : result.trajectory)
+    for (const TrajectoryRow& t : result.trajectory) {
       r.bp.frame_time_s.push_back(1e-6 * static_cast<double>(t.utime - result.trajectory.front().utime));
+      if (t.velocity) r.bp.frame_velocity.push_back(*t.velocity);
+    }
+    if (r.bp.frame_velocity.size() != result.trajectory.size()) r.bp.frame_velocity.clear();
   }
 }
 
@@ -109,19 +136,21 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
   std::map<std::string, int> camera_index;
   std::map<int, int> marker_index;
   InitialBlocks(result, &r, &camera_index, &marker_index);
-  RejectionIndex rejections;
-  for (const RejectedObservation& o : result.report.rejected_observations)
-    rejections[{o.camera, o.id}].emplace_back(o.utime, o.reason);
+  const FrameLookup frames(result.trajectory);
+  const RejectionIndex rejections = IndexRejections(result, frames);
   std::map<int, std::string> rejected_markers;
   for (const RejectedMarker& m : result.report.rejected_markers) rejected_markers[m.id] = m.reason;
-  const FrameLookup frames(result.trajectory);
-  for (const detections_t& d : result.detections) {
+  // The rows the bundle gave the detections, when known (else by time: FrameLookup).
+  const std::vector<int>& rows_given = result.membership.row_of_detection;
+  const bool given = rows_given.size() == result.detections.size();
+  for (size_t i = 0; i < result.detections.size(); ++i) {
+    const detections_t& d = result.detections[i];
     std::map<int, int> count;
     for (const marker_t& mk : d.markers) ++count[mk.id];
     const auto cam = camera_index.find(d.camera);
     // On the reference camera's clock (the trajectory's).
     const int64_t utime = cam != camera_index.end() ? map.ReferenceUtime(d.camera, d.utime) : d.utime;
-    const int frame = frames.Find(utime);
+    const int frame = given ? rows_given[i] : frames.Find(utime);
     for (const marker_t& mk : d.markers) {
       ObservationResidual o;
       o.utime = d.utime;
@@ -143,16 +172,16 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
       else if (frame < 0)
         o.reason = "no object pose for its frame";
       if (o.reason.empty()) {
-        o.reason = FindRejection(rejections, d.camera, mk.id, result.trajectory[frame].utime, d.utime);
-        if (o.reason.empty() && utime != d.utime)  // recorded on the corrected clock
-          o.reason = FindRejection(rejections, d.camera, mk.id, result.trajectory[frame].utime, utime);
+        o.reason = FindRejection(rejections, d.camera, mk.id, frame);
         BundleObservation b;
         b.camera = cam->second;
         b.marker = marker->second;
         b.frame = frame;
         b.corners = o.observed;
         b.side = map.markers[marker->second].size;
-        b.time_s = 1e-6 * static_cast<double>(utime - result.trajectory[frame].utime);
+        // Relative to the row's pose on the reference clock, unrounded (the bundle's ObservationDt).
+        b.time_s = 1e-6 * (static_cast<double>(d.utime - result.trajectory[frame].utime) -
+                           map.cameras[cam->second].ClockUs(d.utime, map.time_reference_utime));
         r.bp.observations.push_back(b);
         r.bp.active.push_back(o.reason.empty());
         r.row_of_observation.push_back(static_cast<int>(rows->size()));
@@ -161,7 +190,7 @@ Rebuilt Rebuild(const MapResult& result, std::vector<ObservationResidual>* rows)
       rows->push_back(o);
     }
   }
-  if (r.bp.RefinesTime()) UpdateFrameVelocities(VelocityGapS(r.bp), &r.bp);
+  if (r.bp.RefinesTime() && r.bp.frame_velocity.empty()) UpdateFrameVelocities(VelocityGapS(r.bp), &r.bp);
   return r;
 }
 

@@ -385,7 +385,9 @@ MapResult SolvePass(const std::vector<StoredMessage>& messages, const SolveInput
     DropUnreliableCameras(observations, names, o, settings, &cameras, &bundle, &report);
     log.End("unreliable cameras");
   }
-  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
+  std::vector<int> row_frames;
+  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory, &row_frames);
+  result.membership = MembershipOf(frames, row_frames, messages.size());
   report.final_rms_px = result.map.rms_px;
   report.frames_used = result.map.num_frames;
   report.observations_used = result.map.num_observations;
@@ -558,10 +560,9 @@ MapResult SolveWithEpochs(const std::vector<StoredMessage>& messages, const Solv
 // in report.warnings under --allow-partial. Nothing is written then (as for the other MapperErrors); a
 // live session's detections are kept by the node, and --allow-partial maps them again with the warning.
 void CheckSupported(const MapperOptions& o, MapResult* result) {
-  // Not with time offsets: the diagnostics move each frame's pose to its observations' capture times along
-  // velocities taken again from the trajectory, not the bundle's own; at caliscope's 6 fps a good map's
-  // late camera shows 4.6x its predicted RMS (test_mapper_selfcal_realdata).
-  if (!o.refine || o.unsupported_rms_ratio <= 0 || o.estimate_time_offsets) return;
+  // With time offsets too: the diagnostics move each frame's pose to its observations' capture times along
+  // the bundle's own velocities (the trajectory's), so each camera's RMS is the bundle's.
+  if (!o.refine || o.unsupported_rms_ratio <= 0) return;
   DiagnosticsOptions d;
   d.covariance = false;
   const std::string problem = UnsupportedMapText(ComputeObjectDiagnostics(*result, d),

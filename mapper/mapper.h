@@ -282,6 +282,15 @@ struct MapReport {
   double total_seconds = 0.0;
 };
 
+// How the bundle grouped the input into the trajectory's frames (for mapper/diagnostics.h): per detections
+// message the trajectory row of its frame (-1: none), per row its frame's utime as assembled (on the clocks
+// of the pass that assembled it: the utime report.rejected_observations name the frame by). Empty when not
+// known (the diagnostics then find rows by time).
+struct FrameMembership {
+  std::vector<int> row_of_detection;
+  std::vector<int64_t> frame_utime_of_row;
+};
+
 struct MapResult {
   RigMap map;                                     // refined
   RigMap initial_map;                             // after the graph initialisation, before refinement
@@ -292,6 +301,7 @@ struct MapResult {
   std::vector<std::vector<TrajectoryRow>> object_trajectories, initial_object_trajectories;
   MapReport report;
   std::vector<detections_t> detections;  // the input, as given to Add() (for mapper/diagnostics.h)
+  FrameMembership membership;            // of `detections` in `trajectory`
 };
 
 // Per-camera counts while collecting (live progress).

@@ -393,6 +393,18 @@ ResidualStats StatsOf(const BundleProblem& bp) {
 
 }  // namespace
 
+FrameMembership MembershipOf(const std::vector<Frame>& frames, const std::vector<int>& row_frames,
+                             size_t num_messages) {
+  FrameMembership m;
+  m.row_of_detection.assign(num_messages, -1);
+  for (size_t row = 0; row < row_frames.size(); ++row) {
+    const Frame& f = frames[row_frames[row]];
+    m.frame_utime_of_row.push_back(f.utime);
+    for (int i : f.messages) m.row_of_detection[i] = static_cast<int>(row);
+  }
+  return m;
+}
+
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,
              const MarkerLayout& layout, const CameraPlacement& cameras, const MapperOptions& o, RigMap* map,
              std::vector<TrajectoryRow>* trajectory, std::vector<int>* row_frames) {
@@ -433,11 +445,14 @@ void FillMap(const MapperBundle& bundle, const Observations& observations, const
     // With clocks, the row is at its observations' mean capture time on the reference clock (the frame's
     // pose is at its first message's utime, on that camera's clock as the frames were assembled: with
     // the time offsets' second pass, the first pass's clock error of that camera; at 0.5 m/s 1 ms is
-    // 0.5 mm of the object's trajectory).
-    const double dt_s = bp.RefinesTime() ? s.fr_dt[f] / s.fr_n[f] : 0.0;
-    row.utime = (*names.frames)[f].utime + std::llround(1e6 * dt_s);
+    // 0.5 mm of the object's trajectory). The pose is at the row's utime exactly (the mean rounded to the
+    // microsecond), and the row keeps the bundle's velocity: moved along it, it is the pose each
+    // observation saw (the diagnostics').
+    const int64_t dt_us = bp.RefinesTime() ? std::llround(1e6 * s.fr_dt[f] / s.fr_n[f]) : 0;
+    row.utime = (*names.frames)[f].utime + dt_us;
     row.seq = (*names.frames)[f].seq;
-    row.rig_from_object = Normalized(FramePoseAt(bp, static_cast<int>(f), dt_s));
+    row.rig_from_object = Normalized(FramePoseAt(bp, static_cast<int>(f), 1e-6 * static_cast<double>(dt_us)));
+    if (bp.RefinesTime()) row.velocity = bp.frame_velocity[f];
     row.rms_px = std::sqrt(s.fr_sq[f] / s.fr_n[f]);
     row.cameras = static_cast<int>(s.fr_cams[f].size());
     row.markers = static_cast<int>(s.fr_markers[f].size());

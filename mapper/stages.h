@@ -206,6 +206,10 @@ void DropUnreliableCameras(const Observations& observations, const ObservationNa
                            const MapperOptions& options, const BundleSettings& settings,
                            CameraPlacement* cameras, MapperBundle* bundle, MapReport* report);
 
+// Which row each of num_messages messages went to (frames: the pass's, row_frames: FillMap's).
+FrameMembership MembershipOf(const std::vector<Frame>& frames, const std::vector<int>& row_frames,
+                             size_t num_messages);
+
 // The map and trajectory at the bundle's current parameters, refined intrinsics included (statistics
 // over active observations). row_frames (optional): the frame index of each trajectory row.
 void FillMap(const MapperBundle& bundle, const Observations& observations, const ObservationNames& names,

@@ -68,7 +68,7 @@ void Reexpress(const Rigid3& new_rig_from_old_rig, MapResult* result) {
   for (RigMap* map : {&result->map, &result->initial_map})
     for (MapCamera& c : map->cameras) c.rig_from_cam = Normalized(new_rig_from_old_rig * c.rig_from_cam);
   for (std::vector<TrajectoryRow>* rows : {&result->trajectory, &result->initial_trajectory})
-    for (TrajectoryRow& r : *rows) r.rig_from_object = Normalized(new_rig_from_old_rig * r.rig_from_object);
+    for (TrajectoryRow& r : *rows) MoveToRig(new_rig_from_old_rig, &r);
 }
 
 }  // namespace
@@ -200,7 +200,9 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
   report.initial_rms_px = result.initial_map.rms_px;
   if (o.refine)
     RefineWithRejection(observations, names, layout, o, BundleSettingsFor(o, threads), &bundle, &report);
-  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory);
+  std::vector<int> row_frames;
+  FillMap(bundle, observations, names, layout, cameras, o, &result.map, &result.trajectory, &row_frames);
+  result.membership = MembershipOf(frames, row_frames, messages.size());
   for (RigMap* map : {&result.map, &result.initial_map}) KeepWhatWasNotSeen(old_map, map);
   for (MovedCamera& m : report.moved_cameras) {  // against the solved pose, in the old map's frame
     const Rigid3& after = result.map.FindCamera(m.camera)->rig_from_cam;

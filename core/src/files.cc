@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -551,39 +552,103 @@ RigMap ReadMap(const std::string& path) {
 }
 
 const char kTrajectoryHeader[] = "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers";
+const char kTrajectoryVelocityHeader[] =
+    "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers,wx,wy,wz,vx,vy,vz";
 
-std::string TrajectoryCsvLine(const TrajectoryRow& row) {
+void MoveToRig(const Rigid3& new_rig_from_rig, TrajectoryRow* row) {
+  row->rig_from_object = Normalized(new_rig_from_rig * row->rig_from_object);
+  if (!row->velocity) return;
+  std::array<double, 6>& twist = *row->velocity;
+  for (int part = 0; part < 2; ++part) {
+    Eigen::Map<Eigen::Vector3d> x(twist.data() + 3 * part);
+    x = new_rig_from_rig.linear() * Eigen::Vector3d(x);
+  }
+}
+
+bool IsTrajectoryHeader(const std::string& line) {
+  const std::string s = !line.empty() && line.back() == '\r' ? line.substr(0, line.size() - 1) : line;
+  return s == kTrajectoryHeader || s == kTrajectoryVelocityHeader;
+}
+
+std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity) {
   const auto q = QuaternionWxyz(row.rig_from_object);
   const Eigen::Vector3d t = row.rig_from_object.translation();
   std::string line = std::to_string(row.utime) + "," + std::to_string(row.seq);
   for (double v : {t.x(), t.y(), t.z(), q[0], q[1], q[2], q[3], row.rms_px}) line += "," + CsvNum(v);
   line += "," + std::to_string(row.cameras) + "," + std::to_string(row.markers);
+  if (velocity)
+    for (int k = 0; k < 6; ++k) line += "," + (row.velocity ? CsvNum((*row.velocity)[k]) : std::string());
   return line;
 }
 
 void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows) {
-  std::string content = std::string(kTrajectoryHeader) + "\n";
-  for (const auto& row : rows) content += TrajectoryCsvLine(row) + "\n";
+  const bool velocity =
+      std::any_of(rows.begin(), rows.end(), [](const TrajectoryRow& r) { return r.velocity.has_value(); });
+  std::string content = std::string(velocity ? kTrajectoryVelocityHeader : kTrajectoryHeader) + "\n";
+  for (const auto& row : rows) content += TrajectoryCsvLine(row, velocity) + "\n";
   WriteFileAtomic(path, content);
 }
+
+namespace {
+
+const char* const kTrajectoryColumns[] = {"utime",  "seq",     "tx",      "ty", "tz", "qw", "qx", "qy", "qz",
+                                          "rms_px", "cameras", "markers", "wx", "wy", "wz", "vx", "vy", "vz"};
+
+// One row of the trajectory's fields (12, or 18 with the velocity columns: all six given or all empty);
+// `where` is "FILE:LINE: ".
+TrajectoryRow ParseTrajectoryRow(const std::vector<std::string>& fields, const std::string& where) {
+  TrajectoryRow row;
+  int64_t cams = 0, marks = 0;
+  double v[8];
+  if (!ParseInt64(fields[0], &row.utime))
+    throw FileFormatError(where + "utime: not an integer: '" + fields[0] + "'");
+  if (!ParseInt64(fields[1], &row.seq))
+    throw FileFormatError(where + "seq: not an integer: '" + fields[1] + "'");
+  for (int i = 0; i < 8; ++i)
+    if (!ParseDouble(fields[2 + i], &v[i]))
+      throw FileFormatError(where + kTrajectoryColumns[2 + i] + ": not a number: '" + fields[2 + i] + "'");
+  if (!ParseInt64(fields[10], &cams))
+    throw FileFormatError(where + "cameras: not an integer: '" + fields[10] + "'");
+  if (!ParseInt64(fields[11], &marks))
+    throw FileFormatError(where + "markers: not an integer: '" + fields[11] + "'");
+  try {
+    row.rig_from_object = RigidFromQuaternion({v[3], v[4], v[5], v[6]}, Eigen::Vector3d(v[0], v[1], v[2]));
+  } catch (const std::exception& e) {
+    throw FileFormatError(where + "qw..qz: " + e.what());
+  }
+  row.rms_px = v[7];
+  row.cameras = static_cast<int>(cams);
+  row.markers = static_cast<int>(marks);
+  const bool none =
+      std::all_of(fields.begin() + 12, fields.end(), [](const std::string& f) { return f.empty(); });
+  if (fields.size() == 18 && !none) {
+    row.velocity.emplace();
+    for (int k = 0; k < 6; ++k)
+      if (!ParseDouble(fields[12 + k], &(*row.velocity)[k]) || !std::isfinite((*row.velocity)[k]))
+        throw FileFormatError(where + kTrajectoryColumns[12 + k] + ": not a finite number: '" +
+                              fields[12 + k] + "' (the velocity columns are all given or all empty)");
+  }
+  return row;
+}
+
+}  // namespace
 
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
   std::istringstream in(ReadFile(path));
   std::vector<TrajectoryRow> rows;
   std::string line;
   int line_number = 0;
-  bool header_seen = false;
-  static const char* kNames[] = {"utime", "seq", "tx", "ty",     "tz",      "qw",
-                                 "qx",    "qy",  "qz", "rms_px", "cameras", "markers"};
+  size_t columns = 0;  // of the header; 0 before it
   while (std::getline(in, line)) {
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
-    if (!header_seen) {
-      if (line != kTrajectoryHeader)
-        throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) + "'");
-      header_seen = true;
+    if (columns == 0) {
+      if (!IsTrajectoryHeader(line))
+        throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) + "' (or '" +
+                              kTrajectoryVelocityHeader + "')");
+      columns = line == kTrajectoryHeader ? 12 : 18;
       continue;
     }
     std::vector<std::string> fields;
@@ -591,33 +656,12 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     std::string field;
     while (std::getline(ss, field, ',')) fields.push_back(field);
     if (!line.empty() && line.back() == ',') fields.push_back("");
-    if (fields.size() != 12)
-      throw FileFormatError(where + "expected 12 fields, got " + std::to_string(fields.size()));
-    TrajectoryRow row;
-    int64_t cams = 0, marks = 0;
-    double v[8];
-    if (!ParseInt64(fields[0], &row.utime))
-      throw FileFormatError(where + "utime: not an integer: '" + fields[0] + "'");
-    if (!ParseInt64(fields[1], &row.seq))
-      throw FileFormatError(where + "seq: not an integer: '" + fields[1] + "'");
-    for (int i = 0; i < 8; ++i)
-      if (!ParseDouble(fields[2 + i], &v[i]))
-        throw FileFormatError(where + kNames[2 + i] + ": not a number: '" + fields[2 + i] + "'");
-    if (!ParseInt64(fields[10], &cams))
-      throw FileFormatError(where + "cameras: not an integer: '" + fields[10] + "'");
-    if (!ParseInt64(fields[11], &marks))
-      throw FileFormatError(where + "markers: not an integer: '" + fields[11] + "'");
-    try {
-      row.rig_from_object = RigidFromQuaternion({v[3], v[4], v[5], v[6]}, Eigen::Vector3d(v[0], v[1], v[2]));
-    } catch (const std::exception& e) {
-      throw FileFormatError(where + "qw..qz: " + e.what());
-    }
-    row.rms_px = v[7];
-    row.cameras = static_cast<int>(cams);
-    row.markers = static_cast<int>(marks);
-    rows.push_back(row);
+    if (fields.size() != columns)
+      throw FileFormatError(where + "expected " + std::to_string(columns) + " fields, got " +
+                            std::to_string(fields.size()));
+    rows.push_back(ParseTrajectoryRow(fields, where));
   }
-  if (!header_seen)
+  if (columns == 0)
     throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +
                           "')");
   return rows;

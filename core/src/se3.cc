@@ -114,6 +114,13 @@ Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta) {
   return out;
 }
 
+Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt) {
+  Rigid3 out = pose;
+  out.linear() = RotationFromVector(dt * Eigen::Vector3d(twist[0], twist[1], twist[2])) * pose.linear();
+  out.translation() += dt * Eigen::Vector3d(twist[3], twist[4], twist[5]);
+  return out;
+}
+
 Rigid3 RandomRigid(std::mt19937_64& rng, double max_translation) {
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-max_translation, max_translation);

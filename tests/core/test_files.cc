@@ -226,6 +226,54 @@ TEST(Files, TrajectoryRoundTrips) {
   EXPECT_TRUE(ReadTrajectory(dir.File("empty.csv")).empty());
 }
 
+// The mapper's trajectory with time offsets keeps each row's velocity (kTrajectoryVelocityHeader):
+// bit-exact; a file without the columns (every earlier one) reads as rows without velocity; rows
+// without one are written with the six columns empty beside rows with one.
+TEST(Files, TrajectoryVelocitiesRoundTrip) {
+  TempDir dir;
+  std::vector<TrajectoryRow> rows(3);
+  for (int i = 0; i < 3; ++i) {
+    rows[i].utime = 1000 + i;
+    rows[i].seq = i;
+    if (i != 1)
+      rows[i].velocity = std::array<double, 6>{0.1 * i, -1.0 / 3.0, 2e-7, 0.5, -0.25 * i, 1.0 / 7.0};
+  }
+  const std::string path = dir.File("trajectory.csv");
+  WriteTrajectory(path, rows);
+  const std::string text = ReadFile(path);
+  EXPECT_EQ(text.rfind(std::string(kTrajectoryVelocityHeader) + "\n", 0), 0u);
+  EXPECT_NE(text.find("\n1001,1,0,0,0,1,0,0,0,0,0,0,,,,,,\n"), std::string::npos) << text;
+  const std::vector<TrajectoryRow> back = ReadTrajectory(path);
+  ASSERT_EQ(back.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_EQ(back[i].velocity.has_value(), rows[i].velocity.has_value()) << i;
+    if (rows[i].velocity) {
+      EXPECT_EQ(*back[i].velocity, *rows[i].velocity) << i;
+    }
+  }
+  EXPECT_TRUE(IsTrajectoryHeader(kTrajectoryHeader));
+  EXPECT_TRUE(IsTrajectoryHeader(std::string(kTrajectoryVelocityHeader) + "\r"));
+  EXPECT_FALSE(IsTrajectoryHeader("utime,seq"));
+  // Without velocities: the 12 columns alone, as before.
+  for (TrajectoryRow& r : rows) r.velocity.reset();
+  WriteTrajectory(path, rows);
+  EXPECT_EQ(ReadFile(path).rfind(std::string(kTrajectoryHeader) + "\n", 0), 0u);
+  for (const TrajectoryRow& r : ReadTrajectory(path)) EXPECT_FALSE(r.velocity.has_value());
+  // A new rig frame rotates the velocity with the pose: the moved pose at dt is the pose at dt moved.
+  TrajectoryRow row;
+  row.rig_from_object =
+      Rigid3(Eigen::Translation3d(0.1, 0.2, 1.0) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()));
+  row.velocity = std::array<double, 6>{0.2, -0.1, 0.4, 0.3, 0.0, -0.2};
+  const Rigid3 new_from_rig(Eigen::Translation3d(-0.5, 0.0, 0.2) *
+                            Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, 2, 3).normalized()));
+  auto at = [](const TrajectoryRow& r, double dt) { return MovedAlong(r.rig_from_object, *r.velocity, dt); };
+  TrajectoryRow moved = row;
+  MoveToRig(new_from_rig, &moved);
+  const Rigid3 want = new_from_rig * at(row, 0.05), got = at(moved, 0.05);
+  EXPECT_LT((want.translation() - got.translation()).norm(), 1e-12);
+  EXPECT_LT(RotationAngle(want, got), 1e-12);
+}
+
 TEST(Files, TrajectoryErrorsNameTheLine) {
   TempDir dir;
   auto error = [&](const std::string& text) -> std::string {
@@ -246,6 +294,17 @@ TEST(Files, TrajectoryErrorsNameTheLine) {
   EXPECT_CONTAINS(error(h + "1.5,2,0,0,0,1,0,0,0,0.5,1,1\n"), "t.csv:2: utime: not an integer");
   EXPECT_CONTAINS(error(h + "1,2,0,0,0,0,0,0,0,0.5,1,1\n"), "t.csv:2: qw..qz");
   EXPECT_CONTAINS(error(""), "empty file");
+  // The velocity columns: all six numbers or all empty, each named.
+  const std::string hv = std::string(kTrajectoryVelocityHeader) + "\n";
+  EXPECT_CONTAINS(error(hv + "1,2,0,0,0,1,0,0,0,0.5,1,1\n"), "t.csv:2: expected 18 fields, got 12");
+  EXPECT_CONTAINS(error(hv + "1,2,0,0,0,1,0,0,0,0.5,1,1,0,0,,0,0,0\n"),
+                  "t.csv:2: wz: not a finite number: ''");
+  EXPECT_CONTAINS(error(hv + "1,2,0,0,0,1,0,0,0,0.5,1,1,0,0,0,0,fast,0\n"),
+                  "t.csv:2: vy: not a finite number: 'fast'");
+  EXPECT_CONTAINS(error(hv + "1,2,0,0,0,1,0,0,0,0.5,1,1,0,0,0,nan,0,0\n"),
+                  "t.csv:2: vx: not a finite number");
+  EXPECT_CONTAINS(error(h + "1,2,0,0,0,1,0,0,0,0.5,1,1,0,0,0,0,0,0\n"),
+                  "t.csv:2: expected 12 fields, got 18");
   // CRLF line ends are accepted.
   const std::string crlf = std::string(kTrajectoryHeader) + "\r\n1,2,0,0,0,1,0,0,0,0.5,1,1\r\n";
   EXPECT_EQ(ReadTrajectory(dir.Write("crlf.csv", crlf)).size(), 1u);

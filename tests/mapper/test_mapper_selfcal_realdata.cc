@@ -105,18 +105,24 @@ TEST(MapperSelfCalRealData, CharucoBoardClockOffsetsFromCaliscopeTimestamps) {
   // The diagnostics (report.json) see each observation at its capture time on the reference clock: every
   // observation finds its frame, and each camera's RMS there is near the map's. Before, they paired
   // detections with frames by the cameras' own clocks: cam1, 122 ms late, at 15.7x its predicted RMS.
-  // Not equal: the velocities that move the poses are taken again from the trajectory's rows, 167 ms
-  // apart, not the bundle's (measured: cam0 0.917 / 0.666 px, cam1 1.625 / 0.786, cam2 1.183 / 0.826,
-  // cam3 0.830 / 0.825).
-  for (const CameraDiagnostics& d : ComputeDiagnostics(estimated).cameras) {
+  // Equal, as the poses move along the bundle's own velocities (kept with the trajectory's rows); before,
+  // they were taken again from the rows, 167 ms apart (cam0 0.917 / 0.666 px, cam1 1.625 / 0.786, cam2
+  // 1.183 / 0.826, cam3 0.830 / 0.825), and the unsupported-map check skipped time offsets.
+  const Diagnostics diagnostics = ComputeDiagnostics(estimated);
+  for (const CameraDiagnostics& d : diagnostics.cameras) {
     const MapCamera* c = estimated.map.FindCamera(d.name);
     ASSERT_NE(c, nullptr) << d.name;
-    std::printf("  diagnostics %s: rms %.3f px (map %.3f), predicted %.3f px, %d of %d inliers, %s\n",
-                d.name.c_str(), d.rms_px, c->rms_px, d.predicted_rms_px, d.inliers, d.observations,
-                d.verdict.c_str());
-    EXPECT_LT(d.rms_px, 2.5 * c->rms_px) << d.name;
+    std::printf(
+        "  diagnostics %s: rms %.9f px (map %.9f), predicted %.3f px, %d of %d inliers (map %d), %s\n",
+        d.name.c_str(), d.rms_px, c->rms_px, d.predicted_rms_px, d.inliers, d.observations, c->observations,
+        d.verdict.c_str());
+    EXPECT_NEAR(d.rms_px, c->rms_px, 1e-6) << d.name;
+    EXPECT_EQ(d.inliers, c->observations) << d.name;
     EXPECT_GE(d.inliers, d.observations - 2) << d.name;
   }
+  const MapperOptions options = MapperOptions::FromConfig(rig);
+  EXPECT_EQ(UnsupportedMapText(diagnostics, options.unsupported_rms_ratio, options.unsupported_side_fraction),
+            "");
   EXPECT_LT(b_est.grid_max_offset_mm, 0.7);
   EXPECT_LT(std::abs(b_est.spacing_over_size / 1.885618 - 1), 0.0025);
 }
