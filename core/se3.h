@@ -50,6 +50,11 @@ Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta);
 // maps into): (Exp(dt w) R, t + dt v) (the mapper's frame velocities with time offsets).
 Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt);
 
+// That twist re-expressed for new_from_old * pose: both parts rotated, so that
+// MovedAlong(new_from_old * pose, TwistIn(new_from_old, twist), dt) = new_from_old * MovedAlong(pose, twist,
+// dt).
+std::array<double, 6> TwistIn(const Rigid3& new_from_old, const std::array<double, 6>& twist);
+
 // A random transform: rotation uniform on SO(3), translation uniform in [-max_translation,
 // max_translation]^3.
 Rigid3 RandomRigid(std::mt19937_64& rng, double max_translation);

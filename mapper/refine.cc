@@ -267,7 +267,8 @@ std::string UnreliableCameraMessage(int c, int total, int active, const CameraPl
   return msg.str();
 }
 
-// Makes camera `reference` the rig frame: every cam_from_rig and rig_from_object re-expressed in it.
+// Makes camera `reference` the rig frame: every cam_from_rig, rig_from_object and frame velocity
+// re-expressed in it.
 void ReanchorOn(int reference, CameraPlacement* cameras, BundleProblem* bp) {
   const Rigid3 rig_from_new = Inverse(RigidFromBlock(bp->cam_from_rig[reference].data()));
   const Rigid3 new_from_rig = Inverse(rig_from_new);
@@ -275,6 +276,7 @@ void ReanchorOn(int reference, CameraPlacement* cameras, BundleProblem* bp) {
     b = BlockFromRigid(Normalized(RigidFromBlock(b.data()) * rig_from_new));
   for (PoseBlock& b : bp->rig_from_object)
     b = BlockFromRigid(Normalized(new_from_rig * RigidFromBlock(b.data())));
+  for (std::array<double, 6>& twist : bp->frame_velocity) twist = TwistIn(new_from_rig, twist);
   bp->cam_from_rig[reference] = BlockFromRigid(Rigid3::Identity());
   bp->camera_fixed.assign(bp->camera_fixed.size(), 0);
   bp->camera_fixed[reference] = 1;

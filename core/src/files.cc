@@ -557,12 +557,7 @@ const char kTrajectoryVelocityHeader[] =
 
 void MoveToRig(const Rigid3& new_rig_from_rig, TrajectoryRow* row) {
   row->rig_from_object = Normalized(new_rig_from_rig * row->rig_from_object);
-  if (!row->velocity) return;
-  std::array<double, 6>& twist = *row->velocity;
-  for (int part = 0; part < 2; ++part) {
-    Eigen::Map<Eigen::Vector3d> x(twist.data() + 3 * part);
-    x = new_rig_from_rig.linear() * Eigen::Vector3d(x);
-  }
+  if (row->velocity) row->velocity = TwistIn(new_rig_from_rig, *row->velocity);
 }
 
 bool IsTrajectoryHeader(const std::string& line) {

@@ -121,6 +121,14 @@ Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double
   return out;
 }
 
+std::array<double, 6> TwistIn(const Rigid3& new_from_old, const std::array<double, 6>& twist) {
+  std::array<double, 6> out;
+  for (int part = 0; part < 2; ++part)
+    Eigen::Map<Eigen::Vector3d>(out.data() + 3 * part) =
+        new_from_old.linear() * Eigen::Vector3d(twist[3 * part], twist[3 * part + 1], twist[3 * part + 2]);
+  return out;
+}
+
 Rigid3 RandomRigid(std::mt19937_64& rng, double max_translation) {
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-max_translation, max_translation);

@@ -138,6 +138,18 @@ TEST(Se3, PerturbLeft) {
   EXPECT_LT((PerturbLeft(pose, Vector6d::Zero()).matrix() - pose.matrix()).norm(), 1e-15);
 }
 
+// A twist re-expressed in another frame moves the re-expressed pose as the frame change moves the moved pose.
+TEST(Se3, TwistInAnotherFrameMovesThePoseTheSameWay) {
+  std::mt19937_64 rng(17);
+  const Rigid3 pose = RandomRigid(rng, 2.0), new_from_old = RandomRigid(rng, 1.0);
+  const std::array<double, 6> twist = {0.4, -1.1, 0.7, 0.3, -0.2, 0.5};
+  for (double dt : {-0.05, 0.02, 0.3}) {
+    const Rigid3 expected = new_from_old * MovedAlong(pose, twist, dt);
+    const Rigid3 moved = MovedAlong(new_from_old * pose, TwistIn(new_from_old, twist), dt);
+    EXPECT_LT((moved.matrix() - expected.matrix()).norm(), 1e-12) << dt;
+  }
+}
+
 TEST(Se3, RandomRigidIsUniformEnough) {
   std::mt19937_64 rng(17);
   Eigen::Vector3d mean_z = Eigen::Vector3d::Zero();

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <random>
 #include <utility>
 
 #include "core/lcm_util.h"
+#include "core/se3.h"
 #include "mapper/stages.h"
 #include "sim/eval.h"
 #include "tests/support/mapper_sim.h"
@@ -319,7 +322,20 @@ TEST(MapperStages, UnreliableReferenceCameraIsReplacedOrNamed) {
   partial.allow_partial = true;
   CameraPlacement cameras = p.cameras;
   MapReport report;
+  // Frame velocities (the bundle's with time offsets; not refined here) go into the new reference's frame
+  // with the poses.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> speed(-1.0, 1.0);
+  bundle.problem.frame_velocity.resize(bundle.problem.rig_from_object.size());
+  for (std::array<double, 6>& twist : bundle.problem.frame_velocity)
+    for (double& x : twist) x = speed(rng);
+  const std::vector<std::array<double, 6>> old_velocity = bundle.problem.frame_velocity;
+  const std::vector<PoseBlock> old_cam_from_rig = bundle.problem.cam_from_rig;
   DropUnreliableCameras(p.observations, p.Names(), partial, settings, &cameras, &bundle, &report);
+  const Rigid3 new_from_old = RigidFromBlock(old_cam_from_rig[cameras.reference].data());
+  for (size_t f = 0; f < old_velocity.size(); ++f)
+    for (int i = 0; i < 6; ++i)
+      ASSERT_NEAR(bundle.problem.frame_velocity[f][i], TwistIn(new_from_old, old_velocity[f])[i], 1e-12) << f;
   EXPECT_NE(cameras.reference, old_ref);
   EXPECT_FALSE(cameras.placed[old_ref]);
   EXPECT_EQ(report.dropped_cameras, std::vector<std::string>{p.names[old_ref]});
