@@ -221,6 +221,80 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
+// The detector's cv::findContours without a hierarchy (detector/candidates.cc) is the one the program
+// calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
+// returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
+// adaptive-threshold images of a textured frame, holes within holes, one-pixel lines and specks, shapes
+// touching the image's edges, widths around the vector width, views, offsets, a vector that held other
+// contours; the input is left as it was, and other modes go to OpenCV's.
+TEST(CandidateSearch, FindContoursIsOpenCVs) {
+  const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
+  using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::findContours)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  std::vector<cv::Mat> images;
+  for (double density : {0.05, 0.3, 0.5, 0.7, 0.95}) {  // noise, nonzero values 1 to 255
+    cv::Mat noise(61, 83, CV_8U), level(61, 83, CV_8U);
+    cv::randu(noise, 1, 256);
+    cv::randu(level, 0, 256);
+    noise.setTo(0, level >= 256 * density);
+    images.push_back(noise);
+  }
+  cv::Mat frame(240, 320, CV_8U);  // a textured frame's binary images, as the aruco module's
+  cv::randu(frame, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(0, 0), 2.0);
+  cv::rectangle(frame, cv::Rect(60, 40, 90, 80), cv::Scalar(10), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(75, 55, 60, 50), cv::Scalar(240), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(90, 70, 30, 20), cv::Scalar(10), cv::FILLED);
+  for (int window : {5, 15}) {
+    cv::Mat binary;
+    cv::adaptiveThreshold(frame, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window, 7);
+    images.push_back(binary);
+    images.push_back(binary(cv::Rect(7, 3, 250, 200)));  // a view
+  }
+  cv::Mat shapes(50, 70, CV_8U, cv::Scalar(0));  // nested holes, lines, specks, the edges touched
+  cv::rectangle(shapes, cv::Rect(0, 0, 30, 30), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(5, 5, 20, 20), cv::Scalar(0), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(9, 9, 12, 12), cv::Scalar(7), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(13, 13, 4, 4), cv::Scalar(0), cv::FILLED);
+  cv::line(shapes, cv::Point(35, 2), cv::Point(68, 40), cv::Scalar(255));
+  cv::line(shapes, cv::Point(35, 45), cv::Point(69, 10), cv::Scalar(200));
+  cv::line(shapes, cv::Point(40, 49), cv::Point(69, 49), cv::Scalar(1));
+  for (int i = 0; i < 12; ++i) shapes.at<uint8_t>(33 + i % 4 * 3, 40 + i * 2) = 255;
+  cv::circle(shapes, cv::Point(55, 30), 6, cv::Scalar(90), 1);
+  images.push_back(shapes);
+  images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(3)));  // one border along the image's edges
+  images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(0)));
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(1, 9), cv::Size(9, 1), cv::Size(15, 4), cv::Size(16, 5),
+                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7)}) {
+    for (double density : {0.5, 0.9}) {
+      cv::Mat tiny(size, CV_8U), level(size, CV_8U);
+      cv::randu(tiny, 1, 256);
+      cv::randu(level, 0, 256);
+      tiny.setTo(0, level >= 256 * density);
+      images.push_back(tiny);
+    }
+  }
+  for (const cv::Mat& image : images)
+    for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
+      SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset);
+      const cv::Mat before = image.clone();
+      std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
+      cv::findContours(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+      opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+      ASSERT_EQ(ours, theirs);
+      ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
+    }
+  for (int mode : {cv::RETR_EXTERNAL, cv::RETR_CCOMP}) {
+    std::vector<std::vector<cv::Point>> ours, theirs;
+    cv::findContours(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
+    opencv(images[5], theirs, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
+    EXPECT_EQ(ours, theirs);
+  }
+}
+
 TEST(DetectorOptions, ValidateNamesTheField) {
   DetectorOptions o;
   o.corner_refinement = "magic";
