@@ -259,14 +259,13 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
 // any other border pixel.
 constexpr int8_t kBorderRightExamined = -126, kBorderPixel = 2;
 
-// Follows the border through `start` (a pixel of `framed`, the 0/1 image with a frame of zeros, `step`
-// bytes a row) as OpenCV's icvFetchContour does for 8-bit images and CHAIN_APPROX_NONE: the same first
-// direction (an outer border searches from the left neighbour, a hole's from the right one, clockwise in
-// image coordinates), the same marks, every pixel passed appended to `points` from `pt` on.
-void FollowBorder(int8_t* start, std::ptrdiff_t step, bool hole, cv::Point pt,
+// Follows the border through `start` (a pixel of the framed 0/1 image; `delta`: the offsets of its 8
+// neighbours, right first and counter-clockwise on screen, twice over) as OpenCV's icvFetchContour does
+// for 8-bit images and CHAIN_APPROX_NONE: the same first direction (an outer border searches from the
+// left neighbour, a hole's from the right one), the same marks, every pixel passed appended to `points`
+// from `pt` on.
+void FollowBorder(int8_t* start, const std::ptrdiff_t* delta, bool hole, cv::Point pt,
                   std::vector<cv::Point>* points) {
-  const std::ptrdiff_t delta[16] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1,
-                                    1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1};
   static constexpr int kDx[8] = {1, 1, 0, -1, -1, -1, 0, 1}, kDy[8] = {0, -1, -1, -1, 0, 1, 1, 1};
   const int first_end = hole ? 0 : 4;
   int s = first_end;
@@ -301,18 +300,26 @@ void FollowBorder(int8_t* start, std::ptrdiff_t step, bool hole, cv::Point pt,
   }
 }
 
-// The first x in [x, end) with row[x] != value (end if none).
-int NextChange(const int8_t* row, int x, int end, int8_t value) {
+// Bit i set where a border starts at row[x + i] as the row is (i < 16; row readable from x - 1 to
+// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's).
+uint32_t BorderStarts(const int8_t* row, int x) {
 #ifdef __SSE2__
-  const __m128i v = _mm_set1_epi8(value);
-  for (; x + 16 <= end; x += 16) {
-    const int same =
-        _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x)), v));
-    if (same != 0xffff) return x + __builtin_ctz(~same);
+  const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+  const __m128i prev = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x - 1));
+  if (_mm_movemask_epi8(_mm_cmpeq_epi8(p, prev)) == 0xffff) return 0;  // no change (most of an image)
+  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+  const __m128i outer = _mm_and_si128(_mm_cmpeq_epi8(p, one), _mm_cmpeq_epi8(prev, zero));
+  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero),
+                                     _mm_or_si128(_mm_cmpeq_epi8(prev, one), _mm_cmpeq_epi8(prev, two)));
+  return static_cast<uint32_t>(_mm_movemask_epi8(_mm_or_si128(outer, hole)));
+#else
+  uint32_t mask = 0;
+  for (int i = 0; i < 16; ++i) {
+    const int8_t p = row[x + i], prev = row[x + i - 1];
+    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev >= 1)) << i;
   }
+  return mask;
 #endif
-  while (x < end && row[x] == value) ++x;
-  return x;
 }
 
 // Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
@@ -325,10 +332,14 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   const int w = src.cols, h = src.rows;
   const std::ptrdiff_t step = w + 2;
   thread_local std::vector<int8_t> framed;
-  framed.assign(static_cast<size_t>(step) * (h + 2), 0);
+  // Every byte written below (no clearing pass); 16 more for the last row's 16-pixel reads.
+  framed.resize(static_cast<size_t>(step) * (h + 2) + 16);
+  std::fill_n(framed.begin(), step, 0);
+  std::fill_n(framed.begin() + (h + 1) * step, step + 16, 0);
   for (int y = 0; y < h; ++y) {
     const uint8_t* s = src.ptr<uint8_t>(y);
     int8_t* d = framed.data() + (y + 1) * step + 1;
+    d[-1] = 0, d[w] = 0;
     int x = 0;
 #ifdef __SSE2__
     const __m128i one = _mm_set1_epi8(1);
@@ -340,22 +351,26 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   }
   points->clear();
   ends->clear();
+  const std::ptrdiff_t delta[16] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1,
+                                    1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1};
+  // OpenCV compares each pixel with the one before it as it is then (after the borders followed so far
+  // marked it): where a border starts it follows it. The starts are found 16 pixels at a time, and found
+  // again after each border followed (it may have marked pixels ahead).
   for (int y = 1; y <= h; ++y) {
     int8_t* row = framed.data() + y * step;
-    int8_t prev = 0;
-    for (int x = NextChange(row, 1, w + 1, 0); x <= w; x = NextChange(row, x + 1, w + 1, prev)) {
-      const int8_t p = row[x];
-      if (prev == 0 && p == 1) {
-        FollowBorder(row + x, step, false, cv::Point(x - 1, y - 1) + offset, points);
-        ends->push_back(points->size());
-        prev = row[x];  // marked
-      } else if (p == 0 && prev >= 1) {
-        FollowBorder(row + x - 1, step, true, cv::Point(x - 2, y - 1) + offset, points);
-        ends->push_back(points->size());
-        prev = 0;
-      } else {
-        prev = p;
+    for (int base = 1; base <= w;) {
+      uint32_t starts = BorderStarts(row, base);
+      if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+      if (starts == 0) {
+        base += 16;
+        continue;
       }
+      const int x = base + __builtin_ctz(starts);
+      const bool hole = row[x] == 0;
+      FollowBorder(row + x - (hole ? 1 : 0), delta, hole, cv::Point(x - (hole ? 2 : 1), y - 1) + offset,
+                   points);
+      ends->push_back(points->size());
+      base = x + 1;
     }
   }
 }
