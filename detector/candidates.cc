@@ -6,6 +6,7 @@
 #endif
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -375,6 +376,65 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   }
 }
 
+// One row segment of OpenCV 4.6's warpPerspective with INTER_NEAREST (its WarpPerspectiveInvoker: column
+// blocks of `bw` pixels from `x`): d[i] = the pixel of `src` nearest to M (x + i, y), `border` outside.
+// Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) / (W0 + M6 i) with X0 =
+// M0 x + M1 y + M2 per block row, 0 where the denominator is 0, clamped to the int range, rounded to even
+// and saturated to 16 bits, 16 pixels at a time as its SSE4.1 line (every operation SSE2's) and the rest
+// as its scalar code.
+void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int bw, uint8_t border,
+                        uint8_t* d) {
+  const double X0 = M[0] * x + M[1] * y + M[2], Y0 = M[3] * x + M[4] * y + M[5],
+               W0 = M[6] * x + M[7] * y + M[8];
+  int16_t xy[2 * 16];
+  const uint8_t* data = src.data;
+  const size_t step = src.step[0];
+  const unsigned cols = static_cast<unsigned>(src.cols), rows = static_cast<unsigned>(src.rows);
+  auto sample = [&](int i, int n) {
+    for (int k = 0; k < n; ++k) {
+      const int sx = xy[2 * k], sy = xy[2 * k + 1];
+      d[i + k] = static_cast<unsigned>(sx) < cols && static_cast<unsigned>(sy) < rows ? data[sy * step + sx]
+                                                                                      : border;
+    }
+  };
+  int i = 0;
+#ifdef __SSE2__
+  const __m128d m0 = _mm_set1_pd(M[0]), m3 = _mm_set1_pd(M[3]), m6 = _mm_set1_pd(M[6]);
+  const __m128d int_max = _mm_set1_pd(static_cast<double>(INT_MAX)),
+                int_min = _mm_set1_pd(static_cast<double>(INT_MIN));
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1), x0 = _mm_set1_pd(X0), y0 = _mm_set1_pd(Y0),
+                w0 = _mm_set1_pd(W0);
+  for (; i <= bw - 16; i += 16) {
+    __m128d at = _mm_set_pd(i + 1, i);
+    for (int k = 0; k < 16; k += 4) {
+      __m128i xy4[2];
+      for (int h = 0; h < 2; ++h, at = _mm_add_pd(at, _mm_set1_pd(2))) {
+        __m128d w = _mm_add_pd(_mm_mul_pd(m6, at), w0);
+        w = _mm_andnot_pd(_mm_cmpeq_pd(w, zero), _mm_div_pd(one, w));
+        const __m128d fx =
+            _mm_max_pd(int_min, _mm_min_pd(int_max, _mm_mul_pd(_mm_add_pd(x0, _mm_mul_pd(m0, at)), w)));
+        const __m128d fy =
+            _mm_max_pd(int_min, _mm_min_pd(int_max, _mm_mul_pd(_mm_add_pd(y0, _mm_mul_pd(m3, at)), w)));
+        xy4[h] = _mm_unpacklo_epi32(_mm_cvtpd_epi32(fx), _mm_cvtpd_epi32(fy));  // x0 y0 x1 y1
+      }
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(xy + 2 * k), _mm_packs_epi32(xy4[0], xy4[1]));
+    }
+    sample(i, 16);
+  }
+#endif
+  for (; i < bw; ++i) {
+    double w = W0 + M[6] * i;
+    w = w != 0 ? 1. / w : 0;
+    const double fx =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
+    const double fy =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
+    xy[0] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx));
+    xy[1] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
+    sample(i, 1);
+  }
+}
+
 }  // namespace
 
 QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gray), search_(search) {
@@ -599,6 +659,43 @@ void findContours(InputArray image_array, OutputArrayOfArrays contours_array, in
     contours[n - 1 - k].assign(points.begin() + static_cast<std::ptrdiff_t>(begin),
                                points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
   }
+}
+
+// OpenCV's cv::warpPerspective, which cv::aruco::detectMarkers calls for every candidate to read its
+// cells (a 48 x 48 image with the default 6 px per cell, 100,000 instructions a call through OpenCV's
+// invoker, map blocks and remap): for 8-bit images, INTER_NEAREST and a constant border, the same
+// inverse map (cv::invert, as OpenCV inverts it) and the same positions bit for bit (WarpSegmentNearest,
+// test_detector_unit WarpPerspectiveIsOpenCVs); every other case goes to OpenCV's own.
+void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_array, Size dsize, int flags,
+                     int border_type, const Scalar& border_value) {
+  const int m_type = m_array.type();
+  if ((flags & INTER_MAX) != INTER_NEAREST || border_type != BORDER_CONSTANT || !src_array.isMat() ||
+      !dst_array.isMat() || src_array.type() != CV_8UC1 || src_array.empty() ||
+      (m_type != CV_32FC1 && m_type != CV_64FC1) || m_array.size() != Size(3, 3)) {
+    using Function = void (*)(InputArray, OutputArray, InputArray, Size, int, int, const Scalar&);
+    static const Function opencv =
+        reinterpret_cast<Function>(dlsym(RTLD_NEXT,
+                                         "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_"
+                                         "NS_5Size_IiEEiiRKNS_7Scalar_IdEE"));
+    CV_Assert(opencv != nullptr);
+    opencv(src_array, dst_array, m_array, dsize, flags, border_type, border_value);
+    return;
+  }
+  Mat src = src_array.getMat();
+  double m[9];
+  Mat matrix(3, 3, CV_64F, m);
+  m_array.getMat().convertTo(matrix, CV_64F);
+  dst_array.create(dsize.empty() ? src.size() : dsize, src.type());
+  Mat dst = dst_array.getMat();
+  if (dst.data == src.data) src = src.clone();
+  if (!(flags & WARP_INVERSE_MAP)) invert(matrix, matrix);
+  const uint8_t border = saturate_cast<uint8_t>(border_value[0]);
+  // OpenCV's column blocks (a block's map starts from its first column); its row blocks do not matter.
+  const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
+  for (int y = 0; y < dst.rows; ++y)
+    for (int x = 0; x < dst.cols; x += block_width)
+      mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
+                               dst.ptr<uint8_t>(y) + x);
 }
 
 }  // namespace cv

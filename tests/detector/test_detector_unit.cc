@@ -295,6 +295,57 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
   }
 }
 
+// The detector's cv::warpPerspective (detector/candidates.cc) is the one the program calls, the aruco
+// module's bit reading included, and with INTER_NEAREST and a constant border on 8-bit images it gives
+// OpenCV's own images bit for bit: random quads of a noise image to marker-sized squares (as the aruco
+// module reads candidates), quads reaching outside the image, outputs of several column blocks and of
+// widths that are not multiples of 16, the inverse-map flag, a float matrix, a map through a zero
+// denominator, a fractional border value; other interpolations go to OpenCV's.
+TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
+  const char* name =
+      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
+  using Function =
+      void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::warpPerspective)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  cv::Mat image(120, 160, CV_8U);
+  cv::randu(image, 0, 256);
+  cv::RNG rng(3);
+  for (int trial = 0; trial < 60; ++trial) {
+    const cv::Size size = std::vector<cv::Size>{{48, 48}, {24, 24}, {17, 5}, {300, 40}, {70, 33}}[trial % 5];
+    std::vector<cv::Point2f> quad,
+        square = {
+            {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
+    const float cx = rng.uniform(-10.f, 170.f), cy = rng.uniform(-10.f, 130.f), r = rng.uniform(5.f, 60.f);
+    for (int k = 0; k < 4; ++k) {
+      const float a = static_cast<float>(k * CV_PI / 2 + rng.uniform(-0.4, 0.4)),
+                  s = r * rng.uniform(0.6f, 1.4f);
+      quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
+    }
+    cv::Mat m = cv::getPerspectiveTransform(quad, square);
+    if (trial % 7 == 3) m.convertTo(m, CV_32F);
+    const int flags = trial % 4 == 1 ? cv::INTER_NEAREST | cv::WARP_INVERSE_MAP : cv::INTER_NEAREST;
+    if (flags & cv::WARP_INVERSE_MAP) m = m.inv();
+    const cv::Scalar border = trial % 3 == 0 ? cv::Scalar(77.6) : cv::Scalar();
+    SCOPED_TRACE(::testing::Message() << "trial " << trial << " size " << size << " matrix " << m);
+    cv::Mat ours, theirs;
+    cv::warpPerspective(image, ours, m, size, flags, cv::BORDER_CONSTANT, border);
+    opencv(image, theirs, m, size, flags, cv::BORDER_CONSTANT, border);
+    ASSERT_EQ(ours.size(), theirs.size());
+    ASSERT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
+  }
+  const cv::Matx33d through_zero(1, 0.5, 3, 0.2, 1, 2, 0.05, 0, -1);  // denominator 0 at column 20
+  for (int interpolation : {cv::INTER_NEAREST, cv::INTER_LINEAR}) {
+    cv::Mat ours, theirs;
+    cv::warpPerspective(image, ours, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP);
+    opencv(image, theirs, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP,
+           cv::BORDER_CONSTANT, cv::Scalar());
+    EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
+  }
+}
+
 TEST(DetectorOptions, ValidateNamesTheField) {
   DetectorOptions o;
   o.corner_refinement = "magic";
