@@ -346,6 +346,37 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
   }
 }
 
+// The detector's cv::countNonZero (detector/candidates.cc) is the one the program calls, the aruco
+// module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
+// (below, at and across the vector width, over 255 vectors a row), views, an empty matrix; other types go
+// to OpenCV's.
+TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
+  const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
+  using Function = int (*)(cv::InputArray);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::countNonZero)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
+                        cv::Size(4200, 3), cv::Size(640, 480)})
+    for (double density : {0.0, 0.5, 0.97}) {
+      cv::Mat image(size, CV_8U), level(size, CV_8U);
+      cv::randu(image, 1, 256);
+      cv::randu(level, 0, 256);
+      image.setTo(0, level >= 256 * density);
+      SCOPED_TRACE(::testing::Message() << size << " density " << density);
+      EXPECT_EQ(cv::countNonZero(image), opencv(image));
+      const cv::Mat view =
+          image(cv::Rect(size.width / 3, size.height / 4, size.width / 2 + 1, size.height / 2 + 1));
+      EXPECT_EQ(cv::countNonZero(view), opencv(view));
+    }
+  EXPECT_EQ(cv::countNonZero(cv::Mat(0, 5, CV_8U)), 0);
+  cv::Mat real(13, 7, CV_32F);
+  cv::randu(real, -1, 1);
+  real.setTo(0, real > 0.3);
+  EXPECT_EQ(cv::countNonZero(real), opencv(real));
+}
+
 TEST(DetectorOptions, ValidateNamesTheField) {
   DetectorOptions o;
   o.corner_refinement = "magic";
