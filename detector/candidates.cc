@@ -397,10 +397,10 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
 
 // One row segment of OpenCV 4.6's warpPerspective with INTER_NEAREST (its WarpPerspectiveInvoker: column
 // blocks of `bw` pixels from `x`): d[i] = the pixel of `src` nearest to M (x + i, y), `border` outside.
-// Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) / (W0 + M6 i) with X0 =
-// M0 x + M1 y + M2 per block row, 0 where the denominator is 0, clamped to the int range, rounded to even
-// and saturated to 16 bits, 16 pixels at a time as its SSE4.1 line (every operation SSE2's) and the rest
-// as its scalar code.
+// Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) times 1 / (W0 + M6 i)
+// (0 where that denominator is 0) with X0 = M0 x + M1 y + M2 per block row, clamped to the int range,
+// rounded to even and saturated to 16 bits, 16 pixels at a time as its SSE4.1 line (every operation
+// SSE2's) and the rest as its scalar code.
 void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int bw, uint8_t border,
                         uint8_t* d) {
   const double X0 = M[0] * x + M[1] * y + M[2], Y0 = M[3] * x + M[4] * y + M[5],
