@@ -183,34 +183,15 @@ void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* col
   for (; x < w; ++x) column[x] = static_cast<uint16_t>(column[x] + in[x] - out[x]);
 }
 
-// sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R). From R = 4 on, as
-// R sums of two adjacent columns (one pass) and the last column: half the loads and additions.
+// sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R).
 template <int R>
 void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
-  const uint16_t* terms = column;  // term i of the window at x: terms[x - R + i * stride]
-  int count = 2 * R + 1, stride = 1;
-  if constexpr (R >= 4) {
-    thread_local std::vector<uint16_t> pair_buffer;
-    pair_buffer.resize(static_cast<size_t>(w) + 2 * R);
-    uint16_t* pairs = pair_buffer.data() + R;  // pairs[j] = column[j] + column[j + 1], -R <= j <= w + R - 2
-    int j = -R;
-#ifdef __SSE2__
-    for (; j + 8 <= w + R - 1; j += 8)
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(pairs + j),
-                       _mm_add_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(column + j)),
-                                     _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + j + 1))));
-#endif
-    for (; j <= w + R - 2; ++j) pairs[j] = static_cast<uint16_t>(column[j] + column[j + 1]);
-    terms = pairs, count = R, stride = 2;
-  }
   int x = 0;
 #ifdef __SSE2__
   for (; x + 8 <= w; x += 8) {
-    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(terms + x - R));
-    for (int i = 1; i < count; ++i)
-      sum = _mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(terms + x - R + i * stride)));
-    if (stride == 2)
-      sum = _mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x + R)));
+    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x - R));
+    for (int i = 1 - R; i <= R; ++i)
+      sum = _mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x + i)));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x), sum);
   }
 #endif
