@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #ifdef __SSE2__
@@ -292,8 +293,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
 }
 
 // Mean of the groups' profiles at the bin nearest u, over the groups whose row `row` (0: the border;
-// 1..: code rows; -1: any) has colour `colour`.
+// 1..kRows: code rows; -1: any) has colour `colour`.
 double LevelNear(const SideProfiles& s, double u, int row, int colour) {
+  assert(row <= SideProfiles::kRows);  // the patterns hold rows 1..kRows
   const int j = std::clamp(static_cast<int>(std::lround((u - s.u0) / s.du)), 0, s.bins - 1);
   double sum = 0, count = 0;
   for (size_t g = 0; g < s.patterns.size(); ++g) {
@@ -344,7 +346,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   p[kL0] = LevelNear(s, -0.5 * c, -1, 0);
   p[kL1] = LevelNear(s, -1.5 * c, 1, 1);
   if (!std::isfinite(p[kL1])) p[kL1] = LevelNear(s, -2.5 * c, 2, 1);
-  if (!std::isfinite(p[kL1])) p[kL1] = LevelNear(s, -3.5 * c, 3, 1);
   p[kS1] = LevelNear(s, std::min(0.5 * c, 1.0), -1, 0);
   p[kS2] = LevelNear(s, s.u0 + (s.bins - 1) * s.du, -1, 0);
   p[kQ] = c;
