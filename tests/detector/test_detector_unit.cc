@@ -221,6 +221,162 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
+// The detector's cv::findContours without a hierarchy (detector/candidates.cc) is the one the program
+// calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
+// returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
+// adaptive-threshold images of a textured frame, holes within holes, one-pixel lines and specks, shapes
+// touching the image's edges, widths around the vector width, views, offsets, a vector that held other
+// contours; the input is left as it was, and other modes go to OpenCV's.
+TEST(CandidateSearch, FindContoursIsOpenCVs) {
+  const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
+  using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::findContours)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  std::vector<cv::Mat> images;
+  for (double density : {0.05, 0.3, 0.5, 0.7, 0.95}) {  // noise, nonzero values 1 to 255
+    cv::Mat noise(61, 83, CV_8U), level(61, 83, CV_8U);
+    cv::randu(noise, 1, 256);
+    cv::randu(level, 0, 256);
+    noise.setTo(0, level >= 256 * density);
+    images.push_back(noise);
+  }
+  cv::Mat frame(240, 320, CV_8U);  // a textured frame's binary images, as the aruco module's
+  cv::randu(frame, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(0, 0), 2.0);
+  cv::rectangle(frame, cv::Rect(60, 40, 90, 80), cv::Scalar(10), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(75, 55, 60, 50), cv::Scalar(240), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(90, 70, 30, 20), cv::Scalar(10), cv::FILLED);
+  for (int window : {5, 15}) {
+    cv::Mat binary;
+    cv::adaptiveThreshold(frame, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window, 7);
+    images.push_back(binary);
+    images.push_back(binary(cv::Rect(7, 3, 250, 200)));  // a view
+  }
+  cv::Mat shapes(50, 70, CV_8U, cv::Scalar(0));  // nested holes, lines, specks, the edges touched
+  cv::rectangle(shapes, cv::Rect(0, 0, 30, 30), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(5, 5, 20, 20), cv::Scalar(0), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(9, 9, 12, 12), cv::Scalar(7), cv::FILLED);
+  cv::rectangle(shapes, cv::Rect(13, 13, 4, 4), cv::Scalar(0), cv::FILLED);
+  cv::line(shapes, cv::Point(35, 2), cv::Point(68, 40), cv::Scalar(255));
+  cv::line(shapes, cv::Point(35, 45), cv::Point(69, 10), cv::Scalar(200));
+  cv::line(shapes, cv::Point(40, 49), cv::Point(69, 49), cv::Scalar(1));
+  for (int i = 0; i < 12; ++i) shapes.at<uint8_t>(33 + i % 4 * 3, 40 + i * 2) = 255;
+  cv::circle(shapes, cv::Point(55, 30), 6, cv::Scalar(90), 1);
+  images.push_back(shapes);
+  images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(3)));  // one border along the image's edges
+  images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(0)));
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(1, 9), cv::Size(9, 1), cv::Size(15, 4), cv::Size(16, 5),
+                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7)}) {
+    for (double density : {0.5, 0.9}) {
+      cv::Mat tiny(size, CV_8U), level(size, CV_8U);
+      cv::randu(tiny, 1, 256);
+      cv::randu(level, 0, 256);
+      tiny.setTo(0, level >= 256 * density);
+      images.push_back(tiny);
+    }
+  }
+  for (const cv::Mat& image : images)
+    for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
+      SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset);
+      const cv::Mat before = image.clone();
+      std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
+      cv::findContours(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+      opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+      ASSERT_EQ(ours, theirs);
+      ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
+    }
+  for (int mode : {cv::RETR_EXTERNAL, cv::RETR_CCOMP}) {
+    std::vector<std::vector<cv::Point>> ours, theirs;
+    cv::findContours(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
+    opencv(images[5], theirs, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
+    EXPECT_EQ(ours, theirs);
+  }
+}
+
+// The detector's cv::warpPerspective (detector/candidates.cc) is the one the program calls, the aruco
+// module's bit reading included, and with INTER_NEAREST and a constant border on 8-bit images it gives
+// OpenCV's own images bit for bit: random quads of a noise image to marker-sized squares (as the aruco
+// module reads candidates), quads reaching outside the image, outputs of several column blocks and of
+// widths that are not multiples of 16, the inverse-map flag, a float matrix, a map through a zero
+// denominator, a fractional border value; other interpolations go to OpenCV's.
+TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
+  const char* name =
+      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
+  using Function =
+      void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::warpPerspective)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  cv::Mat image(120, 160, CV_8U);
+  cv::randu(image, 0, 256);
+  cv::RNG rng(3);
+  for (int trial = 0; trial < 60; ++trial) {
+    const cv::Size size = std::vector<cv::Size>{{48, 48}, {24, 24}, {17, 5}, {300, 40}, {70, 33}}[trial % 5];
+    std::vector<cv::Point2f> quad,
+        square = {
+            {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
+    const float cx = rng.uniform(-10.f, 170.f), cy = rng.uniform(-10.f, 130.f), r = rng.uniform(5.f, 60.f);
+    for (int k = 0; k < 4; ++k) {
+      const float a = static_cast<float>(k * CV_PI / 2 + rng.uniform(-0.4, 0.4)),
+                  s = r * rng.uniform(0.6f, 1.4f);
+      quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
+    }
+    cv::Mat m = cv::getPerspectiveTransform(quad, square);
+    if (trial % 7 == 3) m.convertTo(m, CV_32F);
+    const int flags = trial % 4 == 1 ? cv::INTER_NEAREST | cv::WARP_INVERSE_MAP : cv::INTER_NEAREST;
+    if (flags & cv::WARP_INVERSE_MAP) m = m.inv();
+    const cv::Scalar border = trial % 3 == 0 ? cv::Scalar(77.6) : cv::Scalar();
+    SCOPED_TRACE(::testing::Message() << "trial " << trial << " size " << size << " matrix " << m);
+    cv::Mat ours, theirs;
+    cv::warpPerspective(image, ours, m, size, flags, cv::BORDER_CONSTANT, border);
+    opencv(image, theirs, m, size, flags, cv::BORDER_CONSTANT, border);
+    ASSERT_EQ(ours.size(), theirs.size());
+    ASSERT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
+  }
+  const cv::Matx33d through_zero(1, 0.5, 3, 0.2, 1, 2, 0.05, 0, -1);  // denominator 0 at column 20
+  for (int interpolation : {cv::INTER_NEAREST, cv::INTER_LINEAR}) {
+    cv::Mat ours, theirs;
+    cv::warpPerspective(image, ours, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP);
+    opencv(image, theirs, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP,
+           cv::BORDER_CONSTANT, cv::Scalar());
+    EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
+  }
+}
+
+// The detector's cv::countNonZero (detector/candidates.cc) is the one the program calls, the aruco
+// module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
+// (below, at and across the vector width, over 255 vectors a row), views, an empty matrix; other types go
+// to OpenCV's.
+TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
+  const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
+  using Function = int (*)(cv::InputArray);
+  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::countNonZero)));
+  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  ASSERT_NE(opencv, nullptr);
+  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
+                        cv::Size(4200, 3), cv::Size(640, 480)})
+    for (double density : {0.0, 0.5, 0.97}) {
+      cv::Mat image(size, CV_8U), level(size, CV_8U);
+      cv::randu(image, 1, 256);
+      cv::randu(level, 0, 256);
+      image.setTo(0, level >= 256 * density);
+      SCOPED_TRACE(::testing::Message() << size << " density " << density);
+      EXPECT_EQ(cv::countNonZero(image), opencv(image));
+      const cv::Mat view =
+          image(cv::Rect(size.width / 3, size.height / 4, size.width / 2 + 1, size.height / 2 + 1));
+      EXPECT_EQ(cv::countNonZero(view), opencv(view));
+    }
+  EXPECT_EQ(cv::countNonZero(cv::Mat(0, 5, CV_8U)), 0);
+  cv::Mat real(13, 7, CV_32F);
+  cv::randu(real, -1, 1);
+  real.setTo(0, real > 0.3);
+  EXPECT_EQ(cv::countNonZero(real), opencv(real));
+}
+
 TEST(DetectorOptions, ValidateNamesTheField) {
   DetectorOptions o;
   o.corner_refinement = "magic";
