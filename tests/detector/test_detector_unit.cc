@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -12,6 +13,7 @@
 #include "detector/candidates.h"
 #include "detector/detector.h"
 #include "detector/node.h"
+#include "detector/side_model.h"
 #include "detector/source.h"
 #include "tests/detector/synthetic.h"
 #include "tests/support/temp_dir.h"
@@ -564,7 +566,6 @@ TEST_F(SourceTest, MissingSourceNamesCameraAndPath) {
     EXPECT_NE(what.find("nope"), std::string::npos);
   }
 }
-
 }  // namespace
 }  // namespace mcmt
 
@@ -620,5 +621,42 @@ TEST(DetectorUnit, SharpPixelAlignedEdgesAreUnbiased) {
         }
       }
 }
+// A side whose code rows 1-2 are all of the border's colour (the code's other colour only mixed in along
+// the side) is fitted from its own profiles alone: the fit's cold start once looked for the other colour
+// in row 3, one byte past each group's pattern, so its result depended on whatever lay there. Here the
+// byte past the pattern is planted (a pattern cleared by Reset keeps its storage) as 1 and as 0.
+TEST(SideModel, AFitDoesNotReadPastTheGroupsPatterns) {
+  const double cell = 3.0, edge = 0.1, sigma = 0.8, surround = 200, border = 40;
+  const double row_level = border + (220.0 - border) * 0.3;
+  const auto phi = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  const auto profile = [&](double u) {  // u outward; the rows' boundaries cell and 2 cell inside the edge
+    return row_level + (border - row_level) * phi((u - (edge - cell)) / sigma) +
+           (surround - border) * phi((u - edge) / sigma);
+  };
+  SideFit fits[2];
+  bool ok[2];
+  for (const uint8_t planted : {1, 0}) {
+    SideProfiles s;
+    s.Reset(-2.0 * cell, 0.25, 40, cell);
+    s.AddRay({1, 0}, {cell, 2 * cell}, {0, 0});
+    s.AddRay({planted, 1}, {cell, 2 * cell}, {0, 0});  // the slot after the first group's pattern
+    s.Reset(-2.0 * cell, 0.25, 40, cell);
+    s.polarity = 1;
+    for (int ray = 0; ray < 10; ++ray) {
+      const int g = s.AddRay({0, 0}, {cell, 2 * cell}, {0.3, 0.3});
+      for (int j = 0; j < s.bins; ++j)  // with a deterministic noise of about 1 grey level
+        s.Add(g, j, profile(s.u0 + j * s.du) + std::sin(12.9898 * (ray * s.bins + j)));
+    }
+    ASSERT_EQ(reinterpret_cast<const uint8_t*>(s.patterns.data())[2], planted);  // within its storage
+    ok[planted] = FitSideProfiles(s, &fits[planted]);
+  }
+  ASSERT_TRUE(ok[0]);
+  ASSERT_TRUE(ok[1]);
+  EXPECT_NEAR(fits[0].e, edge, 0.01);
+  std::printf("edge %.17g / %.17g px\n", fits[0].e, fits[1].e);
+  EXPECT_EQ(fits[0].e, fits[1].e);
+  EXPECT_EQ(fits[0].sigma, fits[1].sigma);
+}
+
 }  // namespace
 }  // namespace mcmt
