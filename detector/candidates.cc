@@ -435,6 +435,15 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
   }
 }
 
+// The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
+// the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
+template <typename Function>
+Function LibraryDefinition(const char* symbol) {
+  void* next = dlsym(RTLD_NEXT, symbol);
+  CV_Assert(next != nullptr);
+  return reinterpret_cast<Function>(next);
+}
+
 }  // namespace
 
 QuadFinder::QuadFinder(const cv::Mat& gray, const QuadSearch& search) : gray_(gray), search_(search) {
@@ -581,9 +590,8 @@ void adaptiveThreshold(InputArray src_array, OutputArray dst_array, double max_v
       !src_array.isMat() || !dst_array.isMat() || src_array.type() != CV_8UC1 || block_size % 2 != 1 ||
       block_size <= 1 || max_value < 0) {
     using Function = void (*)(InputArray, OutputArray, double, int, int, int, double);
-    static const Function opencv = reinterpret_cast<Function>(
-        dlsym(RTLD_NEXT, "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid"));
-    CV_Assert(opencv != nullptr);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid");
     opencv(src_array, dst_array, max_value, method, type, block_size, delta);
     return;
   }
@@ -642,9 +650,8 @@ void findContours(InputArray image_array, OutputArrayOfArrays contours_array, in
       contours_array.kind() != _InputArray::STD_VECTOR_VECTOR ||
       CV_MAT_TYPE(contours_array.getFlags()) != CV_32SC2) {
     using Function = void (*)(InputArray, OutputArrayOfArrays, int, int, Point);
-    static const Function opencv = reinterpret_cast<Function>(
-        dlsym(RTLD_NEXT, "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE"));
-    CV_Assert(opencv != nullptr);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE");
     opencv(image_array, contours_array, mode, method, offset);
     return;
   }
@@ -673,11 +680,9 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
       !dst_array.isMat() || src_array.type() != CV_8UC1 || src_array.empty() ||
       (m_type != CV_32FC1 && m_type != CV_64FC1) || m_array.size() != Size(3, 3)) {
     using Function = void (*)(InputArray, OutputArray, InputArray, Size, int, int, const Scalar&);
-    static const Function opencv =
-        reinterpret_cast<Function>(dlsym(RTLD_NEXT,
-                                         "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_"
-                                         "NS_5Size_IiEEiiRKNS_7Scalar_IdEE"));
-    CV_Assert(opencv != nullptr);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_"
+        "NS_5Size_IiEEiiRKNS_7Scalar_IdEE");
     opencv(src_array, dst_array, m_array, dsize, flags, border_type, border_value);
     return;
   }
@@ -706,8 +711,7 @@ int countNonZero(InputArray src_array) {
   if (src_array.kind() != _InputArray::MAT || src_array.type() != CV_8UC1 || src_array.dims() > 2) {
     using Function = int (*)(InputArray);
     static const Function opencv =
-        reinterpret_cast<Function>(dlsym(RTLD_NEXT, "_ZN2cv12countNonZeroERKNS_11_InputArrayE"));
-    CV_Assert(opencv != nullptr);
+        mcmt::LibraryDefinition<Function>("_ZN2cv12countNonZeroERKNS_11_InputArrayE");
     return opencv(src_array);
   }
   const Mat& src = *static_cast<const Mat*>(src_array.getObj());

@@ -182,6 +182,22 @@ TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
   EXPECT_TRUE(FindQuads(faint, search).empty());
 }
 
+// OpenCV's own definition of `name` (a mangled name) beside mcmt's `ours`: null, with a failure, unless
+// calls reach ours (the program's definition comes first) and the library's is another function.
+template <typename Function>
+Function LibraryDefinitionBeside(const char* name, Function ours) {
+  if (dlsym(RTLD_DEFAULT, name) != reinterpret_cast<void*>(ours)) {
+    ADD_FAILURE() << name << ": calls do not reach mcmt's definition";
+    return nullptr;
+  }
+  void* library = dlsym(RTLD_NEXT, name);
+  if (library == nullptr || library == reinterpret_cast<void*>(ours)) {
+    ADD_FAILURE() << name << ": no other definition in the library";
+    return nullptr;
+  }
+  return reinterpret_cast<Function>(library);
+}
+
 // The detector's cv::adaptiveThreshold (detector/candidates.cc) is the one the program calls, the aruco
 // module's search included, and its binary images are OpenCV's own bit for bit: both threshold types,
 // fractional and negative offsets, the windows whose means it rounds as cv::boxFilter does (3 to 15 px)
@@ -190,11 +206,8 @@ TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
 TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
   using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
-  ASSERT_EQ(dlsym(RTLD_DEFAULT, name),
-            reinterpret_cast<void*>(static_cast<Function>(&cv::adaptiveThreshold)));
-  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::adaptiveThreshold);
   ASSERT_NE(opencv, nullptr);
-  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));  // the library's is another
   cv::Mat large(260, 341, CV_8U);
   cv::randu(large, 0, 256);
   cv::GaussianBlur(large, large, cv::Size(0, 0), 1.5);  // edges of every contrast, as in a frame
@@ -232,10 +245,8 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
 TEST(CandidateSearch, FindContoursIsOpenCVs) {
   const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
   using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
-  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::findContours)));
-  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::findContours);
   ASSERT_NE(opencv, nullptr);
-  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
   std::vector<cv::Mat> images;
   for (double density : {0.05, 0.3, 0.5, 0.7, 0.95}) {  // noise, nonzero values 1 to 255
     cv::Mat noise(61, 83, CV_8U), level(61, 83, CV_8U);
@@ -308,10 +319,8 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
       "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
   using Function =
       void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
-  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::warpPerspective)));
-  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::warpPerspective);
   ASSERT_NE(opencv, nullptr);
-  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
   cv::Mat image(120, 160, CV_8U);
   cv::randu(image, 0, 256);
   cv::RNG rng(3);
@@ -355,10 +364,8 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
 TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
   const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
   using Function = int (*)(cv::InputArray);
-  ASSERT_EQ(dlsym(RTLD_DEFAULT, name), reinterpret_cast<void*>(static_cast<Function>(&cv::countNonZero)));
-  const auto opencv = reinterpret_cast<Function>(dlsym(RTLD_NEXT, name));
+  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::countNonZero);
   ASSERT_NE(opencv, nullptr);
-  ASSERT_NE(reinterpret_cast<void*>(opencv), dlsym(RTLD_DEFAULT, name));
   for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
                         cv::Size(4200, 3), cv::Size(640, 480)})
     for (double density : {0.0, 0.5, 0.97}) {
