@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "core/dictionary.h"
@@ -428,6 +429,14 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
   const double b = Median(std::move(border)), r = Median(std::move(ring));
   if (std::abs(b - r) < 5.0) return 0;
   return b < r ? 1 : -1;
+}
+
+// `camera` for the pixels of its images' region `roi` (their own image: the principal point moved).
+CameraModel CameraInRegion(const CameraModel& camera, const cv::Rect& roi) {
+  CameraModel in_region = camera;
+  in_region.cx -= roi.x, in_region.cy -= roi.y;
+  in_region.width = roi.width, in_region.height = roi.height;
+  return in_region;
 }
 
 // The bounding box of `corners` grown by `rate` of its larger side plus `margin_px` on every side,
@@ -1670,7 +1679,13 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         for (int v = 0; v < 256; ++v)
           gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
       }
-      cv::LUT(gray(*roi), gamma_lut_, linear_(*roi));
+      // Linearised a little beyond the region: its smoothing (sharp_smoothing) reads up to OpenCV's
+      // kernel radius for 8-bit images (about 3 sigma) outside it.
+      const int pad = static_cast<int>(std::ceil(3.0 * options_.sharp_smoothing)) + 1;
+      const cv::Rect padded =
+          cv::Rect(roi->x - pad, roi->y - pad, roi->width + 2 * pad, roi->height + 2 * pad) &
+          cv::Rect(0, 0, gray.cols, gray.rows);
+      cv::LUT(gray(padded), gamma_lut_, linear_(padded));
       return &linear_;
     }
     UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
@@ -1678,11 +1693,24 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   };
   // The border's polarity is known unless both prints are searched for (`inverted` without
   // markers.inverted: a quad's border against its ring depends on the surround, not the print).
-  auto refine = [&](const cv::Mat& from, const Raw& r, std::array<cv::Point2d, 4>* corners, double* blur,
-                    bool* kept) {
-    return RefineMarkerCorners(from, cells, MarkerBits(r.id), camera_.get(), options_.edge_passes, corners,
-                               options_.edge_model, blur, options_.gamma == 0 || unsharp, kept, polarity,
-                               unsharp ? options_.gamma : 0.0);
+  // A marker is refined on its region `roi` of `from` only: the working images (linear_, smooth_) hold
+  // this marker's region, and outside it what earlier markers and frames left (a refinement from a
+  // candidate far off the marker sampled there: memcheck's uninitialised reads, results that could
+  // depend on the images before). Beyond the region a ray counts as beyond the image.
+  auto refine = [&](const cv::Mat& from, const cv::Rect& roi, const Raw& r,
+                    std::array<cv::Point2d, 4>* corners, double* blur, bool* kept) {
+    const cv::Point2d origin(roi.x, roi.y);
+    std::optional<CameraModel> region_camera;
+    if (camera_) region_camera = CameraInRegion(*camera_, roi);
+    std::array<cv::Point2d, 4> local = *corners;
+    for (cv::Point2d& c : local) c -= origin;
+    const bool ok =
+        RefineMarkerCorners(from(roi), cells, MarkerBits(r.id), region_camera ? &*region_camera : nullptr,
+                            options_.edge_passes, &local, options_.edge_model, blur,
+                            options_.gamma == 0 || unsharp, kept, polarity, unsharp ? options_.gamma : 0.0);
+    if (ok)
+      for (int k = 0; k < 4; ++k) (*corners)[k] = local[k] + origin;
+    return ok;
   };
   // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
   // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
@@ -1714,7 +1742,7 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       Smoothed m;
       m.corners = r.corners;
       double sigma = NAN;
-      m.refined = refine(smooth_, r, &m.corners, &sigma, &m.kept_lines);
+      m.refined = refine(smooth_, roi, r, &m.corners, &sigma, &m.kept_lines);
       if (m.refined && std::isfinite(sigma)) blurs.push_back(std::sqrt(std::max(0.0, sigma * sigma - s * s)));
       smoothed.push_back(m);
     }
@@ -1752,7 +1780,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
         if (refined) r.corners = smoothed[i].corners;
       } else {
         cv::Rect roi;
-        refined = refine(*region(r, &roi), r, &r.corners, nullptr, &kept_lines);
+        const cv::Mat* source = region(r, &roi);
+        refined = refine(*source, roi, r, &r.corners, nullptr, &kept_lines);
       }
       // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
       // unrefined marker, not a confusing region.
