@@ -66,10 +66,11 @@ using Vector = Eigen::Matrix<double, kParams, 1>;
 // `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
 // the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
 // exp(-(z - h)^2 / 2) = exp(-z^2 / 2) exp(z h - h^2 / 2)), restarted from std::exp every 16 bins (relative
-// error below 1e-13, far below PhiAndDensity's 1.5e-7).
-void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double* zs, double* big_phi,
-                  double* small_phi) {
-  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
+// error below 1e-13, far below PhiAndDensity's 1.5e-7). `step_ratio`: exp(-h^2), the same for every
+// boundary of one evaluation (computed once by Evaluate).
+void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
+                  double* big_phi, double* small_phi) {
+  const double h = s.du * inv_sigma;
   double gauss = 0, ratio = 0;
   int run = -1;  // bins since the recurrence was restarted; -1: not running
   const double u0 = s.u0, du = s.du;
@@ -333,9 +334,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   const size_t capacity = static_cast<size_t>(groups) * n + 1;  // + 1: an even count of rows
   if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
   const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
+  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
   auto fill = [&](int row, double bound) {
     const size_t i = static_cast<size_t>(row) * n;
-    FillBoundary(s, bound, inv_sigma, &zs[i], &big_phi[i], &small_phi[i]);
+    FillBoundary(s, bound, inv_sigma, step_ratio, &zs[i], &big_phi[i], &small_phi[i]);
   };
   fill(0, p[kE] + p[kQ]);
   fill(1, p[kE]);
