@@ -350,6 +350,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   for (int k = 0; k < kParams; ++k) column[k] = jtj ? jacobian.data() + k * capacity : nullptr;
   double* const weight_of = weights.data();
   double* const residual_of = residuals.data();
+#ifdef __SSE2__
+  LaneConstants constants;
+  __asm__("" : "+m"(constants));  // (LaneConstants)
+#endif
   for (int g = 0; g < groups; ++g) {
     // Boundary b's Phi, phi and z at the bins.
     const double *big_of[kBoundaries], *small_of[kBoundaries], *z_of[kBoundaries];
@@ -414,8 +418,6 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
 #ifdef __SSE2__
     if (jtj) {
       GroupLanes lanes;
-      LaneConstants constants;
-      __asm__("" : "+m"(constants));  // (LaneConstants)
       for (int k = 0; k < kRegions; ++k)
         lanes.level[k] = _mm_set1_pd(level[k]), lanes.other[k] = _mm_set1_pd(other[k]),
         lanes.border_part[k] = _mm_set1_pd(1.0 - other[k]);
