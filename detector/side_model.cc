@@ -94,7 +94,8 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
 
 // Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
 // b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
-// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers).
+// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers). The columns, weights and
+// residuals start 16-byte aligned (aligned loads, which the multiplications take as operands).
 template <int kA>
 void NormalRow(const double* const* columns, const double* weights, const double* residuals, size_t rows,
                double (*sums)[2]) {
@@ -102,9 +103,9 @@ void NormalRow(const double* const* columns, const double* weights, const double
   __m128d acc[kA + 2];
   for (int b = 0; b <= kA + 1; ++b) acc[b] = _mm_setzero_pd();
   for (size_t i = 0; i < rows; i += 2) {
-    const __m128d wa = _mm_mul_pd(_mm_loadu_pd(weights + i), _mm_loadu_pd(columns[kA] + i));
-    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_loadu_pd(columns[b] + i)));
-    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_loadu_pd(residuals + i)));
+    const __m128d wa = _mm_mul_pd(_mm_load_pd(weights + i), _mm_load_pd(columns[kA] + i));
+    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_load_pd(columns[b] + i)));
+    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_load_pd(residuals + i)));
   }
   for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums[b], acc[b]);
 #else
@@ -118,7 +119,8 @@ void NormalRow(const double* const* columns, const double* weights, const double
 }
 
 // The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
-// jacobian + k * stride, `used` rows, zero from there to an even count), the weights and the
+// jacobian + k * stride, `used` rows, zero from there to an even count; jacobian, weights and residuals
+// 16-byte aligned and the stride even: NormalRow), the weights and the
 // residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
 // profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
 void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
@@ -331,7 +333,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   big_phi.resize(static_cast<size_t>(rows_per_group) * n);
   small_phi.resize(big_phi.size());
   zs.resize(big_phi.size());
-  const size_t capacity = static_cast<size_t>(groups) * n + 1;  // + 1: an even count of rows
+  // At least one row more than the bins (an even count of rows, NormalEquations), itself even: every
+  // column starts 16-byte aligned (NormalRow), as the vectors' storage does.
+  const size_t capacity = (static_cast<size_t>(groups) * n + 2) / 2 * 2;
   if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
   const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
   const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
