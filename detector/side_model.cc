@@ -356,7 +356,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   double* const residual_of = residuals.data();
 #ifdef __SSE2__
   LaneConstants constants;
-  __asm__("" : "+m"(constants));  // (LaneConstants)
+  __asm__("" : "+m"(constants));  // its values hidden from the optimiser (LaneConstants)
 #endif
   for (int g = 0; g < groups; ++g) {
     // Boundary b's Phi, phi and z at the bins.
