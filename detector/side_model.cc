@@ -66,10 +66,11 @@ using Vector = Eigen::Matrix<double, kParams, 1>;
 // `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
 // the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
 // exp(-(z - h)^2 / 2) = exp(-z^2 / 2) exp(z h - h^2 / 2)), restarted from std::exp every 16 bins (relative
-// error below 1e-13, far below PhiAndDensity's 1.5e-7).
-void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double* zs, double* big_phi,
-                  double* small_phi) {
-  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
+// error below 1e-13, far below PhiAndDensity's 1.5e-7). `step_ratio`: exp(-h^2), the same for every
+// boundary of one evaluation (computed once by Evaluate).
+void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
+                  double* big_phi, double* small_phi) {
+  const double h = s.du * inv_sigma;
   double gauss = 0, ratio = 0;
   int run = -1;  // bins since the recurrence was restarted; -1: not running
   const double u0 = s.u0, du = s.du;
@@ -93,7 +94,8 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double*
 
 // Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
 // b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
-// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers).
+// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers). The columns, weights and
+// residuals start 16-byte aligned (aligned loads, which the multiplications take as operands).
 template <int kA>
 void NormalRow(const double* const* columns, const double* weights, const double* residuals, size_t rows,
                double (*sums)[2]) {
@@ -101,9 +103,9 @@ void NormalRow(const double* const* columns, const double* weights, const double
   __m128d acc[kA + 2];
   for (int b = 0; b <= kA + 1; ++b) acc[b] = _mm_setzero_pd();
   for (size_t i = 0; i < rows; i += 2) {
-    const __m128d wa = _mm_mul_pd(_mm_loadu_pd(weights + i), _mm_loadu_pd(columns[kA] + i));
-    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_loadu_pd(columns[b] + i)));
-    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_loadu_pd(residuals + i)));
+    const __m128d wa = _mm_mul_pd(_mm_load_pd(weights + i), _mm_load_pd(columns[kA] + i));
+    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_load_pd(columns[b] + i)));
+    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_load_pd(residuals + i)));
   }
   for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums[b], acc[b]);
 #else
@@ -117,7 +119,8 @@ void NormalRow(const double* const* columns, const double* weights, const double
 }
 
 // The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
-// jacobian + k * stride, `used` rows, zero from there to an even count), the weights and the
+// jacobian + k * stride, `used` rows, zero from there to an even count; jacobian, weights and residuals
+// 16-byte aligned and the stride even: NormalRow), the weights and the
 // residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
 // profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
 void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
@@ -144,25 +147,16 @@ void NormalEquations(const double* jacobian, size_t stride, const double* weight
 // exp(x) for |x| below 700 within about 2 ulp, without a library call: x = k ln 2 + r with |r| <= ln 2 / 2
 // (ln 2 in two parts, the first exact times k), e^r by its Taylor series to r^13 (truncation below
 // 1e-17), times 2^k set in the exponent's bits.
+// 1.5 * 2^52: adding and subtracting it rounds to an integer.
+constexpr double kExpRound = 6755399441055744.0;
+constexpr double kLn2High = 0.6931471803691238, kLn2Low = 1.9082149292705877e-10;
+constexpr double kInverseFactorial[14] = {
+    1.0,        1.0,         1.0 / 2,      1.0 / 6,       1.0 / 24,       1.0 / 120,       1.0 / 720,
+    1.0 / 5040, 1.0 / 40320, 1.0 / 362880, 1.0 / 3628800, 1.0 / 39916800, 1.0 / 479001600, 1.0 / 6227020800};
 inline double ExpInline(double x) {
   if (!(std::abs(x) < 700.0)) return std::exp(x);  // also NaN
-  constexpr double kRound = 6755399441055744.0;  // 1.5 * 2^52: adding and subtracting it rounds to an integer
-  const double k = (x * 1.4426950408889634 + kRound) - kRound;
-  const double r = (x - k * 0.6931471803691238) - k * 1.9082149292705877e-10;
-  constexpr double kInverseFactorial[14] = {1.0,
-                                            1.0,
-                                            1.0 / 2,
-                                            1.0 / 6,
-                                            1.0 / 24,
-                                            1.0 / 120,
-                                            1.0 / 720,
-                                            1.0 / 5040,
-                                            1.0 / 40320,
-                                            1.0 / 362880,
-                                            1.0 / 3628800,
-                                            1.0 / 39916800,
-                                            1.0 / 479001600,
-                                            1.0 / 6227020800};
+  const double k = (x * 1.4426950408889634 + kExpRound) - kExpRound;
+  const double r = (x - k * kLn2High) - k * kLn2Low;
   double e = kInverseFactorial[13];
   for (int i = 12; i >= 0; --i) e = kInverseFactorial[i] + r * e;
   const uint64_t bits = static_cast<uint64_t>(static_cast<int64_t>(k) + 1023) << 52;
@@ -187,8 +181,143 @@ inline double LogInline(double x) {
   double series = 1.0 / 21;
   for (int odd = 19; odd >= 3; odd -= 2) series = 1.0 / odd + s2 * series;
   const double k = exponent;
-  return k * 0.6931471803691238 + (2.0 * s + 2.0 * s * s2 * series + k * 1.9082149292705877e-10);
+  return k * kLn2High + (2.0 * s + 2.0 * s * s2 * series + k * kLn2Low);
 }
+
+#ifdef __SSE2__
+// Two lanes of v (a constant in memory where declared constexpr: no broadcast per use).
+constexpr __m128d Both(double v) { return __m128d{v, v}; }
+
+// a where `mask`, else b.
+inline __m128d Select(__m128d mask, __m128d a, __m128d b) {
+  return _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b));
+}
+
+// The constants of the two-lane code below. Evaluate hands TwoBins a copy the compiler cannot see into,
+// so they are read from memory where used (GCC rebuilds a literal constant from a scalar at each use).
+struct LaneConstants {
+  __m128d sign = Both(-0.0), one = Both(1.0), two = Both(2.0), half = Both(0.5),
+          two_52 = Both(4503599627370496.0);
+  // ExpInline2
+  __m128d exp_round = Both(kExpRound), log2e = Both(1.4426950408889634), ln2_high = Both(kLn2High),
+          ln2_low = Both(kLn2Low), exp_bias = Both(4503599627370496.0 + 1023.0), exp_limit = Both(700.0);
+  __m128d inverse_factorial[14] = {
+      Both(kInverseFactorial[0]),  Both(kInverseFactorial[1]),  Both(kInverseFactorial[2]),
+      Both(kInverseFactorial[3]),  Both(kInverseFactorial[4]),  Both(kInverseFactorial[5]),
+      Both(kInverseFactorial[6]),  Both(kInverseFactorial[7]),  Both(kInverseFactorial[8]),
+      Both(kInverseFactorial[9]),  Both(kInverseFactorial[10]), Both(kInverseFactorial[11]),
+      Both(kInverseFactorial[12]), Both(kInverseFactorial[13])};
+  // LogInline2: [i] = 1 / (2 i + 1)
+  __m128d inverse_odd[11] = {Both(0.0),      Both(1.0 / 3),  Both(1.0 / 5),  Both(1.0 / 7),
+                             Both(1.0 / 9),  Both(1.0 / 11), Both(1.0 / 13), Both(1.0 / 15),
+                             Both(1.0 / 17), Both(1.0 / 19), Both(1.0 / 21)};
+  __m128d mantissa = _mm_castsi128_pd(_mm_set1_epi64x(0x000fffffffffffffLL));
+  __m128d log_bias = Both(1023.0), sqrt2 = Both(M_SQRT2), log_min = Both(2.2250738585072014e-308),
+          log_max = Both(1.7976931348623157e308);
+  // TwoBins
+  __m128d per_255 = Both(1.0 / 255.0), full_255 = Both(255.0);
+};
+
+// ExpInline and LogInline on two lanes, by the same operations lane by lane (so the same values), for
+// arguments within their ranges (ExpInline: |x| < 700; LogInline: positive normal x).
+inline __m128d ExpInline2(__m128d x, const LaneConstants& c) {
+  const __m128d k = _mm_sub_pd(_mm_add_pd(_mm_mul_pd(x, c.log2e), c.exp_round), c.exp_round);
+  const __m128d r = _mm_sub_pd(_mm_sub_pd(x, _mm_mul_pd(k, c.ln2_high)), _mm_mul_pd(k, c.ln2_low));
+  __m128d e = c.inverse_factorial[13];
+  for (int i = 12; i >= 0; --i) e = _mm_add_pd(c.inverse_factorial[i], _mm_mul_pd(r, e));
+  // 2^k: k + 1023 is the low bits of k + 1023 + 2^52 (an integer below 2^53: exact), moved to the exponent.
+  const __m128d two_k = _mm_castsi128_pd(_mm_slli_epi64(_mm_castpd_si128(_mm_add_pd(k, c.exp_bias)), 52));
+  return _mm_mul_pd(e, two_k);
+}
+
+inline __m128d LogInline2(__m128d x, const LaneConstants& c) {
+  // The biased exponent (x positive: the sign bit is 0) as a double: its bits under those of 2^52.
+  const __m128d biased =
+      _mm_sub_pd(_mm_or_pd(_mm_castsi128_pd(_mm_srli_epi64(_mm_castpd_si128(x), 52)), c.two_52), c.two_52);
+  __m128d exponent = _mm_sub_pd(biased, c.log_bias);
+  __m128d m = _mm_or_pd(_mm_and_pd(x, c.mantissa), c.one);  // (1.0's bits: 0x3ff0000000000000)
+  const __m128d high = _mm_cmpgt_pd(m, c.sqrt2);
+  m = Select(high, _mm_mul_pd(m, c.half), m);
+  exponent = _mm_add_pd(exponent, _mm_and_pd(high, c.one));
+  const __m128d f = _mm_sub_pd(m, c.one);
+  const __m128d s = _mm_div_pd(f, _mm_add_pd(c.two, f)), s2 = _mm_mul_pd(s, s);
+  __m128d series = c.inverse_odd[10];
+  for (int i = 9; i >= 1; --i) series = _mm_add_pd(c.inverse_odd[i], _mm_mul_pd(s2, series));
+  const __m128d two_s = _mm_mul_pd(c.two, s);
+  const __m128d sum = _mm_add_pd(_mm_add_pd(two_s, _mm_mul_pd(_mm_mul_pd(two_s, s2), series)),
+                                 _mm_mul_pd(exponent, c.ln2_low));
+  return _mm_add_pd(_mm_mul_pd(exponent, c.ln2_high), sum);
+}
+
+// One group's values that Evaluate's bins share, in both lanes: region levels, their steps at the
+// boundaries, the rows' parts of the other colour, 1 / sigma and 1 / gamma.
+struct GroupLanes {
+  __m128d level[kRegions], step[kBoundaries], other[kRegions], border_part[kRegions];
+  __m128d inv_sigma, inv_gamma;
+};
+
+// Evaluate's model, residual and Jacobian row of bins j and j + 1 of one group (both with a weight),
+// two lanes by the operations of its bin-by-bin code (so the same values): their rows at `used` and
+// `used + 1`, their squared residuals added to *cost (bin j's first). False, with nothing written, where
+// the gamma's log or exp would leave its range (a NaN or huge model value): the bins are then evaluated
+// one by one.
+inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants, const GroupLanes& group,
+                    const double* const* big_of, const double* const* small_of, const double* const* z_of,
+                    const double* count, const double* sum, int j, double* cost, double* const* column,
+                    double* weight_of, double* residual_of, size_t used) {
+  const __m128d zero = _mm_setzero_pd();
+  __m128d indicator[kRegions], f = zero;
+  for (int r = 0; r < kRegions; ++r) {
+    const __m128d upper = r == 0 ? constants.one : _mm_loadu_pd(big_of[r - 1] + j);
+    const __m128d lower = r == kRegions - 1 ? zero : _mm_loadu_pd(big_of[r] + j);
+    indicator[r] = _mm_sub_pd(upper, lower);
+    f = _mm_add_pd(f, _mm_mul_pd(group.level[r], indicator[r]));
+  }
+  __m128d scale = constants.one, gamma_grad = zero;
+  if (fit_gamma) {
+    const __m128d at = _mm_max_pd(constants.half, f);  // std::max(f, 0.5), also for NaN
+    const __m128d x = _mm_mul_pd(at, constants.per_255);
+    const __m128d normal = _mm_and_pd(_mm_cmpge_pd(x, constants.log_min), _mm_cmple_pd(x, constants.log_max));
+    if (_mm_movemask_pd(normal) != 3) return false;
+    const __m128d log_lin = LogInline2(x, constants), g = group.inv_gamma;
+    const __m128d y = _mm_mul_pd(log_lin, g);
+    if (_mm_movemask_pd(_mm_cmplt_pd(_mm_andnot_pd(constants.sign, y), constants.exp_limit)) != 3)
+      return false;
+    const __m128d enc = _mm_mul_pd(constants.full_255, ExpInline2(y, constants));
+    scale = _mm_div_pd(_mm_mul_pd(enc, g), at);
+    gamma_grad = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_xor_pd(enc, constants.sign), log_lin), g), g);
+    const __m128d below = _mm_cmplt_pd(f, at), off = _mm_sub_pd(f, at);
+    const __m128d slope = _mm_sub_pd(_mm_div_pd(_mm_mul_pd(gamma_grad, g), at), _mm_mul_pd(scale, g));
+    gamma_grad = Select(below, _mm_add_pd(gamma_grad, _mm_mul_pd(slope, off)), gamma_grad);
+    f = Select(below, _mm_add_pd(enc, _mm_mul_pd(scale, off)), enc);
+  }
+  const __m128d w = _mm_loadu_pd(count + j);
+  const __m128d r = _mm_sub_pd(f, _mm_div_pd(_mm_loadu_pd(sum + j), w));
+  double squares[2];
+  _mm_storeu_pd(squares, _mm_mul_pd(_mm_mul_pd(w, r), r));
+  *cost += squares[0];
+  *cost += squares[1];
+  __m128d grad[kGamma];
+  for (int p = 0; p < kGamma; ++p) grad[p] = zero;
+  for (int b = 0; b < kBoundaries; ++b) {
+    const __m128d d = _mm_mul_pd(_mm_mul_pd(group.step[b], _mm_loadu_pd(small_of[b] + j)), group.inv_sigma);
+    grad[kE] = _mm_add_pd(grad[kE], d);
+    grad[kSigma] = _mm_sub_pd(grad[kSigma], _mm_mul_pd(d, _mm_loadu_pd(z_of[b] + j)));
+    if (b == 0) grad[kQ] = _mm_add_pd(grad[kQ], d);
+  }
+  grad[single ? kS1 : kS2] = _mm_add_pd(grad[single ? kS1 : kS2], indicator[0]);
+  grad[kS1] = _mm_add_pd(grad[kS1], indicator[1]);
+  for (int q = 2; q < kRegions; ++q) {
+    grad[kL0] = _mm_add_pd(grad[kL0], _mm_mul_pd(group.border_part[q], indicator[q]));
+    grad[kL1] = _mm_add_pd(grad[kL1], _mm_mul_pd(group.other[q], indicator[q]));
+  }
+  for (int p = 0; p < kGamma; ++p) _mm_storeu_pd(column[p] + used, _mm_mul_pd(grad[p], scale));
+  _mm_storeu_pd(column[kGamma] + used, gamma_grad);
+  _mm_storeu_pd(weight_of + used, w);
+  _mm_storeu_pd(residual_of + used, r);
+  return true;
+}
+#endif
 
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
@@ -204,12 +333,15 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   big_phi.resize(static_cast<size_t>(rows_per_group) * n);
   small_phi.resize(big_phi.size());
   zs.resize(big_phi.size());
-  const size_t capacity = static_cast<size_t>(groups) * n + 1;  // + 1: an even count of rows
+  // At least one row more than the bins (an even count of rows, NormalEquations), itself even: every
+  // column starts 16-byte aligned (NormalRow), as the vectors' storage does.
+  const size_t capacity = (static_cast<size_t>(groups) * n + 2) / 2 * 2;
   if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
   const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
+  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
   auto fill = [&](int row, double bound) {
     const size_t i = static_cast<size_t>(row) * n;
-    FillBoundary(s, bound, inv_sigma, &zs[i], &big_phi[i], &small_phi[i]);
+    FillBoundary(s, bound, inv_sigma, step_ratio, &zs[i], &big_phi[i], &small_phi[i]);
   };
   fill(0, p[kE] + p[kQ]);
   fill(1, p[kE]);
@@ -222,6 +354,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   for (int k = 0; k < kParams; ++k) column[k] = jtj ? jacobian.data() + k * capacity : nullptr;
   double* const weight_of = weights.data();
   double* const residual_of = residuals.data();
+#ifdef __SSE2__
+  LaneConstants constants;
+  __asm__("" : "+m"(constants));  // its values hidden from the optimiser (LaneConstants)
+#endif
   for (int g = 0; g < groups; ++g) {
     // Boundary b's Phi, phi and z at the bins.
     const double *big_of[kBoundaries], *small_of[kBoundaries], *z_of[kBoundaries];
@@ -237,9 +373,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     double level[kRegions];
     level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
     for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
-    for (int j = 0; j < n; ++j) {
+    // Bin j's model value, residual and Jacobian row (the rows of bins with a weight, in bin order).
+    auto bin = [&](int j) {
       const double w = count[j];
-      if (w <= 0) continue;
+      if (w <= 0) return;
       double f = 0, indicator[kRegions], gamma_grad = 0;
       for (int k = 0; k < kRegions; ++k) {
         const double upper = k == 0 ? 1.0 : big_of[k - 1][j];
@@ -265,7 +402,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       }
       const double r = f - sum[j] / w;
       cost += w * r * r;
-      if (!jtj) continue;
+      if (!jtj) return;
       double grad[kParams] = {};
       for (int b = 0; b < kBoundaries; ++b) {
         const double d = (level[b + 1] - level[b]) * small_of[b][j] * inv_sigma;  // d f / d bound_b
@@ -280,7 +417,26 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       column[kGamma][used] = gamma_grad;
       weight_of[used] = w, residual_of[used] = r;
       ++used;
+    };
+    int j = 0;
+#ifdef __SSE2__
+    if (jtj) {
+      GroupLanes lanes;
+      for (int k = 0; k < kRegions; ++k)
+        lanes.level[k] = _mm_set1_pd(level[k]), lanes.other[k] = _mm_set1_pd(other[k]),
+        lanes.border_part[k] = _mm_set1_pd(1.0 - other[k]);
+      for (int b = 0; b < kBoundaries; ++b) lanes.step[b] = _mm_set1_pd(level[b + 1] - level[b]);
+      lanes.inv_sigma = _mm_set1_pd(inv_sigma), lanes.inv_gamma = _mm_set1_pd(inv_gamma);
+      for (; j + 1 < n; j += 2)
+        if (!(count[j] > 0 && count[j + 1] > 0) ||
+            !TwoBins(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, count, sum, j, &cost,
+                     column, weight_of, residual_of, used))
+          bin(j), bin(j + 1);
+        else
+          used += 2;
     }
+#endif
+    for (; j < n; ++j) bin(j);
   }
   if (!jtj) return cost;
   if (used % 2) {  // the pad row: no weight

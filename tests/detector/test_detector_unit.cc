@@ -703,5 +703,45 @@ TEST(SideModel, AFitDoesNotReadPastTheGroupsPatterns) {
   EXPECT_EQ(fits[0].sigma, fits[1].sigma);
 }
 
+// Evaluate takes a group's bins two at a time where both have samples (SSE2) and one at a time elsewhere,
+// by the same operations. So a side's fit is the same to the bit when one empty bin in front moves every
+// pair of bins by one (the bins' positions exactly the same, that bin beyond 7 sigmas of every boundary:
+// its Phi and phi need no exponential), with gamma fitted (the encoding's log and exp in both paths).
+// Bins left empty across the edge make their neighbours there go one at a time in one fit and paired in
+// the other.
+TEST(SideModel, AFitIsTheSameWhicheverBinsArePaired) {
+  const double cell = 2.0, edge = 0.1, sigma = 0.8, gamma = 2.2, surround = 200, border = 30, code = 230;
+  const auto phi = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  // Linear light across the side (u outward): surround, border, rows 1 and 2 (code or border), encoded.
+  const auto profile = [&](double u, const std::array<uint8_t, 2>& pattern) {
+    const double row1 = pattern[0] ? code : border, row2 = pattern[1] ? code : border;
+    const double linear = row2 + (row1 - row2) * phi((u - (edge - 2 * cell)) / sigma) +
+                          (border - row1) * phi((u - (edge - cell)) / sigma) +
+                          (surround - border) * phi((u - edge) / sigma);
+    return 255.0 * std::pow(linear / 255.0, 1.0 / gamma);
+  };
+  const std::array<uint8_t, 2> patterns[3] = {{1, 0}, {0, 1}, {1, 1}};
+  SideFit fits[2];
+  for (int shift = 0; shift < 2; ++shift) {
+    SideProfiles s;
+    s.Reset(-40.0 - 0.25 * shift, 0.25, 200 + shift, cell);  // bin j + shift at u = -40 + 0.25 j, exactly
+    s.fit_gamma = true;
+    s.polarity = 1;
+    for (int ray = 0; ray < 12; ++ray) {
+      const std::array<uint8_t, 2>& pattern = patterns[ray % 3];
+      const int g = s.AddRay(pattern, {cell, 2 * cell}, {1.0 * pattern[0], 1.0 * pattern[1]});
+      for (int j = 0; j < 200; ++j)  // with a deterministic noise of about 1 grey level; u -0.75, 0, 0.5 empty
+        if (j != 157 && j != 160 && j != 162)
+          s.Add(g, j + shift, profile(-40.0 + 0.25 * j, pattern) + std::sin(12.9898 * (ray * 200 + j)));
+    }
+    ASSERT_TRUE(FitSideProfiles(s, &fits[shift])) << "shift " << shift;
+  }
+  EXPECT_NEAR(fits[0].e, edge, 0.02);
+  EXPECT_NEAR(fits[0].gamma, gamma, 0.2);
+  std::printf("edge %.17g / %.17g px, gamma %.17g / %.17g\n", fits[0].e, fits[1].e, fits[0].gamma,
+              fits[1].gamma);
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(fits[0].params[k], fits[1].params[k]) << "parameter " << k;
+}
+
 }  // namespace
 }  // namespace mcmt
