@@ -13,6 +13,7 @@
 #include "core/dictionary.h"
 #include "core/math.h"
 #include "detector/candidates.h"
+#include "detector/opencv_overrides.h"
 #include "detector/side_model.h"
 
 #ifdef __SSE2__
@@ -1255,6 +1256,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
 
 MarkerDetector::MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options)
     : markers_(markers), options_(options) {
+  LinkOpenCvOverrides();  // cv::aruco::detectMarkers' calls reach mcmt's cheaper definitions
   options_.Validate();
   if (options_.tone == "auto") tone_ = std::make_unique<ToneEstimator>();
   dictionary_ = LoadDictionary(markers.dictionary);

@@ -220,23 +220,35 @@ TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
   EXPECT_TRUE(FindQuads(faint, search).empty());
 }
 
-// OpenCV's own definition of `name` (a mangled name) beside mcmt's `ours`: null, with a failure, unless
-// calls reach ours (the program's definition comes first) and the library's is another function.
+// mcmt's and OpenCV's definitions of `name` (a mangled name of one of the OpenCV functions mcmt defines
+// in OpenCV's place, detector/opencv_overrides.cc), found as the dynamic linker finds them, never by
+// naming the function here: a reference from this file would link mcmt's definition into this test by
+// itself, whether or not the detector brings it into programs. Both null, with a failure, unless calls
+// reach a definition in this program (not in a shared library) and OpenCV's library has another.
 template <typename Function>
-Function LibraryDefinitionBeside(const char* name, Function ours) {
-  if (dlsym(RTLD_DEFAULT, name) != reinterpret_cast<void*>(ours)) {
-    ADD_FAILURE() << name << ": calls do not reach mcmt's definition";
-    return nullptr;
+struct Definitions {
+  Function mcmt = nullptr, opencv = nullptr;
+};
+template <typename Function>
+Definitions<Function> DefinitionsOf(const char* name) {
+  void* program = dlsym(RTLD_DEFAULT, name);
+  Dl_info found{}, here{};
+  if (program == nullptr || dladdr(program, &found) == 0 ||
+      dladdr(reinterpret_cast<void*>(&DefinitionsOf<Function>), &here) == 0 ||
+      found.dli_fbase != here.dli_fbase) {
+    ADD_FAILURE() << name << ": calls do not reach a definition in this program but "
+                  << (program != nullptr && found.dli_fname != nullptr ? found.dli_fname : "none");
+    return {};
   }
   void* library = dlsym(RTLD_NEXT, name);
-  if (library == nullptr || library == reinterpret_cast<void*>(ours)) {
+  if (library == nullptr || library == program) {
     ADD_FAILURE() << name << ": no other definition in the library";
-    return nullptr;
+    return {};
   }
-  return reinterpret_cast<Function>(library);
+  return {reinterpret_cast<Function>(program), reinterpret_cast<Function>(library)};
 }
 
-// The detector's cv::adaptiveThreshold (detector/candidates.cc) is the one the program calls, the aruco
+// The detector's cv::adaptiveThreshold (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's search included, and its binary images are OpenCV's own bit for bit: both threshold types,
 // fractional and negative offsets, the windows whose means it rounds as cv::boxFilter does (3 to 15 px)
 // and larger ones up to larger than the image, a view into a larger image and the image thresholded in
@@ -244,8 +256,8 @@ Function LibraryDefinitionBeside(const char* name, Function ours) {
 TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
   using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
-  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::adaptiveThreshold);
-  ASSERT_NE(opencv, nullptr);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
   cv::Mat large(260, 341, CV_8U);
   cv::randu(large, 0, 256);
   cv::GaussianBlur(large, large, cv::Size(0, 0), 1.5);  // edges of every contrast, as in a frame
@@ -260,21 +272,21 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
           SCOPED_TRACE(::testing::Message()
                        << image.size() << " type " << type << " window " << window << " delta " << delta);
           cv::Mat ours, theirs;
-          cv::adaptiveThreshold(image, ours, 255, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          program(image, ours, 255, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
           opencv(image, theirs, 255, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
           ASSERT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
           cv::Mat in_place = image.clone();
-          cv::adaptiveThreshold(in_place, in_place, 100.4, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
+          program(in_place, in_place, 100.4, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
           opencv(image, theirs, 100.4, cv::ADAPTIVE_THRESH_MEAN_C, type, window, delta);
           ASSERT_EQ(cv::norm(in_place, theirs, cv::NORM_INF), 0.0);
         }
   cv::Mat ours, theirs;
-  cv::adaptiveThreshold(large, ours, 255, cv::ADAPTIVE_THRESH_GAUSSIAN_C, cv::THRESH_BINARY_INV, 7, 7.0);
+  program(large, ours, 255, cv::ADAPTIVE_THRESH_GAUSSIAN_C, cv::THRESH_BINARY_INV, 7, 7.0);
   opencv(large, theirs, 255, cv::ADAPTIVE_THRESH_GAUSSIAN_C, cv::THRESH_BINARY_INV, 7, 7.0);
   EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
-// The detector's cv::findContours without a hierarchy (detector/candidates.cc) is the one the program
+// The detector's cv::findContours without a hierarchy (detector/opencv_overrides.cc) is the one the program
 // calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
 // returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
 // adaptive-threshold images of a textured frame, holes within holes, one-pixel lines and specks, shapes
@@ -283,8 +295,8 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
 TEST(CandidateSearch, FindContoursIsOpenCVs) {
   const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
   using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
-  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::findContours);
-  ASSERT_NE(opencv, nullptr);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
   std::vector<cv::Mat> images;
   for (double density : {0.05, 0.3, 0.5, 0.7, 0.95}) {  // noise, nonzero values 1 to 255
     cv::Mat noise(61, 83, CV_8U), level(61, 83, CV_8U);
@@ -300,8 +312,9 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
   cv::rectangle(frame, cv::Rect(75, 55, 60, 50), cv::Scalar(240), cv::FILLED);
   cv::rectangle(frame, cv::Rect(90, 70, 30, 20), cv::Scalar(10), cv::FILLED);
   for (int window : {5, 15}) {
-    cv::Mat binary;
-    cv::adaptiveThreshold(frame, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window, 7);
+    cv::Mat mean;  // cv::adaptiveThreshold's binary image (mean, inverted, offset 7): mean - pixel >= 7
+    cv::blur(frame, mean, cv::Size(window, window), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+    const cv::Mat binary = mean - frame >= 7;
     images.push_back(binary);
     images.push_back(binary(cv::Rect(7, 3, 250, 200)));  // a view
   }
@@ -333,20 +346,20 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
       SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset);
       const cv::Mat before = image.clone();
       std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
-      cv::findContours(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+      program(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
       opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
       ASSERT_EQ(ours, theirs);
       ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
     }
   for (int mode : {cv::RETR_EXTERNAL, cv::RETR_CCOMP}) {
     std::vector<std::vector<cv::Point>> ours, theirs;
-    cv::findContours(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
+    program(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
     opencv(images[5], theirs, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
     EXPECT_EQ(ours, theirs);
   }
 }
 
-// The detector's cv::warpPerspective (detector/candidates.cc) is the one the program calls, the aruco
+// The detector's cv::warpPerspective (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and with INTER_NEAREST and a constant border on 8-bit images it gives
 // OpenCV's own images bit for bit: random quads of a noise image to marker-sized squares (as the aruco
 // module reads candidates), quads reaching outside the image, outputs of several column blocks and of
@@ -357,8 +370,8 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
       "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
   using Function =
       void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
-  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::warpPerspective);
-  ASSERT_NE(opencv, nullptr);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
   cv::Mat image(120, 160, CV_8U);
   cv::randu(image, 0, 256);
   cv::RNG rng(3);
@@ -380,7 +393,7 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
     const cv::Scalar border = trial % 3 == 0 ? cv::Scalar(77.6) : cv::Scalar();
     SCOPED_TRACE(::testing::Message() << "trial " << trial << " size " << size << " matrix " << m);
     cv::Mat ours, theirs;
-    cv::warpPerspective(image, ours, m, size, flags, cv::BORDER_CONSTANT, border);
+    program(image, ours, m, size, flags, cv::BORDER_CONSTANT, border);
     opencv(image, theirs, m, size, flags, cv::BORDER_CONSTANT, border);
     ASSERT_EQ(ours.size(), theirs.size());
     ASSERT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
@@ -388,22 +401,23 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
   const cv::Matx33d through_zero(1, 0.5, 3, 0.2, 1, 2, 0.05, 0, -1);  // denominator 0 at column 20
   for (int interpolation : {cv::INTER_NEAREST, cv::INTER_LINEAR}) {
     cv::Mat ours, theirs;
-    cv::warpPerspective(image, ours, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP);
+    program(image, ours, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP,
+            cv::BORDER_CONSTANT, cv::Scalar());
     opencv(image, theirs, through_zero, cv::Size(64, 20), interpolation | cv::WARP_INVERSE_MAP,
            cv::BORDER_CONSTANT, cv::Scalar());
     EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
   }
 }
 
-// The detector's cv::countNonZero (detector/candidates.cc) is the one the program calls, the aruco
+// The detector's cv::countNonZero (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
 // (below, at and across the vector width, over 255 vectors a row), views, an empty matrix; other types go
 // to OpenCV's.
 TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
   const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
   using Function = int (*)(cv::InputArray);
-  const auto opencv = LibraryDefinitionBeside<Function>(name, &cv::countNonZero);
-  ASSERT_NE(opencv, nullptr);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
   for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
                         cv::Size(4200, 3), cv::Size(640, 480)})
     for (double density : {0.0, 0.5, 0.97}) {
@@ -412,16 +426,16 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
       cv::randu(level, 0, 256);
       image.setTo(0, level >= 256 * density);
       SCOPED_TRACE(::testing::Message() << size << " density " << density);
-      EXPECT_EQ(cv::countNonZero(image), opencv(image));
+      EXPECT_EQ(program(image), opencv(image));
       const cv::Mat view =
           image(cv::Rect(size.width / 3, size.height / 4, size.width / 2 + 1, size.height / 2 + 1));
-      EXPECT_EQ(cv::countNonZero(view), opencv(view));
+      EXPECT_EQ(program(view), opencv(view));
     }
-  EXPECT_EQ(cv::countNonZero(cv::Mat(0, 5, CV_8U)), 0);
+  EXPECT_EQ(program(cv::Mat(0, 5, CV_8U)), 0);
   cv::Mat real(13, 7, CV_32F);
   cv::randu(real, -1, 1);
   real.setTo(0, real > 0.3);
-  EXPECT_EQ(cv::countNonZero(real), opencv(real));
+  EXPECT_EQ(program(real), opencv(real));
 }
 
 TEST(DetectorOptions, ValidateNamesTheField) {

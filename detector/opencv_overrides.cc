@@ -1,0 +1,500 @@
+// mcmt's own definitions of four OpenCV functions that cv::aruco::detectMarkers calls:
+// cv::adaptiveThreshold, cv::findContours, cv::warpPerspective and cv::countNonZero. The aruco module (a
+// shared library) calls them through the dynamic linker, which finds a program's definition before the
+// library's, so these take OpenCV's place for every caller. Each computes exactly what OpenCV's does, bit
+// for bit, for the cases the search uses (8-bit images, the modes detectMarkers passes), only cheaper;
+// every other case goes to OpenCV's own definition (LibraryDefinition: the next one, dlsym(RTLD_NEXT)).
+// They are checked against OpenCV's own at run time by test_detector_unit's CandidateSearch.*IsOpenCVs
+// tests, which also check that calls reach these definitions.
+//
+// mcmt_detector is a static archive, and the linker takes an archive member only for a symbol something
+// already references: nothing calls these by name, so MarkerDetector calls LinkOpenCvOverrides() (below)
+// to bring this file into every program that detects markers.
+#include "detector/opencv_overrides.h"
+
+#include <dlfcn.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace mcmt {
+namespace {
+
+// cv::boxFilter's mean of a k x k window of 8-bit pixels where area = k * k <= 256 (its 16-bit sums,
+// OpenCV's ColumnSum<ushort, uchar>) is the window sum s scaled as ((s + add) * mul) >> 23, mul 2^23 /
+// area rounded and add area / 2 or area / 2 + 1 against its rounding. That mean is at least v exactly
+// where s >= area * v - offset for one offset (a pixel's comparison with its window's mean is then one of
+// the window sum with a threshold linear in the pixel): the offset, or -1 if not so for every
+// v = 1..255 or if the mean could exceed 255.
+int BoxMeanThresholdOffset(int area) {
+  double exact = static_cast<double>(1 << 23) / area;
+  int mul = cvFloor(exact), add = area / 2;
+  exact -= mul;
+  if (exact < 0.5)
+    ++add;
+  else
+    ++mul;
+  auto mean = [&](int sum) { return static_cast<int>((static_cast<uint32_t>(sum + add) * mul) >> 23); };
+  int first = 0;  // the smallest sum of mean 1
+  while (first <= area && mean(first) < 1) ++first;
+  const int offset = area - first;
+  if (offset < 0 || offset >= area || mean(255 * area) > 255) return -1;
+  for (int v = 1; v <= 255; ++v) {
+    const int t = area * v - offset;
+    if (mean(t) < v || mean(t - 1) >= v) return -1;
+  }
+  return offset;
+}
+
+// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves.
+void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+  int x = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128();
+  for (; x + 8 <= w; x += 8) {
+    const __m128i add = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in + x)), zero);
+    const __m128i sub = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(out + x)), zero);
+    __m128i* c = reinterpret_cast<__m128i*>(column + x);
+    _mm_storeu_si128(c, _mm_sub_epi16(_mm_add_epi16(_mm_loadu_si128(c), add), sub));
+  }
+#endif
+  for (; x < w; ++x) column[x] = static_cast<uint16_t>(column[x] + in[x] - out[x]);
+}
+
+// sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R).
+template <int R>
+void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+  int x = 0;
+#ifdef __SSE2__
+  for (; x + 8 <= w; x += 8) {
+    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x - R));
+    for (int i = 1 - R; i <= R; ++i)
+      sum = _mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + x + i)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x), sum);
+  }
+#endif
+  for (; x < w; ++x) {
+    int sum = 0;
+    for (int i = -R; i <= R; ++i) sum += column[x + i];
+    sums[x] = static_cast<uint16_t>(sum);
+  }
+}
+
+// d[x] = `below` where the window sum sums[x] >= area * (p - at) - offset (p = s[x]; p - at <= 0: always,
+// p - at >= 256: never, as the sum is at most 255 * area), else `above`.
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int w, int at, int area, int offset,
+                           uint8_t below, uint8_t above, uint8_t* d) {
+  int x = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
+  const __m128i area16 = _mm_set1_epi16(static_cast<int16_t>(area)), limit = _mm_set1_epi16(256);
+  const __m128i offset16 = _mm_set1_epi16(static_cast<int16_t>(offset));
+  const __m128i below8 = _mm_set1_epi8(static_cast<char>(below)),
+                above8 = _mm_set1_epi8(static_cast<char>(above));
+  for (; x + 8 <= w; x += 8) {
+    const __m128i p = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x)), zero);
+    const __m128i v = _mm_min_epi16(_mm_max_epi16(_mm_sub_epi16(p, at16), zero), limit);
+    const __m128i t = _mm_subs_epu16(_mm_mullo_epi16(v, area16), offset16);
+    const __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + x));
+    const __m128i is_below = _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
+    const __m128i mask = _mm_packs_epi16(is_below, is_below);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(d + x),
+                     _mm_or_si128(_mm_and_si128(mask, below8), _mm_andnot_si128(mask, above8)));
+  }
+#endif
+  for (; x < w; ++x)
+    d[x] = sums[x] >= std::max(0, area * std::clamp(s[x] - at, 0, 256) - offset) ? below : above;
+}
+
+// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15,
+// edges replicated within src) rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset):
+// 16-bit column sums slid down the image, their window sums compared with a threshold linear in the
+// pixel. dst must not be src.
+void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                             cv::Mat& dst) {
+  const int r = k / 2, w = src.cols, h = src.rows, area = k * k;
+  if (w == 0 || h == 0) return;
+  thread_local std::vector<uint16_t> padded, sums;
+  padded.assign(static_cast<size_t>(w) + 2 * r, 0);
+  sums.resize(w);
+  uint16_t* column = padded.data() + r;  // column[-r..w + r): this row's column sums, edges replicated
+  auto row = [&](int y) { return src.ptr<uint8_t>(std::clamp(y, 0, h - 1)); };
+  for (int y = -r; y <= r; ++y)
+    for (int x = 0; x < w; ++x) column[x] += row(y)[x];
+  using Sums = void (*)(const uint16_t*, int, uint16_t*);
+  static constexpr Sums kSumsOf[8] = {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>,
+                                      WindowSums<4>, WindowSums<5>, WindowSums<6>, WindowSums<7>};
+  for (int y = 0; y < h; ++y) {
+    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), w, column);
+    for (int x = 1; x <= r; ++x) column[-x] = column[0], column[w - 1 + x] = column[w - 1];
+    kSumsOf[r](column, w, sums.data());
+    CompareWithWindowSums(src.ptr<uint8_t>(y), sums.data(), w, at, area, offset, below, above,
+                          dst.ptr<uint8_t>(y));
+  }
+}
+
+// OpenCV's contour follower's marks in its 0/1 image (Suzuki and Abe's NBD 2 for every border in its list
+// modes): a border pixel whose right neighbour (a 0 pixel) was examined while following the border, and
+// any other border pixel.
+constexpr int8_t kBorderRightExamined = -126, kBorderPixel = 2;
+
+// Follows the border through `start` (a pixel of the framed 0/1 image; `delta`: the offsets of its 8
+// neighbours, right first and counter-clockwise on screen, twice over) as OpenCV's icvFetchContour does
+// for 8-bit images and CHAIN_APPROX_NONE: the same first direction (an outer border searches from the
+// left neighbour, a hole's from the right one), the same marks, every pixel passed appended to `points`
+// from `pt` on.
+void FollowBorder(int8_t* start, const std::ptrdiff_t* delta, bool hole, cv::Point pt,
+                  std::vector<cv::Point>* points) {
+  static constexpr int kDx[8] = {1, 1, 0, -1, -1, -1, 0, 1}, kDy[8] = {0, -1, -1, -1, 0, 1, 1, 1};
+  const int first_end = hole ? 0 : 4;
+  int s = first_end;
+  int8_t* second;
+  do {
+    s = (s - 1) & 7;
+    second = start + delta[s];
+  } while (*second == 0 && s != first_end);
+  if (s == first_end) {  // a single pixel
+    *start = kBorderRightExamined;
+    points->push_back(pt);
+    return;
+  }
+  int8_t* here = start;
+  for (;;) {
+    const int end = s;
+    int8_t* next = here;
+    while (s < 15) {
+      next = here + delta[++s];
+      if (*next != 0) break;
+    }
+    s &= 7;
+    if (static_cast<unsigned>(s - 1) < static_cast<unsigned>(end))
+      *here = kBorderRightExamined;
+    else if (*here == 1)
+      *here = kBorderPixel;
+    points->push_back(pt);
+    pt.x += kDx[s], pt.y += kDy[s];
+    if (next == start && here == second) break;
+    here = next;
+    s = (s + 4) & 7;
+  }
+}
+
+// Bit i set where a border starts at row[x + i] as the row is (i < 16; row readable from x - 1 to
+// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's).
+uint32_t BorderStarts(const int8_t* row, int x) {
+#ifdef __SSE2__
+  const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+  const __m128i prev = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x - 1));
+  if (_mm_movemask_epi8(_mm_cmpeq_epi8(p, prev)) == 0xffff) return 0;  // no change (most of an image)
+  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+  const __m128i outer = _mm_and_si128(_mm_cmpeq_epi8(p, one), _mm_cmpeq_epi8(prev, zero));
+  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero),
+                                     _mm_or_si128(_mm_cmpeq_epi8(prev, one), _mm_cmpeq_epi8(prev, two)));
+  return static_cast<uint32_t>(_mm_movemask_epi8(_mm_or_si128(outer, hole)));
+#else
+  uint32_t mask = 0;
+  for (int i = 0; i < 16; ++i) {
+    const int8_t p = row[x + i], prev = row[x + i - 1];
+    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev >= 1)) << i;
+  }
+  return mask;
+#endif
+}
+
+// Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
+// RETR_LIST and CHAIN_APPROX_NONE finds them: its 0/1 image framed by zeros, scanned row by row; an outer
+// border starts where a 1 follows a 0, a hole's where a 0 follows a pixel of value 1 or 2, and each is
+// followed at once (FollowBorder). Points shifted by `offset`, border k's points ending at ends[k], in the
+// order found (OpenCV returns them last found first).
+void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* points,
+                 std::vector<size_t>* ends) {
+  const int w = src.cols, h = src.rows;
+  const std::ptrdiff_t step = w + 2;
+  thread_local std::vector<int8_t> framed;
+  // Every byte written below (no clearing pass); 16 more for the last row's 16-pixel reads.
+  framed.resize(static_cast<size_t>(step) * (h + 2) + 16);
+  std::fill_n(framed.begin(), step, 0);
+  std::fill_n(framed.begin() + (h + 1) * step, step + 16, 0);
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* s = src.ptr<uint8_t>(y);
+    int8_t* d = framed.data() + (y + 1) * step + 1;
+    d[-1] = 0, d[w] = 0;
+    int x = 0;
+#ifdef __SSE2__
+    const __m128i one = _mm_set1_epi8(1);
+    for (; x + 16 <= w; x += 16)
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(d + x),
+                       _mm_min_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x)), one));
+#endif
+    for (; x < w; ++x) d[x] = s[x] != 0 ? 1 : 0;
+  }
+  points->clear();
+  ends->clear();
+  const std::ptrdiff_t delta[16] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1,
+                                    1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1};
+  // OpenCV compares each pixel with the one before it as it is then (after the borders followed so far
+  // marked it): where a border starts it follows it. The starts are found 16 pixels at a time, and found
+  // again after each border followed (it may have marked pixels ahead).
+  for (int y = 1; y <= h; ++y) {
+    int8_t* row = framed.data() + y * step;
+    for (int base = 1; base <= w;) {
+      uint32_t starts = BorderStarts(row, base);
+      if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+      if (starts == 0) {
+        base += 16;
+        continue;
+      }
+      const int x = base + __builtin_ctz(starts);
+      const bool hole = row[x] == 0;
+      FollowBorder(row + x - (hole ? 1 : 0), delta, hole, cv::Point(x - (hole ? 2 : 1), y - 1) + offset,
+                   points);
+      ends->push_back(points->size());
+      base = x + 1;
+    }
+  }
+}
+
+// One row segment of OpenCV 4.6's warpPerspective with INTER_NEAREST (its WarpPerspectiveInvoker: column
+// blocks of `bw` pixels from `x`): d[i] = the pixel of `src` nearest to M (x + i, y), `border` outside.
+// Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) times 1 / (W0 + M6 i)
+// (0 where that denominator is 0) with X0 = M0 x + M1 y + M2 per block row, clamped to the int range,
+// rounded to even and saturated to 16 bits, 16 pixels at a time as its SSE4.1 line (every operation
+// SSE2's) and the rest as its scalar code.
+void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int bw, uint8_t border,
+                        uint8_t* d) {
+  const double X0 = M[0] * x + M[1] * y + M[2], Y0 = M[3] * x + M[4] * y + M[5],
+               W0 = M[6] * x + M[7] * y + M[8];
+  int16_t xy[2 * 16];
+  const uint8_t* data = src.data;
+  const size_t step = src.step[0];
+  const unsigned cols = static_cast<unsigned>(src.cols), rows = static_cast<unsigned>(src.rows);
+  auto sample = [&](int i, int n) {
+    for (int k = 0; k < n; ++k) {
+      const int sx = xy[2 * k], sy = xy[2 * k + 1];
+      d[i + k] = static_cast<unsigned>(sx) < cols && static_cast<unsigned>(sy) < rows ? data[sy * step + sx]
+                                                                                      : border;
+    }
+  };
+  int i = 0;
+#ifdef __SSE2__
+  const __m128d m0 = _mm_set1_pd(M[0]), m3 = _mm_set1_pd(M[3]), m6 = _mm_set1_pd(M[6]);
+  const __m128d int_max = _mm_set1_pd(static_cast<double>(INT_MAX)),
+                int_min = _mm_set1_pd(static_cast<double>(INT_MIN));
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1), x0 = _mm_set1_pd(X0), y0 = _mm_set1_pd(Y0),
+                w0 = _mm_set1_pd(W0);
+  for (; i <= bw - 16; i += 16) {
+    __m128d at = _mm_set_pd(i + 1, i);
+    for (int k = 0; k < 16; k += 4) {
+      __m128i xy4[2];
+      for (int h = 0; h < 2; ++h, at = _mm_add_pd(at, _mm_set1_pd(2))) {
+        __m128d w = _mm_add_pd(_mm_mul_pd(m6, at), w0);
+        w = _mm_andnot_pd(_mm_cmpeq_pd(w, zero), _mm_div_pd(one, w));
+        const __m128d fx =
+            _mm_max_pd(int_min, _mm_min_pd(int_max, _mm_mul_pd(_mm_add_pd(x0, _mm_mul_pd(m0, at)), w)));
+        const __m128d fy =
+            _mm_max_pd(int_min, _mm_min_pd(int_max, _mm_mul_pd(_mm_add_pd(y0, _mm_mul_pd(m3, at)), w)));
+        xy4[h] = _mm_unpacklo_epi32(_mm_cvtpd_epi32(fx), _mm_cvtpd_epi32(fy));  // x0 y0 x1 y1
+      }
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(xy + 2 * k), _mm_packs_epi32(xy4[0], xy4[1]));
+    }
+    sample(i, 16);
+  }
+#endif
+  for (; i < bw; ++i) {
+    double w = W0 + M[6] * i;
+    w = w != 0 ? 1. / w : 0;
+    const double fx =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
+    const double fy =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
+    xy[0] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx));
+    xy[1] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
+    sample(i, 1);
+  }
+}
+
+// The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
+// the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
+template <typename Function>
+Function LibraryDefinition(const char* symbol) {
+  void* next = dlsym(RTLD_NEXT, symbol);
+  CV_Assert(next != nullptr);
+  return reinterpret_cast<Function>(next);
+}
+
+}  // namespace
+
+void LinkOpenCvOverrides() {}
+
+}  // namespace mcmt
+
+// OpenCV's cv::adaptiveThreshold, which cv::aruco::detectMarkers calls once per window size (a quarter of
+// an accurate-mode frame's instructions): for 8-bit images and the local mean, the same box filter
+// (cv::boxFilter, as OpenCV calls it) and then the same comparison, src - mean <= -floor(delta) for
+// THRESH_BINARY_INV and src - mean > -ceil(delta) for THRESH_BINARY, vectorised, where OpenCV looks each
+// pixel up in a 768-entry table one at a time (6 M instructions per 640 x 480 frame for two windows).
+// Same binary image bit for bit (test_detector_unit, AdaptiveThresholdIsOpenCVs), hence the same contours
+// and candidates. Defined in the program, it takes the place of the shared library's definition for every
+// caller, the aruco module's included (the executable's symbols come first in the dynamic linker's
+// lookup); every other case (Gaussian mean, other types, UMat) goes to OpenCV's own, the next definition.
+namespace cv {
+
+void adaptiveThreshold(InputArray src_array, OutputArray dst_array, double max_value, int method, int type,
+                       int block_size, double delta) {
+  if (method != ADAPTIVE_THRESH_MEAN_C || (type != THRESH_BINARY && type != THRESH_BINARY_INV) ||
+      !src_array.isMat() || !dst_array.isMat() || src_array.type() != CV_8UC1 || block_size % 2 != 1 ||
+      block_size <= 1 || max_value < 0) {
+    using Function = void (*)(InputArray, OutputArray, double, int, int, int, double);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid");
+    opencv(src_array, dst_array, max_value, method, type, block_size, delta);
+    return;
+  }
+  Mat src = src_array.getMat();
+  dst_array.create(src.size(), src.type());
+  Mat dst = dst_array.getMat();
+  const bool inverted = type == THRESH_BINARY_INV;
+  // Set where src - mean <= `at` (inverted) or > `at`; differences lie within [-255, 255].
+  const int at = std::clamp(inverted ? -cvFloor(delta) : -cvCeil(delta), -256, 256);
+  const uint8_t on = saturate_cast<uint8_t>(max_value), below = inverted ? on : 0, above = inverted ? 0 : on;
+  const int area = block_size * block_size;
+  const int offset = block_size <= 15 ? mcmt::BoxMeanThresholdOffset(area) : -1;
+  if (offset >= 0) {
+    if (src.data == dst.data) src = src.clone();
+    mcmt::ThresholdAgainstBoxMean(src, block_size, at, offset, below, above, dst);
+    return;
+  }
+  Mat mean;
+  if (src.data != dst.data) mean = dst;
+  boxFilter(src, mean, src.type(), Size(block_size, block_size), Point(-1, -1), true,
+            BORDER_REPLICATE | BORDER_ISOLATED);
+  for (int y = 0; y < src.rows; ++y) {
+    // The mean is written into dst (or dst is src): each pixel is read before it is written.
+    const uint8_t* s = src.ptr<uint8_t>(y);
+    const uint8_t* m = mean.ptr<uint8_t>(y);
+    uint8_t* d = dst.ptr<uint8_t>(y);
+    int x = 0;
+#ifdef __SSE2__
+    const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
+    const __m128i below8 = _mm_set1_epi8(static_cast<char>(below)),
+                  above8 = _mm_set1_epi8(static_cast<char>(above));
+    for (; x + 16 <= src.cols; x += 16) {
+      const __m128i sv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x));
+      const __m128i mv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(m + x));
+      const __m128i low = _mm_sub_epi16(_mm_unpacklo_epi8(sv, zero), _mm_unpacklo_epi8(mv, zero));
+      const __m128i high = _mm_sub_epi16(_mm_unpackhi_epi8(sv, zero), _mm_unpackhi_epi8(mv, zero));
+      const __m128i over = _mm_packs_epi16(_mm_cmpgt_epi16(low, at16), _mm_cmpgt_epi16(high, at16));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(d + x),
+                       _mm_or_si128(_mm_and_si128(over, above8), _mm_andnot_si128(over, below8)));
+    }
+#endif
+    for (; x < src.cols; ++x) d[x] = s[x] - m[x] <= at ? below : above;
+  }
+}
+
+// OpenCV's cv::findContours without a hierarchy, which cv::aruco::detectMarkers calls once per window size
+// with RETR_LIST and CHAIN_APPROX_NONE on its binary image (a fifth of an accurate-mode frame's
+// instructions, most of them building and converting OpenCV's sequences and bounding boxes for the
+// ~1,300 specks of a textured frame): for 8-bit images, these modes and vectors of point vectors, the same
+// borders followed the same way (ListBorders), in the same order, each point the same; every other case
+// goes to OpenCV's own. Same contours bit for bit (test_detector_unit, FindContoursIsOpenCVs).
+void findContours(InputArray image_array, OutputArrayOfArrays contours_array, int mode, int method,
+                  Point offset) {
+  if (mode != RETR_LIST || method != CHAIN_APPROX_NONE || !image_array.isMat() ||
+      image_array.type() != CV_8UC1 || image_array.empty() ||
+      contours_array.kind() != _InputArray::STD_VECTOR_VECTOR ||
+      CV_MAT_TYPE(contours_array.getFlags()) != CV_32SC2) {
+    using Function = void (*)(InputArray, OutputArrayOfArrays, int, int, Point);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE");
+    opencv(image_array, contours_array, mode, method, offset);
+    return;
+  }
+  thread_local std::vector<Point> points;
+  thread_local std::vector<size_t> ends;
+  mcmt::ListBorders(image_array.getMat(), offset, &points, &ends);
+  auto& contours = *static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj());
+  const size_t n = ends.size();
+  contours.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t begin = k == 0 ? 0 : ends[k - 1];
+    contours[n - 1 - k].assign(points.begin() + static_cast<std::ptrdiff_t>(begin),
+                               points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
+  }
+}
+
+// OpenCV's cv::warpPerspective, which cv::aruco::detectMarkers calls for every candidate to read its
+// cells (a 48 x 48 image with the default 6 px per cell, 100,000 instructions a call through OpenCV's
+// invoker, map blocks and remap): for 8-bit images, INTER_NEAREST and a constant border, the same
+// inverse map (cv::invert, as OpenCV inverts it) and the same positions bit for bit (WarpSegmentNearest,
+// test_detector_unit WarpPerspectiveIsOpenCVs); every other case goes to OpenCV's own.
+void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_array, Size dsize, int flags,
+                     int border_type, const Scalar& border_value) {
+  const int m_type = m_array.type();
+  if ((flags & INTER_MAX) != INTER_NEAREST || border_type != BORDER_CONSTANT || !src_array.isMat() ||
+      !dst_array.isMat() || src_array.type() != CV_8UC1 || src_array.empty() ||
+      (m_type != CV_32FC1 && m_type != CV_64FC1) || m_array.size() != Size(3, 3)) {
+    using Function = void (*)(InputArray, OutputArray, InputArray, Size, int, int, const Scalar&);
+    static const Function opencv = mcmt::LibraryDefinition<Function>(
+        "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_"
+        "NS_5Size_IiEEiiRKNS_7Scalar_IdEE");
+    opencv(src_array, dst_array, m_array, dsize, flags, border_type, border_value);
+    return;
+  }
+  Mat src = src_array.getMat();
+  double m[9];
+  Mat matrix(3, 3, CV_64F, m);
+  m_array.getMat().convertTo(matrix, CV_64F);
+  dst_array.create(dsize.empty() ? src.size() : dsize, src.type());
+  Mat dst = dst_array.getMat();
+  if (dst.data == src.data) src = src.clone();
+  if (!(flags & WARP_INVERSE_MAP)) invert(matrix, matrix);
+  const uint8_t border = saturate_cast<uint8_t>(border_value[0]);
+  // OpenCV's column blocks (a block's map starts from its first column); its row blocks do not matter.
+  const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
+  for (int y = 0; y < dst.rows; ++y)
+    for (int x = 0; x < dst.cols; x += block_width)
+      mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
+                               dst.ptr<uint8_t>(y) + x);
+}
+
+// OpenCV's cv::countNonZero, which cv::aruco::detectMarkers calls for every cell of every candidate (64
+// calls a candidate, ~840 instructions each through OpenCV's type dispatch and plane iterator on a 4 x 4
+// view): for 8-bit 2-D matrices the count row by row (16 pixels at a time); every other case goes to
+// OpenCV's own (test_detector_unit, CountNonZeroIsOpenCVs).
+int countNonZero(InputArray src_array) {
+  if (src_array.kind() != _InputArray::MAT || src_array.type() != CV_8UC1 || src_array.dims() > 2) {
+    using Function = int (*)(InputArray);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZN2cv12countNonZeroERKNS_11_InputArrayE");
+    return opencv(src_array);
+  }
+  const Mat& src = *static_cast<const Mat*>(src_array.getObj());
+  int64_t zeros = 0;
+  for (int y = 0; y < src.rows; ++y) {
+    const uint8_t* p = src.ptr<uint8_t>(y);
+    int x = 0;
+#ifdef __SSE2__
+    while (x + 16 <= src.cols) {  // zeros per byte lane, summed every 255 loads at most
+      __m128i lanes = _mm_setzero_si128();
+      for (const int end = std::min(src.cols - 15, x + 255 * 16); x < end; x += 16)
+        lanes = _mm_sub_epi8(lanes, _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + x)),
+                                                   _mm_setzero_si128()));
+      const __m128i sums = _mm_sad_epu8(lanes, _mm_setzero_si128());
+      zeros += _mm_cvtsi128_si32(sums) + _mm_cvtsi128_si32(_mm_srli_si128(sums, 8));
+    }
+#endif
+    for (; x < src.cols; ++x) zeros += p[x] == 0;
+  }
+  return static_cast<int>(static_cast<int64_t>(src.rows) * src.cols - zeros);
+}
+
+}  // namespace cv
