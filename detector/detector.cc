@@ -613,6 +613,11 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       const cv::Vec3d mu = unit_from_ideal * cv::Vec3d(mid.x(), mid.y(), 1.0);
       const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
       const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
+      // (Not a number where the ray's point maps to infinity: the ray is not used; casting it is undefined.)
+      if (!std::isfinite(at)) {
+        ok = false;
+        break;
+      }
       const int c = static_cast<int>(std::floor(at));
       // Beyond the marker's outline (a ray near an acute corner drifts across the perpendicular side's
       // border into its margin) the row is not the code the model takes it for: in the skew pass
