@@ -620,11 +620,16 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // Nor is a faint strip beyond the edge (kMinMarginExcess); that side is fitted with one level in this
   // pass only, and the next pass fits both models again (kept warm, the choice depended on the start: fast
   // mode's corners left the accurate mode's by 0.47 px on a marker without a margin).
+  // Nor is a margin whose far side (e + q) lies beyond the profiles' outer end: S2 has no bin there, and
+  // where the margin has the surround's level (no margin) q and S2 wander between valleys (no margin on
+  // grey, 25.6 px at 71 deg: q 1.9 or 7.5 px, S2 88 or -20 by the start; fast mode's corners 0.21 px from
+  // the accurate mode's; bench/results/2026-12-05-blurside3.md).
   const double* p = fit->params.data();
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
+  const bool unseen = p[kE] + p[kQ] > s.u0 + (s.bins - 1) * s.du;
   if (!code_contrast ||
-      (!faint && std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
+      (!faint && !unseen && std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
   *fit = start;
   fit->warm = false;

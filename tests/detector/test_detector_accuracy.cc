@@ -52,11 +52,13 @@ struct Bounds {
 // (now meets the targets: -0.002 / 0.043 / 1.000), hard 0.947 -> 1.000. Blur's markers still lost at
 // 60-75 deg have no candidate quad (their thin blurred border breaks where white cells touch it); the
 // black tool's neither (the half-cell margin under blur joins the border to the dark surface).
+// A two-level margin whose far side lies beyond the profiles' outer end is refitted with one surround
+// level (side_model.cc FitSideModels; 2026-12-05 evening): hard -0.043 -> -0.035 px (bound 0.06 -> 0.04).
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
-      {"hard", {0.06, 0.18, 0.99, 1.00}},
+      {"hard", {0.04, 0.18, 0.99, 1.00}},
   };
   return s;
 }
