@@ -744,7 +744,8 @@ TEST(SideModel, AFitIsTheSameWhicheverBinsArePaired) {
     for (int ray = 0; ray < 12; ++ray) {
       const std::array<uint8_t, 2>& pattern = patterns[ray % 3];
       const int g = s.AddRay(pattern, {cell, 2 * cell}, {1.0 * pattern[0], 1.0 * pattern[1]});
-      for (int j = 0; j < 200; ++j)  // with a deterministic noise of about 1 grey level; u -0.75, 0, 0.5 empty
+      // With a deterministic noise of about 1 grey level; u -0.75, 0, 0.5 empty.
+      for (int j = 0; j < 200; ++j)
         if (j != 157 && j != 160 && j != 162)
           s.Add(g, j + shift, profile(-40.0 + 0.25 * j, pattern) + std::sin(12.9898 * (ray * 200 + j)));
     }
