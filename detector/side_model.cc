@@ -503,7 +503,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   p[kL1] = LevelNear(s, -1.5 * c, 1, 1);
   if (!std::isfinite(p[kL1])) p[kL1] = LevelNear(s, -2.5 * c, 2, 1);
   p[kS1] = LevelNear(s, std::min(0.5 * c, 1.0), -1, 0);
-  p[kS2] = LevelNear(s, s.u0 + (s.bins - 1) * s.du, -1, 0);
+  p[kS2] = LevelNear(s, s.OuterU(), -1, 0);
   p[kQ] = c;
   p[kGamma] = 1.0;
   if (!std::isfinite(p[kL0]) || !std::isfinite(p[kS1]) || !std::isfinite(p[kS2])) return false;
@@ -622,12 +622,13 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // mode's corners left the accurate mode's by 0.47 px on a marker without a margin).
   // Nor is a margin whose far side (e + q) lies beyond the profiles' outer end: S2 has no bin there, and
   // where the margin has the surround's level (no margin) q and S2 wander between valleys (no margin on
-  // grey, 25.6 px at 71 deg: q 1.9 or 7.5 px, S2 88 or -20 by the start; fast mode's corners 0.21 px from
-  // the accurate mode's; bench/results/2026-12-05-blurside3.md).
+  // grey, 25.6 px at 71 deg: q 1.9 or 7.5 px, S2 88 or -20 by the start; with blurside3's row-3 terms fast
+  // mode's corners were 0.21 px from the accurate mode's, bench/results/2026-12-05-blurside3.md). On main
+  // it took the reference renderer's "hard" map from +0.96 to +0.68 % (BENCHMARKS.md, 2026-12-05 evening).
   const double* p = fit->params.data();
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
-  const bool unseen = p[kE] + p[kQ] > s.u0 + (s.bins - 1) * s.du;
+  const bool unseen = p[kE] + p[kQ] > s.OuterU();
   if (!code_contrast ||
       (!faint && !unseen && std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;

@@ -30,6 +30,7 @@ struct SideProfiles {
   static constexpr int kRows = 2;  // code rows modelled inside the border
   double u0 = 0, du = 0.25;        // bin j is at u = u0 + j * du
   int bins = 0;
+  double OuterU() const { return u0 + (bins - 1) * du; }  // the last bin's u: the profiles' outer end
   // Encoded images (gamma unknown): the model's linear values are encoded as 255 (f / 255)^(1 / gamma)
   // with gamma fitted too; false: the profiles are linear already.
   bool fit_gamma = false;
