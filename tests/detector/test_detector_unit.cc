@@ -103,7 +103,6 @@ TEST(DetectorAccuracy, CornersDoNotDependOnTheImagesBefore) {
     auto dict = LoadDictionary(dict_name);
     MarkerDetector running(mc, DetectorOptions());
     std::mt19937_64 rng(1);
-    int differing = 0, markers = 0;
     for (int i = 0; i < 30; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderScene(*dict, scene, rng, &truth);
@@ -111,19 +110,14 @@ TEST(DetectorAccuracy, CornersDoNotDependOnTheImagesBefore) {
       const std::vector<marker_t> fresh = MarkerDetector(mc, DetectorOptions()).Detect(image);
       ASSERT_EQ(after.size(), fresh.size()) << dict_name << " image " << i;
       for (size_t j = 0; j < fresh.size(); ++j) {
-        ++markers;
         bool same = after[j].id == fresh[j].id;
         for (int k = 0; k < 4; ++k)
           for (int c = 0; c < 2; ++c) same = same && after[j].corners[k][c] == fresh[j].corners[k][c];
-        if (!same) {
-          ++differing;
-          ADD_FAILURE() << dict_name << " image " << i << " marker " << fresh[j].id << " corner 0 after ("
-                        << after[j].corners[0][0] << ", " << after[j].corners[0][1] << "), new ("
-                        << fresh[j].corners[0][0] << ", " << fresh[j].corners[0][1] << ")";
-        }
+        EXPECT_TRUE(same) << dict_name << " image " << i << " marker " << fresh[j].id << " corner 0 after ("
+                          << after[j].corners[0][0] << ", " << after[j].corners[0][1] << "), new ("
+                          << fresh[j].corners[0][0] << ", " << fresh[j].corners[0][1] << ")";
       }
     }
-    EXPECT_EQ(differing, 0) << dict_name << ": of " << markers << " markers";
   }
 }
 
