@@ -41,6 +41,12 @@ struct SimEvalResult {
   double Recall75() const { return visible75 ? double(found75) / visible75 : 0; }
 };
 
+// Whether a marker view is in issue 15's domain for corner targets: fully visible, at least min_size_px on
+// its longest side, at most 75 degrees from the view axis (refinement may give up beyond).
+inline bool InCornerTargetDomain(const sim::MarkerView& v, double min_size_px = 15.0) {
+  return v.fully_visible && v.size_px >= min_size_px && v.view_angle_deg <= 75;
+}
+
 inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
   sim::RigOptions rig;
   rig.num_cameras = o.cameras;
@@ -86,7 +92,7 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
         if (!ok) ++r.wrong_ids;
       }
       for (const auto& v : views) {
-        if (!v.fully_visible || v.size_px < o.min_size_px || v.view_angle_deg > 75) continue;
+        if (!InCornerTargetDomain(v, o.min_size_px)) continue;
         const marker_t* hit = nullptr;
         for (const marker_t& m : found)
           if (m.id == v.id) hit = &m;

@@ -522,7 +522,7 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnSim) {
         const auto views = sim::ProjectMarkers(cameras[c], object, trajectory[i].rig_from_object);
         auto comparable = [&](int id) {
           for (const auto& v : views)
-            if (v.id == id) return v.fully_visible && v.view_angle_deg <= 75 && v.size_px >= 15;
+            if (v.id == id) return testing::InCornerTargetDomain(v);
           return false;
         };
         CompareModes(accurate.Detect(image), fast.Detect(image), comparable,
