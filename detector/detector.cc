@@ -1087,7 +1087,7 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
 // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
 // crossings' (each with the cell depths of the previous one's corners), at least two (one in a
-// model-only round), until the corners move less than kSettledPx (at most kMaxModelPasses); a side
+// model-only round), until the corners move less than `settled_px` (at most kMaxModelPasses); a side
 // whose line has settled (kSideSettledPx) keeps it meanwhile: where the search started
 // (the candidate, the previous frame) must not change where the corners end up. Passes that do not
 // settle are mostly a two-cycle (a poorly modelled side whose warm-started fits alternate between two
@@ -1109,9 +1109,16 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   if (!(perimeter > 4 * 4.0)) return false;
   constexpr int kMaxModelPasses = 6;
   // A model-only round (RefineMarkerCorners) starts from corners settled by the passes before it: its
-  // first (cold) pass moving them less than kSettledPx ends it (a second pass moved them by 1e-4 to
+  // first (cold) pass moving them less than kRoundSettledPx ends it (a second pass moved them by 1e-4 to
   // 1e-3 px more: bench/results/2026-12-05-speed4.md).
-  constexpr double kSettledPx = 0.004;
+  constexpr double kRoundSettledPx = 0.004;
+  // The first refinement's model passes only bring the corners near the edges, and the model-only
+  // rounds after it (RefineMarkerCorners) settle them from fits started cold: those passes stop at
+  // kFirstSettledPx (kRoundSettledPx as the rounds: 7.56 passes per marker in bench_detector; 0.02 px:
+  // 7.05; 0.01 and 0.03 px: 7.15 and 7.20; 0.05 px: 7.39, the rounds then moving the corners by more
+  // than their own limit more often: bench/results/2026-12-05-fewerfits.md).
+  constexpr double kFirstSettledPx = 0.02;
+  const double settled_px = model_only ? kRoundSettledPx : kFirstSettledPx;
   const int min_model_passes = model_only ? 1 : 2;
   bool converged = false, model_converged = false;
   int model_passes = 0;
@@ -1133,7 +1140,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     previous = r.img;
     r.img = next;
     if (model_pass) ++model_passes;
-    model_converged = model_pass && model_passes >= min_model_passes && moved < kSettledPx;
+    model_converged = model_pass && model_passes >= min_model_passes && moved < settled_px;
   }
   std::array<Eigen::Vector2d, 4>& img = r.img;
   if (model_fit && !model_converged && model_passes >= 2)
