@@ -108,7 +108,9 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
            .Add("inverted", &O::inverted, "also look for white-on-black markers (default: markers.inverted)")
            .Add("aruco3", &O::aruco3, "OpenCV's ArUco3 fast search (downsampled candidate search)")
            .Add("aruco3_min_side", &O::aruco3_min_side, "px", "ArUco3's minSideLengthCanonicalImg")
-           .Add("fast", &O::fast, "fast mode: full searches only every full_search_every frames")
+           .Add("fast", &O::fast,
+                "fast mode: full searches only every full_search_every frames (a marker coming into view is "
+                "found at the next)")
            .Add("full_search_every", &O::full_search_every, "frames",
                 "fast mode: frames between full searches", AtLeast(1))
            .Add("drop_duplicate_ids", &O::drop_duplicate_ids,
