@@ -15,6 +15,9 @@ function(mcmt_add_test)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
+  if(MCMT_SANITIZE)  # instrumented programs run 2-3x slower
+    math(EXPR T_TIMEOUT "${T_TIMEOUT} * 3")
+  endif()
   set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT})
   # Process tests start the mcmt-* programs: build them first.
   if(TARGET mcmt_programs)

@@ -472,6 +472,7 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
           const int j1 = std::min(p.grid - 1, static_cast<int>(std::floor((pxmax + p.half) * inv)));
           const int i0 = std::max(0, static_cast<int>(std::floor((p.half - pymax) * inv)));
           const int i1 = std::min(p.grid - 1, static_cast<int>(std::floor((p.half - pymin) * inv)));
+          if (j0 > j1 || i0 > i1) continue;  // the footprint lies in the margin: no cell to read
           const bool inside = pxmin >= -p.half && pxmax <= p.half && pymin >= -p.half && pymax <= p.half;
           if (inside && j0 == j1 && i0 == i1) {
             coverage = 1.0;

@@ -370,7 +370,9 @@ void TrackerNode::UpdateHealth(const FrameJudgement& frame, int64_t utime) {
     changes = health_change_ + (changes.empty() ? "" : "; " + changes);
     health_change_.clear();
   }
-  if (!changes.empty() || utime - last_health_utime_ >= 1000000) PublishHealth(utime, changes);
+  // INT64_MIN: none published yet (utime minus it would overflow).
+  const bool due = last_health_utime_ == INT64_MIN || utime - last_health_utime_ >= 1000000;
+  if (!changes.empty() || due) PublishHealth(utime, changes);
 }
 
 void TrackerNode::PublishHealth(int64_t utime, const std::string& message) {

@@ -9,6 +9,7 @@ set -uo pipefail
 SRC="$1"
 BUILD="$2"
 BIN="$BUILD/bin"
+export MCMT_BIN="$BIN"  # mcmt-replay's mcmt-progress: this build's, not ../build's
 WORK="$BUILD/tests/e2e_first_use"
 rm -rf "$WORK" && mkdir -p "$WORK"
 FAILS=0

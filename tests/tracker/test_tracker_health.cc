@@ -28,6 +28,7 @@ namespace {
 struct TrackedRun {
   std::vector<double> error_mm;  // per tracked frame, object origin against the truth
   std::vector<int64_t> seq;      // per tracked frame
+  std::vector<int64_t> utime;    // per tracked frame
   std::vector<CameraHealth> health;
   int64_t frames = 0;
 };
@@ -56,8 +57,18 @@ void HideMarker(const std::string& log, int id) {
   });
 }
 
-// Tracks the session written in `dir` with the map of its ground truth (the cameras before any move).
-TrackedRun Track(const std::string& dir, const sim::GroundTruth& truth, bool camera_health = true) {
+struct StatusSink {
+  std::vector<tracker_status_t>* out;
+  void On(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    tracker_status_t msg;
+    if (Decode(rbuf->data, rbuf->data_size, &msg)) out->push_back(msg);
+  }
+};
+
+// Tracks the session written in `dir` with the map of its ground truth (the cameras before any move);
+// statuses: where the MCMT_TRACKER_STATUS messages go (nullptr: nowhere).
+TrackedRun Track(const std::string& dir, const sim::GroundTruth& truth, bool camera_health = true,
+                 std::vector<tracker_status_t>* statuses = nullptr) {
   std::vector<TrajectoryRow> truth_rows;
   const RigMap map = sim::MapFromGroundTruth(truth, 0, 0, &truth_rows);
   std::map<int64_t, Rigid3> truth_at;
@@ -68,11 +79,16 @@ TrackedRun Track(const std::string& dir, const sim::GroundTruth& truth, bool cam
   options.keep_trajectory = true;
   options.quiet = true;
   options.tracker.camera_health = camera_health;
-  lcm::LCM lcm("memq://");
-  TrackerNode node(lcm, rig, options, map);
+  lcm::LCM lcm("memq://"), output("memq://");
+  StatusSink sink{statuses};
+  if (statuses) output.subscribe(kTrackerStatusChannel, &StatusSink::On, &sink)->setQueueCapacity(1 << 16);
+  TrackerNode node(lcm, rig, options, map, statuses ? &output : nullptr);
   node.RunLog(dir + "/detections.lcmlog", StopToken());
+  while (statuses && output.handleTimeout(0) > 0) {
+  }
   TrackedRun run;
   for (const TrajectoryRow& r : node.trajectory()) {
+    run.utime.push_back(r.utime);
     run.seq.push_back(r.seq);
     run.error_mm.push_back(1000.0 * TranslationDistance(r.rig_from_object, truth_at.at(r.seq)));
   }
@@ -176,6 +192,23 @@ TEST(TrackerHealth, NoFalseAlarmWithNoiseOnlyFastMotionAndAHiddenMarker) {
     EXPECT_EQ(h.first_suspect_utime, -1) << h.camera << " rms " << h.rms_px << " baseline " << h.baseline_px;
     EXPECT_GT(h.frames, 3000) << h.camera;
   }
+}
+
+// MCMT_TRACKER_STATUS from the first tracked frame on, then at least once a second of frames. Before, the
+// "a second since the last status" test subtracted the INT64_MIN that stands for "none yet" (an overflow,
+// undefined behaviour: UBSan stopped the tracker there) and wrapped to a negative difference: no status
+// until a camera's state first changed.
+TEST(TrackerHealth, StatusIsPublishedFromTheFirstFrameOn) {
+  test::TempDir dir("health_status");
+  const sim::GroundTruth truth = sim::GenerateDataset(sim::DetectionsOnlySession(dir.str(), 90, 7)).truth;
+  std::vector<tracker_status_t> statuses;
+  const TrackedRun run = Track(dir.str(), truth, true, &statuses);
+  ASSERT_FALSE(run.utime.empty());
+  ASSERT_FALSE(statuses.empty());
+  EXPECT_EQ(statuses.front().utime, run.utime.front());
+  for (size_t i = 1; i < statuses.size(); ++i)
+    EXPECT_LE(statuses[i].utime - statuses[i - 1].utime, 1000000 + 33334) << i;
+  EXPECT_LE(run.utime.back() - statuses.back().utime, 1000000 + 33334);
 }
 
 TEST(TrackerHealth, StatusMessageFingerprintsArePinned) {
