@@ -504,6 +504,10 @@ struct SideRay {
   double delta;
   std::array<uint8_t, SideProfiles::kRows> pattern;
   std::array<double, SideProfiles::kRows> depths, other;
+  // The steps where the ray crosses a column boundary between cells of different colours inside a code
+  // row (SideProfiles::RowStep; AddRowSteps).
+  std::array<SideProfiles::RowStep, SideProfiles::kMaxRowSteps> row_steps{};
+  int row_step_count = 0;
 };
 
 // A side's rays (FitSide) and how their profiles are sampled.
@@ -534,7 +538,8 @@ struct SideRays {
     profiles->polarity = polarity;
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
-      const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other);
+      const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
+                                         rays[r].row_steps.data(), rays[r].row_step_count);
       const double ox = (*origins)[rays[r].index].x(), oy = (*origins)[rays[r].index].y();
       const double nx = (*normals)[rays[r].index].x(), ny = (*normals)[rays[r].index].y();
       const double first_s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0;
@@ -550,6 +555,79 @@ struct SideRays {
 // The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
 // depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
 // the corners, each followed inward across the marker's rows (`skew_pass`: TurnSkewedSides's).
+// The ray's colour sequence along its profile (issue 15, bench/results/2026-12-05-rowsteps.md). A ray along
+// the side's normal crosses the code's column boundaries obliquely on a sheared quad; where it crosses one
+// inside code row r between cells of different colours, the model has one more blurred step there
+// (SideProfiles::RowStep), at the crossing's depth along the ray, with the blur across that boundary seen
+// along the ray: sigma / sin(angle between the ray and the boundary) (sigma itself: bench_detector's
+// 1280x960 fast vs accurate 0.131 px, bench_accuracy median 0.072). The rows with steps take the colour
+// where the ray enters them. Without the steps, a wide-cell side of a sheared quad (camera 1 frame 25 id 7
+// of bench_detector 30 2 at 1280x960) fitted 7 grey levels rms off, gamma absorbed it in two valleys and
+// the start chose one (fast vs accurate 0.423 px). False where the ray leaves the marker through the next
+// side within the profiles' reach (taken as 2 cells deep): its samples there are not the code.
+// `t`: the ray's distances (ideal px from q along dir) to the row boundaries 1..kRows + 1.
+bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, const PixelMap& map,
+                 const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
+                 const Eigen::Vector2d& origin, const Eigen::Vector2d& normal, const Eigen::Vector2d& q,
+                 const Eigen::Vector2d& dir, const double* t, SideRay* ray) {
+  auto cell_of = [&](int r, int k) { return k >= 0 && k < cells ? row_cells[r * cells + k] : 0; };
+  // The column coordinate (cells along the side) of the ray's point at t.
+  auto column_at = [&](double at_t) {
+    const Eigen::Vector2d x = q + at_t * dir;
+    const cv::Vec3d m = unit_from_ideal * cv::Vec3d(x.x(), x.y(), 1.0);
+    const double mx = m[0] / m[2], my = m[1] / m[2];
+    return (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
+  };
+  // Gates: a ray any of whose crossings meets its boundary at a sine below kMinSin (0.3: at 0-40 deg the
+  // median of bench_accuracy --quick stays 0.039 px, 0.042 without) or whose border cell is shallower
+  // than kMinCellPx keeps one colour per row. 4 px: without a gate 19 steep markers of bench_accuracy
+  // end a cell off and are dropped (recall at 60-75 deg 0.943 -> 0.901); with 3 px the real caliscope
+  // board's corners with tone auto came out 0.091 % small per camera on average (0.082 % without steps,
+  // test_detector_realdata's bound 0.09 %), with 4 px 0.078 %.
+  constexpr double kMinSin = 0.3, kMinCellPx = 4.0;
+  const SideRay plain = *ray;
+  const double t_max = 2.0 * t[1];
+  const double end_column = column_at(t_max);
+  if (!std::isfinite(end_column) || end_column < 0.0 || end_column > cells) return false;
+  ray->row_step_count = 0;
+  for (int r = 1; r <= SideProfiles::kRows && r < cells; ++r) {
+    if (t[r] >= t_max) break;
+    const double t_out = std::isfinite(t[r + 1]) ? std::min(t[r + 1], t_max) : t_max;
+    const double in = column_at(t[r]), out = column_at(t_out);
+    if (!std::isfinite(in) || !std::isfinite(out)) return false;
+    const int c_in = static_cast<int>(std::floor(in)), c_out = static_cast<int>(std::floor(out));
+    const int way = c_out > c_in ? 1 : -1;
+    bool stepped = false;
+    for (int c = c_in; c != c_out; c += way) {
+      const int k = way > 0 ? c + 1 : c;  // the column boundary crossed, from column c to c + way
+      const double delta = static_cast<double>(cell_of(r, c + way)) - cell_of(r, c);
+      if (delta == 0.0 || ray->row_step_count == SideProfiles::kMaxRowSteps) continue;
+      // The boundary as a line in ideal pixels, and the ray's distance to it.
+      const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, static_cast<double>(k) / cells, 0.0);
+      const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, static_cast<double>(k) / cells, 1.0);
+      const Eigen::Vector2d a0(p0[0] / p0[2], p0[1] / p0[2]), a1(p1[0] / p1[2], p1[1] / p1[2]);
+      const Eigen::Vector2d along_boundary = (a1 - a0).normalized();
+      const Eigen::Vector2d boundary_normal(along_boundary.y(), -along_boundary.x());
+      const double den = boundary_normal.dot(dir);
+      if (std::abs(den) < 1e-9) continue;
+      const double t_k = boundary_normal.dot(a0 - q) / den;
+      const double sin_angle = std::abs(den);  // |sin| of the angle between the ray and the boundary
+      if (sin_angle < kMinSin || ray->depths[0] < kMinCellPx) {
+        *ray = plain;
+        return true;
+      }
+      SideProfiles::RowStep& step = ray->row_steps[ray->row_step_count++];
+      step.row = r;
+      step.depth = (origin - map.ToImage(q + t_k * dir)).dot(normal);
+      step.delta = delta;
+      step.sigma_scale = 1.0 / sin_angle;  // sin_angle >= kMinSin
+      stepped = true;
+    }
+    if (stepped) ray->pattern[r - 1] = cell_of(r, c_in), ray->other[r - 1] = cell_of(r, c_in);
+  }
+  return true;
+}
+
 double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap& map,
                        const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
                        const Line& line, const std::vector<char>& valid,
@@ -643,6 +721,9 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
         if (r < cells && cell_of(r, k)) other += phi(k + 1) - phi(k);
       ray.other[r - 1] = other;
     }
+    if (ok)
+      ok = AddRowSteps(row_cells, cells, side, map, ideal_from_unit, unit_from_ideal, origins[i], normals[i],
+                       q, dir, t, &ray);
     if (!ok) continue;
     depth_sum += ray.depths[0];
     rays->push_back(ray);

@@ -26,12 +26,20 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   depth_sum.clear();
   other_sum.clear();
   rays.clear();
+  row_steps.clear();
+  first_step.clear();
+  steps.clear();
 }
 
 int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
-                         const std::array<double, kRows>& other) {
+                         const std::array<double, kRows>& other, const RowStep* ray_steps,
+                         int ray_step_count) {
   size_t g = 0;
-  while (g < patterns.size() && patterns[g] != pattern) ++g;
+  // A ray with steps is a group of its own; the others group by pattern among the groups without steps.
+  if (ray_step_count == 0)
+    while (g < patterns.size() && (patterns[g] != pattern || steps[g] > 0)) ++g;
+  else
+    g = patterns.size();
   if (g == patterns.size()) {
     patterns.push_back(pattern);
     sum.resize(sum.size() + bins, 0.0);
@@ -39,6 +47,9 @@ int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::a
     depth_sum.push_back({});
     other_sum.push_back({});
     rays.push_back(0);
+    first_step.push_back(static_cast<int>(row_steps.size()));
+    steps.push_back(ray_step_count);
+    row_steps.insert(row_steps.end(), ray_steps, ray_steps + ray_step_count);
   }
   for (int r = 0; r < kRows; ++r) depth_sum[g][r] += depths[r], other_sum[g][r] += other[r];
   ++rays[g];
@@ -319,6 +330,45 @@ inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants,
 }
 #endif
 
+// Whether group g has a step (SideProfiles::RowStep) in code row `row`.
+bool HasRowStep(const SideProfiles& s, int g, int row) {
+  for (int k = s.first_step[g]; k < s.first_step[g] + s.steps[g]; ++k)
+    if (s.row_steps[k].row == row) return true;
+  return false;
+}
+
+// Group g's row steps at u (SideProfiles::RowStep): their part of the model, in units of L1 - L0, and its
+// derivatives by e and sigma. A step is the cell beyond the column boundary: blurred across the boundary
+// (along the ray, sigma k) and across the row's boundaries (B_in outer, B_out inner: none for the last
+// row), as a product (exact for boundaries at right angles):
+//   sum over steps of delta Phi((e - depth - u) / (sigma k)) [Phi((B_in - u) / sigma) - Phi((B_out - u) /
+//   sigma)]
+void RowStepsAt(const SideProfiles& s, const double* p, int g, double u, double* part, double* d_e,
+                double* d_sigma) {
+  *part = *d_e = *d_sigma = 0.0;
+  const double inv_sigma = 1.0 / p[kSigma];
+  for (int k = s.first_step[g]; k < s.first_step[g] + s.steps[g]; ++k) {
+    const SideProfiles::RowStep& step = s.row_steps[k];
+    // d Phi(z) / d e = phi / (sigma k), d Phi(z) / d sigma = -phi z / sigma.
+    double cross, cross_density;
+    const double z = (p[kE] - step.depth - u) * inv_sigma / step.sigma_scale;
+    PhiAndDensity(z, &cross, &cross_density);
+    double in, in_density, out = 0.0, out_density = 0.0, z_out = 0.0;
+    const double z_in = (p[kE] - s.depth_sum[g][step.row - 1] / s.rays[g] - u) * inv_sigma;
+    PhiAndDensity(z_in, &in, &in_density);
+    if (step.row < SideProfiles::kRows) {
+      z_out = (p[kE] - s.depth_sum[g][step.row] / s.rays[g] - u) * inv_sigma;
+      PhiAndDensity(z_out, &out, &out_density);
+    }
+    const double band = in - out;
+    *part += step.delta * cross * band;
+    *d_e += step.delta * (cross_density / step.sigma_scale * band + cross * (in_density - out_density)) *
+            inv_sigma;
+    *d_sigma -= step.delta * (cross_density * z * band + cross * (in_density * z_in - out_density * z_out)) *
+                inv_sigma;
+  }
+}
+
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
 // squared residual sum.
 double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj, Vector* jtr) {
@@ -384,6 +434,11 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
         indicator[k] = upper - lower;
         f += level[k] * indicator[k];
       }
+      double step_part = 0, step_d_e = 0, step_d_sigma = 0;
+      if (s.steps[g] > 0) {
+        RowStepsAt(s, p, g, s.u0 + j * s.du, &step_part, &step_d_e, &step_d_sigma);
+        f += (p[kL1] - p[kL0]) * step_part;
+      }
       double scale = 1.0;  // d encoded / d linear
       if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
         // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
@@ -413,6 +468,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
+      if (s.steps[g] > 0) {
+        grad[kE] += (p[kL1] - p[kL0]) * step_d_e, grad[kSigma] += (p[kL1] - p[kL0]) * step_d_sigma;
+        grad[kL0] -= step_part, grad[kL1] += step_part;
+      }
       for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
       column[kGamma][used] = gamma_grad;
       weight_of[used] = w, residual_of[used] = r;
@@ -420,7 +479,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     };
     int j = 0;
 #ifdef __SSE2__
-    if (jtj) {
+    if (jtj && s.steps[g] == 0) {
       GroupLanes lanes;
       for (int k = 0; k < kRegions; ++k)
         lanes.level[k] = _mm_set1_pd(level[k]), lanes.other[k] = _mm_set1_pd(other[k]),
@@ -529,7 +588,8 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   for (size_t g = 0; g < s.patterns.size(); ++g)
     for (int r = 0; r < SideProfiles::kRows; ++r)
       code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
-                                        (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g]));
+                                        (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g] ||
+                                         HasRowStep(s, static_cast<int>(g), r + 1)));
   *code_contrast_out = code_contrast;
   const bool free_gamma = s.fit_gamma && !s.hold_gamma && (code_contrast || !hold_gamma);
   const double held_gamma = s.fit_gamma ? std::clamp(s.gamma_hint, 0.4, 3.5) : 1.0;

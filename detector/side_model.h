@@ -60,11 +60,24 @@ struct SideProfiles {
   // along the side mixes in the neighbouring columns' cells).
   std::vector<std::array<double, kRows>> other_sum;
   std::vector<int> rays;
+  // A ray crossing a column boundary inside code row
+  // `row` (1..kRows) where the two cells differ has one more blurred step there, `depth` px inward from
+  // its origin (as the rows' depths), the level changing by delta (L1 - L0) (delta +1 / -1) until the
+  // row's inner boundary, its blur sigma * sigma_scale (the ray crosses the column boundary obliquely).
+  // A ray with steps is a group of its own; its rows' `other` is then the colour where it enters the row.
+  struct RowStep {
+    int row;
+    double depth, delta, sigma_scale;
+  };
+  static constexpr int kMaxRowSteps = 4;
+  std::vector<RowStep> row_steps;
+  std::vector<int> first_step, steps;  // per group: its steps' first index in row_steps, their count
 
   void Reset(double u0_, double du_, int bins_, double cell_);
   // The group of a pattern (created if new), with one more ray whose row boundaries lie at `depths`.
   int AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
-             const std::array<double, kRows>& other);
+             const std::array<double, kRows>& other, const RowStep* ray_steps = nullptr,
+             int ray_step_count = 0);
   void Add(int group, int bin, double value) {
     sum[static_cast<size_t>(group) * bins + bin] += value;
     count[static_cast<size_t>(group) * bins + bin] += 1.0;
