@@ -7,7 +7,7 @@ def load(p):
         f=l.split(); key=(f[0],f[1],f[2])
         d[key]=(float(f[3]),[float(x) for x in f[6:14]],[float(x) for x in f[15:23]])
     return d
-runs=[('main','/tmp/rs_acc/t_0'),('column rays','/tmp/rs_acc/t_c'),('row steps','/tmp/rs_acc/t_1'),('row steps, no cell gate','/tmp/rs_acc/t_1u')]
+runs=[('main','/tmp/rs_acc/t_0'),('column rays','/tmp/rs_acc/t_c'),('row steps','/tmp/rs_clean/t_f'),('row steps, no sine gate','/tmp/rs_acc/t_1'),('row steps, no gates','/tmp/rs_acc/t_1u')]
 R={n:load(p) for n,p in runs}
 keys=[k for k in R['main'] if all(k in r for r in R.values())]
 agg=collections.defaultdict(lambda: collections.defaultdict(list))

@@ -27,7 +27,7 @@ def side_info(t, g):
         A0=ang(a,b,P[(k+3)%4]); A1=ang(b,a,P[(k+2)%4])
         out.append(((o0+o1)/2, depth, min(A0,A1), o0, o1))
     return out
-runs={n:load(p) for n,p in [('main','/tmp/rs_acc/t_0'),('column','/tmp/rs_acc/t_c'),('rowsteps','/tmp/rs_clean/t_1')]}
+runs={n:load(p) for n,p in [('main','/tmp/rs_acc/t_0'),('column','/tmp/rs_acc/t_c'),('rowsteps','/tmp/rs_clean/t_f')]}
 keys=[k for k in runs['main'] if all(k in r for r in runs.values())]
 print("markers in all three:", len(keys))
 # aggregate: 60-75 deg markers, sides by cell depth class and by min corner angle class
