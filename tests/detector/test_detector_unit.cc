@@ -619,6 +619,47 @@ TEST_F(SourceTest, MissingSourceNamesCameraAndPath) {
     EXPECT_NE(what.find("nope"), std::string::npos);
   }
 }
+// A ray across a side of a sheared marker crosses a column boundary inside code row 1 (detector.cc
+// AddRowSteps): the row is the code's colour where the ray enters it and the border's beyond the crossing.
+// Profiles made so (gamma 2.2, cells 5 px, crossings 1.3-1.7 cells deep, at 60 deg to the ray) are fitted
+// with their steps (SideProfiles::RowStep) to the edge and the gamma; with one colour per row, the colour
+// at the middle of the row's stretch, as before the steps, the edge is 0.45 px off (asserted: > 0.05).
+TEST(SideModel, ARayCrossingAColumnBoundaryIsFittedWithItsStep) {
+  const double cell = 5.0, edge = 0.1, sigma = 0.8, gamma = 2.2, surround = 200, border = 30, code = 230;
+  const double sigma_scale = 1.0 / std::sin(60.0 * M_PI / 180.0);
+  const auto phi = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  // Linear light across the side (u outward): surround, border, row 1 white until the crossing at
+  // `crossing` px inside the edge, then dark as row 2; encoded.
+  const auto profile = [&](double u, double crossing) {
+    const double row1 = phi((edge - cell - u) / sigma) - phi((edge - 2 * cell - u) / sigma);
+    const double linear = surround + (border - surround) * phi((edge - u) / sigma) +
+                          (code - border) * row1 * (1.0 - phi((edge - crossing - u) / (sigma * sigma_scale)));
+    return 255.0 * std::pow(linear / 255.0, 1.0 / gamma);
+  };
+  SideFit fits[2];
+  for (const bool with_steps : {true, false}) {
+    SideProfiles s;
+    s.Reset(-12.0, 0.25, 72, cell);
+    s.fit_gamma = true;
+    s.polarity = 1;
+    for (int ray = 0; ray < 9; ++ray) {
+      const double crossing = cell * (1.3 + 0.05 * ray);
+      const SideProfiles::RowStep step{1, crossing, -1.0, sigma_scale};
+      const uint8_t middle = crossing > 1.5 * cell ? 1 : 0;  // row 1's colour at the middle of its stretch
+      const int g = with_steps ? s.AddRay({1, 0}, {cell, 2 * cell}, {1, 0}, &step, 1)
+                               : s.AddRay({middle, 0}, {cell, 2 * cell}, {1.0 * middle, 0});
+      for (int j = 0; j < s.bins; ++j)  // with a deterministic noise of about 1 grey level
+        s.Add(g, j, profile(s.u0 + j * s.du, crossing) + std::sin(12.9898 * (ray * s.bins + j)));
+    }
+    ASSERT_TRUE(FitSideProfiles(s, &fits[with_steps])) << "with steps " << with_steps;
+    std::printf("with steps %d: edge %+.4f px (truth %+.4f), gamma %.3f (truth %.1f)\n", with_steps,
+                fits[with_steps].e, edge, fits[with_steps].gamma, gamma);
+  }
+  EXPECT_NEAR(fits[1].e, edge, 0.02);
+  EXPECT_NEAR(fits[1].gamma, gamma, 0.2);
+  EXPECT_GT(std::abs(fits[0].e - edge), 0.05);
+}
+
 }  // namespace
 }  // namespace mcmt
 
