@@ -585,6 +585,7 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   // board's corners with tone auto came out 0.091 % small per camera on average (0.082 % without steps,
   // test_detector_realdata's bound 0.09 %), with 4 px 0.078 %.
   constexpr double kMinSin = 0.3, kMinCellPx = 4.0;
+  if (ray->depths[0] < kMinCellPx) return true;  // one colour per row, and kept (as before the steps)
   const SideRay plain = *ray;
   const double t_max = 2.0 * t[1];
   const double end_column = column_at(t_max);
@@ -612,7 +613,7 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
       if (std::abs(den) < 1e-9) continue;
       const double t_k = boundary_normal.dot(a0 - q) / den;
       const double sin_angle = std::abs(den);  // |sin| of the angle between the ray and the boundary
-      if (sin_angle < kMinSin || ray->depths[0] < kMinCellPx) {
+      if (sin_angle < kMinSin) {
         *ray = plain;
         return true;
       }
