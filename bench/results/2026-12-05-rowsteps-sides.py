@@ -54,15 +54,6 @@ for k in keys:
     sm=side_info(*runs['main'][k][2:]); sc=side_info(*runs['column'][k][2:])
     move=sum(a[0]-b[0] for a,b in zip(sm,sc))
     if best is None or move>best[0]: best=(move,k)
-for move,k in [best]:
-    print("\nmarker seed %s image %s id %s view %.1f deg side %.1f px (column rays move its sides inward by %.3f px in sum)"%(k+runs['main'][k][:2]+(move,)))
-    print("| side | cell depth px | smaller end angle deg | main (end0 / end1) | column rays | row steps |")
-    print("|---|---|---|---|---|---|")
-    inf={n:side_info(*runs[n][k][2:]) for n in runs}
-    for s in range(4):
-        m=inf['main'][s]
-        print("| %d | %.2f | %.0f | %+.3f (%+.3f / %+.3f) | %+.3f (%+.3f / %+.3f) | %+.3f (%+.3f / %+.3f) |"%((s,m[1],m[2])+tuple(x for n in ('main','column','rowsteps') for x in (inf[n][s][0],inf[n][s][3],inf[n][s][4]))))
-
 def show(k, why):
     print("\nmarker seed %s image %s id %s view %.1f deg side %.1f px (%s)"%(k+runs['main'][k][:2]+(why,)))
     print("| side | cell depth px | smaller end angle deg | main (end0 / end1) | column rays | row steps |")
@@ -71,6 +62,8 @@ def show(k, why):
     for s in range(4):
         m=inf['main'][s]
         print("| %d | %.2f | %.0f | %+.3f (%+.3f / %+.3f) | %+.3f (%+.3f / %+.3f) | %+.3f (%+.3f / %+.3f) |"%((s,m[1],m[2])+tuple(x for n in ('main','column','rowsteps') for x in (inf[n][s][0],inf[n][s][3],inf[n][s][4]))))
+show(best[1], "column rays move its sides inward by %.3f px in sum" % best[0])
+
 cands=[]
 for k in keys:
     if runs['main'][k][0]<60: continue
