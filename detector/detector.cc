@@ -583,7 +583,9 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   // than kMinCellPx keeps one colour per row. 4 px: without a gate 19 steep markers of bench_accuracy
   // end a cell off and are dropped (recall at 60-75 deg 0.943 -> 0.901); with 3 px the real caliscope
   // board's corners with tone auto came out 0.091 % small per camera on average (0.082 % without steps,
-  // test_detector_realdata's bound 0.09 %), with 4 px 0.078 %.
+  // test_detector_realdata's bound 0.09 %), with 4 px 0.081 %. A ray under kMinCellPx is also kept
+  // when it leaves the marker: dropping those moved the paper rig's plain map from the reference
+  // renderer (17 px markers) +0.040 -> +0.052 % (test_mapper_rendered's bound 0.05 %).
   constexpr double kMinSin = 0.3, kMinCellPx = 4.0;
   if (ray->depths[0] < kMinCellPx) return true;  // one colour per row, and kept (as before the steps)
   const SideRay plain = *ray;
