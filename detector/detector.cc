@@ -494,6 +494,25 @@ cv::Vec3d UnitPoint(int side, double along, double depth) {
   }
 }
 
+// Where a point (ideal pixels) lies along the side `side` of the marker: the unit-square coordinate
+// UnitPoint takes as `along` (0..1 from the side's start corner).
+double AlongSide(const cv::Matx33d& unit_from_ideal, int side, const Eigen::Vector2d& ideal) {
+  const cv::Vec3d m = unit_from_ideal * cv::Vec3d(ideal.x(), ideal.y(), 1.0);
+  const double ux = m[0] / m[2], uy = m[1] / m[2];
+  return side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+}
+
+// A line of the marker's grid in ideal pixels, through the unit-square points a and b: a point on it (a's)
+// and a normal (as long as the line's image from a to b).
+struct GridLine {
+  Eigen::Vector2d point, normal;
+};
+GridLine GridLineThrough(const cv::Matx33d& ideal_from_unit, const cv::Vec3d& a, const cv::Vec3d& b) {
+  const cv::Vec3d p0 = ideal_from_unit * a, p1 = ideal_from_unit * b;
+  const Eigen::Vector2d a0(p0[0] / p0[2], p0[1] / p0[2]), a1(p1[0] / p1[2], p1[1] / p1[2]);
+  return {a0, Eigen::Vector2d(a1.y() - a0.y(), a0.x() - a1.x())};
+}
+
 // One ray of a side's model fit: its index among the pass's rays, where it meets the side (`along`, 0..1
 // from the side's start corner), the offset from its origin to the line along its normal (`delta`, px),
 // and per code row the row's pattern, the depth of the row's outer boundary (px inward from the origin)
@@ -572,12 +591,7 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
                  const Eigen::Vector2d& dir, const double* t, SideRay* ray) {
   auto cell_of = [&](int r, int k) { return k >= 0 && k < cells ? row_cells[r * cells + k] : 0; };
   // The column coordinate (cells along the side) of the ray's point at t.
-  auto column_at = [&](double at_t) {
-    const Eigen::Vector2d x = q + at_t * dir;
-    const cv::Vec3d m = unit_from_ideal * cv::Vec3d(x.x(), x.y(), 1.0);
-    const double mx = m[0] / m[2], my = m[1] / m[2];
-    return (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
-  };
+  auto column_at = [&](double at_t) { return AlongSide(unit_from_ideal, side, q + at_t * dir) * cells; };
   // Gates: a ray any of whose crossings meets its boundary at a sine below kMinSin (0.3: at 0-40 deg the
   // median of bench_accuracy --quick stays 0.039 px, 0.042 without) or whose border cell is shallower
   // than kMinCellPx keeps one colour per row. 4 px: without a gate 19 steep markers of bench_accuracy
@@ -606,14 +620,13 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
       const double delta = static_cast<double>(cell_of(r, c + way)) - cell_of(r, c);
       if (delta == 0.0 || ray->row_step_count == SideProfiles::kMaxRowSteps) continue;
       // The boundary as a line in ideal pixels, and the ray's distance to it.
-      const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, static_cast<double>(k) / cells, 0.0);
-      const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, static_cast<double>(k) / cells, 1.0);
-      const Eigen::Vector2d a0(p0[0] / p0[2], p0[1] / p0[2]), a1(p1[0] / p1[2], p1[1] / p1[2]);
-      const Eigen::Vector2d along_boundary = (a1 - a0).normalized();
-      const Eigen::Vector2d boundary_normal(along_boundary.y(), -along_boundary.x());
+      const GridLine boundary =
+          GridLineThrough(ideal_from_unit, UnitPoint(side, static_cast<double>(k) / cells, 0.0),
+                          UnitPoint(side, static_cast<double>(k) / cells, 1.0));
+      const Eigen::Vector2d boundary_normal = boundary.normal.normalized();
       const double den = boundary_normal.dot(dir);
       if (std::abs(den) < 1e-9) continue;
-      const double t_k = boundary_normal.dot(a0 - q) / den;
+      const double t_k = boundary_normal.dot(boundary.point - q) / den;
       const double sin_angle = std::abs(den);  // |sin| of the angle between the ray and the boundary
       if (sin_angle < kMinSin) {
         *ray = plain;
@@ -641,14 +654,10 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
   rays->clear();
   double depth_sum = 0;
   // The boundaries between rows r-1 and r (r = 1..kRows + 1) as lines in ideal pixels: a point, a normal.
-  Eigen::Vector2d row_point[SideProfiles::kRows + 2], row_normal[SideProfiles::kRows + 2];
-  for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
-    const cv::Vec3d p0 = ideal_from_unit * UnitPoint(side, 0.0, static_cast<double>(r) / cells);
-    const cv::Vec3d p1 = ideal_from_unit * UnitPoint(side, 1.0, static_cast<double>(r) / cells);
-    row_point[r] = Eigen::Vector2d(p0[0] / p0[2], p0[1] / p0[2]);
-    const Eigen::Vector2d a1(p1[0] / p1[2], p1[1] / p1[2]);
-    row_normal[r] = Eigen::Vector2d(a1.y() - row_point[r].y(), row_point[r].x() - a1.x());
-  }
+  GridLine row_boundary[SideProfiles::kRows + 2];
+  for (int r = 1; r <= SideProfiles::kRows + 1; ++r)
+    row_boundary[r] = GridLineThrough(ideal_from_unit, UnitPoint(side, 0.0, static_cast<double>(r) / cells),
+                                      UnitPoint(side, 1.0, static_cast<double>(r) / cells));
   // The cells of rows 1..kRows along the side (InnerCell), read once.
   thread_local std::vector<uint8_t> row_cells;  // row r's cell k at r * cells + k
   row_cells.assign(static_cast<size_t>(SideProfiles::kRows + 1) * cells, 0);
@@ -659,9 +668,7 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
   for (size_t i = 0; i < valid.size(); ++i) {
     if (!valid[i]) continue;
     const Eigen::Vector2d& q = ideal_origins[i];
-    const cv::Vec3d m = unit_from_ideal * cv::Vec3d(q.x(), q.y(), 1.0);
-    const double ux = m[0] / m[2], uy = m[1] / m[2];
-    const double along = side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+    const double along = AlongSide(unit_from_ideal, side, q);
     const double a = along * cells;
     const int col = static_cast<int>(std::floor(a));
     const double frac = a - col;
@@ -679,8 +686,8 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     double t[SideProfiles::kRows + 2];
     t[0] = 0.0;
     for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
-      const double den = row_normal[r].dot(dir);
-      t[r] = std::abs(den) > 1e-12 ? row_normal[r].dot(row_point[r] - q) / den : NAN;
+      const double den = row_boundary[r].normal.dot(dir);
+      t[r] = std::abs(den) > 1e-12 ? row_boundary[r].normal.dot(row_boundary[r].point - q) / den : NAN;
     }
     bool ok = true;
     for (int r = 1; r <= SideProfiles::kRows && ok; ++r) {
@@ -690,10 +697,7 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       ray.depths[r - 1] = (origins[i] - map.ToImage(q + t[r] * dir)).dot(normals[i]);
       // The row's column at the middle of its stretch of the ray, and the part of the row's level that
       // comes from cells of the other colour under blur along the side (Gaussian of sigma_along px).
-      const Eigen::Vector2d mid = q + 0.5 * (t[r] + t[r + 1]) * dir;
-      const cv::Vec3d mu = unit_from_ideal * cv::Vec3d(mid.x(), mid.y(), 1.0);
-      const double mx = mu[0] / mu[2], my = mu[1] / mu[2];
-      const double at = (side == 0 ? mx : side == 1 ? my : side == 2 ? 1.0 - mx : 1.0 - my) * cells;
+      const double at = AlongSide(unit_from_ideal, side, q + 0.5 * (t[r] + t[r + 1]) * dir) * cells;
       // (Not a number where the ray's point maps to infinity: the ray is not used; casting it is undefined.)
       if (!std::isfinite(at)) {
         ok = false;
