@@ -60,11 +60,11 @@ struct SideProfiles {
   // along the side mixes in the neighbouring columns' cells).
   std::vector<std::array<double, kRows>> other_sum;
   std::vector<int> rays;
-  // A ray crossing a column boundary inside code row
-  // `row` (1..kRows) where the two cells differ has one more blurred step there, `depth` px inward from
-  // its origin (as the rows' depths), the level changing by delta (L1 - L0) (delta +1 / -1) until the
-  // row's inner boundary, its blur sigma * sigma_scale (the ray crosses the column boundary obliquely).
-  // A ray with steps is a group of its own; its rows' `other` is then the colour where it enters the row.
+  // A ray crossing a column boundary inside code row `row` (1..kRows) where the two cells differ has one
+  // more blurred step there, `depth` px inward from its origin (as the rows' depths), the level changing
+  // by delta (L1 - L0) (delta +1 / -1) until the row's inner boundary, its blur sigma * sigma_scale (the
+  // ray crosses the column boundary obliquely; detector.cc AddRowSteps). A ray with steps is a group of
+  // its own; its rows' `other` is then the colour where it enters the row.
   struct RowStep {
     int row;
     double depth, delta, sigma_scale;
