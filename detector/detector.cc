@@ -1582,60 +1582,45 @@ bool MarkerDetector::IdentifyCells(const std::vector<float>& values, const std::
   return true;
 }
 
-std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray, bool* ok) {
-  // One region per previous marker: its bounding box grown by 40 % of its size, overlapping regions
-  // merged; each searched at the scale its markers had.
-  struct Region {
-    cv::Rect rect;
-    double min_perimeter, max_perimeter;
-    std::vector<int> ids;
-  };
-  std::vector<Region> regions;
+std::vector<cv::Rect> MarkerDetector::TrackRegions(cv::Size size) const {
+  // Origins on the own search's tile grid (threshold_tile_px, anchored at the searched image's origin):
+  // its tiles in a region are the full search's.
+  const int tile = std::max(1, options_.threshold_tile_px);
+  std::vector<cv::Rect> regions;
   for (const Raw& r : last_) {
-    double perimeter = 0;
-    for (int k = 0; k < 4; ++k) perimeter += cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
-    const cv::Rect rect = GrownBox(r.corners, 0.4, 4.0, gray.size());
-    if (rect.area() <= 0) continue;
-    regions.push_back({rect, 0.6 * perimeter, 1.6 * perimeter, {r.id}});
+    cv::Rect rect = GrownBox(r.corners, options_.fast_band_sides, 4.0, size);
+    const cv::Point origin(rect.x / tile * tile, rect.y / tile * tile);
+    rect = cv::Rect(origin, rect.br());
+    if (rect.area() > 0) regions.push_back(rect);
   }
   for (bool merged = true; merged;) {
     merged = false;
     for (size_t i = 0; i < regions.size() && !merged; ++i) {
       for (size_t j = i + 1; j < regions.size() && !merged; ++j) {
-        if ((regions[i].rect & regions[j].rect).area() > 0) {
-          regions[i].rect |= regions[j].rect;
-          regions[i].min_perimeter = std::min(regions[i].min_perimeter, regions[j].min_perimeter);
-          regions[i].max_perimeter = std::max(regions[i].max_perimeter, regions[j].max_perimeter);
-          regions[i].ids.insert(regions[i].ids.end(), regions[j].ids.begin(), regions[j].ids.end());
+        if ((regions[i] & regions[j]).area() > 0) {
+          regions[i] |= regions[j];
           regions.erase(regions.begin() + j);
           merged = true;
         }
       }
     }
   }
+  return regions;
+}
+
+std::vector<MarkerDetector::Raw> MarkerDetector::FullSearch(const cv::Mat& gray, const cv::Rect& roi) {
+  return Search(gray, roi, options_.min_perimeter_px,
+                options_.max_perimeter_rate * std::max(gray.cols, gray.rows), options_.adaptive_window_min,
+                options_.adaptive_window_max);
+}
+
+std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray) {
+  // Each region searched as the full search searches the image (every threshold window, every
+  // perimeter): a marker inside one, away from its edges, gives the full search's candidate. Regions
+  // do not overlap (merged), so a marker is found once per candidate, as in the full search.
   std::vector<Raw> out;
-  *ok = true;
-  for (const Region& region : regions) {
-    // Window of about three cells of the smallest marker.
-    const double cell = region.min_perimeter / 0.6 / 4.0 / (dictionary_->markerSize + 2);
-    int window = static_cast<int>(std::lround(3.0 * cell)) | 1;
-    window = std::clamp(window, 3, 31);
-    const double min_perimeter = std::max(options_.min_perimeter_px, region.min_perimeter);
-    std::vector<Raw> found = Search(gray, region.rect, min_perimeter, region.max_perimeter, window, window);
-    bool all = true;
-    for (int id : region.ids) {
-      bool seen = false;
-      for (const Raw& f : found) seen = seen || f.id == id;
-      all = all && seen;
-    }
-    if (!all) {
-      // A marker not found at its last scale: search its region again with every window of the full
-      // search (it may have turned away or be occluded: then it is simply no longer tracked; new
-      // markers are found by the periodic full search).
-      ++stats_.region_retries;
-      found = Search(gray, region.rect, options_.min_perimeter_px, region.max_perimeter * 1.5,
-                     options_.adaptive_window_min, options_.adaptive_window_max);
-    }
+  for (const cv::Rect& region : TrackRegions(gray.size())) {
+    const std::vector<Raw> found = FullSearch(gray, region);
     out.insert(out.end(), found.begin(), found.end());
   }
   return out;
@@ -1677,17 +1662,11 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   ++stats_.frames;
 
   std::vector<Raw> raw;
-  bool done = false;
   if (options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every) {
-    bool ok = false;
-    raw = TrackSearch(gray, &ok);
-    done = ok;
+    raw = TrackSearch(gray);
     ++frames_since_full_;
-  }
-  if (!done) {
-    raw = Search(gray, cv::Rect(0, 0, gray.cols, gray.rows), options_.min_perimeter_px,
-                 options_.max_perimeter_rate * std::max(gray.cols, gray.rows), options_.adaptive_window_min,
-                 options_.adaptive_window_max);
+  } else {
+    raw = FullSearch(gray, cv::Rect(0, 0, gray.cols, gray.rows));
     frames_since_full_ = 0;
     ++stats_.full_searches;
   }

@@ -10,8 +10,9 @@
 // until the corners settle, so the result does not depend on the starting corners.
 //
 // Fast mode (DetectorOptions::fast): after a full-frame search, the next frames are searched only near
-// the markers' last positions, at their last scale; a full search runs every `full_search_every` frames
-// and whenever a marker is lost. Corners are refined the same way in both modes, to the same place.
+// the markers' last positions (a band of `fast_band_sides` marker sides around each, searched as the
+// full search searches the image); a full search runs every `full_search_every` frames and whenever no
+// marker was found. Corners are refined the same way in both modes, to the same place.
 #pragma once
 
 #include <array>
@@ -110,6 +111,10 @@ struct DetectorOptions {
   // Fast mode.
   bool fast = false;
   int full_search_every = 10;  // frames between full searches in fast mode
+  // Between them, each previous marker's box grown by this many of its sides (its larger side on every
+  // side; overlapping boxes merged) is searched as the full search searches the image: a marker coming
+  // into view there (a box's next face, a neighbour) is found in the frame it appears in.
+  double fast_band_sides = 2.0;
   // Drop every marker whose id is detected twice in one image (one of them is wrong).
   bool drop_duplicate_ids = true;
   // A marker whose edges cannot be fitted keeps cv::cornerSubPix corners (small markers often: they still
@@ -136,7 +141,6 @@ struct DetectorStats {
   long long markers = 0;
   long long refine_failures = 0;  // markers whose edges could not be fitted (cornerSubPix or dropped)
   long long dropped = 0;          // ... of which dropped
-  long long region_retries = 0;   // fast mode: regions searched again with every window
   long long rereads = 0;          // rejected candidates read again (reread_rejected) ...
   long long rereads_found = 0;    // ... of which markers
   // Codes read from unmixed cell levels (cells as narrow as the blur: MarkerDetector::ReadCode).
@@ -190,7 +194,13 @@ class MarkerDetector {
   };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max);
-  std::vector<Raw> TrackSearch(const cv::Mat& gray, bool* ok);
+  // The full search's candidate search (every threshold window, every perimeter) in `roi`.
+  std::vector<Raw> FullSearch(const cv::Mat& gray, const cv::Rect& roi);
+  // Fast mode between full searches: FullSearch in each of TrackRegions.
+  std::vector<Raw> TrackSearch(const cv::Mat& gray);
+  // Fast mode's search regions: each previous marker's box grown by fast_band_sides of its larger side
+  // (and 4 px) on every side, overlapping ones merged.
+  std::vector<cv::Rect> TrackRegions(cv::Size size) const;
   const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);

@@ -109,10 +109,15 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
            .Add("aruco3", &O::aruco3, "OpenCV's ArUco3 fast search (downsampled candidate search)")
            .Add("aruco3_min_side", &O::aruco3_min_side, "px", "ArUco3's minSideLengthCanonicalImg")
            .Add("fast", &O::fast,
-                "fast mode: full searches only every full_search_every frames (a marker coming into view is "
-                "found at the next)")
+                "fast mode: full searches only every full_search_every frames; between them, a band of "
+                "fast_band_sides around each marker of the frame before (a marker coming into view there is "
+                "found in its first frame, elsewhere at the next full search)")
            .Add("full_search_every", &O::full_search_every, "frames",
                 "fast mode: frames between full searches", AtLeast(1))
+           .Add("fast_band_sides", &O::fast_band_sides, "marker sides",
+                "fast mode: each previous marker's box grown by this many of its sides is searched every "
+                "frame as the full search searches the image (below 0.4 markers meet their region's edge)",
+                AtLeast(0.4))
            .Add("drop_duplicate_ids", &O::drop_duplicate_ids,
                 "drop every marker whose id is detected twice in one image")
            .Add("drop_unrefined", &O::drop_unrefined,

@@ -4,11 +4,14 @@
 //   bench_detector [frames per camera (default 60)] [cameras (default 2)] [image width: only that size]
 // (MCMT_BENCH_ONLY=accurate|fast|stock: only that detector; MCMT_BENCH_BLUR=sigma: renders blurred by a
 // Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
-// by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search.)
+// by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search;
+// MCMT_BENCH_BAND=sides: fast mode's fast_band_sides; MCMT_BENCH_MISSES: the markers fast mode missed and
+// how far they were from its markers of the frame before, on stderr.)
 #include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +35,44 @@ double PeakRssMb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return u.ru_maxrss / 1024.0;
+}
+// MCMT_BENCH_MISSES: the markers of the domain the accurate mode found and fast mode did not, with
+// where they were in the frame before and how far they lie from the markers fast mode had then.
+void PrintMisses(int camera, size_t frame, const std::vector<marker_t>& a, const std::vector<marker_t>& f,
+                 const std::vector<marker_t>& previous_f, const std::vector<sim::MarkerView>& views,
+                 const int size[2]) {
+  auto box = [](const marker_t& m) {
+    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+    for (const auto& c : m.corners)
+      x0 = std::min(x0, c[0]), x1 = std::max(x1, c[0]), y0 = std::min(y0, c[1]), y1 = std::max(y1, c[1]);
+    return std::array<double, 4>{x0, y0, x1, y1};
+  };
+  for (const auto& r : a) {
+    bool in_f = false;
+    for (const auto& m : f) in_f = in_f || m.id == r.id;
+    const sim::MarkerView* v = nullptr;
+    for (const auto& w : views)
+      if (w.id == r.id) v = &w;
+    if (in_f || !v || !testing::InCornerTargetDomain(*v)) continue;
+    const auto b = box(r);
+    // Nearest previous marker: gap between boxes (px) and that marker's larger box side.
+    double gap = 1e9, tracked_side = 0, union_gap = 1e9;
+    double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+    for (const auto& m : previous_f) {
+      const auto p = box(m);
+      const double g = std::max({p[0] - b[2], b[0] - p[2], p[1] - b[3], b[1] - p[3], 0.0});
+      if (g < gap) gap = g, tracked_side = std::max(p[2] - p[0], p[3] - p[1]);
+      u0 = std::min(u0, p[0]), v0 = std::min(v0, p[1]), u1 = std::max(u1, p[2]), v1 = std::max(v1, p[3]);
+    }
+    if (!previous_f.empty()) union_gap = std::max({u0 - b[2], b[0] - u1, v0 - b[3], b[1] - v1, 0.0});
+    const double border = std::min({b[0], b[1], size[0] - 1 - b[2], size[1] - 1 - b[3]});
+    std::fprintf(
+        stderr,
+        "miss cam %d frame %zu id %d size %.1f angle %.0f | nearest tracked gap %.0f px (%.2f of its "
+        "side %.0f), union gap %.0f px, border %.0f px, tracked %zu\n",
+        camera, frame, r.id, v->size_px, v->view_angle_deg, gap, gap / std::max(tracked_side, 1.0),
+        tracked_side, union_gap, border, previous_f.size());
+  }
 }
 }  // namespace
 
@@ -62,6 +103,7 @@ int main(int argc, char** argv) {
       "no clean edge fit (accurate/fast) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   long long rereads = 0, rereads_found = 0;
+  std::string all_found;  // per resolution
   const int sizes[4][2] = {{320, 240}, {640, 480}, {1280, 960}, {1920, 1440}};
   for (const auto& size : sizes) {
     if (only_width > 0 && size[0] != only_width) continue;
@@ -72,7 +114,7 @@ int main(int argc, char** argv) {
         images[c].push_back(renderer.Render(cameras[c], c, f.seq, f.rig_from_object));
     double accurate_ms = 0, fast_ms = 0, stock_ms = 0, max_diff = 0, max_diff_all_sizes = 0;
     int min_markers = 1 << 30, max_markers = 0;
-    long long full = 0, fails_a = 0, fails_f = 0, found_a = 0, found_f = 0;
+    long long full = 0, fails_a = 0, fails_f = 0, found_a = 0, found_f = 0, all_a = 0, all_f = 0;
     for (int c = 0; c < num_cameras; ++c) {
       DetectorOptions accurate_options, fast_options;
       if (std::getenv("MCMT_BENCH_REFINE"))
@@ -82,6 +124,8 @@ int main(int argc, char** argv) {
       if (std::getenv("MCMT_BENCH_PASSES"))
         accurate_options.edge_passes = std::atoi(std::getenv("MCMT_BENCH_PASSES"));
       fast_options.fast = true;
+      if (std::getenv("MCMT_BENCH_BAND"))
+        fast_options.fast_band_sides = std::atof(std::getenv("MCMT_BENCH_BAND"));
       if (const char* search = std::getenv("MCMT_CANDIDATE_SEARCH"))
         accurate_options.candidate_search = fast_options.candidate_search = search;
       MarkerDetector accurate(mc, accurate_options), fast(mc, fast_options);
@@ -89,6 +133,7 @@ int main(int argc, char** argv) {
       fast.SetCamera(cameras[c].model);
       auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_6X6_250);
       auto params = cv::aruco::DetectorParameters::create();
+      std::vector<marker_t> previous_f;
       for (const cv::Mat& image : images[c]) {
         auto t0 = ThreadSeconds();
         const auto a = only != "fast" && only != "stock" ? accurate.Detect(image) : std::vector<marker_t>();
@@ -133,7 +178,11 @@ int main(int argc, char** argv) {
             if (v.id == id) return &v;
           return nullptr;
         };
+        all_a += static_cast<long long>(a.size()), all_f += static_cast<long long>(f.size());
         for (const auto& r : a) found_a += view_of(r.id) && testing::InCornerTargetDomain(*view_of(r.id));
+        if (std::getenv("MCMT_BENCH_MISSES") && frame_index > 0)
+          PrintMisses(c, frame_index, a, f, previous_f, views, size);
+        previous_f = f;
         for (const auto& m : f) found_f += view_of(m.id) && testing::InCornerTargetDomain(*view_of(m.id));
         for (const auto& m : f)
           for (const auto& r : a) {
@@ -159,8 +208,11 @@ int main(int argc, char** argv) {
         size[0], size[1], min_markers, max_markers, accurate_ms / n, 1000.0 * n / accurate_ms, fast_ms / n,
         1000.0 * n / fast_ms, full, n, found_f, found_a, max_diff, max_diff_all_sizes, stock_ms / n, fails_a,
         fails_f);
+    all_found += std::to_string(size[0]) + "x" + std::to_string(size[1]) + " " + std::to_string(all_f) +
+                 " / " + std::to_string(all_a) + "; ";
     std::fflush(stdout);
   }
+  std::printf("\nMarkers found, all sizes and angles (fast / accurate): %s\n", all_found.c_str());
   std::printf("\nRejected candidates read again (accurate mode): %lld, of which markers: %lld\n", rereads,
               rereads_found);
   std::printf(

@@ -174,6 +174,55 @@ TEST(DetectorAccuracy, FastModeFindsTheSameCorners) {
   EXPECT_EQ(f.stats().full_searches, 1);
 }
 
+// An image of markers on a grey surface, each given by the image quad of its marker (border included,
+// ArUco order), drawn with its one-cell white quiet zone; noise 2 (seeded).
+cv::Mat RenderQuads(const cv::aruco::Dictionary& dict,
+                    const std::vector<std::pair<int, std::array<cv::Point2f, 4>>>& markers, uint64_t seed) {
+  const int cells = dict.markerSize + 2, texels_per_cell = 16;
+  cv::Mat canvas(480, 640, CV_32F, cv::Scalar(0.5));
+  for (const auto& [id, quad] : markers) {
+    const cv::Mat texture = testing::MarkerTexture(dict, id, 1, texels_per_cell, false);
+    const float a = texels_per_cell, b = (cells + 1) * texels_per_cell;  // the marker's corners in texels
+    const cv::Point2f marker[4] = {{a, a}, {b, a}, {b, b}, {a, b}};
+    testing::DrawTexture(texture, cv::Matx33d(cv::getPerspectiveTransform(marker, quad.data())), &canvas);
+  }
+  canvas.convertTo(canvas, CV_32F, 190, 30);
+  cv::Mat noise(canvas.size(), CV_32F);
+  cv::theRNG().state = seed;
+  cv::randn(noise, 0.0, 2.0);
+  cv::Mat out;
+  cv::Mat(canvas + noise).convertTo(out, CV_8U);
+  return out;
+}
+
+// A box's next face turning into view: a foreshortened marker (16 x 40 px, as at about 65 degrees) appears
+// a side (40 px) beside a tracked one. Fast mode finds it in the frame it appears in (it searches a band of
+// fast_band_sides around each tracked marker every frame; before, only at the next full search, up to
+// full_search_every - 1 frames later), with the accurate mode's corners.
+TEST(DetectorAccuracy, FastModeFindsAMarkerComingIntoViewBesideATrackedOne) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const std::pair<int, std::array<cv::Point2f, 4>> tracked = {
+      3, {{{250, 200}, {290, 200}, {290, 240}, {250, 240}}}};
+  const std::pair<int, std::array<cv::Point2f, 4>> turning = {
+      17, {{{330, 198}, {346, 201}, {346, 239}, {330, 242}}}};
+  const cv::Mat before = RenderQuads(*dict, {tracked}, 1), after = RenderQuads(*dict, {tracked, turning}, 2);
+  MarkerConfig mc;
+  DetectorOptions fast_options;
+  fast_options.fast = true;
+  MarkerDetector fast(mc, fast_options);
+  ASSERT_EQ(fast.Detect(before).size(), 1u);
+  const std::vector<marker_t> got = fast.Detect(after);
+  EXPECT_EQ(fast.stats().full_searches, 1);
+  const std::vector<marker_t> reference = MarkerDetector(mc, DetectorOptions()).Detect(after);
+  ASSERT_EQ(reference.size(), 2u);
+  ASSERT_EQ(got.size(), 2u);
+  for (size_t j = 0; j < got.size(); ++j) {
+    EXPECT_EQ(got[j].id, reference[j].id);
+    for (int k = 0; k < 4; ++k)
+      for (int c = 0; c < 2; ++c) EXPECT_NEAR(got[j].corners[k][c], reference[j].corners[k][c], 0.02);
+  }
+}
+
 TEST(DetectorAccuracy, WhitelistAndSortedOutput) {
   testing::SceneOptions scene;
   scene.markers = 6;
