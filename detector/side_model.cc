@@ -261,21 +261,25 @@ inline __m128d LogInline2(__m128d x, const LaneConstants& c) {
 }
 
 // One group's values that Evaluate's bins share, in both lanes: region levels, their steps at the
-// boundaries, the rows' parts of the other colour, 1 / sigma and 1 / gamma.
+// boundaries, the rows' parts of the other colour, 1 / sigma, 1 / gamma and L1 - L0 (the row steps' unit).
 struct GroupLanes {
   __m128d level[kRegions], step[kBoundaries], other[kRegions], border_part[kRegions];
-  __m128d inv_sigma, inv_gamma;
+  __m128d inv_sigma, inv_gamma, level_difference;
 };
 
 // Evaluate's model, residual and Jacobian row of bins j and j + 1 of one group (both with a weight),
 // two lanes by the operations of its bin-by-bin code (so the same values): their rows at `used` and
-// `used + 1`, their squared residuals added to *cost (bin j's first). False, with nothing written, where
+// `used + 1`, their squared residuals added to *cost (bin j's first). `row_steps`: the group's row steps
+// at the bins (FillRowSteps' part, d_e, d_sigma), read with kRowSteps only (an instance without them for
+// the groups without steps: the same instructions as before the steps). False, with nothing written, where
 // the gamma's log or exp would leave its range (a NaN or huge model value): the bins are then evaluated
 // one by one.
+template <bool kRowSteps>
 inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants, const GroupLanes& group,
                     const double* const* big_of, const double* const* small_of, const double* const* z_of,
-                    const double* count, const double* sum, int j, double* cost, double* const* column,
-                    double* weight_of, double* residual_of, size_t used) {
+                    const double* const* row_steps, const double* count, const double* sum, int j,
+                    double* cost, double* const* column, double* weight_of, double* residual_of,
+                    size_t used) {
   const __m128d zero = _mm_setzero_pd();
   __m128d indicator[kRegions], f = zero;
   for (int r = 0; r < kRegions; ++r) {
@@ -283,6 +287,11 @@ inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants,
     const __m128d lower = r == kRegions - 1 ? zero : _mm_loadu_pd(big_of[r] + j);
     indicator[r] = _mm_sub_pd(upper, lower);
     f = _mm_add_pd(f, _mm_mul_pd(group.level[r], indicator[r]));
+  }
+  __m128d step_part = zero;
+  if (kRowSteps) {
+    step_part = _mm_loadu_pd(row_steps[0] + j);
+    f = _mm_add_pd(f, _mm_mul_pd(group.level_difference, step_part));
   }
   __m128d scale = constants.one, gamma_grad = zero;
   if (fit_gamma) {
@@ -322,6 +331,12 @@ inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants,
     grad[kL0] = _mm_add_pd(grad[kL0], _mm_mul_pd(group.border_part[q], indicator[q]));
     grad[kL1] = _mm_add_pd(grad[kL1], _mm_mul_pd(group.other[q], indicator[q]));
   }
+  if (kRowSteps) {
+    grad[kE] = _mm_add_pd(grad[kE], _mm_mul_pd(group.level_difference, _mm_loadu_pd(row_steps[1] + j)));
+    grad[kSigma] =
+        _mm_add_pd(grad[kSigma], _mm_mul_pd(group.level_difference, _mm_loadu_pd(row_steps[2] + j)));
+    grad[kL0] = _mm_sub_pd(grad[kL0], step_part), grad[kL1] = _mm_add_pd(grad[kL1], step_part);
+  }
   for (int p = 0; p < kGamma; ++p) _mm_storeu_pd(column[p] + used, _mm_mul_pd(grad[p], scale));
   _mm_storeu_pd(column[kGamma] + used, gamma_grad);
   _mm_storeu_pd(weight_of + used, w);
@@ -337,35 +352,47 @@ bool HasRowStep(const SideProfiles& s, int g, int row) {
   return false;
 }
 
-// Group g's row steps at u (SideProfiles::RowStep): their part of the model, in units of L1 - L0, and its
-// derivatives by e and sigma. A step is the cell beyond the column boundary: blurred across the boundary
-// (along the ray, sigma k) and across the row's boundaries (B_in outer, B_out inner: none for the last
-// row), as a product (exact for boundaries at right angles):
+// Group g's row steps (SideProfiles::RowStep) at every bin: their part of the model, in units of L1 - L0,
+// into part[j], and its derivatives by e and sigma into d_e[j], d_sigma[j] (with `derivatives`). A step
+// is the cell beyond the column boundary: blurred across the boundary (along the ray, sigma k) and across
+// the row's boundaries (B_in outer, B_out inner: none for the last row), as a product (exact for
+// boundaries at right angles):
 //   sum over steps of delta Phi((e - depth - u) / (sigma k)) [Phi((B_in - u) / sigma) - Phi((B_out - u) /
 //   sigma)]
-void RowStepsAt(const SideProfiles& s, const double* p, int g, double u, double* part, double* d_e,
-                double* d_sigma) {
-  *part = *d_e = *d_sigma = 0.0;
+// The bracket (the row's band) and the row boundaries' phi and z are the group's boundaries' (Evaluate's
+// big_of, small_of, z_of: boundary b's at [b][j]); each step's Phi((e - depth - u) / (sigma k)) is filled
+// over the bins once (FillBoundary with 1 / (sigma k)).
+void FillRowSteps(const SideProfiles& s, const double* p, int g, bool derivatives,
+                  const double* const* big_of, const double* const* small_of, const double* const* z_of,
+                  double* part, double* d_e, double* d_sigma) {
+  const int n = s.bins;
+  std::fill(part, part + n, 0.0);
+  if (derivatives) std::fill(d_e, d_e + n, 0.0), std::fill(d_sigma, d_sigma + n, 0.0);
+  thread_local std::vector<double> cross_z, cross, cross_density;
+  cross_z.resize(n), cross.resize(n), cross_density.resize(n);
   const double inv_sigma = 1.0 / p[kSigma];
   for (int k = s.first_step[g]; k < s.first_step[g] + s.steps[g]; ++k) {
     const SideProfiles::RowStep& step = s.row_steps[k];
-    // d Phi(z) / d e = phi / (sigma k), d Phi(z) / d sigma = -phi z / sigma.
-    double cross, cross_density;
-    const double z = (p[kE] - step.depth - u) * inv_sigma / step.sigma_scale;
-    PhiAndDensity(z, &cross, &cross_density);
-    double in, in_density, out = 0.0, out_density = 0.0, z_out = 0.0;
-    const double z_in = (p[kE] - s.depth_sum[g][step.row - 1] / s.rays[g] - u) * inv_sigma;
-    PhiAndDensity(z_in, &in, &in_density);
-    if (step.row < SideProfiles::kRows) {
-      z_out = (p[kE] - s.depth_sum[g][step.row] / s.rays[g] - u) * inv_sigma;
-      PhiAndDensity(z_out, &out, &out_density);
-    }
-    const double band = in - out;
-    *part += step.delta * cross * band;
-    *d_e += step.delta * (cross_density / step.sigma_scale * band + cross * (in_density - out_density)) *
-            inv_sigma;
-    *d_sigma -= step.delta * (cross_density * z * band + cross * (in_density * z_in - out_density * z_out)) *
+    const double inv_width = inv_sigma / step.sigma_scale, h = s.du * inv_width;
+    FillBoundary(s, p[kE] - step.depth, inv_width, std::exp(-h * h), cross_z.data(), cross.data(),
+                 cross_density.data());
+    const int b_in = 1 + step.row;  // the row's outer boundary (rows 1..kRows: boundaries 2..kRows + 1)
+    const bool last = step.row == SideProfiles::kRows;  // no inner boundary
+    for (int j = 0; j < n; ++j) {
+      const double band = big_of[b_in][j] - (last ? 0.0 : big_of[b_in + 1][j]);
+      part[j] += step.delta * cross[j] * band;
+      if (!derivatives) continue;
+      // d Phi(z) / d e = phi / (sigma k), d Phi(z) / d sigma = -phi z / sigma.
+      const double in_density = small_of[b_in][j], z_in = z_of[b_in][j];
+      const double out_density = last ? 0.0 : small_of[b_in + 1][j], z_out = last ? 0.0 : z_of[b_in + 1][j];
+      d_e[j] += step.delta *
+                (cross_density[j] / step.sigma_scale * band + cross[j] * (in_density - out_density)) *
                 inv_sigma;
+      d_sigma[j] -=
+          step.delta *
+          (cross_density[j] * cross_z[j] * band + cross[j] * (in_density * z_in - out_density * z_out)) *
+          inv_sigma;
+    }
   }
 }
 
@@ -379,7 +406,8 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   const int rows_per_group = kBoundaries + (groups - 1) * SideProfiles::kRows;
   // The Jacobian's columns (one per parameter, `used` rows each: the bins with a weight) and the
   // weights and residuals of those bins.
-  thread_local std::vector<double> big_phi, small_phi, zs, jacobian, weights, residuals;
+  thread_local std::vector<double> big_phi, small_phi, zs, jacobian, weights, residuals, row_steps;
+  row_steps.resize(3 * static_cast<size_t>(n));
   big_phi.resize(static_cast<size_t>(rows_per_group) * n);
   small_phi.resize(big_phi.size());
   zs.resize(big_phi.size());
@@ -416,6 +444,14 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       big_of[b] = &big_phi[row], small_of[b] = &small_phi[row], z_of[b] = &zs[row];
     }
     const double* count = &s.count[static_cast<size_t>(g) * n];
+    // The group's row steps at the bins (FillRowSteps): their part, its derivatives by e and sigma.
+    const bool stepped = s.steps[g] > 0;
+    double* const step_part = row_steps.data();
+    double* const step_d_e = step_part + n;
+    double* const step_d_sigma = step_d_e + n;
+    const double* const row_steps_of[3] = {step_part, step_d_e, step_d_sigma};
+    if (stepped)
+      FillRowSteps(s, p, g, jtj != nullptr, big_of, small_of, z_of, step_part, step_d_e, step_d_sigma);
     const double* sum = &s.sum[static_cast<size_t>(g) * n];
     // Region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other.
     double other[kRegions] = {0, 0, 0};
@@ -434,11 +470,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
         indicator[k] = upper - lower;
         f += level[k] * indicator[k];
       }
-      double step_part = 0, step_d_e = 0, step_d_sigma = 0;
-      if (s.steps[g] > 0) {
-        RowStepsAt(s, p, g, s.u0 + j * s.du, &step_part, &step_d_e, &step_d_sigma);
-        f += (p[kL1] - p[kL0]) * step_part;
-      }
+      if (stepped) f += (p[kL1] - p[kL0]) * step_part[j];
       double scale = 1.0;  // d encoded / d linear
       if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
         // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
@@ -468,9 +500,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
       grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
-      if (s.steps[g] > 0) {
-        grad[kE] += (p[kL1] - p[kL0]) * step_d_e, grad[kSigma] += (p[kL1] - p[kL0]) * step_d_sigma;
-        grad[kL0] -= step_part, grad[kL1] += step_part;
+      if (stepped) {
+        grad[kE] += (p[kL1] - p[kL0]) * step_d_e[j], grad[kSigma] += (p[kL1] - p[kL0]) * step_d_sigma[j];
+        grad[kL0] -= step_part[j], grad[kL1] += step_part[j];
       }
       for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
       column[kGamma][used] = gamma_grad;
@@ -479,17 +511,21 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
     };
     int j = 0;
 #ifdef __SSE2__
-    if (jtj && s.steps[g] == 0) {
+    if (jtj) {
       GroupLanes lanes;
       for (int k = 0; k < kRegions; ++k)
         lanes.level[k] = _mm_set1_pd(level[k]), lanes.other[k] = _mm_set1_pd(other[k]),
         lanes.border_part[k] = _mm_set1_pd(1.0 - other[k]);
       for (int b = 0; b < kBoundaries; ++b) lanes.step[b] = _mm_set1_pd(level[b + 1] - level[b]);
       lanes.inv_sigma = _mm_set1_pd(inv_sigma), lanes.inv_gamma = _mm_set1_pd(inv_gamma);
+      lanes.level_difference = _mm_set1_pd(p[kL1] - p[kL0]);
       for (; j + 1 < n; j += 2)
         if (!(count[j] > 0 && count[j + 1] > 0) ||
-            !TwoBins(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, count, sum, j, &cost,
-                     column, weight_of, residual_of, used))
+            !(stepped
+                  ? TwoBins<true>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, row_steps_of,
+                                  count, sum, j, &cost, column, weight_of, residual_of, used)
+                  : TwoBins<false>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, nullptr,
+                                   count, sum, j, &cost, column, weight_of, residual_of, used)))
           bin(j), bin(j + 1);
         else
           used += 2;
