@@ -140,6 +140,17 @@ double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double
   return RectArea(polygon, x0, y0, x1, y1);
 }
 
+CellSpan CellsOverlapping(double from, double to, int grid) {
+  constexpr double kIntLimit = 2147483648.0;  // 2^31: floor(to) below it converts to int
+  CellSpan span;
+  if (!(to >= 0 && to < kIntLimit)) return span;  // before the grid, too far, or NaN
+  span.last = std::min(grid - 1, static_cast<int>(std::floor(to)));
+  // Below the grid (-inf and NaN included) from counts from cell 0; above 2^31 (only when from > to)
+  // it is held below the limit of the conversion, past `last`.
+  span.first = from > 0 ? static_cast<int>(std::floor(std::min(from, kIntLimit - 1))) : 0;
+  return span;
+}
+
 struct Renderer::Impl {
   std::vector<Patch> patches;
   Eigen::Vector3d light_in_rig = Eigen::Vector3d(0.3, 0.2, 1.0).normalized();
@@ -468,10 +479,9 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
         double coverage, value;
         if (p.is_marker) {
           const double inv = 1.0 / p.cell;
-          const int j0 = std::max(0, static_cast<int>(std::floor((pxmin + p.half) * inv)));
-          const int j1 = std::min(p.grid - 1, static_cast<int>(std::floor((pxmax + p.half) * inv)));
-          const int i0 = std::max(0, static_cast<int>(std::floor((p.half - pymax) * inv)));
-          const int i1 = std::min(p.grid - 1, static_cast<int>(std::floor((p.half - pymin) * inv)));
+          const CellSpan columns = CellsOverlapping((pxmin + p.half) * inv, (pxmax + p.half) * inv, p.grid);
+          const CellSpan rows = CellsOverlapping((p.half - pymax) * inv, (p.half - pymin) * inv, p.grid);
+          const int j0 = columns.first, j1 = columns.last, i0 = rows.first, i1 = rows.last;
           if (j0 > j1 || i0 > i1) continue;  // the footprint lies in the margin: no cell to read
           const bool inside = pxmin >= -p.half && pxmax <= p.half && pymin >= -p.half && pymax <= p.half;
           if (inside && j0 == j1 && i0 == i1) {

@@ -272,6 +272,16 @@ class Renderer {
 double ConvexPolygonRectArea(const std::vector<Eigen::Vector2d>& polygon, double x0, double y0, double x1,
                              double y1);
 
+// Low-level helper (exposed for tests): the cells first..last of a row (or column) of `grid` cells that
+// the interval [from, to], in cells from the grid's edge, overlaps: first = max(0, floor(from)),
+// last = min(grid - 1, floor(to)); none (first > last) when the interval misses the grid. An interval
+// ending 2^31 or more cells away, or not a number (a pixel's footprint at the horizon), gives none: such
+// a footprint is not rendered (the conversion to int was undefined there; x86 skipped it).
+struct CellSpan {
+  int first = 0, last = -1;
+};
+CellSpan CellsOverlapping(double from, double to, int grid);
+
 // ---------------------------------------------------------------------------------------------
 // What a session tells its user that is not the truth (sim/perturb.cc, issue 18): intrinsics written to
 // the rig (camK.yml, and the camera_model of the detections) that differ from the true ones the images and

@@ -99,7 +99,9 @@ class Recording {
 class Receiver {
  public:
   explicit Receiver(const std::string& url) : lcm_(url) {
-    if (lcm_.good()) lcm_.subscribe(kDetectionsChannelRegex, &Receiver::OnMessage, this);
+    // LCM's default queue (30 messages) drops frames when this process lags on a loaded machine.
+    if (lcm_.good())
+      lcm_.subscribe(kDetectionsChannelRegex, &Receiver::OnMessage, this)->setQueueCapacity(100000);
   }
   bool good() { return lcm_.good(); }
   void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -426,7 +428,8 @@ TEST(DetectorProcess, LaunchRecordMode) {
 class ImageReceiver {
  public:
   explicit ImageReceiver(const std::string& url) : lcm_(url) {
-    if (lcm_.good()) lcm_.subscribe("MCMT_IMAGE_CAM0", &ImageReceiver::OnMessage, this);
+    if (lcm_.good())
+      lcm_.subscribe("MCMT_IMAGE_CAM0", &ImageReceiver::OnMessage, this)->setQueueCapacity(100000);
   }
   void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     const uint8_t* p = static_cast<const uint8_t*>(rbuf->data);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
@@ -250,6 +251,37 @@ TEST(ConvexPolygonRectArea, HandComputedCases) {
   EXPECT_EQ(sim::ConvexPolygonRectArea({{0, 0}, {1, 1}}, -1, -1, 2, 2), 0.0);
   EXPECT_EQ(sim::ConvexPolygonRectArea(unit, 0.5, 0.5, 0.5, 2), 0.0);
   EXPECT_EQ(sim::ConvexPolygonRectArea(unit, 0.5, 0.5, 0.2, 2), 0.0);
+}
+
+// The cells of a marker's row a footprint overlaps, including the footprints at the horizon whose extent
+// does not fit an int (-3.8e10 cells in test_sim_detect at 1280x960: undefined behaviour before).
+TEST(CellsOverlapping, ClampsToTheGridAndSkipsWhatAnIntCannotHold) {
+  auto span = [](double from, double to) {
+    const sim::CellSpan s = sim::CellsOverlapping(from, to, 8);
+    return std::make_pair(s.first, s.last);
+  };
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  EXPECT_EQ(span(2.5, 3.0), std::make_pair(2, 3));
+  EXPECT_EQ(span(2.5, 2.7), std::make_pair(2, 2));
+  EXPECT_EQ(span(-1.5, 0.5), std::make_pair(0, 0));
+  EXPECT_EQ(span(6.5, 9.5), std::make_pair(6, 7));
+  EXPECT_EQ(span(-3.0, 12.0), std::make_pair(0, 7));
+  // Missing the grid: first > last.
+  const auto before_grid = span(-3.0, -0.5), after_grid = span(8.0, 9.0);
+  EXPECT_GT(before_grid.first, before_grid.second);
+  EXPECT_GT(after_grid.first, after_grid.second);
+  // Huge extents: the low end clamps to cell 0, an end at 2^31 cells or more gives no cell (as x86's
+  // conversion did), just below it the last cell.
+  EXPECT_EQ(span(-3.77449e10, 3.0), std::make_pair(0, 3));
+  EXPECT_EQ(span(-inf, 3.0), std::make_pair(0, 3));
+  EXPECT_EQ(span(nan, 3.0), std::make_pair(0, 3));
+  EXPECT_EQ(span(2.0, 2147483647.0), std::make_pair(2, 7));
+  for (double to : {2147483648.0, 3.77449e10, inf, nan}) {
+    const auto none = span(2.0, to);
+    EXPECT_GT(none.first, none.second) << to;
+  }
+  const auto reversed = span(3e10, 5.0);  // from > to: no cell
+  EXPECT_GT(reversed.first, reversed.second);
 }
 
 // A fronto-parallel square at several sub-pixel positions: the dark area is the projected square's
