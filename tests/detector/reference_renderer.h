@@ -176,8 +176,10 @@ inline std::vector<Quad> MarkerQuads(const cv::Mat& bits, int cells, const cv::M
 }
 
 // The camera pipeline on a linear image (gray levels, CV_64F): optics, vignetting, noise, encoding,
-// sharpening, quantisation, JPEG. Returns 8-bit gray.
-inline cv::Mat CameraPipeline(cv::Mat linear, const Imaging& im, std::mt19937_64& rng) {
+// sharpening, quantisation, JPEG. Returns 8-bit gray. The noise is drawn from `noise_rng` when given
+// (diagnostics: one scene under several noise draws), else from `rng` like the motion's direction.
+inline cv::Mat CameraPipeline(cv::Mat linear, const Imaging& im, std::mt19937_64& rng,
+                              std::mt19937_64* noise_rng = nullptr) {
   if (im.blur_sigma > 0) cv::GaussianBlur(linear, linear, cv::Size(0, 0), im.blur_sigma);
   if (im.defocus_radius > 0) {
     const int r = static_cast<int>(std::ceil(im.defocus_radius)) + 1;
@@ -215,7 +217,8 @@ inline cv::Mat CameraPipeline(cv::Mat linear, const Imaging& im, std::mt19937_64
       double v = linear.at<double>(y, x);
       v *= 1.0 - im.gradient * x / linear.cols;
       v *= 1.0 - im.vignetting * ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2max;
-      v += normal(rng) * std::sqrt(im.read_noise * im.read_noise + im.shot_noise * std::max(0.0, v));
+      v += normal(noise_rng ? *noise_rng : rng) *
+           std::sqrt(im.read_noise * im.read_noise + im.shot_noise * std::max(0.0, v));
       v = std::clamp(v, 0.0, 255.0);
       encoded.at<double>(y, x) = im.sharpen_linear ? v : 255.0 * std::pow(v / 255.0, 1.0 / im.gamma);
     }
@@ -264,10 +267,11 @@ inline cv::Mat Clutter(int width, int height, const Imaging& im, std::mt19937_64
 }
 }  // namespace reference
 
-// A random image of markers (random ids, sizes, view angles, in-plane rotations) under one imaging
-// condition, with the exact corners (ArUco order) of every marker drawn.
-inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const ReferenceScene& scene,
-                               const Imaging& im, std::mt19937_64& rng, std::vector<RenderedMarker>* truth) {
+// The linear light of a random image of markers (random ids, sizes, view angles, in-plane rotations)
+// under one imaging condition, before the camera, with the exact corners (ArUco order) of every marker.
+inline cv::Mat RenderReferenceLinear(const cv::aruco::Dictionary& dict, const ReferenceScene& scene,
+                                     const Imaging& im, std::mt19937_64& rng,
+                                     std::vector<RenderedMarker>* truth) {
   using reference::Apply;
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const int cells = dict.markerSize + 2;
@@ -330,7 +334,13 @@ inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const Referenc
                      image_from_plane.inv(), &linear);
     truth->push_back(m);
   }
-  return reference::CameraPipeline(linear, im, rng);
+  return linear;
+}
+
+// RenderReferenceLinear through the camera: the image the detector sees.
+inline cv::Mat RenderReference(const cv::aruco::Dictionary& dict, const ReferenceScene& scene,
+                               const Imaging& im, std::mt19937_64& rng, std::vector<RenderedMarker>* truth) {
+  return reference::CameraPipeline(RenderReferenceLinear(dict, scene, im, rng, truth), im, rng);
 }
 
 }  // namespace mcmt::testing
