@@ -37,6 +37,11 @@ constexpr char kPoseChannel[] = "MCMT_POSE";
 constexpr char kMapperStatusChannel[] = "MCMT_MAPPER_STATUS";
 constexpr char kMapperCommandChannel[] = "MCMT_MAPPER_COMMAND";
 constexpr char kTrackerStatusChannel[] = "MCMT_TRACKER_STATUS";  // tracker_status_t, from mcmt-tracker
+// Messages LCM keeps per subscription for a process between its handle() calls. LCM's default is 30, and
+// it drops what arrives beyond that without a word: a burst of five cameras, or a process busy for a
+// moment, would silently lose detections. Each subscription of a process that must not lose messages
+// sets this (lcm::Subscription::setQueueCapacity).
+constexpr int kSubscriptionQueueCapacity = 10000;
 
 // "cam0" -> "MCMT_DETECTIONS_CAM0"; characters other than [A-Za-z0-9_] become '_'.
 std::string DetectionsChannel(const std::string& camera_name);

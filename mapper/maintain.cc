@@ -20,7 +20,6 @@ namespace mcmt {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kQueueCapacity = 10000;
 
 }  // namespace
 
@@ -37,7 +36,7 @@ MaintainNode::MaintainNode(lcm::LCM& input, lcm::LCM* output, const RigConfig& r
   subscriptions_.push_back(input_.subscribe(kDetectionsChannelRegex, &MaintainNode::HandleDetections, this));
   subscriptions_.push_back(input_.subscribe(node_options_.pose_channel, &MaintainNode::HandlePose, this));
   subscriptions_.push_back(input_.subscribe(kTrackerStatusChannel, &MaintainNode::HandleStatus, this));
-  for (lcm::Subscription* s : subscriptions_) s->setQueueCapacity(kQueueCapacity);
+  for (lcm::Subscription* s : subscriptions_) s->setQueueCapacity(kSubscriptionQueueCapacity);
 }
 
 MaintainNode::~MaintainNode() {

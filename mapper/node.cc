@@ -25,6 +25,7 @@ MapperNode::MapperNode(lcm::LCM& input, lcm::LCM* output, Mapper& mapper, Mapper
   subscriptions_.push_back(input_.subscribe(kDetectionsChannelRegex, &MapperNode::OnDetections, this));
   if (options_.log_path.empty())
     subscriptions_.push_back(input_.subscribe(kMapperCommandChannel, &MapperNode::OnCommand, this));
+  for (lcm::Subscription* s : subscriptions_) s->setQueueCapacity(kSubscriptionQueueCapacity);
   tty_ = (&log_ == &std::cerr) && isatty(STDERR_FILENO);
   // Before hours of collecting: a bad path or another session's results must not lose this session.
   CheckOutputFolder(options_.outdir);

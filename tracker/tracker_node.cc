@@ -17,8 +17,6 @@
 namespace mcmt {
 namespace {
 
-constexpr int kQueueCapacity = 10000;
-
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(q * (v.size() - 1) + 0.5)));
@@ -60,7 +58,7 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
   // LCM queues 30 messages per subscription by default and drops the rest: a burst of detections
   // (many cameras, a replay) must not lose any.
   subscriptions_.push_back(lcm_.subscribe(kDetectionsChannelRegex, &TrackerNode::HandleDetections, this));
-  subscriptions_.back()->setQueueCapacity(kQueueCapacity);
+  subscriptions_.back()->setQueueCapacity(kSubscriptionQueueCapacity);
   waits_for_map_ = !map;
   // Live, newer maps on MCMT_MAP replace the map file too (mcmt-mapper --maintain re-estimates a moved
   // camera, adds a new one); in a log only without a map file.
