@@ -356,8 +356,14 @@ TEST(MapperProcess, LiveCollectsABurstWithoutLosingMessages) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (!listener.collecting && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
   const std::vector<detections_t> messages = session.Messages();
+  // Bursts of 50 messages (10 frames of 5 cameras) with no pause inside, 100 ms apart: each burst is
+  // beyond LCM's default queue, and well within the kernel's socket buffer (about 166 of these messages
+  // with Debian's default net.core.rmem_max), which the process cannot raise and the test must not test.
   if (listener.collecting)
-    for (const detections_t& d : messages) lcm.publish(DetectionsChannel(d.camera), &d);
+    for (size_t i = 0; i < messages.size(); ++i) {
+      lcm.publish(DetectionsChannel(messages[i].camera), &messages[i]);
+      if ((i + 1) % 50 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   kill(pid, SIGUSR1);  // solve
   int status = 0;
