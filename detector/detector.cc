@@ -571,9 +571,6 @@ struct SideRays {
   }
 };
 
-// The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
-// depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
-// the corners, each followed inward across the marker's rows (`skew_pass`: TurnSkewedSides's).
 // The ray's colour sequence along its profile (issue 15, bench/results/2026-12-05-rowsteps.md). A ray along
 // the side's normal crosses the code's column boundaries obliquely on a sheared quad; where it crosses one
 // inside code row r between cells of different colours, the model has one more blurred step there
@@ -644,6 +641,9 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   return true;
 }
 
+// The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
+// depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
+// the corners, each followed inward across the marker's rows (`skew_pass`: TurnSkewedSides's).
 double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap& map,
                        const cv::Matx33d& ideal_from_unit, const cv::Matx33d& unit_from_ideal,
                        const Line& line, const std::vector<char>& valid,
