@@ -44,14 +44,12 @@ std::vector<Variant> Variants() {
   add("-noise-jpeg-sharpen-gamma", [](Imaging& im) {
     im.read_noise = 0, im.shot_noise = 0, im.jpeg_quality = 0, im.sharpen = 0, im.gamma = 1;
   });
-  add("optics only", [](Imaging& im) {
-    im.read_noise = 0, im.shot_noise = 0, im.jpeg_quality = 0, im.sharpen = 0, im.gamma = 1;
-    im.face_shading = 0, im.gradient = 0, im.surface_texture = 0;
-  });
+  // Only the optics (blur, defocus, motion, the margin): no noise, JPEG, sharpening, gamma, shading, texture.
   auto optics = [](Imaging& im) {
     im.read_noise = 0, im.shot_noise = 0, im.jpeg_quality = 0, im.sharpen = 0, im.gamma = 1;
     im.face_shading = 0, im.gradient = 0, im.surface_texture = 0;
   };
+  add("optics only", optics);
   add("optics + texture", [&](Imaging& im) { optics(im), im.surface_texture = hard.surface_texture; });
   add("optics + shading",
       [&](Imaging& im) { optics(im), im.face_shading = hard.face_shading, im.gradient = hard.gradient; });
@@ -70,17 +68,6 @@ std::vector<Variant> Variants() {
   add("-texture-shading", [](Imaging& im) { im.surface_texture = 0, im.face_shading = 0, im.gradient = 0; });
   add("margin 1", [](Imaging& im) { im.margin_cells = 1.0; });
   return v;
-}
-
-// Outward unit normal of side `side` (corners side -> side + 1) of the true quad.
-cv::Point2d OutwardNormal(const testing::RenderedMarker& t, int side) {
-  cv::Point2d centre(0, 0);
-  for (const auto& c : t.corners) centre += c * 0.25;
-  const cv::Point2d d = t.corners[(side + 1) % 4] - t.corners[side];
-  cv::Point2d n(d.y, -d.x);
-  n *= 1.0 / cv::norm(n);
-  const cv::Point2d mid = 0.5 * (t.corners[side] + t.corners[(side + 1) % 4]);
-  return n.dot(mid - centre) < 0 ? -n : n;
 }
 }  // namespace
 
@@ -125,7 +112,8 @@ int main(int argc, char** argv) {
                   const double angle = std::acos(a.dot(b) / cv::norm(a) / cv::norm(b)) * 180 / M_PI;
                   std::printf("%s,%d,%d,%d,%d,%.3f,%.3f,%d,%.2f,%.5f,%.5f,%.5f,%.5f\n", v.name.c_str(), r,
                               cell, i, m.id, t.side_px, t.view_angle_deg, k, angle, e.x, e.y,
-                              e.dot(OutwardNormal(t, (k + 3) % 4)), e.dot(OutwardNormal(t, k)));
+                              e.dot(testing::OutwardNormal(t, (k + 3) % 4)),
+                              e.dot(testing::OutwardNormal(t, k)));
                 }
               }
           }

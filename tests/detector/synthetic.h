@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <opencv2/aruco.hpp>
 #include <opencv2/core.hpp>
@@ -93,6 +94,23 @@ struct SceneOptions {
   double background = 0.5;  // level of the surface around the quiet zones (0 dark .. 1 light)
 };
 
+// A canvas of levels 0 (dark) .. 1 (light) as the 8-bit image: blurred by o.blur_sigma, levels o.dark ..
+// o.light, Gaussian noise of o.noise_sigma gray levels (cv::theRNG seeded with noise_seed), rounded and
+// saturated.
+inline cv::Mat CanvasToImage(cv::Mat canvas, const SceneOptions& o, uint64_t noise_seed) {
+  if (o.blur_sigma > 0) cv::GaussianBlur(canvas, canvas, cv::Size(0, 0), o.blur_sigma);
+  cv::Mat out;
+  canvas.convertTo(canvas, CV_32F, o.light - o.dark, o.dark);
+  if (o.noise_sigma > 0) {
+    cv::Mat noise(canvas.size(), CV_32F);
+    cv::theRNG().state = noise_seed;
+    cv::randn(noise, 0.0, o.noise_sigma);
+    canvas += noise;
+  }
+  canvas.convertTo(out, CV_8U);  // rounds and saturates
+  return out;
+}
+
 // A random image with `markers` non-overlapping markers of random ids, sizes, poses; ground truth out.
 inline cv::Mat RenderScene(const cv::aruco::Dictionary& dict, const SceneOptions& o, std::mt19937_64& rng,
                            std::vector<RenderedMarker>* truth) {
@@ -164,17 +182,8 @@ inline cv::Mat RenderScene(const cv::aruco::Dictionary& dict, const SceneOptions
     DrawTexture(tex, H, &canvas);
     truth->push_back(m);
   }
-  if (o.blur_sigma > 0) cv::GaussianBlur(canvas, canvas, cv::Size(0, 0), o.blur_sigma);
-  cv::Mat out;
-  canvas.convertTo(canvas, CV_32F, o.light - o.dark, o.dark);
-  if (o.noise_sigma > 0) {
-    cv::Mat noise(canvas.size(), CV_32F);
-    cv::theRNG().state = rng();
-    cv::randn(noise, 0.0, o.noise_sigma);
-    canvas += noise;
-  }
-  canvas.convertTo(out, CV_8U);  // rounds and saturates
-  return out;
+  // The noise's seed drawn only with noise, as rng's later draws (the caller's next image) depend on it.
+  return CanvasToImage(canvas, o, o.noise_sigma > 0 ? rng() : 0);
 }
 
 // Per-corner error statistics of detected markers against the truth.
@@ -183,22 +192,24 @@ struct CornerErrors {
   std::vector<double> offsets;  // signed offset along the outward edge normals, px (+: outward)
 };
 
-inline void AddCornerErrors(const RenderedMarker& truth, const std::array<cv::Point2d, 4>& got,
-                            CornerErrors* out) {
+// The outward unit normal of side `side` (corners side -> side + 1) of a marker's true quad.
+inline cv::Point2d OutwardNormal(const RenderedMarker& truth, int side) {
   cv::Point2d centre(0, 0);
   for (const auto& c : truth.corners) centre += c * 0.25;
+  const cv::Point2d d = truth.corners[(side + 1) % 4] - truth.corners[side];
+  cv::Point2d n(d.y, -d.x);
+  n *= 1.0 / cv::norm(n);
+  const cv::Point2d mid = 0.5 * (truth.corners[side] + truth.corners[(side + 1) % 4]);
+  return n.dot(mid - centre) < 0 ? -n : n;
+}
+
+inline void AddCornerErrors(const RenderedMarker& truth, const std::array<cv::Point2d, 4>& got,
+                            CornerErrors* out) {
   for (int k = 0; k < 4; ++k) {
     const cv::Point2d e = got[k] - truth.corners[k];
     out->errors.push_back(cv::norm(e));
     double offset = 0;
-    for (int side : {(k + 3) % 4, k}) {
-      const cv::Point2d d = truth.corners[(side + 1) % 4] - truth.corners[side];
-      cv::Point2d n(d.y, -d.x);
-      n *= 1.0 / cv::norm(n);
-      const cv::Point2d mid = 0.5 * (truth.corners[side] + truth.corners[(side + 1) % 4]);
-      if (n.dot(mid - centre) < 0) n = -n;
-      offset += 0.5 * n.dot(e);
-    }
+    for (int side : {(k + 3) % 4, k}) offset += 0.5 * OutwardNormal(truth, side).dot(e);
     out->offsets.push_back(offset);
   }
 }

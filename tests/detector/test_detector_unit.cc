@@ -175,24 +175,20 @@ TEST(DetectorAccuracy, FastModeFindsTheSameCorners) {
 }
 
 // An image of markers on a grey surface, each given by the image quad of its marker (border included,
-// ArUco order), drawn with its one-cell white quiet zone; noise 2 (seeded).
+// ArUco order), drawn with its one-cell white quiet zone; levels 30..220, noise 2 (seeded).
 cv::Mat RenderQuads(const cv::aruco::Dictionary& dict,
                     const std::vector<std::pair<int, std::array<cv::Point2f, 4>>>& markers, uint64_t seed) {
+  testing::SceneOptions o;
+  o.noise_sigma = 2;
   const int cells = dict.markerSize + 2, texels_per_cell = 16;
-  cv::Mat canvas(480, 640, CV_32F, cv::Scalar(0.5));
+  cv::Mat canvas(o.height, o.width, CV_32F, cv::Scalar(o.background));
   for (const auto& [id, quad] : markers) {
     const cv::Mat texture = testing::MarkerTexture(dict, id, 1, texels_per_cell, false);
     const float a = texels_per_cell, b = (cells + 1) * texels_per_cell;  // the marker's corners in texels
     const cv::Point2f marker[4] = {{a, a}, {b, a}, {b, b}, {a, b}};
     testing::DrawTexture(texture, cv::Matx33d(cv::getPerspectiveTransform(marker, quad.data())), &canvas);
   }
-  canvas.convertTo(canvas, CV_32F, 190, 30);
-  cv::Mat noise(canvas.size(), CV_32F);
-  cv::theRNG().state = seed;
-  cv::randn(noise, 0.0, 2.0);
-  cv::Mat out;
-  cv::Mat(canvas + noise).convertTo(out, CV_8U);
-  return out;
+  return testing::CanvasToImage(canvas, o, seed);
 }
 
 // A box's next face turning into view: a foreshortened marker (16 x 40 px, as at about 65 degrees) appears
