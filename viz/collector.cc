@@ -14,8 +14,11 @@ namespace mcmt::viz {
 
 LcmCollector::LcmCollector(lcm::LCM& lcm, size_t keep_frames, size_t keep_poses)
     : lcm_(lcm), keep_frames_(keep_frames), keep_poses_(keep_poses) {
-  // Every channel: pose streams are told by their type (tracker.channels may name them anything).
+  // Every channel: pose streams are told by their type (tracker.channels may name them anything). LCM's
+  // default queue (30) would drop a burst between two redraws; the camera images this also receives are
+  // small, rate-limited JPEGs (detector.image_rate_hz), so the larger queue stays small in memory.
   subscriptions_.push_back(lcm_.subscribe(".*", &LcmCollector::OnMessage, this));
+  subscriptions_.back()->setQueueCapacity(kSubscriptionQueueCapacity);
 }
 
 LcmCollector::~LcmCollector() {

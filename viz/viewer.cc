@@ -220,6 +220,12 @@ int Viewer::RunHeadless(LcmCollector* collector) {
     auto ready = [&] {
       return (have_file_map_ || collector->has_map()) && collector->all_poses() >= options_.max_poses;
     };
+    // Subscribed from here on (tests wait for this line).
+    std::string wanted = have_file_map_ ? "" : "MCMT_MAP";
+    if (options_.max_poses > 0)
+      wanted += (wanted.empty() ? "" : " and ") + std::to_string(options_.max_poses) + " poses";
+    std::cerr << "mcmt-viz: listening for " << wanted << " (at most " << options_.timeout_s << " s)"
+              << std::endl;
     while (!ready() && Clock::now() < deadline) lcm_->handleTimeout(20);
     if (!ready()) {
       char text[200];
