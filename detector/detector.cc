@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
@@ -205,12 +206,33 @@ inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
 }
 
 // The homography from the unit square (0,0)-(1,0)-(1,1)-(0,1) to a marker's corners (ArUco order): marker
-// coordinates (cells / cells-per-side) to image pixels.
+// coordinates (cells / cells-per-side) to image pixels. It is cv::getPerspectiveTransform(square, quad)
+// (OpenCV 4.6, the corners as floats) to the bit: the same 8 x 8 system, entries computed as it computes
+// them (products of floats), solved by the LU decomposition cv::solve(DECOMP_LU) calls; a singular
+// system gives h[0..7] = 0 as there. Without cv::solve's matrix copies, output allocation and the
+// vectors of points: 0.2 M of 33.5 M instructions per 640x480 image (bench/results/2026-12-05-speed7.md).
+// The system, for each corner i (x, y: the square's; u, v: the quad's):
+//   [x y 1 0 0 0 -x u -y u] h = u,   [0 0 0 x y 1 -x v -y v] h = v,   h[8] = 1.
 cv::Matx33d QuadFromUnitSquare(const std::array<cv::Point2d, 4>& corners) {
-  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  std::vector<cv::Point2f> quad;
-  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-  return cv::getPerspectiveTransform(square, quad);
+  static constexpr float kSquare[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  double a[8][8], h[9];
+  for (int i = 0; i < 4; ++i) {
+    const float x = kSquare[i][0], y = kSquare[i][1];
+    const float u = static_cast<float>(corners[i].x), v = static_cast<float>(corners[i].y);
+    a[i][0] = a[i + 4][3] = x;
+    a[i][1] = a[i + 4][4] = y;
+    a[i][2] = a[i + 4][5] = 1;
+    a[i][3] = a[i][4] = a[i][5] = a[i + 4][0] = a[i + 4][1] = a[i + 4][2] = 0;
+    a[i][6] = -x * u;
+    a[i][7] = -y * u;
+    a[i + 4][6] = -x * v;
+    a[i + 4][7] = -y * v;
+    h[i] = u;
+    h[i + 4] = v;
+  }
+  if (!cv::hal::LU64f(&a[0][0], sizeof a[0], 8, h, sizeof h[0], 1)) std::fill(h, h + 8, 0.0);
+  h[8] = 1.0;
+  return cv::Matx33d(h);
 }
 
 // The grey level at every cell centre of the quad `corners` (cells x cells, row-major, border included),
