@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
@@ -104,9 +105,10 @@ void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const E
 #endif
 }
 
-// Samples at the n points origin + (s0 + j ds) direction, j < n, handed to visit(j, value) where inside
-// the image; returns how many were. The points move monotonically: both ends inside, all inside, with
-// no check per sample.
+// Samples at the n points origin + (s0 + j ds) direction, j < n, handed to visit(j, values, count) (the
+// values of samples j .. j + count - 1) where inside the image; returns how many were. The points move
+// monotonically: both ends inside, all inside, with no check per sample, in runs of up to 64 samples;
+// otherwise sample by sample (count 1).
 template <class Visit>
 int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const Eigen::Vector2d& direction,
                double s0, double ds, const Visit& visit) {
@@ -121,7 +123,7 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
     for (int j0 = 0; j0 < n; j0 += kChunk) {
       const int count = std::min(kChunk, n - j0);
       SampleRayInside(gray, origin, direction, s0, ds, j0, j0 + count, values);
-      for (int j = 0; j < count; ++j) visit(j0 + j, values[j]);
+      visit(j0, values, count);
     }
     return n;
   }
@@ -129,9 +131,24 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
   for (int j = 0; j < n; ++j) {
     const Eigen::Vector2d x = point(j);
     float v;
-    if (Sample(gray, x.x(), x.y(), &v)) visit(j, v), ++sampled;
+    if (Sample(gray, x.x(), x.y(), &v)) visit(j, &v, 1), ++sampled;
   }
   return sampled;
+}
+
+// sum[j] += values[j], count[j] += 1 for j < n (SSE2: two at a time, each the same addition).
+inline void AddSamples(const float* values, int n, double* sum, double* count) {
+  int j = 0;
+#ifdef __SSE2__
+  const __m128d one = _mm_set1_pd(1.0);
+  for (; j + 1 < n; j += 2) {
+    const __m128d v =
+        _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + j))));
+    _mm_storeu_pd(sum + j, _mm_add_pd(_mm_loadu_pd(sum + j), v));
+    _mm_storeu_pd(count + j, _mm_add_pd(_mm_loadu_pd(count + j), one));
+  }
+#endif
+  for (; j < n; ++j) sum[j] += values[j], count[j] += 1.0;
 }
 
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
@@ -205,12 +222,33 @@ inline int GridCell(const cv::Mat& bits, int cells, int row, int col) {
 }
 
 // The homography from the unit square (0,0)-(1,0)-(1,1)-(0,1) to a marker's corners (ArUco order): marker
-// coordinates (cells / cells-per-side) to image pixels.
+// coordinates (cells / cells-per-side) to image pixels. It is cv::getPerspectiveTransform(square, quad)
+// (OpenCV 4.6, the corners as floats) to the bit: the same 8 x 8 system, entries computed as it computes
+// them (products of floats), solved by the LU decomposition cv::solve(DECOMP_LU) calls; a singular
+// system gives h[0..7] = 0 as there. Without cv::solve's matrix copies, output allocation and the
+// vectors of points: 0.2 M of 33.5 M instructions per 640x480 image (bench/results/2026-12-05-speed7.md).
+// The system, for each corner i (x, y: the square's; u, v: the quad's):
+//   [x y 1 0 0 0 -x u -y u] h = u,   [0 0 0 x y 1 -x v -y v] h = v,   h[8] = 1.
 cv::Matx33d QuadFromUnitSquare(const std::array<cv::Point2d, 4>& corners) {
-  const std::vector<cv::Point2f> square = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  std::vector<cv::Point2f> quad;
-  for (const auto& c : corners) quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-  return cv::getPerspectiveTransform(square, quad);
+  static constexpr float kSquare[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  double a[8][8], h[9];
+  for (int i = 0; i < 4; ++i) {
+    const float x = kSquare[i][0], y = kSquare[i][1];
+    const float u = static_cast<float>(corners[i].x), v = static_cast<float>(corners[i].y);
+    a[i][0] = a[i + 4][3] = x;
+    a[i][1] = a[i + 4][4] = y;
+    a[i][2] = a[i + 4][5] = 1;
+    a[i][3] = a[i][4] = a[i][5] = a[i + 4][0] = a[i + 4][1] = a[i + 4][2] = 0;
+    a[i][6] = -x * u;
+    a[i][7] = -y * u;
+    a[i + 4][6] = -x * v;
+    a[i + 4][7] = -y * v;
+    h[i] = u;
+    h[i + 4] = v;
+  }
+  if (!cv::hal::LU64f(&a[0][0], sizeof a[0], 8, h, sizeof h[0], 1)) std::fill(h, h + 8, 0.0);
+  h[8] = 1.0;
+  return cv::Matx33d(h);
 }
 
 // The grey level at every cell centre of the quad `corners` (cells x cells, row-major, border included),
@@ -566,7 +604,7 @@ struct SideRays {
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
       SampleLine(*gray, bins, Eigen::Vector2d(ox, oy), Eigen::Vector2d(nx, ny), first_s, du,
-                 [&](int j, float v) { sum[j] += v, count[j] += 1.0; });
+                 [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
     }
   }
 };
@@ -922,7 +960,9 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
     s->ideal_origins[i] = q;
     s->normals[i] = normal;
     float* prof = &s->profiles[static_cast<size_t>(i) * m];
-    if (SampleLine(gray, m, p, normal, -s->h, s->ds, [&](int j, float v) { prof[j] = v; }) < m) continue;
+    if (SampleLine(gray, m, p, normal, -s->h, s->ds,
+                   [&](int j, const float* v, int n) { std::copy(v, v + n, prof + j); }) < m)
+      continue;
     s->valid[i] = 1;
     ++s->num_valid;
     s->clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
