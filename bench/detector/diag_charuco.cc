@@ -44,13 +44,19 @@ void PrintSplit(const RigConfig& rig, const std::vector<ChessboardMarker>& marke
 
 void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& markers) {
   std::ofstream out(path);
-  out << "camera,frame,id,side_px,offset_px,size_rel,size_rel_local,size_rel_raw,x_px,y_px,view_deg,white";
+  out << "camera,frame,id,side_px,offset_px,size_rel,size_rel_local,size_rel_raw,x_px,y_px,view_deg,white,"
+         "size_rel_centres,size_rel_stock_centres";
+  for (int k = 0; k < 4; ++k) out << ",gx" << k << ",gy" << k << ",wx" << k << ",wy" << k;
   for (int s = 0; s < 4; ++s) out << ",side" << s << "_px,side" << s << "_horizontal";
   out << "\n";
   for (const ChessboardMarker& m : markers) {
     out << m.camera << "," << m.frame << "," << m.id << "," << m.side_px << "," << m.offset_px << ","
         << m.size_rel << "," << m.size_rel_local << "," << m.size_rel_raw << "," << m.x_px << "," << m.y_px
-        << "," << m.view_deg << "," << m.white;
+        << "," << m.view_deg << "," << m.white << "," << m.size_rel_centres << ","
+        << m.size_rel_stock_centres;
+    for (int k = 0; k < 4; ++k)
+      out << "," << m.got_ideal[k].x() << "," << m.got_ideal[k].y() << "," << m.want_ideal[k].x() << ","
+          << m.want_ideal[k].y();
     for (int s = 0; s < 4; ++s) out << "," << m.side_offset_px[s] << "," << m.side_horizontal[s];
     out << "\n";
   }

@@ -45,6 +45,12 @@ struct ChessboardMarker {
   // (no lens distortion model, raw corners compared).
   double size_rel_local = std::numeric_limits<double>::quiet_NaN();
   double size_rel_raw = 0;
+  // size_rel against a homography fitted to the centres (diagonal crossings) of the frame's markers as
+  // mcmt found them, and as stock OpenCV found them: the board's marker spacing, no chessboard corner
+  // involved (NaN below 5 markers).
+  double size_rel_centres = std::numeric_limits<double>::quiet_NaN();
+  double size_rel_stock_centres = std::numeric_limits<double>::quiet_NaN();
+  std::array<Eigen::Vector2d, 4> got_ideal{}, want_ideal{};  // detected and predicted corners, ideal px
 };
 
 // Means over the markers `take` selects (NaN fields skipped per field).
@@ -207,6 +213,32 @@ inline CharucoDetection DetectCharuco(const cv::Mat& gray, const cv::Ptr<cv::aru
   return d;
 }
 
+// A quad's centre: the crossing of its diagonals (the projection of a square's centre under any
+// homography), in homogeneous coordinates x = (q0 x q2) x (q1 x q3).
+inline Eigen::Vector2d DiagonalCrossing(const std::array<Eigen::Vector2d, 4>& q) {
+  auto h = [](const Eigen::Vector2d& p) { return Eigen::Vector3d(p.x(), p.y(), 1.0); };
+  const Eigen::Vector3d x = h(q[0]).cross(h(q[2])).cross(h(q[1]).cross(h(q[3])));
+  return x.head<2>() / x.z();
+}
+
+// A board-to-image homography fitted to the centres of the markers `quads` (id, corners in ideal px)
+// against their centres on `board`: no chessboard corner involved. Empty (`ok` false) below 5 markers.
+inline BoardHomography CentresHomography(
+    const cv::aruco::CharucoBoard& board, const std::map<int, int>& marker_index,
+    const std::vector<std::pair<int, std::array<Eigen::Vector2d, 4>>>& quads) {
+  std::vector<cv::Point2d> plane, image;
+  for (const auto& [id, quad] : quads) {
+    auto it = marker_index.find(id);
+    if (it == marker_index.end()) continue;
+    const cv::Point3f* obj = board.objPoints[it->second].data();
+    plane.emplace_back(0.5 * (obj[0].x + obj[2].x), 0.5 * (obj[0].y + obj[2].y));
+    const Eigen::Vector2d c = DiagonalCrossing(quad);
+    image.emplace_back(c.x(), c.y());
+  }
+  if (plane.size() < 5) plane.clear();
+  return BoardHomography(plane, image);
+}
+
 // Cameras of `rig` (all, or only `camera`), at most `max_frames` frames each (< 0: all). `hook` (optional)
 // sees every frame with a homography.
 inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_frames = -1,
@@ -276,6 +308,20 @@ inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_
         }
         return (first - (*want)[0]).norm() <= 5.0;
       };
+      // Homographies fitted to the centres of mcmt's markers and of stock OpenCV's.
+      std::vector<std::pair<int, std::array<Eigen::Vector2d, 4>>> mcmt_quads, stock_quads;
+      for (const marker_t& mk : recorded[f].markers) {
+        std::array<Eigen::Vector2d, 4> q;
+        for (int k = 0; k < 4; ++k) q[k] = ideal(mk.corners[k][0], mk.corners[k][1]);
+        mcmt_quads.emplace_back(mk.id, q);
+      }
+      for (size_t i = 0; i < ids.size(); ++i) {
+        std::array<Eigen::Vector2d, 4> q;
+        for (int k = 0; k < 4; ++k) q[k] = ideal(corners[i][k].x, corners[i][k].y);
+        stock_quads.emplace_back(ids[i], q);
+      }
+      const BoardHomography apply_centres = CentresHomography(*board, marker_index, mcmt_quads),
+                            apply_stock_centres = CentresHomography(*board, marker_index, stock_quads);
       detections_t replaced = recorded[f];
       replaced.markers.clear();
       for (const marker_t& mk : recorded[f].markers) {
@@ -292,6 +338,11 @@ inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_
         const cv::Point2d centre(0.5 * (obj[0].x + obj[2].x), 0.5 * (obj[0].y + obj[2].y));
         if (predict(LocalHomography(xc.plane, xc.ideal, centre, 0.09), mk.id, got[0], &want_raw))
           SideOffsets(got, want_raw, &other), c.size_rel_local = other.size_rel;
+        if (predict(apply_centres, mk.id, got[0], &want_raw))
+          SideOffsets(got, want_raw, &other), c.size_rel_centres = other.size_rel;
+        if (predict(apply_stock_centres, mk.id, got[0], &want_raw))
+          SideOffsets(got, want_raw, &other), c.size_rel_stock_centres = other.size_rel;
+        c.got_ideal = got, c.want_ideal = want;
         marker_t r = mk;
         for (int k = 0; k < 4; ++k) {
           want_raw[k] = raw(want[k]);
