@@ -6,7 +6,10 @@
 // against that prediction.
 //   diag_charuco_board [poses (20)] [view deg (60)] [marker px head-on (25)] [blur px (0.7)] [gamma (1.85)]
 // One line per pose, then means. MCMT_BOARD_MARKERS=1: one CSV line per marker on stderr (truth|mcmt, pose,
-// id, true mean side px, size error %); MCMT_BOARD_SAVE=PREFIX: each render as PREFIX<pose>.png.
+// id, true mean side px, size error %, skew error deg; mcmt lines then the size error % and skew error
+// deg against the chessboard's prediction); MCMT_BOARD_SAVE=PREFIX: each render as PREFIX<pose>.png.
+// A quad's skew is the mean over its corners of |angle - 90| (deg); a skew error is the detected or
+// predicted skew minus the true one.
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
@@ -87,6 +90,16 @@ std::vector<testing::reference::Quad> BoardQuads(const cv::aruco::CharucoBoard& 
   return quads;
 }
 
+// The mean over the quad's corners of |angle - 90| (deg).
+double SkewDeg(const std::array<cv::Point2d, 4>& q) {
+  double sum = 0;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d u = q[(k + 3) % 4] - q[k], v = q[(k + 1) % 4] - q[k];
+    sum += 0.25 * std::abs(std::acos(u.dot(v) / (cv::norm(u) * cv::norm(v))) * 180 / M_PI - 90);
+  }
+  return sum;
+}
+
 // Marker i's corners by `h` (board metres -> pixels).
 template <typename H>
 std::array<cv::Point2d, 4> MarkerCorners(const cv::aruco::CharucoBoard& board, size_t i, const H& h) {
@@ -154,24 +167,27 @@ int main(int argc, char** argv) {
     double pose_truth = 0, pose_mcmt = 0, pose_mcmt_chess = 0;
     int pn = 0, pm = 0;
     for (size_t i = 0; i < board->ids.size(); ++i) {
-      const double want = Perimeter(MarkerCorners(*board, i, chess)),
-                   real = Perimeter(MarkerCorners(*board, i, truth));
+      const std::array<cv::Point2d, 4> want_q = MarkerCorners(*board, i, chess),
+                                       real_q = MarkerCorners(*board, i, truth);
+      const double want = Perimeter(want_q), real = Perimeter(real_q);
       pose_truth += 100 * (want / real - 1), ++pn;
       if (per_marker)
-        std::fprintf(stderr, "truth,%d,%d,%.3f,%.4f\n", pose, board->ids[i], real / 4,
-                     100 * (want / real - 1));
+        std::fprintf(stderr, "truth,%d,%d,%.3f,%.4f,%.4f\n", pose, board->ids[i], real / 4,
+                     100 * (want / real - 1), SkewDeg(want_q) - SkewDeg(real_q));
     }
     for (const marker_t& m : detector.Detect(image))
       for (size_t i = 0; i < board->ids.size(); ++i) {
         if (board->ids[i] != m.id) continue;
         std::array<cv::Point2d, 4> got;
         for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
-        const double want = Perimeter(MarkerCorners(*board, i, chess)),
-                     real = Perimeter(MarkerCorners(*board, i, truth));
+        const std::array<cv::Point2d, 4> want_q = MarkerCorners(*board, i, chess),
+                                         real_q = MarkerCorners(*board, i, truth);
+        const double want = Perimeter(want_q), real = Perimeter(real_q);
         pose_mcmt += 100 * (Perimeter(got) / real - 1);
         if (per_marker)
-          std::fprintf(stderr, "mcmt,%d,%d,%.3f,%.4f\n", pose, m.id, real / 4,
-                       100 * (Perimeter(got) / real - 1));
+          std::fprintf(stderr, "mcmt,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f\n", pose, m.id, real / 4,
+                       100 * (Perimeter(got) / real - 1), SkewDeg(got) - SkewDeg(real_q),
+                       100 * (Perimeter(got) / want - 1), SkewDeg(got) - SkewDeg(want_q));
         pose_mcmt_chess += 100 * (Perimeter(got) / want - 1), ++pm;
       }
     std::printf(
