@@ -601,6 +601,64 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
   }
 }
 
+// The refinement does not depend on its start. Fast mode's corners rest on this rule, and since fast mode
+// takes the full search's candidates (fast_band_sides), FastModeCornersAreTheAccurateModes* compare
+// identical starts and no longer check it. Each marker of the reference renders the accurate mode found
+// (>= 15 px, <= 75 deg) is refined again from its corners rounded to whole pixels and from its corners
+// moved by up to half a pixel in x and y (seeded); the two results must agree within 0.02 px. Three
+// conditions do not yet, each because of markers whose refinement never settles (its passes move the
+// corners by more than the rule at every round: bench/results/2026-12-05-{settle,rulec,aitken}.md); they
+// are bounded a little above what main measures (two-cell margin 0.086 px, gamma 2.2 0.182, hard 1.069:
+// image 1 id 95, which lands anywhere between 0.03 and 0.34 px from the truth under any small change).
+TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
+  const std::map<std::string, double> shortfall_px = {
+      {"two-cell margin, white", 0.10}, {"gamma 2.2", 0.20}, {"hard", 1.2}};
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  const int cells = dict->markerSize + 2;
+  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
+    testing::ReferenceScene scene;
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> shift(-0.5, 0.5);
+    double max_px = 0;
+    int compared = 0;
+    std::string worst;
+    for (int i = 0; i < 3; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+      for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
+        bool comparable = false;
+        for (const auto& t : truth)
+          comparable = comparable || (t.id == m.id && t.side_px >= 15 && t.view_angle_deg <= 75);
+        if (!comparable) continue;
+        const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+            dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
+        std::array<cv::Point2d, 4> rounded, moved;
+        for (int k = 0; k < 4; ++k) {
+          rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
+          moved[k] = {m.corners[k][0] + shift(rng), m.corners[k][1] + shift(rng)};
+        }
+        const bool ok_rounded =
+            RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr, true, nullptr, 1);
+        const bool ok_moved =
+            RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true, nullptr, 1);
+        if (!ok_rounded || !ok_moved) continue;
+        ++compared;
+        for (int k = 0; k < 4; ++k) {
+          const double d = cv::norm(rounded[k] - moved[k]);
+          if (d > max_px) max_px = d, worst = "image " + std::to_string(i) + " id " + std::to_string(m.id);
+        }
+      }
+    }
+    std::printf("%-30s %3d markers refined from two starts, max %.4f px apart (%s)\n", im.name.c_str(),
+                compared, max_px, worst.c_str());
+    EXPECT_GT(compared, 10) << im.name;
+    const auto known = shortfall_px.find(im.name);
+    EXPECT_LE(max_px, known == shortfall_px.end() ? 0.02 : known->second) << im.name << ": " << worst;
+  }
+}
+
 // The refinement of a frame does not depend on the frames before it (the rule: results never depend on
 // the order frames arrive). The choice to smooth a sharp marker's region before refining it was made
 // on a running average of the fitted blur over each detector's history: the same sharp frame after
