@@ -562,6 +562,14 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnTheBenchScene) {
   EXPECT_EQ(d.missing, 0);
 }
 
+// Whether marker `id` of a reference render is one the corner comparisons below take: in the render
+// (its ids are distinct), at least 15 px, at most 75 deg.
+bool ComparedOnReference(const std::vector<testing::RenderedMarker>& truth, int id) {
+  for (const auto& t : truth)
+    if (t.id == id) return t.side_px >= 15 && t.view_angle_deg <= 75;
+  return false;
+}
+
 TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
@@ -574,11 +582,7 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
     for (int i = 0; i < 3; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
-      auto comparable = [&](int id) {
-        for (const auto& t : truth)
-          if (t.id == id) return t.side_px >= 15 && t.view_angle_deg <= 75;
-        return false;
-      };
+      auto comparable = [&](int id) { return ComparedOnReference(truth, id); };
       DetectorOptions fast_options;
       fast_options.fast = true;
       MarkerDetector accurate(mc, DetectorOptions()), fast(mc, fast_options);
@@ -633,10 +637,7 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
       for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
-        bool comparable = false;
-        for (const auto& t : truth)
-          comparable = comparable || (t.id == m.id && t.side_px >= 15 && t.view_angle_deg <= 75);
-        if (!comparable) continue;
+        if (!ComparedOnReference(truth, m.id)) continue;
         const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
             dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
         std::array<cv::Point2d, 4> rounded, moved;
