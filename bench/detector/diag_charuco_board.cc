@@ -21,13 +21,6 @@ using namespace mcmt;
 
 namespace {
 
-// Perimeter of a quad.
-double Perimeter(const std::array<cv::Point2d, 4>& q) {
-  double sum = 0;
-  for (int k = 0; k < 4; ++k) sum += cv::norm(q[(k + 1) % 4] - q[k]);
-  return sum;
-}
-
 constexpr double kSquareM = 0.054;  // the board's squares
 
 // A random pose of the board: centred in front of the camera at depth `z`, tilted by view_deg about an
@@ -88,16 +81,6 @@ std::vector<testing::reference::Quad> BoardQuads(const cv::aruco::CharucoBoard& 
         if (bits.at<uint8_t>(r, col)) quads.push_back(cells(col + 1, r + 1, col + 2, r + 2, im.ink));
   }
   return quads;
-}
-
-// The mean over the quad's corners of |angle - 90| (deg).
-double SkewDeg(const std::array<cv::Point2d, 4>& q) {
-  double sum = 0;
-  for (int k = 0; k < 4; ++k) {
-    const cv::Point2d u = q[(k + 3) % 4] - q[k], v = q[(k + 1) % 4] - q[k];
-    sum += 0.25 * std::abs(std::acos(u.dot(v) / (cv::norm(u) * cv::norm(v))) * 180 / M_PI - 90);
-  }
-  return sum;
 }
 
 // Marker i's corners by `h` (board metres -> pixels).
@@ -169,11 +152,11 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < board->ids.size(); ++i) {
       const std::array<cv::Point2d, 4> want_q = MarkerCorners(*board, i, chess),
                                        real_q = MarkerCorners(*board, i, truth);
-      const double want = Perimeter(want_q), real = Perimeter(real_q);
+      const double want = testing::QuadPerimeter(want_q), real = testing::QuadPerimeter(real_q);
       pose_truth += 100 * (want / real - 1), ++pn;
       if (per_marker)
         std::fprintf(stderr, "truth,%d,%d,%.3f,%.4f,%.4f\n", pose, board->ids[i], real / 4,
-                     100 * (want / real - 1), SkewDeg(want_q) - SkewDeg(real_q));
+                     100 * (want / real - 1), testing::QuadSkewDeg(want_q) - testing::QuadSkewDeg(real_q));
     }
     for (const marker_t& m : detector.Detect(image))
       for (size_t i = 0; i < board->ids.size(); ++i) {
@@ -182,13 +165,15 @@ int main(int argc, char** argv) {
         for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
         const std::array<cv::Point2d, 4> want_q = MarkerCorners(*board, i, chess),
                                          real_q = MarkerCorners(*board, i, truth);
-        const double want = Perimeter(want_q), real = Perimeter(real_q);
-        pose_mcmt += 100 * (Perimeter(got) / real - 1);
+        const double want = testing::QuadPerimeter(want_q), real = testing::QuadPerimeter(real_q),
+                     perimeter = testing::QuadPerimeter(got);
+        pose_mcmt += 100 * (perimeter / real - 1);
         if (per_marker)
           std::fprintf(stderr, "mcmt,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f\n", pose, m.id, real / 4,
-                       100 * (Perimeter(got) / real - 1), SkewDeg(got) - SkewDeg(real_q),
-                       100 * (Perimeter(got) / want - 1), SkewDeg(got) - SkewDeg(want_q));
-        pose_mcmt_chess += 100 * (Perimeter(got) / want - 1), ++pm;
+                       100 * (perimeter / real - 1), testing::QuadSkewDeg(got) - testing::QuadSkewDeg(real_q),
+                       100 * (perimeter / want - 1),
+                       testing::QuadSkewDeg(got) - testing::QuadSkewDeg(want_q));
+        pose_mcmt_chess += 100 * (perimeter / want - 1), ++pm;
       }
     std::printf(
         "pose %2d: %2zu X-corners (mean error %.3f px), chessboard truth's size error %+.3f %%; mcmt %2d "

@@ -26,12 +26,6 @@ struct Band {
 constexpr Band kBands[] = {{15, 20, 0, 30},  {15, 20, 55, 70}, {20, 28, 0, 30},
                            {20, 28, 55, 70}, {30, 45, 0, 30},  {30, 45, 55, 70}};
 
-// The angle (deg) at `at` between the directions to `prev` and `next`.
-double AngleDeg(const cv::Point2d& prev, const cv::Point2d& at, const cv::Point2d& next) {
-  const cv::Point2d u = prev - at, v = next - at;
-  return std::acos(u.dot(v) / (cv::norm(u) * cv::norm(v))) * 180 / M_PI;
-}
-
 // One detection against its truth: size error %, mean outward offset px, skew error deg.
 struct MarkerError {
   double size_pct = 0, offset_px = 0, skew_deg = 0;
@@ -41,18 +35,14 @@ MarkerError ErrorOf(const marker_t& m, const testing::RenderedMarker& t) {
   std::array<cv::Point2d, 4> got;
   for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
   MarkerError e;
-  double got_len = 0, want_len = 0;
   for (int k = 0; k < 4; ++k) {
-    const int next = (k + 1) % 4, prev = (k + 3) % 4;
-    got_len += cv::norm(got[next] - got[k]), want_len += cv::norm(t.corners[next] - t.corners[k]);
+    const int next = (k + 1) % 4;
     // offset: the mean over the 4 sides of their ends' displacement along the true outward normal
     const cv::Point2d n = testing::OutwardNormal(t, k);
     e.offset_px += 0.125 * (n.dot(got[k] - t.corners[k]) + n.dot(got[next] - t.corners[next]));
-    // skew error: mean over the corners of |angle - 90| detected minus true
-    e.skew_deg += 0.25 * (std::abs(AngleDeg(got[prev], got[k], got[next]) - 90) -
-                          std::abs(AngleDeg(t.corners[prev], t.corners[k], t.corners[next]) - 90));
   }
-  e.size_pct = 100 * (got_len / want_len - 1);
+  e.size_pct = 100 * (testing::QuadPerimeter(got) / testing::QuadPerimeter(t.corners) - 1);
+  e.skew_deg = testing::QuadSkewDeg(got) - testing::QuadSkewDeg(t.corners);
   return e;
 }
 

@@ -192,6 +192,23 @@ struct CornerErrors {
   std::vector<double> offsets;  // signed offset along the outward edge normals, px (+: outward)
 };
 
+// A quad's perimeter (px).
+inline double QuadPerimeter(const std::array<cv::Point2d, 4>& q) {
+  double sum = 0;
+  for (int k = 0; k < 4; ++k) sum += cv::norm(q[(k + 1) % 4] - q[k]);
+  return sum;
+}
+
+// A quad's skew: the mean over its corners of |angle - 90| (deg).
+inline double QuadSkewDeg(const std::array<cv::Point2d, 4>& q) {
+  double sum = 0;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d u = q[(k + 3) % 4] - q[k], v = q[(k + 1) % 4] - q[k];
+    sum += 0.25 * std::abs(std::acos(u.dot(v) / (cv::norm(u) * cv::norm(v))) * 180 / M_PI - 90);
+  }
+  return sum;
+}
+
 // The outward unit normal of side `side` (corners side -> side + 1) of a marker's true quad.
 inline cv::Point2d OutwardNormal(const RenderedMarker& truth, int side) {
   cv::Point2d centre(0, 0);
