@@ -9,6 +9,7 @@
 
 #include "core/config.h"
 #include "detector/detector.h"
+#include "tests/detector/charuco_render.h"
 #include "tests/detector/chessboard_truth.h"
 
 namespace mcmt {
@@ -127,25 +128,111 @@ TEST(DetectorRealData, CaliscopeCornersAgreeWithTheChessboard) {
 // The same comparison with detector.tone auto (configs/caliscope_charuco_tone_auto.yaml, 120 markers):
 // each camera's gamma and sharpening estimated from its own markers, then (DetectRecording's first pass)
 // used on every frame. The four webcams differ (cam0 and cam1 soft, cam2 and cam3 sharpened;
-// bench/results/2026-12-04-calib3.md), so one tone for all cannot be right. Measured (2026-12-04):
-// cam0-3 -0.046 / +0.171 / -0.061 / +0.039 %, mean |size| 0.079 % (the estimate used only from the frame
-// after it, as live: -0.123 / +0.167 / -0.005 / +0.132 %, mean 0.107 %; the config's one tone for all:
-// 0.189 %). Bounds: the mean 0.09 % and each camera 0.2 % (cam1 misses the 0.1 % target; the chessboard
-// truth itself is good to about 0.1 % per camera on cams 1-3).
+// bench/results/2026-12-04-calib3.md), so one tone for all cannot be right.
+// Judged on the frames seen at most 55 deg from the board's normal: up to there the chessboard truth is
+// sound on renders of this board (RenderedBoardTruthIsSoundUpTo55Deg), beyond it it reads sizes about
+// 0.1 % small and angles 0.15 deg too skewed at 24 px (2026-12-06; bench/results/2026-12-05-truthtest.md:
+// -0.07..-0.09 % at 58-65 deg), as much as the bound. cam1 films the board steeply (149 of its 270 markers
+// beyond 55 deg), so each camera needs 100 markers there, not 200. Measured (2026-12-06, main 29430f8),
+// <= 55 deg: cam0-3 -0.036 / +0.193 / -0.081 / -0.011 % (398 / 121 / 410 / 412 markers), mean 0.080 %;
+// all views (printed beside, not asserted): -0.041 / +0.189 / -0.081 / -0.013 %, mean 0.081 %. Bounds: the
+// mean 0.09 % and each camera 0.2 % (the truth itself is good to about 0.1 % per camera on cams 1-3: its two
+// independent versions differ by 0.05-0.12 %).
 TEST(DetectorRealData, CaliscopeCornersWithAutoToneAgreeWithTheChessboardPerCamera) {
   if (!fs::exists(kData + "/charuco_calibration/cam_0.mp4")) GTEST_SKIP() << "no real data in " << kData;
   RigConfig rig = LoadRigConfig(std::string(MCMT_SOURCE_DIR) + "/configs/caliscope_charuco_tone_auto.yaml");
   const testing::ChessboardComparison c = testing::CompareWithChessboard(rig);
+  constexpr double kTruthSoundDeg = 55;
   double mean_abs = 0;
   for (const CameraConfig& cam : rig.cameras) {
-    const testing::ChessboardMean m = testing::CameraMean(c.mcmt, cam.name);
-    std::printf("  %s: size %+.3f %% (%d markers)\n", cam.name.c_str(), 100 * m.size_rel, m.n);
-    EXPECT_GE(m.n, 200) << cam.name;
+    const testing::ChessboardMean all = testing::CameraMean(c.mcmt, cam.name);
+    const testing::ChessboardMean m = testing::MeanOf(c.mcmt, [&](const testing::ChessboardMarker& k) {
+      return k.camera == cam.name && k.view_deg <= kTruthSoundDeg;
+    });
+    std::printf("  %s: size %+.3f %% (%d markers at <= %.0f deg); all views %+.3f %% (%d)\n",
+                cam.name.c_str(), 100 * m.size_rel, m.n, kTruthSoundDeg, 100 * all.size_rel, all.n);
+    EXPECT_GE(m.n, 100) << cam.name;
     EXPECT_LE(std::abs(m.size_rel), 0.002) << cam.name;
     mean_abs += std::abs(m.size_rel) / rig.cameras.size();
   }
-  std::printf("mean |size error| %.3f %%\n", 100 * mean_abs);
+  std::printf("mean |size error| %.3f %% (<= %.0f deg)\n", 100 * mean_abs, kTruthSoundDeg);
   EXPECT_LE(mean_abs, 0.0009);
+}
+
+// The caliscope board rendered whole at known poses (tests/detector/charuco_render.h; blur 0.7 px, gamma
+// 1.85, noise 2 grey levels): the chessboard truth's own error, and mcmt's markers against the true
+// corners, at one tilt and head-on marker size.
+struct RenderedBoardFigures {
+  int markers = 0, found = 0;
+  double truth_size_rel = 0, truth_skew_deg = 0;     // the chessboard truth against the true corners
+  double offset_px = 0, size_rel = 0, skew_deg = 0;  // mcmt against the true corners
+  double truth_size_rel_se = 0;                      // standard error of truth_size_rel
+};
+
+RenderedBoardFigures MeasureRenderedBoard(int poses, double view_deg, double marker_px, uint64_t seed) {
+  const auto board = testing::CaliscopeCharucoBoard();
+  testing::Imaging im;
+  im.blur_sigma = 0.7, im.gamma = 1.85;
+  MarkerConfig mc;
+  mc.dictionary = "DICT_4X4_1000", mc.inverted = true;
+  DetectorOptions o;
+  o.inverted = true, o.gamma = im.gamma;
+  MarkerDetector detector(mc, o);
+  std::mt19937_64 rng(seed);
+  RenderedBoardFigures f;
+  double truth_sq = 0;
+  auto eigen = [](const std::array<cv::Point2d, 4>& q) {
+    std::array<Eigen::Vector2d, 4> out;
+    for (int k = 0; k < 4; ++k) out[k] = {q[k].x, q[k].y};
+    return out;
+  };
+  for (int pose = 0; pose < poses; ++pose) {
+    const testing::RenderedBoardPose r =
+        testing::RenderBoardPose(board, view_deg, marker_px, im, detector, rng);
+    for (const testing::RenderedBoardMarker& m : r.markers) {
+      const double truth = testing::QuadPerimeter(m.chess) / testing::QuadPerimeter(m.real) - 1;
+      f.truth_size_rel += truth, truth_sq += truth * truth, ++f.markers;
+      f.truth_skew_deg += testing::QuadSkewDeg(m.chess) - testing::QuadSkewDeg(m.real);
+      if (!m.found) continue;
+      testing::ChessboardMarker against_real;
+      testing::SideOffsets(eigen(m.got), eigen(m.real), &against_real);
+      f.offset_px += against_real.offset_px, f.size_rel += against_real.size_rel, ++f.found;
+      f.skew_deg += testing::QuadSkewDeg(m.got) - testing::QuadSkewDeg(m.real);
+    }
+  }
+  if (f.markers) {
+    f.truth_size_rel /= f.markers, f.truth_skew_deg /= f.markers;
+    f.truth_size_rel_se =
+        std::sqrt(std::max(0.0, truth_sq / f.markers - f.truth_size_rel * f.truth_size_rel) / f.markers);
+  }
+  if (f.found) f.offset_px /= f.found, f.size_rel /= f.found, f.skew_deg /= f.found;
+  std::printf(
+      "rendered board, %d poses at %.0f deg, %.0f px markers: chessboard truth %+.3f %% (se %.3f) skew %+.3f "
+      "deg (%d markers); mcmt %+.4f px, size %+.3f %%, skew %+.3f deg (%d found)\n",
+      poses, view_deg, marker_px, 100 * f.truth_size_rel, 100 * f.truth_size_rel_se, f.truth_skew_deg,
+      f.markers, f.offset_px, 100 * f.size_rel, f.skew_deg, f.found);
+  return f;
+}
+
+// The chessboard truth the tests above rest on, judged on renders of the same board with known corners
+// (no real data needed): at 55 deg and 24 px markers, its sizes within 0.1 % and its angles within
+// 0.1 deg, so the per-camera test above may use every view up to 55 deg. Measured (2026-12-06, 30 poses,
+// seeds 5-8): sizes -0.013 / -0.067 / -0.067 / -0.047 % (standard errors 0.03-0.04), angles +0.003..+0.050
+// deg; at 62 deg -0.108..+0.027 % (se 0.04-0.08) and -0.10..+0.15 deg (truthtest, 100 poses: -0.07..-0.09 %
+// at 58-65 deg). mcmt on the same renders, against the true corners: its sides in place (-0.007..-0.009 px
+// along their normals; the target 0.02 px), but small skewed markers come out too square (angles
+// -0.10..-0.28 deg), which makes them -0.14..-0.19 % small (at 62 deg -0.41..-0.59 deg, -0.24..-0.34 %):
+// bounded at that measured shortfall plus a margin (0.25 %, 0.35 deg) as a regression guard; the target is
+// 0.1 % and 0.1 deg.
+TEST(DetectorRealData, RenderedBoardTruthIsSoundUpTo55Deg) {
+  const RenderedBoardFigures f = MeasureRenderedBoard(30, 55, 24, 5);
+  ASSERT_GE(f.markers, 250);
+  EXPECT_LE(std::abs(f.truth_size_rel), 0.001);
+  EXPECT_LE(std::abs(f.truth_skew_deg), 0.1);
+  ASSERT_GE(f.found, 0.8 * f.markers);
+  EXPECT_LE(std::abs(f.offset_px), 0.02);
+  EXPECT_LE(std::abs(f.size_rel), 0.0025) << "(target 0.1 %, measured shortfall)";
+  EXPECT_LE(std::abs(f.skew_deg), 0.35) << "(target 0.1 deg, measured shortfall)";
 }
 
 TEST(DetectorRealData, Caliscope4CamRecordingOpens) {
