@@ -125,6 +125,34 @@ TEST(DetectorRealData, CaliscopeCornersAgreeWithTheChessboard) {
   }
 }
 
+std::array<cv::Point2d, 4> CvQuad(const std::array<Eigen::Vector2d, 4>& q) {
+  return {cv::Point2d(q[0].x(), q[0].y()), cv::Point2d(q[1].x(), q[1].y()), cv::Point2d(q[2].x(), q[2].y()),
+          cv::Point2d(q[3].x(), q[3].y())};
+}
+std::array<Eigen::Vector2d, 4> EigenQuad(const std::array<cv::Point2d, 4>& q) {
+  return {Eigen::Vector2d(q[0].x, q[0].y), Eigen::Vector2d(q[1].x, q[1].y), Eigen::Vector2d(q[2].x, q[2].y),
+          Eigen::Vector2d(q[3].x, q[3].y)};
+}
+
+// The detected minus the predicted skew (testing::QuadSkewDeg: mean |corner angle - 90|, deg) over the
+// markers `take` selects: mean, standard error, count.
+struct SkewError {
+  double mean_deg = 0, se_deg = 0;
+  int n = 0;
+};
+SkewError SkewErrorOf(const std::vector<testing::ChessboardMarker>& markers,
+                      const std::function<bool(const testing::ChessboardMarker&)>& take) {
+  SkewError e;
+  double sq = 0;
+  for (const testing::ChessboardMarker& m : markers) {
+    if (!take(m)) continue;
+    const double d = testing::QuadSkewDeg(CvQuad(m.got_ideal)) - testing::QuadSkewDeg(CvQuad(m.want_ideal));
+    e.mean_deg += d, sq += d * d, ++e.n;
+  }
+  if (e.n) e.mean_deg /= e.n, e.se_deg = std::sqrt(std::max(0.0, sq / e.n - e.mean_deg * e.mean_deg) / e.n);
+  return e;
+}
+
 // The same comparison with detector.tone auto (configs/caliscope_charuco_tone_auto.yaml, 120 markers):
 // each camera's gamma and sharpening estimated from its own markers, then (DetectRecording's first pass)
 // used on every frame. The four webcams differ (cam0 and cam1 soft, cam2 and cam3 sharpened;
@@ -151,6 +179,13 @@ TEST(DetectorRealData, CaliscopeCornersWithAutoToneAgreeWithTheChessboardPerCame
     });
     std::printf("  %s: size %+.3f %% (%d markers at <= %.0f deg); all views %+.3f %% (%d)\n",
                 cam.name.c_str(), 100 * m.size_rel, m.n, kTruthSoundDeg, 100 * all.size_rel, all.n);
+    for (const bool large : {false, true}) {
+      const SkewError e = SkewErrorOf(c.mcmt, [&](const testing::ChessboardMarker& k) {
+        return k.camera == cam.name && k.view_deg <= kTruthSoundDeg && (k.side_px >= 28) == large;
+      });
+      std::printf("    markers %s 28 px: skew %+.3f deg (se %.3f, %d markers)\n", large ? ">=" : "< ",
+                  e.mean_deg, e.se_deg, e.n);
+    }
     EXPECT_GE(m.n, 100) << cam.name;
     EXPECT_LE(std::abs(m.size_rel), 0.002) << cam.name;
     mean_abs += std::abs(m.size_rel) / rig.cameras.size();
@@ -181,11 +216,6 @@ RenderedBoardFigures MeasureRenderedBoard(int poses, double view_deg, double mar
   std::mt19937_64 rng(seed);
   RenderedBoardFigures f;
   double truth_sq = 0;
-  auto eigen = [](const std::array<cv::Point2d, 4>& q) {
-    std::array<Eigen::Vector2d, 4> out;
-    for (int k = 0; k < 4; ++k) out[k] = {q[k].x, q[k].y};
-    return out;
-  };
   for (int pose = 0; pose < poses; ++pose) {
     const testing::RenderedBoardPose r =
         testing::RenderBoardPose(board, view_deg, marker_px, im, detector, rng);
@@ -195,7 +225,7 @@ RenderedBoardFigures MeasureRenderedBoard(int poses, double view_deg, double mar
       f.truth_skew_deg += testing::QuadSkewDeg(m.chess) - testing::QuadSkewDeg(m.real);
       if (!m.found) continue;
       testing::ChessboardMarker against_real;
-      testing::SideOffsets(eigen(m.got), eigen(m.real), &against_real);
+      testing::SideOffsets(EigenQuad(m.got), EigenQuad(m.real), &against_real);
       f.offset_px += against_real.offset_px, f.size_rel += against_real.size_rel, ++f.found;
       f.skew_deg += testing::QuadSkewDeg(m.got) - testing::QuadSkewDeg(m.real);
     }
