@@ -1443,7 +1443,16 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
       !options_.inverted && !markers_.inverted)
     return OwnSearch(gray, roi, min_perimeter, max_perimeter);
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
-  const cv::Mat view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
+  // Inverted prints only (markers.inverted): searched as dark-bordered markers of the negated image.
+  // OpenCV's detectInvertedMarker sees a white-bordered marker only as the hole of the dark ring around
+  // it, a contour that breaks where the ring is thin (a ChArUco board's one-cell ring at steep views).
+  const bool negated = options_.inverted && markers_.inverted;
+  const cv::Mat whole_or_roi = roi.area() == gray.rows * gray.cols ? gray : gray(roi);
+  cv::Mat view;
+  if (negated)
+    cv::bitwise_not(whole_or_roi, view);  // a new image: `gray` stays as it is
+  else
+    view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
   p->adaptiveThreshWinSizeMin = window_min;
   p->adaptiveThreshWinSizeMax = window_max;
@@ -1462,7 +1471,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   p->errorCorrectionRate = options_.error_correction_rate;
   p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;
   p->perspectiveRemoveIgnoredMarginPerCell = options_.perspective_ignored_margin;
-  p->detectInvertedMarker = options_.inverted;
+  p->detectInvertedMarker = options_.inverted && !negated;
   p->useAruco3Detection = options_.aruco3;
   p->minSideLengthCanonicalImg = options_.aruco3_min_side;
   if (options_.corner_refinement == "subpix") {

@@ -7,7 +7,9 @@
 //   diag_charuco_board [poses (20)] [view deg (60)] [marker px head-on (25)] [blur px (0.7)] [gamma (1.85)]
 // One line per pose, then means. MCMT_BOARD_MARKERS=1: one CSV line per marker on stderr (truth|mcmt, pose,
 // id, true mean side px, size error %, skew error deg; mcmt lines then the size error % and skew error
-// deg against the chessboard's prediction); MCMT_BOARD_SAVE=PREFIX: each render as PREFIX<pose>.png.
+// deg against the chessboard's prediction; "missed" lines: markers mcmt did not find, with whether stock
+// OpenCV found them); MCMT_BOARD_SAVE=PREFIX: each render as PREFIX<pose>.png; MCMT_BOARD_REFINEMENT:
+// mcmt's corner_refinement (default edges).
 // A quad's skew is the mean over its corners of |angle - 90| (deg); a skew error is the detected or
 // predicted skew minus the true one.
 #include <cstdio>
@@ -32,6 +34,7 @@ int main(int argc, char** argv) {
   mc.dictionary = "DICT_4X4_1000", mc.inverted = true;
   DetectorOptions o;
   o.inverted = true, o.gamma = im.gamma;
+  if (const char* r = std::getenv("MCMT_BOARD_REFINEMENT")) o.corner_refinement = r;
   MarkerDetector detector(mc, o);
   std::mt19937_64 rng(5);
   double sum_truth = 0, sum_mcmt = 0, sum_mcmt_chess = 0, sum_xerr = 0;
@@ -55,7 +58,12 @@ int main(int argc, char** argv) {
                      testing::QuadSkewDeg(m.chess) - testing::QuadSkewDeg(m.real));
     }
     for (const testing::RenderedBoardMarker& m : r.markers) {
-      if (!m.found) continue;
+      if (!m.found) {
+        if (per_marker)
+          std::fprintf(stderr, "missed,%d,%d,%.3f,%d\n", pose, m.id, testing::QuadPerimeter(m.real) / 4,
+                       m.stock_found ? 1 : 0);
+        continue;
+      }
       const double want = testing::QuadPerimeter(m.chess), real = testing::QuadPerimeter(m.real),
                    perimeter = testing::QuadPerimeter(m.got);
       pose_mcmt += 100 * (perimeter / real - 1);

@@ -80,7 +80,8 @@ inline std::vector<reference::Quad> BoardQuads(const cv::aruco::CharucoBoard& bo
 struct RenderedBoardMarker {
   int id = 0;
   std::array<cv::Point2d, 4> real{}, chess{}, got{};
-  bool found = false;
+  bool found = false;        // by mcmt
+  bool stock_found = false;  // by stock OpenCV (the truth's detectMarkers)
 };
 
 // One rendered pose: how many X-corners the truth found and their mean distance from the true ones (px),
@@ -122,6 +123,7 @@ inline RenderedBoardPose RenderBoardPose(const cv::Ptr<cv::aruco::CharucoBoard>&
   for (size_t i = 0; i < board.ids.size(); ++i) {
     RenderedBoardMarker m;
     m.id = board.ids[i];
+    m.stock_found = std::find(d.marker_ids.begin(), d.marker_ids.end(), m.id) != d.marker_ids.end();
     for (int k = 0; k < 4; ++k) {
       const cv::Point3f& p = board.objPoints[i][k];
       const Eigen::Vector2d c = chess_h(p.x, p.y);
