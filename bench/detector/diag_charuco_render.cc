@@ -11,6 +11,7 @@
 //                       [halo weight (0)] [halo sigma px (3)] [MPEG-4 qscale (0)]
 //                       [denoise range (0; encoded levels)] [demosaic (0; 1 bilinear, 2 VNG, 3 EA)]
 //                       [shoulder knee (0: none; encoded level)] [pedestal (0; encoded levels)]
+//                       [encoded blur sigma px (0)]
 // The halo: a part of the light spread by a second, wider Gaussian (a point-spread function that is not
 // one Gaussian; a negative weight takes light away, as a sharpening of linear light does). The MPEG-4
 // qscale: each image encoded as one frame by ffmpeg's mpeg4 encoder at that fixed quantiser (the
@@ -21,7 +22,8 @@
 // pixel's value mixes its own sample with interpolated neighbours, differently on each of the 4 sites.
 // The shoulder and the pedestal: a tone curve that is not the power law the detector is told. Above the
 // knee K the encoded values roll off, y = x - (x - K)^2 / (2 (255 - K)) (slope 0 at 255); the pedestal
-// P lifts the blacks, y = P + (255 - P) x / 255.
+// P lifts the blacks, y = P + (255 - P) x / 255. The encoded blur: a Gaussian blur of the encoded image
+// (after the gamma), as a webcam that scales or filters its YUV output blurs.
 // Or condition N of the reference catalogue (ImagingCatalogue) as bench_imaging_maps renders it
 // (DICT_6X6_250, not inverted, gamma fitted):
 //   diag_charuco_render cN [images per band (20)]
@@ -83,7 +85,8 @@ cv::Mat ThroughMpeg4(const cv::Mat& image, int qscale) {
 // dictionary, polarity and gamma given; one line per band.
 void Report(const testing::Imaging& im, const std::string& dictionary, bool inverted, bool negative,
             double gamma, int images, double halo_weight = 0, double halo_sigma_px = 3, int mpeg4_qscale = 0,
-            double denoise_range = 0, int demosaic = 0, double shoulder_knee = 0, double pedestal = 0) {
+            double denoise_range = 0, int demosaic = 0, double shoulder_knee = 0, double pedestal = 0,
+            double encoded_blur_px = 0) {
   auto dict = LoadDictionary(dictionary);
   MarkerConfig mc;
   mc.dictionary = dictionary, mc.inverted = inverted;
@@ -127,6 +130,12 @@ void Report(const testing::Imaging& im, const std::string& dictionary, bool inve
             x -= (x - shoulder_knee) * (x - shoulder_knee) / (2 * (255 - shoulder_knee));
           v = cv::saturate_cast<uint8_t>(pedestal + (255 - pedestal) * x / 255);
         }
+      if (encoded_blur_px > 0) {
+        cv::Mat encoded;
+        image.convertTo(encoded, CV_64F);
+        cv::GaussianBlur(encoded, encoded, cv::Size(0, 0), encoded_blur_px);
+        encoded.convertTo(image, CV_8U);
+      }
       if (mpeg4_qscale > 0) image = ThroughMpeg4(image, mpeg4_qscale);
       truths += static_cast<int>(truth.size());
       for (const marker_t& m : detector.Detect(image))
@@ -166,6 +175,7 @@ int main(int argc, char** argv) {
          argc > 1 ? std::atoi(argv[1]) : 20, argc > 8 ? std::atof(argv[8]) : 0,
          argc > 9 ? std::atof(argv[9]) : 3, argc > 10 ? std::atoi(argv[10]) : 0,
          argc > 11 ? std::atof(argv[11]) : 0, argc > 12 ? std::atoi(argv[12]) : 0,
-         argc > 13 ? std::atof(argv[13]) : 0, argc > 14 ? std::atof(argv[14]) : 0);
+         argc > 13 ? std::atof(argv[13]) : 0, argc > 14 ? std::atof(argv[14]) : 0,
+         argc > 15 ? std::atof(argv[15]) : 0);
   return 0;
 }

@@ -2,7 +2,9 @@
 # as 2026-12-05-cam1bias-widths.py) per marker id: mean cell depth, mean offset, the slope of offset on cell
 # depth within the id (px per px; pooled over ids, inverse-variance) against the slope across all ids, and
 # each id's two pairs of sides apart. With the picture types (ffprobe, as 2026-12-06-cam1width-splits.py),
-# also each frame's mean residual from the camera's linear trend (offset = a + b depth).
+# also each frame's mean residual from the camera's linear trend (offset = a + b depth). Last, the
+# within-marker slope: per marker, pair 0/2's offset minus pair 1/3's regressed (through 0) on their depth
+# difference, px per px (a marker-wide scale error cancels), all markers and by view < / >= 50 deg.
 #   python3 2026-12-06-cam1width-byid.py A.csv CAMERA [types.txt]
 import csv, math, sys
 from collections import defaultdict
@@ -45,3 +47,22 @@ if len(sys.argv) > 3:
         frames[p[4]].append(p[1] - a - b * p[0])
     for f in sorted(frames):
         print('frame %3d %s residual %+.3f (%d pairs)' % (f, types[f], sum(frames[f]) / len(frames[f]), len(frames[f])))
+
+within = []  # (depth difference, offset difference, view) per marker
+for r in csv.DictReader(open(sys.argv[1])):
+    if r['camera'] != cam:
+        continue
+    w = [(float(r['wx%d' % k]), float(r['wy%d' % k])) for k in range(4)]
+    d, o = [], []
+    for s in (0, 1):
+        d.append(0.5 * (dpl(w[(s + 2) % 4], w[s], w[(s + 1) % 4]) + dpl(w[(s + 3) % 4], w[s], w[(s + 1) % 4])) / 6)
+        o.append(0.5 * (float(r['side%d_px' % s]) + float(r['side%d_px' % (s + 2)])))
+    within.append((d[0] - d[1], o[0] - o[1], float(r['view_deg'])))
+for name, sel in [('all', lambda v: True), ('view < 50', lambda v: v < 50), ('view >= 50', lambda v: v >= 50)]:
+    xy = [(x, y) for x, y, v in within if sel(v)]
+    if len(xy) < 3:
+        continue
+    sxx = sum(x * x for x, _ in xy)
+    b = sum(x * y for x, y in xy) / sxx
+    sd = math.sqrt(sum((y - b * x) ** 2 for x, y in xy) / (len(xy) - 1))
+    print('within-marker slope, %s: %+.4f px/px (se %.4f, %d markers)' % (name, b, sd / math.sqrt(sxx), len(xy)))
