@@ -4,9 +4,10 @@
 # each id's two pairs of sides apart. With the picture types (ffprobe, as 2026-12-06-cam1width-splits.py),
 # also each frame's mean residual from the camera's linear trend (offset = a + b depth). Last, the
 # within-marker slope: per marker, pair 0/2's offset minus pair 1/3's regressed (through 0) on their depth
-# difference, px per px (a marker-wide scale error cancels), all markers and by view < / >= 50 deg.
+# difference, px per px (a marker-wide scale error cancels), all markers and by view < / >= 50 deg; with
+# STOCK=1 against the stock-OpenCV-centres homography instead (diag_charuco's side*_stock_px columns).
 #   python3 2026-12-06-cam1width-byid.py A.csv CAMERA [types.txt]
-import csv, math, sys
+import csv, math, os, sys
 from collections import defaultdict
 def dpl(p,a,b):
     dx,dy=b[0]-a[0],b[1]-a[1]; return abs((p[0]-a[0])*dy-(p[1]-a[1])*dx)/math.hypot(dx,dy)
@@ -56,7 +57,10 @@ for r in csv.DictReader(open(sys.argv[1])):
     d, o = [], []
     for s in (0, 1):
         d.append(0.5 * (dpl(w[(s + 2) % 4], w[s], w[(s + 1) % 4]) + dpl(w[(s + 3) % 4], w[s], w[(s + 1) % 4])) / 6)
-        o.append(0.5 * (float(r['side%d_px' % s]) + float(r['side%d_px' % (s + 2)])))
+        key = 'side%d_stock_px' if os.environ.get('STOCK') else 'side%d_px'
+        o.append(0.5 * (float(r[key % s]) + float(r[key % (s + 2)])))
+    if any(math.isnan(x) for x in o):
+        continue
     within.append((d[0] - d[1], o[0] - o[1], float(r['view_deg'])))
 for name, sel in [('all', lambda v: True), ('view < 50', lambda v: v < 50), ('view >= 50', lambda v: v >= 50)]:
     xy = [(x, y) for x, y, v in within if sel(v)]
