@@ -48,6 +48,7 @@ void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& mark
          "size_rel_centres,size_rel_stock_centres";
   for (int k = 0; k < 4; ++k) out << ",gx" << k << ",gy" << k << ",wx" << k << ",wy" << k;
   for (int s = 0; s < 4; ++s) out << ",side" << s << "_px,side" << s << "_horizontal";
+  for (int s = 0; s < 4; ++s) out << ",side" << s << "_stock_px";
   out << "\n";
   for (const ChessboardMarker& m : markers) {
     out << m.camera << "," << m.frame << "," << m.id << "," << m.side_px << "," << m.offset_px << ","
@@ -58,6 +59,7 @@ void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& mark
       out << "," << m.got_ideal[k].x() << "," << m.got_ideal[k].y() << "," << m.want_ideal[k].x() << ","
           << m.want_ideal[k].y();
     for (int s = 0; s < 4; ++s) out << "," << m.side_offset_px[s] << "," << m.side_horizontal[s];
+    for (int s = 0; s < 4; ++s) out << "," << m.side_offset_stock_px[s];
     out << "\n";
   }
 }

@@ -7,7 +7,9 @@
 //   diag_charuco_board [poses (20)] [view deg (60)] [marker px head-on (25)] [blur px (0.7)] [gamma (1.85)]
 // One line per pose, then means. MCMT_BOARD_MARKERS=1: one CSV line per marker on stderr (truth|mcmt, pose,
 // id, true mean side px, size error %, skew error deg; mcmt lines then the size error % and skew error
-// deg against the chessboard's prediction; "missed" lines: markers mcmt did not find, with whether stock
+// deg against the chessboard's prediction, then per pair of opposite sides p = 0, 1 (sides p and p + 2)
+// its true cell depth px and the half width errors px of mcmt and of the chessboard's prediction, see
+// PairWidth; "missed" lines: markers mcmt did not find, with whether stock
 // OpenCV found them); MCMT_BOARD_SAVE=PREFIX: each render as PREFIX<pose>.png; MCMT_BOARD_REFINEMENT:
 // mcmt's corner_refinement (default edges).
 // A quad's skew is the mean over its corners of |angle - 90| (deg); a skew error is the detected or
@@ -19,6 +21,19 @@
 #include "tests/detector/charuco_render.h"
 
 using namespace mcmt;
+
+namespace {
+
+// The width of a quad across its pair of opposite sides p and p + 2: the mean distance of corners p + 2
+// and p + 3 from the line through corners p and p + 1. Half its error is that pair's mean outward offset.
+double PairWidth(const std::array<cv::Point2d, 4>& q, int p) {
+  const cv::Point2d a = q[p], d = q[(p + 1) % 4] - a;
+  double sum = 0;
+  for (int k : {(p + 2) % 4, (p + 3) % 4}) sum += 0.5 * std::abs(d.cross(q[k] - a)) / cv::norm(d);
+  return sum;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   const int poses = argc > 1 ? std::atoi(argv[1]) : 20;
@@ -67,11 +82,17 @@ int main(int argc, char** argv) {
       const double want = testing::QuadPerimeter(m.chess), real = testing::QuadPerimeter(m.real),
                    perimeter = testing::QuadPerimeter(m.got);
       pose_mcmt += 100 * (perimeter / real - 1);
-      if (per_marker)
-        std::fprintf(stderr, "mcmt,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f\n", pose, m.id, real / 4,
+      if (per_marker) {
+        std::fprintf(stderr, "mcmt,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f", pose, m.id, real / 4,
                      100 * (perimeter / real - 1), testing::QuadSkewDeg(m.got) - testing::QuadSkewDeg(m.real),
                      100 * (perimeter / want - 1),
                      testing::QuadSkewDeg(m.got) - testing::QuadSkewDeg(m.chess));
+        for (int p = 0; p < 2; ++p)
+          std::fprintf(stderr, ",%.4f,%.5f,%.5f", PairWidth(m.real, p) / 6,
+                       0.5 * (PairWidth(m.got, p) - PairWidth(m.real, p)),
+                       0.5 * (PairWidth(m.chess, p) - PairWidth(m.real, p)));
+        std::fprintf(stderr, "\n");
+      }
       pose_mcmt_chess += 100 * (perimeter / want - 1), ++pm;
     }
     std::printf(

@@ -8,11 +8,31 @@
 //   diag_charuco_render [images per band (20)] [blur sigma px (0.9)] [gamma (1.85)]
 //                       [detector gamma (= gamma)] [defocus radius px (0)]
 //                       [unsharp amount (0; sigma 1 px, on encoded values)] [JPEG quality (0)]
+//                       [halo weight (0)] [halo sigma px (3)] [MPEG-4 qscale (0)]
+//                       [denoise range (0; encoded levels)] [demosaic (0; 1 bilinear, 2 VNG, 3 EA)]
+//                       [shoulder knee (0: none; encoded level)] [pedestal (0; encoded levels)]
+//                       [encoded blur sigma px (0)]
+// The halo: a part of the light spread by a second, wider Gaussian (a point-spread function that is not
+// one Gaussian; a negative weight takes light away, as a sharpening of linear light does). The MPEG-4
+// qscale: each image encoded as one frame by ffmpeg's mpeg4 encoder at that fixed quantiser (the
+// caliscope recordings are MPEG-4 part 2 at qscale 3, 4:2:0) and decoded (its luma). The denoise: an
+// edge-preserving smoothing of the encoded image (bilateral, 5 px, space sigma 1 px, range sigma as given),
+// as webcams denoise: it flattens what differs less than the range from its neighbours. The demosaic:
+// the (grey) image taken as a Bayer mosaic's samples and demosaiced by OpenCV, then made grey again: each
+// pixel's value mixes its own sample with interpolated neighbours, differently on each of the 4 sites.
+// The shoulder and the pedestal: a tone curve that is not the power law the detector is told. Above the
+// knee K the encoded values roll off, y = x - (x - K)^2 / (2 (255 - K)) (slope 0 at 255); the pedestal
+// P lifts the blacks, y = P + (255 - P) x / 255. The encoded blur: a Gaussian blur of the encoded image
+// (after the gamma), as a webcam that scales or filters its YUV output blurs.
 // Or condition N of the reference catalogue (ImagingCatalogue) as bench_imaging_maps renders it
 // (DICT_6X6_250, not inverted, gamma fitted):
 //   diag_charuco_render cN [images per band (20)]
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "tests/detector/accuracy.h"
 
@@ -46,10 +66,27 @@ MarkerError ErrorOf(const marker_t& m, const testing::RenderedMarker& t) {
   return e;
 }
 
+// `image` through ffmpeg's MPEG-4 part 2 encoder at fixed quantiser `qscale` (4:2:0, one intra frame),
+// decoded again; empty if ffmpeg failed.
+cv::Mat ThroughMpeg4(const cv::Mat& image, int qscale) {
+  const std::string stem = "/tmp/diag_charuco_render_" + std::to_string(getpid());
+  cv::imwrite(stem + ".png", image);
+  const std::string command = "ffmpeg -v error -y -i " + stem + ".png -c:v mpeg4 -q:v " +
+                              std::to_string(qscale) + " -pix_fmt yuv420p " + stem + ".mp4";
+  if (std::system(command.c_str()) != 0) return cv::Mat();
+  cv::VideoCapture video(stem + ".mp4");
+  cv::Mat frame, gray;
+  if (!video.read(frame)) return cv::Mat();
+  cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
+  return gray;
+}
+
 // `images` renders per band of `im` (the negative of each render when `negative`), detected with the
 // dictionary, polarity and gamma given; one line per band.
 void Report(const testing::Imaging& im, const std::string& dictionary, bool inverted, bool negative,
-            double gamma, int images) {
+            double gamma, int images, double halo_weight = 0, double halo_sigma_px = 3, int mpeg4_qscale = 0,
+            double denoise_range = 0, int demosaic = 0, double shoulder_knee = 0, double pedestal = 0,
+            double encoded_blur_px = 0) {
   auto dict = LoadDictionary(dictionary);
   MarkerConfig mc;
   mc.dictionary = dictionary, mc.inverted = inverted;
@@ -69,7 +106,37 @@ void Report(const testing::Imaging& im, const std::string& dictionary, bool inve
       std::vector<testing::RenderedMarker> truth;
       cv::Mat linear = testing::RenderReferenceLinear(*dict, scene, im, rng, &truth);
       if (negative) linear = im.exposure * (im.ink + im.paper) - linear;
-      const cv::Mat image = testing::reference::CameraPipeline(linear, im, rng);
+      if (halo_weight != 0) {  // linear <- (1 - w) linear + w G(halo sigma) * linear
+        cv::Mat wide;
+        cv::GaussianBlur(linear, wide, cv::Size(0, 0), halo_sigma_px);
+        linear = (1 - halo_weight) * linear + halo_weight * wide;
+      }
+      cv::Mat image = testing::reference::CameraPipeline(linear, im, rng);
+      if (denoise_range > 0) {
+        cv::Mat smooth;
+        cv::bilateralFilter(image, smooth, 5, denoise_range, 1.0);
+        image = smooth;
+      }
+      if (demosaic > 0) {
+        const int code[] = {cv::COLOR_BayerBG2BGR, cv::COLOR_BayerBG2BGR_VNG, cv::COLOR_BayerBG2BGR_EA};
+        cv::Mat bgr;
+        cv::cvtColor(image, bgr, code[std::min(demosaic, 3) - 1]);
+        cv::cvtColor(bgr, image, cv::COLOR_BGR2GRAY);
+      }
+      if (shoulder_knee > 0 || pedestal > 0)
+        for (uint8_t& v : cv::Mat_<uint8_t>(image)) {
+          double x = v;
+          if (shoulder_knee > 0 && x > shoulder_knee)
+            x -= (x - shoulder_knee) * (x - shoulder_knee) / (2 * (255 - shoulder_knee));
+          v = cv::saturate_cast<uint8_t>(pedestal + (255 - pedestal) * x / 255);
+        }
+      if (encoded_blur_px > 0) {
+        cv::Mat encoded;
+        image.convertTo(encoded, CV_64F);
+        cv::GaussianBlur(encoded, encoded, cv::Size(0, 0), encoded_blur_px);
+        encoded.convertTo(image, CV_8U);
+      }
+      if (mpeg4_qscale > 0) image = ThroughMpeg4(image, mpeg4_qscale);
       truths += static_cast<int>(truth.size());
       for (const marker_t& m : detector.Detect(image))
         for (const testing::RenderedMarker& t : truth) {
@@ -105,6 +172,10 @@ int main(int argc, char** argv) {
   im.sharpen = argc > 6 ? std::atof(argv[6]) : 0.0;
   im.jpeg_quality = argc > 7 ? std::atoi(argv[7]) : 0;
   Report(im, "DICT_4X4_1000", true, true, argc > 4 ? std::atof(argv[4]) : im.gamma,
-         argc > 1 ? std::atoi(argv[1]) : 20);
+         argc > 1 ? std::atoi(argv[1]) : 20, argc > 8 ? std::atof(argv[8]) : 0,
+         argc > 9 ? std::atof(argv[9]) : 3, argc > 10 ? std::atoi(argv[10]) : 0,
+         argc > 11 ? std::atof(argv[11]) : 0, argc > 12 ? std::atoi(argv[12]) : 0,
+         argc > 13 ? std::atof(argv[13]) : 0, argc > 14 ? std::atof(argv[14]) : 0,
+         argc > 15 ? std::atof(argv[15]) : 0);
   return 0;
 }

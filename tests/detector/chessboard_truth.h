@@ -50,6 +50,8 @@ struct ChessboardMarker {
   // involved (NaN below 5 markers).
   double size_rel_centres = std::numeric_limits<double>::quiet_NaN();
   double size_rel_stock_centres = std::numeric_limits<double>::quiet_NaN();
+  // Per side, the outward offset against the stock-centres homography's prediction (NaN: none).
+  std::array<double, 4> side_offset_stock_px{NAN, NAN, NAN, NAN};
   std::array<Eigen::Vector2d, 4> got_ideal{}, want_ideal{};  // detected and predicted corners, ideal px
 };
 
@@ -341,7 +343,8 @@ inline ChessboardComparison CompareWithChessboard(const RigConfig& rig, int max_
         if (predict(apply_centres, mk.id, got[0], &want_raw))
           SideOffsets(got, want_raw, &other), c.size_rel_centres = other.size_rel;
         if (predict(apply_stock_centres, mk.id, got[0], &want_raw))
-          SideOffsets(got, want_raw, &other), c.size_rel_stock_centres = other.size_rel;
+          SideOffsets(got, want_raw, &other), c.size_rel_stock_centres = other.size_rel,
+                                              c.side_offset_stock_px = other.side_offset_px;
         c.got_ideal = got, c.want_ideal = want;
         marker_t r = mk;
         for (int k = 0; k < 4; ++k) {
