@@ -37,7 +37,7 @@ struct Imaging {
   double read_noise = 2.0;          // gray levels (linear), at any level
   double shot_noise = 0.0;          // variance added per linear gray level (photon noise)
   double gamma = 1.0;               // encoding: 255 (v / 255)^(1 / gamma)
-  double sharpen = 0.0;             // unsharp mask amount (sigma 1 px) after encoding
+  double sharpen = 0.0;             // unsharp mask amount (sigma 1 px) after encoding; < 0: a blur
   bool sharpen_linear = false;      // the unsharp mask on linear light, before the encoding
   int jpeg_quality = 0;             // 0: none
   double exposure = 255.0;          // linear gray level of a reflectance-1 surface in full light
@@ -228,10 +228,10 @@ inline cv::Mat CameraPipeline(cv::Mat linear, const Imaging& im, std::mt19937_64
     encoded = encoded + im.sharpen * (encoded - smooth);
   };
   if (im.sharpen_linear) {  // sharpened in linear light, then encoded
-    if (im.sharpen > 0) sharpen();
+    if (im.sharpen != 0) sharpen();
     for (double& v : cv::Mat_<double>(encoded))
       v = 255.0 * std::pow(std::max(v, 0.0) / 255.0, 1.0 / im.gamma);
-  } else if (im.sharpen > 0) {
+  } else if (im.sharpen != 0) {
     sharpen();
   }
   cv::Mat out;
