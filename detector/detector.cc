@@ -580,6 +580,7 @@ struct SideRays {
   double gamma_hint = 1.0;
   bool hold_gamma = false;
   int polarity = 0;
+  double paper = 0;        // SideProfiles::paper
   bool skew_pass = false;  // TurnSkewedSides's: TurnSide always takes its three rounds
 
   // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
@@ -593,6 +594,7 @@ struct SideRays {
     profiles->gamma_hint = gamma_hint;
     profiles->hold_gamma = hold_gamma;
     profiles->polarity = polarity;
+    profiles->paper = paper;
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
@@ -872,8 +874,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const std::vector<char>& valid, const std::vector<Eigen::Vector2d>& origins,
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
                double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
-               SideProfiles* profiles, SideFit* fit, double* tilt = nullptr, double* tilt_at = nullptr,
-               bool skew_pass = false) {
+               double paper, SideProfiles* profiles, SideFit* fit, double* tilt = nullptr,
+               double* tilt_at = nullptr, bool skew_pass = false) {
   if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   thread_local SideRays rays;
@@ -892,6 +894,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.gamma_hint = gamma_hint;
   rays.hold_gamma = hold_gamma;
   rays.polarity = polarity;
+  rays.paper = paper;
   rays.skew_pass = skew_pass;
   if (!FitWholeSide(rays, profiles, fit)) return NAN;
   if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
@@ -1094,9 +1097,95 @@ struct Refinement {
   // How far each side's line moved in the latest model pass (px, at its corners; infinite before one).
   std::array<double, 4> side_moved;
   bool skew_turn = false;  // the model turns the sides of a skewed quad (SkewTurnWeight; TurnSkewedSides)
+  double paper = 0;        // the paper's level, read once per refinement (MarkerPaperLevel); 0: unknown
   double sigma_sum = 0;
   int sigma_count = 0;
 };
+
+// The paper's level of a normal print (the code's other colour), linear, from the inner cells of the quad
+// `corners` (bits: the code; `cells` with the border), under a Gaussian blur of `sigma_px` and the encoding
+// gamma `gamma` (1: linear). The value at cell k's centre (SampleCellCentres, linearised as
+// 255 (v / 255)^gamma) is v_k = B + (P - B) w_k, w_k the part of the blur about the centre on cells of the
+// other colour: over its 5 x 5 neighbourhood, in the quad's cell units at its centre (blur covariance
+// sigma^2 (J^T J)^-1, J the homography's Jacobian there, its diagonal taken), separable:
+//   w_k = sum over (dr, dc) of colour(dr, dc) g_row(dr) g_col(dc),
+//   g(d) = Phi((d + 1/2) / s) - Phi((d - 1/2) / s)   (a cell's box under the blur, s in cells).
+// B is the mean of the cells with w <= 0.2, P the mean of (v_k - (1 - w_k) B) / w_k over those with
+// w >= 0.8 (where a blur wider than the model's moves it least); over the cells whose neighbourhood lies
+// within the outline. 0 (unknown) where no cell reaches either or a centre leaves the image.
+double PaperLevel(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners, const cv::Mat& bits,
+                  int cells, double sigma_px, double gamma) {
+  if (bits.empty() || cells < 6 || !(sigma_px > 0)) return 0.0;
+  const std::array<cv::Point2d, 4> quad = {
+      cv::Point2d(corners[0].x(), corners[0].y()), cv::Point2d(corners[1].x(), corners[1].y()),
+      cv::Point2d(corners[2].x(), corners[2].y()), cv::Point2d(corners[3].x(), corners[3].y())};
+  thread_local std::vector<float> values;
+  if (!SampleCellCentres(gray, quad, cells, &values)) return 0.0;
+  // The homography's Jacobian at the quad's centre, per cell (px per cell along each of its axes):
+  // x = (h0 . u) / (h2 . u), dx/du_i = (h0_i - x h2_i) / (h2 . u).
+  const cv::Matx33d h = QuadFromUnitSquare(quad);
+  const cv::Vec3d mid = h * cv::Vec3d(0.5, 0.5, 1.0);
+  const double x = mid[0] / mid[2], y = mid[1] / mid[2];
+  Eigen::Matrix2d px_from_cell;
+  for (int i = 0; i < 2; ++i)
+    px_from_cell(0, i) = (h(0, i) - x * h(2, i)) / mid[2] / cells,
+                    px_from_cell(1, i) = (h(1, i) - y * h(2, i)) / mid[2] / cells;
+  const Eigen::Matrix2d cell_covariance =
+      sigma_px * sigma_px * (px_from_cell.transpose() * px_from_cell).inverse();
+  if (!(cell_covariance(0, 0) > 0) || !(cell_covariance(1, 1) > 0)) return 0.0;
+  double g_col[5], g_row[5];
+  const double s_col = std::sqrt(cell_covariance(0, 0)), s_row = std::sqrt(cell_covariance(1, 1));
+  for (int d = -2; d <= 2; ++d)
+    g_col[d + 2] = Phi((d + 0.5) / s_col) - Phi((d - 0.5) / s_col),
+              g_row[d + 2] = Phi((d + 0.5) / s_row) - Phi((d - 0.5) / s_row);
+  constexpr double kPaperWhite = 0.8;
+  double white_sum = 0, black_sum = 0;
+  int whites = 0, blacks = 0;
+  thread_local std::vector<std::pair<double, double>> white_cells;  // (w, linear value)
+  white_cells.clear();
+  for (int row = 2; row < cells - 2; ++row)
+    for (int col = 2; col < cells - 2; ++col) {
+      double other = 0, total = 0;
+      for (int dr = -2; dr <= 2; ++dr)
+        for (int dc = -2; dc <= 2; ++dc) {
+          const double g = g_row[dr + 2] * g_col[dc + 2];
+          total += g, other += GridCell(bits, cells, row + dr, col + dc) * g;
+        }
+      const double w = other / total;
+      const double value = 255.0 * std::pow(values[row * cells + col] / 255.0, gamma);
+      if (w >= kPaperWhite) white_cells.emplace_back(w, value);
+      if (w <= 1.0 - kPaperWhite) black_sum += value, ++blacks;
+    }
+  if (white_cells.empty() || blacks == 0) return 0.0;
+  const double border = black_sum / blacks;
+  for (const auto& [w, value] : white_cells) white_sum += (value - (1.0 - w) * border) / w, ++whites;
+  return white_sum / whites;
+}
+
+// The blur MarkerPaperLevel reads the paper with, times the sides' largest. paperexcess: 1.3 took the black
+// tool's map to +0.040 % but plain to -0.231 % and webcam to -0.202 %; 1.0 (its "M1") is kept here.
+constexpr double kPaperBlurFactor = 1.0;
+
+// The paper's level (PaperLevel) of a normal print at the refinement's current corners in the image's
+// units (encoded again with the gamma it was read with: each side's model takes it to linear light with
+// its own gamma, SideProfiles::paper), with the blur kPaperBlurFactor times the largest of the sides' latest
+// fits (the fits of cells a pixel deep find too little; 0.8 px before any) and the gamma their mean (the
+// known gamma where held; 1 on linear images); 0 on other prints.
+double MarkerPaperLevel(const Refinement& r) {
+  if (r.polarity <= 0) return 0.0;
+  double sigma = 0, gamma_sum = 0;
+  int gammas = 0;
+  for (const SideFit& fit : r.side_fits) {
+    if (!fit.warm) continue;
+    sigma = std::max(sigma, fit.sigma);
+    if (fit.gamma_fitted) gamma_sum += fit.gamma, ++gammas;
+  }
+  double gamma = 1.0;
+  if (r.fit_gamma) gamma = r.held_gamma > 0 ? r.held_gamma : gammas > 0 ? gamma_sum / gammas : 1.0;
+  const double linear =
+      PaperLevel(r.gray, r.img, r.bits, r.cells, kPaperBlurFactor * (sigma > 0 ? sigma : 0.8), gamma);
+  return linear > 0 ? 255.0 * std::pow(linear / 255.0, 1.0 / gamma) : 0.0;
+}
 
 // The line of side `side` through the corners `ideal`.
 Line LineThrough(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
@@ -1174,7 +1263,7 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   const double gamma_hint = r->held_gamma > 0 ? r->held_gamma : OtherSidesGamma(r->side_fits, side);
   const double e = FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line,
                            s.valid, s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma,
-                           gamma_hint, r->held_gamma > 0, r->polarity, &r->side_profiles, &fit,
+                           gamma_hint, r->held_gamma > 0, r->polarity, r->paper, &r->side_profiles, &fit,
                            turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn);
   r->side_modelled[side] = std::isfinite(e);
   if (!std::isfinite(e)) return true;
@@ -1196,6 +1285,11 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
   const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (int k = 0; k < 4; ++k) centre += r->img[k] / 4.0;
+  if (model_pass && !(r->paper > 0)) {  // read once per refinement, after the sides' first fits
+    bool warm = false;
+    for (const SideFit& fit : r->side_fits) warm = warm || fit.warm;
+    if (warm) r->paper = MarkerPaperLevel(*r);
+  }
   std::array<Line, 4> lines;
   for (int side = 0; side < 4; ++side)
     if (!LocateSide(r, ideal, ideal_from_unit, unit_from_ideal, centre, side, pass, model_pass, &lines[side]))

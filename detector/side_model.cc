@@ -18,6 +18,7 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   hold_gamma = false;
   polarity = 0;
   edge_only = false;
+  paper = 0;
   patterns.clear();
   sum.reserve(static_cast<size_t>(16) * bins);
   count.reserve(static_cast<size_t>(16) * bins);
@@ -406,9 +407,68 @@ void FillRowSteps(const SideProfiles& s, const double* p, int g, bool derivative
   }
 }
 
-// Model values, and with `jtj` / `jtr` the normal equations, for parameters p. Returns the weighted
-// squared residual sum.
-double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj, Vector* jtr) {
+// The margin's penalty (SideProfiles::paper) counts as this many observations of the paper's level per
+// ray.
+constexpr double kPaperWeightPerRay = 1.0;
+
+// 3 t^2 - 2 t^3 of t = (x - from) / (to - from) clamped to [0, 1]: 0 below `from`, 1 above `to`.
+double SmoothStep(double x, double from, double to) {
+  const double t = std::clamp((x - from) / (to - from), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// The paper's level P (SideProfiles::paper) in the model's linear units at gamma p[kGamma]:
+// P_lin = 255 (P / 255)^gamma where the profiles are encoded.
+double LinearPaper(const SideProfiles& s, const double* p) {
+  return s.fit_gamma ? 255.0 * std::pow(s.paper / 255.0, p[kGamma]) : s.paper;
+}
+
+// The two-level model's margin as paper plus an excess (SideProfiles::paper): a soft penalty on a margin
+// below the paper instead of a floor, so that no fit switches between models (a switch taken in one pass
+// and not in another left fast mode's corners 0.09 px from the accurate mode's). The residual
+//   h = W min(0, S1 - P_lin(gamma)),   W = sqrt(kPaperWeightPerRay * rays) G,
+// (d h / d S1 = W, d h / d gamma = -W P_lin ln(P / 255) where it is below), G the weight of the fit's
+// start (MarginWeight): held through the fit, so that the fit cannot escape the penalty by shrinking the
+// margin (a gate on the fitted margin's area let it do so: the stronger the penalty, the smaller the
+// black tool's gain). Returns h; its gradient in the parameters into `grad`.
+double MarginPenalty(const SideProfiles& s, const double* p, bool single, double weight, double* grad) {
+  std::fill(grad, grad + kParams, 0.0);
+  if (single || !(weight > 0)) return 0.0;
+  const double paper = LinearPaper(s, p);
+  if (!(p[kS1] < paper)) return 0.0;
+  grad[kS1] = weight;
+  if (s.fit_gamma) grad[kGamma] = -weight * paper * std::log(s.paper / 255.0);
+  return weight * (p[kS1] - paper);
+}
+
+// MarginPenalty's W for a fit starting from p:
+//   G = SmoothStep(a, 0.1, 0.2) (1 - SmoothStep(q / c, 2.5, 3.5)) (1 - SmoothStep(b, 0.1, 0.2)),
+//   a = q (S1 - S2) / (c (P_lin - L0)),   b = (S2 - L0) / (P_lin - L0),
+// by the margin's area a (width times excess over the surround, as a part of a cell times the paper's
+// contrast to the border: what the profiles fix even on cells a pixel deep, 0.5 for a half-cell margin,
+// near 0 on markers without one, whose fits must not get a paper strip), by its width (a "margin" wider
+// than 2.5 cells is the surface's far edge or texture, and its level is seen, not slid) and by the level
+// b of the surround beyond it (the penalty only where the surface is near the border's black: with a
+// grey surface the free fit's margin level is the paper's on the median, and a one-sided penalty clipped
+// the lower half of its scatter and moved mcmt-sim's 1-cell margins' edges outward; gate,
+// bench/results/2026-12-06-gate.md). 0 on other prints or without the paper's level.
+double MarginWeight(const SideProfiles& s, const double* p) {
+  if (s.polarity <= 0 || !(s.paper > 0)) return 0.0;
+  const double contrast = LinearPaper(s, p) - p[kL0];
+  if (!(contrast > 0)) return 0.0;
+  double rays = 0;
+  for (int n : s.rays) rays += n;
+  const double c = s.cell, a = p[kQ] * (p[kS1] - p[kS2]) / (c * contrast);
+  const double b = (p[kS2] - p[kL0]) / contrast;
+  const double gate = SmoothStep(a, 0.1, 0.2) * (1.0 - SmoothStep(p[kQ] / c, 2.5, 3.5));
+  return std::sqrt(kPaperWeightPerRay * rays) * gate * (1.0 - SmoothStep(b, 0.1, 0.2));
+}
+
+// Model values, and with `jtj` / `jtr` the normal equations, for parameters p, with the margin's penalty
+// of weight `margin_weight` (MarginPenalty). Returns the weighted squared residual sum and the penalty's
+// square.
+double Evaluate(const SideProfiles& s, const double* p, bool single, double margin_weight, Normal* jtj,
+                Vector* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
@@ -543,6 +603,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
 #endif
     for (; j < n; ++j) bin(j);
   }
+  double penalty_grad[kParams];
+  const double penalty = MarginPenalty(s, p, single, margin_weight, penalty_grad);
+  cost += penalty * penalty;
   if (!jtj) return cost;
   if (used % 2) {  // the pad row: no weight
     for (int k = 0; k < kParams; ++k) jacobian[k * capacity + used] = 0.0;
@@ -550,6 +613,10 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, Normal* jtj
   }
   NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
                   jtr);
+  if (penalty != 0) {
+    const Vector g = Eigen::Map<const Vector>(penalty_grad);
+    *jtj += g * g.transpose(), *jtr += penalty * g;
+  }
   return cost;
 }
 
@@ -647,7 +714,8 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   if (single) lo[kS2] = hi[kS2] = p[kS2], lo[kQ] = hi[kQ] = p[kQ];  // not in the model: held
   Normal jtj;
   Vector jtr;
-  double cost = Evaluate(s, p, single, &jtj, &jtr);
+  const double margin_weight = MarginWeight(s, p);
+  double cost = Evaluate(s, p, single, margin_weight, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -669,7 +737,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, single, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, margin_weight, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;

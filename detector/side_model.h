@@ -50,6 +50,14 @@ struct SideProfiles {
   // edge of a part of the side (its direction, FitSide in detector.cc) with the whole side's levels,
   // blur, margin and gamma.
   bool edge_only = false;
+  // The paper's level in the profiles' units (encoded where fit_gamma: the model takes it to linear light
+  // with its gamma), measured on the marker's code cells (PaperLevel in detector.cc); 0: unknown. A printed
+  // margin is paper: on cells about a pixel deep the profiles fix a narrow margin's area (its width times its
+  // excess over the surround) but not its level and width apart, and free fits slide to a margin too wide and
+  // too dim (the edge inward). Where the surface beyond the margin is near the border's black, the
+  // two-level model's margin then pays a soft penalty for lying below the paper (MarginPenalty and
+  // MarginWeight in side_model.cc).
+  double paper = 0;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
