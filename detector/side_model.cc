@@ -69,6 +69,8 @@ constexpr double kMinMarginContrast = 0.4;
 // width's bound (0.2 cell) that pairs with a per-side gamma off the image's (0.8-0.9 on linear renders) and
 // moves the edge 0.03-0.06 px outward on markers without a margin (FitSideModels).
 constexpr double kMinMarginExcess = 0.04;
+// A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
+constexpr double kHaloMaxCells = 0.25;
 
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
@@ -735,8 +737,15 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
   const bool unseen = p[kE] + p[kQ] > s.OuterU();
-  if (!code_contrast ||
-      (!faint && !unseen && std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
+  // Nor is a strip at the margin's narrowest (kHaloMaxCells) whose level lies beyond the border's, away
+  // from the code's (darker than the ink of a normal print): a print's margin is paper, or surround of
+  // any level but then not a strip of a fifth of a cell. It is the edge's own undershoot (sharpening,
+  // a gamma off the side's), and its valley lies half a cell inside the edge of the one-level fit: the
+  // model-only rounds' cold fits (RefineMarkerCorners) alternated between the two for ever, 1.25 px
+  // apart, and the corners depended on the start by 1.42 px (hard, bench/results/2026-12-06-onevalley.md).
+  const bool halo = p[kQ] < kHaloMaxCells * s.cell && (p[kS1] - p[kL0]) * (p[kL1] - p[kL0]) < 0;
+  if (!code_contrast || (!faint && !unseen && !halo &&
+                         std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
   *fit = start;
   fit->warm = false;
