@@ -70,6 +70,10 @@ constexpr double kMinMarginContrast = 0.4;
 // width's bound (0.2 cell) that pairs with a per-side gamma off the image's (0.8-0.9 on linear renders) and
 // moves the edge 0.03-0.06 px outward on markers without a margin (FitSideModels).
 constexpr double kMinMarginExcess = 0.04;
+// The fitted levels' bounds: the 8-bit range with some room for noise (FitOnce).
+constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
+// A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
+constexpr double kHaloMaxCells = 0.25;
 
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
@@ -691,7 +695,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   double lo[kParams], hi[kParams];
   lo[kE] = -c, hi[kE] = c;
   lo[kSigma] = 0.15, hi[kSigma] = 4.0;
-  for (int k : {kL0, kL1, kS1, kS2}) lo[k] = -20.0, hi[k] = 275.0;
+  for (int k : {kL0, kL1, kS1, kS2}) lo[k] = kLevelMin, hi[k] = kLevelMax;
   // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
   // sat 0.03 px further inward on the reference renderer's "hard" condition).
   lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
@@ -803,8 +807,18 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
   const bool unseen = p[kE] + p[kQ] > s.OuterU();
-  if (!code_contrast ||
-      (!faint && !unseen && std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
+  // Nor is a strip at the margin's narrowest (kHaloMaxCells) whose level lies beyond the border's, away
+  // from the code's, at the level's bound (darker than black for a normal print): a print's margin is
+  // paper, or surround of any level but then not a strip of a fifth of a cell. It is the edge's own
+  // undershoot (sharpening, a gamma off the side's), and its valley lies half a cell inside the edge of
+  // the one-level fit: the model-only rounds' cold fits (RefineMarkerCorners) alternated between the two
+  // for ever, 1.25 px apart, and the corners depended on the start by 1.42 px (hard,
+  // bench/results/2026-12-06-onevalley.md; without the level's bound the rule moved the no-margin map
+  // -0.205 -> -0.222 %).
+  const bool halo = p[kQ] < kHaloMaxCells * s.cell && (p[kS1] - p[kL0]) * (p[kL1] - p[kL0]) < 0 &&
+                    (p[kS1] < kLevelMin + 0.5 || p[kS1] > kLevelMax - 0.5);
+  if (!code_contrast || (!faint && !unseen && !halo &&
+                         std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
   *fit = start;
   fit->warm = false;
