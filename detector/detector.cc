@@ -779,13 +779,15 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
 }
 
 // The whole side's model fit about its line (fit->e then px outward from it), false when it fails. A
-// previous pass's fit warm-starts it, its edge at fit->e (LocateSide). A fit of the wrong polarity took the
-// first code row for the border (the profiles lay about a cell inside the edge): the side is sampled and
-// fitted again one cell outward. An edge beyond the profiles' middle (more than 0.75 cell from their line:
-// the line a cell inside or outside, on the code's edge or the margin's) is sampled and fitted again about
-// where it was found.
+// previous pass's fit warm-starts it. A fit of the wrong polarity took the first code row for the border
+// (the profiles lay about a cell inside the edge): the side is sampled and fitted again one cell
+// outward. An edge beyond the profiles' middle (more than 0.75 cell from their line: the line a cell
+// inside or outside, on the code's edge or the margin's) is sampled and fitted again about where it was
+// found.
 bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
   side.SampleProfiles(profiles, 0.0);
+  // The previous pass's edge was moved to the line it found: e = 0 here.
+  if (fit->warm) fit->e = 0.0;
   double shift = 0.0;
   bool ok = FitSideProfiles(*profiles, fit);
   if (!ok && fit->wrong_polarity) {
@@ -1090,7 +1092,6 @@ struct Refinement {
   // Sides of the latest pass located neither by crossings nor by the model (they kept their line).
   std::array<bool, 4> side_unfitted{};
   std::array<bool, 4> side_modelled{};  // located by the side model in the latest pass
-  std::array<bool, 4> side_crossed{};   // located about its crossings' line in the latest pass
   // How far each side's line moved in the latest model pass (px, at its corners; infinite before one).
   std::array<double, 4> side_moved;
   bool skew_turn = false;  // the model turns the sides of a skewed quad (SkewTurnWeight; TurnSkewedSides)
@@ -1164,13 +1165,6 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   if (!model_pass) return true;
   SideFit& fit = r->side_fits[side];
   const double sigma_along = fit.warm ? fit.sigma : 0.8;
-  // A warm fit starts its edge where the previous pass found it relative to the line it was fitted about:
-  // about the crossings' line in both passes, at the previous fit's offset from it (the crossings lie
-  // where the image's mid level does, and the model's edge at about the same offset from them in every
-  // pass: 8 % fewer model evaluations in bench_detector); otherwise on the line (the previous pass's edge,
-  // moved there).
-  if (fit.warm && !(crossed && r->side_crossed[side])) fit.e = 0.0;
-  r->side_crossed[side] = crossed;
   // The line's direction is the crossings' where their levels have the marker's polarity (the border's
   // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
   // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the
