@@ -1108,10 +1108,8 @@ Line LineThrough(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
 
 // A side whose line moved less than this in a model pass (px, at its corners) is settled: the next
 // model passes of the refinement keep its line and fit (LocateSide) while the other sides go on. Its
-// next fit would move it by about a fifth of that (the passes converge linearly). 1e-3 px (3e-4 before):
-// bench_detector's instructions -3.8 % (accurate), bench_accuracy --quick's conditions within 0.003 px
-// (bench/results/2026-12-06-speed8.md).
-constexpr double kSideSettledPx = 1e-3;
+// next fit would move it by about a fifth of that (the passes converge linearly).
+constexpr double kSideSettledPx = 3e-4;
 
 // How far side `side` of the quad `ideal` is turned by the model (LocateSide) where its crossings alone
 // would give its direction: 0 to 1 as the larger |cosine| of the quad's angles at the side's ends grows
