@@ -788,7 +788,9 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
 // found.
 bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
   side.SampleProfiles(profiles, 0.0);
-  // The previous pass's edge was moved to the line it found: e = 0 here.
+  // A warm fit keeps the previous pass's other parameters but starts its edge at e = 0, on the line the
+  // profiles were just sampled about (this pass's line, not where the previous fit put the edge; starting
+  // at the previous offset saved 8 % of evaluations but moved start-dependent markers: speed8).
   if (fit->warm) fit->e = 0.0;
   double shift = 0.0;
   bool ok = FitSideProfiles(*profiles, fit);
