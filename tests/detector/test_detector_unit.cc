@@ -799,7 +799,7 @@ TEST(SideModel, AFitDoesNotReadPastTheGroupsPatterns) {
 
 // Evaluate takes a group's bins two at a time where both have samples (SSE2) and one at a time elsewhere,
 // by the same operations. So a side's fit is the same to the bit when one empty bin in front moves every
-// pair of bins by one (the bins' positions exactly the same, that bin beyond 5 sigmas of every boundary:
+// pair of bins by one (the bins' positions exactly the same, that bin beyond 7 sigmas of every boundary:
 // its Phi and phi need no exponential), with gamma fitted (the encoding's log and exp in both paths).
 // Bins left empty across the edge make their neighbours there go one at a time in one fit and paired in
 // the other.
