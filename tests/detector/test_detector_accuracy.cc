@@ -63,6 +63,26 @@ const std::map<std::string, Bounds>& Shortfalls() {
   return s;
 }
 
+// The reference renderer's sharpening amount: positive sharpens an edge (overshoot beside it), negative
+// blurs it (the pixels beside the edge move toward its other side). A negative amount used to be ignored
+// (the image was the unsharpened one, byte for byte; found by cam1width).
+TEST(ReferenceRenderer, SharpeningAmountOfEitherSign) {
+  cv::Mat linear(8, 16, CV_64F, cv::Scalar(40.0));
+  linear.colRange(8, 16).setTo(200.0);
+  auto render = [&](double amount) {
+    testing::Imaging im;
+    im.read_noise = 0, im.sharpen = amount;
+    std::mt19937_64 rng(1);
+    return testing::reference::CameraPipeline(linear.clone(), im, rng);
+  };
+  const cv::Mat none = render(0), sharp = render(0.6), soft = render(-0.6);
+  // Row 4, the columns each side of the step (7 dark, 8 bright).
+  EXPECT_LT(sharp.at<uint8_t>(4, 7), none.at<uint8_t>(4, 7));
+  EXPECT_GT(sharp.at<uint8_t>(4, 8), none.at<uint8_t>(4, 8));
+  EXPECT_GT(soft.at<uint8_t>(4, 7), none.at<uint8_t>(4, 7) + 10);
+  EXPECT_LT(soft.at<uint8_t>(4, 8) + 10, none.at<uint8_t>(4, 8));
+}
+
 TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   testing::Accuracy all;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
