@@ -161,9 +161,10 @@ SkewError SkewErrorOf(const std::vector<testing::ChessboardMarker>& markers,
 // sound on renders of this board (RenderedBoardTruthIsSoundUpTo55Deg), beyond it it reads sizes about
 // 0.1 % small and angles 0.15 deg too skewed at 24 px (2026-12-06; bench/results/2026-12-05-truthtest.md:
 // -0.07..-0.09 % at 58-65 deg), as much as the bound. cam1 films the board steeply (149 of its 270 markers
-// beyond 55 deg), so each camera needs 100 markers there, not 200. Measured (2026-12-06, main 29430f8),
-// <= 55 deg: cam0-3 -0.036 / +0.193 / -0.081 / -0.011 % (398 / 121 / 410 / 412 markers), mean 0.080 %;
-// all views (printed beside, not asserted): -0.041 / +0.189 / -0.081 / -0.013 %, mean 0.081 %. Bounds: the
+// beyond 55 deg), so each camera needs 100 markers there, not 200. Measured (2026-12-06, inverted prints
+// searched in the negated image), <= 55 deg: cam0-3 -0.040 / +0.176 / -0.096 / -0.034 % (404 / 124 / 419 /
+// 421 markers), mean 0.086 %; all views (printed beside, not asserted): -0.044 / +0.191 / -0.096 / -0.044 %
+// (before that search, main 29430f8: <= 55 deg mean 0.080 %, all views 0.081 %). Bounds: the
 // mean 0.09 % and each camera 0.2 % (the truth itself is good to about 0.1 % per camera on cams 1-3: its two
 // independent versions differ by 0.05-0.12 %).
 // Each camera's angle error by marker size is printed (not asserted: main's small markers come out too
