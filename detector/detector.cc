@@ -1104,6 +1104,12 @@ struct Refinement {
   int sigma_count = 0;
 };
 
+// A quad's corners as OpenCV points.
+std::array<cv::Point2d, 4> CvQuad(const std::array<Eigen::Vector2d, 4>& q) {
+  return {cv::Point2d(q[0].x(), q[0].y()), cv::Point2d(q[1].x(), q[1].y()), cv::Point2d(q[2].x(), q[2].y()),
+          cv::Point2d(q[3].x(), q[3].y())};
+}
+
 // The paper's level of a normal print (the code's other colour), linear, from the inner cells of the quad
 // `corners` (bits: the code; `cells` with the border), under a Gaussian blur of `sigma_px` and the encoding
 // gamma `gamma` (1: linear). The value at cell k's centre (SampleCellCentres, linearised as
@@ -1118,9 +1124,7 @@ struct Refinement {
 double PaperLevel(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners, const cv::Mat& bits,
                   int cells, double sigma_px, double gamma) {
   if (bits.empty() || cells < 6 || !(sigma_px > 0)) return 0.0;
-  const std::array<cv::Point2d, 4> quad = {
-      cv::Point2d(corners[0].x(), corners[0].y()), cv::Point2d(corners[1].x(), corners[1].y()),
-      cv::Point2d(corners[2].x(), corners[2].y()), cv::Point2d(corners[3].x(), corners[3].y())};
+  const std::array<cv::Point2d, 4> quad = CvQuad(corners);
   thread_local std::vector<float> values;
   if (!SampleCellCentres(gray, quad, cells, &values)) return 0.0;
   // The homography's Jacobian at the quad's centre, per cell (px per cell along each of its axes):
@@ -1171,8 +1175,8 @@ constexpr double kPaperBlurFactor = 1.0;
 // The paper's level (PaperLevel) of a normal print at the refinement's current corners in the image's
 // units (encoded again with the gamma it was read with: each side's model takes it to linear light with
 // its own gamma, SideProfiles::paper), with the blur kPaperBlurFactor times the largest of the sides' latest
-// fits (the fits of cells a pixel deep find too little; 0.8 px before any) and the gamma their mean (the
-// known gamma where held; 1 on linear images); 0 on other prints.
+// fits (the fits of cells a pixel deep find too little) and the gamma their mean (the known gamma where
+// held; 1 on linear images); 0 on other prints and before any side has been fitted.
 double MarkerPaperLevel(const Refinement& r) {
   if (r.polarity <= 0) return 0.0;
   double sigma = 0, gamma_sum = 0;
@@ -1182,10 +1186,10 @@ double MarkerPaperLevel(const Refinement& r) {
     sigma = std::max(sigma, fit.sigma);
     if (fit.gamma_fitted) gamma_sum += fit.gamma, ++gammas;
   }
+  if (!(sigma > 0)) return 0.0;  // no side fitted yet (a fit's blur is at least 0.15 px)
   double gamma = 1.0;
   if (r.fit_gamma) gamma = r.held_gamma > 0 ? r.held_gamma : gammas > 0 ? gamma_sum / gammas : 1.0;
-  const double linear =
-      PaperLevel(r.gray, r.img, r.bits, r.cells, kPaperBlurFactor * (sigma > 0 ? sigma : 0.8), gamma);
+  const double linear = PaperLevel(r.gray, r.img, r.bits, r.cells, kPaperBlurFactor * sigma, gamma);
   return linear > 0 ? 255.0 * std::pow(linear / 255.0, 1.0 / gamma) : 0.0;
 }
 
@@ -1281,17 +1285,12 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
 bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vector2d, 4>* next) {
   std::array<Eigen::Vector2d, 4> ideal;
   for (int k = 0; k < 4; ++k) ideal[k] = r->map.ToIdeal(r->img[k]);
-  const cv::Matx33d ideal_from_unit =
-      QuadFromUnitSquare({cv::Point2d(ideal[0].x(), ideal[0].y()), cv::Point2d(ideal[1].x(), ideal[1].y()),
-                          cv::Point2d(ideal[2].x(), ideal[2].y()), cv::Point2d(ideal[3].x(), ideal[3].y())});
+  const cv::Matx33d ideal_from_unit = QuadFromUnitSquare(CvQuad(ideal));
   const cv::Matx33d unit_from_ideal = ideal_from_unit.inv();
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (int k = 0; k < 4; ++k) centre += r->img[k] / 4.0;
-  if (model_pass && !(r->paper > 0)) {  // read once per refinement, after the sides' first fits
-    bool warm = false;
-    for (const SideFit& fit : r->side_fits) warm = warm || fit.warm;
-    if (warm) r->paper = MarkerPaperLevel(*r);
-  }
+  // Read once per refinement, after the sides' first fits.
+  if (model_pass && !(r->paper > 0)) r->paper = MarkerPaperLevel(*r);
   std::array<Line, 4> lines;
   for (int side = 0; side < 4; ++side)
     if (!LocateSide(r, ideal, ideal_from_unit, unit_from_ideal, centre, side, pass, model_pass, &lines[side]))
@@ -1380,7 +1379,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     if (!std::isfinite(img[k].x()) || !std::isfinite(img[k].y()) || (img[k] - original[k]).norm() > limit)
       return false;
   }
-  for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(img[k].x(), img[k].y());
+  *corners = CvQuad(img);
   if (blur_sigma && r.sigma_count > 0) *blur_sigma = r.sigma_sum / r.sigma_count;
   return true;
 }
@@ -1412,7 +1411,7 @@ bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const 
   }
   for (int k = 0; k < 4; ++k)
     if (r.side_unfitted[k] || !std::isfinite(r.img[k].x()) || !std::isfinite(r.img[k].y())) return false;
-  for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(r.img[k].x(), r.img[k].y());
+  *corners = CvQuad(r.img);
   return true;
 }
 }  // namespace
@@ -1543,12 +1542,12 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   // OpenCV's detectInvertedMarker sees a white-bordered marker only as the hole of the dark ring around
   // it, a contour that breaks where the ring is thin (a ChArUco board's one-cell ring at steep views).
   const bool negated = options_.inverted && markers_.inverted;
-  const cv::Mat whole_or_roi = roi.area() == gray.rows * gray.cols ? gray : gray(roi);
+  const bool whole = roi.area() == gray.rows * gray.cols;
   cv::Mat view;
   if (negated)
-    cv::bitwise_not(whole_or_roi, view);  // a new image: `gray` stays as it is
+    cv::bitwise_not(whole ? gray : gray(roi), view);  // a new image: `gray` stays as it is
   else
-    view = roi.area() == gray.rows * gray.cols ? gray : gray(roi).clone();
+    view = whole ? gray : gray(roi).clone();
   const double side = std::max(view.cols, view.rows);
   p->adaptiveThreshWinSizeMin = window_min;
   p->adaptiveThreshWinSizeMax = window_max;
