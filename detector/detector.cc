@@ -491,6 +491,32 @@ cv::Rect GrownBox(const std::array<cv::Point2d, 4>& corners, double rate, double
                   cv::Point(static_cast<int>(std::ceil(x1 + grow)), static_cast<int>(std::ceil(y1 + grow)))) &
          cv::Rect(cv::Point(0, 0), size);
 }
+
+std::vector<cv::Point2f> FloatQuad(const std::array<cv::Point2d, 4>& q) {
+  std::vector<cv::Point2f> f;
+  for (const cv::Point2d& c : q) f.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+  return f;
+}
+
+// Whether the centre (the corners' mean) of quad `a` lies strictly inside quad `b`.
+bool CentreInside(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  cv::Point2d centre(0, 0);
+  for (const cv::Point2d& c : a) centre += 0.25 * c;
+  return cv::pointPolygonTest(FloatQuad(b),
+                              cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)),
+                              false) > 0;
+}
+
+// OpenCV's corner refinement of `corners` in place, in a window of about half a cell (1-5 px).
+void SubPixelCorners(const cv::Mat& gray, int cells, std::array<cv::Point2d, 4>* corners) {
+  std::vector<cv::Point2f> f = FloatQuad(*corners);
+  double side = 0;
+  for (int k = 0; k < 4; ++k) side += 0.25 * cv::norm((*corners)[(k + 1) % 4] - (*corners)[k]);
+  const int half = std::clamp(static_cast<int>(0.5 * side / cells), 1, 5);
+  cv::cornerSubPix(gray, f, cv::Size(half, half), cv::Size(-1, -1),
+                   cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01));
+  for (int k = 0; k < 4; ++k) (*corners)[k] = cv::Point2d(f[k].x, f[k].y);
+}
 }  // namespace
 
 namespace {
@@ -1595,15 +1621,8 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
       std::array<cv::Point2d, 4> quad;
       for (int k = 0; k < 4; ++k) quad[k] = cv::Point2d(c[k].x + roi.x, c[k].y + roi.y);
       // Not where a marker was accepted (a margin's or a window's other quad of it).
-      cv::Point2d centre(0, 0);
-      for (const auto& q : quad) centre += 0.25 * q;
       bool covered = false;
-      for (size_t j = 0; j < accepted && !covered; ++j) {
-        std::vector<cv::Point2f> a;
-        for (const auto& q : out[j].corners) a.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
-        covered = cv::pointPolygonTest(
-                      a, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
-      }
+      for (size_t j = 0; j < accepted && !covered; ++j) covered = CentreInside(quad, out[j].corners);
       if (covered) continue;
       Raw r;
       if (RereadCandidate(gray, quad, &r) && markers_.Accepts(r.id)) out.push_back(r);
@@ -1794,7 +1813,10 @@ void MarkerDetector::UnsharpRegion(const cv::Mat& from, double smoothing, cv::Ma
   unsharp_in_.convertTo(to, CV_8U, 255.0);
 }
 
-std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
+namespace {
+
+// `image` (8-bit or deeper; gray, BGR or BGRA) as 8-bit gray (shared, not copied, when it is one).
+cv::Mat GrayImage(const cv::Mat& image) {
   cv::Mat gray;
   if (image.channels() == 3)
     cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
@@ -1803,21 +1825,13 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   else
     gray = image;
   if (gray.depth() != CV_8U) gray.convertTo(gray, CV_8U);
-  ++stats_.frames;
+  return gray;
+}
 
-  std::vector<Raw> raw;
-  if (options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every) {
-    raw = TrackSearch(gray);
-    ++frames_since_full_;
-  } else {
-    raw = FullSearch(gray, cv::Rect(0, 0, gray.cols, gray.rows));
-    frames_since_full_ = 0;
-    ++stats_.full_searches;
-  }
-  // Duplicated ids. One marker found twice (regions overlapping in fast mode, quads of one marker from
-  // two threshold windows, or the marker's and its narrow margin's quads both decoding): quads whose
-  // centres lie inside each other, kept once, the quad whose code reads best. Two distinct places
-  // with one id: one is wrong, both dropped (drop_duplicate_ids).
+}  // namespace
+
+std::vector<MarkerDetector::Raw> MarkerDetector::DropDuplicates(const cv::Mat& gray,
+                                                                const std::vector<Raw>& raw) {
   const int cells = dictionary_->markerSize + 2;
   std::map<int, std::vector<size_t>> by_id;
   for (size_t i = 0; i < raw.size(); ++i) by_id[raw[i].id].push_back(i);
@@ -1827,18 +1841,10 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
       unique.push_back(raw[indices[0]]);
       continue;
     }
-    auto inside = [&](size_t a, size_t b) {  // the centre of quad a inside quad b
-      cv::Point2d centre(0, 0);
-      for (const auto& c : raw[a].corners) centre += 0.25 * c;
-      std::vector<cv::Point2f> quad;
-      for (const auto& c : raw[b].corners)
-        quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-      return cv::pointPolygonTest(
-                 quad, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
-    };
     bool same_place = true;
     for (size_t j = 1; j < indices.size(); ++j)
-      same_place = same_place && inside(indices[j], indices[0]) && inside(indices[0], indices[j]);
+      same_place = same_place && CentreInside(raw[indices[j]].corners, raw[indices[0]].corners) &&
+                   CentreInside(raw[indices[0]].corners, raw[indices[j]].corners);
     if (!same_place) {
       if (!options_.drop_duplicate_ids)
         for (size_t j : indices) unique.push_back(raw[j]);
@@ -1853,10 +1859,15 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
     }
     unique.push_back(raw[best]);
   }
+  return unique;
+}
 
+std::vector<MarkerDetector::Raw> MarkerDetector::DropLookAlikes(const cv::Mat& gray,
+                                                                std::vector<Raw> unique) const {
   // Inverted prints (markers.inverted): only white-bordered markers are real; the dark parts of an
   // inverted marker can look like a normal one.
   if (markers_.inverted && options_.inverted) {
+    const int cells = dictionary_->markerSize + 2;
     std::vector<Raw> kept;
     for (const Raw& r : unique)
       if (MarkerPolarity(gray, r.corners, cells) < 0) kept.push_back(r);
@@ -1866,175 +1877,183 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   if (unique.size() > 1) {
     std::vector<Raw> kept;
     for (size_t i = 0; i < unique.size(); ++i) {
-      cv::Point2d centre(0, 0);
-      for (const auto& c : unique[i].corners) centre += 0.25 * c;
+      const double area = std::abs(cv::contourArea(FloatQuad(unique[i].corners)));
       bool nested = false;
-      for (size_t j = 0; j < unique.size() && !nested; ++j) {
-        if (j == i) continue;
-        std::vector<cv::Point2f> quad;
-        for (const auto& c : unique[j].corners)
-          quad.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-        nested =
-            cv::contourArea(quad) > 1.5 * std::abs(cv::contourArea(std::vector<cv::Point2f>{
-                                              unique[i].corners[0], unique[i].corners[1],
-                                              unique[i].corners[2], unique[i].corners[3]})) &&
-            cv::pointPolygonTest(
-                quad, cv::Point2f(static_cast<float>(centre.x), static_cast<float>(centre.y)), false) > 0;
-      }
+      for (size_t j = 0; j < unique.size() && !nested; ++j)
+        nested = j != i && cv::contourArea(FloatQuad(unique[j].corners)) > 1.5 * area &&
+                 CentreInside(unique[i].corners, unique[j].corners);
       if (!nested) kept.push_back(unique[i]);
     }
     unique.swap(kept);
   }
+  return unique;
+}
 
-  // "edges": the region a marker is refined on (gamma-encoded camera images linearised: edges are located
-  // on intensities proportional to light, where a blurred step crosses halfway at the true edge; in
-  // encoded values it shifts to the dark side) and its refinement from `corners`.
+// "edges": the region a marker is refined on (gamma-encoded camera images linearised: edges are located
+// on intensities proportional to light, where a blurred step crosses halfway at the true edge; in
+// encoded values it shifts to the dark side). A camera's sharpening (unsharp_amount) undone: the region
+// stays encoded, a known gamma is held in the side model (not applied through an 8-bit table) and fitted
+// per side where unknown.
+const cv::Mat* MarkerDetector::RefineRegion(const cv::Mat& gray, const Raw& r, cv::Rect* roi) {
   const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
-  const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
-  // A camera's sharpening (unsharp_amount) undone: the region stays encoded, a known gamma is held in
-  // the side model (not applied through an 8-bit table) and fitted per side where unknown.
   const bool unsharp = options_.unsharp_amount > 0;
-  auto region = [&](const Raw& r, cv::Rect* roi) -> const cv::Mat* {
-    *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-    if (!linearise && !unsharp) return &gray;
-    if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
-    if (!unsharp) {
-      if (gamma_lut_.empty()) {
-        gamma_lut_.create(1, 256, CV_8U);
-        for (int v = 0; v < 256; ++v)
-          gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
-      }
-      // Linearised a little beyond the region: its smoothing (sharp_smoothing) reads up to OpenCV's
-      // kernel radius for 8-bit images (about 3 sigma) outside it.
-      const int pad = static_cast<int>(std::ceil(3.0 * options_.sharp_smoothing)) + 1;
-      const cv::Rect padded =
-          cv::Rect(roi->x - pad, roi->y - pad, roi->width + 2 * pad, roi->height + 2 * pad) &
-          cv::Rect(0, 0, gray.cols, gray.rows);
-      cv::LUT(gray(padded), gamma_lut_, linear_(padded));
-      return &linear_;
+  *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+  if (!linearise && !unsharp) return &gray;
+  if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
+  if (!unsharp) {
+    if (gamma_lut_.empty()) {
+      gamma_lut_.create(1, 256, CV_8U);
+      for (int v = 0; v < 256; ++v)
+        gamma_lut_.at<uint8_t>(v) = cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options_.gamma));
     }
-    UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
+    // Linearised a little beyond the region: its smoothing (sharp_smoothing) reads up to OpenCV's
+    // kernel radius for 8-bit images (about 3 sigma) outside it.
+    const int pad = static_cast<int>(std::ceil(3.0 * options_.sharp_smoothing)) + 1;
+    const cv::Rect padded =
+        cv::Rect(roi->x - pad, roi->y - pad, roi->width + 2 * pad, roi->height + 2 * pad) &
+        cv::Rect(0, 0, gray.cols, gray.rows);
+    cv::LUT(gray(padded), gamma_lut_, linear_(padded));
     return &linear_;
-  };
-  // The border's polarity is known unless both prints are searched for (`inverted` without
-  // markers.inverted: a quad's border against its ring depends on the surround, not the print).
-  // A marker is refined on its region `roi` of `from` only: the working images (linear_, smooth_) hold
-  // this marker's region, and outside it what earlier markers and frames left (a refinement from a
-  // candidate far off the marker sampled there: memcheck's uninitialised reads, results that could
-  // depend on the images before). Beyond the region a ray counts as beyond the image.
-  auto refine = [&](const cv::Mat& from, const cv::Rect& roi, const Raw& r,
-                    std::array<cv::Point2d, 4>* corners, double* blur, bool* kept) {
-    const cv::Point2d origin(roi.x, roi.y);
-    std::optional<CameraModel> region_camera;
-    if (camera_) region_camera = CameraInRegion(*camera_, roi);
-    std::array<cv::Point2d, 4> local = *corners;
-    for (cv::Point2d& c : local) c -= origin;
-    const bool ok =
-        RefineMarkerCorners(from(roi), cells, MarkerBits(r.id), region_camera ? &*region_camera : nullptr,
-                            options_.edge_passes, &local, options_.edge_model, blur,
-                            options_.gamma == 0 || unsharp, kept, polarity, unsharp ? options_.gamma : 0.0);
-    if (ok)
-      for (int k = 0; k < 4; ++k) (*corners)[k] = local[k] + origin;
-    return ok;
-  };
-  // Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
-  // phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
-  // crossing and model fit are unbiased under symmetric blur, the locking is gone. A blurred frame (the
-  // mean of its markers' blur from those fits, sqrt(sigma^2 - smoothing^2), 0.55 px or more) needs no
-  // smoothing: its markers are refined from their candidates on their unsmoothed regions. The choice
-  // rests on this frame's markers only: never on earlier frames (nor the detector's mode, whose
-  // histories differ). The mean, not the median: the sim's blur is 0.4-0.58 px per marker, and the
-  // upper median of a frame's two markers flipped the choice between the modes (0.13 px at 640x480).
-  struct Smoothed {
-    std::array<cv::Point2d, 4> corners;
-    bool refined = false, kept_lines = false;
-  };
-  std::vector<Smoothed> smoothed;
-  bool use_smoothed = false;
-  if (options_.corner_refinement == "edges" && options_.sharp_smoothing > 0) {
-    const double s = options_.sharp_smoothing;
-    std::vector<double> blurs;  // each smoothed fit's blur, px
-    for (const Raw& r : unique) {
-      cv::Rect roi;
-      if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
-      if (unsharp) {
-        roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
-        UnsharpRegion(gray(roi), s, smooth_(roi));
-      } else {
-        const cv::Mat* source = region(r, &roi);
-        cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
-      }
-      Smoothed m;
-      m.corners = r.corners;
-      double sigma = NAN;
-      m.refined = refine(smooth_, roi, r, &m.corners, &sigma, &m.kept_lines);
-      if (m.refined && std::isfinite(sigma)) blurs.push_back(std::sqrt(std::max(0.0, sigma * sigma - s * s)));
-      smoothed.push_back(m);
-    }
-    double mean = 0;
-    for (double b : blurs) mean += b / blurs.size();
-    use_smoothed = blurs.empty() || mean < 0.55;
   }
+  UnsharpRegion(gray(*roi), 0.0, linear_(*roi));
+  return &linear_;
+}
 
+// The border's polarity is known unless both prints are searched for (`inverted` without
+// markers.inverted: a quad's border against its ring depends on the surround, not the print).
+// A marker is refined on its region `roi` of `from` only: the working images (linear_, smooth_) hold
+// this marker's region, and outside it what earlier markers and frames left (a refinement from a
+// candidate far off the marker sampled there: memcheck's uninitialised reads, results that could
+// depend on the images before). Beyond the region a ray counts as beyond the image.
+bool MarkerDetector::RefineInRegion(const cv::Mat& from, const cv::Rect& roi, const Raw& r,
+                                    std::array<cv::Point2d, 4>* corners, double* blur, bool* kept_lines) {
+  const int cells = dictionary_->markerSize + 2;
+  const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
+  const bool unsharp = options_.unsharp_amount > 0;
+  const cv::Point2d origin(roi.x, roi.y);
+  std::optional<CameraModel> region_camera;
+  if (camera_) region_camera = CameraInRegion(*camera_, roi);
+  std::array<cv::Point2d, 4> local = *corners;
+  for (cv::Point2d& c : local) c -= origin;
+  const bool ok = RefineMarkerCorners(from(roi), cells, MarkerBits(r.id),
+                                      region_camera ? &*region_camera : nullptr, options_.edge_passes, &local,
+                                      options_.edge_model, blur, options_.gamma == 0 || unsharp, kept_lines,
+                                      polarity, unsharp ? options_.gamma : 0.0);
+  if (ok)
+    for (int k = 0; k < 4; ++k) (*corners)[k] = local[k] + origin;
+  return ok;
+}
+
+// Sharp images: interpolated edge profiles lock to the pixel grid (sides along an image axis keep one
+// phase all along). Every marker is refined first on its region smoothed a little (sharp_smoothing):
+// crossing and model fit are unbiased under symmetric blur, the locking is gone. A blurred frame (the
+// mean of its markers' blur from those fits, sqrt(sigma^2 - smoothing^2), 0.55 px or more) needs no
+// smoothing: its markers are refined from their candidates on their unsmoothed regions. The choice
+// rests on this frame's markers only: never on earlier frames (nor the detector's mode, whose
+// histories differ). The mean, not the median: the sim's blur is 0.4-0.58 px per marker, and the
+// upper median of a frame's two markers flipped the choice between the modes (0.13 px at 640x480).
+std::vector<MarkerDetector::Refined> MarkerDetector::RefineSmoothed(const cv::Mat& gray,
+                                                                    const std::vector<Raw>& unique,
+                                                                    bool* sharp_frame) {
+  const double s = options_.sharp_smoothing;
+  const bool unsharp = options_.unsharp_amount > 0;
+  std::vector<double> blurs;  // each smoothed fit's blur, px
+  std::vector<Refined> smoothed;
+  for (const Raw& r : unique) {
+    cv::Rect roi;
+    if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
+    if (unsharp) {
+      roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+      UnsharpRegion(gray(roi), s, smooth_(roi));
+    } else {
+      const cv::Mat* source = RefineRegion(gray, r, &roi);
+      cv::GaussianBlur((*source)(roi), smooth_(roi), cv::Size(0, 0), s);
+    }
+    Refined m;
+    m.corners = r.corners;
+    double sigma = NAN;
+    m.refined = RefineInRegion(smooth_, roi, r, &m.corners, &sigma, &m.kept_lines);
+    if (m.refined && std::isfinite(sigma)) blurs.push_back(std::sqrt(std::max(0.0, sigma * sigma - s * s)));
+    smoothed.push_back(m);
+  }
+  double mean = 0;
+  for (double b : blurs) mean += b / blurs.size();
+  *sharp_frame = blurs.empty() || mean < 0.55;
+  return smoothed;
+}
+
+bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed, Raw* r) {
+  const int cells = dictionary_->markerSize + 2;
+  const cv::Mat& bits = MarkerBits(r->id);
+  // A refinement counts only if the code reads at the refined corners about as well as at the
+  // candidate's (which decoded): not a cell off.
+  const std::array<cv::Point2d, 4> candidate = r->corners;
+  int candidate_mismatches = -1;  // read once, when a refinement is to be judged
+  // A marker read from unmixed levels is judged on them (its cells' centres read wrong anywhere).
+  auto mismatches = [&](const std::array<cv::Point2d, 4>& corners) {
+    if (!r->deconvolved) return CodeMismatches(gray, corners, bits, cells);
+    std::vector<float> levels;
+    if (!DeconvolvedCells(gray, corners, cells, kDeconvolutionSigmaPx, &levels)) return cells * cells;
+    return LevelMismatches(levels, bits, cells);
+  };
+  auto reads = [&](const std::array<cv::Point2d, 4>& corners) {
+    if (candidate_mismatches < 0) candidate_mismatches = mismatches(candidate);
+    return mismatches(corners) <= candidate_mismatches + cells;
+  };
+  bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
+  bool kept_lines = false;
+  bool refined = false;
+  if (smoothed) {
+    refined = smoothed->refined, kept_lines = smoothed->kept_lines;
+    if (refined) r->corners = smoothed->corners;
+  } else {
+    cv::Rect roi;
+    const cv::Mat* source = RefineRegion(gray, *r, &roi);
+    refined = RefineInRegion(*source, roi, *r, &r->corners, nullptr, &kept_lines);
+  }
+  // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
+  // unrefined marker, not a confusing region.
+  if (refined && !reads(r->corners)) refined = false, slid = !kept_lines;
+  if (refined) return true;
+  r->corners = candidate;
+  // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner a
+  // pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side (a
+  // small or blurred marker, one cut by the image border, glare): OpenCV's corner refinement in a
+  // window of about half a cell rather than the candidate polygon's pixel-level corners, or dropped
+  // (drop_unrefined).
+  ++stats_.refine_failures;
+  if (slid || options_.drop_unrefined) {
+    ++stats_.dropped;
+    return false;
+  }
+  SubPixelCorners(gray, cells, &r->corners);
+  return true;
+}
+
+std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
+  const cv::Mat gray = GrayImage(image);
+  ++stats_.frames;
+
+  std::vector<Raw> raw;
+  if (options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every) {
+    raw = TrackSearch(gray);
+    ++frames_since_full_;
+  } else {
+    raw = FullSearch(gray, cv::Rect(0, 0, gray.cols, gray.rows));
+    frames_since_full_ = 0;
+    ++stats_.full_searches;
+  }
+  std::vector<Raw> unique = DropLookAlikes(gray, DropDuplicates(gray, raw));
+
+  const bool edges = options_.corner_refinement == "edges";
+  std::vector<Refined> smoothed;
+  bool use_smoothed = false;
+  if (edges && options_.sharp_smoothing > 0) smoothed = RefineSmoothed(gray, unique, &use_smoothed);
   std::vector<marker_t> out;
   out.reserve(unique.size());
   for (size_t i = 0; i < unique.size(); ++i) {
     Raw& r = unique[i];
-    if (options_.corner_refinement == "edges") {
-      const cv::Mat& bits = MarkerBits(r.id);
-      // A refinement counts only if the code reads at the refined corners about as well as at the
-      // candidate's (which decoded): not a cell off.
-      const std::array<cv::Point2d, 4> candidate = r.corners;
-      int candidate_mismatches = -1;  // read once, when a refinement is to be judged
-      // A marker read from unmixed levels is judged on them (its cells' centres read wrong anywhere).
-      auto mismatches = [&](const std::array<cv::Point2d, 4>& corners) {
-        if (!r.deconvolved) return CodeMismatches(gray, corners, bits, cells);
-        std::vector<float> levels;
-        if (!DeconvolvedCells(gray, corners, cells, kDeconvolutionSigmaPx, &levels)) return cells * cells;
-        return LevelMismatches(levels, bits, cells);
-      };
-      auto reads = [&](const std::array<cv::Point2d, 4>& corners) {
-        if (candidate_mismatches < 0) candidate_mismatches = mismatches(candidate);
-        return mismatches(corners) <= candidate_mismatches + cells;
-      };
-      bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
-      bool kept_lines = false;
-      bool refined = false;
-      if (use_smoothed) {
-        refined = smoothed[i].refined, kept_lines = smoothed[i].kept_lines;
-        if (refined) r.corners = smoothed[i].corners;
-      } else {
-        cv::Rect roi;
-        const cv::Mat* source = region(r, &roi);
-        refined = refine(*source, roi, r, &r.corners, nullptr, &kept_lines);
-      }
-      // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
-      // unrefined marker, not a confusing region.
-      if (refined && !reads(r.corners)) refined = false, slid = !kept_lines;
-      if (!refined) r.corners = candidate;
-      if (!refined) {
-        // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner
-        // a pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side
-        // (a small or blurred marker, one cut by the image border, glare): OpenCV's corner refinement in a
-        // window of about half a cell rather than the candidate polygon's pixel-level corners, or dropped
-        // (drop_unrefined).
-        ++stats_.refine_failures;
-        if (slid || options_.drop_unrefined) {
-          ++stats_.dropped;
-          continue;
-        }
-        std::vector<cv::Point2f> corners;
-        double side = 0;
-        for (int k = 0; k < 4; ++k) {
-          corners.emplace_back(static_cast<float>(r.corners[k].x), static_cast<float>(r.corners[k].y));
-          side += 0.25 * cv::norm(r.corners[(k + 1) % 4] - r.corners[k]);
-        }
-        const int half = std::clamp(static_cast<int>(0.5 * side / cells), 1, 5);
-        cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01));
-        for (int k = 0; k < 4; ++k) r.corners[k] = cv::Point2d(corners[k].x, corners[k].y);
-      }
-    }
+    if (edges && !RefineCorners(gray, use_smoothed ? &smoothed[i] : nullptr, &r)) continue;
     marker_t m;
     m.id = r.id;
     for (int k = 0; k < 4; ++k) {

@@ -192,6 +192,11 @@ class MarkerDetector {
     std::array<cv::Point2d, 4> corners;
     bool deconvolved = false;  // read from unmixed cell levels (DeconvolvedCells)
   };
+  // corner_refinement "edges": a marker's corners refined on a smoothed region (sharp_smoothing).
+  struct Refined {
+    std::array<cv::Point2d, 4> corners;
+    bool refined = false, kept_lines = false;
+  };
   std::vector<Raw> Search(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                           double max_perimeter, int window_min, int window_max);
   // The full search's candidate search (every threshold window, every perimeter) in `roi`.
@@ -216,6 +221,27 @@ class MarkerDetector {
   // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
   std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                              double max_perimeter);
+
+  // Each id once: one marker found twice (regions overlapping in fast mode, quads of one marker from two
+  // threshold windows, or the marker's and its narrow margin's quads both decoding: quads whose centres
+  // lie inside each other) kept once, the quad whose code reads best; one id in two distinct places is
+  // wrong once, so both are dropped (drop_duplicate_ids).
+  std::vector<Raw> DropDuplicates(const cv::Mat& gray, const std::vector<Raw>& raw);
+  // Quads that only look like markers dropped: the dark parts of an inverted print (markers.inverted),
+  // a pattern of another marker's bits (its centre inside a quad 1.5 times its area).
+  std::vector<Raw> DropLookAlikes(const cv::Mat& gray, std::vector<Raw> unique) const;
+  // The image a marker is refined on (gray, or its region linearised / unsharpened into linear_), and the
+  // region `roi` there.
+  const cv::Mat* RefineRegion(const cv::Mat& gray, const Raw& r, cv::Rect* roi);
+  // RefineMarkerCorners of `r` on `roi` of `from`, `corners` in the image's pixels.
+  bool RefineInRegion(const cv::Mat& from, const cv::Rect& roi, const Raw& r,
+                      std::array<cv::Point2d, 4>* corners, double* blur, bool* kept_lines);
+  // Every marker refined on its smoothed region; `sharp_frame`: whether those refinements are the ones
+  // to use (the frame's mean blur is small).
+  std::vector<Refined> RefineSmoothed(const cv::Mat& gray, const std::vector<Raw>& unique, bool* sharp_frame);
+  // r's corners refined ("edges"; `smoothed`: the smoothed region's refinement to use instead), judged
+  // on its code, or OpenCV's corner refinement where no edge is clear. False: the marker is dropped.
+  bool RefineCorners(const cv::Mat& gray, const Refined* smoothed, Raw* r);
 
   MarkerConfig markers_;
   DetectorOptions options_;
