@@ -4,8 +4,11 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "core/options.h"
 
 namespace mcmt {
 
@@ -13,11 +16,14 @@ class ArgParser {
  public:
   ArgParser(std::string program, std::string summary);
 
-  // Options keep the value already in *out as their default (shown in --help).
-  void AddString(const std::string& name, std::string* out, const std::string& help, bool required = false);
-  void AddInt(const std::string& name, int* out, const std::string& help);
-  void AddInt64(const std::string& name, long long* out, const std::string& help);
-  void AddDouble(const std::string& name, double* out, const std::string& help);
+  // Options keep the value already in *out as their default (shown in --help). A check (core/options.h:
+  // InRange, AtLeast, OneOf, ...) is applied to the value given on the command line: a refused value is a
+  // usage error naming the option, what it must be and the text given. --help shows it beside the default.
+  void AddString(const std::string& name, std::string* out, const std::string& help, bool required = false,
+                 TextCheck check = {});
+  void AddInt(const std::string& name, int* out, const std::string& help, NumberCheck check = {});
+  void AddInt64(const std::string& name, long long* out, const std::string& help, NumberCheck check = {});
+  void AddDouble(const std::string& name, double* out, const std::string& help, NumberCheck check = {});
   void AddFlag(const std::string& name, bool* out, const std::string& help);
   // Values of an option that may be repeated (--camera a --camera b).
   void AddList(const std::string& name, std::vector<std::string>* out, const std::string& help);
@@ -43,6 +49,8 @@ class ArgParser {
     bool required;
     bool given = false;
     std::string default_text;
+    std::string check_text;                 // what a value must be ("must be in [0, 1]"); empty: any
+    std::function<bool()> check = nullptr;  // whether *out passes the check
   };
   std::string program_, summary_, epilog_, config_help_;
   std::vector<Option> options_;

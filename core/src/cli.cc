@@ -12,25 +12,39 @@ namespace mcmt {
 ArgParser::ArgParser(std::string program, std::string summary)
     : program_(std::move(program)), summary_(std::move(summary)) {}
 
-void ArgParser::AddString(const std::string& name, std::string* out, const std::string& help, bool required) {
-  options_.push_back({name, help, "string", out, required, false, *out});
+namespace {
+
+template <class V, class C>
+std::function<bool()> Bound(const OptionCheck<C>& check, V* out) {
+  if (!check.ok) return nullptr;
+  return [ok = check.ok, out]() { return ok(static_cast<C>(*out)); };
 }
-void ArgParser::AddInt(const std::string& name, int* out, const std::string& help) {
-  options_.push_back({name, help, "int", out, false, false, std::to_string(*out)});
+
+}  // namespace
+
+void ArgParser::AddString(const std::string& name, std::string* out, const std::string& help, bool required,
+                          TextCheck check) {
+  options_.push_back({name, help, "string", out, required, false, *out, check.text, Bound(check, out)});
 }
-void ArgParser::AddInt64(const std::string& name, long long* out, const std::string& help) {
-  options_.push_back({name, help, "int64", out, false, false, std::to_string(*out)});
+void ArgParser::AddInt(const std::string& name, int* out, const std::string& help, NumberCheck check) {
+  options_.push_back(
+      {name, help, "int", out, false, false, std::to_string(*out), check.text, Bound(check, out)});
 }
-void ArgParser::AddDouble(const std::string& name, double* out, const std::string& help) {
+void ArgParser::AddInt64(const std::string& name, long long* out, const std::string& help,
+                         NumberCheck check) {
+  options_.push_back(
+      {name, help, "int64", out, false, false, std::to_string(*out), check.text, Bound(check, out)});
+}
+void ArgParser::AddDouble(const std::string& name, double* out, const std::string& help, NumberCheck check) {
   std::ostringstream s;
   s << *out;
-  options_.push_back({name, help, "double", out, false, false, s.str()});
+  options_.push_back({name, help, "double", out, false, false, s.str(), check.text, Bound(check, out)});
 }
 void ArgParser::AddFlag(const std::string& name, bool* out, const std::string& help) {
-  options_.push_back({name, help, "flag", out, false, false, ""});
+  options_.push_back({name, help, "flag", out, false, false, "", "", nullptr});
 }
 void ArgParser::AddList(const std::string& name, std::vector<std::string>* out, const std::string& help) {
-  options_.push_back({name, help, "list", out, false, false, ""});
+  options_.push_back({name, help, "list", out, false, false, "", "", nullptr});
 }
 void ArgParser::AddEpilog(const std::string& text) { epilog_ += text; }
 
@@ -63,9 +77,11 @@ std::string ArgParser::Help() const {
       s << "\n" << std::string(28, ' ');
     s << o.help;
     if (o.required)
-      s << " (required)";
+      s << " (required" << (o.check_text.empty() ? "" : "; " + o.check_text) << ")";
     else if (!o.default_text.empty())
-      s << " (default: " << o.default_text << ")";
+      s << " (default: " << o.default_text << (o.check_text.empty() ? "" : "; " + o.check_text) << ")";
+    else if (!o.check_text.empty())
+      s << " (" << o.check_text << ")";
     s << "\n";
   }
   s << "  --help                    print this help and exit\n";
@@ -147,6 +163,8 @@ bool ArgParser::Parse(int argc, char** argv, int* exit_code) {
       return usage_error("--" + name + ": expected " + (o->kind == "double" ? "a number" : "an integer") +
                          ", got '" + value + "'");
     }
+    if (o->check && !o->check())
+      return usage_error("--" + name + ": " + o->check_text + ", got '" + value + "'");
   }
   for (const auto& o : options_)
     if (o.required && !o.given) return usage_error("missing required option --" + o.name);
