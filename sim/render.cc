@@ -16,6 +16,7 @@
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -321,74 +322,253 @@ const CameraCache& Renderer::Impl::Cache(const SimCamera& camera, int index, con
   return *caches.back();
 }
 
+namespace {
+
+// Patch `p` as `camera` sees it, with its pixel bounds (from points along its outline: edges curve under
+// distortion; the whole image where the outline leaves the model's valid region); nothing for a back face,
+// a face seen edge-on or one outside the image.
+std::optional<ViewPatch> SeePatch(const Patch& p, const CameraModel& m, const CameraCache& cache,
+                                  const internal::ValidRegion& region, const Rigid3& cam_from_object) {
+  ViewPatch vp;
+  vp.patch = &p;
+  vp.origin = cam_from_object * p.origin;
+  vp.e1 = cam_from_object.linear() * p.e1;
+  vp.e2 = cam_from_object.linear() * p.e2;
+  vp.normal = cam_from_object.linear() * p.normal;
+  vp.n_dot_origin = vp.normal.dot(vp.origin);
+  if (!(vp.n_dot_origin < 0)) return std::nullopt;  // back face (or seen edge-on)
+  double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+  bool unbounded = false;
+  const size_t k = p.outline.size();
+  for (size_t i = 0; i < k && !unbounded; ++i) {
+    const Vec2& a = p.outline[i];
+    const Vec2& b = p.outline[(i + 1) % k];
+    const int steps = cache.distorted ? 8 : 1;
+    for (int s = 0; s < steps; ++s) {
+      const Vec2 q = a + (b - a) * (static_cast<double>(s) / steps);
+      const Eigen::Vector3d x = vp.origin + q.x() * vp.e1 + q.y() * vp.e2;
+      if (!(x.z() > 1e-6) || !region.Contains(x.x() / x.z(), x.y() / x.z())) {
+        unbounded = true;
+        break;
+      }
+      double px[2] = {0, 0};
+      m.Project(x.data(), px);
+      umin = std::min(umin, px[0]);
+      umax = std::max(umax, px[0]);
+      vmin = std::min(vmin, px[1]);
+      vmax = std::max(vmax, px[1]);
+    }
+  }
+  if (unbounded) {
+    vp.u0 = 0, vp.u1 = m.width - 1, vp.v0 = 0, vp.v1 = m.height - 1;
+    return vp;
+  }
+  const double margin = cache.distorted ? 3.0 : 1.5;
+  vp.u0 = std::max(0, static_cast<int>(std::floor(umin - margin)));
+  vp.u1 = std::min(m.width - 1, static_cast<int>(std::ceil(umax + margin)));
+  vp.v0 = std::max(0, static_cast<int>(std::floor(vmin - margin)));
+  vp.v1 = std::min(m.height - 1, static_cast<int>(std::ceil(vmax + margin)));
+  if (vp.u0 > vp.u1 || vp.v0 > vp.v1) return std::nullopt;
+  return vp;
+}
+
+// The undistorted ray (nx, ny, 1) through a pixel's centre and its Jacobian j with respect to the pixel.
+struct PixelRay {
+  double nx, ny, j00, j01, j10, j11;
+};
+
+// False where the pixel has no ray (outside a distortion model's valid region).
+bool RayAt(const CameraModel& m, const CameraCache& cache, int u, int v, PixelRay* r) {
+  if (cache.distorted) {
+    const cv::Vec2d ray = cache.rays.at<cv::Vec2d>(v, u);
+    if (!(ray[0] == ray[0])) return false;
+    const cv::Vec4d j = cache.jacobians.at<cv::Vec4d>(v, u);
+    *r = {ray[0], ray[1], j[0], j[1], j[2], j[3]};
+    return true;
+  }
+  *r = {(u - m.cx) / m.fx, (v - m.cy) / m.fy, 1.0 / m.fx, 0, 0, 1.0 / m.fy};
+  return true;
+}
+
+// Plain SxS point supersampling (comparison mode): the nearest patch hit per sample, the mean of the
+// samples' values (`background` where no patch is hit); `lit`: the light's relative level at the pixel.
+double SupersampledValue(const std::vector<const ViewPatch*>& candidates, const PixelRay& r, int ss,
+                         double lit, double background, const RenderOptions& o) {
+  double sum = 0;
+  for (int sy = 0; sy < ss; ++sy)
+    for (int sx = 0; sx < ss; ++sx) {
+      const double du = (sx + 0.5) / ss - 0.5, dv = (sy + 0.5) / ss - 0.5;
+      const Eigen::Vector3d ray(r.nx + r.j00 * du + r.j01 * dv, r.ny + r.j10 * du + r.j11 * dv, 1.0);
+      double best_depth = 1e300, value = background;
+      for (const ViewPatch* vp : candidates) {
+        const double denom = vp->normal.dot(ray);
+        if (!(denom < 0)) continue;
+        const double t = vp->n_dot_origin / denom;
+        const Eigen::Vector3d x = t * ray - vp->origin;
+        const Vec2 q(vp->e1.dot(x), vp->e2.dot(x));
+        const Patch& p = *vp->patch;
+        bool inside = true;
+        for (const auto& [n, d] : p.half_planes)
+          if (n.dot(q) > d) inside = false;
+        if (!inside) continue;
+        const double key = t - (p.is_marker ? 1e-5 : 0.0);
+        if (key >= best_depth) continue;
+        best_depth = key;
+        if (p.is_marker) {
+          const int col = std::clamp(static_cast<int>(std::floor((q.x() + p.half) / p.cell)), 0, p.grid - 1);
+          const int row = std::clamp(static_cast<int>(std::floor((p.half - q.y()) / p.cell)), 0, p.grid - 1);
+          value = lit * vp->shade * (p.cells[row * p.grid + col] ? o.white_level : o.black_level);
+        } else {
+          value = lit * vp->shade * 255.0 * p.albedo * Grain(o, q);
+        }
+      }
+      sum += value;
+    }
+  return sum / (ss * ss);
+}
+
+// One patch's part of a pixel: the depth along the ray (markers a little in front of the face they are
+// glued on), the share of the pixel's footprint it covers, its level there.
+struct Hit {
+  double depth, coverage, value;
+};
+
+// The footprint `par` (patch coordinates, area `det`, bounds [xmin, xmax] x [ymin, ymax]) on marker `p`'s
+// cells: the covered share and the mean level over the cells it covers. False where it covers no cell.
+bool MarkerFootprint(const Patch& p, const Poly& par, double det, double pxmin, double pxmax, double pymin,
+                     double pymax, const RenderOptions& o, double* coverage, double* value) {
+  const double white = o.white_level, black = o.black_level;
+  const double inv = 1.0 / p.cell;
+  const CellSpan columns = CellsOverlapping((pxmin + p.half) * inv, (pxmax + p.half) * inv, p.grid);
+  const CellSpan rows = CellsOverlapping((p.half - pymax) * inv, (p.half - pymin) * inv, p.grid);
+  const int j0 = columns.first, j1 = columns.last, i0 = rows.first, i1 = rows.last;
+  if (j0 > j1 || i0 > i1) return false;  // the footprint lies in the margin: no cell to read
+  const bool inside = pxmin >= -p.half && pxmax <= p.half && pymin >= -p.half && pymax <= p.half;
+  if (inside && j0 == j1 && i0 == i1) {
+    *coverage = 1.0;
+    *value = p.cells[i0 * p.grid + j0] ? white : black;
+    return true;
+  }
+  double total = 0, white_area = 0;
+  // Fast path: all the cells in range have the same colour -> one clip against their union.
+  uint8_t first = p.cells[i0 * p.grid + j0];
+  bool uniform = true;
+  for (int i = i0; i <= i1 && uniform; ++i)
+    for (int j = j0; j <= j1; ++j)
+      if (p.cells[i * p.grid + j] != first) {
+        uniform = false;
+        break;
+      }
+  if (uniform) {
+    total = RectArea(par, -p.half + j0 * p.cell, p.half - (i1 + 1) * p.cell, -p.half + (j1 + 1) * p.cell,
+                     p.half - i0 * p.cell);
+    white_area = first ? total : 0.0;
+  } else {
+    for (int i = i0; i <= i1; ++i)
+      for (int j = j0; j <= j1; ++j) {
+        const double area = RectArea(par, -p.half + j * p.cell, p.half - (i + 1) * p.cell,
+                                     -p.half + (j + 1) * p.cell, p.half - i * p.cell);
+        total += area;
+        if (p.cells[i * p.grid + j]) white_area += area;
+      }
+  }
+  if (!(total > 0)) return false;
+  *coverage = std::min(1.0, total / det);
+  *value = (white_area * white + (total - white_area) * black) / total;
+  return true;
+}
+
+// Patch vp's part of the pixel whose footprint is the parallelogram the pixel square maps to on the
+// patch's plane (through the ray's Jacobian). False where the footprint misses the patch.
+bool FootprintHit(const ViewPatch& vp, const PixelRay& r, double lit, const RenderOptions& o, Poly* par,
+                  Hit* hit) {
+  const Eigen::Vector3d ray(r.nx, r.ny, 1.0);
+  const double denom = vp.normal.dot(ray);
+  if (!(denom < 0)) return false;
+  const double t = vp.n_dot_origin / denom;
+  const Eigen::Vector3d x = t * ray;
+  const Eigen::Vector3d rel = x - vp.origin;
+  const Vec2 c(vp.e1.dot(rel), vp.e2.dot(rel));
+  // d(x)/d(nx) = t (e_x - ray (N . e_x) / denom), likewise for ny.
+  const Eigen::Vector3d dx_dnx = t * (Eigen::Vector3d::UnitX() - ray * (vp.normal.x() / denom));
+  const Eigen::Vector3d dx_dny = t * (Eigen::Vector3d::UnitY() - ray * (vp.normal.y() / denom));
+  Eigen::Matrix2d dq_dn;
+  dq_dn << vp.e1.dot(dx_dnx), vp.e1.dot(dx_dny), vp.e2.dot(dx_dnx), vp.e2.dot(dx_dny);
+  Eigen::Matrix2d dn_dp;
+  dn_dp << r.j00, r.j01, r.j10, r.j11;
+  const Eigen::Matrix2d jac = dq_dn * dn_dp;  // patch coordinates per pixel
+  const Vec2 a = 0.5 * jac.col(0), b = 0.5 * jac.col(1);
+  const double det = std::abs(jac.determinant());
+  if (!(det > 0)) return false;
+  (*par)[0] = c - a - b;
+  (*par)[1] = c + a - b;
+  (*par)[2] = c + a + b;
+  (*par)[3] = c - a + b;
+  const double ext_x = std::abs(a.x()) + std::abs(b.x()), ext_y = std::abs(a.y()) + std::abs(b.y());
+  const double pxmin = c.x() - ext_x, pxmax = c.x() + ext_x, pymin = c.y() - ext_y, pymax = c.y() + ext_y;
+  const Patch& p = *vp.patch;
+  if (pxmax <= p.xmin || pxmin >= p.xmax || pymax <= p.ymin || pymin >= p.ymax) return false;
+  double coverage, value;
+  if (p.is_marker) {
+    if (!MarkerFootprint(p, *par, det, pxmin, pxmax, pymin, pymax, o, &coverage, &value)) return false;
+  } else {
+    bool inside = true;
+    for (const Vec2& q : *par)
+      for (const auto& [n, d] : p.half_planes)
+        if (n.dot(q) > d) inside = false;
+    if (inside) {
+      coverage = 1.0;
+    } else {
+      const double area = ClippedArea(*par, p.half_planes);
+      if (!(area > 0)) return false;
+      coverage = std::min(1.0, area / det);
+    }
+    value = 255.0 * p.albedo * Grain(o, c);
+  }
+  *hit = {t - (p.is_marker ? 1e-5 : 0.0), coverage, lit * vp.shade * value};
+  return true;
+}
+
+// The hits composited front to back, each covering what the nearer ones left of the pixel, the rest
+// `background`.
+double Composite(std::vector<Hit>* hits, double background) {
+  std::sort(hits->begin(), hits->end(), [](const Hit& x, const Hit& y) { return x.depth < y.depth; });
+  double rem = 1.0, acc = 0.0;
+  for (const Hit& hit : *hits) {
+    const double use = std::min(rem, hit.coverage);
+    acc += use * hit.value;
+    rem -= use;
+    if (rem <= 1e-12) break;
+  }
+  if (rem > 0) acc += rem * background;
+  return acc;
+}
+
+}  // namespace
+
 void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cache,
                                 const Rigid3& rig_from_object, const RenderOptions& o, cv::Mat* image) const {
   const CameraModel& m = camera.model;
-  const int w = m.width, h = m.height;
   const Rigid3 cam_from_object = Inverse(camera.rig_from_cam) * rig_from_object;
   const internal::ValidRegion region(m);
   std::vector<ViewPatch> views;
-  int bu0 = w, bu1 = -1, bv0 = h, bv1 = -1;
+  int bu0 = m.width, bu1 = -1, bv0 = m.height, bv1 = -1;
   for (const Patch& p : patches) {
-    ViewPatch vp;
-    vp.patch = &p;
-    vp.origin = cam_from_object * p.origin;
-    vp.e1 = cam_from_object.linear() * p.e1;
-    vp.e2 = cam_from_object.linear() * p.e2;
-    vp.normal = cam_from_object.linear() * p.normal;
-    vp.n_dot_origin = vp.normal.dot(vp.origin);
-    if (!(vp.n_dot_origin < 0)) continue;  // back face (or seen edge-on)
-    // Image bounds from points along the outline (edges curve under distortion).
-    double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
-    bool unbounded = false;
-    const size_t k = p.outline.size();
-    for (size_t i = 0; i < k && !unbounded; ++i) {
-      const Vec2& a = p.outline[i];
-      const Vec2& b = p.outline[(i + 1) % k];
-      const int steps = cache.distorted ? 8 : 1;
-      for (int s = 0; s < steps; ++s) {
-        const Vec2 q = a + (b - a) * (static_cast<double>(s) / steps);
-        const Eigen::Vector3d x = vp.origin + q.x() * vp.e1 + q.y() * vp.e2;
-        if (!(x.z() > 1e-6) || !region.Contains(x.x() / x.z(), x.y() / x.z())) {
-          unbounded = true;
-          break;
-        }
-        double px[2] = {0, 0};
-        m.Project(x.data(), px);
-        umin = std::min(umin, px[0]);
-        umax = std::max(umax, px[0]);
-        vmin = std::min(vmin, px[1]);
-        vmax = std::max(vmax, px[1]);
-      }
-    }
-    if (unbounded) {
-      vp.u0 = 0, vp.u1 = w - 1, vp.v0 = 0, vp.v1 = h - 1;
-    } else {
-      const double margin = cache.distorted ? 3.0 : 1.5;
-      vp.u0 = std::max(0, static_cast<int>(std::floor(umin - margin)));
-      vp.u1 = std::min(w - 1, static_cast<int>(std::ceil(umax + margin)));
-      vp.v0 = std::max(0, static_cast<int>(std::floor(vmin - margin)));
-      vp.v1 = std::min(h - 1, static_cast<int>(std::ceil(vmax + margin)));
-      if (vp.u0 > vp.u1 || vp.v0 > vp.v1) continue;
-    }
+    std::optional<ViewPatch> vp = SeePatch(p, m, cache, region, cam_from_object);
+    if (!vp) continue;
     const Eigen::Vector3d normal_rig = rig_from_object.linear() * p.normal;
-    vp.shade = 1.0 - o.shading * (1.0 - std::max(0.0, normal_rig.dot(light_in_rig)));
-    views.push_back(vp);
-    bu0 = std::min(bu0, vp.u0);
-    bu1 = std::max(bu1, vp.u1);
-    bv0 = std::min(bv0, vp.v0);
-    bv1 = std::max(bv1, vp.v1);
+    vp->shade = 1.0 - o.shading * (1.0 - std::max(0.0, normal_rig.dot(light_in_rig)));
+    views.push_back(*vp);
+    bu0 = std::min(bu0, vp->u0);
+    bu1 = std::max(bu1, vp->u1);
+    bv0 = std::min(bv0, vp->v0);
+    bv1 = std::max(bv1, vp->v1);
   }
   if (views.empty()) return;
 
-  struct Hit {
-    double depth, coverage, value;
-  };
   std::vector<Hit> hits;
   std::vector<const ViewPatch*> candidates;
   Poly par(4);
-  const double black = o.black_level, white = o.white_level;
-  const int ss = o.supersampling;
   for (int v = bv0; v <= bv1; ++v) {
     float* out = image->ptr<float>(v);
     const float* light = cache.lighting.ptr<float>(v);
@@ -398,150 +578,20 @@ void Renderer::Impl::RenderInto(const SimCamera& camera, const CameraCache& cach
       for (const ViewPatch& vp : views)
         if (u >= vp.u0 && u <= vp.u1 && v >= vp.v0 && v <= vp.v1) candidates.push_back(&vp);
       if (candidates.empty()) continue;
-      // Undistorted ray through the pixel centre and its Jacobian with respect to the pixel.
-      double nx, ny, j00, j01, j10, j11;
-      if (cache.distorted) {
-        const cv::Vec2d r = cache.rays.at<cv::Vec2d>(v, u);
-        if (!(r[0] == r[0])) continue;
-        const cv::Vec4d j = cache.jacobians.at<cv::Vec4d>(v, u);
-        nx = r[0], ny = r[1], j00 = j[0], j01 = j[1], j10 = j[2], j11 = j[3];
-      } else {
-        nx = (u - m.cx) / m.fx, ny = (v - m.cy) / m.fy;
-        j00 = 1.0 / m.fx, j01 = 0, j10 = 0, j11 = 1.0 / m.fy;
-      }
+      PixelRay ray;
+      if (!RayAt(m, cache, u, v, &ray)) continue;
       const double lit = light[u];
-      if (ss >= 1) {
-        // Plain SxS point supersampling (comparison mode): nearest patch hit per sample.
-        double sum = 0;
-        for (int sy = 0; sy < ss; ++sy)
-          for (int sx = 0; sx < ss; ++sx) {
-            const double du = (sx + 0.5) / ss - 0.5, dv = (sy + 0.5) / ss - 0.5;
-            const Eigen::Vector3d ray(nx + j00 * du + j01 * dv, ny + j10 * du + j11 * dv, 1.0);
-            double best_depth = 1e300, value = bg[u];
-            for (const ViewPatch* vp : candidates) {
-              const double denom = vp->normal.dot(ray);
-              if (!(denom < 0)) continue;
-              const double t = vp->n_dot_origin / denom;
-              const Eigen::Vector3d x = t * ray - vp->origin;
-              const Vec2 q(vp->e1.dot(x), vp->e2.dot(x));
-              const Patch& p = *vp->patch;
-              bool inside = true;
-              for (const auto& [n, d] : p.half_planes)
-                if (n.dot(q) > d) inside = false;
-              if (!inside) continue;
-              const double key = t - (p.is_marker ? 1e-5 : 0.0);
-              if (key >= best_depth) continue;
-              best_depth = key;
-              if (p.is_marker) {
-                const int col =
-                    std::clamp(static_cast<int>(std::floor((q.x() + p.half) / p.cell)), 0, p.grid - 1);
-                const int row =
-                    std::clamp(static_cast<int>(std::floor((p.half - q.y()) / p.cell)), 0, p.grid - 1);
-                value = lit * vp->shade * (p.cells[row * p.grid + col] ? white : black);
-              } else {
-                value = lit * vp->shade * 255.0 * p.albedo * Grain(o, q);
-              }
-            }
-            sum += value;
-          }
-        out[u] = static_cast<float>(sum / (ss * ss));
+      if (o.supersampling >= 1) {
+        out[u] = static_cast<float>(SupersampledValue(candidates, ray, o.supersampling, lit, bg[u], o));
         continue;
       }
-      const Eigen::Vector3d ray(nx, ny, 1.0);
       hits.clear();
       for (const ViewPatch* vp : candidates) {
-        const double denom = vp->normal.dot(ray);
-        if (!(denom < 0)) continue;
-        const double t = vp->n_dot_origin / denom;
-        const Eigen::Vector3d x = t * ray;
-        const Eigen::Vector3d rel = x - vp->origin;
-        const Vec2 c(vp->e1.dot(rel), vp->e2.dot(rel));
-        // d(x)/d(nx) = t (e_x - ray (N . e_x) / denom), likewise for ny.
-        const Eigen::Vector3d dx_dnx = t * (Eigen::Vector3d::UnitX() - ray * (vp->normal.x() / denom));
-        const Eigen::Vector3d dx_dny = t * (Eigen::Vector3d::UnitY() - ray * (vp->normal.y() / denom));
-        Eigen::Matrix2d dq_dn;
-        dq_dn << vp->e1.dot(dx_dnx), vp->e1.dot(dx_dny), vp->e2.dot(dx_dnx), vp->e2.dot(dx_dny);
-        Eigen::Matrix2d dn_dp;
-        dn_dp << j00, j01, j10, j11;
-        const Eigen::Matrix2d jac = dq_dn * dn_dp;  // patch coordinates per pixel
-        const Vec2 a = 0.5 * jac.col(0), b = 0.5 * jac.col(1);
-        const double det = std::abs(jac.determinant());
-        if (!(det > 0)) continue;
-        par[0] = c - a - b;
-        par[1] = c + a - b;
-        par[2] = c + a + b;
-        par[3] = c - a + b;
-        const double ext_x = std::abs(a.x()) + std::abs(b.x()), ext_y = std::abs(a.y()) + std::abs(b.y());
-        const double pxmin = c.x() - ext_x, pxmax = c.x() + ext_x, pymin = c.y() - ext_y,
-                     pymax = c.y() + ext_y;
-        const Patch& p = *vp->patch;
-        if (pxmax <= p.xmin || pxmin >= p.xmax || pymax <= p.ymin || pymin >= p.ymax) continue;
-        double coverage, value;
-        if (p.is_marker) {
-          const double inv = 1.0 / p.cell;
-          const CellSpan columns = CellsOverlapping((pxmin + p.half) * inv, (pxmax + p.half) * inv, p.grid);
-          const CellSpan rows = CellsOverlapping((p.half - pymax) * inv, (p.half - pymin) * inv, p.grid);
-          const int j0 = columns.first, j1 = columns.last, i0 = rows.first, i1 = rows.last;
-          if (j0 > j1 || i0 > i1) continue;  // the footprint lies in the margin: no cell to read
-          const bool inside = pxmin >= -p.half && pxmax <= p.half && pymin >= -p.half && pymax <= p.half;
-          if (inside && j0 == j1 && i0 == i1) {
-            coverage = 1.0;
-            value = p.cells[i0 * p.grid + j0] ? white : black;
-          } else {
-            double total = 0, white_area = 0;
-            // Fast path: all the cells in range have the same colour -> one clip against their union.
-            uint8_t first = p.cells[i0 * p.grid + j0];
-            bool uniform = true;
-            for (int i = i0; i <= i1 && uniform; ++i)
-              for (int j = j0; j <= j1; ++j)
-                if (p.cells[i * p.grid + j] != first) {
-                  uniform = false;
-                  break;
-                }
-            if (uniform) {
-              total = RectArea(par, -p.half + j0 * p.cell, p.half - (i1 + 1) * p.cell,
-                               -p.half + (j1 + 1) * p.cell, p.half - i0 * p.cell);
-              white_area = first ? total : 0.0;
-            } else {
-              for (int i = i0; i <= i1; ++i)
-                for (int j = j0; j <= j1; ++j) {
-                  const double area = RectArea(par, -p.half + j * p.cell, p.half - (i + 1) * p.cell,
-                                               -p.half + (j + 1) * p.cell, p.half - i * p.cell);
-                  total += area;
-                  if (p.cells[i * p.grid + j]) white_area += area;
-                }
-            }
-            if (!(total > 0)) continue;
-            coverage = std::min(1.0, total / det);
-            value = (white_area * white + (total - white_area) * black) / total;
-          }
-        } else {
-          bool inside = true;
-          for (const Vec2& q : par)
-            for (const auto& [n, d] : p.half_planes)
-              if (n.dot(q) > d) inside = false;
-          if (inside) {
-            coverage = 1.0;
-          } else {
-            const double area = ClippedArea(par, p.half_planes);
-            if (!(area > 0)) continue;
-            coverage = std::min(1.0, area / det);
-          }
-          value = 255.0 * p.albedo * Grain(o, c);
-        }
-        hits.push_back({t - (p.is_marker ? 1e-5 : 0.0), coverage, lit * vp->shade * value});
+        Hit hit;
+        if (FootprintHit(*vp, ray, lit, o, &par, &hit)) hits.push_back(hit);
       }
       if (hits.empty()) continue;
-      std::sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) { return x.depth < y.depth; });
-      double rem = 1.0, acc = 0.0;
-      for (const Hit& hit : hits) {
-        const double use = std::min(rem, hit.coverage);
-        acc += use * hit.value;
-        rem -= use;
-        if (rem <= 1e-12) break;
-      }
-      if (rem > 0) acc += rem * bg[u];
-      out[u] = static_cast<float>(acc);
+      out[u] = static_cast<float>(Composite(&hits, bg[u]));
     }
   }
 }
