@@ -212,174 +212,215 @@ ObjectKind ObjectKindFromName(const std::string& name) {
   throw std::invalid_argument("unknown object '" + name + "' (expected one of: " + list + ")");
 }
 
+namespace {
+
+constexpr double kFaceAlbedo = 0.45;
+
+// Four markers around a square prism (7 x 7 x 7 cm for 4 cm markers), one per side.
+void FourSidedObject(const ObjectOptions& o, SimObject* obj) {
+  const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+  const double side = s * 1.75, h = s * 1.75;
+  obj->faces = PrismFaces(4, side / std::sqrt(2.0), h, kFaceAlbedo);
+  int id = o.first_id;
+  for (int k = 0; k < 4; ++k) {
+    const double a = 2 * kPi * k / 4;
+    const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
+    obj->markers.push_back({id++, s, MarkerOnFace(n * side / 2, n, Eigen::Vector3d::UnitZ())});
+  }
+}
+
+// A cube with face_columns x face_rows markers on each of its six faces.
+void CubeObject(const ObjectOptions& o, SimObject* obj) {
+  const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+  if (o.face_columns < 1 || o.face_rows < 1)
+    throw std::invalid_argument("cube: face_columns and face_rows must be >= 1 (got " +
+                                std::to_string(o.face_columns) + " x " + std::to_string(o.face_rows) + ")");
+  const int n = std::max(o.face_columns, o.face_rows);
+  const double pitch = s * 1.25;  // marker plus a quarter-side gap
+  const double side = n * pitch - 0.25 * s + 0.02;
+  obj->faces = BoxFaces(side, side, side, kFaceAlbedo);
+  const Eigen::Vector3d normals[6] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                      Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
+                                      Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ()};
+  int id = o.first_id;
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Vector3d up = k < 4 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+    const Eigen::Matrix3d face = FrameFromNormalUp(normals[k], up);
+    for (int row = 0; row < o.face_rows; ++row)
+      for (int col = 0; col < o.face_columns; ++col) {
+        const double u = (col - 0.5 * (o.face_columns - 1)) * pitch;
+        const double v = (row - 0.5 * (o.face_rows - 1)) * pitch;
+        const Eigen::Vector3d c = normals[k] * side / 2 + face.col(0) * u + face.col(1) * v;
+        obj->markers.push_back({id++, s, MarkerOnFace(c, normals[k], up)});
+      }
+  }
+}
+
+// A pentagonal prism with two markers stacked on each side.
+void PentagonObject(const ObjectOptions& o, SimObject* obj) {
+  const double s = o.marker_size > 0 ? o.marker_size : 0.025;
+  const double quiet = s * 1.25;  // marker plus a one-cell quiet zone each side (6x6 + border: 8 cells)
+  // Side length of the pentagon: room for one marker with margin; height: two markers stacked.
+  const double side = quiet * 1.25;
+  const double r = side / (2 * std::sin(kPi / 5));
+  const double apothem = r * std::cos(kPi / 5);
+  const double h = quiet * 2.4;
+  obj->faces = PrismFaces(5, r, h, kFaceAlbedo);
+  int id = o.first_id;
+  for (int k = 0; k < 5; ++k) {
+    const double a = 2 * kPi * k / 5;
+    const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
+    for (int level = 0; level < 2; ++level) {
+      const Eigen::Vector3d c = n * apothem + Eigen::Vector3d(0, 0, (level == 0 ? 0.5 : -0.5) * quiet * 1.1);
+      obj->markers.push_back({id++, s, MarkerOnFace(c, n, Eigen::Vector3d::UnitZ())});
+    }
+  }
+}
+
+// A standing printed board: 3 x 3 markers on its +x face, grid in y (columns) and z (rows), white paper
+// between them as on a real printed board.
+void BoardObject(const ObjectOptions& o, SimObject* obj) {
+  const double s = o.marker_size > 0 ? o.marker_size : 0.04;
+  const double pitch = s * 1.3;
+  const double w = 3 * pitch + 0.3 * s, thick = 0.01;
+  obj->faces = BoxFaces(thick, w, w, 225.0 / 255.0);
+  int id = o.first_id;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) {
+      const Eigen::Vector3d c(thick / 2, (col - 1) * pitch, (1 - row) * pitch);
+      obj->markers.push_back({id++, s, MarkerOnFace(c, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ())});
+    }
+}
+
+// A box (4.5 x 3.5 x 2.5 marker sides) with eight markers at random places and rolls: two on the top
+// face and one or two on every side, spread by rejection sampling (seeded by o.seed).
+class BoxLayout {
+ public:
+  BoxLayout(const ObjectOptions& o, SimObject* obj)
+      : o_(o), obj_(obj), s_(o.marker_size > 0 ? o.marker_size : 0.04), half_quiet_(0.5 * s_ * 1.25) {
+    half_[0] = 4.5 * s_ / 2, half_[1] = 3.5 * s_ / 2, half_[2] = 2.5 * s_ / 2;
+    obj_->faces = BoxFaces(2 * half_[0], 2 * half_[1], 2 * half_[2], kFaceAlbedo);
+  }
+
+  // A marker placed early can leave no room for the second one on its face (a second marker on a side
+  // needs the first near an end): then the whole layout is drawn again, the random stream continuing. A
+  // layout that succeeds at the first try is what earlier versions produced. Deterministic fallback (only
+  // reached for odd marker sizes): upright markers spread evenly along each face's longer axis.
+  void Place() {
+    std::mt19937_64 rng(o_.seed * 104729 + 3);
+    const int max_layouts = 200;
+    for (int layout = 0; layout < max_layouts; ++layout)
+      if (PlaceAtRandom(&rng)) return;
+    PlaceEvenly();
+  }
+
+ private:
+  static constexpr int kWanted = 8;
+  static constexpr int kFacePlan[kWanted] = {4, 0, 1, 2, 3, 4, 0, 2};  // faces +x, -x, +y, -y, +z: 0..4
+
+  Eigen::Vector3d Normal(int f) const {
+    const Eigen::Vector3d normals[5] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                        Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
+                                        Eigen::Vector3d::UnitZ()};
+    return normals[f];
+  }
+
+  // Marker on face f at in-face coordinates c (along the two other coordinate axes), rolled by `roll`;
+  // `ext`: half the extent of its rotated quiet square's bounding box.
+  void Add(int f, const Eigen::Vector2d& c, double roll, double ext) {
+    const Eigen::Vector3d n = Normal(f);
+    const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+    Eigen::Vector3d centre = n * half_[axis];
+    centre[a0] = c[0];
+    centre[a1] = c[1];
+    const Eigen::Vector3d up = f == 4 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    obj_->markers.push_back(
+        {o_.first_id + static_cast<int>(obj_->markers.size()), s_, MarkerOnFace(centre, n, up, roll)});
+    placed_.push_back({f, c, ext});
+  }
+
+  bool PlaceAtRandom(std::mt19937_64* rng) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const int max_attempts_per_marker = 20000;
+    const double gap = 0.002;
+    obj_->markers.clear();
+    placed_.clear();
+    for (int k = 0; k < kWanted; ++k) {
+      const int f = kFacePlan[k];
+      const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+      bool ok = false;
+      for (int attempts = 0; attempts < max_attempts_per_marker && !ok; ++attempts) {
+        const double roll = 2 * kPi * u(*rng);
+        const double ext = half_quiet_ * (std::abs(std::cos(roll)) + std::abs(std::sin(roll)));
+        if (ext > half_[a0] || ext > half_[a1]) continue;
+        const Eigen::Vector2d c((2 * u(*rng) - 1) * (half_[a0] - ext), (2 * u(*rng) - 1) * (half_[a1] - ext));
+        bool clash = false;
+        for (const auto& p : placed_)
+          if (p.face == f && std::abs(p.centre[0] - c[0]) < p.ext + ext + gap &&
+              std::abs(p.centre[1] - c[1]) < p.ext + ext + gap)
+            clash = true;
+        if (clash) continue;
+        Add(f, c, roll, ext);
+        ok = true;
+      }
+      if (!ok) return false;
+    }
+    return true;
+  }
+
+  void PlaceEvenly() {
+    obj_->markers.clear();
+    placed_.clear();
+    for (int k = 0; k < kWanted; ++k) {
+      const int f = kFacePlan[k];
+      const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
+      int count = 0, index = 0;
+      for (int j = 0; j < kWanted; ++j) {
+        if (kFacePlan[j] != f) continue;
+        if (j < k) ++index;
+        ++count;
+      }
+      const int along = half_[a0] >= half_[a1] ? 0 : 1;
+      Eigen::Vector2d c(0, 0);
+      c[along] = (count > 1 ? (2.0 * index / (count - 1) - 1) : 0.0) * half_[along == 0 ? a0 : a1] / 2;
+      Add(f, c, 0.0, half_quiet_);
+    }
+  }
+
+  struct Placed {
+    int face;
+    Eigen::Vector2d centre;
+    double ext;
+  };
+  const ObjectOptions& o_;
+  SimObject* obj_;
+  const double s_, half_quiet_;
+  double half_[3];
+  std::vector<Placed> placed_;
+};
+
+}  // namespace
+
 SimObject MakeObject(const ObjectOptions& o) {
   SimObject obj;
   obj.name = ObjectKindNames().at(static_cast<int>(o.kind));
-  const double albedo = 0.45;
-  int id = o.first_id;
   if (o.first_id < 0) throw std::invalid_argument("first marker id must be >= 0");
   switch (o.kind) {
-    case ObjectKind::kFourSided: {
-      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
-      const double side = s * 1.75, h = s * 1.75;  // 7 x 7 x 7 cm for 4 cm markers
-      obj.faces = PrismFaces(4, side / std::sqrt(2.0), h, albedo);
-      for (int k = 0; k < 4; ++k) {
-        const double a = 2 * kPi * k / 4;
-        const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
-        obj.markers.push_back({id++, s, MarkerOnFace(n * side / 2, n, Eigen::Vector3d::UnitZ())});
-      }
+    case ObjectKind::kFourSided:
+      FourSidedObject(o, &obj);
       break;
-    }
-    case ObjectKind::kCube: {
-      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
-      if (o.face_columns < 1 || o.face_rows < 1)
-        throw std::invalid_argument("cube: face_columns and face_rows must be >= 1 (got " +
-                                    std::to_string(o.face_columns) + " x " + std::to_string(o.face_rows) +
-                                    ")");
-      const int n = std::max(o.face_columns, o.face_rows);
-      const double pitch = s * 1.25;  // marker plus a quarter-side gap
-      const double side = n * pitch - 0.25 * s + 0.02;
-      obj.faces = BoxFaces(side, side, side, albedo);
-      const Eigen::Vector3d normals[6] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
-                                          Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
-                                          Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ()};
-      for (int k = 0; k < 6; ++k) {
-        const Eigen::Vector3d up = k < 4 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
-        const Eigen::Matrix3d face = FrameFromNormalUp(normals[k], up);
-        for (int row = 0; row < o.face_rows; ++row)
-          for (int col = 0; col < o.face_columns; ++col) {
-            const double u = (col - 0.5 * (o.face_columns - 1)) * pitch;
-            const double v = (row - 0.5 * (o.face_rows - 1)) * pitch;
-            const Eigen::Vector3d c = normals[k] * side / 2 + face.col(0) * u + face.col(1) * v;
-            obj.markers.push_back({id++, s, MarkerOnFace(c, normals[k], up)});
-          }
-      }
+    case ObjectKind::kCube:
+      CubeObject(o, &obj);
       break;
-    }
-    case ObjectKind::kPentagon: {
-      const double s = o.marker_size > 0 ? o.marker_size : 0.025;
-      const double quiet = s * 1.25;  // marker plus a one-cell quiet zone each side (6x6 + border: 8 cells)
-      // Side length of the pentagon: room for one marker with margin; height: two markers stacked.
-      const double side = quiet * 1.25;
-      const double r = side / (2 * std::sin(kPi / 5));
-      const double apothem = r * std::cos(kPi / 5);
-      const double h = quiet * 2.4;
-      obj.faces = PrismFaces(5, r, h, albedo);
-      for (int k = 0; k < 5; ++k) {
-        const double a = 2 * kPi * k / 5;
-        const Eigen::Vector3d n(std::cos(a), std::sin(a), 0);
-        for (int level = 0; level < 2; ++level) {
-          const Eigen::Vector3d c =
-              n * apothem + Eigen::Vector3d(0, 0, (level == 0 ? 0.5 : -0.5) * quiet * 1.1);
-          obj.markers.push_back({id++, s, MarkerOnFace(c, n, Eigen::Vector3d::UnitZ())});
-        }
-      }
+    case ObjectKind::kPentagon:
+      PentagonObject(o, &obj);
       break;
-    }
-    case ObjectKind::kBoard: {
-      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
-      const double pitch = s * 1.3;
-      const double w = 3 * pitch + 0.3 * s, thick = 0.01;
-      // Standing board: markers on its +x face, grid in y (columns) and z (rows).
-      // A printed sheet: white paper between the markers, as on a real printed board.
-      obj.faces = BoxFaces(thick, w, w, 225.0 / 255.0);
-      for (int row = 0; row < 3; ++row)
-        for (int col = 0; col < 3; ++col) {
-          const Eigen::Vector3d c(thick / 2, (col - 1) * pitch, (1 - row) * pitch);
-          obj.markers.push_back(
-              {id++, s, MarkerOnFace(c, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ())});
-        }
+    case ObjectKind::kBoard:
+      BoardObject(o, &obj);
       break;
-    }
-    case ObjectKind::kBox: {
-      const double s = o.marker_size > 0 ? o.marker_size : 0.04;
-      const double sx = 4.5 * s, sy = 3.5 * s, sz = 2.5 * s;
-      obj.faces = BoxFaces(sx, sy, sz, albedo);
-      std::mt19937_64 rng(o.seed * 104729 + 3);
-      std::uniform_real_distribution<double> u(0.0, 1.0);
-      struct Placed {
-        int face;
-        Eigen::Vector2d centre;
-        double ext;  // half extent of the rotated quiet square's bounding box
-      };
-      std::vector<Placed> placed;
-      const double half_quiet = 0.5 * s * 1.25;
-      // Faces: +x, -x, +y, -y, +z (the bottom is not seen by cameras above the object).
-      const Eigen::Vector3d normals[5] = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
-                                          Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(),
-                                          Eigen::Vector3d::UnitZ()};
-      const double half[3] = {sx / 2, sy / 2, sz / 2};
-      const int wanted = 8;
-      // Two markers on the top face and one or two on every side, spread by rejection sampling.
-      const int face_plan[8] = {4, 0, 1, 2, 3, 4, 0, 2};
-      const double gap = 0.002;
-      auto place = [&](int f, const Eigen::Vector2d& c, double roll, double ext) {
-        const Eigen::Vector3d n = normals[f];
-        const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
-        Eigen::Vector3d centre = n * half[axis];
-        centre[a0] = c[0];
-        centre[a1] = c[1];
-        const Eigen::Vector3d up = f == 4 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
-        obj.markers.push_back(
-            {o.first_id + static_cast<int>(obj.markers.size()), s, MarkerOnFace(centre, n, up, roll)});
-        placed.push_back({f, c, ext});
-      };
-      // A marker placed early can leave no room for the second one on its face (a second marker on
-      // a side needs the first near an end): then the whole layout is drawn again, the random stream
-      // continuing. A layout that succeeds at the first try is what earlier versions produced.
-      const int max_layouts = 200, max_attempts_per_marker = 20000;
-      bool done = false;
-      for (int layout = 0; layout < max_layouts && !done; ++layout) {
-        obj.markers.clear();
-        placed.clear();
-        bool failed = false;
-        for (int k = 0; k < wanted && !failed; ++k) {
-          const int f = face_plan[k];
-          const int axis = f / 2;
-          // In-face axes: the two other coordinate axes.
-          const int a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
-          bool ok = false;
-          for (int attempts = 0; attempts < max_attempts_per_marker && !ok; ++attempts) {
-            const double roll = 2 * kPi * u(rng);
-            // Extent of the rotated quiet square along the face axes.
-            const double ext = half_quiet * (std::abs(std::cos(roll)) + std::abs(std::sin(roll)));
-            if (ext > half[a0] || ext > half[a1]) continue;
-            const Eigen::Vector2d c((2 * u(rng) - 1) * (half[a0] - ext), (2 * u(rng) - 1) * (half[a1] - ext));
-            bool clash = false;
-            for (const auto& p : placed)
-              if (p.face == f && std::abs(p.centre[0] - c[0]) < p.ext + ext + gap &&
-                  std::abs(p.centre[1] - c[1]) < p.ext + ext + gap)
-                clash = true;
-            if (clash) continue;
-            place(f, c, roll, ext);
-            ok = true;
-          }
-          failed = !ok;
-        }
-        done = !failed;
-      }
-      if (!done) {
-        // Deterministic fallback (only reached for odd marker sizes): upright markers spread evenly
-        // along each face's longer axis.
-        obj.markers.clear();
-        placed.clear();
-        for (int k = 0; k < wanted; ++k) {
-          const int f = face_plan[k];
-          const int axis = f / 2, a0 = (axis + 1) % 3, a1 = (axis + 2) % 3;
-          int count = 0, index = 0;
-          for (int j = 0; j < wanted; ++j) {
-            if (face_plan[j] != f) continue;
-            if (j < k) ++index;
-            ++count;
-          }
-          const int along = half[a0] >= half[a1] ? 0 : 1;
-          Eigen::Vector2d c(0, 0);
-          c[along] = (count > 1 ? (2.0 * index / (count - 1) - 1) : 0.0) * half[along == 0 ? a0 : a1] / 2;
-          place(f, c, 0.0, half_quiet);
-        }
-      }
+    case ObjectKind::kBox:
+      BoxLayout(o, &obj).Place();
       break;
-    }
   }
   obj.radius = CircumRadius(obj.faces);
   return obj;
