@@ -64,27 +64,16 @@ Stats ComputeStats(std::vector<double> values) {
   return s;
 }
 
-EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
-                    const std::vector<TrajectoryRow>* trajectory) {
-  const GroundTruth truth = TruthAtEnd(session_truth);  // a map holds every camera's latest pose
-  EvalResult r;
-  r.gt_cameras = static_cast<int>(truth.cameras.size());
-  r.gt_markers = static_cast<int>(truth.markers.size());
-  r.gt_frames = static_cast<int>(truth.frames.size());
-  if (!map) throw EvalInputError("a map is required (--map)");
-  r.has_map = true;
-  r.map_rms_px = map->rms_px;
-  // Marker ids only mean the same markers in the same dictionary. Dictionary files may be named by
-  // different paths, so only two predefined names are compared.
-  auto predefined = [](const std::string& d) { return d.rfind("DICT_", 0) == 0; };
-  if (predefined(map->dictionary) && predefined(truth.dictionary) && map->dictionary != truth.dictionary)
-    throw EvalInputError("the map's dictionary " + map->dictionary + " is not the ground truth's " +
-                         truth.dictionary);
+namespace {
 
-  // --- Cameras: names must belong to the ground truth.
+// The map's cameras against the truth's (names must belong to it): r's camera errors, the rigid alignment
+// of the rig frames (on the camera centres, or through the first camera where fewer than 3) and the
+// scale error of the distances between cameras.
+void EvaluateCameras(const GroundTruth& truth, const RigMap& map, EvalResult* out) {
+  EvalResult& r = *out;
   std::vector<const SimCamera*> gt_cams;
   std::vector<const MapCamera*> est_cams;
-  for (const MapCamera& c : map->cameras) {
+  for (const MapCamera& c : map.cameras) {
     const SimCamera* g = truth.FindCamera(c.name);
     if (!g) {
       std::string names;
@@ -97,7 +86,7 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
   }
   if (gt_cams.empty()) throw EvalInputError("the map has no camera");
   for (const SimCamera& c : truth.cameras)
-    if (!map->FindCamera(c.name)) r.missing_cameras.push_back(c.name);
+    if (!map.FindCamera(c.name)) r.missing_cameras.push_back(c.name);
   r.mapped_cameras = static_cast<int>(gt_cams.size());
   if (gt_cams.size() >= 3) {
     std::vector<Eigen::Vector3d> est, gt;
@@ -132,11 +121,15 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
       gt_sq += gt * gt;
     }
   if (gt_sq > 0) r.scale_error = dot / gt_sq - 1.0;
+}
 
-  // --- Markers: ids must belong to the ground truth.
+// The map's markers against the truth's (ids must belong to it): r's marker errors, the rigid alignment of
+// the object frames (on the corners) and the configuration error.
+void EvaluateMarkers(const GroundTruth& truth, const RigMap& map, EvalResult* out) {
+  EvalResult& r = *out;
   std::vector<const SimMarker*> gt_marks;
   std::vector<const MapMarker*> est_marks;
-  for (const MapMarker& m : map->markers) {
+  for (const MapMarker& m : map.markers) {
     const SimMarker* g = truth.FindMarker(m.id);
     if (!g) {
       std::string ids;
@@ -149,7 +142,7 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
   }
   if (gt_marks.empty()) throw EvalInputError("the map has no marker");
   for (const SimMarker& m : truth.markers)
-    if (!map->FindMarker(m.id)) r.missing_markers.push_back(m.id);
+    if (!map.FindMarker(m.id)) r.missing_markers.push_back(m.id);
   r.mapped_markers = static_cast<int>(gt_marks.size());
   std::vector<Eigen::Vector3d> est_corners, gt_corners;
   for (size_t i = 0; i < gt_marks.size(); ++i) {
@@ -177,41 +170,67 @@ EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
     r.markers.push_back(e);
   }
   r.configuration_mm = ComputeStats(conf);
+}
 
-  // --- Object poses.
-  if (trajectory) {
-    r.has_trajectory = true;
-    std::map<int64_t, const SimFrame*> by_seq;
-    for (const SimFrame& f : truth.frames) by_seq[f.seq] = &f;
-    std::set<int64_t> seen;
-    std::vector<double> trans, rot;
-    std::vector<Eigen::Vector3d> est_pos, gt_pos;
-    const Rigid3 B_inv = Inverse(B);
-    for (const TrajectoryRow& row : *trajectory) {
-      auto it = by_seq.find(row.seq);
-      if (it == by_seq.end())
-        throw EvalInputError("trajectory seq " + std::to_string(row.seq) +
-                             " is not a ground-truth frame (0.." +
-                             std::to_string(truth.frames.empty() ? -1 : truth.frames.back().seq) + ")");
-      if (!seen.insert(row.seq).second) continue;  // duplicate: first one counts
-      const Rigid3& gt = it->second->rig_from_object;
-      const Rigid3 est = A * row.rig_from_object * B_inv;
-      trans.push_back(1000.0 * TranslationDistance(est, gt));
-      rot.push_back(AngleDeg(est.linear(), gt.linear()));
-      est_pos.push_back((row.rig_from_object * B_inv).translation());
-      gt_pos.push_back(gt.translation());
-    }
-    r.frames_with_pose = static_cast<int>(seen.size());
-    r.object_translation_mm = ComputeStats(trans);
-    r.object_rotation_deg = ComputeStats(rot);
-    if (!est_pos.empty()) {
-      const Rigid3 align = AlignRigid(est_pos, gt_pos);
-      std::vector<double> d;
-      for (size_t i = 0; i < est_pos.size(); ++i)
-        d.push_back(1000.0 * (align * est_pos[i] - gt_pos[i]).norm());
-      r.object_translation_aligned_mm = ComputeStats(d);
-    }
+// The object's poses in `trajectory` against the truth's frames (seqs must belong to it), through both
+// alignments; a seq given twice counts once (the first).
+void EvaluatePoses(const GroundTruth& truth, const std::vector<TrajectoryRow>& trajectory, EvalResult* out) {
+  EvalResult& r = *out;
+  const Rigid3& A = r.gt_rig_from_est_rig;
+  const Rigid3& B = r.gt_object_from_est_object;
+  r.has_trajectory = true;
+  std::map<int64_t, const SimFrame*> by_seq;
+  for (const SimFrame& f : truth.frames) by_seq[f.seq] = &f;
+  std::set<int64_t> seen;
+  std::vector<double> trans, rot;
+  std::vector<Eigen::Vector3d> est_pos, gt_pos;
+  const Rigid3 B_inv = Inverse(B);
+  for (const TrajectoryRow& row : trajectory) {
+    auto it = by_seq.find(row.seq);
+    if (it == by_seq.end())
+      throw EvalInputError("trajectory seq " + std::to_string(row.seq) + " is not a ground-truth frame (0.." +
+                           std::to_string(truth.frames.empty() ? -1 : truth.frames.back().seq) + ")");
+    if (!seen.insert(row.seq).second) continue;  // duplicate: first one counts
+    const Rigid3& gt = it->second->rig_from_object;
+    const Rigid3 est = A * row.rig_from_object * B_inv;
+    trans.push_back(1000.0 * TranslationDistance(est, gt));
+    rot.push_back(AngleDeg(est.linear(), gt.linear()));
+    est_pos.push_back((row.rig_from_object * B_inv).translation());
+    gt_pos.push_back(gt.translation());
   }
+  r.frames_with_pose = static_cast<int>(seen.size());
+  r.object_translation_mm = ComputeStats(trans);
+  r.object_rotation_deg = ComputeStats(rot);
+  if (!est_pos.empty()) {
+    const Rigid3 align = AlignRigid(est_pos, gt_pos);
+    std::vector<double> d;
+    for (size_t i = 0; i < est_pos.size(); ++i) d.push_back(1000.0 * (align * est_pos[i] - gt_pos[i]).norm());
+    r.object_translation_aligned_mm = ComputeStats(d);
+  }
+}
+
+}  // namespace
+
+EvalResult Evaluate(const GroundTruth& session_truth, const RigMap* map,
+                    const std::vector<TrajectoryRow>* trajectory) {
+  const GroundTruth truth = TruthAtEnd(session_truth);  // a map holds every camera's latest pose
+  EvalResult r;
+  r.gt_cameras = static_cast<int>(truth.cameras.size());
+  r.gt_markers = static_cast<int>(truth.markers.size());
+  r.gt_frames = static_cast<int>(truth.frames.size());
+  if (!map) throw EvalInputError("a map is required (--map)");
+  r.has_map = true;
+  r.map_rms_px = map->rms_px;
+  // Marker ids only mean the same markers in the same dictionary. Dictionary files may be named by
+  // different paths, so only two predefined names are compared.
+  auto predefined = [](const std::string& d) { return d.rfind("DICT_", 0) == 0; };
+  if (predefined(map->dictionary) && predefined(truth.dictionary) && map->dictionary != truth.dictionary)
+    throw EvalInputError("the map's dictionary " + map->dictionary + " is not the ground truth's " +
+                         truth.dictionary);
+
+  EvaluateCameras(truth, *map, &r);
+  EvaluateMarkers(truth, *map, &r);
+  if (trajectory) EvaluatePoses(truth, *trajectory, &r);
   return r;
 }
 
