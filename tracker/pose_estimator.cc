@@ -233,97 +233,77 @@ std::vector<PosePoint> PoseEstimator::PosePoints(const MarkerObservation& observ
   return Points({obs}, {1});
 }
 
-PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,
-                                  const Rigid3* prior) const {
-  PoseSolution sol;
-  const std::vector<Obs> obs = Mapped(observations, &sol.num_unmapped);
-  if (obs.empty()) return sol;
-
-  Refined best;
-  int iterations = 0;
-  bool from_prior = false;
-  if (prior) {
-    best = RefineFrom(obs, *prior);
-    iterations += best.iterations;
-    from_prior = best.valid;
+std::vector<PoseEstimator::Hypothesis> PoseEstimator::SquareHypotheses(const std::vector<Obs>& obs) const {
+  std::vector<int> order(obs.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<double> area(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i) {
+    const auto& p = *obs[i].pixels;
+    double a = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const auto& p0 = p[k];
+      const auto& p1 = p[(k + 1) % 4];
+      a += p0.x() * p1.y() - p1.x() * p0.y();
+    }
+    area[i] = std::abs(0.5 * a);
   }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return area[a] > area[b]; });
+  if (static_cast<int>(order.size()) > options_.max_start_markers) order.resize(options_.max_start_markers);
+  std::vector<Hypothesis> hypotheses;
+  const double score_px = 3.0 * options_.outlier_px;
+  for (int i : order) {
+    const Camera& cam = cameras_[obs[i].camera];
+    const Marker& mk = markers_[obs[i].marker];
+    const SquarePose sp = EstimateSquarePose(cam.model, *obs[i].pixels, mk.size);
+    if (!sp.ok) continue;
+    for (int h = 0; h < sp.num_hypotheses; ++h) {
+      Hypothesis c;
+      c.pose = Normalized(Inverse(*obs[i].cam_from_rig) * sp.hypotheses[h].cam_from_marker *
+                          Inverse(mk.object_from_marker));
+      c.ratio = sp.ratio;
+      c.inliers = 0;
+      c.cost = 0.0;
+      for (const Obs& o : obs) {
+        const double e = ObservationRms(o, c.pose);
+        if (e <= score_px) c.inliers++;
+        c.cost += std::min(e * e, score_px * score_px);
+      }
+      hypotheses.push_back(c);
+    }
+  }
+  std::stable_sort(hypotheses.begin(), hypotheses.end(), [](const Hypothesis& a, const Hypothesis& b) {
+    if (a.inliers != b.inliers) return a.inliers > b.inliers;
+    if (a.cost != b.cost) return a.cost < b.cost;
+    return a.ratio > b.ratio;
+  });
+  return hypotheses;
+}
+
+void PoseEstimator::RefineHypotheses(const std::vector<Obs>& obs, Refined* best, bool* from_prior,
+                                     int* iterations) const {
+  const std::vector<Hypothesis> hypotheses = SquareHypotheses(obs);
   const int n_obs = static_cast<int>(obs.size());
-  if (!best.valid || best.num_inliers < n_obs) {
-    // Lost (or the prediction left observations out): start from single-square hypotheses. Observations
-    // with the largest image footprint give the best single-square poses; among them the highest IPPE
-    // ratio first. Every hypothesis (both of an ambiguous square) is scored against all observations.
-    std::vector<int> order(obs.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::vector<double> area(obs.size());
-    for (size_t i = 0; i < obs.size(); ++i) {
-      const auto& p = *obs[i].pixels;
-      double a = 0.0;
-      for (int k = 0; k < 4; ++k) {
-        const auto& p0 = p[k];
-        const auto& p1 = p[(k + 1) % 4];
-        a += p0.x() * p1.y() - p1.x() * p0.y();
-      }
-      area[i] = std::abs(0.5 * a);
+  constexpr int kMaxRefined = 3;
+  for (int i = 0; i < static_cast<int>(hypotheses.size()) && i < kMaxRefined; ++i) {
+    Refined r = RefineFrom(obs, hypotheses[i].pose);
+    *iterations += r.iterations;
+    // Against the prediction's result, a hypothesis must explain more observations, or as many clearly
+    // better: with equal support (e.g. one true and one false marker, or a mirror solution) continuity
+    // decides.
+    const bool replace =
+        *from_prior ? (r.valid && (r.num_inliers > best->num_inliers ||
+                                   (r.num_inliers == best->num_inliers && r.cost < 0.5 * best->cost)))
+                    : Better(r, *best);
+    if (replace) {
+      *best = r;
+      *from_prior = false;
     }
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return area[a] > area[b]; });
-    if (static_cast<int>(order.size()) > options_.max_start_markers) order.resize(options_.max_start_markers);
-    struct Candidate {
-      Rigid3 pose;
-      double ratio;
-      int inliers;
-      double cost;
-    };
-    std::vector<Candidate> candidates;
-    const double score_px = 3.0 * options_.outlier_px;
-    for (int i : order) {
-      const Camera& cam = cameras_[obs[i].camera];
-      const Marker& mk = markers_[obs[i].marker];
-      const SquarePose sp = EstimateSquarePose(cam.model, *obs[i].pixels, mk.size);
-      if (!sp.ok) continue;
-      for (int h = 0; h < sp.num_hypotheses; ++h) {
-        Candidate c;
-        c.pose = Normalized(Inverse(*obs[i].cam_from_rig) * sp.hypotheses[h].cam_from_marker *
-                            Inverse(mk.object_from_marker));
-        c.ratio = sp.ratio;
-        c.inliers = 0;
-        c.cost = 0.0;
-        for (const Obs& o : obs) {
-          const double e = ObservationRms(o, c.pose);
-          if (e <= score_px) c.inliers++;
-          c.cost += std::min(e * e, score_px * score_px);
-        }
-        candidates.push_back(c);
-      }
-    }
-    std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-      if (a.inliers != b.inliers) return a.inliers > b.inliers;
-      if (a.cost != b.cost) return a.cost < b.cost;
-      return a.ratio > b.ratio;
-    });
-    constexpr int kMaxRefined = 3;
-    for (int i = 0; i < static_cast<int>(candidates.size()) && i < kMaxRefined; ++i) {
-      Refined r = RefineFrom(obs, candidates[i].pose);
-      iterations += r.iterations;
-      // Against the prediction's result, a hypothesis must explain more observations, or as many clearly
-      // better: with equal support (e.g. one true and one false marker, or a mirror solution) continuity
-      // decides.
-      const bool replace =
-          from_prior ? (r.valid && (r.num_inliers > best.num_inliers ||
-                                    (r.num_inliers == best.num_inliers && r.cost < 0.5 * best.cost)))
-                     : Better(r, best);
-      if (replace) {
-        best = r;
-        from_prior = false;
-      }
-      if (best.valid && best.num_inliers == n_obs) break;
-    }
+    if (best->valid && best->num_inliers == n_obs) break;
   }
-  sol.iterations = iterations;
-  if (!best.valid) {
-    sol.num_rejected = n_obs;
-    return sol;
-  }
+}
 
+void PoseEstimator::Describe(const std::vector<Obs>& obs, const Refined& best, PoseSolution* sol) const {
+  const int n_obs = static_cast<int>(obs.size());
   // Final covariance at the solution: sigma^2 (J^T J)^-1 over the inliers, sigma^2 = RSS / (N - 6).
   Matrix6d h;
   Vector6d g;
@@ -347,13 +327,12 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
   Eigen::Matrix<int, 6, 1> perm;
   perm << 3, 4, 5, 0, 1, 2;  // message order: x y z (translation) then rotation
   for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) sol.covariance(a, b) = cov_params(perm[a], perm[b]);
+    for (int b = 0; b < 6; ++b) sol->covariance(a, b) = cov_params(perm[a], perm[b]);
 
-  sol.rig_from_object = best.pose;
-  sol.rms_px = std::sqrt(rss / (4.0 * n_inliers));
-  sol.num_observations = n_inliers;
-  sol.num_rejected = n_obs - n_inliers;
-  sol.from_prior = from_prior;
+  sol->rig_from_object = best.pose;
+  sol->rms_px = std::sqrt(rss / (4.0 * n_inliers));
+  sol->num_observations = n_inliers;
+  sol->num_rejected = n_obs - n_inliers;
   std::set<std::string> cams;
   std::set<int> ids;
   const Obs* single = nullptr;
@@ -363,16 +342,42 @@ PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observat
     ids.insert(markers_[obs[i].marker].id);
     single = &obs[i];
   }
-  sol.cameras.assign(cams.begin(), cams.end());
-  sol.markers.assign(ids.begin(), ids.end());
-  sol.status = PoseStatus::kTracking;
+  sol->cameras.assign(cams.begin(), cams.end());
+  sol->markers.assign(ids.begin(), ids.end());
+  sol->status = PoseStatus::kTracking;
   if (n_inliers == 1) {
     const SquarePose sp =
         EstimateSquarePose(cameras_[single->camera].model, *single->pixels, markers_[single->marker].size);
-    sol.ippe_ratio = sp.ok ? sp.ratio : 1.0;
+    sol->ippe_ratio = sp.ok ? sp.ratio : 1.0;
     if (!sp.ok || (sp.num_hypotheses >= 2 && sp.ratio < options_.ambiguity_ratio))
-      sol.status = PoseStatus::kAmbiguous;
+      sol->status = PoseStatus::kAmbiguous;
   }
+}
+
+PoseSolution PoseEstimator::Solve(const std::vector<MarkerObservation>& observations,
+                                  const Rigid3* prior) const {
+  PoseSolution sol;
+  const std::vector<Obs> obs = Mapped(observations, &sol.num_unmapped);
+  if (obs.empty()) return sol;
+
+  Refined best;
+  int iterations = 0;
+  bool from_prior = false;
+  if (prior) {
+    best = RefineFrom(obs, *prior);
+    iterations += best.iterations;
+    from_prior = best.valid;
+  }
+  // Lost (or the prediction left observations out): start from single-square hypotheses.
+  if (!best.valid || best.num_inliers < static_cast<int>(obs.size()))
+    RefineHypotheses(obs, &best, &from_prior, &iterations);
+  sol.iterations = iterations;
+  if (!best.valid) {
+    sol.num_rejected = static_cast<int>(obs.size());
+    return sol;
+  }
+  Describe(obs, best, &sol);
+  sol.from_prior = from_prior;
   return sol;
 }
 

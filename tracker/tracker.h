@@ -235,6 +235,22 @@ class PoseEstimator {
   // LM with outlier rejection from one start.
   Refined RefineFrom(const std::vector<Obs>& obs, const Rigid3& start) const;
   static bool Better(const Refined& a, const Refined& b);
+  // A pose from one observed square (either of an ambiguous square's two), scored against all observations
+  // (inliers within 3 outlier_px, a capped squared error).
+  struct Hypothesis {
+    Rigid3 pose;
+    double ratio;  // the square's IPPE ratio
+    int inliers;
+    double cost;
+  };
+  // The single-square hypotheses of the observations with the largest image footprint (max_start_markers;
+  // they give the best single-square poses), best first: most inliers, then lowest cost, then highest ratio.
+  std::vector<Hypothesis> SquareHypotheses(const std::vector<Obs>& obs) const;
+  // The best hypotheses refined; one replaces *best if better (against the prediction's result: more
+  // inliers, or as many at half the cost).
+  void RefineHypotheses(const std::vector<Obs>& obs, Refined* best, bool* from_prior, int* iterations) const;
+  // sol's pose, covariance, RMS, counts, cameras, markers and status from the refined solution.
+  void Describe(const std::vector<Obs>& obs, const Refined& best, PoseSolution* sol) const;
 
   RigMap map_;
   TrackerOptions options_;
