@@ -89,12 +89,12 @@ def case(S, q_cells, c=2.2, sigma=0.9, L0=0.04 * 255, P=0.85 * 255):
     p3, c3 = fit(us, ys, tied, [0.0, L0, P, S, c, 0.8], [-c, -50, -50, -50, 0.2 * c, 0.15],
                  [c, 300, 300, 300, 4 * c, 4])
     area = q_cells * (P - S) / (P - L0)
-    print('| %.2f | %.2f | %.3f | %+.3f (rms %.2f) | %+.3f (q %.2f c, S1 %.0f, rms %.3f) | %+.3f (q %.2f c) | %+.3f |' % (
+    print('| %.2f | %.2f | %.3f | %+.3f (rms %.2f) | %+.3f (q %.2f c, S1 %.0f, rms %.3f) | %+.3f (q %.2f c) |' % (
         S / 255, q_cells, area, p1[0], math.sqrt(c1 / len(us)), p2[0], p2[5] / c, p2[3],
-        math.sqrt(c2 / len(us)), p3[0], p3[4] / c, -q * (P - S) / (S - L0)))
+        math.sqrt(c2 / len(us)), p3[0], p3[4] / c))
 
 
-print('| surface | margin cells | area a | one level: e px | two levels, free: e px | margin = paper: e px | -q (P - S) / (S - L0) px |')
-print('|---|---|---|---|---|---|---|')
+print('| surface | margin cells | area a | one level: e px | two levels, free: e px | margin = paper: e px |')
+print('|---|---|---|---|---|---|')
 for S, qc in ((0.7, 0.3), (0.5, 0.3), (0.7, 1.0), (0.5, 1.0), (0.06, 0.5), (0.45, 0.5), (0.7, 0.0001)):
     case(S, qc)

@@ -57,7 +57,7 @@ def band(v, edges):
 for path in sys.argv[1:]:
     rows = [(s, v) + measures(t, e) for _, t, e, s, v in markers(path)]
     print('\n%s: %d markers' % (path, len(rows)))
-    print('| band | markers | size %% | long diag %% | short diag %% | side offset px |')
+    print('| band | markers | size % | long diag % | short diag % | side offset px |')
     print('|---|---|---|---|---|---|')
     def line(name, sel):
         if not sel:
