@@ -8,7 +8,8 @@
 // renders of their own (seeds apart from the matrix's), printed, and given to the detector.
 // With MCMT_CORNER_DUMP=FILE every corner mcmt found is written there (id x0 y0 ... x3 y3 per line), to
 // compare two builds' corners marker by marker. MCMT_CANDIDATE_SEARCH=opencv|own: the detector's
-// candidate_search.
+// candidate_search. MCMT_IMAGING_OVERRIDE="motion_px=0,jpeg_quality=0": every condition with those Imaging
+// fields set (ablations; the seeds stay the condition's).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -52,7 +53,9 @@ int main(int argc, char** argv) {
   std::ofstream dump;
   if (const char* path = std::getenv("MCMT_CORNER_DUMP")) dump.open(path);
   dump.precision(10);
-  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  if (const char* spec = std::getenv("MCMT_IMAGING_OVERRIDE"))
+    for (testing::Imaging& im : catalogue) testing::OverrideImaging(spec, &im);
   for (size_t c = 0; c < catalogue.size(); ++c) {
     const testing::Imaging& im = catalogue[c];
     if (only && !std::strstr(im.name.c_str(), only)) continue;

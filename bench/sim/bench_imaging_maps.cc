@@ -31,6 +31,8 @@
 //                               LCM log, channels MCMT_DETECTIONS_<camera>: mcmt-mapper reads it too)
 //   MCMT_IMAGING_LOAD=FILE      map the detections MCMT_IMAGING_SAVE wrote instead of rendering (one
 //                               condition; no reference map)
+//   MCMT_IMAGING_OVERRIDE=SPEC  with MCMT_IMAGING_RENDERER=reference: every catalogue condition with the
+//                               Imaging fields SPEC names set ("motion_px=0,jpeg_quality=0"; ablations)
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
 //                               mapping (an oracle: what an isotropic size bias of the corners costs the
 //                               map's scale; negative P enlarges)
@@ -74,7 +76,12 @@ struct Condition {
 std::vector<Condition> Conditions() {
   std::vector<Condition> c;
   if (const char* e = std::getenv("MCMT_IMAGING_RENDERER"); e && std::string(e) == "reference") {
-    static const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+    static const std::vector<testing::Imaging> catalogue = [] {
+      std::vector<testing::Imaging> list = testing::ImagingCatalogue();
+      if (const char* spec = std::getenv("MCMT_IMAGING_OVERRIDE"))
+        for (testing::Imaging& im : list) testing::OverrideImaging(spec, &im);
+      return list;
+    }();
     for (const testing::Imaging& im : catalogue) c.push_back({"reference renderer: " + im.name, {}, &im});
     return c;
   } else if (e && std::string(e) != "sim") {

@@ -7,13 +7,16 @@
 // gamma encoding, sharpening, 8-bit quantisation and JPEG.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <opencv2/aruco.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -69,6 +72,56 @@ inline std::vector<Imaging> ImagingCatalogue() {
   x.face_shading = 0.4, x.gradient = 0.3, x.defocus_radius = 1.0, x.motion_px = 1.5, x.gamma = 2.0;
   x.sharpen = 0.4, x.jpeg_quality = 60, x.shot_noise = 0.1, c.push_back(x);
   return c;
+}
+
+// Diagnostics (benches' MCMT_IMAGING_OVERRIDE): sets the fields a spec like "motion_px=0,jpeg_quality=0"
+// names to its values (numbers; sharpen_linear 0 or 1). Throws std::invalid_argument on an unknown field
+// or a value that is not a number.
+inline void OverrideImaging(const std::string& spec, Imaging* im) {
+  struct Field {
+    const char* name;
+    double Imaging::*member;
+  };
+  static const Field kFields[] = {{"margin_cells", &Imaging::margin_cells},
+                                  {"ink", &Imaging::ink},
+                                  {"paper", &Imaging::paper},
+                                  {"surface", &Imaging::surface},
+                                  {"surface_texture", &Imaging::surface_texture},
+                                  {"face_shading", &Imaging::face_shading},
+                                  {"gradient", &Imaging::gradient},
+                                  {"vignetting", &Imaging::vignetting},
+                                  {"blur_sigma", &Imaging::blur_sigma},
+                                  {"defocus_radius", &Imaging::defocus_radius},
+                                  {"motion_px", &Imaging::motion_px},
+                                  {"read_noise", &Imaging::read_noise},
+                                  {"shot_noise", &Imaging::shot_noise},
+                                  {"gamma", &Imaging::gamma},
+                                  {"sharpen", &Imaging::sharpen},
+                                  {"exposure", &Imaging::exposure}};
+  size_t begin = 0;
+  while (begin < spec.size()) {
+    const size_t end = std::min(spec.find(',', begin), spec.size());
+    const std::string item = spec.substr(begin, end - begin);
+    begin = end + 1;
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("imaging override \"" + item + "\": no '='");
+    const std::string name = item.substr(0, eq), value_text = item.substr(eq + 1);
+    char* parsed_end = nullptr;
+    const double value = std::strtod(value_text.c_str(), &parsed_end);
+    if (value_text.empty() || *parsed_end != '\0')
+      throw std::invalid_argument("imaging override \"" + item + "\": not a number");
+    if (name == "jpeg_quality") {
+      im->jpeg_quality = static_cast<int>(value);
+    } else if (name == "sharpen_linear") {
+      im->sharpen_linear = value != 0;
+    } else {
+      const Field* f = std::find_if(std::begin(kFields), std::end(kFields),
+                                    [&](const Field& x) { return name == x.name; });
+      if (f == std::end(kFields)) throw std::invalid_argument("imaging override: no field \"" + name + "\"");
+      im->*(f->member) = value;
+    }
+    im->name += " [" + item + "]";
+  }
 }
 
 namespace reference {

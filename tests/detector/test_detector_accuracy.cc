@@ -83,6 +83,23 @@ TEST(ReferenceRenderer, SharpeningAmountOfEitherSign) {
   EXPECT_LT(soft.at<uint8_t>(4, 8) + 10, none.at<uint8_t>(4, 8));
 }
 
+// The benches' MCMT_IMAGING_OVERRIDE: the named fields take the values, the name records them, the
+// rest of the condition stays; an unknown field or a value that is no number throws.
+TEST(ReferenceRenderer, OverrideSetsTheNamedFields) {
+  testing::Imaging im = testing::ImagingCatalogue().back();
+  const testing::Imaging hard = im;
+  testing::OverrideImaging("margin_cells=1,jpeg_quality=0,sharpen_linear=1", &im);
+  EXPECT_EQ(im.margin_cells, 1.0);
+  EXPECT_EQ(im.jpeg_quality, 0);
+  EXPECT_TRUE(im.sharpen_linear);
+  EXPECT_EQ(im.surface_texture, hard.surface_texture);
+  EXPECT_EQ(im.motion_px, hard.motion_px);
+  EXPECT_EQ(im.name, "hard [margin_cells=1] [jpeg_quality=0] [sharpen_linear=1]");
+  EXPECT_THROW(testing::OverrideImaging("margin=1", &im), std::invalid_argument);
+  EXPECT_THROW(testing::OverrideImaging("gamma=two", &im), std::invalid_argument);
+  EXPECT_THROW(testing::OverrideImaging("gamma", &im), std::invalid_argument);
+}
+
 TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
   testing::Accuracy all;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
