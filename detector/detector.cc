@@ -580,9 +580,8 @@ struct SideRays {
   double gamma_hint = 1.0;
   bool hold_gamma = false;
   int polarity = 0;
-  double paper = 0;         // SideProfiles::paper
-  bool skew_pass = false;   // TurnSkewedSides's: TurnSide always takes its three rounds
-  bool all_rounds = false;  // TurnSide takes its three rounds (the skew pass, a short-span side)
+  double paper = 0;        // SideProfiles::paper
+  bool skew_pass = false;  // TurnSkewedSides's: TurnSide always takes its three rounds
 
   // The profiles about the line moved `shift` px outward (the row boundaries' depths are relative to
   // the edge the model places, so they hold at any shift). `half`: -1 every ray, 0 / 1 those before /
@@ -849,7 +848,7 @@ void TurnSide(const SideRays& side, SideProfiles* profiles, SideFit* fit, double
     const double step = (e_half[1] - e_half[0]) / (along_half[1] - along_half[0]);
     turn += step;
     if (0.5 * std::abs(turn) > 1.5 * side.cell) return;
-    if ((!side.all_rounds && 0.5 * std::abs(step) < 0.1 * side.cell) || round == 2) break;
+    if ((!side.skew_pass && 0.5 * std::abs(step) < 0.1 * side.cell) || round == 2) break;
     side.SampleProfiles(profiles, fit->e, -1, split, turn);
     SideFit again = *fit;
     again.e = 0.0;
@@ -878,7 +877,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
                const std::vector<Eigen::Vector2d>& ideal_origins, const std::vector<Eigen::Vector2d>& normals,
                double sigma_along, bool fit_gamma, double gamma_hint, bool hold_gamma, int polarity,
                double paper, SideProfiles* profiles, SideFit* fit, double* tilt = nullptr,
-               double* tilt_at = nullptr, bool skew_pass = false, bool all_rounds = false) {
+               double* tilt_at = nullptr, bool skew_pass = false) {
   if (tilt) *tilt = NAN;
   if (bits.empty()) return NAN;
   thread_local SideRays rays;
@@ -899,7 +898,6 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.polarity = polarity;
   rays.paper = paper;
   rays.skew_pass = skew_pass;
-  rays.all_rounds = skew_pass || all_rounds;
   if (!FitWholeSide(rays, profiles, fit)) return NAN;
   if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
   return fit->e;
@@ -978,76 +976,13 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   return s->num_valid >= 4;
 }
 
-// Where a ray's profile (`m` samples, `ds` px apart from -h px) crosses the level `mid` going from the
-// inside to the outside (`sign`: +1 where the outside is the brighter), the crossing nearest to the
-// profile's centre, px along the outward normal; NaN without one.
-double MidCrossing(const float* prof, int m, double h, double ds, float mid, float sign) {
-  double best = NAN;
-  for (int j = 0; j + 1 < m; ++j) {
-    const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
-    if (v0 <= 0.f && v1 > 0.f) {
-      const double at = -h + (j + v0 / (v0 - v1)) * ds;
-      if (!(std::abs(at) >= std::abs(best))) best = at;
-    }
-  }
-  return best;
-}
-
-// A model pass's side whose crossings span less than kMinCrossingSpan of it (first to last ray
-// crossing): on a small marker the clean rays (next to clean code cells, CleanNeighbour) are a few
-// code cells' worth, all near one end. They give the side's offset but not its direction: the line
-// through them turns the far end by their noise times the lever arm (a 21 px marker's sides turned 2-5
-// px per pass, and the passes of 43 of 293 refinements on the caliscope board's camera 3 never settled;
-// bench/results/2026-12-05-{settle,rulec}.md). Such a side's direction is taken from the crossings of
-// every valid ray that lie within kShortSpanReachCells of the clean crossings' offset (the others'
-// crossings mix in the code's edge where a code cell of the border's colour touches the border), its
-// offset stays the clean crossings', and the side model turns it (LocateSide; TurnSide's three
-// rounds). Main's under-skew of small skewed markers (corner angles 0.27-0.32 deg too close to square
-// on the real board's cameras 1-3, 0.77 deg on renders of 20-28 px at 55-70 deg) then goes (about 0;
-// bench/results/2026-12-05-cam1bias.md, 2026-12-06-rulee.md).
-constexpr double kMinCrossingSpan = 0.5;
-constexpr double kShortSpanReachCells = 0.5;
-
-// The line of a short-span side (kMinCrossingSpan) from its crossings `points` and the current line
-// `current` (ideal pixels): where `points` are the clean rays' (`clean`), the direction through every
-// valid ray's crossing of `mid` within kShortSpanReachCells of their offset, with their offset;
-// otherwise, or where fewer of those crossings than clean ones are found, the current direction with
-// the offset of `points`.
-Line ShortSpanLine(const SideSamples& s, const PixelMap& map, const Line& current,
-                   const std::vector<Eigen::Vector2d>& points, bool clean, float mid, float sign) {
-  thread_local std::vector<Eigen::Vector2d> all;
-  double c = 0;
-  for (const Eigen::Vector2d& p : points) c += current.n.dot(p) / points.size();
-  if (!clean) return {current.n, c};
-  // The profiles reach h px either side: 2 h is about a cell (SampleSide).
-  const double reach_px = kShortSpanReachCells * 2.0 * s.h;
-  all.clear();
-  for (int i = 0; i < s.n; ++i) {
-    if (!s.valid[i]) continue;
-    const double at = MidCrossing(&s.profiles[static_cast<size_t>(i) * s.m], s.m, s.h, s.ds, mid, sign);
-    if (std::isnan(at)) continue;
-    const Eigen::Vector2d p = map.ToIdeal(s.origins[i] + at * s.normals[i]);
-    if (std::abs(current.n.dot(p) - c) <= reach_px) all.push_back(p);
-  }
-  Line through;
-  if (all.size() < points.size() || !FitLine(all, &through)) return {current.n, c};
-  if (through.n.dot(current.n) < 0) through.n = -through.n;
-  // offset: the clean crossings' mean distance along the new normal
-  through.c = 0;
-  for (const Eigen::Vector2d& p : points) through.c += through.n.dot(p) / points.size();
-  return through;
-}
-
 // The line (ideal pixels) through the side's crossings of the mid level between its profiles' inner
 // and outer levels (`level_in`, `level_out`: medians over the rays next to clean code cells where there
 // are enough of them), false when the levels differ by less than 8 grey levels (no clean crossing: a
 // margin narrower than the profile between a dark border and a dark surround, or the candidate a pixel
-// or two off) or fewer than 4 rays cross. In a model pass (`model_pass`) a side whose crossings span
-// less than kMinCrossingSpan of it gets ShortSpanLine's line about the current line `current`, and
-// *short_span is set (the side model then turns it).
-bool CrossingLine(const SideSamples& s, const PixelMap& map, const Line& current, bool model_pass, Line* line,
-                  double* level_in, double* level_out, bool* short_span) {
-  *short_span = false;
+// or two off) or fewer than 4 rays cross.
+bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double* level_in,
+                  double* level_out) {
   thread_local std::vector<float> inside, outside;
   thread_local std::vector<Eigen::Vector2d> points;
   const int n = s.n, m = s.m;
@@ -1064,19 +999,22 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, const Line& current
   const float mid = static_cast<float>(0.5 * (*level_in + *level_out));
   const float sign = *level_out > *level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
   points.clear();
-  int first = n, last = -1;  // the first and last ray that crosses
   for (int i = 0; i < n; ++i) {
     if (!s.valid[i] || (use_clean && !s.clean[i])) continue;
-    const double at = MidCrossing(&s.profiles[static_cast<size_t>(i) * m], m, s.h, s.ds, mid, sign);
-    if (std::isnan(at)) continue;
-    first = std::min(first, i), last = std::max(last, i);
-    points.push_back(map.ToIdeal(s.origins[i] + at * s.normals[i]));
+    const float* prof = &s.profiles[static_cast<size_t>(i) * m];
+    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+    double best = 1e9;
+    for (int j = 0; j + 1 < m; ++j) {
+      const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+      if (v0 <= 0.f && v1 > 0.f) {
+        const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
+        if (std::abs(at) < std::abs(best)) best = at;
+      }
+    }
+    if (best > 1e8) continue;
+    points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));
   }
-  if (points.size() < 4) return false;
-  if (!model_pass || last - first + 1 >= kMinCrossingSpan * n) return FitLine(points, line);
-  *line = ShortSpanLine(s, map, current, points, use_clean, mid, sign);
-  *short_span = true;
-  return true;
+  return points.size() >= 4 && FitLine(points, line);
 }
 
 // The gamma of the marker's other sides (their latest fits with gamma free), for a side whose code
@@ -1306,9 +1244,7 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                   r->first_width, &s))
     return false;
   double level_in, level_out;
-  bool short_span = false;
-  const bool crossed =
-      CrossingLine(s, r->map, LineThrough(ideal, side), model_pass, line, &level_in, &level_out, &short_span);
+  const bool crossed = CrossingLine(s, r->map, line, &level_in, &level_out);
   // Without a clean crossing the side keeps the line through the current corners. A model pass fits
   // its edge from there (its profiles reach over border, margin and surround); without the model it
   // fails.
@@ -1324,12 +1260,9 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   // The line's direction is the crossings' where their levels have the marker's polarity (the border's
   // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
   // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the
-  // side), the model turns the line too, and so it does where the crossings span too little of the side
-  // to give its direction (`short_span`, ShortSpanLine; in TurnSide's three rounds: a round count that
-  // depends on the step would jump with the start). So it does on the sides of a skewed quad in the
-  // skew pass (TurnSkewedSides).
-  const bool turn_line =
-      !crossed || short_span || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
+  // side), the model turns the line too. So it does on the sides of a skewed quad in the skew pass
+  // (TurnSkewedSides).
+  const bool turn_line = !crossed || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
   const double turn_weight = turn_line ? 1.0 : r->skew_turn ? SkewTurnWeight(ideal, side) : 0.0;
   double tilt = NAN, tilt_at = 0.5;
   // A known gamma (held_gamma > 0) is held on every side.
@@ -1337,7 +1270,7 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   const double e = FitSide(r->gray, r->bits, r->cells, side, r->map, ideal_from_unit, unit_from_ideal, *line,
                            s.valid, s.origins, s.ideal_origins, s.normals, sigma_along, r->fit_gamma,
                            gamma_hint, r->held_gamma > 0, r->polarity, r->paper, &r->side_profiles, &fit,
-                           turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn, short_span);
+                           turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn);
   r->side_modelled[side] = std::isfinite(e);
   if (!std::isfinite(e)) return true;
   r->side_unfitted[side] = false;
