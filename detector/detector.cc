@@ -805,12 +805,36 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
   return depth_sum / rays->size();
 }
 
+// The side sampled about its line moved `shift` px outward and fitted cold (FitSideProfiles).
+bool FitCold(const SideRays& side, double shift, SideProfiles* profiles, SideFit* fit) {
+  side.SampleProfiles(profiles, shift);
+  fit->warm = false;
+  fit->e = 0.0;
+  return FitSideProfiles(*profiles, fit);
+}
+
+// FitCold about the line moved `*shift` px outward; an edge beyond the profiles' middle (more than 0.75
+// cell from their line) is sampled and fitted again about where it was found (*shift moved to it).
+bool FitColdAbout(const SideRays& side, double* shift, SideProfiles* profiles, SideFit* fit) {
+  if (FitCold(side, *shift, profiles, fit)) return true;
+  if (!fit->beyond) return false;
+  *shift += fit->beyond_e;
+  return FitCold(side, *shift, profiles, fit);
+}
+
 // The whole side's model fit about its line (fit->e then px outward from it), false when it fails. A
-// previous pass's fit warm-starts it. A fit of the wrong polarity took the first code row for the border
-// (the profiles lay about a cell inside the edge): the side is sampled and fitted again one cell
-// outward. An edge beyond the profiles' middle (more than 0.75 cell from their line: the line a cell
-// inside or outside, on the code's edge or the margin's) is sampled and fitted again about where it was
-// found.
+// previous pass's fit warm-starts it. An edge beyond the profiles' middle (more than 0.75 cell from their
+// line: the line a cell inside or outside, on the code's edge or the margin's) is sampled and fitted again
+// about where it was found. A fit of the wrong polarity has found an edge with the bright side inward:
+// - the border's inner edge, the crossings a cell inside (code white, border dark): the side is sampled
+//   and fitted again one cell outward;
+// - or the margin's outer edge, the crossings a margin's width outside (a margin narrower than the
+//   profiles over a dark surround: black tool). One cell outward the profiles then lie on the surround,
+//   and a fit there takes the dark surround for the border and the margin for a code row: its edge shows
+//   no step (EdgeHasStep), and the side fitted from there settled outside the marker or failed in every
+//   pass, whichever start led there (bench/results/2026-12-06-polarity.md). Then the side is sampled and
+//   fitted again half a cell inward (the true edge within 0.75 cell for margins up to 1.25 cells), and
+//   that fit is kept where it shows a step.
 bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
   side.SampleProfiles(profiles, 0.0);
   // A warm fit keeps the previous pass's other parameters but starts its edge at e = 0, on the line the
@@ -820,18 +844,18 @@ bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
   double shift = 0.0;
   bool ok = FitSideProfiles(*profiles, fit);
   if (!ok && fit->wrong_polarity) {
+    const SideFit wrong = *fit;
     shift = side.cell;
-    side.SampleProfiles(profiles, shift);
-    fit->warm = false;
-    fit->e = 0.0;
-    ok = FitSideProfiles(*profiles, fit);
-  }
-  if (!ok && fit->beyond) {
-    shift += fit->beyond_e;
-    side.SampleProfiles(profiles, shift);
-    fit->warm = false;
-    fit->e = 0.0;
-    ok = FitSideProfiles(*profiles, fit);
+    ok = FitColdAbout(side, &shift, profiles, fit);
+    if (!ok || !EdgeHasStep(*profiles, *fit)) {
+      SideFit inward = wrong;
+      double inward_shift = -0.5 * side.cell;
+      const bool inward_ok = FitColdAbout(side, &inward_shift, profiles, &inward);
+      if (inward_ok && EdgeHasStep(*profiles, inward)) *fit = inward, shift = inward_shift, ok = true;
+    }
+  } else if (!ok && fit->beyond) {
+    shift = fit->beyond_e;
+    ok = FitCold(side, shift, profiles, fit);
   }
   if (!ok) {
     fit->warm = false;

@@ -829,6 +829,16 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
 
 }  // namespace
 
+bool EdgeHasStep(const SideProfiles& s, const SideFit& fit) {
+  const double c = s.cell;
+  const double border = LevelNear(s, fit.e - 0.5 * c, -1, 0), beyond = LevelNear(s, fit.e + 0.25 * c, -1, 0);
+  double code = LevelNear(s, fit.e - 1.5 * c, 1, 1);
+  if (!std::isfinite(code)) code = LevelNear(s, fit.e - 2.5 * c, 2, 1);
+  if (s.polarity == 0 || !std::isfinite(border) || !std::isfinite(beyond) || !std::isfinite(code))
+    return true;
+  return (beyond - border) * s.polarity >= kMinEdgeStep * std::abs(code - border);
+}
+
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;

@@ -110,6 +110,18 @@ struct SideFit {
   bool warm = false;
 };
 
+// The profiles show a step at the fit's outer edge (fit.e about the profiles' line), of the marker's
+// polarity: their level a quarter cell beyond the edge differs from the border's (half a cell inside) by
+// at least kMinEdgeStep of the border-to-code contrast (the code's other colour a cell and a half inside),
+// in the profiles' own units (blurred, so the step read is below the print's). A print's border meets
+// paper or a surface of another level (no margin on grey: 0.38 of the contrast in the reflectances of
+// the reference renderer); a fit without a step has taken a dark surround for the border and the margin
+// beyond the true edge for a code row, its edge placed by nothing (half-cell margin on a black tool:
+// 0.02 in reflectance; FitWholeSide in detector.cc). True where a level is missing or the polarity is
+// unknown.
+constexpr double kMinEdgeStep = 0.15;
+bool EdgeHasStep(const SideProfiles& s, const SideFit& fit);
+
 // The standard normal distribution Phi(z) and density phi(z) given gauss = exp(-z^2 / 2): Abramowitz and
 // Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
 inline void PhiAndDensityOf(double z, double gauss, double* big, double* small) {

@@ -749,6 +749,67 @@ TEST(DetectorAccuracy, AnUndershootIsNoMargin) {
   EXPECT_TRUE(seen);
 }
 
+// A side whose crossings lie on the outer edge of a half-cell margin over a black surface (bright inside,
+// dark outside) fits a wrong-polarity model there; its refit one cell outward lies on the surface and takes
+// it for the border (no step at its edge), and the refinement from that start ended outside the marker or
+// failed. The refit half a cell inward finds the edge. The probe's two starts of these markers (black tool,
+// seed 41 image 5 id 82; seed 31 image 4 id 22): one of them failed before (id 82 0.58 px from the truth,
+// id 22 0.43 px), bench/results/2026-12-06-polarity.md.
+TEST(DetectorAccuracy, AMarginsOuterEdgeIsNotTheBorders) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  const int cells = dict->markerSize + 2;
+  testing::Imaging black_tool;
+  for (const testing::Imaging& im : testing::ImagingCatalogue())
+    if (im.name == "half-cell margin, black tool") black_tool = im;
+  ASSERT_EQ(black_tool.name, "half-cell margin, black tool");
+  struct Case {
+    int seed, image, id;
+  };
+  for (const Case& c : {Case{41, 5, 82}, Case{31, 4, 22}}) {
+    testing::ReferenceScene scene;
+    // RefinementDoesNotDependOnItsStart's images and start shifts at the case's seed.
+    std::mt19937_64 rng(c.seed), start_rng(c.seed + 1);
+    std::uniform_real_distribution<double> shift(-0.5, 0.5);
+    bool seen = false;
+    for (int i = 0; i <= c.image; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(*dict, scene, black_tool, rng, &truth);
+      for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
+        if (!ComparedOnReference(truth, m.id)) continue;
+        std::array<cv::Point2d, 4> rounded, moved;
+        for (int k = 0; k < 4; ++k) {
+          rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
+          moved[k] = {m.corners[k][0] + shift(start_rng), m.corners[k][1] + shift(start_rng)};
+        }
+        if (i < c.image || m.id != c.id) continue;
+        seen = true;
+        const std::string what = "seed " + std::to_string(c.seed) + " image " + std::to_string(c.image) +
+                                 " id " + std::to_string(c.id);
+        const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+            dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
+        std::array<cv::Point2d, 4> truth_corners{};
+        for (const testing::RenderedMarker& t : truth)
+          if (t.id == m.id) truth_corners = t.corners;
+        double apart = 0, error = 0;
+        for (auto* start : {&rounded, &moved}) {
+          EXPECT_TRUE(
+              RefineMarkerCorners(image, cells, bits, nullptr, 1, start, true, nullptr, true, nullptr, 1))
+              << what;
+          for (int k = 0; k < 4; ++k) error = std::max(error, cv::norm((*start)[k] - truth_corners[k]));
+        }
+        for (int k = 0; k < 4; ++k) apart = std::max(apart, cv::norm(rounded[k] - moved[k]));
+        std::printf("black tool %s: refined from two starts, %.4f px apart, %.4f px from the truth\n",
+                    what.c_str(), apart, error);
+        EXPECT_LE(apart, 0.02) << what;
+        EXPECT_LE(error, 0.2) << what;
+      }
+    }
+    EXPECT_TRUE(seen) << c.seed;
+  }
+}
+
 // The refinement of a frame does not depend on the frames before it (the rule: results never depend on
 // the order frames arrive). The choice to smooth a sharp marker's region before refining it was made
 // on a running average of the fitted blur over each detector's history: the same sharp frame after
