@@ -156,14 +156,13 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
   cv::Mat bytes;
   cv::vconcat(patterns, bytes);
   const cv::aruco::Dictionary fake(bytes, dict->markerSize, 0);
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   int stock_detections = 0, squares = 0;
   // Both candidate searches (DetectorOptions::candidate_search) on the same renders.
   DetectorOptions own;
   own.candidate_search = "own";
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
-    MarkerDetector detector(mc, DetectorOptions()), own_detector(mc, own);
+    MarkerDetector detector = testing::ReferenceDetector(im),
+                   own_detector = testing::ReferenceDetector(im, own);
     testing::ReferenceScene scene;
     scene.min_side_px = 15, scene.max_side_px = 80, scene.markers = 12;
     int detections = 0, own_detections = 0;
@@ -173,7 +172,7 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
       squares += static_cast<int>(truth.size());
       detections += static_cast<int>(detector.Detect(image).size());
       own_detections += static_cast<int>(own_detector.Detect(image).size());
-      stock_detections += static_cast<int>(testing::StockDetect(image, dict, false).size());
+      stock_detections += static_cast<int>(testing::StockDetect(image, dict, im.inverted).size());
     }
     EXPECT_EQ(detections, 0) << im.name;
     EXPECT_EQ(own_detections, 0) << im.name << " (candidate_search own)";
@@ -592,8 +591,6 @@ bool ComparedOnReference(const std::vector<testing::RenderedMarker>& truth, int 
 
 TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   ModeDiff all;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     testing::ReferenceScene scene;
@@ -605,7 +602,8 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
       auto comparable = [&](int id) { return ComparedOnReference(truth, id); };
       DetectorOptions fast_options;
       fast_options.fast = true;
-      MarkerDetector accurate(mc, DetectorOptions()), fast(mc, fast_options);
+      MarkerDetector accurate = testing::ReferenceDetector(im),
+                     fast = testing::ReferenceDetector(im, fast_options);
       for (int frame = 0; frame < 4; ++frame)
         CompareModes(accurate.Detect(image), fast.Detect(image), comparable,
                      im.name + " image " + std::to_string(i) + " frame " + std::to_string(frame), &d);
@@ -640,8 +638,6 @@ constexpr int kProbeImages = 6;  // per condition
 
 TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   const int cells = dict->markerSize + 2;
   const int seed = std::getenv("MCMT_PROBE_SEED") ? std::atoi(std::getenv("MCMT_PROBE_SEED")) : 31;
   int all_compared = 0, all_apart = 0;
@@ -656,7 +652,7 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
     for (int i = 0; i < kProbeImages; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
-      for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
+      for (const marker_t& m : testing::ReferenceDetector(im).Detect(image)) {
         if (!ComparedOnReference(truth, m.id)) continue;
         const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
             dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
@@ -665,10 +661,11 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
           rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
           moved[k] = {m.corners[k][0] + shift(start_rng), m.corners[k][1] + shift(start_rng)};
         }
-        const bool ok_rounded =
-            RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr, true, nullptr, 1);
-        const bool ok_moved =
-            RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true, nullptr, 1);
+        const int polarity = im.inverted ? -1 : 1;  // the border darker than its ring, or brighter
+        const bool ok_rounded = RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr,
+                                                    true, nullptr, polarity);
+        const bool ok_moved = RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true,
+                                                  nullptr, polarity);
         if (!ok_rounded || !ok_moved) continue;
         ++compared;
         double d = 0;
