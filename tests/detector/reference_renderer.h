@@ -69,6 +69,13 @@ inline std::vector<Imaging> ImagingCatalogue() {
   x = base, x.name = "hard", x.margin_cells = 0.3, x.surface = 0.7, x.surface_texture = 0.2;
   x.face_shading = 0.4, x.gradient = 0.3, x.defocus_radius = 1.0, x.motion_px = 1.5, x.gamma = 2.0;
   x.sharpen = 0.4, x.jpeg_quality = 60, x.shot_noise = 0.1, c.push_back(x);
+  // Added after the others, so that their indices (bench_imaging_maps' MCMT_IMAGING_CONDITIONS) and
+  // seeds (BenchSeed, SmallSeed) stay as they were.
+  x = base, x.name = "inverted print", x.inverted = true, c.push_back(x);
+  // A surround between the black tool's and the grey one's: the side model's margin penalty is gated by
+  // the surround's level b = (S - ink) / (paper - ink) between 0.1 and 0.2 (side_model.cc MarginWeight),
+  // surfaces 0.12-0.20 here; 0.15 is b = 0.14, inside that range.
+  x = base, x.name = "half-cell margin, dark grey", x.margin_cells = 0.5, x.surface = 0.15, c.push_back(x);
   return c;
 }
 

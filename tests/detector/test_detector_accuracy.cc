@@ -54,11 +54,15 @@ struct Bounds {
 // black tool's neither (the half-cell margin under blur joins the border to the dark surface).
 // A two-level margin whose far side lies beyond the profiles' outer end is refitted with one surround
 // level (side_model.cc FitSideModels; 2026-12-05 evening): hard -0.043 -> -0.035 px (bound 0.06 -> 0.04).
+// Added to the catalogue (bench/results/2026-12-06-catalogue.md): an inverted print meets the targets
+// (-0.003 / 0.045 / 1.000 / 1.000); a half-cell margin on a dark grey surface (0.15, inside the margin
+// penalty's surround gate) misses them like the black tool: -0.035 / 0.047 / 1.000 / 0.846.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
       {"hard", {0.04, 0.18, 0.99, 1.00}},
+      {"half-cell margin, dark grey", {0.04, 0.10, 0.99, 0.84}},
   };
   return s;
 }
@@ -81,6 +85,65 @@ TEST(ReferenceRenderer, SharpeningAmountOfEitherSign) {
   EXPECT_GT(sharp.at<uint8_t>(4, 8), none.at<uint8_t>(4, 8));
   EXPECT_GT(soft.at<uint8_t>(4, 7), none.at<uint8_t>(4, 7) + 10);
   EXPECT_LT(soft.at<uint8_t>(4, 8) + 10, none.at<uint8_t>(4, 8));
+}
+
+// The catalogue's inverted print is what ArUco calls an inverted marker: stock OpenCV decodes its
+// markers with detectInvertedMarker, none without, and its corners are as close to the truth as on the
+// plain print of the same scenes (its contours run on the dark pixels: inside a plain marker's border,
+// offset -0.43 px, median error 0.72 px; outside an inverted one's, +0.12 / 0.56 px). Before, the renderer
+// printed an inverted marker's margin white like its border, which left the border no edge: stock
+// OpenCV found none of the markers.
+TEST(ReferenceRenderer, InvertedPrintIsArucosInvertedMarker) {
+  testing::Imaging inverted;
+  for (const testing::Imaging& im : testing::ImagingCatalogue())
+    if (im.inverted) inverted = im;
+  ASSERT_TRUE(inverted.inverted);
+  testing::Imaging plain = inverted;
+  plain.inverted = false;
+  auto dict = LoadDictionary("DICT_6X6_250");
+  testing::ReferenceScene scene;
+  scene.min_side_px = 30, scene.max_side_px = 60, scene.max_angle_deg = 45;
+  struct Found {
+    int markers = 0, found = 0, found_other = 0;  // found_other: with the other polarity's search
+    double worst_px = 0;
+    testing::CornerErrors corners;
+  };
+  // Stock OpenCV on 4 renders of `print` (the same scenes for either print: the same seed).
+  auto stock = [&](const testing::Imaging& print) {
+    std::mt19937_64 rng(3);
+    Found f;
+    for (int i = 0; i < 4; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(*dict, scene, print, rng, &truth);
+      f.markers += static_cast<int>(truth.size());
+      f.found_other += static_cast<int>(testing::StockDetect(image, dict, !print.inverted).size());
+      for (const marker_t& m : testing::StockDetect(image, dict, print.inverted))
+        for (const testing::RenderedMarker& t : truth) {
+          if (t.id != m.id) continue;
+          ++f.found;
+          std::array<cv::Point2d, 4> got;
+          for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+          testing::AddCornerErrors(t, got, &f.corners);
+          for (int k = 0; k < 4; ++k)
+            f.worst_px = std::max(
+                f.worst_px, std::hypot(m.corners[k][0] - t.corners[k].x, m.corners[k][1] - t.corners[k].y));
+        }
+    }
+    return f;
+  };
+  const Found a = stock(inverted), b = stock(plain);
+  std::printf(
+      "stock OpenCV, %d inverted markers: %d found with detectInvertedMarker (corners within %.2f px, "
+      "offset %+.3f px, median %.3f px), %d without; the plain print: %d found (within %.2f px, offset "
+      "%+.3f px, median %.3f px)\n",
+      a.markers, a.found, a.worst_px, testing::MeanOf(a.corners.offsets), testing::MedianOf(a.corners.errors),
+      a.found_other, b.found, b.worst_px, testing::MeanOf(b.corners.offsets),
+      testing::MedianOf(b.corners.errors));
+  EXPECT_GE(a.markers, 16);
+  EXPECT_EQ(a.found, a.markers);
+  EXPECT_EQ(a.found_other, 0);
+  EXPECT_LE(std::abs(testing::MeanOf(a.corners.offsets)), 0.5);
+  EXPECT_LE(testing::MedianOf(a.corners.errors), testing::MedianOf(b.corners.errors));
 }
 
 TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
