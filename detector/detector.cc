@@ -1607,11 +1607,14 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   p->maxMarkerPerimeterRate = max_perimeter / side;
   p->polygonalApproxAccuracyRate = options_.polygonal_approx_rate;
   p->minCornerDistanceRate = options_.min_corner_distance_rate;
-  // With inverted markers OpenCV's grouping is what pairs a quad with the one just inside it (it reads
-  // the smaller as a white-bordered marker): its default is kept there (0.01 gave wrong ids on
-  // DICT_4X4_1000, DetectorAccuracy.InvertedMarkers).
-  p->minMarkerDistanceRate = options_.inverted ? std::max(0.05, options_.min_marker_distance_rate)
-                                               : options_.min_marker_distance_rate;
+  // With OpenCV's detectInvertedMarker its grouping is what pairs a quad with the one just inside it (it
+  // reads the smaller as a white-bordered marker): its default is kept there (0.01 gave wrong ids on
+  // DICT_4X4_1000, DetectorAccuracy.InvertedMarkers). The negated image's markers are dark-bordered
+  // ones in a white margin, searched as the plain search does (0.05 lost a 51 px marker of an inverted
+  // print there, as it loses markers with narrow margins:
+  // DetectorAccuracy.InvertedPrintsMarginIsNotTheMarker).
+  p->minMarkerDistanceRate = options_.inverted && !negated ? std::max(0.05, options_.min_marker_distance_rate)
+                                                           : options_.min_marker_distance_rate;
   p->minDistanceToBorder = options_.min_distance_to_border;
   p->errorCorrectionRate = options_.error_correction_rate;
   p->perspectiveRemovePixelPerCell = options_.perspective_pixels_per_cell;

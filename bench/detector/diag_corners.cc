@@ -183,8 +183,6 @@ int main(int argc, char** argv) {
   const double min_print = argc > 4 ? std::atof(argv[4]) : modes ? 0.02 : 0.0;
   cv::setNumThreads(1);
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   DetectorOptions fast_options;
   fast_options.fast = true;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
@@ -194,14 +192,15 @@ int main(int argc, char** argv) {
       scene.min_side_px = std::getenv("MIN_PX") ? std::atof(std::getenv("MIN_PX")) : 15;
       scene.max_side_px = std::getenv("MAX_PX") ? std::atof(std::getenv("MAX_PX")) : 60;
     }
-    MarkerDetector detector(mc, DetectorOptions());
+    MarkerDetector detector = testing::ReferenceDetector(im);
     std::mt19937_64 rng(seed);
     testing::Accuracy all;
     for (int i = 0; i < images; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
       if (modes) {
-        MarkerDetector accurate(mc, DetectorOptions()), fast(mc, fast_options);
+        MarkerDetector accurate = testing::ReferenceDetector(im),
+                       fast = testing::ReferenceDetector(im, fast_options);
         accurate.Detect(image), fast.Detect(image);
         const std::vector<marker_t> a = accurate.Detect(image), f = fast.Detect(image);
         for (const auto& t : truth) {

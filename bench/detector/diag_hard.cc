@@ -22,7 +22,9 @@ struct Variant {
 };
 
 std::vector<Variant> Variants() {
-  const Imaging hard = testing::ImagingCatalogue().back();
+  Imaging hard;
+  for (const Imaging& im : testing::ImagingCatalogue())
+    if (im.name == "hard") hard = im;
   std::vector<Variant> v;
   auto add = [&](const std::string& name, auto change) {
     Imaging im = hard;

@@ -54,8 +54,6 @@ double NearestQuad(const std::vector<std::array<cv::Point2d, 4>>& quads,
 int CompareSearches(const char* only, int images) {
   cv::setNumThreads(1);
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   DetectorOptions opencv, own;
   own.candidate_search = "own";
   int lost = 0, gained = 0;
@@ -67,7 +65,7 @@ int CompareSearches(const char* only, int images) {
       for (int g = 0; g < 3; ++g) {
         const testing::ReferenceScene scene = testing::BenchScene(s, g);
         const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
-        MarkerDetector a(mc, opencv), b(mc, own);
+        MarkerDetector a = testing::ReferenceDetector(im, opencv), b = testing::ReferenceDetector(im, own);
         std::mt19937_64 rng(seed);
         for (int i = 0; i < images; ++i) {
           std::vector<testing::RenderedMarker> truth;
@@ -155,8 +153,6 @@ int main(int argc, char** argv) {
   mkdir(dir.c_str(), 0755);
   cv::setNumThreads(1);
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   const DetectorOptions options;
   int dumped = 0, missed = 0, visible = 0;
   const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
@@ -167,7 +163,7 @@ int main(int argc, char** argv) {
       for (int g = 0; g < 3; ++g) {
         const testing::ReferenceScene scene = testing::BenchScene(s, g);
         const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
-        MarkerDetector detector(mc, options);
+        MarkerDetector detector = testing::ReferenceDetector(im, options);
         std::mt19937_64 rng(seed);
         for (int i = 0; i < images; ++i) {
           std::vector<testing::RenderedMarker> truth;

@@ -263,7 +263,11 @@ int main(int argc, char** argv) {
       for (size_t c = 0; c < cameras.size(); ++c) {
         DetectorOptions options;
         if (const char* e = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = e;
-        MarkerDetector detector(session.markers, options);
+        // An inverted print's markers searched as such (markers.inverted, and `inverted` as a rig config
+        // defaults it).
+        MarkerConfig markers = session.markers;
+        if (condition.reference) markers.inverted = options.inverted = condition.reference->inverted;
+        MarkerDetector detector(markers, options);
         detector.SetCamera(cameras[c].model);
         for (const sim::SimFrame& f : trajectory) {
           detections_t d = condition.reference

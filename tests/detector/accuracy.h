@@ -74,6 +74,17 @@ inline std::vector<marker_t> StockDetect(const cv::Mat& image, const cv::Ptr<cv:
   return out;
 }
 
+// mcmt's detector (`options`) of `dictionary` for reference renders of `imaging`: an inverted print's
+// markers searched as such (markers.inverted, and `inverted` as a rig config defaults it).
+inline MarkerDetector ReferenceDetector(const Imaging& imaging, DetectorOptions options = DetectorOptions(),
+                                        const std::string& dictionary = "DICT_6X6_250") {
+  MarkerConfig mc;
+  mc.dictionary = dictionary;
+  mc.inverted = imaging.inverted;
+  options.inverted = imaging.inverted;
+  return MarkerDetector(mc, options);
+}
+
 // `images` reference renders of `scene` under `imaging`, detected by mcmt (options) and, when `stock`
 // is non-null, by stock OpenCV; `found` (optional) collects mcmt's markers of every image.
 inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceScene& scene,
@@ -81,12 +92,7 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
                                  uint64_t seed, Accuracy* stock = nullptr,
                                  std::vector<marker_t>* found = nullptr) {
   auto dict = LoadDictionary(dictionary);
-  MarkerConfig mc;
-  mc.dictionary = dictionary;
-  mc.inverted = scene.inverted;
-  DetectorOptions o = options;
-  o.inverted = scene.inverted;
-  MarkerDetector detector(mc, o);
+  MarkerDetector detector = ReferenceDetector(imaging, options, dictionary);
   std::mt19937_64 rng(seed);
   Accuracy a;
   for (int i = 0; i < images; ++i) {
@@ -95,7 +101,7 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
     const std::vector<marker_t> markers = detector.Detect(image);
     Score(truth, markers, &a);
     if (found) found->insert(found->end(), markers.begin(), markers.end());
-    if (stock) Score(truth, StockDetect(image, dict, scene.inverted), stock);
+    if (stock) Score(truth, StockDetect(image, dict, imaging.inverted), stock);
   }
   return a;
 }
@@ -104,13 +110,11 @@ inline Accuracy MeasureReference(const std::string& dictionary, const ReferenceS
 // (at most 4 a frame) on reference renders of `imaging` (6 markers each, 25-60 px, 0-60 deg, from `seed`).
 inline ToneEstimate EstimateToneOnReference(const Imaging& imaging, int markers, uint64_t seed) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   DetectorOptions options;
   options.tone = "auto";
   options.tone_markers = markers;
   options.tone_frames = 10 * markers;
-  MarkerDetector detector(mc, options);
+  MarkerDetector detector = ReferenceDetector(imaging, options);
   ReferenceScene scene;
   scene.min_side_px = 25, scene.max_side_px = 60, scene.max_angle_deg = 60;
   std::mt19937_64 rng(seed);

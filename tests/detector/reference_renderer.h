@@ -27,7 +27,8 @@ namespace mcmt::testing {
 // One imaging condition: the print, the surface, the light and the camera.
 struct Imaging {
   std::string name = "plain";
-  double margin_cells = 1.0;        // white margin of the print around the marker, cells (0: none)
+  double margin_cells = 1.0;        // margin of the print around the marker, cells (0: none)
+  bool inverted = false;            // white-on-black print (markers.inverted): white border, black margin
   double ink = 0.04, paper = 0.85;  // reflectances of the ink and the paper
   double surface = 0.5;             // reflectance of the surface the print is glued on
   double surface_texture = 0.0;     // relative amplitude of the surface's wood-like grain (0: plain)
@@ -71,11 +72,18 @@ inline std::vector<Imaging> ImagingCatalogue() {
   x = base, x.name = "hard", x.margin_cells = 0.3, x.surface = 0.7, x.surface_texture = 0.2;
   x.face_shading = 0.4, x.gradient = 0.3, x.defocus_radius = 1.0, x.motion_px = 1.5, x.gamma = 2.0;
   x.sharpen = 0.4, x.jpeg_quality = 60, x.shot_noise = 0.1, c.push_back(x);
+  // Added after the others, so that their indices (bench_imaging_maps' MCMT_IMAGING_CONDITIONS) and
+  // seeds (BenchSeed, SmallSeed) stay as they were.
+  x = base, x.name = "inverted print", x.inverted = true, c.push_back(x);
+  // A surround between the black tool's and the grey one's: the side model's margin penalty is gated by
+  // the surround's level b = (S - ink) / (paper - ink) between 0.1 and 0.2 (side_model.cc MarginWeight),
+  // surfaces 0.12-0.20 here; 0.15 is b = 0.14, inside that range.
+  x = base, x.name = "half-cell margin, dark grey", x.margin_cells = 0.5, x.surface = 0.15, c.push_back(x);
   return c;
 }
 
 // Diagnostics (benches' MCMT_IMAGING_OVERRIDE): sets the fields a spec like "motion_px=0,jpeg_quality=0"
-// names to its values (numbers; sharpen_linear 0 or 1). Throws std::invalid_argument on an unknown field
+// names to its values (numbers; sharpen_linear and inverted 0 or 1). Throws std::invalid_argument on an unknown field
 // or a value that is not a number.
 inline void OverrideImaging(const std::string& spec, Imaging* im) {
   struct Field {
@@ -114,6 +122,8 @@ inline void OverrideImaging(const std::string& spec, Imaging* im) {
       im->jpeg_quality = static_cast<int>(value);
     } else if (name == "sharpen_linear") {
       im->sharpen_linear = value != 0;
+    } else if (name == "inverted") {
+      im->inverted = value != 0;
     } else {
       const Field* f = std::find_if(std::begin(kFields), std::end(kFields),
                                     [&](const Field& x) { return name == x.name; });
@@ -203,10 +213,10 @@ inline cv::Point2d Apply(const cv::Matx33d& h, double x, double y) {
 
 // The quads of one marker seen through image_from_plane (plane coordinates: the marker's black square
 // is [0, cells]^2 in cells, row 0 at the top), printed with a margin on a surface (margin_cells + 2.5
-// cells of it around the print; none with `with_surface` false: drawn already), lit by `light`.
+// cells of it around the print; none with `with_surface` false: drawn already), lit by `light`. An
+// inverted print (im.inverted) swaps ink and paper: white border and code cells, a black margin.
 inline std::vector<Quad> MarkerQuads(const cv::Mat& bits, int cells, const cv::Matx33d& image_from_plane,
-                                     const Imaging& im, double light, bool inverted,
-                                     bool with_surface = true) {
+                                     const Imaging& im, double light, bool with_surface = true) {
   auto quad = [&](double x0, double y0, double x1, double y1, double reflectance, double grain) {
     Quad q;
     q.p = {Apply(image_from_plane, x0, y0), Apply(image_from_plane, x1, y0), Apply(image_from_plane, x1, y1),
@@ -215,12 +225,12 @@ inline std::vector<Quad> MarkerQuads(const cv::Mat& bits, int cells, const cv::M
     q.grain = grain;
     return q;
   };
-  const double dark = inverted ? im.paper : im.ink, bright = inverted ? im.ink : im.paper;
+  const double dark = im.inverted ? im.paper : im.ink, bright = im.inverted ? im.ink : im.paper;
   std::vector<Quad> quads;
   const double s = im.margin_cells + 2.5;  // surface extent around the print
   if (with_surface) quads.push_back(quad(-s, -s, cells + s, cells + s, im.surface, im.surface_texture));
   const double m = im.margin_cells;
-  if (m > 0) quads.push_back(quad(-m, -m, cells + m, cells + m, im.paper, 0));
+  if (m > 0) quads.push_back(quad(-m, -m, cells + m, cells + m, bright, 0));
   quads.push_back(quad(0, 0, cells, cells, dark, 0));
   for (int r = 1; r + 1 < cells; ++r)
     for (int c = 1; c + 1 < cells; ++c)
@@ -305,7 +315,6 @@ struct ReferenceScene {
   double min_side_px = 15, max_side_px = 60;
   double min_angle_deg = 0, max_angle_deg = 75;
   int markers = 6;
-  bool inverted = false;
 };
 
 namespace reference {
@@ -383,7 +392,7 @@ inline cv::Mat RenderReferenceLinear(const cv::aruco::Dictionary& dict, const Re
     const cv::Mat bits =
         cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(id, id + 1), dict.markerSize);
     const double light = 1.0 - im.face_shading * uni(rng);
-    reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light, scene.inverted), box,
+    reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light), box,
                      image_from_plane.inv(), &linear);
     truth->push_back(m);
   }

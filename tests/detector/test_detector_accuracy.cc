@@ -54,11 +54,15 @@ struct Bounds {
 // black tool's neither (the half-cell margin under blur joins the border to the dark surface).
 // A two-level margin whose far side lies beyond the profiles' outer end is refitted with one surround
 // level (side_model.cc FitSideModels; 2026-12-05 evening): hard -0.043 -> -0.035 px (bound 0.06 -> 0.04).
+// Added to the catalogue (bench/results/2026-12-06-catalogue.md): an inverted print meets the targets
+// (-0.003 / 0.045 / 1.000 / 1.000); a half-cell margin on a dark grey surface (0.15, inside the margin
+// penalty's surround gate) misses them like the black tool: -0.035 / 0.047 / 1.000 / 0.846.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
       {"hard", {0.04, 0.18, 0.99, 1.00}},
+      {"half-cell margin, dark grey", {0.04, 0.10, 0.99, 0.84}},
   };
   return s;
 }
@@ -86,7 +90,10 @@ TEST(ReferenceRenderer, SharpeningAmountOfEitherSign) {
 // The benches' MCMT_IMAGING_OVERRIDE: the named fields take the values, the name records them, the
 // rest of the condition stays; an unknown field or a value that is no number throws.
 TEST(ReferenceRenderer, OverrideSetsTheNamedFields) {
-  testing::Imaging im = testing::ImagingCatalogue().back();
+  testing::Imaging im;
+  for (const testing::Imaging& x : testing::ImagingCatalogue())
+    if (x.name == "hard") im = x;
+  ASSERT_EQ(im.name, "hard");
   const testing::Imaging hard = im;
   testing::OverrideImaging("margin_cells=1,jpeg_quality=0,sharpen_linear=1", &im);
   EXPECT_EQ(im.margin_cells, 1.0);
@@ -98,6 +105,65 @@ TEST(ReferenceRenderer, OverrideSetsTheNamedFields) {
   EXPECT_THROW(testing::OverrideImaging("margin=1", &im), std::invalid_argument);
   EXPECT_THROW(testing::OverrideImaging("gamma=two", &im), std::invalid_argument);
   EXPECT_THROW(testing::OverrideImaging("gamma", &im), std::invalid_argument);
+}
+
+// The catalogue's inverted print is what ArUco calls an inverted marker: stock OpenCV decodes its
+// markers with detectInvertedMarker, none without, and its corners are as close to the truth as on the
+// plain print of the same scenes (its contours run on the dark pixels: inside a plain marker's border,
+// offset -0.43 px, median error 0.72 px; outside an inverted one's, +0.12 / 0.56 px). Before, the renderer
+// printed an inverted marker's margin white like its border, which left the border no edge: stock
+// OpenCV found none of the markers.
+TEST(ReferenceRenderer, InvertedPrintIsArucosInvertedMarker) {
+  testing::Imaging inverted;
+  for (const testing::Imaging& im : testing::ImagingCatalogue())
+    if (im.inverted) inverted = im;
+  ASSERT_TRUE(inverted.inverted);
+  testing::Imaging plain = inverted;
+  plain.inverted = false;
+  auto dict = LoadDictionary("DICT_6X6_250");
+  testing::ReferenceScene scene;
+  scene.min_side_px = 30, scene.max_side_px = 60, scene.max_angle_deg = 45;
+  struct Found {
+    int markers = 0, found = 0, found_other = 0;  // found_other: with the other polarity's search
+    double worst_px = 0;
+    testing::CornerErrors corners;
+  };
+  // Stock OpenCV on 4 renders of `print` (the same scenes for either print: the same seed).
+  auto stock = [&](const testing::Imaging& print) {
+    std::mt19937_64 rng(3);
+    Found f;
+    for (int i = 0; i < 4; ++i) {
+      std::vector<testing::RenderedMarker> truth;
+      const cv::Mat image = testing::RenderReference(*dict, scene, print, rng, &truth);
+      f.markers += static_cast<int>(truth.size());
+      f.found_other += static_cast<int>(testing::StockDetect(image, dict, !print.inverted).size());
+      for (const marker_t& m : testing::StockDetect(image, dict, print.inverted))
+        for (const testing::RenderedMarker& t : truth) {
+          if (t.id != m.id) continue;
+          ++f.found;
+          std::array<cv::Point2d, 4> got;
+          for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+          testing::AddCornerErrors(t, got, &f.corners);
+          for (int k = 0; k < 4; ++k)
+            f.worst_px = std::max(
+                f.worst_px, std::hypot(m.corners[k][0] - t.corners[k].x, m.corners[k][1] - t.corners[k].y));
+        }
+    }
+    return f;
+  };
+  const Found a = stock(inverted), b = stock(plain);
+  std::printf(
+      "stock OpenCV, %d inverted markers: %d found with detectInvertedMarker (corners within %.2f px, "
+      "offset %+.3f px, median %.3f px), %d without; the plain print: %d found (within %.2f px, offset "
+      "%+.3f px, median %.3f px)\n",
+      a.markers, a.found, a.worst_px, testing::MeanOf(a.corners.offsets), testing::MedianOf(a.corners.errors),
+      a.found_other, b.found, b.worst_px, testing::MeanOf(b.corners.offsets),
+      testing::MedianOf(b.corners.errors));
+  EXPECT_GE(a.markers, 16);
+  EXPECT_EQ(a.found, a.markers);
+  EXPECT_EQ(a.found_other, 0);
+  EXPECT_LE(std::abs(testing::MeanOf(a.corners.offsets)), 0.5);
+  EXPECT_LE(testing::MedianOf(a.corners.errors), testing::MedianOf(b.corners.errors));
 }
 
 TEST(DetectorAccuracy, ImagingCatalogueOnReferenceRenders) {
@@ -173,14 +239,13 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
   cv::Mat bytes;
   cv::vconcat(patterns, bytes);
   const cv::aruco::Dictionary fake(bytes, dict->markerSize, 0);
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   int stock_detections = 0, squares = 0;
   // Both candidate searches (DetectorOptions::candidate_search) on the same renders.
   DetectorOptions own;
   own.candidate_search = "own";
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
-    MarkerDetector detector(mc, DetectorOptions()), own_detector(mc, own);
+    MarkerDetector detector = testing::ReferenceDetector(im),
+                   own_detector = testing::ReferenceDetector(im, own);
     testing::ReferenceScene scene;
     scene.min_side_px = 15, scene.max_side_px = 80, scene.markers = 12;
     int detections = 0, own_detections = 0;
@@ -190,7 +255,7 @@ TEST(DetectorAccuracy, NoWrongIdsOnPatternsOutsideTheDictionary) {
       squares += static_cast<int>(truth.size());
       detections += static_cast<int>(detector.Detect(image).size());
       own_detections += static_cast<int>(own_detector.Detect(image).size());
-      stock_detections += static_cast<int>(testing::StockDetect(image, dict, false).size());
+      stock_detections += static_cast<int>(testing::StockDetect(image, dict, im.inverted).size());
     }
     EXPECT_EQ(detections, 0) << im.name;
     EXPECT_EQ(own_detections, 0) << im.name << " (candidate_search own)";
@@ -272,6 +337,25 @@ TEST(DetectorAccuracy, OwnCandidateSearchFindsThinMarginsAndBlurredBorders) {
     for (const marker_t& m : detector.Detect(image)) found = found || m.id == k.id;
     EXPECT_TRUE(found) << k.condition << " id " << k.id;
   }
+}
+
+// An inverted print is searched as dark-bordered markers of the negated image, where its black margin
+// is a white one. With OpenCV's grouping at its default 0.05 there (kept for detectInvertedMarker) this 51
+// px marker at 32 deg (bench_accuracy's inverted print, 40-60 px, 0-40 deg, image 0) was lost, as stock
+// OpenCV's plain search loses it on the negated image (likely its margin's quad taken for it:
+// min_marker_distance_rate); mcmt's plain search on the negated image and stock OpenCV's
+// detectInvertedMarker found it. The negated search now groups as the plain one does.
+TEST(DetectorAccuracy, InvertedPrintsMarginIsNotTheMarker) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  testing::Imaging inverted;
+  for (const testing::Imaging& im : testing::ImagingCatalogue())
+    if (im.inverted) inverted = im;
+  std::vector<testing::RenderedMarker> truth;
+  const cv::Mat image = BenchImage(*dict, inverted.name, 2, 0, 0, &truth);
+  ASSERT_FALSE(image.empty());
+  bool found = false;
+  for (const marker_t& m : testing::ReferenceDetector(inverted).Detect(image)) found = found || m.id == 73;
+  EXPECT_TRUE(found);
 }
 
 // Markers whose code cells are about as narrow as the blur (bench_accuracy's renders, build/bench/
@@ -609,8 +693,6 @@ bool ComparedOnReference(const std::vector<testing::RenderedMarker>& truth, int 
 
 TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   ModeDiff all;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     testing::ReferenceScene scene;
@@ -622,7 +704,8 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
       auto comparable = [&](int id) { return ComparedOnReference(truth, id); };
       DetectorOptions fast_options;
       fast_options.fast = true;
-      MarkerDetector accurate(mc, DetectorOptions()), fast(mc, fast_options);
+      MarkerDetector accurate = testing::ReferenceDetector(im),
+                     fast = testing::ReferenceDetector(im, fast_options);
       for (int frame = 0; frame < 4; ++frame)
         CompareModes(accurate.Detect(image), fast.Detect(image), comparable,
                      im.name + " image " + std::to_string(i) + " frame " + std::to_string(frame), &d);
@@ -657,8 +740,6 @@ constexpr int kProbeImages = 6;  // per condition
 
 TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
   const int cells = dict->markerSize + 2;
   const int seed = std::getenv("MCMT_PROBE_SEED") ? std::atoi(std::getenv("MCMT_PROBE_SEED")) : 31;
   int all_compared = 0, all_apart = 0;
@@ -673,7 +754,7 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
     for (int i = 0; i < kProbeImages; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
-      for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
+      for (const marker_t& m : testing::ReferenceDetector(im).Detect(image)) {
         if (!ComparedOnReference(truth, m.id)) continue;
         const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
             dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
@@ -682,10 +763,11 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
           rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
           moved[k] = {m.corners[k][0] + shift(start_rng), m.corners[k][1] + shift(start_rng)};
         }
-        const bool ok_rounded =
-            RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr, true, nullptr, 1);
-        const bool ok_moved =
-            RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true, nullptr, 1);
+        const int polarity = im.inverted ? -1 : 1;  // the border darker than its ring, or brighter
+        const bool ok_rounded = RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr,
+                                                    true, nullptr, polarity);
+        const bool ok_moved = RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true,
+                                                  nullptr, polarity);
         if (!ok_rounded || !ok_moved) continue;
         ++compared;
         double d = 0;

@@ -99,7 +99,7 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
         for (double y : {-e, cells + e}) extent.push_back(Apply(image_from_plane, x, y));
       const cv::Rect box = reference::PaintBox(extent, model);
       if (box.area() > 0)
-        reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light, false, false), box,
+        reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light, false), box,
                          image_from_plane.inv(), &linear);
     }
   }
