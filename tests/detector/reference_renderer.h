@@ -83,8 +83,8 @@ inline std::vector<Imaging> ImagingCatalogue() {
 }
 
 // Diagnostics (benches' MCMT_IMAGING_OVERRIDE): sets the fields a spec like "motion_px=0,jpeg_quality=0"
-// names to its values (numbers; sharpen_linear and inverted 0 or 1). Throws std::invalid_argument on an unknown field
-// or a value that is not a number.
+// names to its values (numbers; sharpen_linear and inverted 0 or 1). Throws std::invalid_argument on an
+// unknown field or a value that is not a number.
 inline void OverrideImaging(const std::string& spec, Imaging* im) {
   struct Field {
     const char* name;
