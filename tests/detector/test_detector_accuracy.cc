@@ -737,20 +737,24 @@ TEST(DetectorAccuracy, FastModeCornersAreTheAccurateModesOnReferenceRenders) {
 // seed 41 8 / 409, 1.39 px; seed 51 10 / 399, 1.42 px (MCMT_PROBE_SEED). So the share is bounded over
 // every condition, at 3 %, and the distance at 1.5 px.
 constexpr int kProbeImages = 6;  // per condition
+// Markers refined from one of the probe's two starts only, all conditions: 2 / 0 / 1 at seeds 31 / 41 / 51
+// (black tool and dark grey image 1 id 90: neither refit finds an edge with a step; wood image 3 id 155).
+// Before the inward refit of a margin's outer edge (polarity), on the 13 conditions then: 2 / 2 / 2.
+constexpr int kOneStartFailedMax = 2;
 
 TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
   auto dict = LoadDictionary("DICT_6X6_250");
   const int cells = dict->markerSize + 2;
   const int seed = std::getenv("MCMT_PROBE_SEED") ? std::atoi(std::getenv("MCMT_PROBE_SEED")) : 31;
-  int all_compared = 0, all_apart = 0;
+  int all_compared = 0, all_apart = 0, all_one_failed = 0;
   for (const testing::Imaging& im : testing::ImagingCatalogue()) {
     testing::ReferenceScene scene;
     // The starts' shifts have their own generator: the images do not depend on how many markers were found.
     std::mt19937_64 rng(seed), start_rng(seed + 1);
     std::uniform_real_distribution<double> shift(-0.5, 0.5);
     double max_px = 0;
-    int compared = 0, apart = 0;
-    std::string worst;
+    int compared = 0, apart = 0, one_failed = 0;
+    std::string worst, failed;
     for (int i = 0; i < kProbeImages; ++i) {
       std::vector<testing::RenderedMarker> truth;
       const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
@@ -768,6 +772,10 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
                                                     true, nullptr, polarity);
         const bool ok_moved = RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true,
                                                   nullptr, polarity);
+        if (ok_rounded != ok_moved) {
+          ++one_failed;
+          failed += " image " + std::to_string(i) + " id " + std::to_string(m.id);
+        }
         if (!ok_rounded || !ok_moved) continue;
         ++compared;
         double d = 0;
@@ -776,14 +784,20 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
         if (d > max_px) max_px = d, worst = "image " + std::to_string(i) + " id " + std::to_string(m.id);
       }
     }
-    std::printf("%-30s %3d markers refined from two starts, %d more than 0.02 px apart, max %.4f px (%s)\n",
-                im.name.c_str(), compared, apart, max_px, worst.c_str());
+    std::printf(
+        "%-30s %3d markers refined from two starts, %d more than 0.02 px apart, max %.4f px (%s); %d refined "
+        "from one start only%s\n",
+        im.name.c_str(), compared, apart, max_px, worst.c_str(), one_failed, failed.c_str());
     EXPECT_GT(compared, 10 * kProbeImages / 3) << im.name;
     EXPECT_LE(max_px, 1.5) << im.name << ": " << worst;
-    all_compared += compared, all_apart += apart;
+    all_compared += compared, all_apart += apart, all_one_failed += one_failed;
   }
-  std::printf("all: %d of %d markers more than 0.02 px apart\n", all_apart, all_compared);
+  std::printf("all: %d of %d markers more than 0.02 px apart, %d refined from one start only\n", all_apart,
+              all_compared, all_one_failed);
   EXPECT_LE(all_apart, 0.03 * all_compared);
+  // A refinement that fails from one start and not the other depends on its start as much as two far-apart
+  // ends do (a side that took a wrong edge in its first passes: bench/results/2026-12-06-polarity.md).
+  EXPECT_LE(all_one_failed, kOneStartFailedMax);
 }
 
 // A side whose edge undershoots (sharpening, a gamma off the side's) fitted a strip of a fifth of a cell
