@@ -238,9 +238,9 @@ int main(int argc, char** argv) {
   std::vector<double> side_by_extent[kBands];
   std::map<int, std::vector<double>> per_id;
   ShapeByAngle shape;
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  MarkerDetector detector(mc, DetectorOptions());
+  // An inverted print's markers searched and refined as such.
+  MarkerDetector detector = testing::ReferenceDetector(condition ? *condition : testing::Imaging());
+  const int polarity = condition && condition->inverted ? -1 : 1;
   const bool detect = Env("DETECT", 0) > 0;
   auto refine = [&](const cv::Mat& rendered, const std::vector<testing::RenderedMarker>& truth) {
     // SMOOTH: as the detector's refinement on sharp frames (DetectorOptions::sharp_smoothing).
@@ -261,7 +261,7 @@ int main(int argc, char** argv) {
         for (int k = 0; k < 4; ++k) c[k] = cv::Point2d(m->corners[k][0], m->corners[k][1]);
         sigma = 0;
       } else if (!RefineMarkerCorners(image, cells, bits, nullptr, 1, &c, true, &sigma,
-                                      Env("FITGAMMA", 1) > 0, nullptr, 1)) {
+                                      Env("FITGAMMA", 1) > 0, nullptr, polarity)) {
         continue;
       }
       ++refined, sigma_sum += sigma;
