@@ -22,9 +22,7 @@ struct Variant {
 };
 
 std::vector<Variant> Variants() {
-  Imaging hard;
-  for (const Imaging& im : testing::ImagingCatalogue())
-    if (im.name == "hard") hard = im;
+  const Imaging hard = testing::CatalogueCondition("hard");
   std::vector<Variant> v;
   auto add = [&](const std::string& name, auto change) {
     Imaging im = hard;

@@ -82,6 +82,13 @@ inline std::vector<Imaging> ImagingCatalogue() {
   return c;
 }
 
+// The catalogue's condition named `name`; throws std::invalid_argument if there is none.
+inline Imaging CatalogueCondition(const std::string& name) {
+  for (const Imaging& im : ImagingCatalogue())
+    if (im.name == name) return im;
+  throw std::invalid_argument("no imaging condition named \"" + name + "\" in ImagingCatalogue()");
+}
+
 // Diagnostics (benches' MCMT_IMAGING_OVERRIDE): sets the fields a spec like "motion_px=0,jpeg_quality=0"
 // names to its values (numbers; sharpen_linear and inverted 0 or 1). Throws std::invalid_argument on an
 // unknown field or a value that is not a number.

@@ -90,10 +90,7 @@ TEST(ReferenceRenderer, SharpeningAmountOfEitherSign) {
 // The benches' MCMT_IMAGING_OVERRIDE: the named fields take the values, the name records them, the
 // rest of the condition stays; an unknown field or a value that is no number throws.
 TEST(ReferenceRenderer, OverrideSetsTheNamedFields) {
-  testing::Imaging im;
-  for (const testing::Imaging& x : testing::ImagingCatalogue())
-    if (x.name == "hard") im = x;
-  ASSERT_EQ(im.name, "hard");
+  testing::Imaging im = testing::CatalogueCondition("hard");
   const testing::Imaging hard = im;
   testing::OverrideImaging("margin_cells=1,jpeg_quality=0,sharpen_linear=1", &im);
   EXPECT_EQ(im.margin_cells, 1.0);
@@ -406,10 +403,7 @@ TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
 // px, largest corner error 1.98 px; now -0.22 / 0.77 px (the target, 0.1 px, is not met: its other
 // sides sit 0.3-0.6 px off under the sharpening, which the side model does not model).
 TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
-  testing::Imaging im;
-  for (const testing::Imaging& c : testing::ImagingCatalogue())
-    if (c.name == "webcam") im = c;
-  ASSERT_EQ(im.name, "webcam");
+  const testing::Imaging im = testing::CatalogueCondition("webcam");
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
   mc.dictionary = "DICT_6X6_250";
@@ -800,49 +794,56 @@ TEST(DetectorAccuracy, RefinementDoesNotDependOnItsStart) {
   EXPECT_LE(all_one_failed, kOneStartFailedMax);
 }
 
-// A side whose edge undershoots (sharpening, a gamma off the side's) fitted a strip of a fifth of a cell
-// darker than the border as its margin, half a cell inside the one-level fit's edge; the model-only
-// rounds' cold fits alternated between the two (1.25 px per round) and the probe's two starts of this
-// marker (hard, seed 51, image 4, id 96) ended 1.42 px apart (bench/results/2026-12-06-onevalley.md).
-TEST(DetectorAccuracy, AnUndershootIsNoMargin) {
+// One marker of the start probe (RefinementDoesNotDependOnItsStart) as the probe saw it at `seed`: its
+// image (the probe's `image`-th under `im`), true corners and two starts (the detected corners rounded, and
+// moved by up to half a pixel, the start shifts drawn in the probe's order). False if it was not compared.
+struct ProbeMarker {
+  cv::Mat image, bits;
+  std::array<cv::Point2d, 4> truth, rounded, moved;
+};
+bool ProbeStarts(const testing::Imaging& im, int seed, int image, int id, ProbeMarker* out) {
   auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  const int cells = dict->markerSize + 2;
-  testing::Imaging hard;
-  for (const testing::Imaging& im : testing::ImagingCatalogue())
-    if (im.name == "hard") hard = im;
-  ASSERT_EQ(hard.name, "hard");
   testing::ReferenceScene scene;
-  // RefinementDoesNotDependOnItsStart's images and start shifts at seed 51.
-  std::mt19937_64 rng(51), start_rng(52);
+  std::mt19937_64 rng(seed), start_rng(seed + 1);
   std::uniform_real_distribution<double> shift(-0.5, 0.5);
-  bool seen = false;
-  for (int i = 0; i <= 4; ++i) {
+  for (int i = 0; i <= image; ++i) {
     std::vector<testing::RenderedMarker> truth;
-    const cv::Mat image = testing::RenderReference(*dict, scene, hard, rng, &truth);
-    for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
+    const cv::Mat rendered = testing::RenderReference(*dict, scene, im, rng, &truth);
+    for (const marker_t& m : testing::ReferenceDetector(im).Detect(rendered)) {
       if (!ComparedOnReference(truth, m.id)) continue;
       std::array<cv::Point2d, 4> rounded, moved;
       for (int k = 0; k < 4; ++k) {
         rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
         moved[k] = {m.corners[k][0] + shift(start_rng), m.corners[k][1] + shift(start_rng)};
       }
-      if (i < 4 || m.id != 96) continue;
-      seen = true;
-      const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
-          dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
-      ASSERT_TRUE(
-          RefineMarkerCorners(image, cells, bits, nullptr, 1, &rounded, true, nullptr, true, nullptr, 1));
-      ASSERT_TRUE(
-          RefineMarkerCorners(image, cells, bits, nullptr, 1, &moved, true, nullptr, true, nullptr, 1));
-      double apart = 0;
-      for (int k = 0; k < 4; ++k) apart = std::max(apart, cv::norm(rounded[k] - moved[k]));
-      std::printf("hard image 4 id 96: refined from two starts, %.4f px apart\n", apart);
-      EXPECT_LE(apart, 0.1);
+      if (i < image || m.id != id) continue;
+      out->image = rendered, out->rounded = rounded, out->moved = moved;
+      out->bits =
+          cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(id, id + 1), dict->markerSize);
+      for (const testing::RenderedMarker& t : truth)
+        if (t.id == id) out->truth = t.corners;
+      return true;
     }
   }
-  EXPECT_TRUE(seen);
+  return false;
+}
+
+// A side whose edge undershoots (sharpening, a gamma off the side's) fitted a strip of a fifth of a cell
+// darker than the border as its margin, half a cell inside the one-level fit's edge; the model-only
+// rounds' cold fits alternated between the two (1.25 px per round) and the probe's two starts of this
+// marker (hard, seed 51, image 4, id 96) ended 1.42 px apart (bench/results/2026-12-06-onevalley.md).
+TEST(DetectorAccuracy, AnUndershootIsNoMargin) {
+  const int cells = LoadDictionary("DICT_6X6_250")->markerSize + 2;
+  ProbeMarker p;
+  ASSERT_TRUE(ProbeStarts(testing::CatalogueCondition("hard"), 51, 4, 96, &p));
+  ASSERT_TRUE(
+      RefineMarkerCorners(p.image, cells, p.bits, nullptr, 1, &p.rounded, true, nullptr, true, nullptr, 1));
+  ASSERT_TRUE(
+      RefineMarkerCorners(p.image, cells, p.bits, nullptr, 1, &p.moved, true, nullptr, true, nullptr, 1));
+  double apart = 0;
+  for (int k = 0; k < 4; ++k) apart = std::max(apart, cv::norm(p.rounded[k] - p.moved[k]));
+  std::printf("hard image 4 id 96: refined from two starts, %.4f px apart\n", apart);
+  EXPECT_LE(apart, 0.1);
 }
 
 // A side whose crossings lie on the outer edge of a half-cell margin over a black surface (bright inside,
@@ -852,57 +853,28 @@ TEST(DetectorAccuracy, AnUndershootIsNoMargin) {
 // seed 41 image 5 id 82; seed 31 image 4 id 22): one of them failed before (id 82 0.58 px from the truth,
 // id 22 0.43 px), bench/results/2026-12-06-polarity.md.
 TEST(DetectorAccuracy, AMarginsOuterEdgeIsNotTheBorders) {
-  auto dict = LoadDictionary("DICT_6X6_250");
-  MarkerConfig mc;
-  mc.dictionary = "DICT_6X6_250";
-  const int cells = dict->markerSize + 2;
-  testing::Imaging black_tool;
-  for (const testing::Imaging& im : testing::ImagingCatalogue())
-    if (im.name == "half-cell margin, black tool") black_tool = im;
-  ASSERT_EQ(black_tool.name, "half-cell margin, black tool");
+  const int cells = LoadDictionary("DICT_6X6_250")->markerSize + 2;
+  const testing::Imaging black_tool = testing::CatalogueCondition("half-cell margin, black tool");
   struct Case {
     int seed, image, id;
   };
   for (const Case& c : {Case{41, 5, 82}, Case{31, 4, 22}}) {
-    testing::ReferenceScene scene;
-    // RefinementDoesNotDependOnItsStart's images and start shifts at the case's seed.
-    std::mt19937_64 rng(c.seed), start_rng(c.seed + 1);
-    std::uniform_real_distribution<double> shift(-0.5, 0.5);
-    bool seen = false;
-    for (int i = 0; i <= c.image; ++i) {
-      std::vector<testing::RenderedMarker> truth;
-      const cv::Mat image = testing::RenderReference(*dict, scene, black_tool, rng, &truth);
-      for (const marker_t& m : MarkerDetector(mc, DetectorOptions()).Detect(image)) {
-        if (!ComparedOnReference(truth, m.id)) continue;
-        std::array<cv::Point2d, 4> rounded, moved;
-        for (int k = 0; k < 4; ++k) {
-          rounded[k] = {std::round(m.corners[k][0]), std::round(m.corners[k][1])};
-          moved[k] = {m.corners[k][0] + shift(start_rng), m.corners[k][1] + shift(start_rng)};
-        }
-        if (i < c.image || m.id != c.id) continue;
-        seen = true;
-        const std::string what = "seed " + std::to_string(c.seed) + " image " + std::to_string(c.image) +
-                                 " id " + std::to_string(c.id);
-        const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
-            dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
-        std::array<cv::Point2d, 4> truth_corners{};
-        for (const testing::RenderedMarker& t : truth)
-          if (t.id == m.id) truth_corners = t.corners;
-        double apart = 0, error = 0;
-        for (auto* start : {&rounded, &moved}) {
-          EXPECT_TRUE(
-              RefineMarkerCorners(image, cells, bits, nullptr, 1, start, true, nullptr, true, nullptr, 1))
-              << what;
-          for (int k = 0; k < 4; ++k) error = std::max(error, cv::norm((*start)[k] - truth_corners[k]));
-        }
-        for (int k = 0; k < 4; ++k) apart = std::max(apart, cv::norm(rounded[k] - moved[k]));
-        std::printf("black tool %s: refined from two starts, %.4f px apart, %.4f px from the truth\n",
-                    what.c_str(), apart, error);
-        EXPECT_LE(apart, 0.02) << what;
-        EXPECT_LE(error, 0.2) << what;
-      }
+    const std::string what = "seed " + std::to_string(c.seed) + " image " + std::to_string(c.image) + " id " +
+                             std::to_string(c.id);
+    ProbeMarker p;
+    ASSERT_TRUE(ProbeStarts(black_tool, c.seed, c.image, c.id, &p)) << what;
+    double apart = 0, error = 0;
+    for (auto* start : {&p.rounded, &p.moved}) {
+      EXPECT_TRUE(
+          RefineMarkerCorners(p.image, cells, p.bits, nullptr, 1, start, true, nullptr, true, nullptr, 1))
+          << what;
+      for (int k = 0; k < 4; ++k) error = std::max(error, cv::norm((*start)[k] - p.truth[k]));
     }
-    EXPECT_TRUE(seen) << c.seed;
+    for (int k = 0; k < 4; ++k) apart = std::max(apart, cv::norm(p.rounded[k] - p.moved[k]));
+    std::printf("black tool %s: refined from two starts, %.4f px apart, %.4f px from the truth\n",
+                what.c_str(), apart, error);
+    EXPECT_LE(apart, 0.02) << what;
+    EXPECT_LE(error, 0.2) << what;
   }
 }
 
@@ -915,11 +887,8 @@ TEST(DetectorAccuracy, CornersDoNotDependOnTheFramesBefore) {
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
   mc.dictionary = "DICT_6X6_250";
-  testing::Imaging sharp, blurred;
-  for (const testing::Imaging& im : testing::ImagingCatalogue()) {
-    if (im.name == "plain") sharp = im;
-    if (im.name == "gaussian blur 1.2") blurred = im;
-  }
+  const testing::Imaging sharp = testing::CatalogueCondition("plain"),
+                         blurred = testing::CatalogueCondition("gaussian blur 1.2");
   testing::ReferenceScene scene;
   std::mt19937_64 rng(41);
   auto render = [&](const testing::Imaging& im) {
