@@ -1698,7 +1698,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
 }
 
 bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   // A dark-bordered quad (or a bright-bordered one with inverted markers) against its ring.
   const int polarity = MarkerPolarity(gray, quad, cells);
   if (polarity == 0 || (polarity < 0 && !options_.inverted) || (polarity > 0 && markers_.inverted))
@@ -1716,7 +1716,7 @@ bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::P
 bool MarkerDetector::ReadCode(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
                               const std::array<cv::Point2d, 4>& corners, int polarity, int max_border_errors,
                               Raw* r) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   std::vector<float> values;
   if (!SampleCellCentres(gray, corners, cells, &values)) return false;
   if (IdentifyCells(values, quad, polarity, max_border_errors, r)) return true;
@@ -1735,7 +1735,7 @@ bool MarkerDetector::ReadCode(const cv::Mat& gray, const std::array<cv::Point2d,
 
 bool MarkerDetector::IdentifyCells(const std::vector<float>& values, const std::array<cv::Point2d, 4>& quad,
                                    int polarity, int max_border_errors, Raw* r) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   // Two classes split where the between-class variance is largest (Otsu on the cells' values).
   std::vector<float> sorted = values;
   std::sort(sorted.begin(), sorted.end());
@@ -1857,9 +1857,13 @@ cv::Mat GrayImage(const cv::Mat& image) {
 
 }  // namespace
 
+cv::Rect MarkerDetector::RegionBox(const Raw& r, cv::Size image) {
+  return GrownBox(r.corners, 0.5, 6.0, image);
+}
+
 std::vector<MarkerDetector::Raw> MarkerDetector::DropDuplicates(const cv::Mat& gray,
                                                                 const std::vector<Raw>& raw) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   std::map<int, std::vector<size_t>> by_id;
   for (size_t i = 0; i < raw.size(); ++i) by_id[raw[i].id].push_back(i);
   std::vector<Raw> unique;
@@ -1894,7 +1898,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::DropLookAlikes(const cv::Mat& g
   // Inverted prints (markers.inverted): only white-bordered markers are real; the dark parts of an
   // inverted marker can look like a normal one.
   if (markers_.inverted && options_.inverted) {
-    const int cells = dictionary_->markerSize + 2;
+    const int cells = Cells();
     std::vector<Raw> kept;
     for (const Raw& r : unique)
       if (MarkerPolarity(gray, r.corners, cells) < 0) kept.push_back(r);
@@ -1902,13 +1906,13 @@ std::vector<MarkerDetector::Raw> MarkerDetector::DropLookAlikes(const cv::Mat& g
   }
   // A marker inside another one's quad is a pattern of its bits, not a marker.
   if (unique.size() > 1) {
+    std::vector<double> areas;  // px^2 (contourArea: unsigned)
+    for (const Raw& r : unique) areas.push_back(cv::contourArea(FloatQuad(r.corners)));
     std::vector<Raw> kept;
     for (size_t i = 0; i < unique.size(); ++i) {
-      const double area = std::abs(cv::contourArea(FloatQuad(unique[i].corners)));
       bool nested = false;
       for (size_t j = 0; j < unique.size() && !nested; ++j)
-        nested = j != i && cv::contourArea(FloatQuad(unique[j].corners)) > 1.5 * area &&
-                 CentreInside(unique[i].corners, unique[j].corners);
+        nested = j != i && areas[j] > 1.5 * areas[i] && CentreInside(unique[i].corners, unique[j].corners);
       if (!nested) kept.push_back(unique[i]);
     }
     unique.swap(kept);
@@ -1924,7 +1928,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::DropLookAlikes(const cv::Mat& g
 const cv::Mat* MarkerDetector::RefineRegion(const cv::Mat& gray, const Raw& r, cv::Rect* roi) {
   const bool linearise = options_.gamma != 1.0 && options_.gamma != 0.0;
   const bool unsharp = options_.unsharp_amount > 0;
-  *roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+  *roi = RegionBox(r, gray.size());
   if (!linearise && !unsharp) return &gray;
   if (linear_.size() != gray.size()) linear_.create(gray.size(), CV_8U);
   if (!unsharp) {
@@ -1954,7 +1958,7 @@ const cv::Mat* MarkerDetector::RefineRegion(const cv::Mat& gray, const Raw& r, c
 // depend on the images before). Beyond the region a ray counts as beyond the image.
 bool MarkerDetector::RefineInRegion(const cv::Mat& from, const cv::Rect& roi, const Raw& r,
                                     std::array<cv::Point2d, 4>* corners, double* blur, bool* kept_lines) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   const int polarity = !options_.inverted ? 1 : markers_.inverted ? -1 : 0;
   const bool unsharp = options_.unsharp_amount > 0;
   const cv::Point2d origin(roi.x, roi.y);
@@ -1990,7 +1994,7 @@ std::vector<MarkerDetector::Refined> MarkerDetector::RefineSmoothed(const cv::Ma
     cv::Rect roi;
     if (smooth_.size() != gray.size()) smooth_.create(gray.size(), CV_8U);
     if (unsharp) {
-      roi = GrownBox(r.corners, 0.5, 6.0, gray.size());
+      roi = RegionBox(r, gray.size());
       UnsharpRegion(gray(roi), s, smooth_(roi));
     } else {
       const cv::Mat* source = RefineRegion(gray, r, &roi);
@@ -2010,7 +2014,7 @@ std::vector<MarkerDetector::Refined> MarkerDetector::RefineSmoothed(const cv::Ma
 }
 
 bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed, Raw* r) {
-  const int cells = dictionary_->markerSize + 2;
+  const int cells = Cells();
   const cv::Mat& bits = MarkerBits(r->id);
   // A refinement counts only if the code reads at the refined corners about as well as at the
   // candidate's (which decoded): not a cell off.

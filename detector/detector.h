@@ -206,7 +206,10 @@ class MarkerDetector {
   // Fast mode's search regions: each previous marker's box grown by fast_band_sides of its larger side
   // (and 4 px) on every side, overlapping ones merged.
   std::vector<cv::Rect> TrackRegions(cv::Size size) const;
-  const cv::Mat& MarkerBits(int id);  // the dictionary's bits of `id` (cached)
+  const cv::Mat& MarkerBits(int id);                         // the dictionary's bits of `id` (cached)
+  int Cells() const { return dictionary_->markerSize + 2; }  // a marker's width in cells, border included
+  // The region a marker `r` is refined on: its box grown by half its larger side and 6 px, in the image.
+  static cv::Rect RegionBox(const Raw& r, cv::Size image);
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
   // A marker region with the camera's sharpening undone (unsharp_amount), smoothed by `smoothing` px.
