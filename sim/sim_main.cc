@@ -46,8 +46,8 @@ struct SimArgs {
        plain_bg = false;
 };
 
-// Every option once: its name, value, help (with its unit) and check.
-void DeclareOptions(mcmt::ArgParser* p, SimArgs* a) {
+// The session's place: output folder, object, cameras, frames, dictionary and lens.
+void DeclareSceneOptions(mcmt::ArgParser* p, SimArgs* a) {
   using mcmt::AtLeast, mcmt::InRange, mcmt::OneOf;
   mcmt::ArgParser& args = *p;
   args.AddString("out", &a->out,
@@ -83,6 +83,12 @@ void DeclareOptions(mcmt::ArgParser* p, SimArgs* a) {
   args.AddDouble("intrinsics-spread", &a->intrinsics_spread,
                  "per-camera relative spread of focal length, principal point and distortion (0: identical)",
                  InRange(0, 0.2));
+}
+
+// The imaging: noise, blur, margin, surface, light, encoding, and what is written.
+void DeclareImagingOptions(mcmt::ArgParser* p, SimArgs* a) {
+  using mcmt::AtLeast, mcmt::InRange, mcmt::OneOf;
+  mcmt::ArgParser& args = *p;
   args.AddDouble("noise", &a->noise, "image noise sigma, gray levels", InRange(0, 100));
   args.AddDouble("blur", &a->blur, "Gaussian blur sigma, pixels (0: none)", InRange(0, 50));
   args.AddFlag("motion-blur", &a->motion_blur, "average 5 poses over half a frame interval (5x slower)");
@@ -119,6 +125,12 @@ void DeclareOptions(mcmt::ArgParser* p, SimArgs* a) {
               "JPEG compression of every frame at this quality 1..100 (0: none)", InRange(0, 100));
   args.AddFlag("bgr", &a->bgr, "write 3-channel images");
   args.AddFlag("video", &a->video, "write DIR/camK.mp4 instead of PNG folders");
+}
+
+// The motion, rendering threads, detections-only sessions and what goes wrong in them.
+void DeclareSessionOptions(mcmt::ArgParser* p, SimArgs* a) {
+  using mcmt::AtLeast, mcmt::InRange, mcmt::OneOf;
+  mcmt::ArgParser& args = *p;
   args.AddInt("still-frames", &a->still_frames, "length of each of two still segments, frames (0: none)",
               AtLeast(0));
   args.AddDouble("max-tilt-deg", &a->max_tilt, "largest tilt of the object from upright, degrees",
@@ -170,6 +182,13 @@ void DeclareOptions(mcmt::ArgParser* p, SimArgs* a) {
       "  mcmt-sim --out /tmp/d --detections-only --frames 10000 --cameras 8 --corner-noise-px 0.2\n"
       "  mcmt-sim --out /tmp/q --detections-only --intrinsics-error cam1,3,8,-6,0.03 --clock cam2,12,100 "
       "--max-speed-m-s 1\n");
+}
+
+// Every option once: its name, value, help (with its unit) and check, in --help's order.
+void DeclareOptions(mcmt::ArgParser* p, SimArgs* a) {
+  DeclareSceneOptions(p, a);
+  DeclareImagingOptions(p, a);
+  DeclareSessionOptions(p, a);
 }
 
 // The object, rig and motion: names read, the radius's proportions applied.
