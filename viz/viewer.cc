@@ -307,53 +307,63 @@ int Viewer::RunHeadless(LcmCollector* collector) {
   return 0;
 }
 
-int Viewer::RunWindow(LcmCollector* collector) {
+namespace {
+
+constexpr char kHeadlessHint[] =
+    "render headless instead with --snapshot out.png, --save-scene out.3Dscene or --video DIR";
+
+// The live MRPT window, or null after a one-line reason on stderr (no display, or it would not open).
+mrpt::gui::CDisplayWindow3D::Ptr OpenWindow(int width, int height) {
   const std::string reason = NoDisplayReason();
   if (!reason.empty()) {
-    std::cerr << "mcmt-viz: " << reason
-              << ": the live window cannot open; render headless instead with --snapshot out.png, "
-                 "--save-scene out.3Dscene or --video DIR\n";
-    return 1;
+    std::cerr << "mcmt-viz: " << reason << ": the live window cannot open; " << kHeadlessHint << "\n";
+    return nullptr;
   }
   mrpt::gui::CDisplayWindow3D::Ptr win;
   try {
-    win = mrpt::gui::CDisplayWindow3D::Create("mcmt-viz", options_.scene.width, options_.scene.height);
+    win = mrpt::gui::CDisplayWindow3D::Create("mcmt-viz", width, height);
   } catch (const std::exception& e) {
     std::cerr << "mcmt-viz: cannot open the live window (" << e.what()
               << "); render headless instead with --snapshot, --save-scene or --video\n";
-    return 1;
+    return nullptr;
   }
   if (!win || !win->isOpen()) {
-    std::cerr
-        << "mcmt-viz: cannot open the live window on display '"
-        << (std::getenv("DISPLAY") ? std::getenv("DISPLAY") : "")
-        << "'; render headless instead with --snapshot out.png, --save-scene out.3Dscene or --video DIR\n";
-    return 1;
+    std::cerr << "mcmt-viz: cannot open the live window on display '"
+              << (std::getenv("DISPLAY") ? std::getenv("DISPLAY") : "") << "'; " << kHeadlessHint << "\n";
+    return nullptr;
   }
-  VizScene scene(options_.scene);
-  scene.EnableLegendViewport();
-  bool follow = options_.follow;
-  bool browsing = false;  // stepping through frames with the arrow keys
-  int map_count = -1;
-  // Poses received (the collector's absolute index per stream: "" the first moving body's) already in
-  // the scene.
-  std::map<std::string, int64_t> poses_shown;
-  auto scene_map = [&]() -> const RigMap& { return have_file_map_ ? file_map_ : collector->map(); };
-  auto all_shown = [&] {
-    poses_shown.clear();
-    poses_shown[""] = MainStream(*collector, scene_map()).total();
-    for (const auto& [body, stream] : collector->body_poses()) poses_shown[body] = stream.total();
-  };
-  auto push_view = [&](const ViewCamera& v) {
+  return win;
+}
+
+}  // namespace
+
+// The live window and what it shows, between turns of Viewer::RunWindow's loop.
+struct Viewer::LiveWindow {
+  LiveWindow(mrpt::gui::CDisplayWindow3D::Ptr w, const SceneOptions& options)
+      : win(std::move(w)), scene(options) {}
+
+  // Runs `change` on the scene with the window's scene lock held (the window thread renders it).
+  template <class Change>
+  void Locked(Change change) {
+    mrpt::opengl::COpenGLScene::Ptr& ptr = win->get3DSceneAndLock();
+    change(ptr);
+    win->unlockAccess3DScene();
+  }
+  const ViewCamera& MainView() const {
+    return scene.view(scene.num_panels() > 0 ? scene.num_panels() - 1 : 0);
+  }
+  // The main view to the window's camera.
+  void PushView(const ViewCamera& v) {
     win->setCameraPointingToPoint(static_cast<float>(v.pointing.x()), static_cast<float>(v.pointing.y()),
                                   static_cast<float>(v.pointing.z()));
     win->setCameraAzimuthDeg(static_cast<float>(v.azimuth_deg));
     win->setCameraElevationDeg(static_cast<float>(v.elevation_deg));
     win->setCameraZoom(static_cast<float>(v.distance));
     win->setFOV(static_cast<float>(v.fov_deg));
-  };
-  auto pull_view = [&]() {
-    ViewCamera v = scene.view(scene.num_panels() > 0 ? scene.num_panels() - 1 : 0);
+  }
+  // The window's camera (the mouse may have moved it) to the main view.
+  void PullView() {
+    ViewCamera v = MainView();
     float x, y, z;
     win->getCameraPointingToPoint(x, y, z);
     v.pointing = Eigen::Vector3d(x, y, z);
@@ -361,172 +371,195 @@ int Viewer::RunWindow(LcmCollector* collector) {
     v.elevation_deg = win->getCameraElevationDeg();
     v.distance = win->getCameraZoom();
     scene.SetView(v);
-  };
-  {
-    auto& ptr = win->get3DSceneAndLock();
-    ptr = scene.scene();
-    win->unlockAccess3DScene();
   }
-  if (!collector) {  // files only: one static scene
-    auto& ptr = win->get3DSceneAndLock();
-    scene.SetPanels(Panels(nullptr));
-    ptr = scene.scene();
-    win->unlockAccess3DScene();
-    push_view(scene.view(scene.num_panels() - 1));
-  }
-  std::cout
-      << "mcmt-viz: keys: f follow the object, r reset the view, t toggle rays, left/right (or , .) step "
-         "frames, n newest frame, q quit"
-      << std::endl;
-  const auto period = std::chrono::duration<double>(1.0 / options_.redraw_hz);
-  auto next_redraw = Clock::now();
-  bool dirty = true;
-  ViewCamera last_view;
-  auto last_repaint = Clock::now();
-  const auto start = Clock::now();
-  int64_t repaints = 0;
-  while (win->isOpen()) {
-    if (options_.max_seconds > 0 &&
-        Clock::now() - start > std::chrono::duration<double>(options_.max_seconds))
-      break;
-    // LCM until the next redraw is due (redraws bounded however fast poses arrive).
-    while (Clock::now() < next_redraw) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(next_redraw - Clock::now());
-      if (collector && !is_log_)
-        lcm_->handleTimeout(std::max<int>(1, static_cast<int>(left.count())));
-      else
-        std::this_thread::sleep_for(left);
-    }
-    next_redraw = Clock::now() + std::chrono::duration_cast<Clock::duration>(period);
-    bool reset = false;
-    if (win->keyHit()) {
-      const int key = win->getPushedKey();
-      if (key == 'f' || key == 'F') follow = !follow;
-      if (key == 'r' || key == 'R') reset = true;
-      if (key == 't' || key == 'T') {
-        auto& ptr = win->get3DSceneAndLock();
-        (void)ptr;
-        scene.SetRaysVisible(!scene.rays_visible());
-        win->unlockAccess3DScene();
-      }
-      if (key == 'q' || key == 'Q' || key == 27) break;
-      // Step through the trajectory (then the newest live pose is no longer followed until 'n').
-      const int n = static_cast<int>(scene.trajectory().size());
-      if (n > 0 &&
-          (key == ',' || key == mrpt::gui::MRPTK_LEFT || key == '.' || key == mrpt::gui::MRPTK_RIGHT)) {
-        const int step = (key == ',' || key == mrpt::gui::MRPTK_LEFT) ? -1 : 1;
-        browsing = true;
-        auto& ptr = win->get3DSceneAndLock();
-        (void)ptr;
-        scene.SetCurrentFrame(std::clamp(scene.current_frame() + step, 0, n - 1));
-        win->unlockAccess3DScene();
-      }
-      if (key == 'n' || key == 'N') {
-        browsing = false;
-        auto& ptr = win->get3DSceneAndLock();
-        (void)ptr;
-        scene.SetCurrentFrame(-1);
-        win->unlockAccess3DScene();
-      }
-      dirty = true;
-    }
-    if (collector) {
-      auto& ptr = win->get3DSceneAndLock();
-      const bool new_map = collector->map_count() != map_count && (collector->has_map() || have_file_map_);
-      if (new_map || (map_count < 0 && have_file_map_)) {
-        map_count = collector->map_count();
-        scene.SetCameraStates(collector->camera_states());
-        scene.SetPanels(Panels(collector));
-        ptr = scene.scene();
-        all_shown();
-        reset = true;
-        dirty = true;
-      } else if (scene.HasMap() && collector->camera_states() != scene.camera_states()) {
-        // A camera turned suspect, excluded or ok again (MCMT_TRACKER_STATUS): redrawn, the view kept.
-        const ViewCamera view = scene.view(scene.num_panels() - 1);
-        const int shown = scene.current_frame();
-        scene.SetCameraStates(collector->camera_states());
-        scene.SetPanels(Panels(collector));
-        scene.SetView(view);
-        scene.SetCurrentFrame(browsing ? shown : -1);
-        ptr = scene.scene();
-        all_shown();
-        dirty = true;
-      }
-      if (scene.HasMap() && !have_file_trajectory_) {
-        const RigMap& map = scene_map();
-        const PoseStream& main = MainStream(*collector, map);
-        int64_t& main_shown = poses_shown[""];
-        main_shown = std::max(main_shown, main.dropped);  // older ones dropped
-        for (; main_shown < main.total(); ++main_shown) {
-          const int shown = scene.current_frame();
-          scene.AddPose(main.rows[static_cast<size_t>(main_shown - main.dropped)]);
-          if (browsing) scene.SetCurrentFrame(shown);
-          dirty = true;
-        }
-        const std::string main_body = map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
-        for (const auto& [body, stream] : collector->body_poses()) {
-          if (body == main_body) continue;
-          int64_t& body_shown = poses_shown[body];
-          body_shown = std::max(body_shown, stream.dropped);
-          for (; body_shown < stream.total(); ++body_shown) {
-            scene.AddBodyPose(body, stream.rows[static_cast<size_t>(body_shown - stream.dropped)], !browsing);
-            dirty = true;
-          }
-        }
-      }
-      if (dirty && scene.HasMap() && scene.current_frame() >= 0)
-        scene.SetDetections(collector->DetectionsAt(scene.trajectory()[scene.current_frame()].utime));
-      const PoseStats& st = collector->stats();
-      char line[200];
-      std::snprintf(
-          line, sizeof(line), "poses %lld (lost %lld)  rate %.1f Hz  latency %.1f ms  RMS %.3f px%s%s",
-          static_cast<long long>(st.poses), static_cast<long long>(st.lost), collector->RateHz(NowUtime()),
-          st.latency_ms, st.rms_px, follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
-      scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP (or give --map map.yaml) ...",
-                        FrameOverlay(scene.trajectory(), scene.current_frame())});
-      win->unlockAccess3DScene();
-    }
-    if (!scene.HasMap()) {
-      if (dirty) win->forceRepaint();
-      dirty = false;
-      continue;
-    }
-    if (reset) {
-      auto& ptr = win->get3DSceneAndLock();
-      (void)ptr;
-      scene.AutoView();
-      win->unlockAccess3DScene();
-      push_view(scene.view(scene.num_panels() - 1));
-      dirty = true;
-    } else {
-      pull_view();  // the mouse may have moved the main view
-    }
-    if (follow && dirty) {
-      scene.FollowObject();
-      push_view(scene.view(scene.num_panels() - 1));
-    }
-    // Repaint when something changed: the scene, the view (mouse), or once a second (overlay).
-    const ViewCamera& v = scene.view(scene.num_panels() - 1);
+  // Repaints when something changed: the scene, the view (mouse), or once a second (overlay).
+  void RepaintIfChanged() {
+    const ViewCamera& v = MainView();
     const bool view_changed = (v.pointing - last_view.pointing).norm() > 0 ||
                               v.azimuth_deg != last_view.azimuth_deg ||
                               v.elevation_deg != last_view.elevation_deg || v.distance != last_view.distance;
-    if (!dirty && !view_changed && Clock::now() - last_repaint < std::chrono::seconds(1)) continue;
+    if (!dirty && !view_changed && Clock::now() - last_repaint < std::chrono::seconds(1)) return;
     last_view = v;
-    {
-      auto& ptr = win->get3DSceneAndLock();
-      (void)ptr;
-      scene.ApplyViews();  // keeps the side-by-side panels on the main view
-      win->unlockAccess3DScene();
-    }
+    Locked([&](auto&) { scene.ApplyViews(); });  // keeps the side-by-side panels on the main view
     win->forceRepaint();
     ++repaints;
     last_repaint = Clock::now();
     dirty = false;
   }
+
+  mrpt::gui::CDisplayWindow3D::Ptr win;
+  VizScene scene;
+  bool follow = false;
+  bool browsing = false;  // stepping through frames with the arrow keys
+  bool dirty = true;      // the scene changed since the last repaint
+  bool reset = false;     // this turn: the view goes back to the automatic one
+  int map_count = -1;     // the collector's map_count() shown
+  // Poses received (the collector's absolute index per stream: "" the first moving body's) already in
+  // the scene.
+  std::map<std::string, int64_t> poses_shown;
+  ViewCamera last_view;
+  Clock::time_point last_repaint = Clock::now();
+  int64_t repaints = 0;
+};
+
+const RigMap& Viewer::SceneMap(const LcmCollector& collector) const {
+  return have_file_map_ ? file_map_ : collector.map();
+}
+
+bool Viewer::HandleKey(LiveWindow& w, int key) const {
+  if (key == 'q' || key == 'Q' || key == 27) return false;
+  if (key == 'f' || key == 'F') w.follow = !w.follow;
+  if (key == 'r' || key == 'R') w.reset = true;
+  if (key == 't' || key == 'T') w.Locked([&](auto&) { w.scene.SetRaysVisible(!w.scene.rays_visible()); });
+  // Step through the trajectory (then the newest live pose is no longer followed until 'n').
+  const int n = static_cast<int>(w.scene.trajectory().size());
+  if (n > 0 && (key == ',' || key == mrpt::gui::MRPTK_LEFT || key == '.' || key == mrpt::gui::MRPTK_RIGHT)) {
+    const int step = (key == ',' || key == mrpt::gui::MRPTK_LEFT) ? -1 : 1;
+    w.browsing = true;
+    w.Locked([&](auto&) { w.scene.SetCurrentFrame(std::clamp(w.scene.current_frame() + step, 0, n - 1)); });
+  }
+  if (key == 'n' || key == 'N') {
+    w.browsing = false;
+    w.Locked([&](auto&) { w.scene.SetCurrentFrame(-1); });
+  }
+  w.dirty = true;
+  return true;
+}
+
+void Viewer::MarkAllPosesShown(LiveWindow& w, const LcmCollector& collector) const {
+  w.poses_shown.clear();
+  w.poses_shown[""] = MainStream(collector, SceneMap(collector)).total();
+  for (const auto& [body, stream] : collector.body_poses()) w.poses_shown[body] = stream.total();
+}
+
+void Viewer::ShowNewPoses(LiveWindow& w, const LcmCollector& collector) const {
+  const RigMap& map = SceneMap(collector);
+  const PoseStream& main = MainStream(collector, map);
+  int64_t& main_shown = w.poses_shown[""];
+  main_shown = std::max(main_shown, main.dropped);  // older ones dropped
+  for (; main_shown < main.total(); ++main_shown) {
+    const int shown = w.scene.current_frame();
+    w.scene.AddPose(main.rows[static_cast<size_t>(main_shown - main.dropped)]);
+    if (w.browsing) w.scene.SetCurrentFrame(shown);
+    w.dirty = true;
+  }
+  const std::string main_body = map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
+  for (const auto& [body, stream] : collector.body_poses()) {
+    if (body == main_body) continue;
+    int64_t& body_shown = w.poses_shown[body];
+    body_shown = std::max(body_shown, stream.dropped);
+    for (; body_shown < stream.total(); ++body_shown) {
+      w.scene.AddBodyPose(body, stream.rows[static_cast<size_t>(body_shown - stream.dropped)], !w.browsing);
+      w.dirty = true;
+    }
+  }
+}
+
+void Viewer::SyncWithCollector(LiveWindow& w, const LcmCollector& collector) const {
+  w.Locked([&](mrpt::opengl::COpenGLScene::Ptr& ptr) {
+    VizScene& scene = w.scene;
+    const bool new_map = collector.map_count() != w.map_count && (collector.has_map() || have_file_map_);
+    if (new_map || (w.map_count < 0 && have_file_map_)) {
+      w.map_count = collector.map_count();
+      scene.SetCameraStates(collector.camera_states());
+      scene.SetPanels(Panels(&collector));
+      ptr = scene.scene();
+      MarkAllPosesShown(w, collector);
+      w.reset = true;
+      w.dirty = true;
+    } else if (scene.HasMap() && collector.camera_states() != scene.camera_states()) {
+      // A camera turned suspect, excluded or ok again (MCMT_TRACKER_STATUS): redrawn, the view kept.
+      const ViewCamera view = w.MainView();
+      const int shown = scene.current_frame();
+      scene.SetCameraStates(collector.camera_states());
+      scene.SetPanels(Panels(&collector));
+      scene.SetView(view);
+      scene.SetCurrentFrame(w.browsing ? shown : -1);
+      ptr = scene.scene();
+      MarkAllPosesShown(w, collector);
+      w.dirty = true;
+    }
+    if (scene.HasMap() && !have_file_trajectory_) ShowNewPoses(w, collector);
+    if (w.dirty && scene.HasMap() && scene.current_frame() >= 0)
+      scene.SetDetections(collector.DetectionsAt(scene.trajectory()[scene.current_frame()].utime));
+    const PoseStats& st = collector.stats();
+    char line[200];
+    std::snprintf(
+        line, sizeof(line), "poses %lld (lost %lld)  rate %.1f Hz  latency %.1f ms  RMS %.3f px%s%s",
+        static_cast<long long>(st.poses), static_cast<long long>(st.lost), collector.RateHz(NowUtime()),
+        st.latency_ms, st.rms_px, w.follow ? "  [follow]" : "", scene.rays_visible() ? "  [rays]" : "");
+    scene.SetOverlay({scene.HasMap() ? line : "waiting for MCMT_MAP (or give --map map.yaml) ...",
+                      FrameOverlay(scene.trajectory(), scene.current_frame())});
+  });
+}
+
+void Viewer::UpdateView(LiveWindow& w) const {
+  if (w.reset) {
+    w.Locked([&](auto&) { w.scene.AutoView(); });
+    w.PushView(w.MainView());
+    w.dirty = true;
+  } else {
+    w.PullView();  // the mouse may have moved the main view
+  }
+  if (w.follow && w.dirty) {
+    w.scene.FollowObject();
+    w.PushView(w.MainView());
+  }
+}
+
+void Viewer::WaitForRedraw(Clock::time_point next_redraw, LcmCollector* collector) {
+  // LCM until the next redraw is due (redraws bounded however fast poses arrive).
+  while (Clock::now() < next_redraw) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(next_redraw - Clock::now());
+    if (collector && !is_log_)
+      lcm_->handleTimeout(std::max<int>(1, static_cast<int>(left.count())));
+    else
+      std::this_thread::sleep_for(left);
+  }
+}
+
+int Viewer::RunWindow(LcmCollector* collector) {
+  mrpt::gui::CDisplayWindow3D::Ptr win = OpenWindow(options_.scene.width, options_.scene.height);
+  if (!win) return 1;
+  LiveWindow w(win, options_.scene);
+  w.scene.EnableLegendViewport();
+  w.follow = options_.follow;
+  w.Locked([&](mrpt::opengl::COpenGLScene::Ptr& ptr) { ptr = w.scene.scene(); });
+  if (!collector) {  // files only: one static scene
+    w.Locked([&](mrpt::opengl::COpenGLScene::Ptr& ptr) {
+      w.scene.SetPanels(Panels(nullptr));
+      ptr = w.scene.scene();
+    });
+    w.PushView(w.MainView());
+  }
+  std::cout
+      << "mcmt-viz: keys: f follow the object, r reset the view, t toggle rays, left/right (or , .) step "
+         "frames, n newest frame, q quit"
+      << std::endl;
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.redraw_hz));
+  const auto start = Clock::now();
+  auto next_redraw = start;
+  while (win->isOpen()) {
+    if (options_.max_seconds > 0 &&
+        Clock::now() - start > std::chrono::duration<double>(options_.max_seconds))
+      break;
+    WaitForRedraw(next_redraw, collector);
+    next_redraw = Clock::now() + period;
+    w.reset = false;
+    if (win->keyHit() && !HandleKey(w, win->getPushedKey())) break;
+    if (collector) SyncWithCollector(w, *collector);
+    if (!w.scene.HasMap()) {
+      if (w.dirty) win->forceRepaint();
+      w.dirty = false;
+      continue;
+    }
+    UpdateView(w);
+    w.RepaintIfChanged();
+  }
   std::printf("mcmt-viz: window closed after %.1f s: %zu poses shown, %lld repaints\n",
-              std::chrono::duration<double>(Clock::now() - start).count(), scene.trajectory().size(),
-              static_cast<long long>(repaints));
+              std::chrono::duration<double>(Clock::now() - start).count(), w.scene.trajectory().size(),
+              static_cast<long long>(w.repaints));
   return 0;
 }
 

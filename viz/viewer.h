@@ -2,6 +2,7 @@
 // renders headless (PNG snapshot, .3Dscene, one PNG per frame) or opens the live MRPT window.
 #pragma once
 
+#include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <string>
@@ -65,6 +66,16 @@ class Viewer {
   std::string NoPosesInLog() const;  // why a log shows no object, and what to add
   int RunHeadless(LcmCollector* collector);
   int RunWindow(LcmCollector* collector);
+  // The live window's loop turn, in steps (viewer.cc).
+  struct LiveWindow;
+  const RigMap& SceneMap(const LcmCollector& collector) const;  // --map's, else the collector's
+  void WaitForRedraw(std::chrono::steady_clock::time_point next_redraw, LcmCollector* collector);
+  bool HandleKey(LiveWindow& w, int key) const;  // false: quit
+  // A new map or camera states, new poses, the current frame's detections and the overlay.
+  void SyncWithCollector(LiveWindow& w, const LcmCollector& collector) const;
+  void MarkAllPosesShown(LiveWindow& w, const LcmCollector& collector) const;
+  void ShowNewPoses(LiveWindow& w, const LcmCollector& collector) const;
+  void UpdateView(LiveWindow& w) const;  // reset, the mouse's view, following
 
   ViewerOptions options_;
   lcm::LCM* lcm_;
