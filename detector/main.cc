@@ -1,5 +1,4 @@
 // mcmt-detector: one camera's frames -> marker detections on LCM channel MCMT_DETECTIONS_<CAMERA>.
-#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -32,7 +31,7 @@ int main(int argc, char** argv) {
                    "pipeline");
     args.AddString("rate", &rate, "max (as fast as possible) or realtime (recordings at their frame rate)");
     args.AddFlag("loop", &loop, "recordings: start again at the end");
-    args.AddInt("max-frames", &max_frames, "stop after N frames (-1: no limit)");
+    args.AddInt("max-frames", &max_frames, "stop after N frames (-1: no limit)", mcmt::AtLeast(-1));
     args.AddFlag("images", &images, "also publish rate-limited JPEG images on MCMT_IMAGE_<CAMERA>");
     args.AddInt64("start-utime", &start_utime,
                   "utime (us) of frame 0 of recordings without a timestamps file (frame k: + k * 1e6 / fps)");
@@ -41,10 +40,12 @@ int main(int argc, char** argv) {
         "with --rate realtime: wall clock (us since the epoch) at which to publish the first frame; "
         "give several detectors the same value to publish each frame together");
     args.AddDouble("fps", &fps,
-                   "frame rate of recordings (0: detector.fps of the rig, the video's own, or 30)");
+                   "frame rate of recordings (0: detector.fps of the rig, the video's own, or 30)",
+                   mcmt::InRange(0, 1e6));
     args.AddDouble("max-lag-ms", &max_lag_ms,
                    "with --rate realtime: drop frames already this late, as a live camera would (0: none; "
-                   "default: detector.max_lag_ms of the rig)");
+                   "default: detector.max_lag_ms of the rig)",
+                   mcmt::InRange(0, 1e9));
     args.AddFlag("quiet", &quiet, "no status lines");
     args.AddEpilog(
         "Examples:\n"
@@ -71,18 +72,8 @@ int main(int argc, char** argv) {
     if (args.Given("images")) options.images = images;
     options.start_utime = start_utime;
     options.start_wall_utime = start_wall_utime;
-    if (args.Given("fps")) {
-      if (!(fps >= 0) || !std::isfinite(fps))
-        throw std::runtime_error("--fps: expected a frame rate in Hz > 0, or 0 for the rig's own; got " +
-                                 std::to_string(fps));
-      if (fps > 0) options.fps = fps;
-    }
-    if (args.Given("max-lag-ms")) {
-      if (!(max_lag_ms >= 0) || !std::isfinite(max_lag_ms))
-        throw std::runtime_error("--max-lag-ms: expected a lag in ms >= 0 (0: drop no frame); got " +
-                                 std::to_string(max_lag_ms));
-      options.max_lag_ms = max_lag_ms;
-    }
+    if (args.Given("fps") && fps > 0) options.fps = fps;
+    if (args.Given("max-lag-ms")) options.max_lag_ms = max_lag_ms;
     options.quiet = quiet;
     if (lcm_url.empty()) lcm_url = rig.lcm_url;
 

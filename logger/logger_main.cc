@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
     args.AddInt("queue-capacity", &o.queue_capacity, "LCM subscription queue, messages (LCM's default: 30)");
     args.AddDouble(
         "recv-buf-mb", &recv_buf_mb,
-        "udpm: socket receive buffer to ask for (recv_buf_size) unless the URL sets one; 0: leave it");
+        "udpm: socket receive buffer to ask for (recv_buf_size) unless the URL sets one; 0: leave it",
+        mcmt::InRange(0, 1e6));
     args.AddDouble("status-seconds", &o.status_seconds, "status line interval on stderr; 0: quiet");
     args.AddEpilog(
         "Files: without splitting exactly --out; with --split-mb/--split-minutes the parts are "
@@ -65,7 +66,6 @@ int main(int argc, char** argv) {
     options.max_seconds = o.max_seconds;
     options.max_messages = max_messages;
     if (args.Given("lcm-url")) url = lcm_url;
-    if (recv_buf_mb < 0) throw std::invalid_argument("--recv-buf-mb: must be >= 0");
     long long recv_buf = static_cast<long long>(recv_buf_mb * 1e6);
     const long long cap = mcmt::KernelReceiveBufferMax();
     if (cap > 0 && recv_buf > cap) recv_buf = cap;  // the kernel would cap it anyway

@@ -53,9 +53,10 @@ int Run(int argc, char** argv) {
                  "trajectory_initial.csv (required; with --maintain optional: map.yaml rewritten at each "
                  "new map)");
   args.AddString("lcm-url", &lcm_url, "LCM URL (default: lcm.url of the rig YAML, else LCM's default)");
-  args.AddInt("frames", &frames, "stop collecting after this many frames (0: no limit)");
+  args.AddInt("frames", &frames, "stop collecting after this many frames (0: no limit)", mcmt::AtLeast(0));
   args.AddDouble("seconds", &seconds,
-                 "stop collecting after this many seconds (log: of message time; 0: no limit)");
+                 "stop collecting after this many seconds (log: of message time; 0: no limit)",
+                 mcmt::AtLeast(0));
   args.AddFlag("allow-partial", &allow_partial,
                "map the connected cameras and markers, leaving out the others; write a map no camera "
                "supports (mapper.unsupported_rms_ratio) with a warning");
@@ -64,7 +65,8 @@ int Run(int argc, char** argv) {
   args.AddString("reference-camera", &reference_camera,
                  "reference camera (default: mapper.reference_camera, "
                  "else the best connected)");
-  args.AddInt("threads", &threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)");
+  args.AddInt("threads", &threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)",
+              mcmt::AtLeast(-1));
   args.AddFlag("no-refine", &no_refine, "initialisation only (no bundle adjustment)");
   args.AddFlag("force", &force, "overwrite the results of another session in --out");
   args.AddString(
@@ -105,8 +107,6 @@ int Run(int argc, char** argv) {
   }
   if (threads >= 0) options.threads = threads;
   if (no_refine) options.refine = false;
-  if (frames < 0) throw std::runtime_error("--frames must be >= 0");
-  if (seconds < 0) throw std::runtime_error("--seconds must be >= 0");
   if (!args.Given("lcm-url")) lcm_url = rig.lcm_url;
   if (maintain) return Maintain(rig, options, old_map, log, out, lcm_url, pose_channel);
   if (out.empty()) throw std::runtime_error("--out is required (the output folder)");

@@ -408,6 +408,8 @@ TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
   one_line_error({Bin("mcmt-export"), "--log", dir_ + "/text.lcmlog"}, "say what to export");
   one_line_error({Bin("mcmt-export"), "--map", dir_ + "/nomap.yaml", "--ply", dir_ + "/o.ply"}, "nomap.yaml");
   one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--flush-ms", "0"}, "--flush-ms");
+  one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--recv-buf-mb", "-1"},
+                 "--recv-buf-mb: must be in [0, 1000000], got '-1'");
   one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--config", dir_ + "/norig.yaml"},
                  "norig.yaml");
   CameraModel model;

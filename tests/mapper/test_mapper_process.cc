@@ -155,6 +155,11 @@ TEST(MapperProcess, BadInputGivesOneLineErrors) {
   const std::string typo = WriteRig(dir, session, "mapper:\n  hubr_px: 2\n");
   WriteLog(dir + "/s.lcmlog", messages, false);
   expect_error("--config " + typo + " --log " + dir + "/s.lcmlog --out " + dir + "/out", "hubr_px");
+  // Option values refused by their declared checks, before anything is read.
+  expect_error("--config " + rig + " --log " + dir + "/s.lcmlog --out " + dir + "/out --frames -1",
+               "--frames: must be >= 0, got '-1'");
+  expect_error("--config " + rig + " --log " + dir + "/s.lcmlog --out " + dir + "/out --seconds nan",
+               "--seconds: must be >= 0, got 'nan'");
   fs::remove_all(dir);
 }
 
