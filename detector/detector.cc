@@ -1652,10 +1652,42 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
       for (size_t j = 0; j < accepted && !covered; ++j) covered = CentreInside(quad, out[j].corners);
       if (covered) continue;
       Raw r;
-      if (RereadCandidate(gray, quad, &r) && markers_.Accepts(r.id)) out.push_back(r);
+      if (RereadCandidate(gray, quad, &r) && markers_.Accepts(r.id)) {
+        out.push_back(r);
+        continue;
+      }
+      if (options_.inside_rejected_level > 0 && SearchInsideRejected(gray, quad, &r) &&
+          markers_.Accepts(r.id))
+        out.push_back(r);
     }
   }
   return out;
+}
+
+bool MarkerDetector::SearchInsideRejected(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
+                                          Raw* r) {
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += cv::norm(quad[(k + 1) % 4] - quad[k]);
+  const std::vector<cv::Point2f> points(quad.begin(), quad.end());
+  const cv::Rect box =
+      (cv::boundingRect(points) + cv::Size(4, 4) - cv::Point(2, 2)) & cv::Rect(0, 0, gray.cols, gray.rows);
+  QuadSearch search;
+  search.tile_px = options_.threshold_tile_px;
+  search.min_contrast = options_.min_tile_contrast;
+  search.min_perimeter = options_.min_perimeter_px;
+  search.max_perimeter = 0.95 * perimeter;  // not the candidate itself again
+  search.max_deviation_rate = options_.polygonal_approx_rate;
+  search.min_side_rate = options_.min_corner_distance_rate;
+  search.min_distance_to_border = options_.min_distance_to_border;
+  QuadFinder finder(gray(box), search);
+  for (double level : {options_.low_threshold_level, options_.inside_rejected_level}) {
+    if (level == 0) continue;
+    for (std::array<cv::Point2d, 4> q : finder.Find(level)) {
+      for (auto& c : q) c += cv::Point2d(box.x, box.y);
+      if (ReadCode(gray, q, q, 1, own_border_errors_, r) || RereadCandidate(gray, q, r)) return true;
+    }
+  }
+  return false;
 }
 
 std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, const cv::Rect& roi,

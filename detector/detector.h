@@ -101,6 +101,12 @@ struct DetectorOptions {
   // with dictionaries where a random pattern is within the correction margin of an id with a chance
   // below 1e-3 (DICT_6X6_250: 1.1e-4; not DICT_4X4_*), and not with inverted markers.
   bool reread_rejected = true;
+  // A rejected candidate that is no marker read again may hold one: a dark card or tool face around a
+  // marker whose margin is too thin at a steep view to part its border from the card at the adaptive
+  // threshold (the candidate is the card's outline). Its box is searched again for quads at
+  // low_threshold_level and at this level of the local range (detector/candidates.h), each read as the
+  // own search reads them (0: not searched). With reread_rejected's dictionaries only.
+  double inside_rejected_level = 0.15;
   int min_distance_to_border = 1;           // pixels
   double error_correction_rate = 0.6;       // of the dictionary's correction capacity
   int perspective_pixels_per_cell = 6;      // bit sampling resolution
@@ -212,6 +218,9 @@ class MarkerDetector {
   static cv::Rect RegionBox(const Raw& r, cv::Size image);
   // A candidate OpenCV rejected, read again at its sides' mid-level crossings; false if not a marker.
   bool RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
+  // A marker inside a candidate OpenCV rejected (DetectorOptions::inside_rejected_level): quads of the
+  // candidate's box at low levels of the local range, read; false if none is a marker.
+  bool SearchInsideRejected(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
   // A marker region with the camera's sharpening undone (unsharp_amount), smoothed by `smoothing` px.
   void UnsharpRegion(const cv::Mat& from, double smoothing, cv::Mat to);
   // The code of a candidate read at the cell centres of `corners` (`quad`'s corners or refined ones),

@@ -97,6 +97,11 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 InRange(0, 1))
            .Add("reread_rejected", &O::reread_rejected,
                 "read candidates OpenCV rejected again at their sides' mid-level crossings")
+           .Add("inside_rejected_level", &O::inside_rejected_level, "",
+                "a rejected candidate that is no marker (a dark card's outline around a marker whose margin "
+                "the view made too thin) is searched inside for quads at low_threshold_level and this level "
+                "of the local range (0: not)",
+                InRange(0, 1, false, true))
            .Add("min_distance_to_border", &O::min_distance_to_border, "px",
                 "smallest distance of a candidate to the image border")
            .Add("error_correction_rate", &O::error_correction_rate, "",

@@ -57,12 +57,16 @@ struct Bounds {
 // Added to the catalogue (bench/results/2026-12-06-catalogue.md): an inverted print meets the targets
 // (-0.003 / 0.045 / 1.000 / 1.000); a half-cell margin on a dark grey surface (0.15, inside the margin
 // penalty's surround gate) misses them like the black tool: -0.035 / 0.047 / 1.000 / 0.846.
+// Their markers lost at 60-75 deg had a candidate: the dark card's outline around the marker, whose
+// half-cell margin the view made too thin to part the border from the card at the adaptive threshold.
+// Such a rejected candidate is now searched inside at low levels of the local range (detector option
+// inside_rejected_level): black tool -0.015 / 0.049 / 1.000 / 0.872 -> -0.012 / 0.050 / 1.000 / 0.949,
+// dark grey -0.017 / 0.047 / 1.000 / 0.846 -> -0.013 / 0.048 / 1.000 / 0.923: both meet the targets now
+// and are asserted at them.
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"half-cell margin, black tool", {0.05, 0.10, 0.99, 0.84}},
       {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
       {"hard", {0.04, 0.18, 0.99, 1.00}},
-      {"half-cell margin, dark grey", {0.04, 0.10, 0.99, 0.84}},
   };
   return s;
 }
