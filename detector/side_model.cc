@@ -468,6 +468,40 @@ double MarginWeight(const SideProfiles& s, const double* p) {
   return std::sqrt(kPaperWeightPerRay * rays) * gate * (1.0 - SmoothStep(b, 0.1, 0.2));
 }
 
+// Phi, phi and z of every boundary at every bin (Evaluate's rows): row 0 the margin's far side e + q,
+// row 1 the outer edge e, then per group its kRows inner boundaries at e less their mean depths (they
+// differ by group under perspective).
+void FillBoundaries(const SideProfiles& s, const double* p, double* zs, double* big_phi, double* small_phi) {
+  const int n = s.bins;
+  const double inv_sigma = 1.0 / p[kSigma];
+  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
+  auto fill = [&](int row, double bound) {
+    const size_t i = static_cast<size_t>(row) * n;
+    FillBoundary(s, bound, inv_sigma, step_ratio, &zs[i], &big_phi[i], &small_phi[i]);
+  };
+  fill(0, p[kE] + p[kQ]);
+  fill(1, p[kE]);
+  for (int g = 0; g < static_cast<int>(s.patterns.size()); ++g)
+    for (int r = 0; r < SideProfiles::kRows; ++r)
+      fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
+}
+
+// Group g's region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other,
+// `other` the share of the row's cells of the other colour than the border's along the group's rays.
+void RegionLevels(const SideProfiles& s, const double* p, bool single, int g, double* other, double* level) {
+  other[0] = other[1] = other[2] = 0;
+  for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
+  level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
+  for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
+}
+
+// The margin's penalty h (MarginPenalty) added to the normal equations: J^T J += g g^T, J^T r += h g.
+void AddPenalty(double penalty, const double* penalty_grad, Normal* jtj, Vector* jtr) {
+  if (penalty == 0) return;
+  const Vector g = Eigen::Map<const Vector>(penalty_grad);
+  *jtj += g * g.transpose(), *jtr += penalty * g;
+}
+
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p, with the margin's penalty
 // of weight `margin_weight` (MarginPenalty). Returns the weighted squared residual sum and the penalty's
 // square.
@@ -490,16 +524,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
   const size_t capacity = (static_cast<size_t>(groups) * n + 2) / 2 * 2;
   if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
   const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
-  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
-  auto fill = [&](int row, double bound) {
-    const size_t i = static_cast<size_t>(row) * n;
-    FillBoundary(s, bound, inv_sigma, step_ratio, &zs[i], &big_phi[i], &small_phi[i]);
-  };
-  fill(0, p[kE] + p[kQ]);
-  fill(1, p[kE]);
-  for (int g = 0; g < groups; ++g)
-    for (int r = 0; r < SideProfiles::kRows; ++r)
-      fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
+  FillBoundaries(s, p, zs.data(), big_phi.data(), small_phi.data());
   double cost = 0;
   size_t used = 0;
   double* column[kParams];  // the Jacobian's, the weights' and the residuals' data (no reloads)
@@ -527,12 +552,8 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
     if (stepped)
       FillRowSteps(s, p, g, jtj != nullptr, big_of, small_of, z_of, step_part, step_d_e, step_d_sigma);
     const double* sum = &s.sum[static_cast<size_t>(g) * n];
-    // Region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other.
-    double other[kRegions] = {0, 0, 0};
-    for (int r = 0; r < SideProfiles::kRows; ++r) other[3 + r] = s.other_sum[g][r] / s.rays[g];
-    double level[kRegions];
-    level[0] = single ? p[kS1] : p[kS2], level[1] = p[kS1];
-    for (int k = 2; k < kRegions; ++k) level[k] = p[kL0] + (p[kL1] - p[kL0]) * other[k];
+    double other[kRegions], level[kRegions];
+    RegionLevels(s, p, single, g, other, level);
     // Bin j's model value, residual and Jacobian row (the rows of bins with a weight, in bin order).
     auto bin = [&](int j) {
       const double w = count[j];
@@ -617,10 +638,7 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
   }
   NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
                   jtr);
-  if (penalty != 0) {
-    const Vector g = Eigen::Map<const Vector>(penalty_grad);
-    *jtj += g * g.transpose(), *jtr += penalty * g;
-  }
+  AddPenalty(penalty, penalty_grad, jtj, jtr);
   return cost;
 }
 
