@@ -1671,27 +1671,19 @@ bool MarkerDetector::SearchInsideRejected(const cv::Mat& gray, const std::array<
   const std::vector<cv::Point2f> points(quad.begin(), quad.end());
   const cv::Rect box =
       (cv::boundingRect(points) + cv::Size(4, 4) - cv::Point(2, 2)) & cv::Rect(0, 0, gray.cols, gray.rows);
-  QuadSearch search;
-  search.tile_px = options_.threshold_tile_px;
-  search.min_contrast = options_.min_tile_contrast;
-  search.min_perimeter = options_.min_perimeter_px;
-  search.max_perimeter = 0.95 * perimeter;  // not the candidate itself again
-  search.max_deviation_rate = options_.polygonal_approx_rate;
-  search.min_side_rate = options_.min_corner_distance_rate;
-  search.min_distance_to_border = options_.min_distance_to_border;
-  QuadFinder finder(gray(box), search);
+  // Quads smaller than the candidate (not its outline again).
+  QuadFinder finder(gray(box), OwnQuadSearch(options_.min_perimeter_px, 0.95 * perimeter));
   for (double level : {options_.low_threshold_level, options_.inside_rejected_level}) {
     if (level == 0) continue;
     for (std::array<cv::Point2d, 4> q : finder.Find(level)) {
       for (auto& c : q) c += cv::Point2d(box.x, box.y);
-      if (ReadCode(gray, q, q, 1, own_border_errors_, r) || RereadCandidate(gray, q, r)) return true;
+      if (ReadQuad(gray, q, r)) return true;
     }
   }
   return false;
 }
 
-std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, const cv::Rect& roi,
-                                                           double min_perimeter, double max_perimeter) {
+QuadSearch MarkerDetector::OwnQuadSearch(double min_perimeter, double max_perimeter) const {
   QuadSearch search;
   search.tile_px = options_.threshold_tile_px;
   search.min_contrast = options_.min_tile_contrast;
@@ -1700,7 +1692,16 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
   search.max_deviation_rate = options_.polygonal_approx_rate;
   search.min_side_rate = options_.min_corner_distance_rate;
   search.min_distance_to_border = options_.min_distance_to_border;
-  QuadFinder finder(gray(roi), search);
+  return search;
+}
+
+bool MarkerDetector::ReadQuad(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
+  return ReadCode(gray, quad, quad, 1, own_border_errors_, r) || (reread_ && RereadCandidate(gray, quad, r));
+}
+
+std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, const cv::Rect& roi,
+                                                           double min_perimeter, double max_perimeter) {
+  QuadFinder finder(gray(roi), OwnQuadSearch(min_perimeter, max_perimeter));
   // The mid level first; then, on the tiles where no marker was found yet, a lower level (on a grey
   // surface without margin the marker is one component with the surface at the mid level), a still
   // lower one (a thin blurred margin on a dark surface is dark at the others), a higher one (a blurred
@@ -1715,12 +1716,8 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
                    : finder.FindBelowMean(options_.mean_window_px, options_.adaptive_constant)) {
       std::array<cv::Point2d, 4> quad = local;  // image pixels (local: the region's)
       for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-      // Read at the quad's cell centres with a dark border (at most own_border_errors_ border cells
-      // bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level crossings.
       Raw r;
-      if (!ReadCode(gray, quad, quad, 1, own_border_errors_, &r) &&
-          !(reread_ && RereadCandidate(gray, quad, &r)))
-        continue;
+      if (!ReadQuad(gray, quad, &r)) continue;
       if (!markers_.Accepts(r.id)) continue;
       out.push_back(r);
       finder.Cover(local, 0.0);

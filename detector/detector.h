@@ -168,6 +168,8 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
                          double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr,
                          int polarity = 0, double held_gamma = 0.0);
 
+struct QuadSearch;  // detector/candidates.h
+
 class MarkerDetector {
  public:
   MarkerDetector(const MarkerConfig& markers, const DetectorOptions& options);
@@ -230,6 +232,12 @@ class MarkerDetector {
   // The code of the cells' levels `values` (cells x cells, row-major) thresholded, as ReadCode's.
   bool IdentifyCells(const std::vector<float>& values, const std::array<cv::Point2d, 4>& quad, int polarity,
                      int max_border_errors, Raw* r);
+  // The own candidate search's settings (detector/candidates.h) for quads of this perimeter range, px.
+  QuadSearch OwnQuadSearch(double min_perimeter, double max_perimeter) const;
+  // A quad of the own search read at its cell centres with a dark border (at most own_border_errors_
+  // border cells bright), or where that fails (and the dictionary makes it safe) at its sides' mid-level
+  // crossings; false if it is no marker.
+  bool ReadQuad(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
   // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
   std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                              double max_perimeter);
