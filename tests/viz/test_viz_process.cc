@@ -8,6 +8,7 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <thread>
 
 #include "core/lcm_util.h"
@@ -356,10 +357,33 @@ TEST(VizProcess, LiveWindowWithoutDisplayExitsWithAClearMessage) {
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }
 
+// The first of `tools` not on the PATH, or "" when all are there.
+std::string MissingTool(std::initializer_list<const char*> tools) {
+  for (const char* tool : tools)
+    if (RunCommand(std::string("sh -c 'command -v ") + tool + "'", 5).exit_code != 0) return tool;
+  return "";
+}
+
+// The live window's last line, "window closed after S s: N poses shown, R repaints", read from `output`.
+struct WindowSummary {
+  double seconds = 0;
+  long long shown = 0, repaints = 0;
+};
+std::optional<WindowSummary> ClosedWindowSummary(const std::string& output) {
+  const size_t at = output.find("window closed after");
+  WindowSummary w;
+  if (at == std::string::npos ||
+      std::sscanf(output.c_str() + at, "window closed after %lf s: %lld poses shown, %lld repaints",
+                  &w.seconds, &w.shown, &w.repaints) != 3)
+    return std::nullopt;
+  return w;
+}
+
 // The live window itself needs an X server: xvfb-run (scripts/setup installs it; skipped where it is
 // missing). Poses arrive at ~200 Hz; repaints stay within --redraw-hz.
 TEST(VizProcess, LiveWindowUnderXvfbShowsPosesWithBoundedRedraws) {
-  if (RunCommand("sh -c 'command -v xvfb-run'", 5).exit_code != 0) GTEST_SKIP() << "xvfb-run not installed";
+  if (const std::string tool = MissingTool({"xvfb-run"}); !tool.empty())
+    GTEST_SKIP() << tool << " not installed (scripts/setup installs it)";
   TempDir dir("window");
   const auto rig = MakeTestRig(3, 1);
   WriteMap(dir / "map.yaml", rig.map);
@@ -389,19 +413,12 @@ TEST(VizProcess, LiveWindowUnderXvfbShowsPosesWithBoundedRedraws) {
   if (result.output.find("cannot open the live window") != std::string::npos)
     GTEST_SKIP() << "no X server could start here: " << result.output;
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  double seconds = 0;
-  long long shown = 0, repaints = 0;
-  const size_t at = result.output.find("window closed after");
-  ASSERT_NE(at, std::string::npos) << result.output;
-  ASSERT_EQ(
-      std::sscanf(result.output.c_str() + at, "window closed after %lf s: %lld poses shown, %lld repaints",
-                  &seconds, &shown, &repaints),
-      3)
-      << result.output;
-  EXPECT_GT(shown, 10) << result.output;
-  EXPECT_GT(repaints, 0);
+  const std::optional<WindowSummary> summary = ClosedWindowSummary(result.output);
+  ASSERT_TRUE(summary) << result.output;
+  EXPECT_GT(summary->shown, 10) << result.output;
+  EXPECT_GT(summary->repaints, 0);
   // Each loop turn waits a full 1/10 s: never more repaints than that, however fast poses come.
-  EXPECT_LE(repaints, static_cast<long long>(seconds * 10) + 2) << result.output;
+  EXPECT_LE(summary->repaints, static_cast<long long>(summary->seconds * 10) + 2) << result.output;
 }
 
 // The share of pixels of rows [row_begin, row_end) whose colour differs by more than `tol` in a channel.
@@ -418,9 +435,8 @@ double ShareDiffering(const cv::Mat& a, const cv::Mat& b, int row_begin, int row
 // xdotool's keys (all three installed by scripts/setup; skipped where one is missing). It draws the scene
 // the headless snapshot draws, ',' steps back a frame, 'q' closes it long before --max-seconds.
 TEST(VizProcess, LiveWindowDrawsTheSnapshotsSceneAndAnswersKeys) {
-  for (const char* tool : {"xvfb-run", "xdotool", "ffmpeg"})
-    if (RunCommand(std::string("sh -c 'command -v ") + tool + "'", 5).exit_code != 0)
-      GTEST_SKIP() << tool << " not installed (scripts/setup installs it)";
+  if (const std::string tool = MissingTool({"xvfb-run", "xdotool", "ffmpeg"}); !tool.empty())
+    GTEST_SKIP() << tool << " not installed (scripts/setup installs it)";
   TempDir dir("window_keys");
   const auto rig = MakeTestRig(4, 10);
   WriteMap(dir / "map.yaml", rig.map);
@@ -457,16 +473,10 @@ TEST(VizProcess, LiveWindowDrawsTheSnapshotsSceneAndAnswersKeys) {
   if (viz_output.find("cannot open the live window") != std::string::npos)
     GTEST_SKIP() << "no X server could start here: " << viz_output;
   ASSERT_NE(r.output.find("viz exit 0"), std::string::npos) << r.output << viz_output;
-  double seconds = 0;
-  long long shown = 0, repaints = 0;
-  const size_t at = viz_output.find("window closed after");
-  ASSERT_NE(at, std::string::npos) << viz_output;
-  ASSERT_EQ(std::sscanf(viz_output.c_str() + at, "window closed after %lf s: %lld poses shown, %lld repaints",
-                        &seconds, &shown, &repaints),
-            3)
-      << viz_output;
-  EXPECT_LT(seconds, 15) << "'q' did not close the window: " << viz_output;
-  EXPECT_EQ(shown, 10);
+  const std::optional<WindowSummary> summary = ClosedWindowSummary(viz_output);
+  ASSERT_TRUE(summary) << viz_output;
+  EXPECT_LT(summary->seconds, 15) << "'q' did not close the window: " << viz_output;
+  EXPECT_EQ(summary->shown, 10);
 
   const cv::Mat snapshot = cv::imread(dir / "snapshot.png", cv::IMREAD_COLOR);
   const cv::Mat last = cv::imread(dir / "last_frame.png", cv::IMREAD_COLOR);
@@ -482,7 +492,7 @@ TEST(VizProcess, LiveWindowDrawsTheSnapshotsSceneAndAnswersKeys) {
   const double stepped = ShareDiffering(last, before, 0, last.rows, 30);
   std::printf(
       "window vs snapshot: %.2f %% of the pixels differ; after ',': %.2f %% changed; closed after %.1f s\n",
-      100 * differing, 100 * stepped, seconds);
+      100 * differing, 100 * stepped, summary->seconds);
   EXPECT_GT(stepped, 0.0005);
   EXPECT_LT(stepped, 0.05);
 }
