@@ -35,6 +35,11 @@ std::string FrameOverlay(const std::vector<TrajectoryRow>& rows, int index) {
   return text;
 }
 
+// The name of the map's first moving body (FirstMovingObject), "" for a map without objects.
+std::string MainBodyName(const RigMap& map) {
+  return map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
+}
+
 }  // namespace
 
 bool ViewerOptions::NeedsLiveLcm() const {
@@ -166,8 +171,7 @@ std::vector<PanelInput> Viewer::Panels(const LcmCollector* collector) const {
   else
     return {};
   const bool several = refined.map.objects.size() > 1;
-  const std::string main_body =
-      refined.map.objects.empty() ? "" : refined.map.objects[FirstMovingObject(refined.map)].name;
+  const std::string main_body = MainBodyName(refined.map);
   if (have_file_trajectory_) {
     refined.trajectory = file_trajectory_;
     for (const auto& [body, rows] : file_body_trajectories_) {
@@ -443,7 +447,7 @@ void Viewer::ShowNewPoses(LiveWindow& w, const LcmCollector& collector) const {
     if (w.browsing) w.scene.SetCurrentFrame(shown);
     w.dirty = true;
   }
-  const std::string main_body = map.objects.empty() ? "" : map.objects[FirstMovingObject(map)].name;
+  const std::string main_body = MainBodyName(map);
   for (const auto& [body, stream] : collector.body_poses()) {
     if (body == main_body) continue;
     int64_t& body_shown = w.poses_shown[body];
