@@ -1278,6 +1278,20 @@ double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
   return x * x * (3.0 - 2.0 * x);
 }
 
+// Whether a crossing line `line` lies within the profiles it was found in: at both of side `side`'s
+// corners `ideal`, its distance |n . x - c| to the corner x is at most `h` (the profiles' half-width, px).
+// Every crossing lies within h of the side, so a line beyond h at a corner was extrapolated from
+// crossings of different edges: on a half-cell margin over a dark surround, the border's edge on some
+// rays and the code's or the margin's far edge on others. Such first-pass lines, turned 3-4 px at one
+// end, led the model passes of 10 of the dark grey map's 12 unrefined markers (13-19 px) 5-45 px off,
+// beyond the refinement's limit, and cornerSubPix left them 0.66 px inward per side
+// (bench/results/2026-12-06-darkland.md). Such a side keeps its line in that pass.
+bool LineWithinProfiles(const std::array<Eigen::Vector2d, 4>& ideal, int side, const Line& line, double h) {
+  for (const Eigen::Vector2d& x : {ideal[side], ideal[(side + 1) % 4]})
+    if (!(std::abs(line.n.dot(x) - line.c) <= h)) return false;
+  return true;
+}
+
 // Side `side`'s line in pass `pass` (its crossings', or with the model its model offset about them or
 // about the current side), false when it cannot be located without the model or has too few rays.
 bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
@@ -1294,8 +1308,10 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                   r->first_width, &s))
     return false;
   double level_in, level_out;
-  const bool crossed = CrossingLine(s, r->map, line, &level_in, &level_out);
-  // Without a clean crossing the side keeps the line through the current corners. A model pass fits
+  const bool crossed = CrossingLine(s, r->map, line, &level_in, &level_out) &&
+                       (model_pass || !r->model_fit || LineWithinProfiles(ideal, side, *line, s.h));
+  // Without a clean crossing (or, in a crossing pass, with a crossing line beyond the profiles:
+  // LineWithinProfiles) the side keeps the line through the current corners. A model pass fits
   // its edge from there (its profiles reach over border, margin and surround); without the model it
   // fails.
   if (!crossed) {
