@@ -55,8 +55,8 @@ struct SideProfiles {
   // margin is paper: on cells about a pixel deep the profiles fix a narrow margin's area (its width times its
   // excess over the surround) but not its level and width apart, and free fits slide to a margin too wide and
   // too dim (the edge inward). Where the surface beyond the margin is near the border's black, the
-  // two-level model's margin then pays a soft penalty for lying below the paper (MarginPenalty and
-  // MarginWeight in side_model.cc).
+  // two-level model's margin level is then tied to the paper's by a soft two-sided penalty (MarginPenalty
+  // and MarginWeight in side_model.cc).
   double paper = 0;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
