@@ -1150,6 +1150,8 @@ struct Refinement {
   std::array<double, 4> side_moved;
   bool skew_turn = false;  // the model turns the sides of a skewed quad (SkewTurnWeight; TurnSkewedSides)
   double paper = 0;        // the paper's level, read once per refinement (MarkerPaperLevel); 0: unknown
+  // A crossing pass's crossing line beyond its profiles is no crossing (LineWithinProfiles).
+  bool lines_within_profiles = false;
   double sigma_sum = 0;
   int sigma_count = 0;
 };
@@ -1285,7 +1287,8 @@ double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
 // rays and the code's or the margin's far edge on others. Such first-pass lines, turned 3-4 px at one
 // end, led the model passes of 10 of the dark grey map's 12 unrefined markers (13-19 px) 5-45 px off,
 // beyond the refinement's limit, and cornerSubPix left them 0.66 px inward per side
-// (bench/results/2026-12-06-darkland.md). Such a side keeps its line in that pass.
+// (bench/results/2026-12-06-darkland.md). Such a side keeps its line in that pass (where asked: the
+// retry of a refinement that failed, RefineMarkerCorners).
 bool LineWithinProfiles(const std::array<Eigen::Vector2d, 4>& ideal, int side, const Line& line, double h) {
   for (const Eigen::Vector2d& x : {ideal[side], ideal[(side + 1) % 4]})
     if (!(std::abs(line.n.dot(x) - line.c) <= h)) return false;
@@ -1308,10 +1311,11 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                   r->first_width, &s))
     return false;
   double level_in, level_out;
-  const bool crossed = CrossingLine(s, r->map, line, &level_in, &level_out) &&
-                       (model_pass || !r->model_fit || LineWithinProfiles(ideal, side, *line, s.h));
-  // Without a clean crossing (or, in a crossing pass, with a crossing line beyond the profiles:
-  // LineWithinProfiles) the side keeps the line through the current corners. A model pass fits
+  const bool crossed =
+      CrossingLine(s, r->map, line, &level_in, &level_out) &&
+      (model_pass || !r->lines_within_profiles || LineWithinProfiles(ideal, side, *line, s.h));
+  // Without a clean crossing (or, where asked, in a crossing pass with a crossing line beyond the
+  // profiles: LineWithinProfiles) the side keeps the line through the current corners. A model pass fits
   // its edge from there (its profiles reach over border, margin and surround); without the model it
   // fails.
   if (!crossed) {
@@ -1372,6 +1376,8 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 // One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
 // was located by the side model in the last pass (not by its crossings alone). `model_only` (with
 // model_fit): no crossing-only passes, for corners already on the edges (RefineMarkerCorners).
+// `lines_within_profiles` (with model_fit): a crossing line beyond its profiles is no crossing
+// (LineWithinProfiles).
 // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
 // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
 // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
@@ -1385,12 +1391,14 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
                 bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere,
-                double held_gamma) {
+                double held_gamma, bool lines_within_profiles = false) {
   CV_Assert(model_fit || !model_only);
+  CV_Assert(model_fit || !lines_within_profiles);
   if (blur_sigma) *blur_sigma = NAN;
   CV_Assert(gray.type() == CV_8UC1);
   const PixelMap map = MapOf(camera);
   Refinement r(gray, bits, cells, map, model_fit, fit_gamma, held_gamma, polarity, first_width, kept_lines);
+  r.lines_within_profiles = lines_within_profiles;
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
   double perimeter = 0;
@@ -1548,6 +1556,16 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   if (wide_ok && (wide_modelled || !narrow_ok))
     return take(wide, wide_sigma, wide_kept || (!narrow_ok && narrow_kept));
   if (narrow_ok) return take(narrow, narrow_sigma, narrow_kept);
+  // Neither located every side within the limit: with the model, once more from the candidate with the
+  // crossing lines held within their profiles (LineWithinProfiles). Only here: held in every refinement,
+  // a crossing line of a candidate cut by the threshold, rightly beyond its profiles at one corner, was
+  // held too (a 14.6 px marker at 59 deg 0.31 -> 1.57 px off on the dark grey map).
+  std::array<cv::Point2d, 4> held = *corners;
+  double held_sigma = NAN;
+  bool held_kept = false;
+  if (model_fit && RefineOnce(gray, cells, bits, camera, passes, &held, true, &held_sigma, 1.0, false,
+                              fit_gamma, &held_kept, polarity, nullptr, held_gamma, true))
+    return take(held, held_sigma, held_kept || narrow_kept || wide_kept);
   if (blur_sigma) *blur_sigma = NAN;
   if (kept_lines) *kept_lines = narrow_kept || wide_kept;
   return false;
