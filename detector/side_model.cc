@@ -68,8 +68,13 @@ constexpr double kMinMarginContrast = 0.4;
 // A margin narrower than half a cell whose excess over the surround, times its width, is below this
 // fraction of a cell times the code-to-surround contrast is no print's margin either: a faint strip at the
 // width's bound (0.2 cell) that pairs with a per-side gamma off the image's (0.8-0.9 on linear renders) and
-// moves the edge 0.03-0.06 px outward on markers without a margin (FitSideModels).
-constexpr double kMinMarginExcess = 0.04;
+// moves the edge outward on markers without a margin (FitSideModels). The narrowest margin a print has is
+// paper over the surround (excess 1) about 0.3 cell wide (the reference renderer's "hard"), 0.3 of a cell;
+// the fitted products of real margins under blur, shading and sharpening stay above 0.1 but for a few
+// sides of "hard" (5 of 2871 two-level fits of its map). On the no-margin map 0.04 left 166 strips at the
+// width's bound with products 0.04-0.1 (+0.10..0.15 px outward each, a fifth of the map's -0.215 %):
+// bench/results/2026-12-06-nomargin.md.
+constexpr double kMinMarginExcess = 0.1;
 // The fitted levels' bounds: the 8-bit range with some room for noise (FitOnce).
 constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
 // A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
