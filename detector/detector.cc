@@ -1464,6 +1464,24 @@ bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const 
   *corners = CvQuad(r.img);
   return true;
 }
+
+// Whether each of `end`'s corners lies within kMaxMoveCells cells of `start`'s (a cell: the start quad's
+// mean side / `cells`):
+//   max_k |end_k - start_k| <= kMaxMoveCells * perimeter(start) / (4 cells).
+// Each refinement limits its own move (RefineOnce: max(3 px, 1.6 cells)), but the model-only rounds and
+// the skew pass of RefineMarkerCorners each start where the one before ended, so their moves add up. A
+// candidate lies on its marker's outline to a pixel; corners that end cells from it have left the marker
+// (with a third code row in the side model, wood seed 51 image 3 id 155 of the start probe ended 12.5 px
+// from its start and from the truth: bench/results/2026-12-06-row3.md, 2026-12-06-blurrow.md).
+constexpr double kMaxMoveCells = 2.0;
+bool EndsNearItsStart(const std::array<cv::Point2d, 4>& start, const std::array<cv::Point2d, 4>& end,
+                      int cells) {
+  double perimeter = 0, moved = 0;
+  for (int k = 0; k < 4; ++k)
+    perimeter += cv::norm(start[(k + 1) % 4] - start[k]),
+        moved = std::max(moved, cv::norm(end[k] - start[k]));
+  return moved <= kMaxMoveCells * perimeter / (4.0 * cells);
+}
 }  // namespace
 
 bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
@@ -1518,6 +1536,11 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
     if (unsettled >= 2)
       for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
     if (model_fit) TurnSkewedSides(gray, cells, bits, camera, &c, fit_gamma, polarity, held_gamma);
+    if (!EndsNearItsStart(*corners, c, cells)) {
+      if (blur_sigma) *blur_sigma = NAN;
+      if (kept_lines) *kept_lines = kept;
+      return false;
+    }
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
     if (kept_lines) *kept_lines = kept;
