@@ -1272,11 +1272,12 @@ constexpr double kSideSettledPx = 3e-4;
 // 0.52-0.66 cell on 15-22 px markers) the acute angles of markers at 50-60 deg came out 1.6 deg too square,
 // the long diagonal -1.3 % and the map +0.212 % (gamma 2.2 with blur 0.8, 0.40-0.54 cell: +0.145
 // %). With `blur_cells` (the fitted sigma in cells of the quad) from kSkewBlurFrom to kSkewBlurFull the
-// onset moves by kSkewTurnBlurShift (angles below 78 to 66 deg), smoothly. Sharp reference renders fit
-// 0.30-0.38 cell (plain), larger markers less: their corners stay as they were
-// (bench/results/2026-12-06-blurrow.md).
+// onset moves by kSkewTurnBlurShift (angles below 84 to 73 deg), smoothly; a shift of 0.4 (78 to 66 deg)
+// left the blur map at +0.060 % (the acute angles of 70-80 deg still 0.55 deg too square), 0.5 gives
+// +0.036 % (gamma 2.2: +0.055 / +0.025 %). Sharp reference renders fit 0.30-0.38 cell (plain), larger
+// markers less: their corners stay as they were (bench/results/2026-12-06-blurrow.md).
 constexpr double kSkewTurnFrom = 0.6, kSkewTurnFull = 0.8;
-constexpr double kSkewBlurFrom = 0.38, kSkewBlurFull = 0.48, kSkewTurnBlurShift = 0.4;
+constexpr double kSkewBlurFrom = 0.38, kSkewBlurFull = 0.48, kSkewTurnBlurShift = 0.5;
 double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side, double blur_cells) {
   const double shift = kSkewTurnBlurShift * SmoothStep(blur_cells, kSkewBlurFrom, kSkewBlurFull);
   double skew = 0;
