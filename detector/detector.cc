@@ -1149,6 +1149,7 @@ struct Refinement {
   // How far each side's line moved in the latest model pass (px, at its corners; infinite before one).
   std::array<double, 4> side_moved;
   bool skew_turn = false;  // the model turns the sides of a skewed quad (SkewTurnWeight; TurnSkewedSides)
+  double blur_cells = 0;   // the refinement's fitted blur sigma in cells of the quad (SkewTurnWeight)
   double paper = 0;        // the paper's level, read once per refinement (MarkerPaperLevel); 0: unknown
   // A crossing pass's crossing line beyond its profiles is no crossing (LineWithinProfiles).
   bool lines_within_profiles = false;
@@ -1260,24 +1261,34 @@ constexpr double kSideSettledPx = 3e-4;
 // How far side `side` of the quad `ideal` is turned by the model (LocateSide) where its crossings alone
 // would give its direction: 0 to 1 as the larger |cosine| of the quad's angles at the side's ends grows
 // from kSkewTurnFrom to kSkewTurnFull (smoothly: the corners must not depend on the start; angles below
-// 53 to 37 deg). On a quad that skewed (views beyond about 65 deg with the tilt's axis off the sides) the
-// crossings' line turns its end at the acute angle inward: the perpendicular side's border and margin
-// lie within the blur and the rows' reach there, and the code cells next to the border are narrower than
-// the blur (bench/results/2026-12-05-steep.md, 2026-12-05-steep2.md). Below, the crossings' direction is
-// the better one (their rays are twice the halves' the model turns by): from 0.3 / 0.5 the median corner
-// errors of ImagingCatalogueOnReferenceRenders grew by 0.01-0.025 px, and from 0.5 / 0.7 the caliscope
-// board's camera 1 under tone auto came out +0.269 % in size (DetectorRealData, bound 0.2 %; 0.6 / 0.8:
-// +0.186 %).
+// 53 to 37 deg), both less kSkewTurnBlurShift where the blur is a large part of a cell (below). On a quad
+// that skewed (views beyond about 65 deg with the tilt's axis off the sides) the crossings' line turns its
+// end at the acute angle inward: the perpendicular side's border and margin lie within the blur and the rows'
+// reach there, and the code cells next to the border are narrower than the blur
+// (bench/results/2026-12-05-steep.md, 2026-12-05-steep2.md). Below, the crossings' direction is the better
+// one (their rays are twice the halves' the model turns by): from 0.3 / 0.5 the median corner errors of
+// ImagingCatalogueOnReferenceRenders grew by 0.01-0.025 px, and from 0.5 / 0.7 the caliscope board's camera 1
+// under tone auto came out +0.269 % in size (DetectorRealData, bound 0.2 %; 0.6 / 0.8: +0.186 %). Blurred,
+// the crossings' bias at an acute angle reaches smaller skews: the perpendicular side's border lies within
+// the blur of the side's crossings near that end. Under the catalogue's gaussian blur 1.2 (fitted sigma
+// 0.52-0.66 cell on 15-22 px markers) the acute angles of markers at 50-60 deg came out 1.6 deg too square,
+// the long diagonal -1.3 % and the map +0.212 % (gamma 2.2 with blur 0.8, 0.40-0.54 cell: +0.145
+// %). With `blur_cells` (the fitted sigma in cells of the quad) from kSkewBlurFrom to kSkewBlurFull the
+// onset moves by kSkewTurnBlurShift (angles below 84 to 73 deg), smoothly; a shift of 0.4 (78 to 66 deg)
+// left the blur map at +0.060 % (the acute angles of 70-80 deg still 0.55 deg too square), 0.5 gives
+// +0.036 % (gamma 2.2: +0.055 / +0.025 %). Sharp reference renders fit 0.30-0.38 cell (plain), larger
+// markers less: their corners stay as they were (bench/results/2026-12-06-blurrow.md).
 constexpr double kSkewTurnFrom = 0.6, kSkewTurnFull = 0.8;
-double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side) {
+constexpr double kSkewBlurFrom = 0.38, kSkewBlurFull = 0.48, kSkewTurnBlurShift = 0.5;
+double SkewTurnWeight(const std::array<Eigen::Vector2d, 4>& ideal, int side, double blur_cells) {
+  const double shift = kSkewTurnBlurShift * SmoothStep(blur_cells, kSkewBlurFrom, kSkewBlurFull);
   double skew = 0;
   for (int k : {side, (side + 1) % 4}) {
     const Eigen::Vector2d a = (ideal[(k + 3) % 4] - ideal[k]).normalized();
     const Eigen::Vector2d b = (ideal[(k + 1) % 4] - ideal[k]).normalized();
     skew = std::max(skew, std::abs(a.dot(b)));
   }
-  const double x = std::clamp((skew - kSkewTurnFrom) / (kSkewTurnFull - kSkewTurnFrom), 0.0, 1.0);
-  return x * x * (3.0 - 2.0 * x);
+  return SmoothStep(skew, kSkewTurnFrom - shift, kSkewTurnFull - shift);
 }
 
 // Whether a crossing line `line` lies within the profiles it was found in: at both of side `side`'s
@@ -1333,7 +1344,9 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   // side), the model turns the line too. So it does on the sides of a skewed quad in the skew pass
   // (TurnSkewedSides).
   const bool turn_line = !crossed || (r->polarity != 0 && (level_out - level_in) * r->polarity < 0);
-  const double turn_weight = turn_line ? 1.0 : r->skew_turn ? SkewTurnWeight(ideal, side) : 0.0;
+  const double turn_weight = turn_line      ? 1.0
+                             : r->skew_turn ? SkewTurnWeight(ideal, side, r->blur_cells)
+                                            : 0.0;
   double tilt = NAN, tilt_at = 0.5;
   // A known gamma (held_gamma > 0) is held on every side.
   const double gamma_hint = r->held_gamma > 0 ? r->held_gamma : OtherSidesGamma(r->side_fits, side);
@@ -1459,7 +1472,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 }
 
 // The corners of a refinement's end `corners` with the sides of a skewed quad turned by the model
-// (SkewTurnWeight): one model pass to start the fits from the profiles about them, then kSkewPasses that
+// (SkewTurnWeight, with `blur_px` the refinement's fitted blur sigma, NaN: none): one model pass to start
+// the fits from the profiles about them, then kSkewPasses that
 // also turn those sides; false (corners unchanged) when the quad is not skewed or a pass fails. A fixed
 // number of passes, not passes until the corners settle: turned by the model, a skewed side's line has
 // two fixed points on some markers (no margin on grey, 25.6 px at 71 deg: 0.65 px apart), and which one
@@ -1468,14 +1482,19 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
 // them TurnSide always takes its three rounds (no choice that jumps with the corners).
 constexpr int kSkewPasses = 2;
 bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera,
-                     std::array<cv::Point2d, 4>* corners, bool fit_gamma, int polarity, double held_gamma) {
+                     std::array<cv::Point2d, 4>* corners, bool fit_gamma, int polarity, double held_gamma,
+                     double blur_px) {
   std::array<Eigen::Vector2d, 4> ideal;
   const PixelMap map = MapOf(camera);
   for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(Eigen::Vector2d((*corners)[k].x, (*corners)[k].y));
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += (ideal[(k + 1) % 4] - ideal[k]).norm();
+  const double blur_cells = std::isfinite(blur_px) ? blur_px * 4.0 * cells / perimeter : 0.0;
   double weight = 0;
-  for (int side = 0; side < 4; ++side) weight = std::max(weight, SkewTurnWeight(ideal, side));
+  for (int side = 0; side < 4; ++side) weight = std::max(weight, SkewTurnWeight(ideal, side, blur_cells));
   if (weight <= 0) return false;
   Refinement r(gray, bits, cells, map, true, fit_gamma, held_gamma, polarity, 1.0, nullptr);
+  r.blur_cells = blur_cells;
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   for (int pass = 1; pass <= 1 + kSkewPasses; ++pass) {
     r.skew_turn = pass >= 2;
@@ -1487,6 +1506,24 @@ bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const 
     if (r.side_unfitted[k] || !std::isfinite(r.img[k].x()) || !std::isfinite(r.img[k].y())) return false;
   *corners = CvQuad(r.img);
   return true;
+}
+
+// Whether each of `end`'s corners lies within kMaxMoveCells cells of `start`'s (a cell: the start quad's
+// mean side / `cells`):
+//   max_k |end_k - start_k| <= kMaxMoveCells * perimeter(start) / (4 cells).
+// Each refinement limits its own move (RefineOnce: max(3 px, 1.6 cells)), but the model-only rounds and
+// the skew pass of RefineMarkerCorners each start where the one before ended, so their moves add up. A
+// candidate lies on its marker's outline to a pixel; corners that end cells from it have left the marker
+// (with a third code row in the side model, wood seed 51 image 3 id 155 of the start probe ended 12.5 px
+// from its start and from the truth: bench/results/2026-12-06-row3.md, 2026-12-06-blurrow.md).
+constexpr double kMaxMoveCells = 2.0;
+bool EndsNearItsStart(const std::array<cv::Point2d, 4>& start, const std::array<cv::Point2d, 4>& end,
+                      int cells) {
+  double perimeter = 0, moved = 0;
+  for (int k = 0; k < 4; ++k)
+    perimeter += cv::norm(start[(k + 1) % 4] - start[k]),
+        moved = std::max(moved, cv::norm(end[k] - start[k]));
+  return moved <= kMaxMoveCells * perimeter / (4.0 * cells);
 }
 }  // namespace
 
@@ -1541,7 +1578,12 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
     }
     if (unsettled >= 2)
       for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
-    if (model_fit) TurnSkewedSides(gray, cells, bits, camera, &c, fit_gamma, polarity, held_gamma);
+    if (model_fit) TurnSkewedSides(gray, cells, bits, camera, &c, fit_gamma, polarity, held_gamma, sigma);
+    if (!EndsNearItsStart(*corners, c, cells)) {
+      if (blur_sigma) *blur_sigma = NAN;
+      if (kept_lines) *kept_lines = kept;
+      return false;
+    }
     *corners = c;
     if (blur_sigma) *blur_sigma = sigma;
     if (kept_lines) *kept_lines = kept;

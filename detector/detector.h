@@ -157,7 +157,9 @@ struct DetectorStats {
 // marker in place. `gray` is 8-bit. `cells` is the marker's width in cells including the border
 // (bits + 2). `bits` (cells-2 x cells-2, CV_8U 0/1, the marker's bits as in its dictionary at corner 0 =
 // top-left) may be empty; with it, edge samples next to bit cells of value 1 are skipped. `camera` may be
-// null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located.
+// null (straight sides in the image). Returns false (corners unchanged) if an edge cannot be located or
+// the corners would end more than two cells from where they started (the start is a candidate on the
+// marker's outline: such corners have left the marker).
 // A side without a clean mid-level crossing keeps the line through its current corners for the side
 // model to fit; `kept_lines` (optional) tells whether any side did. `polarity`: +1 the border is darker
 // than the code's other colour, -1 brighter, 0 unknown (side fits of the wrong polarity are retried a

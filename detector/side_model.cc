@@ -420,12 +420,6 @@ void FillRowSteps(const SideProfiles& s, const double* p, int g, bool derivative
 // ray.
 constexpr double kPaperWeightPerRay = 1.0;
 
-// 3 t^2 - 2 t^3 of t = (x - from) / (to - from) clamped to [0, 1]: 0 below `from`, 1 above `to`.
-double SmoothStep(double x, double from, double to) {
-  const double t = std::clamp((x - from) / (to - from), 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
-}
-
 // The paper's level P (SideProfiles::paper) in the model's linear units at gamma p[kGamma]:
 // P_lin = 255 (P / 255)^gamma where the profiles are encoded.
 double LinearPaper(const SideProfiles& s, const double* p) {

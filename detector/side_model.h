@@ -18,6 +18,7 @@
 // the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -142,5 +143,11 @@ inline void PhiAndDensity(double z, double* big, double* small) {
 // sigma. Returns false when the fit fails, finds no contrast between the border and the code, or finds
 // the border and code levels in the wrong order for SideProfiles::polarity (then fit->wrong_polarity).
 bool FitSideProfiles(const SideProfiles& profiles, SideFit* fit);
+
+// 3 t^2 - 2 t^3 of t = (x - from) / (to - from) clamped to [0, 1]: 0 below `from`, 1 above `to`.
+inline double SmoothStep(double x, double from, double to) {
+  const double t = std::clamp((x - from) / (to - from), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
 
 }  // namespace mcmt

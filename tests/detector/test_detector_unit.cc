@@ -192,6 +192,45 @@ cv::Mat RenderQuads(const cv::aruco::Dictionary& dict,
   return testing::CanvasToImage(canvas, o, seed);
 }
 
+// A refinement's corners end within two cells of its start (RefineMarkerCorners): its model-only rounds and
+// skew pass each start where the one before ended, so their moves add up past each refinement's own limit
+// (max(3 px, 1.6 cells)). A 9 x 4.5 px marker (9 px at 60 deg) refined from its corners moved (1.05, 1.05)
+// px ended 2.9 px (2.6 cells) from that start and 3.8 px from the truth, and was taken; it is refused now.
+// A 12 px marker from its corners moved 2 px (1.4 cells) still ends on them.
+TEST(DetectorUnit, ARefinementDoesNotEndCellsFromItsStart) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const int cells = dict->markerSize + 2;
+  const cv::Mat bits =
+      cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(7, 8), dict->markerSize);
+  struct Case {
+    float width, height;
+    cv::Point2d start_from_truth;
+    bool refined;
+  };
+  for (const Case& c : {Case{9, 4.5, {1.05, 1.05}, false}, Case{12, 12, {2.0, 0.0}, true}}) {
+    const float x0 = 300.3f, y0 = 200.6f;
+    const std::array<cv::Point2f, 4> quad = {
+        {{x0, y0}, {x0 + c.width, y0}, {x0 + c.width, y0 + c.height}, {x0, y0 + c.height}}};
+    const cv::Mat image = RenderQuads(*dict, {{7, quad}}, 1);
+    std::array<cv::Point2d, 4> corners;
+    for (int k = 0; k < 4; ++k) corners[k] = cv::Point2d(quad[k]) + c.start_from_truth;
+    const std::array<cv::Point2d, 4> start = corners;
+    const bool ok =
+        RefineMarkerCorners(image, cells, bits, nullptr, 1, &corners, true, nullptr, true, nullptr, 1);
+    double error = 0;
+    for (int k = 0; k < 4; ++k) error = std::max(error, cv::norm(corners[k] - cv::Point2d(quad[k])));
+    std::printf(
+        "%.1f x %.1f px marker from its corners moved (%.2f, %.2f) px: refined %d, %.2f px from the truth\n",
+        c.width, c.height, c.start_from_truth.x, c.start_from_truth.y, ok, error);
+    EXPECT_EQ(ok, c.refined) << c.width << " x " << c.height;
+    if (ok) {
+      EXPECT_LE(error, 0.2) << c.width << " x " << c.height;
+    } else {
+      EXPECT_EQ(corners, start) << c.width << " x " << c.height;
+    }
+  }
+}
+
 // A box's next face turning into view: a foreshortened marker (16 x 40 px, as at about 65 degrees) appears
 // a side (40 px) beside a tracked one. Fast mode finds it in the frame it appears in (it searches a band of
 // fast_band_sides around each tracked marker every frame; before, only at the next full search, up to
