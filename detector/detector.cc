@@ -136,9 +136,8 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
   return sampled;
 }
 
-// sum[j] += values[j], count[j] += 1, squares[j] += values[j]^2 for j < n (SSE2: two at a time, each the
-// same operations).
-inline void AddSamples(const float* values, int n, double* sum, double* count, double* squares) {
+// sum[j] += values[j], count[j] += 1 for j < n (SSE2: two at a time, each the same addition).
+inline void AddSamples(const float* values, int n, double* sum, double* count) {
   int j = 0;
 #ifdef __SSE2__
   const __m128d one = _mm_set1_pd(1.0);
@@ -147,13 +146,9 @@ inline void AddSamples(const float* values, int n, double* sum, double* count, d
         _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + j))));
     _mm_storeu_pd(sum + j, _mm_add_pd(_mm_loadu_pd(sum + j), v));
     _mm_storeu_pd(count + j, _mm_add_pd(_mm_loadu_pd(count + j), one));
-    _mm_storeu_pd(squares + j, _mm_add_pd(_mm_loadu_pd(squares + j), _mm_mul_pd(v, v)));
   }
 #endif
-  for (; j < n; ++j) {
-    const double v = values[j];
-    sum[j] += v, count[j] += 1.0, squares[j] += v * v;
-  }
+  for (; j < n; ++j) sum[j] += values[j], count[j] += 1.0;
 }
 
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
@@ -629,19 +624,15 @@ struct SideRays {
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
-                                         rays[r].row_steps.data(), rays[r].row_step_count, rays[r].along);
+                                         rays[r].row_steps.data(), rays[r].row_step_count);
       const double ox = (*origins)[rays[r].index].x(), oy = (*origins)[rays[r].index].y();
       const double nx = (*normals)[rays[r].index].x(), ny = (*normals)[rays[r].index].y();
       const double first_s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0;
       // The group's profile sums and counts (SideProfiles::Add).
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
-      double* squares = profiles->square_sum.data();
       SampleLine(*gray, bins, Eigen::Vector2d(ox, oy), Eigen::Vector2d(nx, ny), first_s, du,
-                 [&](int j, const float* v, int n) {
-                   AddSamples(v, n, sum + j, count + j, squares + j);
-                   profiles->AddRaySamples(j, v, n);
-                 });
+                 [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
     }
   }
 };

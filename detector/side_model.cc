@@ -24,15 +24,6 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   count.reserve(static_cast<size_t>(16) * bins);
   sum.clear();
   count.clear();
-  square_sum.assign(bins, 0.0);
-  difference_sum.assign(bins, 0.0);
-  difference_count.assign(bins, 0.0);
-  last_sample.assign(bins, 0.0);
-  last_ray.assign(bins, -2.0);
-  ray_count = 0;
-  along_sum.assign(bins, 0.0);
-  along_square_sum.assign(bins, 0.0);
-  along_sample_sum.assign(bins, 0.0);
   depth_sum.clear();
   other_sum.clear();
   rays.clear();
@@ -42,8 +33,8 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
 }
 
 int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
-                         const std::array<double, kRows>& other, const RowStep* ray_steps, int ray_step_count,
-                         double along) {
+                         const std::array<double, kRows>& other, const RowStep* ray_steps,
+                         int ray_step_count) {
   size_t g = 0;
   // A ray with steps is a group of its own; the others group by pattern among the groups without steps.
   if (ray_step_count == 0)
@@ -63,58 +54,14 @@ int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::a
   }
   for (int r = 0; r < kRows; ++r) depth_sum[g][r] += depths[r], other_sum[g][r] += other[r];
   ++rays[g];
-  ++ray_count;
-  ray_along = along;
   return static_cast<int>(g);
-}
-
-void SideProfiles::AddRaySamples(int first_bin, const float* values, int n) {
-  const double ray = ray_count, previous = ray_count - 1, along_square = ray_along * ray_along;
-  double* difference = &difference_sum[first_bin];
-  double* pairs = &difference_count[first_bin];
-  double* last = &last_sample[first_bin];
-  double* last_of = &last_ray[first_bin];
-  double* along = &along_sum[first_bin];
-  double* along_squares = &along_square_sum[first_bin];
-  double* along_samples = &along_sample_sum[first_bin];
-  int k = 0;
-#ifdef __SSE2__
-  // Two bins at a time, each the scalar loop's operations (a pair not taken adds +0).
-  const __m128d one = _mm_set1_pd(1.0), ray2 = _mm_set1_pd(ray), previous2 = _mm_set1_pd(previous);
-  const __m128d along2 = _mm_set1_pd(ray_along), along_square2 = _mm_set1_pd(along_square);
-  for (; k + 1 < n; k += 2) {
-    const __m128d v =
-        _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + k))));
-    const __m128d taken = _mm_cmpeq_pd(_mm_loadu_pd(last_of + k), previous2);
-    const __m128d d = _mm_sub_pd(v, _mm_loadu_pd(last + k));
-    _mm_storeu_pd(difference + k,
-                  _mm_add_pd(_mm_loadu_pd(difference + k), _mm_and_pd(taken, _mm_mul_pd(d, d))));
-    _mm_storeu_pd(pairs + k, _mm_add_pd(_mm_loadu_pd(pairs + k), _mm_and_pd(taken, one)));
-    _mm_storeu_pd(last + k, v);
-    _mm_storeu_pd(last_of + k, ray2);
-    _mm_storeu_pd(along + k, _mm_add_pd(_mm_loadu_pd(along + k), along2));
-    _mm_storeu_pd(along_squares + k, _mm_add_pd(_mm_loadu_pd(along_squares + k), along_square2));
-    _mm_storeu_pd(along_samples + k, _mm_add_pd(_mm_loadu_pd(along_samples + k), _mm_mul_pd(along2, v)));
-  }
-#endif
-  for (; k < n; ++k) {
-    const double v = values[k];
-    if (last_of[k] == previous) {
-      const double d = v - last[k];
-      difference[k] += d * d, pairs[k] += 1.0;
-    }
-    last[k] = v, last_of[k] = ray;
-    along[k] += ray_along, along_squares[k] += along_square, along_samples[k] += ray_along * v;
-  }
 }
 
 namespace {
 
 constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
 constexpr int kRegions = kBoundaries + 1;
-// The surround's slope last: the flat fits hold it at 0 and solve the leading kSlope parameters only
-// (BoundedStep).
-enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kSlope, kParams };
+enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
 // A margin differs from the border's level by at least this fraction of the border-to-code contrast
 // (a print's margin is paper or ink of the other colour; FitSideProfiles).
 constexpr double kMinMarginContrast = 0.4;
@@ -206,21 +153,19 @@ void NormalRow(const double* const* columns, const double* weights, const double
 // jacobian + k * stride, `used` rows, zero from there to an even count; jacobian, weights and residuals
 // 16-byte aligned and the stride even: NormalRow), the weights and the
 // residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
-// profiles, the surround's slope unless `slope`) are left out: their rows and columns are zero. Each
-// symmetric pair is formed once.
+// profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
 void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
-                     size_t used, bool single, bool slope, bool fit_gamma, Normal* jtj, Vector* jtr) {
+                     size_t used, bool single, bool fit_gamma, Normal* jtj, Vector* jtr) {
   int active[kParams], count = 0;
   const double* columns[kParams];
   for (int k = 0; k < kParams; ++k)
-    if (!((single && (k == kS2 || k == kQ)) || (!slope && k == kSlope) || (!fit_gamma && k == kGamma)))
+    if (!((single && (k == kS2 || k == kQ)) || (!fit_gamma && k == kGamma)))
       columns[count] = jacobian + k * stride, active[count++] = k;
   jtj->setZero(), jtr->setZero();
   const size_t rows = (used + 1) / 2 * 2;
   using Row = void (*)(const double* const*, const double*, const double*, size_t, double(*)[2]);
-  static constexpr Row kRowOf[kParams] = {NormalRow<0>, NormalRow<1>, NormalRow<2>,
-                                          NormalRow<3>, NormalRow<4>, NormalRow<5>,
-                                          NormalRow<6>, NormalRow<7>, NormalRow<8>};
+  static constexpr Row kRowOf[kParams] = {NormalRow<0>, NormalRow<1>, NormalRow<2>, NormalRow<3>,
+                                          NormalRow<4>, NormalRow<5>, NormalRow<6>, NormalRow<7>};
   for (int a = 0; a < count; ++a) {
     double sums[kParams + 1][2];  // with columns b <= a, then with the residuals
     kRowOf[a](columns, weights, residuals, rows, sums);
@@ -339,7 +284,7 @@ inline __m128d LogInline2(__m128d x, const LaneConstants& c) {
 // boundaries, the rows' parts of the other colour, 1 / sigma, 1 / gamma and L1 - L0 (the row steps' unit).
 struct GroupLanes {
   __m128d level[kRegions], step[kBoundaries], other[kRegions], border_part[kRegions];
-  __m128d inv_sigma, inv_gamma, level_difference, sigma, slope;
+  __m128d inv_sigma, inv_gamma, level_difference;
 };
 
 // Evaluate's model, residual and Jacobian row of bins j and j + 1 of one group (both with a weight),
@@ -350,11 +295,11 @@ struct GroupLanes {
 // the gamma's log or exp would leave its range (a NaN or huge model value): the bins are then evaluated
 // one by one.
 template <bool kRowSteps>
-inline bool TwoBins(bool fit_gamma, bool single, bool slope, const LaneConstants& constants,
-                    const GroupLanes& group, const double* const* big_of, const double* const* small_of,
-                    const double* const* z_of, const double* const* row_steps, const double* count,
-                    const double* sum, int j, double* cost, double* const* column, double* weight_of,
-                    double* residual_of, size_t used) {
+inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants, const GroupLanes& group,
+                    const double* const* big_of, const double* const* small_of, const double* const* z_of,
+                    const double* const* row_steps, const double* count, const double* sum, int j,
+                    double* cost, double* const* column, double* weight_of, double* residual_of,
+                    size_t used) {
   const __m128d zero = _mm_setzero_pd();
   __m128d indicator[kRegions], f = zero;
   for (int r = 0; r < kRegions; ++r) {
@@ -362,15 +307,6 @@ inline bool TwoBins(bool fit_gamma, bool single, bool slope, const LaneConstants
     const __m128d lower = r == kRegions - 1 ? zero : _mm_loadu_pd(big_of[r] + j);
     indicator[r] = _mm_sub_pd(upper, lower);
     f = _mm_add_pd(f, _mm_mul_pd(group.level[r], indicator[r]));
-  }
-  // The surround's slope beyond B: g sigma (phi_B - z_B beyond_B) (Evaluate).
-  const int outer = single ? 1 : 0;  // B's boundary
-  __m128d beyond = zero, ramp_unit = zero;
-  if (slope) {
-    beyond = single ? _mm_add_pd(indicator[0], indicator[1]) : indicator[0];
-    ramp_unit = _mm_mul_pd(group.sigma, _mm_sub_pd(_mm_loadu_pd(small_of[outer] + j),
-                                                   _mm_mul_pd(_mm_loadu_pd(z_of[outer] + j), beyond)));
-    f = _mm_add_pd(f, _mm_mul_pd(group.slope, ramp_unit));
   }
   __m128d step_part = zero;
   if (kRowSteps) {
@@ -401,8 +337,8 @@ inline bool TwoBins(bool fit_gamma, bool single, bool slope, const LaneConstants
   _mm_storeu_pd(squares, _mm_mul_pd(_mm_mul_pd(w, r), r));
   *cost += squares[0];
   *cost += squares[1];
-  __m128d grad[kParams];  // gamma's: gamma_grad
-  for (int p = 0; p < kParams; ++p) grad[p] = zero;
+  __m128d grad[kGamma];
+  for (int p = 0; p < kGamma; ++p) grad[p] = zero;
   for (int b = 0; b < kBoundaries; ++b) {
     const __m128d d = _mm_mul_pd(_mm_mul_pd(group.step[b], _mm_loadu_pd(small_of[b] + j)), group.inv_sigma);
     grad[kE] = _mm_add_pd(grad[kE], d);
@@ -411,13 +347,6 @@ inline bool TwoBins(bool fit_gamma, bool single, bool slope, const LaneConstants
   }
   grad[single ? kS1 : kS2] = _mm_add_pd(grad[single ? kS1 : kS2], indicator[0]);
   grad[kS1] = _mm_add_pd(grad[kS1], indicator[1]);
-  if (slope) {
-    const __m128d slope_at_far = _mm_mul_pd(group.slope, beyond);
-    grad[kE] = _mm_sub_pd(grad[kE], slope_at_far);
-    if (!single) grad[kQ] = _mm_sub_pd(grad[kQ], slope_at_far);
-    grad[kSigma] = _mm_add_pd(grad[kSigma], _mm_mul_pd(group.slope, _mm_loadu_pd(small_of[outer] + j)));
-    grad[kSlope] = ramp_unit;
-  }
   for (int q = 2; q < kRegions; ++q) {
     grad[kL0] = _mm_add_pd(grad[kL0], _mm_mul_pd(group.border_part[q], indicator[q]));
     grad[kL1] = _mm_add_pd(grad[kL1], _mm_mul_pd(group.other[q], indicator[q]));
@@ -430,7 +359,6 @@ inline bool TwoBins(bool fit_gamma, bool single, bool slope, const LaneConstants
   }
   for (int p = 0; p < kGamma; ++p) _mm_storeu_pd(column[p] + used, _mm_mul_pd(grad[p], scale));
   _mm_storeu_pd(column[kGamma] + used, gamma_grad);
-  if (slope) _mm_storeu_pd(column[kSlope] + used, _mm_mul_pd(grad[kSlope], scale));
   _mm_storeu_pd(weight_of + used, w);
   _mm_storeu_pd(residual_of + used, r);
   return true;
@@ -581,8 +509,8 @@ void AddPenalty(double penalty, const double* penalty_grad, Normal* jtj, Vector*
 // Model values, and with `jtj` / `jtr` the normal equations, for parameters p, with the margin's penalty
 // of weight `margin_weight` (MarginPenalty). Returns the weighted squared residual sum and the penalty's
 // square.
-double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope, double margin_weight,
-                Normal* jtj, Vector* jtr) {
+double Evaluate(const SideProfiles& s, const double* p, bool single, double margin_weight, Normal* jtj,
+                Vector* jtr) {
   const int n = s.bins;
   const int groups = static_cast<int>(s.patterns.size());
   // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
@@ -641,15 +569,6 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope,
         indicator[k] = upper - lower;
         f += level[k] * indicator[k];
       }
-      // The surround's slope g beyond B (the margin's far side e + q; the edge e with one surround
-      // level), blurred:
-      //   g [(u - B) Phi((u - B) / sigma) + sigma phi((u - B) / sigma)] = g sigma (phi_B - z_B beyond_B)
-      // (z_B = (B - u) / sigma, beyond_B = Phi(-z_B): the regions beyond B); d / d g = sigma (phi_B -
-      // z_B beyond_B), d / d B = -g beyond_B, d / d sigma = g phi_B.
-      const int outer = single ? 1 : 0;  // B's boundary
-      const double beyond = slope ? (single ? indicator[0] + indicator[1] : indicator[0]) : 0.0;
-      const double ramp_unit = slope ? p[kSigma] * (small_of[outer][j] - z_of[outer][j] * beyond) : 0.0;
-      if (slope) f += p[kSlope] * ramp_unit;
       if (stepped) f += (p[kL1] - p[kL0]) * step_part[j];
       double scale = 1.0;  // d encoded / d linear
       if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
@@ -678,13 +597,6 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope,
         if (b == 0) grad[kQ] += d;
       }
       grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
-      if (slope) {
-        const double slope_at_far = p[kSlope] * beyond;
-        grad[kE] -= slope_at_far;
-        if (!single) grad[kQ] -= slope_at_far;
-        grad[kSigma] += p[kSlope] * small_of[outer][j];
-        grad[kSlope] = ramp_unit;
-      }
       for (int k = 2; k < kRegions; ++k)
         grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
       if (stepped) {
@@ -693,7 +605,6 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope,
       }
       for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
       column[kGamma][used] = gamma_grad;
-      if (slope) column[kSlope][used] = grad[kSlope] * scale;
       weight_of[used] = w, residual_of[used] = r;
       ++used;
     };
@@ -707,14 +618,13 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope,
       for (int b = 0; b < kBoundaries; ++b) lanes.step[b] = _mm_set1_pd(level[b + 1] - level[b]);
       lanes.inv_sigma = _mm_set1_pd(inv_sigma), lanes.inv_gamma = _mm_set1_pd(inv_gamma);
       lanes.level_difference = _mm_set1_pd(p[kL1] - p[kL0]);
-      lanes.sigma = _mm_set1_pd(p[kSigma]), lanes.slope = _mm_set1_pd(p[kSlope]);
       for (; j + 1 < n; j += 2)
         if (!(count[j] > 0 && count[j + 1] > 0) ||
             !(stepped
-                  ? TwoBins<true>(s.fit_gamma, single, slope, constants, lanes, big_of, small_of, z_of,
-                                  row_steps_of, count, sum, j, &cost, column, weight_of, residual_of, used)
-                  : TwoBins<false>(s.fit_gamma, single, slope, constants, lanes, big_of, small_of, z_of,
-                                   nullptr, count, sum, j, &cost, column, weight_of, residual_of, used)))
+                  ? TwoBins<true>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, row_steps_of,
+                                  count, sum, j, &cost, column, weight_of, residual_of, used)
+                  : TwoBins<false>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, nullptr,
+                                   count, sum, j, &cost, column, weight_of, residual_of, used)))
           bin(j), bin(j + 1);
         else
           used += 2;
@@ -730,8 +640,8 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, bool slope,
     for (int k = 0; k < kParams; ++k) jacobian[k * capacity + used] = 0.0;
     weights[used] = 0.0, residuals[used] = 0.0;
   }
-  NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, slope,
-                  s.fit_gamma, jtj, jtr);
+  NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
+                  jtr);
   AddPenalty(penalty, penalty_grad, jtj, jtr);
   return cost;
 }
@@ -754,53 +664,34 @@ double LevelNear(const SideProfiles& s, double u, int row, int colour) {
 // its bound is held at the bound and the others are solved again (a plain clamp after the solve would
 // leave the free parameters compensating for a move that did not happen, and the fit crawls along the
 // bound for many iterations).
-template <int N>
-Eigen::Matrix<double, N, 1> BoundedStepOf(const Eigen::Matrix<double, N, N>& a,
-                                          const Eigen::Matrix<double, N, 1>& jtr, const double* p,
-                                          const double* lo, const double* hi) {
-  using Matrix = Eigen::Matrix<double, N, N>;
-  using Column = Eigen::Matrix<double, N, 1>;
-  bool fixed[N] = {};
-  Column held = Column::Zero(), step;
+Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const double* lo, const double* hi) {
+  bool fixed[kParams] = {};
+  Vector held = Vector::Zero(), step;
   for (int round = 0; round < 4; ++round) {
-    Matrix m = a;
-    Column rhs = -jtr;
-    for (int k = 0; k < N; ++k) {
+    Normal m = a;
+    Vector rhs = -jtr;
+    for (int k = 0; k < kParams; ++k) {
       if (!fixed[k]) continue;
       rhs -= a.col(k) * held[k];
       m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
     }
     // The damped normal matrix is positive definite: Cholesky (LDLT where it is not, numerically).
-    const Eigen::LLT<Matrix> llt(m);
-    step = llt.info() == Eigen::Success ? Column(llt.solve(rhs)) : Column(m.ldlt().solve(rhs));
+    const Eigen::LLT<Normal> llt(m);
+    step = llt.info() == Eigen::Success ? Vector(llt.solve(rhs)) : Vector(m.ldlt().solve(rhs));
     bool changed = false;
-    for (int k = 0; k < N; ++k) {
+    for (int k = 0; k < kParams; ++k) {
       if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;
       fixed[k] = changed = true;
       held[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
     }
     if (!changed) break;
   }
-  for (int k = 0; k < N; ++k) step[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
+  for (int k = 0; k < kParams; ++k) step[k] = std::clamp(p[k] + step[k], lo[k], hi[k]) - p[k];
   return step;
 }
 
-// BoundedStepOf over every parameter where the surround's slope is free (`slope`), else over the
-// parameters before it (the slope's row and column are zero, and its step 0: 8 x 8 instead of 9 x 9
-// matrices for the flat fits, as before the slope).
-Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const double* lo, const double* hi,
-                   bool slope) {
-  if (slope) return BoundedStepOf<kParams>(a, jtr, p, lo, hi);
-  Vector step = Vector::Zero();
-  step.head<kSlope>() =
-      BoundedStepOf<kSlope>(a.topLeftCorner<kSlope, kSlope>(), jtr.head<kSlope>(), p, lo, hi);
-  return step;
-}
-
-// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast;
-// `slope`: the surround's slope g free (else held at 0 and left out of the model's terms).
-bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, SideFit* fit,
-             bool* code_contrast_out) {
+// One fit; `hold_gamma`: gamma held at the profiles' gamma_hint where the side shows no code contrast.
+bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, bool* code_contrast_out) {
   if (s.bins < 6 || s.patterns.empty() || !(s.cell > 0)) return false;
   const double c = s.cell;
   double p[kParams];
@@ -812,7 +703,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
   p[kS1] = LevelNear(s, std::min(0.5 * c, 1.0), -1, 0);
   p[kS2] = LevelNear(s, s.OuterU(), -1, 0);
   p[kQ] = c;
-  p[kSlope] = 0.0;
   p[kGamma] = 1.0;
   if (!std::isfinite(p[kL0]) || !std::isfinite(p[kS1]) || !std::isfinite(p[kS2])) return false;
   if (!std::isfinite(p[kL1])) p[kL1] = p[kS1];  // no code cell of the other colour here
@@ -831,8 +721,6 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
   // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
   // sat 0.03 px further inward on the reference renderer's "hard" condition).
   lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
-  // The surround's slope (levels per px): at most the levels' range over two cells; 0 unless fitted.
-  lo[kSlope] = slope ? -(kLevelMax - kLevelMin) / (2.0 * c) : 0.0, hi[kSlope] = -lo[kSlope];
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
   bool code_contrast = false;
@@ -853,7 +741,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
   Normal jtj;
   Vector jtr;
   const double margin_weight = MarginWeight(s, p);
-  double cost = Evaluate(s, p, single, slope, margin_weight, &jtj, &jtr);
+  double cost = Evaluate(s, p, single, margin_weight, &jtj, &jtr);
   double lambda = 1e-3;
   // Converged when the next step would move the edge less than 5e-4 px and the blur less than 5e-3 px:
   // that step is taken without evaluating it (near the minimum the damped Gauss-Newton step does not
@@ -864,7 +752,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
     for (int attempt = 0; attempt < 6 && !improved && !done; ++attempt) {
       Normal a = jtj;
       for (int k = 0; k < kParams; ++k) a(k, k) += lambda * jtj(k, k) + 1e-9;
-      const Vector step = BoundedStep(a, jtr, p, lo, hi, slope);
+      const Vector step = BoundedStep(a, jtr, p, lo, hi);
       double q[kParams];
       for (int k = 0; k < kParams; ++k) q[k] = p[k] + step(k);
       if (attempt == 0 && std::abs(step[kE]) < 5e-4 && std::abs(step[kSigma]) < 5e-3) {
@@ -875,7 +763,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
       // The trial's normal equations come with its cost: kept when it is accepted.
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, single, slope, margin_weight, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, margin_weight, &trial_jtj, &trial_jtr);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
@@ -908,23 +796,20 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool slope, Si
 // side is fitted again with the hint.
 bool FitSurround(const SideProfiles& s, bool single, SideFit* fit, bool* code_contrast) {
   const SideFit start = *fit;
-  const bool ok = FitOnce(s, false, single, false, fit, code_contrast);
+  const bool ok = FitOnce(s, false, single, fit, code_contrast);
   if (*code_contrast || !s.fit_gamma || (ok && fit->gamma > 0.41 && fit->gamma < 3.49)) return ok;
   *fit = start;
-  return FitOnce(s, true, single, false, fit, code_contrast);
+  return FitOnce(s, true, single, fit, code_contrast);
 }
 
 // The two-step surround model, refitted with one surround level where its margin has the border's level.
-// `code_contrast`: the side shows the code's level next to the border's; `single`: the fit kept has one
-// surround level (also for a faint strip's, which the next pass fits with both models again).
-bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out, bool* single) {
+// `code_contrast`: the side shows the code's level next to the border's.
+bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out) {
   const SideFit start = *fit;
   // A side fitted with one surround level in the previous pass stays so (warm-started).
   bool& code_contrast = *code_contrast_out;
   code_contrast = true;
-  *single = true;
   if (start.warm && start.single_surround) return FitSurround(s, true, fit, &code_contrast);
-  *single = false;
   bool ok = FitSurround(s, false, fit, &code_contrast);
   fit->single_surround = false;
   if (!ok) return false;
@@ -959,114 +844,9 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out,
     return true;
   *fit = start;
   fit->warm = false;
-  *single = true;
   ok = FitSurround(s, true, fit, &code_contrast);
   fit->single_surround = ok && !faint;
   return ok;
-}
-
-// The surround beyond the margin's far side B = e + q of a two-level fit without a slope (data, not the
-// model), in parts of the border-to-code contrast |L1 - L0| (the levels in the profiles' units, encoded
-// with the fit's gamma where they are), over the bins j with w_j = SmoothStep((u_j - B) / sigma, 1, 2) > 0
-// (the surround alone, past the margin's blur; continuous in B and sigma, so the figures move with the
-// fit and not with which bins it counts). The rays lie along the side; beyond the margin every ray sees
-// the same surface whatever its code rows, so the samples are pooled over every ray.
-// - spread: the rays' scatter about a line in their place a along the side (a level that changes along
-//   the side, as under a light's gradient, is one level across it and moves no edge):
-//     R_j = (Q_j - V_j^2 / n_j) - (X_j - A_j V_j / n_j)^2 / (AA_j - A_j^2 / n_j),
-//     spread^2 = sum_j w_j R_j / sum_j w_j (n_j - 2),
-//   n_j, V_j, Q_j the bin's count, sum and summed squares of the samples, A_j, AA_j, X_j the sums of a,
-//   a^2 and a v (SideProfiles::square_sum, along_sum, along_square_sum, along_sample_sum).
-// - noise: from the successive differences of neighbouring rays (about a quarter cell apart: a grain hardly
-//   changes between them, the image's noise does, E (v_i+1 - v_i)^2 = 2 noise^2):
-//     noise^2 = sum_j w_j D_j / (2 sum_j w_j P_j),
-//   D_j the summed squared differences, P_j their count (SideProfiles::difference_sum, difference_count).
-// - texture^2 = spread^2 - noise^2: the surface's own rise and fall along the side.
-// Measured per side fit (30 frames of each map, p10 / p50 / p90; bench/results/2026-12-06-woodgate.md):
-// texture 0.002 / 0.004 / 0.007 on plain, 0.006 / 0.010 / 0.015 on webcam, 0.025 / 0.045 / 0.068 on
-// wood, 0.003 / 0.009 / 0.023 on the real caliscope board; texture^2 / noise^2 0.8 / 2.2 / 4.7 on plain
-// (the bilinear samples of neighbouring rays share pixels there, so the noise is underestimated on cells
-// of 1-2 px), 3.8 / 5.4 / 14.5 on wood, 0.1 / 0.7 / 2.1 on the real board (its larger cells put the rays
-// a pixel apart). The spread -1 without such bins or pairs.
-struct SurroundTexture {
-  double spread = -1, noise = -1;
-};
-SurroundTexture SurroundSpread(const SideProfiles& s, const double* p) {
-  const double bound = p[kE] + p[kQ];
-  const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
-  double residuals = 0, dof = 0, differences = 0, pairs = 0;
-  for (int j = 0; j < s.bins; ++j) {
-    const double window = SmoothStep((s.u0 + j * s.du - bound) * inv_sigma, 1.0, 2.0);
-    if (!(window > 0)) continue;
-    double n = 0, v = 0;
-    for (size_t g = 0; g < s.patterns.size(); ++g) n += s.count[g * s.bins + j], v += s.sum[g * s.bins + j];
-    if (!(n > 2)) continue;
-    const double a = s.along_sum[j];
-    const double vv = s.square_sum[j] - v * v / n, aa = s.along_square_sum[j] - a * a / n;
-    const double av = s.along_sample_sum[j] - a * v / n;
-    residuals += window * (vv - (aa > 1e-12 ? av * av / aa : 0.0)), dof += window * (n - 2);
-    differences += window * s.difference_sum[j], pairs += window * s.difference_count[j];
-  }
-  auto encoded = [&](double linear) {
-    return s.fit_gamma ? 255.0 * std::pow(std::max(linear, 0.5) / 255.0, inv_gamma) : linear;
-  };
-  const double contrast = std::abs(encoded(p[kL1]) - encoded(p[kL0]));
-  SurroundTexture texture;
-  if (!(dof > 0) || !(pairs > 0) || !(contrast > 0)) return texture;
-  texture.spread = std::sqrt(std::max(0.0, residuals / dof)) / contrast;
-  texture.noise = std::sqrt(differences / (2.0 * pairs)) / contrast;
-  return texture;
-}
-
-// The sloped fit's weight (SlopeSurround) from the surround's spread and noise (SurroundSpread):
-//   w = SmoothStep(texture, kTextureFrom, 2 kTextureFrom) SmoothStep(texture^2 / noise^2, kTextureToNoise,
-//       2 kTextureToNoise) (1 - SmoothStep(spread, kSpreadEdge, 1.5 kSpreadEdge)),
-// texture^2 = spread^2 - noise^2. A texture under 0.01 of the contrast is a surface of one level; a texture
-// not clearly above the noise is the noise (a gate on the spread alone, at 0.01-0.02 of the contrast, opened
-// on 64 % of the real caliscope board's sides and moved its sizes: test_detector_realdata's camera mean
-// 0.084 -> 0.099 %, bench/results/2026-12-06-slope2.md). Per side fit, the mean weight: wood 0.96, hard
-// 0.65, plain 0.012, webcam 0.050, the real board 0.018. A spread above kSpreadEdge (to 1.5 kSpreadEdge)
-// is no grain (a wood grain's 90th percentile is 0.076) but another edge within the profiles' reach (a
-// neighbouring print, a face's edge), which a slope does not describe.
-constexpr double kTextureFrom = 0.01, kTextureToNoise = 2.0, kSpreadEdge = 0.08;
-double SlopeWeight(const SurroundTexture& surround) {
-  if (!(surround.spread >= 0) || !(surround.noise > 0)) return 0.0;
-  const double noise2 = surround.noise * surround.noise;
-  const double texture2 = std::max(0.0, surround.spread * surround.spread - noise2);
-  return SmoothStep(std::sqrt(texture2), kTextureFrom, 2.0 * kTextureFrom) *
-         SmoothStep(texture2 / noise2, kTextureToNoise, 2.0 * kTextureToNoise) *
-         (1.0 - SmoothStep(surround.spread, kSpreadEdge, 1.5 * kSpreadEdge));
-}
-
-// The slope moves the edge by at most this many cells (a wood grain's 99th percentile: 0.067 cell); a fit
-// that moves it further has found another valley, not the grain's slope.
-constexpr double kMaxSlopeMoveCells = 0.08;
-
-// The edge of a two-level fit without a slope (`fit`, its parameters kept for the next pass's warm start)
-// moved towards that of the same model with the surround's slope free (g: the surround S2 + g (u - B)
-// beyond B = e + q), started from it, by the weight of the surround's texture (SlopeWeight):
-//   e = e_flat + w clamp(e_slope - e_flat, -m, m),   m = kMaxSlopeMoveCells c.
-// A surface is not always one level: a wood grain rises or falls by up to a quarter of the paper's contrast
-// over the profiles' reach, and with one surround level the margin's width and level took it up and moved
-// the edge (wood's map +0.39 %, bench/results/2026-12-06-woodmargin.md). A slope fitted everywhere traded
-// with the margin and the blur where the surface is flat: the steep views' long diagonals +0.34 %, a dark
-// grey marker of the start probe 4.7 px apart, +15 % instructions (bench/results/2026-12-06-slope2.md). The
-// weight and the clamp are continuous in the flat fit, so the edge depends on the start no more than the
-// flat fit does; a one-level fit (no margin) is not sloped (on the dark surfaces those were fits that had
-// lost the margin, and the slope moved them 0.2-0.45 px outward).
-void SlopeSurround(const SideProfiles& s, bool single, SideFit* fit) {
-  if (single) return;
-  const SurroundTexture surround = SurroundSpread(s, fit->params.data());
-  const double weight = SlopeWeight(surround);
-  if (!(weight > 0)) return;
-  SideFit sloped = *fit;
-  sloped.warm = true;
-  bool code_contrast = true;
-  if (!FitOnce(s, !fit->gamma_fitted, false, true, &sloped, &code_contrast)) return;
-  const double* p = sloped.params.data();
-  if (code_contrast && s.polarity != 0 && (p[kL1] - p[kL0]) * s.polarity < 0) return;
-  const double most = kMaxSlopeMoveCells * s.cell;
-  fit->e += weight * std::clamp(sloped.e - fit->e, -most, most);
 }
 
 }  // namespace
@@ -1084,17 +864,15 @@ bool EdgeHasStep(const SideProfiles& s, const SideFit& fit) {
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;
-  if (s.edge_only) return fit->warm && FitOnce(s, true, fit->single_surround, false, fit, &code_contrast);
-  bool single = false;
-  if (!FitSideModels(s, fit, &code_contrast, &single)) return false;
+  if (s.edge_only) return fit->warm && FitOnce(s, true, fit->single_surround, fit, &code_contrast);
+  const bool ok = FitSideModels(s, fit, &code_contrast);
+  // Without code contrast in the modelled rows the code's level L1 is free: no polarity to check.
+  if (!ok || s.polarity == 0 || !code_contrast) return ok;
   // The border's level on the wrong side of the code's (the border darker than the other colour for
-  // polarity +1): the fit took the first code row for the border. Without code contrast in the modelled
-  // rows the code's level L1 is free: no polarity to check.
+  // polarity +1): the fit took the first code row for the border.
   const double* p = fit->params.data();
-  fit->wrong_polarity = s.polarity != 0 && code_contrast && (p[kL1] - p[kL0]) * s.polarity < 0;
-  if (fit->wrong_polarity) return false;
-  SlopeSurround(s, single, fit);
-  return true;
+  fit->wrong_polarity = (p[kL1] - p[kL0]) * s.polarity < 0;
+  return !fit->wrong_polarity;
 }
 
 }  // namespace mcmt

@@ -6,17 +6,12 @@
 //   f(u) = sum over regions k of level_k * [Phi((B_{k-1} - u) / sigma) - Phi((B_k - u) / sigma)]
 // with the region boundaries, from outside in,
 //   B_0 = e + q   (far side of the margin: level S2 beyond, S1 between; both free, q free),
-// and beyond B_0 the surround's level S2 + g (u - B_0), its slope g held at 0 but where the surround's rays
-// spread about their mean beyond the noise (a textured surface: a wood grain rises or falls by up to a
-// quarter of the paper's contrast over the profiles' reach, and with one level the margin's width and level
-// took it up and moved the edge; FitSideProfiles then moves the edge towards the sloped fit's:
-// bench/results/2026-12-06-{woodmargin,slope2}.md),
 //   B_1 = e       (the outer edge: the unknown we want),
 //   B_{1+r} = e - r c  (r = 1..kRows: the boundaries between the border (row 0) and the code rows
 //                       1..kRows, c = the depth of one cell here, known from the marker's geometry).
 // The rows' levels are the border's colour L0 or the other colour L1 as the code says at each place
 // along the side: the profiles are averaged per pattern of the rows (a group), and all groups share
-// e, sigma, L0, L1, S1, S2, q, g. The inner boundaries are edges known on both sides; the outer edge
+// e, sigma, L0, L1, S1, S2, q. The inner boundaries are edges known on both sides; the outer edge
 // brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
 // A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
 // that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
@@ -69,18 +64,6 @@ struct SideProfiles {
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
   std::vector<std::array<uint8_t, kRows>> patterns;
   std::vector<double> sum, count;  // group * bins + bin
-  // Per bin, over every ray: the summed squares of the samples (the rays' spread about their groups'
-  // means: SurroundSpread in side_model.cc).
-  std::vector<double> square_sum;
-  // Per bin, over every pair of successive rays along the side that both sampled it: the summed squared
-  // differences of their samples and the pairs' count (the image's noise); over every ray, the sums of
-  // its place along the side (`ray_along`), of its square and of its products with the samples (the
-  // surround's change along the side). The last ray's sample of each bin and that ray's number
-  // (`ray_count` when it was added). SurroundSpread in side_model.cc.
-  std::vector<double> difference_sum, difference_count, along_sum, along_square_sum, along_sample_sum;
-  std::vector<double> last_sample, last_ray;
-  int ray_count = 0;
-  double ray_along = 0;
   std::vector<std::array<double, kRows>> depth_sum;
   // Per group: the summed fractions of each row's level that is the other colour at the rays (blur
   // along the side mixes in the neighbouring columns' cells).
@@ -100,21 +83,14 @@ struct SideProfiles {
   std::vector<int> first_step, steps;  // per group: its steps' first index in row_steps, their count
 
   void Reset(double u0_, double du_, int bins_, double cell_);
-  // The group of a pattern (created if new), with one more ray whose row boundaries lie at `depths`,
-  // `along` (any unit) along the side; the rays are added in their order along the side.
+  // The group of a pattern (created if new), with one more ray whose row boundaries lie at `depths`.
   int AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
              const std::array<double, kRows>& other, const RowStep* ray_steps = nullptr,
-             int ray_step_count = 0, double along = 0);
+             int ray_step_count = 0);
   void Add(int group, int bin, double value) {
     sum[static_cast<size_t>(group) * bins + bin] += value;
     count[static_cast<size_t>(group) * bins + bin] += 1.0;
-    square_sum[bin] += value * value;
-    const float sample = static_cast<float>(value);
-    AddRaySamples(bin, &sample, 1);
   }
-  // The pooled statistics of the last ray's samples of bins first_bin .. first_bin + n - 1 (their
-  // differences with the ray before, where it sampled the same bin; their products with its place).
-  void AddRaySamples(int first_bin, const float* values, int n);
 };
 
 struct SideFit {
@@ -129,9 +105,9 @@ struct SideFit {
   // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
   bool beyond = false;
   double beyond_e = 0;
-  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma, the surround's slope); `warm`: start from them (e
-  // relative to the profiles' line as given in `e`) instead of from the profiles.
-  std::array<double, 9> params{};
+  // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
+  // profiles' line as given in `e`) instead of from the profiles.
+  std::array<double, 8> params{};
   bool warm = false;
 };
 
