@@ -1386,6 +1386,26 @@ bool RefinePass(Refinement* r, int pass, bool model_pass, std::array<Eigen::Vect
   return CornersFromLines(lines, r->map, next);
 }
 
+// The distance between two points of the refinement (ideal pixels) or of the image.
+double Distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).norm(); }
+double Distance(const cv::Point2d& a, const cv::Point2d& b) { return cv::norm(a - b); }
+
+// The sum of quad `q`'s four sides.
+template <typename Point>
+double QuadPerimeter(const std::array<Point, 4>& q) {
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += Distance(q[(k + 1) % 4], q[k]);
+  return perimeter;
+}
+
+// The largest distance of a corner of `to` from the same corner of `from`.
+template <typename Point>
+double MaxCornerMove(const std::array<Point, 4>& from, const std::array<Point, 4>& to) {
+  double moved = 0;
+  for (int k = 0; k < 4; ++k) moved = std::max(moved, Distance(to[k], from[k]));
+  return moved;
+}
+
 // One refinement from `corners` (RefineMarkerCorners). `model_everywhere` (with model_fit): every side
 // was located by the side model in the last pass (not by its crossings alone). `model_only` (with
 // model_fit): no crossing-only passes, for corners already on the edges (RefineMarkerCorners).
@@ -1414,8 +1434,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   r.lines_within_profiles = lines_within_profiles;
   for (int k = 0; k < 4; ++k) r.img[k] = Eigen::Vector2d((*corners)[k].x, (*corners)[k].y);
   const std::array<Eigen::Vector2d, 4> original = r.img;
-  double perimeter = 0;
-  for (int k = 0; k < 4; ++k) perimeter += (r.img[(k + 1) % 4] - r.img[k]).norm();
+  const double perimeter = QuadPerimeter(r.img);
   if (!(perimeter > 4 * 4.0)) return false;
   constexpr int kMaxModelPasses = 6;
   // A model-only round (RefineMarkerCorners) starts from corners settled by the passes before it: its
@@ -1444,8 +1463,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     const bool model_pass = crossings_done && model_fit;
     std::array<Eigen::Vector2d, 4> next;
     if (!RefinePass(&r, pass, model_pass, &next)) return false;
-    double moved = 0;
-    for (int k = 0; k < 4; ++k) moved = std::max(moved, (next[k] - r.img[k]).norm());
+    const double moved = MaxCornerMove(r.img, next);
     converged = moved < 0.01;
     previous = r.img;
     r.img = next;
@@ -1487,9 +1505,7 @@ bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const 
   std::array<Eigen::Vector2d, 4> ideal;
   const PixelMap map = MapOf(camera);
   for (int k = 0; k < 4; ++k) ideal[k] = map.ToIdeal(Eigen::Vector2d((*corners)[k].x, (*corners)[k].y));
-  double perimeter = 0;
-  for (int k = 0; k < 4; ++k) perimeter += (ideal[(k + 1) % 4] - ideal[k]).norm();
-  const double blur_cells = std::isfinite(blur_px) ? blur_px * 4.0 * cells / perimeter : 0.0;
+  const double blur_cells = std::isfinite(blur_px) ? blur_px * 4.0 * cells / QuadPerimeter(ideal) : 0.0;
   double weight = 0;
   for (int side = 0; side < 4; ++side) weight = std::max(weight, SkewTurnWeight(ideal, side, blur_cells));
   if (weight <= 0) return false;
@@ -1519,11 +1535,7 @@ bool TurnSkewedSides(const cv::Mat& gray, int cells, const cv::Mat& bits, const 
 constexpr double kMaxMoveCells = 2.0;
 bool EndsNearItsStart(const std::array<cv::Point2d, 4>& start, const std::array<cv::Point2d, 4>& end,
                       int cells) {
-  double perimeter = 0, moved = 0;
-  for (int k = 0; k < 4; ++k)
-    perimeter += cv::norm(start[(k + 1) % 4] - start[k]),
-        moved = std::max(moved, cv::norm(end[k] - start[k]));
-  return moved <= kMaxMoveCells * perimeter / (4.0 * cells);
+  return MaxCornerMove(start, end) <= kMaxMoveCells * QuadPerimeter(start) / (4.0 * cells);
 }
 }  // namespace
 
@@ -1566,8 +1578,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       if (!RefineOnce(gray, cells, bits, camera, passes, &again, true, &again_sigma, 1.0, true, fit_gamma,
                       &again_kept, polarity, nullptr, held_gamma))
         break;
-      double moved = 0;
-      for (int k = 0; k < 4; ++k) moved = std::max(moved, cv::norm(again[k] - c[k]));
+      const double moved = MaxCornerMove(c, again);
       before = c;
       c = again, sigma = again_sigma, kept = again_kept;
       if (moved < kSettledPx) {
@@ -1579,15 +1590,11 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
     if (unsettled >= 2)
       for (int k = 0; k < 4; ++k) c[k] = 0.5 * (c[k] + before[k]);
     if (model_fit) TurnSkewedSides(gray, cells, bits, camera, &c, fit_gamma, polarity, held_gamma, sigma);
-    if (!EndsNearItsStart(*corners, c, cells)) {
-      if (blur_sigma) *blur_sigma = NAN;
-      if (kept_lines) *kept_lines = kept;
-      return false;
-    }
-    *corners = c;
-    if (blur_sigma) *blur_sigma = sigma;
+    const bool ok = EndsNearItsStart(*corners, c, cells);
+    if (ok) *corners = c;
+    if (blur_sigma) *blur_sigma = ok ? sigma : NAN;
     if (kept_lines) *kept_lines = kept;
-    return true;
+    return ok;
   };
   if (narrow_ok && (narrow_modelled || !model_fit)) return take(narrow, narrow_sigma, narrow_kept);
   std::array<cv::Point2d, 4> wide = *corners;
@@ -1742,8 +1749,7 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
 
 bool MarkerDetector::SearchInsideRejected(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
                                           Raw* r) {
-  double perimeter = 0;
-  for (int k = 0; k < 4; ++k) perimeter += cv::norm(quad[(k + 1) % 4] - quad[k]);
+  const double perimeter = QuadPerimeter(quad);
   const std::vector<cv::Point2f> points(quad.begin(), quad.end());
   const cv::Rect box =
       (cv::boundingRect(points) + cv::Size(4, 4) - cv::Point(2, 2)) & cv::Rect(0, 0, gray.cols, gray.rows);
