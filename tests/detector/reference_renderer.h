@@ -151,6 +151,7 @@ struct Quad {
   std::array<cv::Point2d, 4> p;
   double level;
   double grain = 0;
+  const cv::Matx33d* plane_from_image = nullptr;  // its grain's plane (nullptr: the one Paint is given)
 };
 
 // Spans of the samples of one sample row y (image coordinates) inside the convex polygon: [x0, x1).
@@ -179,7 +180,9 @@ inline bool Span(const Quad& q, double y, double* x0, double* x1) {
 
 // Paints the quads (in order, later ones on top) into the linear image `image` (CV_64F) over the
 // rectangle `roi`: each pixel becomes the mean of its kSuper^2 point samples; samples no quad covers
-// keep the pixel's previous value. `plane_from_image` maps pixels to the marker plane (for grain).
+// keep the pixel's previous value. `plane_from_image` maps pixels to the marker plane (for grain; a quad's
+// own plane_from_image where it has one). Quads that share a pixel must be painted in one call: a later
+// call sees the earlier one's pixel means, not its samples.
 inline void Paint(const std::vector<Quad>& quads, const cv::Rect& roi, const cv::Matx33d& plane_from_image,
                   cv::Mat* image) {
   const int w = roi.width;
@@ -200,7 +203,8 @@ inline void Paint(const std::vector<Quad>& quads, const cv::Rect& roi, const cv:
           double v = q.level;
           if (q.grain > 0) {
             const double x = roi.x - 0.5 + (i + 0.5) / kSuper;
-            const cv::Vec3d m = plane_from_image * cv::Vec3d(x, y, 1.0);
+            const cv::Vec3d m =
+                (q.plane_from_image ? *q.plane_from_image : plane_from_image) * cv::Vec3d(x, y, 1.0);
             const double u = m[0] / m[2], t = m[1] / m[2];
             v *= 1.0 + q.grain * std::sin(2.3 * u + 1.5 * std::sin(0.7 * t));
           }

@@ -58,6 +58,20 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
   const Rigid3 cam_from_object = camera.rig_from_cam.inverse() * rig_from_object;
   const Eigen::Vector3d light_in_rig = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
   const int cells = dict.markerSize + 2;
+  // The faces turned towards the camera: their normals, first vertices and light; all their quads are
+  // painted in one call, so that a pixel on the edge between two faces is their samples' mean (faces
+  // painted one by one let the background's level into that pixel: mcmt-sim's exact render of the same
+  // views differed there by -6.4 gray levels on average, up to 27, on a 200-level ink-paper step,
+  // bench/sim/diag_render_compare.cc).
+  struct SeenFace {
+    Eigen::Vector3d normal, v0;
+    double light;
+  };
+  std::vector<SeenFace> seen;
+  std::vector<cv::Matx33d> face_planes;
+  face_planes.reserve(object.faces.size());
+  std::vector<reference::Quad> face_quads;
+  std::vector<cv::Point2d> face_corners;
   for (const sim::SimFace& face : object.faces) {
     std::vector<Eigen::Vector3d> v;
     for (const Eigen::Vector3d& p : face.vertices) v.push_back(cam_from_object * p);
@@ -66,11 +80,11 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
     if (normal.dot(v[0]) >= 0) continue;  // turned away
     const Eigen::Vector3d normal_in_rig = camera.rig_from_cam.linear() * normal;
     const double light = 1.0 - im.face_shading * 0.5 * (1.0 - normal_in_rig.dot(light_in_rig));
+    seen.push_back({normal, v[0], light});
     // The face's plane in cells of the object's first marker (grain coordinates), the fan of its polygon.
     const double cell_m = object.markers.empty() ? 0.005 : object.markers[0].size / cells;
     const Eigen::Vector3d u_axis = (v[1] - v[0]).normalized() * cell_m, v_axis = normal.cross(u_axis);
-    const cv::Matx33d image_from_face = reference::ImageFromPlane(model, v[0], u_axis, v_axis);
-    std::vector<reference::Quad> quads;
+    face_planes.push_back(reference::ImageFromPlane(model, v[0], u_axis, v_axis).inv());
     std::vector<cv::Point2d> corners;
     for (const Eigen::Vector3d& p : v)
       corners.push_back({model.fx * p.x() / p.z() + model.cx, model.fy * p.y() / p.z() + model.cy});
@@ -78,15 +92,20 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
       reference::Quad q;
       q.p = {corners[0], corners[k], corners[k + 1], corners[std::min(k + 2, corners.size() - 1)]};
       q.level = im.surface * light * im.exposure, q.grain = im.surface_texture;
-      quads.push_back(q);
+      q.plane_from_image = &face_planes.back();
+      face_quads.push_back(q);
     }
-    const cv::Rect face_box = reference::PaintBox(corners, model);
-    if (face_box.area() > 0) reference::Paint(quads, face_box, image_from_face.inv(), &linear);
+    face_corners.insert(face_corners.end(), corners.begin(), corners.end());
+  }
+  const cv::Rect faces_box = reference::PaintBox(face_corners, model);
+  if (faces_box.area() > 0 && !face_quads.empty())
+    reference::Paint(face_quads, faces_box, face_planes.front(), &linear);
+  for (const SeenFace& face : seen) {
     // The prints on this face: (0, 0) of a marker's plane is its top-left corner (-s/2, s/2), v downward.
     for (const sim::SimMarker& m : object.markers) {
       const Rigid3 cam_from_marker = cam_from_object * m.object_from_marker;
-      if (cam_from_marker.linear().col(2).dot(normal) < 0.999) continue;
-      if (std::abs(normal.dot(cam_from_marker.translation() - v[0])) > 1e-4) continue;
+      if (cam_from_marker.linear().col(2).dot(face.normal) < 0.999) continue;
+      if (std::abs(face.normal.dot(cam_from_marker.translation() - face.v0)) > 1e-4) continue;
       const double c = m.size / cells;
       const Eigen::Vector3d origin = cam_from_marker * Eigen::Vector3d(-m.size / 2, m.size / 2, 0);
       const cv::Matx33d image_from_plane = reference::ImageFromPlane(
@@ -99,7 +118,7 @@ inline cv::Mat RenderReferenceRigView(const cv::aruco::Dictionary& dict, const s
         for (double y : {-e, cells + e}) extent.push_back(Apply(image_from_plane, x, y));
       const cv::Rect box = reference::PaintBox(extent, model);
       if (box.area() > 0)
-        reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, light, false), box,
+        reference::Paint(reference::MarkerQuads(bits, cells, image_from_plane, im, face.light, false), box,
                          image_from_plane.inv(), &linear);
     }
   }

@@ -102,6 +102,50 @@ TEST(MapperRenderedViews, ForeshortenedMarkersWeightedByTheirPrecision) {
   RecordProperty("camera_mm", std::to_string(e.camera_position_mm.mean));
 }
 
+// The reference renderer's view of the body (tests/mapper/reference_rig_view.h): every pixel inside the
+// body's outline (convex; at least half a pixel diagonal inside it) is the surface's level where all faces
+// are lit alike, also on the edges between two faces. Painted face by face, those edges took the
+// background's level into their pixels (a later face's pass saw the earlier one's pixel means): on the
+// paper's rig at 1.3 m mcmt-sim's exact render differed there by -6.4 gray levels on average, up to 27
+// (bench/sim/diag_render_compare.cc; bench/results/2026-12-06-sharpturn.md). Markers left out (surface only),
+// no noise; 20 frames x 5 cameras.
+TEST(MapperReferenceRenders, EdgesBetweenFacesShowNoBackground) {
+  testing::RenderedMapSession s = testing::MakeRenderedMapSession(1.3, 20);
+  s.object.markers.clear();
+  const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(s.markers.dictionary);
+  testing::Imaging im;
+  im.read_noise = 0;
+  const double level = im.surface * im.exposure;
+  int inside = 0, off = 0;
+  double worst = 0;
+  for (size_t c = 0; c < s.cameras.size(); ++c)
+    for (const sim::SimFrame& f : s.trajectory) {
+      const cv::Mat image =
+          testing::RenderReferenceRigView(*dictionary, s.object, s.cameras[c], f.rig_from_object, im, 1);
+      const Rigid3 cam_from_object = s.cameras[c].rig_from_cam.inverse() * f.rig_from_object;
+      const CameraModel& m = s.cameras[c].model;
+      std::vector<cv::Point2f> points, hull;
+      for (const sim::SimFace& face : s.object.faces)
+        for (const Eigen::Vector3d& p : face.vertices) {
+          const Eigen::Vector3d x = cam_from_object * p;
+          points.emplace_back(m.fx * x.x() / x.z() + m.cx, m.fy * x.y() / x.z() + m.cy);
+        }
+      cv::convexHull(points, hull);
+      for (int y = 0; y < image.rows; ++y)
+        for (int x = 0; x < image.cols; ++x) {
+          if (cv::pointPolygonTest(hull, cv::Point2f(x, y), true) < 0.75) continue;
+          ++inside;
+          const double d = std::abs(image.at<uint8_t>(y, x) - level);
+          worst = std::max(worst, d);
+          off += d > 1.0;
+        }
+    }
+  std::printf("%d pixels inside the body, %d off the surface's level by more than 1, worst %.1f\n", inside,
+              off, worst);
+  EXPECT_GT(inside, 10000);
+  EXPECT_EQ(off, 0);
+}
+
 // The paper's rig at 1.0 m, 150 frames, drawn by the independent reference renderer
 // (tests/mapper/reference_rig_view.h) under `imaging`, detected with the defaults and mapped once per
 // corner weighting (corner_weights: equal, sides); prints and returns each map's errors against the truth.

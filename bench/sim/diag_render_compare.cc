@@ -1,0 +1,164 @@
+// Issue 15 (bench/results/2026-12-06-sharpturn.md): mcmt-sim's exact-area renderer (RenderIdeal) and the
+// reference renderer (RenderReferenceRigView, tests/mapper/reference_rig_view.h) against an independent
+// fine point-sampled render (S x S samples per pixel, pixel centres at integer coordinates) of the same
+// views of bench_imaging_maps' session, in linear light with equal levels (ink 25, paper 225, surface
+// 127.5), no noise, no optics, no light gradient or shading. Prints, per renderer, the largest and mean
+// |difference| and the mean signed difference (gray levels) over the pixels about each marker seen at
+// 40 deg or more (its print with its margin, one pixel around), split into pixels inside the print, on its
+// outer edge, surface only, and pixels on two faces (the edge between two of the body's faces). The
+// reference's 8-bit output rounds: 0.25 mean |d| of that is its quantisation.
+//   diag_render_compare [radius (1.3)] [frames to scan (40)] [S (32)]
+// ST_WORST=1 lists the pixels where the reference differs by more than 8 levels.
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <opencv2/aruco.hpp>
+
+#include "core/dictionary.h"
+#include "tests/mapper/reference_rig_view.h"
+#include "tests/mapper/rendered_session.h"
+
+using namespace mcmt;
+
+namespace {
+constexpr double kBlack = 25.0, kWhite = 225.0, kSurface = 0.5;
+
+struct Fine {
+  const sim::SimObject* object;
+  const cv::aruco::Dictionary* dict;
+  Rigid3 cam_from_object;
+  CameraModel model;
+  int margin;
+  mutable bool in_print = false;
+  mutable const sim::SimFace* face = nullptr;
+  // The scene's linear level seen along the ray through image point (x, y); -1 where no face is hit.
+  double At(double x, double y) const {
+    const Eigen::Vector3d ray((x - model.cx) / model.fx, (y - model.cy) / model.fy, 1.0);
+    double best = 1e300, value = -1;
+    in_print = false;
+    for (const sim::SimFace& f : object->faces) {
+      std::vector<Eigen::Vector3d> v;
+      for (const auto& p : f.vertices) v.push_back(cam_from_object * p);
+      const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+      const double d = n.dot(ray);
+      if (!(d < 0)) continue;
+      const double t = n.dot(v[0]) / d;
+      const Eigen::Vector3d X = t * ray;
+      bool inside = true;
+      for (size_t k = 0; k < v.size(); ++k)
+        if (n.dot((v[(k + 1) % v.size()] - v[k]).cross(X - v[k])) < 0) inside = false;
+      if (!inside || t >= best) continue;
+      best = t;
+      face = &f;
+      value = 255.0 * kSurface;
+      for (const sim::SimMarker& m : object->markers) {
+        const Rigid3 cm = cam_from_object * m.object_from_marker;
+        if (cm.linear().col(2).dot(n) < 0.999) continue;
+        const Eigen::Vector3d q = cm.inverse() * X;
+        const int cells = dict->markerSize + 2;
+        const double cell = m.size / cells;
+        const double cx = q.x() / cell + 0.5 * cells, cy = 0.5 * cells - q.y() / cell;  // cells, row down
+        if (cx < -margin || cy < -margin || cx >= cells + margin || cy >= cells + margin) continue;
+        const int c = static_cast<int>(std::floor(cx)), r = static_cast<int>(std::floor(cy));
+        bool white = true;
+        if (c >= 0 && r >= 0 && c < cells && r < cells) {
+          white = false;
+          if (c >= 1 && r >= 1 && c + 1 < cells && r + 1 < cells) {
+            const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+                dict->bytesList.rowRange(m.id, m.id + 1), dict->markerSize);
+            white = bits.at<uint8_t>(r - 1, c - 1) != 0;
+          }
+        }
+        value = white ? kWhite : kBlack;
+        in_print = true;
+      }
+    }
+    return value;
+  }
+};
+}  // namespace
+
+int main(int argc, char** argv) {
+  const double radius = argc > 1 ? std::atof(argv[1]) : 1.3;
+  const int scan = argc > 2 ? std::atoi(argv[2]) : 40;
+  const int S = argc > 3 ? std::atoi(argv[3]) : 32;
+  const testing::RenderedMapSession session = testing::MakeRenderedMapSession(radius, 300);
+  const cv::Ptr<cv::aruco::Dictionary> dict = LoadDictionary(session.markers.dictionary);
+  sim::RenderOptions ro;
+  ro.noise_sigma = 0, ro.textured_background = false, ro.background_level = 128, ro.lighting_gradient = 0;
+  ro.shading = 0, ro.black_level = kBlack, ro.white_level = kWhite, ro.surface_albedo = kSurface;
+  sim::Renderer renderer(session.object, session.markers.dictionary, ro);
+  testing::Imaging im;
+  im.ink = kBlack / 255.0, im.paper = kWhite / 255.0, im.surface = kSurface, im.read_noise = 0;
+  double sum_abs[2] = {0, 0}, sum_signed[2] = {0, 0}, max_abs[2] = {0, 0};
+  long long n = 0, kn[4] = {0, 0, 0, 0};
+  double ks_abs[4][2] = {}, ks_signed[4][2] = {}, ks_max[4][2] = {};
+  int markers = 0;
+  for (int fi = 0; fi < scan; ++fi) {
+    const sim::SimFrame& f = session.trajectory[fi * 7 % session.trajectory.size()];
+    for (size_t c = 0; c < session.cameras.size(); ++c) {
+      const sim::SimCamera& cam = session.cameras[c];
+      const cv::Mat simimg = renderer.RenderIdeal(cam, static_cast<int>(c), f.rig_from_object);
+      // The reference's linear image: RenderReferenceRigView without its camera pipeline (read noise 0,
+      // gamma 1: the pipeline only quantises), as doubles before quantisation: rebuild it here.
+      cv::Mat ref = testing::RenderReferenceRigView(*dict, session.object, cam, f.rig_from_object, im, 1);
+      Fine fine{&session.object, dict.get(), cam.rig_from_cam.inverse() * f.rig_from_object, cam.model, 1};
+      for (const sim::MarkerView& v : sim::ProjectMarkers(cam, session.object, f.rig_from_object)) {
+        if (!v.fully_visible || v.view_angle_deg < 40) continue;
+        ++markers;
+        double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+        for (int k = 0; k < 4; ++k)
+          x0 = std::min(x0, v.corners[k][0]), x1 = std::max(x1, v.corners[k][0]),
+          y0 = std::min(y0, v.corners[k][1]), y1 = std::max(y1, v.corners[k][1]);
+        for (int y = int(y0) - 1; y <= int(y1) + 1; ++y)
+          for (int x = int(x0) - 1; x <= int(x1) + 1; ++x) {
+            double acc = 0;
+            bool ok = true;
+            int printed = 0;
+            const sim::SimFace* first_face = nullptr;
+            bool seam = false;
+            for (int a = 0; a < S && ok; ++a)
+              for (int b = 0; b < S; ++b) {
+                const double val = fine.At(x - 0.5 + (b + 0.5) / S, y - 0.5 + (a + 0.5) / S);
+                if (val < 0) ok = false;
+                printed += fine.in_print;
+                if (!first_face) first_face = fine.face;
+                seam = seam || fine.face != first_face;
+                acc += val;
+              }
+            if (!ok) continue;
+            const double truth = acc / (S * S);
+            const int kind = seam ? 3 : printed == S * S ? 0 : printed > 0 ? 1 : 2;
+            const double d[2] = {simimg.at<float>(y, x) - truth, ref.at<uint8_t>(y, x) - truth};
+            if (std::getenv("ST_WORST") && std::abs(d[1]) > 8)
+              std::printf(
+                  "worst cam %zu seq %lld id %d view %.1f size %.1f px (%d,%d) truth %.2f sim %.2f ref %d\n",
+                  c, static_cast<long long>(f.seq), v.id, v.view_angle_deg, v.size_px, x, y, truth,
+                  simimg.at<float>(y, x), ref.at<uint8_t>(y, x));
+            for (int r = 0; r < 2; ++r)
+              ks_abs[kind][r] += std::abs(d[r]), ks_signed[kind][r] += d[r],
+                  ks_max[kind][r] = std::max(ks_max[kind][r], std::abs(d[r]));
+            ++kn[kind];
+            for (int r = 0; r < 2; ++r)
+              sum_abs[r] += std::abs(d[r]), sum_signed[r] += d[r],
+                  max_abs[r] = std::max(max_abs[r], std::abs(d[r]));
+            ++n;
+          }
+      }
+    }
+  }
+  const char* names[2] = {"mcmt-sim (RenderIdeal, float)", "reference (8-bit, no noise)"};
+  std::printf("radius %.1f: %d markers >= 40 deg, %lld pixels, fine render %dx%d\n", radius, markers, n, S,
+              S);
+  for (int r = 0; r < 2; ++r)
+    std::printf("%s: max |d| %.3f, mean |d| %.4f, mean d %+.4f gray levels (step %.0f)\n", names[r],
+                max_abs[r], sum_abs[r] / n, sum_signed[r] / n, kWhite - kBlack);
+  const char* kinds[4] = {"inside the print", "the print's outer edge", "surface only", "two faces (seam)"};
+  for (int k = 0; k < 4; ++k)
+    for (int r = 0; r < 2; ++r)
+      std::printf("  %s, %s (%lld px): max |d| %.3f, mean |d| %.4f, mean d %+.4f\n", kinds[k], names[r],
+                  kn[k], ks_max[k][r], ks_abs[k][r] / std::max(1LL, kn[k]),
+                  ks_signed[k][r] / std::max(1LL, kn[k]));
+  return 0;
+}
