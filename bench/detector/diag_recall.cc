@@ -4,6 +4,9 @@
 // a quadrilateral near the true corners, and which check drops it. Writes each image with misses and
 // its threshold images to DIR (PNG) to look at.
 //   diag_recall CONDITION_SUBSTRING [images per cell (3)] [DIR (/tmp/recall_diag)]
+//   (MCMT_DIAG_TEST_SEED=s: the catalogue test's scene and seed s instead, `images` images; each missed
+//   marker also gets the nearest quad the own search's QuadFinder gives at levels of the local range and
+//   below the local mean at windows 5-21 px and offsets 7 to -3 grey levels.)
 //   diag_recall --cost: thread CPU time of Detect on the catalogue's renders with and without
 //   reread_rejected, and how many rejected candidates were read again.
 //   diag_recall --own CONDITION [images per cell (3)]: markers the OpenCV candidate search finds and the
@@ -166,10 +169,18 @@ int main(int argc, char** argv) {
   for (size_t c = 0; c < catalogue.size(); ++c) {
     const testing::Imaging& im = catalogue[c];
     if (!std::strstr(im.name.c_str(), only)) continue;
-    for (int s = 0; s < 3; ++s)
-      for (int g = 0; g < 3; ++g) {
-        const testing::ReferenceScene scene = testing::BenchScene(s, g);
-        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+    // MCMT_DIAG_TEST_SEED=s: the catalogue test's scene instead (15-60 px, 0-75 deg, `images` images
+    // from seed s: ImagingCatalogueOnReferenceRenders is 8 images of seed 11).
+    const char* test_seed = std::getenv("MCMT_DIAG_TEST_SEED");
+    for (int s = 0; s < (test_seed ? 1 : 3); ++s)
+      for (int g = 0; g < (test_seed ? 1 : 3); ++g) {
+        testing::ReferenceScene scene = testing::BenchScene(s, g);
+        uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+        if (test_seed) {
+          scene = testing::ReferenceScene();
+          scene.min_side_px = 15, scene.max_side_px = 60;
+          seed = std::strtoull(test_seed, nullptr, 10);
+        }
         MarkerDetector detector = testing::ReferenceDetector(im, options);
         std::mt19937_64 rng(seed);
         for (int i = 0; i < images; ++i) {
@@ -194,6 +205,22 @@ int main(int argc, char** argv) {
                 detector.stats().dropped - before.dropped);
             double perimeter = 0;
             for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
+            std::printf("  own quads:");
+            QuadSearch q;
+            q.tile_px = options.threshold_tile_px, q.min_contrast = options.min_tile_contrast;
+            q.min_perimeter = options.min_perimeter_px, q.max_deviation_rate = options.polygonal_approx_rate;
+            q.min_side_rate = options.min_corner_distance_rate;
+            for (double level : {0.25, 0.35, 0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9}) {
+              QuadFinder f(image, q);
+              std::printf(" %.2f: %.2f", level, NearestQuad(f.Find(level), t.corners));
+            }
+            std::printf("\n  below mean:");
+            for (int w : {5, 7, 9, 11, 15, 21})
+              for (double off : {7.0, 3.0, 0.0, -3.0}) {
+                QuadFinder f(image, q);
+                std::printf(" w%d/%g: %.2f", w, off, NearestQuad(f.FindBelowMean(w, off), t.corners));
+              }
+            std::printf("\n");
             for (int w = options.adaptive_window_min; w <= options.adaptive_window_max;
                  w += options.adaptive_window_step) {
               cv::Mat thr;
