@@ -4,9 +4,6 @@
 // a quadrilateral near the true corners, and which check drops it. Writes each image with misses and
 // its threshold images to DIR (PNG) to look at.
 //   diag_recall CONDITION_SUBSTRING [images per cell (3)] [DIR (/tmp/recall_diag)]
-//   (MCMT_DIAG_TEST_SEED=s: the catalogue test's scene and seed s instead, `images` images; each missed
-//   marker also gets the nearest quad the own search's QuadFinder gives at levels of the local range and
-//   below the local mean at windows 5-21 px and offsets 7 to -3 grey levels.)
 //   diag_recall --cost: thread CPU time of Detect on the catalogue's renders with and without
 //   reread_rejected, and how many rejected candidates were read again.
 //   diag_recall --own CONDITION [images per cell (3)]: markers the OpenCV candidate search finds and the
@@ -163,8 +160,12 @@ int main(int argc, char** argv) {
   mkdir(dir.c_str(), 0755);
   cv::setNumThreads(1);
   auto dict = LoadDictionary("DICT_6X6_250");
-  const DetectorOptions options;
+  DetectorOptions options;
+  // MCMT_DIAG_BROKEN_BORDER=0: without the broken-border search (detector option broken_border_window).
+  if (std::getenv("MCMT_DIAG_BROKEN_BORDER"))
+    options.broken_border_window = std::atoi(std::getenv("MCMT_DIAG_BROKEN_BORDER"));
   int dumped = 0, missed = 0, visible = 0;
+  long long blur_quads = 0, blur_found = 0;
   const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
   for (size_t c = 0; c < catalogue.size(); ++c) {
     const testing::Imaging& im = catalogue[c];
@@ -260,6 +261,9 @@ int main(int argc, char** argv) {
               }
             }
           }
+          if (i + 1 == images)
+            blur_quads += detector.stats().broken_border_quads,
+                blur_found += detector.stats().broken_border_found;
           if (any && dumped < 40) {
             char name[256];
             std::snprintf(name, sizeof(name), "%s/s%llu_i%d.png", dir.c_str(),
@@ -270,6 +274,8 @@ int main(int argc, char** argv) {
         }
       }
   }
-  std::printf("missed %d of %d markers (>= 20 px, <= 75 deg)\n", missed, visible);
+  std::printf(
+      "missed %d of %d markers (>= 20 px, <= 75 deg); broken-border search: %lld quads read, %lld markers\n",
+      missed, visible, blur_quads, blur_found);
   return 0;
 }
