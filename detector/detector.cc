@@ -1749,12 +1749,12 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
 
 // Under blur a thin border (under 1.5 px at 60-75 deg) is brighter than the local mean less
 // adaptive_constant where a white code cell adjoins it: at OpenCV's windows its contour breaks into
-// pieces (12-43 px against a perimeter of 85-117) and no candidate is left. Dark below the mean of a
+// pieces (12-101 px against perimeters of 89-117) and no candidate is left. Dark below the mean of a
 // 5 px window *plus* 3 grey levels the border stays whole and its outer boundary is the marker's quad
 // (within 0.5-1.7 px of the true corners on the catalogue test's lost blur markers). Searched with the
 // own search's QuadFinder on the tiles with contrast that no marker found so far touches (a flat
 // surface has no dark pixels), each quad read as a rejected candidate is. Catalogue test (8 images,
-// seed 11): blur 1.2 recall <75 deg 0.829 -> 0.971 (34 of 35), ~4 quads read per image. On every frame
+// seed 11): blur 1.2 recall <75 deg 0.829 -> 0.971 (34 of 35), ~3.4 quads read per image. On every frame
 // it cost +47 % instructions on bench_detector's sharp frames (337.6 -> 494.9 M: the threshold image
 // and contours 6.8 M, the reads 8.9 M per frame), so Detect runs it on blurred frames only. Quads under
 // broken_border_min_perimeter_px are not read: the markers under 20 px it found (steep, cells ~1 px)
@@ -1775,9 +1775,9 @@ void MarkerDetector::SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& ro
        finder.FindBelowMean(options_.broken_border_window, options_.broken_border_offset)) {
     std::array<cv::Point2d, 4> quad = local;
     for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-    Raw r;
     if (QuadPerimeter(quad) < options_.broken_border_min_perimeter_px) continue;
     ++stats_.broken_border_quads;
+    Raw r;
     if (!ReadQuad(gray, quad, &r) || !markers_.Accepts(r.id)) continue;
     ++stats_.broken_border_found;
     out->push_back(r);
