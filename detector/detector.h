@@ -107,10 +107,19 @@ struct DetectorOptions {
   // low_threshold_level and at this level of the local range (detector/candidates.h), each read as the
   // own search reads them (0: not searched). With reread_rejected's dictionaries only.
   double inside_rejected_level = 0.15;
-  int min_distance_to_border = 1;           // pixels
-  double error_correction_rate = 0.6;       // of the dictionary's correction capacity
-  int perspective_pixels_per_cell = 6;      // bit sampling resolution
-  double perspective_ignored_margin = 0.3;  // part of each cell ignored when reading its bit
+  // A marker whose thin blurred border (60-75 deg under 1.2 px blur) breaks at OpenCV's adaptive
+  // threshold where white code cells touch it has no candidate. On a blurred frame (its markers' mean
+  // fitted blur >= 0.55 px, as sharp_smoothing judges it; needs sharp_smoothing > 0) the tiles with
+  // contrast that no marker found touches are searched again for quads dark below the mean of this
+  // window (px) less broken_border_offset grey levels (a negative offset: darker than the mean plus
+  // |offset|), each read as a rejected candidate (0: not searched). With reread_rejected's dictionaries.
+  int broken_border_window = 5;
+  double broken_border_offset = -3;
+  double broken_border_min_perimeter_px = 80;  // smaller quads of that search are not read
+  int min_distance_to_border = 1;              // pixels
+  double error_correction_rate = 0.6;          // of the dictionary's correction capacity
+  int perspective_pixels_per_cell = 6;         // bit sampling resolution
+  double perspective_ignored_margin = 0.3;     // part of each cell ignored when reading its bit
   bool inverted = false;     // also look for white-on-black markers (default: markers.inverted)
   bool aruco3 = false;       // OpenCV's ArUco3 fast search (downsampled candidate search)
   int aruco3_min_side = 32;  // its minSideLengthCanonicalImg
@@ -151,6 +160,9 @@ struct DetectorStats {
   long long rereads_found = 0;    // ... of which markers
   // Codes read from unmixed cell levels (cells as narrow as the blur: MarkerDetector::ReadCode).
   long long deconvolved_reads = 0;
+  // Quads of the broken-border search read (DetectorOptions::broken_border_window) ...
+  long long broken_border_quads = 0;
+  long long broken_border_found = 0;  // ... of which markers
 };
 
 // Refines the corners (ArUco order, raw image pixels, pixel centres at integer coordinates) of one
@@ -225,6 +237,11 @@ class MarkerDetector {
   // A marker inside a candidate OpenCV rejected (DetectorOptions::inside_rejected_level): quads of the
   // candidate's box at low levels of the local range, read; false if none is a marker.
   bool SearchInsideRejected(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r);
+  // Markers whose blurred border breaks at OpenCV's adaptive threshold (DetectorOptions::
+  // broken_border_window): quads of a binary image dark below the local mean plus broken_border_offset
+  // outside the markers in `out` (found in `roi`), read; markers added to `out`.
+  void SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
+                           double max_perimeter, std::vector<Raw>* out);
   // A marker region with the camera's sharpening undone (unsharp_amount), smoothed by `smoothing` px.
   void UnsharpRegion(const cv::Mat& from, double smoothing, cv::Mat to);
   // The code of a candidate read at the cell centres of `corners` (`quad`'s corners or refined ones),

@@ -102,6 +102,18 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "the view made too thin) is searched inside for quads at low_threshold_level and this level "
                 "of the local range (0: not)",
                 InRange(0, 1, false, true))
+           .Add("broken_border_window", &O::broken_border_window, "px",
+                "on blurred frames, markers whose thin border breaks at the adaptive threshold are searched "
+                "for where none was found: dark below the mean of this window less broken_border_offset "
+                "(0: not)",
+                AtLeast(0))
+           .Add("broken_border_offset", &O::broken_border_offset, "grey levels",
+                "the broken-border search's offset from the local mean (negative: darker than the mean "
+                "plus its magnitude)")
+           .Add("broken_border_min_perimeter_px", &O::broken_border_min_perimeter_px, "px",
+                "the broken-border search's quads with a smaller perimeter are not read (markers under 20 "
+                "px found so had poor corners)",
+                AtLeast(0))
            .Add("min_distance_to_border", &O::min_distance_to_border, "px",
                 "smallest distance of a candidate to the image border")
            .Add("error_correction_rate", &O::error_correction_rate, "",

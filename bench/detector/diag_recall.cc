@@ -160,16 +160,28 @@ int main(int argc, char** argv) {
   mkdir(dir.c_str(), 0755);
   cv::setNumThreads(1);
   auto dict = LoadDictionary("DICT_6X6_250");
-  const DetectorOptions options;
+  DetectorOptions options;
+  // MCMT_DIAG_BROKEN_BORDER=0: without the broken-border search (detector option broken_border_window).
+  if (std::getenv("MCMT_DIAG_BROKEN_BORDER"))
+    options.broken_border_window = std::atoi(std::getenv("MCMT_DIAG_BROKEN_BORDER"));
   int dumped = 0, missed = 0, visible = 0;
+  long long blur_quads = 0, blur_found = 0;
   const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
   for (size_t c = 0; c < catalogue.size(); ++c) {
     const testing::Imaging& im = catalogue[c];
     if (!std::strstr(im.name.c_str(), only)) continue;
-    for (int s = 0; s < 3; ++s)
-      for (int g = 0; g < 3; ++g) {
-        const testing::ReferenceScene scene = testing::BenchScene(s, g);
-        const uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+    // MCMT_DIAG_TEST_SEED=s: the catalogue test's scene instead (15-60 px, 0-75 deg, `images` images
+    // from seed s: ImagingCatalogueOnReferenceRenders is 8 images of seed 11).
+    const char* test_seed = std::getenv("MCMT_DIAG_TEST_SEED");
+    for (int s = 0; s < (test_seed ? 1 : 3); ++s)
+      for (int g = 0; g < (test_seed ? 1 : 3); ++g) {
+        testing::ReferenceScene scene = testing::BenchScene(s, g);
+        uint64_t seed = testing::BenchSeed(static_cast<int>(c), s, g);
+        if (test_seed) {
+          scene = testing::ReferenceScene();
+          scene.min_side_px = 15, scene.max_side_px = 60;
+          seed = std::strtoull(test_seed, nullptr, 10);
+        }
         MarkerDetector detector = testing::ReferenceDetector(im, options);
         std::mt19937_64 rng(seed);
         for (int i = 0; i < images; ++i) {
@@ -194,6 +206,22 @@ int main(int argc, char** argv) {
                 detector.stats().dropped - before.dropped);
             double perimeter = 0;
             for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
+            std::printf("  own quads:");
+            QuadSearch q;
+            q.tile_px = options.threshold_tile_px, q.min_contrast = options.min_tile_contrast;
+            q.min_perimeter = options.min_perimeter_px, q.max_deviation_rate = options.polygonal_approx_rate;
+            q.min_side_rate = options.min_corner_distance_rate;
+            for (double level : {0.25, 0.35, 0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9}) {
+              QuadFinder f(image, q);
+              std::printf(" %.2f: %.2f", level, NearestQuad(f.Find(level), t.corners));
+            }
+            std::printf("\n  below mean:");
+            for (int w : {5, 7, 9, 11, 15, 21})
+              for (double off : {7.0, 3.0, 0.0, -3.0}) {
+                QuadFinder f(image, q);
+                std::printf(" w%d/%g: %.2f", w, off, NearestQuad(f.FindBelowMean(w, off), t.corners));
+              }
+            std::printf("\n");
             for (int w = options.adaptive_window_min; w <= options.adaptive_window_max;
                  w += options.adaptive_window_step) {
               cv::Mat thr;
@@ -233,6 +261,9 @@ int main(int argc, char** argv) {
               }
             }
           }
+          if (i + 1 == images)
+            blur_quads += detector.stats().broken_border_quads,
+                blur_found += detector.stats().broken_border_found;
           if (any && dumped < 40) {
             char name[256];
             std::snprintf(name, sizeof(name), "%s/s%llu_i%d.png", dir.c_str(),
@@ -243,6 +274,8 @@ int main(int argc, char** argv) {
         }
       }
   }
-  std::printf("missed %d of %d markers (>= 20 px, <= 75 deg)\n", missed, visible);
+  std::printf(
+      "missed %d of %d markers (>= 20 px, <= 75 deg); broken-border search: %lld quads read, %lld markers\n",
+      missed, visible, blur_quads, blur_found);
   return 0;
 }

@@ -63,9 +63,13 @@ struct Bounds {
 // inside_rejected_level): black tool -0.015 / 0.049 / 1.000 / 0.872 -> -0.012 / 0.050 / 1.000 / 0.949,
 // dark grey -0.017 / 0.047 / 1.000 / 0.846 -> -0.013 / 0.048 / 1.000 / 0.923: both meet the targets now
 // and are asserted at them.
+// Blur's markers lost at 60-75 deg (no candidate quad: the border broken where white cells touch it) are
+// searched for on blurred frames below the local mean plus 3 grey levels (detector option
+// broken_border_window; DetectorAccuracy.BlurredBordersBrokenByWhiteCellsAreFound): blur 1.2 -0.005 /
+// 0.054 / 1.000 / 0.829 -> -0.019 / 0.070 / 1.000 / 0.971, now meeting the targets (asserted at them);
+// defocus recall <75 0.971 -> 1.000, gamma 0.971 -> 1.000 (offset -0.007 -> -0.008 px).
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
-      {"gaussian blur 1.2", {0.02, 0.10, 0.99, 0.82}},
       {"hard", {0.04, 0.18, 0.99, 1.00}},
   };
   return s;
@@ -396,6 +400,55 @@ TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
     EXPECT_LE(worst_offset, 0.6) << "id " << k.id;
     EXPECT_GE(detector.stats().deconvolved_reads, 1) << "id " << k.id;
   }
+}
+
+// Markers whose thin blurred border breaks where the code's white cells touch it (the catalogue test's
+// renders: 1.2 px Gaussian blur, seed 11, 22-29 px at 67-75 deg; build/bench/diag_recall with
+// MCMT_DIAG_TEST_SEED=11). At OpenCV's adaptive threshold (windows 5 and 15, dark below the mean less 7)
+// the nearest contour was 12-101 px long against perimeters of 89-117 and never a quad near the marker;
+// at the own search's levels of the local range (0.25-0.9) only ids 24 and 33 had one within 2 px
+// (0.6-0.65). Dark below the mean of 5 px plus 3 (the broken-border search on blurred frames, detector
+// option broken_border_window) the border stays whole: quads within 0.5-1.7 px of the true corners, read
+// as rejected candidates are. Before, none was found; now all 5, corners within 1.6 px (largest offsets
+// 0.13-0.61 px: steep and blurred, cells ~1.5 px across).
+TEST(DetectorAccuracy, BlurredBordersBrokenByWhiteCellsAreFound) {
+  const testing::Imaging im = testing::CatalogueCondition("gaussian blur 1.2");
+  auto dict = LoadDictionary("DICT_6X6_250");
+  MarkerConfig mc;
+  mc.dictionary = "DICT_6X6_250";
+  testing::ReferenceScene scene;
+  scene.min_side_px = 15, scene.max_side_px = 60;
+  std::mt19937_64 rng(11);
+  const std::map<int, std::vector<int>> lost = {{0, {184}}, {1, {24}}, {3, {166}}, {4, {33, 132}}};
+  int found = 0;
+  for (int i = 0; i <= 4; ++i) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+    if (!lost.count(i)) continue;
+    MarkerDetector detector(mc, DetectorOptions());
+    const std::vector<marker_t> markers = detector.Detect(image);
+    for (int id : lost.at(i)) {
+      testing::CornerErrors e;
+      for (const marker_t& m : markers)
+        for (const auto& t : truth) {
+          if (m.id != id || t.id != id) continue;
+          std::array<cv::Point2d, 4> got;
+          for (int j = 0; j < 4; ++j) got[j] = {m.corners[j][0], m.corners[j][1]};
+          testing::AddCornerErrors(t, got, &e);
+        }
+      EXPECT_EQ(e.errors.size(), 4u) << "image " << i << " id " << id << " not found";
+      if (e.errors.size() != 4u) continue;
+      ++found;
+      double worst = 0, worst_offset = 0;
+      for (int j = 0; j < 4; ++j)
+        worst = std::max(worst, e.errors[j]), worst_offset = std::max(worst_offset, std::abs(e.offsets[j]));
+      std::printf("image %d id %d: largest corner error %.2f px, largest offset %.3f px\n", i, id, worst,
+                  worst_offset);
+      EXPECT_LE(worst, 2.0) << "id " << id;
+    }
+    EXPECT_GE(detector.stats().broken_border_found, 1) << "image " << i;
+  }
+  EXPECT_EQ(found, 5);
 }
 
 // A side whose crossings lie on the code's edge along part of it (a 27 px marker at 68 deg under the
