@@ -103,9 +103,10 @@ const OptionTable<DetectorOptions>& DetectorOptionTable() {
                 "of the local range (0: not)",
                 InRange(0, 1, false, true))
            .Add("broken_border_window", &O::broken_border_window, "px",
-                "on blurred frames, markers whose thin border breaks at the adaptive threshold are searched "
-                "for where none was found: dark below the mean of this window less broken_border_offset "
-                "(0: not)",
+                "on blurred frames (the mean fitted blur of the frame's markers >= 0.55 px, judged by "
+                "sharp_smoothing's fit: sharp_smoothing 0 turns this search off too), markers whose thin "
+                "border breaks at the adaptive threshold are searched for where none was found: dark below "
+                "the mean of this window less broken_border_offset (0: not)",
                 AtLeast(0))
            .Add("broken_border_offset", &O::broken_border_offset, "grey levels",
                 "the broken-border search's offset from the local mean (negative: darker than the mean "
