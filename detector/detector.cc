@@ -1771,18 +1771,11 @@ void MarkerDetector::SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& ro
     for (auto& c : local) c -= cv::Point2d(roi.x, roi.y);
     finder.Cover(local, 0.0);
   }
-  for (const std::array<cv::Point2d, 4>& local :
-       finder.FindBelowMean(options_.broken_border_window, options_.broken_border_offset)) {
-    std::array<cv::Point2d, 4> quad = local;
-    for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-    if (QuadPerimeter(quad) < options_.broken_border_min_perimeter_px) continue;
-    ++stats_.broken_border_quads;
-    Raw r;
-    if (!ReadQuad(gray, quad, &r) || !markers_.Accepts(r.id)) continue;
-    ++stats_.broken_border_found;
-    out->push_back(r);
-    finder.Cover(local, 0.0);
-  }
+  const size_t before = out->size();
+  stats_.broken_border_quads += ReadRegionQuads(
+      gray, roi, finder.FindBelowMean(options_.broken_border_window, options_.broken_border_offset),
+      options_.broken_border_min_perimeter_px, &finder, out);
+  stats_.broken_border_found += static_cast<long long>(out->size() - before);
 }
 
 bool MarkerDetector::SearchInsideRejected(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad,
@@ -1831,19 +1824,29 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
   for (double level : {options_.threshold_level, options_.second_threshold_level,
                        options_.low_threshold_level, options_.high_threshold_level, -1.0}) {
     if (level == 0 || (level < 0 && options_.mean_window_px == 0)) continue;
-    for (const std::array<cv::Point2d, 4>& local :
-         level > 0 ? finder.Find(level)
-                   : finder.FindBelowMean(options_.mean_window_px, options_.adaptive_constant)) {
-      std::array<cv::Point2d, 4> quad = local;  // image pixels (local: the region's)
-      for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-      Raw r;
-      if (!ReadQuad(gray, quad, &r)) continue;
-      if (!markers_.Accepts(r.id)) continue;
-      out.push_back(r);
-      finder.Cover(local, 0.0);
-    }
+    ReadRegionQuads(gray, roi,
+                    level > 0 ? finder.Find(level)
+                              : finder.FindBelowMean(options_.mean_window_px, options_.adaptive_constant),
+                    0.0, &finder, &out);
   }
   return out;
+}
+
+int MarkerDetector::ReadRegionQuads(const cv::Mat& gray, const cv::Rect& roi,
+                                    const std::vector<std::array<cv::Point2d, 4>>& quads,
+                                    double min_perimeter_px, QuadFinder* finder, std::vector<Raw>* out) {
+  int read = 0;
+  for (const std::array<cv::Point2d, 4>& local : quads) {
+    std::array<cv::Point2d, 4> quad = local;  // image pixels (local: the region's)
+    for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
+    if (min_perimeter_px > 0 && QuadPerimeter(quad) < min_perimeter_px) continue;
+    ++read;
+    Raw r;
+    if (!ReadQuad(gray, quad, &r) || !markers_.Accepts(r.id)) continue;
+    out->push_back(r);
+    finder->Cover(local, 0.0);
+  }
+  return read;
 }
 
 bool MarkerDetector::RereadCandidate(const cv::Mat& gray, const std::array<cv::Point2d, 4>& quad, Raw* r) {
@@ -1951,18 +1954,6 @@ std::vector<MarkerDetector::Raw> MarkerDetector::FullSearch(const cv::Mat& gray,
   return Search(gray, roi, options_.min_perimeter_px,
                 options_.max_perimeter_rate * std::max(gray.cols, gray.rows), options_.adaptive_window_min,
                 options_.adaptive_window_max);
-}
-
-std::vector<MarkerDetector::Raw> MarkerDetector::TrackSearch(const cv::Mat& gray) {
-  // Each region searched as the full search searches the image (every threshold window, every
-  // perimeter): a marker inside one, away from its edges, gives the full search's candidate. Regions
-  // do not overlap (merged), so a marker is found once per candidate, as in the full search.
-  std::vector<Raw> out;
-  for (const cv::Rect& region : TrackRegions(gray.size())) {
-    const std::vector<Raw> found = FullSearch(gray, region);
-    out.insert(out.end(), found.begin(), found.end());
-  }
-  return out;
 }
 
 // The unsharp mask y = (1 + k) x - k G x inverted: x = (y + k G x) / (1 + k), iterated from x = y
@@ -2214,12 +2205,21 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   const cv::Mat gray = GrayImage(image);
   ++stats_.frames;
 
+  // Where this frame is searched: in fast mode between full searches, TrackRegions, each as the full
+  // search searches the image (every threshold window, every perimeter: a marker inside one, away from
+  // its edges, gives the full search's candidate; regions do not overlap, so a marker is found once per
+  // candidate, as in the full search); else the whole image.
+  const bool tracked = options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every;
+  const std::vector<cv::Rect> regions =
+      tracked ? TrackRegions(gray.size()) : std::vector<cv::Rect>{cv::Rect(0, 0, gray.cols, gray.rows)};
   std::vector<Raw> raw;
-  if (options_.fast && !last_.empty() && frames_since_full_ + 1 < options_.full_search_every) {
-    raw = TrackSearch(gray);
+  for (const cv::Rect& roi : regions) {
+    const std::vector<Raw> found = FullSearch(gray, roi);
+    raw.insert(raw.end(), found.begin(), found.end());
+  }
+  if (tracked) {
     ++frames_since_full_;
   } else {
-    raw = FullSearch(gray, cv::Rect(0, 0, gray.cols, gray.rows));
     frames_since_full_ = 0;
     ++stats_.full_searches;
   }
@@ -2230,11 +2230,8 @@ std::vector<marker_t> MarkerDetector::Detect(const cv::Mat& image) {
   bool use_smoothed = false;
   if (edges && options_.sharp_smoothing > 0) smoothed = RefineSmoothed(gray, unique, &use_smoothed);
   // A blurred frame (its markers' mean fitted blur >= 0.55 px: RefineSmoothed) is searched again for
-  // markers whose border broke at the adaptive threshold (SearchBrokenBorders), where it was searched.
+  // markers whose border broke at the adaptive threshold (SearchBrokenBorders), in the same regions.
   if (edges && reread_ && !use_smoothed && !smoothed.empty() && options_.broken_border_window > 0) {
-    const std::vector<cv::Rect> regions = frames_since_full_ > 0
-                                              ? TrackRegions(gray.size())
-                                              : std::vector<cv::Rect>{cv::Rect(0, 0, gray.cols, gray.rows)};
     const size_t before = unique.size();
     for (const cv::Rect& roi : regions)
       SearchBrokenBorders(gray, roi, options_.min_perimeter_px,

@@ -183,6 +183,7 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
                          int polarity = 0, double held_gamma = 0.0);
 
 struct QuadSearch;  // detector/candidates.h
+class QuadFinder;   // detector/candidates.h
 
 class MarkerDetector {
  public:
@@ -223,8 +224,6 @@ class MarkerDetector {
                           double max_perimeter, int window_min, int window_max);
   // The full search's candidate search (every threshold window, every perimeter) in `roi`.
   std::vector<Raw> FullSearch(const cv::Mat& gray, const cv::Rect& roi);
-  // Fast mode between full searches: FullSearch in each of TrackRegions.
-  std::vector<Raw> TrackSearch(const cv::Mat& gray);
   // Fast mode's search regions: each previous marker's box grown by fast_band_sides of its larger side
   // (and 4 px) on every side, overlapping ones merged.
   std::vector<cv::Rect> TrackRegions(cv::Size size) const;
@@ -260,6 +259,12 @@ class MarkerDetector {
   // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
   std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                              double max_perimeter);
+  // Reads `quads` (found by `finder` in region `roi`, in its pixels; those with a perimeter under
+  // `min_perimeter_px` skipped): each that is a marker of the set is added to `out` and covered in the
+  // finder. Returns how many were read.
+  int ReadRegionQuads(const cv::Mat& gray, const cv::Rect& roi,
+                      const std::vector<std::array<cv::Point2d, 4>>& quads, double min_perimeter_px,
+                      QuadFinder* finder, std::vector<Raw>* out);
 
   // Each id once: one marker found twice (regions overlapping in fast mode, quads of one marker from two
   // threshold windows, or the marker's and its narrow margin's quads both decoding: quads whose centres
