@@ -50,9 +50,7 @@ inline void Score(const std::vector<RenderedMarker>& truth, const std::vector<ma
       if (m.id != t.id) continue;
       a->found75 += counted, a->found60 += counted && in60;
       a->found_small += !counted;
-      std::array<cv::Point2d, 4> got;
-      for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
-      AddCornerErrors(t, got, &a->corners);
+      AddCornerErrors(t, CornersOf(m), &a->corners);
     }
   }
 }

@@ -105,11 +105,8 @@ inline SimEvalResult EvaluateOnSim(const SimEvalOptions& o) {
         ++r.found75;
         r.found60 += in60;
         RenderedMarker truth;
-        std::array<cv::Point2d, 4> got;
-        for (int k = 0; k < 4; ++k) {
-          truth.corners[k] = cv::Point2d(v.corners[k].x(), v.corners[k].y());
-          got[k] = cv::Point2d(hit->corners[k][0], hit->corners[k][1]);
-        }
+        const std::array<cv::Point2d, 4> got = CornersOf(*hit);
+        for (int k = 0; k < 4; ++k) truth.corners[k] = cv::Point2d(v.corners[k].x(), v.corners[k].y());
         AddCornerErrors(truth, got, &r.corners);
         for (int k = 0; k < 4; ++k) {
           double best = 90;

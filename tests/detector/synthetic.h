@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "mcmt/marker_t.hpp"
 
 namespace mcmt::testing {
 
@@ -218,6 +219,13 @@ inline cv::Point2d OutwardNormal(const RenderedMarker& truth, int side) {
   n *= 1.0 / cv::norm(n);
   const cv::Point2d mid = 0.5 * (truth.corners[side] + truth.corners[(side + 1) % 4]);
   return n.dot(mid - centre) < 0 ? -n : n;
+}
+
+// A detected marker's corners as points (its corner order, pixels).
+inline std::array<cv::Point2d, 4> CornersOf(const marker_t& m) {
+  std::array<cv::Point2d, 4> corners;
+  for (int k = 0; k < 4; ++k) corners[k] = {m.corners[k][0], m.corners[k][1]};
+  return corners;
 }
 
 inline void AddCornerErrors(const RenderedMarker& truth, const std::array<cv::Point2d, 4>& got,

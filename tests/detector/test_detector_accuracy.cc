@@ -146,9 +146,7 @@ TEST(ReferenceRenderer, InvertedPrintIsArucosInvertedMarker) {
         for (const testing::RenderedMarker& t : truth) {
           if (t.id != m.id) continue;
           ++f.found;
-          std::array<cv::Point2d, 4> got;
-          for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
-          testing::AddCornerErrors(t, got, &f.corners);
+          testing::AddCornerErrors(t, testing::CornersOf(m), &f.corners);
           for (int k = 0; k < 4; ++k)
             f.worst_px = std::max(
                 f.worst_px, std::hypot(m.corners[k][0] - t.corners[k].x, m.corners[k][1] - t.corners[k].y));
@@ -363,6 +361,23 @@ TEST(DetectorAccuracy, InvertedPrintsMarginIsNotTheMarker) {
   EXPECT_TRUE(found);
 }
 
+// The corner errors of marker `id` among `found` against its truth (none where it was not found).
+testing::CornerErrors ErrorsOfId(const std::vector<marker_t>& found,
+                                 const std::vector<testing::RenderedMarker>& truth, int id) {
+  testing::CornerErrors e;
+  for (const marker_t& m : found)
+    for (const auto& t : truth)
+      if (m.id == id && t.id == id) testing::AddCornerErrors(t, testing::CornersOf(m), &e);
+  return e;
+}
+
+// The largest |x| of `v` (0 when empty).
+double MaxAbsOf(const std::vector<double>& v) {
+  double worst = 0;
+  for (double x : v) worst = std::max(worst, std::abs(x));
+  return worst;
+}
+
 // Markers whose code cells are about as narrow as the blur (bench_accuracy's renders, build/bench/
 // diag_recall): under 1.2 px Gaussian blur at 59-71 deg (21-24 px, cells of 1.5-2.5 px across) OpenCV's
 // candidate, refined by mid-level crossings, read 3-8 inner bits and up to 13 border cells wrong at the
@@ -383,18 +398,9 @@ TEST(DetectorAccuracy, CellsAsNarrowAsTheBlurAreRead) {
     const cv::Mat image = BenchImage(*dict, "gaussian blur 1.2", k.side_band, k.angle_band, k.image, &truth);
     ASSERT_FALSE(image.empty());
     MarkerDetector detector(mc, DetectorOptions());
-    testing::CornerErrors e;
-    for (const marker_t& m : detector.Detect(image))
-      for (const auto& t : truth) {
-        if (m.id != k.id || t.id != k.id) continue;
-        std::array<cv::Point2d, 4> got;
-        for (int j = 0; j < 4; ++j) got[j] = {m.corners[j][0], m.corners[j][1]};
-        testing::AddCornerErrors(t, got, &e);
-      }
+    const testing::CornerErrors e = ErrorsOfId(detector.Detect(image), truth, k.id);
     ASSERT_EQ(e.errors.size(), 4u) << "id " << k.id << " not found";
-    double worst = 0, worst_offset = 0;
-    for (int j = 0; j < 4; ++j)
-      worst = std::max(worst, e.errors[j]), worst_offset = std::max(worst_offset, std::abs(e.offsets[j]));
+    const double worst = MaxAbsOf(e.errors), worst_offset = MaxAbsOf(e.offsets);
     std::printf("id %d: largest corner error %.2f px, largest offset %.3f px\n", k.id, worst, worst_offset);
     EXPECT_LE(worst, 2.0) << "id " << k.id;
     EXPECT_LE(worst_offset, 0.6) << "id " << k.id;
@@ -428,20 +434,11 @@ TEST(DetectorAccuracy, BlurredBordersBrokenByWhiteCellsAreFound) {
     MarkerDetector detector(mc, DetectorOptions());
     const std::vector<marker_t> markers = detector.Detect(image);
     for (int id : lost.at(i)) {
-      testing::CornerErrors e;
-      for (const marker_t& m : markers)
-        for (const auto& t : truth) {
-          if (m.id != id || t.id != id) continue;
-          std::array<cv::Point2d, 4> got;
-          for (int j = 0; j < 4; ++j) got[j] = {m.corners[j][0], m.corners[j][1]};
-          testing::AddCornerErrors(t, got, &e);
-        }
+      const testing::CornerErrors e = ErrorsOfId(markers, truth, id);
       EXPECT_EQ(e.errors.size(), 4u) << "image " << i << " id " << id << " not found";
       if (e.errors.size() != 4u) continue;
       ++found;
-      double worst = 0, worst_offset = 0;
-      for (int j = 0; j < 4; ++j)
-        worst = std::max(worst, e.errors[j]), worst_offset = std::max(worst_offset, std::abs(e.offsets[j]));
+      const double worst = MaxAbsOf(e.errors), worst_offset = MaxAbsOf(e.offsets);
       std::printf("image %d id %d: largest corner error %.2f px, largest offset %.3f px\n", i, id, worst,
                   worst_offset);
       EXPECT_LE(worst, 2.0) << "id " << id;
@@ -479,9 +476,7 @@ TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
         if (m.id != 108 || t.id != 108) continue;
         seen = true;
         testing::CornerErrors e;
-        std::array<cv::Point2d, 4> got;
-        for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
-        testing::AddCornerErrors(t, got, &e);
+        testing::AddCornerErrors(t, testing::CornersOf(m), &e);
         double worst = 0;
         for (double x : e.errors) worst = std::max(worst, x);
         std::printf("id 108: offset %+.3f px, largest corner error %.3f px\n", testing::MeanOf(e.offsets),
@@ -518,10 +513,7 @@ TEST(DetectorAccuracy, SteepViewsKeepTheirDiagonals) {
       for (const auto& t : truth) {
         if (t.id != m.id) continue;
         auto diagonal = [](const cv::Point2d& a, const cv::Point2d& b) { return cv::norm(b - a); };
-        const cv::Point2d got[4] = {{m.corners[0][0], m.corners[0][1]},
-                                    {m.corners[1][0], m.corners[1][1]},
-                                    {m.corners[2][0], m.corners[2][1]},
-                                    {m.corners[3][0], m.corners[3][1]}};
+        const std::array<cv::Point2d, 4> got = testing::CornersOf(m);
         const double true02 = diagonal(t.corners[0], t.corners[2]),
                      true13 = diagonal(t.corners[1], t.corners[3]);
         const double e02 = diagonal(got[0], got[2]) / true02 - 1, e13 = diagonal(got[1], got[3]) / true13 - 1;
@@ -645,8 +637,7 @@ TEST(DetectorAccuracy, BlurDoesNotSquareASkewedMarker) {
       for (const marker_t& m : detector.Detect(image))
         for (const testing::RenderedMarker& t : truth) {
           if (t.id != m.id || t.view_angle_deg < 45 || t.view_angle_deg >= 60) continue;
-          std::array<cv::Point2d, 4> got;
-          for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
+          const std::array<cv::Point2d, 4> got = testing::CornersOf(m);
           int acute = 0;
           for (int k = 1; k < 4; ++k)
             if (CornerAngleDeg(t.corners, k) < CornerAngleDeg(t.corners, acute)) acute = k;

@@ -57,9 +57,7 @@ Measured Measure(const std::string& dictionary, testing::SceneOptions scene, Det
         if (m.id != t.id) continue;
         ++found;
         found60 += in60;
-        std::array<cv::Point2d, 4> got;
-        for (int k = 0; k < 4; ++k) got[k] = {m.corners[k][0], m.corners[k][1]};
-        testing::AddCornerErrors(t, got, &errors);
+        testing::AddCornerErrors(t, testing::CornersOf(m), &errors);
       }
     }
   }
