@@ -447,9 +447,10 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
   return true;
 }
 
-// +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
-// brighter (inverted), 0 when unclear. Samples the border cells and the ring of cells around the quad.
-int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
+// The medians of the grey levels at the centres of the quad's border cells and of the ring of cells just
+// outside it; false where fewer than 4 of either lie in the image.
+bool BorderAndRing(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells,
+                   double* border_level, double* ring_level) {
   const cv::Matx33d h = QuadFromUnitSquare(corners);
   std::vector<float> border, ring;
   for (int i = 0; i < cells; ++i) {
@@ -464,8 +465,16 @@ int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corner
       (k < 4 ? border : ring).push_back(v);
     }
   }
-  if (border.size() < 4 || ring.size() < 4) return 0;
-  const double b = Median(std::move(border)), r = Median(std::move(ring));
+  if (border.size() < 4 || ring.size() < 4) return false;
+  *border_level = Median(std::move(border)), *ring_level = Median(std::move(ring));
+  return true;
+}
+
+// +1 when the marker's border is darker than the band just outside it (black-on-white print), -1 when
+// brighter (inverted), 0 when unclear (BorderAndRing's medians within 5 grey levels).
+int MarkerPolarity(const cv::Mat& gray, const std::array<cv::Point2d, 4>& corners, int cells) {
+  double b = 0, r = 0;
+  if (!BorderAndRing(gray, corners, cells, &b, &r)) return 0;
   if (std::abs(b - r) < 5.0) return 0;
   return b < r ? 1 : -1;
 }
@@ -1760,6 +1769,15 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
 // broken_border_min_perimeter_px are not read: the markers under 20 px it found (steep, cells ~1 px)
 // had corners ~0.13 px inward on average and took the blur map's scale error from +0.036 to +0.166 %
 // (bench_imaging_maps, reference renderer, 150 frames, 1.0 m; with the floor: +0.036, unchanged).
+// A broken-border quad is read only where its border cells are darker than the ring of cells just
+// outside it by this much (grey levels; IdentifyCells' floor on the code's two colours): its border is
+// ink and its ring the margin's paper. The quads of the markers this search found: 53-110 levels
+// (medians of 28 border and 36 ring cell centres at the quad); the quads it read in vain, dark regions
+// with no bright ring: -12 to +12 (catalogue test's blur renders, seed 11: 22 of 27 quads over 8
+// images; bench_detector's blurred frames: 10 of 12). Those reads cost 15 M instructions on
+// bench_detector's 10 blurred frames (1571.9 -> 1556.8 M), some in DeconvolvedCells and one in
+// RereadCandidate's refinement; the markers found are the same.
+constexpr double kBrokenBorderDepth = 20.0;
 void MarkerDetector::SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                                          double max_perimeter, std::vector<Raw>* out) {
   if (options_.broken_border_window <= 0) return;
@@ -1772,9 +1790,17 @@ void MarkerDetector::SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& ro
     finder.Cover(local, 0.0);
   }
   const size_t before = out->size();
-  stats_.broken_border_quads += ReadRegionQuads(
-      gray, roi, finder.FindBelowMean(options_.broken_border_window, options_.broken_border_offset),
-      options_.broken_border_min_perimeter_px, &finder, out);
+  std::vector<std::array<cv::Point2d, 4>> quads;
+  for (const std::array<cv::Point2d, 4>& local :
+       finder.FindBelowMean(options_.broken_border_window, options_.broken_border_offset)) {
+    std::array<cv::Point2d, 4> quad = local;  // image pixels (local: the region's)
+    for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
+    if (QuadPerimeter(quad) < options_.broken_border_min_perimeter_px) continue;
+    double border = 0, ring = 0;
+    if (!BorderAndRing(gray, quad, Cells(), &border, &ring) || ring - border < kBrokenBorderDepth) continue;
+    quads.push_back(local);
+  }
+  stats_.broken_border_quads += ReadRegionQuads(gray, roi, quads, &finder, out);
   stats_.broken_border_found += static_cast<long long>(out->size() - before);
 }
 
@@ -1827,19 +1853,18 @@ std::vector<MarkerDetector::Raw> MarkerDetector::OwnSearch(const cv::Mat& gray, 
     ReadRegionQuads(gray, roi,
                     level > 0 ? finder.Find(level)
                               : finder.FindBelowMean(options_.mean_window_px, options_.adaptive_constant),
-                    0.0, &finder, &out);
+                    &finder, &out);
   }
   return out;
 }
 
 int MarkerDetector::ReadRegionQuads(const cv::Mat& gray, const cv::Rect& roi,
-                                    const std::vector<std::array<cv::Point2d, 4>>& quads,
-                                    double min_perimeter_px, QuadFinder* finder, std::vector<Raw>* out) {
+                                    const std::vector<std::array<cv::Point2d, 4>>& quads, QuadFinder* finder,
+                                    std::vector<Raw>* out) {
   int read = 0;
   for (const std::array<cv::Point2d, 4>& local : quads) {
     std::array<cv::Point2d, 4> quad = local;  // image pixels (local: the region's)
     for (auto& c : quad) c += cv::Point2d(roi.x, roi.y);
-    if (min_perimeter_px > 0 && QuadPerimeter(quad) < min_perimeter_px) continue;
     ++read;
     Raw r;
     if (!ReadQuad(gray, quad, &r) || !markers_.Accepts(r.id)) continue;

@@ -259,12 +259,11 @@ class MarkerDetector {
   // candidate_search "own": quads of detector/candidates.h, polarity-checked and read.
   std::vector<Raw> OwnSearch(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                              double max_perimeter);
-  // Reads `quads` (found by `finder` in region `roi`, in its pixels; those with a perimeter under
-  // `min_perimeter_px` skipped): each that is a marker of the set is added to `out` and covered in the
-  // finder. Returns how many were read.
+  // Reads `quads` (found by `finder` in region `roi`, in its pixels): each that is a marker of the set is
+  // added to `out` and covered in the finder. Returns how many were read.
   int ReadRegionQuads(const cv::Mat& gray, const cv::Rect& roi,
-                      const std::vector<std::array<cv::Point2d, 4>>& quads, double min_perimeter_px,
-                      QuadFinder* finder, std::vector<Raw>* out);
+                      const std::vector<std::array<cv::Point2d, 4>>& quads, QuadFinder* finder,
+                      std::vector<Raw>* out);
 
   // Each id once: one marker found twice (regions overlapping in fast mode, quads of one marker from two
   // threshold windows, or the marker's and its narrow margin's quads both decoding: quads whose centres

@@ -199,10 +199,10 @@ int main(int argc, char** argv) {
             ++missed;
             any = true;
             std::printf(
-                "seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f); image: %lld "
+                "%s: seed %llu image %d id %d side %.1f px angle %.1f deg corner0 (%.1f, %.1f); image: %lld "
                 "refinements failed, %lld dropped (a cell off)\n",
-                static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg, t.corners[0].x,
-                t.corners[0].y, detector.stats().refine_failures - before.refine_failures,
+                im.name.c_str(), static_cast<unsigned long long>(seed), i, t.id, t.side_px, t.view_angle_deg,
+                t.corners[0].x, t.corners[0].y, detector.stats().refine_failures - before.refine_failures,
                 detector.stats().dropped - before.dropped);
             double perimeter = 0;
             for (int k = 0; k < 4; ++k) perimeter += cv::norm(t.corners[(k + 1) % 4] - t.corners[k]);
