@@ -1756,6 +1756,16 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   return out;
 }
 
+// A broken-border quad is read only where its border cells are darker than the ring of cells just
+// outside it by this much (grey levels; IdentifyCells' floor on the code's two colours): its border is
+// ink and its ring the margin's paper. The quads of the markers this search found: 53-110 levels
+// (medians of 28 border and 36 ring cell centres at the quad); the quads it read in vain, dark regions
+// with no bright ring: -12 to +12 (catalogue test's blur renders, seed 11: 22 of 27 quads over 8
+// images; bench_detector's blurred frames: 10 of 12). Those reads cost 15 M instructions on
+// bench_detector's 10 blurred frames (1572.0 -> 1556.8 M), some in DeconvolvedCells and one in
+// RereadCandidate's refinement; the markers found are the same.
+constexpr double kBrokenBorderDepth = 20.0;
+
 // Under blur a thin border (under 1.5 px at 60-75 deg) is brighter than the local mean less
 // adaptive_constant where a white code cell adjoins it: at OpenCV's windows its contour breaks into
 // pieces (12-101 px against perimeters of 89-117) and no candidate is left. Dark below the mean of a
@@ -1763,21 +1773,12 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
 // (within 0.5-1.7 px of the true corners on the catalogue test's lost blur markers). Searched with the
 // own search's QuadFinder on the tiles with contrast that no marker found so far touches (a flat
 // surface has no dark pixels), each quad read as a rejected candidate is. Catalogue test (8 images,
-// seed 11): blur 1.2 recall <75 deg 0.829 -> 0.971 (34 of 35), ~3.4 quads read per image. On every frame
-// it cost +47 % instructions on bench_detector's sharp frames (337.6 -> 494.9 M: the threshold image
-// and contours 6.8 M, the reads 8.9 M per frame), so Detect runs it on blurred frames only. Quads under
-// broken_border_min_perimeter_px are not read: the markers under 20 px it found (steep, cells ~1 px)
-// had corners ~0.13 px inward on average and took the blur map's scale error from +0.036 to +0.166 %
-// (bench_imaging_maps, reference renderer, 150 frames, 1.0 m; with the floor: +0.036, unchanged).
-// A broken-border quad is read only where its border cells are darker than the ring of cells just
-// outside it by this much (grey levels; IdentifyCells' floor on the code's two colours): its border is
-// ink and its ring the margin's paper. The quads of the markers this search found: 53-110 levels
-// (medians of 28 border and 36 ring cell centres at the quad); the quads it read in vain, dark regions
-// with no bright ring: -12 to +12 (catalogue test's blur renders, seed 11: 22 of 27 quads over 8
-// images; bench_detector's blurred frames: 10 of 12). Those reads cost 15 M instructions on
-// bench_detector's 10 blurred frames (1571.9 -> 1556.8 M), some in DeconvolvedCells and one in
-// RereadCandidate's refinement; the markers found are the same.
-constexpr double kBrokenBorderDepth = 20.0;
+// seed 11): blur 1.2 recall <75 deg 0.829 -> 0.971 (34 of 35), ~3.4 quads per image (read:
+// kBrokenBorderDepth). On every frame it cost +47 % instructions on bench_detector's sharp frames (337.6 ->
+// 494.9 M: the threshold image and contours 6.8 M, the reads 8.9 M per frame), so Detect runs it on blurred
+// frames only. Quads under broken_border_min_perimeter_px are not read: the markers under 20 px it found
+// (steep, cells ~1 px) had corners ~0.13 px inward on average and took the blur map's scale error from +0.036
+// to +0.166 % (bench_imaging_maps, reference renderer, 150 frames, 1.0 m; with the floor: +0.036, unchanged).
 void MarkerDetector::SearchBrokenBorders(const cv::Mat& gray, const cv::Rect& roi, double min_perimeter,
                                          double max_perimeter, std::vector<Raw>* out) {
   if (options_.broken_border_window <= 0) return;
