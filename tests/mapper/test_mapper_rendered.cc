@@ -127,8 +127,8 @@ TEST(MapperReferenceRenders, EdgesBetweenFacesShowNoBackground) {
       std::vector<cv::Point2f> points, hull;
       for (const sim::SimFace& face : s.object.faces)
         for (const Eigen::Vector3d& p : face.vertices) {
-          const Eigen::Vector3d x = cam_from_object * p;
-          points.emplace_back(m.fx * x.x() / x.z() + m.cx, m.fy * x.y() / x.z() + m.cy);
+          const Eigen::Vector2d pixel = m.Project(cam_from_object * p);
+          points.emplace_back(pixel.x(), pixel.y());
         }
       cv::convexHull(points, hull);
       for (int y = 0; y < image.rows; ++y)
