@@ -59,12 +59,19 @@ void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* col
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128();
-  for (; x + 8 <= w; x += 8) {
-    const __m128i add = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in + x)), zero);
-    const __m128i sub = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(out + x)), zero);
-    __m128i* c = reinterpret_cast<__m128i*>(column + x);
+  auto slide = [&](__m128i add, __m128i sub, uint16_t* at) {
+    __m128i* c = reinterpret_cast<__m128i*>(at);
     _mm_storeu_si128(c, _mm_sub_epi16(_mm_add_epi16(_mm_loadu_si128(c), add), sub));
+  };
+  for (; x + 16 <= w; x += 16) {  // 16 pixels of each row per load
+    const __m128i add = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + x));
+    const __m128i sub = _mm_loadu_si128(reinterpret_cast<const __m128i*>(out + x));
+    slide(_mm_unpacklo_epi8(add, zero), _mm_unpacklo_epi8(sub, zero), column + x);
+    slide(_mm_unpackhi_epi8(add, zero), _mm_unpackhi_epi8(sub, zero), column + x + 8);
   }
+  for (; x + 8 <= w; x += 8)
+    slide(_mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(in + x)), zero),
+          _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(out + x)), zero), column + x);
 #endif
   for (; x < w; ++x) column[x] = static_cast<uint16_t>(column[x] + in[x] - out[x]);
 }
@@ -138,16 +145,27 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
   const __m128i offset16 = _mm_set1_epi16(static_cast<int16_t>(offset));
   const __m128i below8 = _mm_set1_epi8(static_cast<char>(below)),
                 above8 = _mm_set1_epi8(static_cast<char>(above));
-  for (; x + 8 <= w; x += 8) {
-    const __m128i p = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x)), zero);
+  // Lanes set where x + at's window sum >= its threshold (pixels p, 16 bits).
+  auto is_below = [&](__m128i p, int at_x) {
     const __m128i v = _mm_min_epi16(_mm_max_epi16(_mm_sub_epi16(p, at16), zero), limit);
     const __m128i t = _mm_subs_epu16(_mm_mullo_epi16(v, area16), offset16);
-    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + x + (kPrefix ? k : 0)));
-    if (kPrefix) sum = _mm_sub_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + x)));
-    const __m128i is_below = _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
-    const __m128i mask = _mm_packs_epi16(is_below, is_below);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(d + x),
-                     _mm_or_si128(_mm_and_si128(mask, below8), _mm_andnot_si128(mask, above8)));
+    __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x + (kPrefix ? k : 0)));
+    if (kPrefix) sum = _mm_sub_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x)));
+    return _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
+  };
+  auto select = [&](__m128i mask) {
+    return _mm_or_si128(_mm_and_si128(mask, below8), _mm_andnot_si128(mask, above8));
+  };
+  for (; x + 16 <= w; x += 16) {  // 16 pixels: one load, pack and store
+    const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x));
+    const __m128i mask =
+        _mm_packs_epi16(is_below(_mm_unpacklo_epi8(p, zero), x), is_below(_mm_unpackhi_epi8(p, zero), x + 8));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d + x), select(mask));
+  }
+  for (; x + 8 <= w; x += 8) {
+    const __m128i p = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x)), zero);
+    const __m128i below_lanes = is_below(p, x);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(d + x), select(_mm_packs_epi16(below_lanes, below_lanes)));
   }
 #endif
   for (; x < w; ++x) {
