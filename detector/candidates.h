@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -26,6 +27,10 @@ struct QuadSearch {
   double min_side_rate = 0.05;       // shortest side, relative to the perimeter
   int min_distance_to_border = 1;    // corners at least this far inside the image, pixels
 };
+
+// Each t x t tile's minimum and maximum over it and its 8 neighbours (within the image), row-major,
+// (cols + t - 1) / t tiles wide: the ranges the threshold levels lie in.
+void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi);
 
 // Quads of dark-bordered shapes in `gray` (8-bit, one channel), from every level's binary image, corners
 // in image pixels (pixel centres at integer coordinates), ordered with (c1 - c0) x (c2 - c0) >= 0 in

@@ -297,6 +297,37 @@ TEST(CandidateSearch, QuadOfADarkQuadrilateral) {
   EXPECT_TRUE(FindQuads(faint, search).empty());
 }
 
+// The own search's tile ranges (TileRanges, 16 columns and 4 tiles at a time) are each tile's minimum and
+// maximum over its 3 x 3 tiles within the image, pixel by pixel: noise and a blurred frame, widths and
+// heights that are and are not multiples of the tile and of 16, views (a row step wider than the row),
+// tile sides 1 to 7.
+TEST(CandidateSearch, TileRangesAreTheNeighbourhoodsRanges) {
+  cv::Mat large(97, 341, CV_8U);
+  cv::randu(large, 0, 256);
+  cv::Mat smooth;
+  cv::GaussianBlur(large, smooth, cv::Size(0, 0), 2.0);
+  for (const cv::Mat& image : {large, smooth, large(cv::Rect(3, 5, 64, 40)), smooth(cv::Rect(1, 2, 333, 91)),
+                               large(cv::Rect(0, 0, 5, 3))})
+    for (int t = 1; t <= 7; ++t) {
+      SCOPED_TRACE(::testing::Message() << image.size() << " tile " << t);
+      std::vector<uint8_t> lo, hi;
+      TileRanges(image, t, &lo, &hi);
+      const int tw = (image.cols + t - 1) / t, th = (image.rows + t - 1) / t;
+      ASSERT_EQ(lo.size(), static_cast<size_t>(tw * th));
+      ASSERT_EQ(hi.size(), lo.size());
+      for (int ty = 0; ty < th; ++ty)
+        for (int tx = 0; tx < tw; ++tx) {
+          int mn = 255, mx = 0;
+          for (int y = std::max(0, (ty - 1) * t); y < std::min(image.rows, (ty + 2) * t); ++y)
+            for (int x = std::max(0, (tx - 1) * t); x < std::min(image.cols, (tx + 2) * t); ++x)
+              mn = std::min<int>(mn, image.at<uint8_t>(y, x)),
+              mx = std::max<int>(mx, image.at<uint8_t>(y, x));
+          ASSERT_EQ(lo[ty * tw + tx], mn) << tx << " " << ty;
+          ASSERT_EQ(hi[ty * tw + tx], mx) << tx << " " << ty;
+        }
+    }
+}
+
 // mcmt's and OpenCV's definitions of `name` (a mangled name of one of the OpenCV functions mcmt defines
 // in OpenCV's place, detector/opencv_overrides.cc), found as the dynamic linker finds them, never by
 // naming the function here: a reference from this file would link mcmt's definition into this test by
