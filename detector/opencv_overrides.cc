@@ -174,25 +174,39 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
   }
 }
 
-// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15,
-// edges replicated within src) rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset):
-// 16-bit column sums slid down the image, their window sums compared with a threshold linear in the
-// pixel. dst must not be src.
+// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
+// rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
+// replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
+// the view and that image's edges replicated (cv::blur's default): 16-bit column sums slid down the
+// image, their window sums compared with a threshold linear in the pixel. dst must not be src.
 void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
-                             cv::Mat& dst) {
+                             bool isolated, cv::Mat& dst) {
   const int r = k / 2, w = src.cols, h = src.rows, area = k * k;
   if (w == 0 || h == 0) return;
+  cv::Size whole(w, h);
+  cv::Point at_whole(0, 0);  // the view's origin in its whole image
+  if (!isolated) src.locateROI(whole, at_whole);
+  // The columns of the view's windows within the whole image: [x_begin, x_end) of -r .. w + r.
+  const int x_begin = std::max(-r, -at_whole.x), x_end = std::min(w + r, whole.width - at_whole.x);
   thread_local std::vector<uint16_t> padded, sums;
   padded.assign(static_cast<size_t>(w) + 2 * r, 0);
   sums.resize(static_cast<size_t>(w) + 2 * r + 1);
   uint16_t* column = padded.data() + r;  // column[-r..w + r): this row's column sums, edges replicated
-  auto row = [&](int y) { return src.ptr<uint8_t>(std::clamp(y, 0, h - 1)); };
-  for (int y = -r; y <= r; ++y) AddRowToColumnSums(row(y), w, column);
+  // Row y of the view (any y: the whole image's nearest row), from column x_begin on.
+  auto row = [&](int y) {
+    const int in_whole = std::clamp(at_whole.y + y, 0, whole.height - 1);
+    return src.data +
+           static_cast<std::ptrdiff_t>(in_whole - at_whole.y) * static_cast<std::ptrdiff_t>(src.step[0]) +
+           x_begin;
+  };
+  const int real = x_end - x_begin;
+  for (int y = -r; y <= r; ++y) AddRowToColumnSums(row(y), real, column + x_begin);
   using Sums = void (*)(const uint16_t*, int, uint16_t*);
   static constexpr Sums kSumsOf[4] = {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>};
   for (int y = 0; y < h; ++y) {
-    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), w, column);
-    for (int x = 1; x <= r; ++x) column[-x] = column[0], column[w - 1 + x] = column[w - 1];
+    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), real, column + x_begin);
+    for (int x = -r; x < x_begin; ++x) column[x] = column[x_begin];
+    for (int x = x_end; x < w + r; ++x) column[x] = column[x_end - 1];
     const uint8_t* s = src.ptr<uint8_t>(y);
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
@@ -398,6 +412,15 @@ Function LibraryDefinition(const char* symbol) {
 
 void LinkOpenCvOverrides() {}
 
+bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst) {
+  if (src.type() != CV_8UC1 || k % 2 != 1 || k < 3 || k > 15 || at < -256 || at > 256) return false;
+  const int offset = BoxMeanThresholdOffset(k * k);
+  if (offset < 0) return false;
+  CV_Assert(dst->type() == CV_8UC1 && dst->size() == src.size() && dst->data != src.data);
+  ThresholdAgainstBoxMean(src, k, at, offset, below, above, false, *dst);
+  return true;
+}
+
 }  // namespace mcmt
 
 // OpenCV's cv::adaptiveThreshold, which cv::aruco::detectMarkers calls once per window size (a quarter of
@@ -433,7 +456,7 @@ void adaptiveThreshold(InputArray src_array, OutputArray dst_array, double max_v
   const int offset = block_size <= 15 ? mcmt::BoxMeanThresholdOffset(area) : -1;
   if (offset >= 0) {
     if (src.data == dst.data) src = src.clone();
-    mcmt::ThresholdAgainstBoxMean(src, block_size, at, offset, below, above, dst);
+    mcmt::ThresholdAgainstBoxMean(src, block_size, at, offset, below, above, true, dst);
     return;
   }
   Mat mean;

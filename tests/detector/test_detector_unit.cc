@@ -14,6 +14,7 @@
 #include "detector/candidates.h"
 #include "detector/detector.h"
 #include "detector/node.h"
+#include "detector/opencv_overrides.h"
 #include "detector/side_model.h"
 #include "detector/source.h"
 #include "tests/detector/synthetic.h"
@@ -326,6 +327,39 @@ TEST(CandidateSearch, TileRangesAreTheNeighbourhoodsRanges) {
           ASSERT_EQ(hi[ty * tw + tx], mx) << tx << " " << ty;
         }
     }
+}
+
+// The own search's below-the-mean threshold without the mean image (ThresholdBelowBlur, used by
+// QuadFinder::FindBelowMean) is exactly cv::blur's mean (BORDER_REPLICATE, a view's whole image counting
+// beyond the view) compared with each pixel: views inside the image, at each of its edges, views of views,
+// views narrower and shorter than the window, every window from 3 to 15 and thresholds to +-256.
+TEST(CandidateSearch, ThresholdBelowBlurIsBlursComparison) {
+  cv::Mat image(120, 203, CV_8U);
+  cv::randu(image, 0, 256);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.2);
+  cv::rectangle(image, cv::Rect(20, 15, 40, 30), cv::Scalar(0), cv::FILLED);
+  cv::rectangle(image, cv::Rect(150, 70, 53, 50), cv::Scalar(255), cv::FILLED);
+  const cv::Mat inner = image(cv::Rect(30, 20, 150, 90));
+  for (const cv::Mat& view :
+       {image, image(cv::Rect(10, 7, 61, 43)), image(cv::Rect(0, 0, 37, 22)),
+        image(cv::Rect(150, 80, 53, 40)), image(cv::Rect(0, 60, 203, 9)), image(cv::Rect(200, 0, 3, 120)),
+        image(cv::Rect(5, 118, 2, 2)), inner(cv::Rect(3, 4, 20, 17)), inner(cv::Rect(0, 0, 150, 90))})
+    for (int k = 3; k <= 15; k += 2)
+      for (int at : {-7, -3, 0, 3, 7, -256, 256}) {
+        SCOPED_TRACE(::testing::Message() << view.size() << " window " << k << " at " << at);
+        cv::Mat mean;
+        cv::blur(view, mean, cv::Size(k, k), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+        cv::Mat ours(view.size(), CV_8U, cv::Scalar(77));
+        ASSERT_TRUE(ThresholdBelowBlur(view, k, at, 200, 9, &ours));
+        for (int y = 0; y < view.rows; ++y)
+          for (int x = 0; x < view.cols; ++x) {
+            const int expected = view.at<uint8_t>(y, x) - mean.at<uint8_t>(y, x) <= at ? 200 : 9;
+            ASSERT_EQ(ours.at<uint8_t>(y, x), expected) << x << " " << y;
+          }
+      }
+  cv::Mat out(image.size(), CV_8U);
+  EXPECT_FALSE(ThresholdBelowBlur(image, 17, 0, 255, 0, &out));
+  EXPECT_FALSE(ThresholdBelowBlur(image, 4, 0, 255, 0, &out));
 }
 
 // mcmt's and OpenCV's definitions of `name` (a mangled name of one of the OpenCV functions mcmt defines
