@@ -19,9 +19,9 @@ namespace mcmt {
 // columns at a time over the rows (SSE2), then over each tile's columns (t = 4: 16 columns, 4 tiles at a
 // time; the last tile's columns beyond the image are the image's last column again). The same minima
 // and maxima as the row-by-row cv::min / cv::max it replaces (test_detector_unit,
-// CandidateSearch.TileRangesAreTheNeighbourhoodsRanges), for 4 M fewer instructions per 640 x 480
-// frame: that call overhead and a scalar pass over every column were 40.4 M of bench_detector's 10
-// blurred frames (the broken-border search's QuadFinder, bench/results/2026-12-06-blursearch.md).
+// CandidateSearch.TileRangesAreTheNeighbourhoodsRanges). Their call overhead and a scalar pass over
+// every column made QuadFinder's constructor 42.2 M instructions on bench_detector's 10 blurred frames
+// (MCMT_BENCH_BLUR=1.2: the broken-border search, bench/results/2026-12-06-blursearch.md); now 17.9 M.
 void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi) {
   const int cols = gray.cols, rows = gray.rows;
   const int tw = (cols + t - 1) / t, th = (rows + t - 1) / t;
