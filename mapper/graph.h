@@ -22,7 +22,10 @@ struct PairCandidates {
   int num_events = 0;            // events stored (a strided subset when there were many)
   int64_t total_events = 0;      // events seen in all
   int64_t total_candidates = 0;  // candidates seen in all (s in the paper)
-  void AddEvent(const std::vector<Rigid3>& candidates);
+  // Per candidate (or empty: unknown), the covariance of a_from_b under a_from_b * Exp(delta), delta =
+  // (rotation vector, translation) in b's frame, from the noise of the square poses it was composed of.
+  std::vector<Matrix6d> covariance;
+  void AddEvent(const std::vector<Rigid3>& candidates, const std::vector<Matrix6d>& covariances = {});
 };
 
 // When are two relative poses the same, up to noise.
@@ -30,8 +33,21 @@ struct ConsistencyOptions {
   double max_angle_rad = 15.0 * 3.14159265358979323846 / 180.0;
   double max_distance_m = 0.02;
   double max_distance_rel = 0.15;  // plus this fraction of the translation's length
+  // Also the same when x has a covariance (PairCandidates::covariance) and the squared Mahalanobis distance
+  // of their difference under twice x's covariance is at most this (0: the tolerances above only).
+  double max_mahalanobis_sq = 0.0;
 };
 bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& options);
+bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
+                const ConsistencyOptions& options);
+
+// Covariance of a square's pose cam_from_marker under cam_from_marker * Exp(delta) (delta = rotation vector,
+// translation, in the marker's frame), from independent noise of sigma_px on each corner coordinate:
+// (J^T J / sigma^2 + prior)^-1 with J the pinhole Jacobian of the four corners' normalised image points,
+// sigma in normalised units = sigma_px x the side's length there / its length in pixels (observed_side_px),
+// and a weak prior (1 rad, 1 m) where the corners do not pin the pose (a face-on square's tilt).
+Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double observed_side_px,
+                              double sigma_px);
 
 struct GraphEdge {
   int a = -1, b = -1;
@@ -48,6 +64,7 @@ struct GraphEdge {
 };
 
 // Events (not candidates) of the pair with a candidate consistent with x: each co-observation votes once.
+// Candidates with a covariance are also tested within their poses' noise (ConsistencyOptions).
 int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyOptions& consistency);
 
 // Medoid of the pair's candidates and the paper's edge cost; support against `consistency`.
@@ -65,6 +82,9 @@ struct GraphItem {
   int node = 0;
   std::vector<Rigid3> node_from_common;
   std::vector<Rigid3> common_from_node;
+  // Optional (empty or one per hypothesis): covariance of common_from_node[h] (SquarePoseCovariance's
+  // convention, delta in the node's frame).
+  std::vector<Matrix6d> covariance;
 };
 
 struct EdgeOptions {

@@ -146,6 +146,9 @@ void ReportUnplacedMarkers(const MarkerLayout& layout, const std::vector<int>& i
   CheckRejectedDeclaredMarkers(layout, ids, rejected, o, report);
 }
 
+// chi^2 with 6 degrees of freedom at 0.999 (MapperOptions::consistency_noise_px).
+constexpr double kPoseNoiseChiSquare = 22.46;
+
 bool IsVerified(const GraphEdge& e, const MapperOptions& o) {
   return e.support >= o.min_marker_support && e.SupportFraction() >= o.marker_inlier_fraction;
 }
@@ -285,16 +288,21 @@ class RigCheck {
 
 }  // namespace
 
-std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs) {
+std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs, double pose_noise_px) {
   std::vector<GraphItem> items;
   for (const Observation& ob : obs) {
     if (ob.kept == 0) continue;
     GraphItem item;
     item.group = ob.view;
     item.node = ob.marker;
+    double side_px = 0.0;
+    for (int k = 0; k < 4; ++k) side_px += 0.25 * (ob.corners[(k + 1) % 4] - ob.corners[k]).norm();
     for (int h = 0; h < ob.kept; ++h) {
-      item.node_from_common.push_back(Inverse(ob.pose.hypotheses[h].cam_from_marker));
-      item.common_from_node.push_back(ob.pose.hypotheses[h].cam_from_marker);
+      const Rigid3& cam_from_marker = ob.pose.hypotheses[h].cam_from_marker;
+      item.node_from_common.push_back(Inverse(cam_from_marker));
+      item.common_from_node.push_back(cam_from_marker);
+      if (pose_noise_px > 0)
+        item.covariance.push_back(SquarePoseCovariance(cam_from_marker, ob.side, side_px, pose_noise_px));
     }
     items.push_back(std::move(item));
   }
@@ -331,7 +339,9 @@ MarkerLayout BuildMarkerGraph(const Observations& observations, const MapperOpti
   edge_options.medoid.point_scale = std::max(0.05, 2.0 * max_side);
   edge_options.tau_n = o.tau_n;
   edge_options.consistency = ConsistencyFor(o);
-  layout.edges = BuildGraphEdges(MarkerItems(observations.obs), n, edge_options, threads);
+  edge_options.consistency.max_mahalanobis_sq = kPoseNoiseChiSquare;
+  layout.edges =
+      BuildGraphEdges(MarkerItems(observations.obs, o.consistency_noise_px), n, edge_options, threads);
   const RigCheck rig(observations, edge_options, o, threads);
   const std::vector<GraphEdge> verified = rig.Verified(layout.edges, observations.marker_ids, report);
   // The reference as the paper chooses it, from the edges one camera verifies (the rig's edges count

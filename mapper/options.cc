@@ -69,6 +69,9 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
                 "\"agree\": within consistency_m + consistency_rel * distance")
            .Add("consistency_rel", &O::consistency_rel, "",
                 "\"agree\": the part of the position tolerance that grows with distance")
+           .Add("consistency_noise_px", &O::consistency_noise_px, "px",
+                "... or (marker pairs) within the square poses' noise for this corner noise (0: off)",
+                AtLeast(0))
            .Add("marker_reject_fraction", &O::marker_reject_fraction, "",
                 "a marker with more of its observations rejected is dropped (reported)", InRange(0, 1, true))
            .Add("max_pair_events", &O::max_pair_events, "",

@@ -104,7 +104,8 @@ struct MarkerLayout {
 
 // The marker graph's items (mapper/graph.h): one per observation with a kept hypothesis, marker_from_cam
 // and cam_from_marker per hypothesis, grouped by view (camera frame).
-std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs);
+// pose_noise_px > 0: each hypothesis with its SquarePoseCovariance for that corner noise.
+std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs, double pose_noise_px = 0.0);
 
 // Fills report->rejected_markers (and warnings with --allow-partial); throws MapperError for a marker
 // that cannot be connected (unless allow_partial) or a reference_marker never detected.
