@@ -32,10 +32,10 @@ bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
   if (Consistent(x, y, options)) return true;
   if (!(options.max_mahalanobis_sq > 0)) return false;
   // x = y Exp(delta) to first order: delta = (rotation vector, translation) of y^-1 x. Its covariance is
-  // x's twice over (y's error taken as large as x's): y's own covariance would let a proposal of a
-  // poorly pinned event agree with everything, and proposals compete by their support (EvaluateEdge). On a
-  // marker moved 5-15 cm between frames (SmallSquaresAgreeWithinTheirPosesNoise), the sum of both covariances
-  // agreed in 26 of 60 frames, twice x's in 12 of 60 (attached: 59 and 58 of 60).
+  // x's twice over (y's error taken as large as x's): y's own covariance would let a y from a poorly
+  // pinned event agree with everything. On a marker moved 5-15 cm between frames
+  // (SmallSquaresAgreeWithinTheirPosesNoise, measured while proposals were also chosen by this test) the sum
+  // of both covariances agreed in 26 of 60 frames, twice x's in 12 of 60 (attached: 59 and 58 of 60).
   const Rigid3 d = Inverse(y) * x;
   Vector6d delta;
   delta << VectorFromRotation(d.rotation()), d.translation();
