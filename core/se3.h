@@ -46,6 +46,13 @@ double TranslationDistance(const Rigid3& a, const Rigid3& b);
 // rotation about the rig-frame origin then a translation.
 Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta);
 
+// The adjoint of a_from_b in core's order (rx, ry, rz, tx, ty, tz): a perturbation delta_b in frame b is
+// the perturbation Ad(a_from_b) * delta_b in frame a,
+//   a_from_b * Exp(delta_b) * b_from_a = Exp(Ad(a_from_b) * delta_b)   (to first order),
+//   Ad = [   R     0 ]
+//        [ [t]x R  R ]   with R, t the rotation and translation of a_from_b.
+Matrix6d Adjoint(const Rigid3& a_from_b);
+
 // The pose dt seconds on along a constant twist (wx, wy, wz rad/s, vx, vy, vz m/s, in the frame the pose
 // maps into): (Exp(dt w) R, t + dt v) (the mapper's frame velocities with time offsets).
 Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt);

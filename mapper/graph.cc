@@ -6,6 +6,8 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "core/marker.h"
+#include "core/math.h"
 #include "mapper/parallel.h"
 
 namespace mcmt {
@@ -45,8 +47,7 @@ bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
 Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double observed_side_px,
                               double sigma_px) {
   const Eigen::Matrix3d r = cam_from_marker.rotation();
-  const double h = 0.5 * side;
-  const Eigen::Vector3d corners[4] = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
+  const MarkerCorners3d corners = MarkerCornersInMarker(side);
   Eigen::Vector2d image[4];
   Matrix6d information = Matrix6d::Zero();
   for (int k = 0; k < 4; ++k) {
@@ -55,11 +56,8 @@ Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double
     // d(x/z, y/z)/dp, and dp/d(w, v) = (-R [X]x, R) for cam_from_marker * Exp((w, v)).
     Eigen::Matrix<double, 2, 3> projection;
     projection << 1 / p.z(), 0, -p.x() / (p.z() * p.z()), 0, 1 / p.z(), -p.y() / (p.z() * p.z());
-    Eigen::Matrix3d cross;
-    cross << 0, -corners[k].z(), corners[k].y(), corners[k].z(), 0, -corners[k].x(), -corners[k].y(),
-        corners[k].x(), 0;
     Eigen::Matrix<double, 3, 6> dp;
-    dp << -r * cross, r;
+    dp << -r * Skew(corners[k]), r;
     const Eigen::Matrix<double, 2, 6> j = projection * dp;
     information += j.transpose() * j;
   }
@@ -262,16 +260,8 @@ std::vector<PairCandidates> CollectPairs(const std::vector<GraphItem>& items, in
         candidates.push_back(a.node_from_common[i] * b.common_from_node[j]);
         if (!with_covariance) continue;
         // x = A^-1 B with A = A0 Exp(da), B = B0 Exp(db): x = x0 Exp(db - Ad(x0^-1) da) to first order,
-        // Ad(T) = [[R, 0], [[t]x R, R]] for (rotation, translation).
-        const Rigid3 x_inverse = Inverse(candidates.back());
-        const Eigen::Matrix3d r = x_inverse.rotation();
-        const Eigen::Vector3d t = x_inverse.translation();
-        Eigen::Matrix3d t_cross;
-        t_cross << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-        Matrix6d adjoint = Matrix6d::Zero();
-        adjoint.topLeftCorner<3, 3>() = r;
-        adjoint.bottomLeftCorner<3, 3>() = t_cross * r;
-        adjoint.bottomRightCorner<3, 3>() = r;
+        // with core's Adjoint (rotation, translation).
+        const Matrix6d adjoint = Adjoint(Inverse(candidates.back()));
         covariances.push_back(b.covariance[j] + adjoint * a.covariance[i] * adjoint.transpose());
       }
     collector.Store(a.node, b.node, candidates, covariances);

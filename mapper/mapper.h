@@ -168,10 +168,10 @@ struct MapperOptions {
   double consistency_deg = 15.0;
   double consistency_m = 0.02;
   double consistency_rel = 0.15;
-  // ... or, in the marker graph, within the square poses' noise: the squared Mahalanobis distance of the
-  // two relative poses under the sum of their covariances (each composed of its two squares' IPPE poses
-  // with consistency_noise_px on every corner coordinate, mapper/graph.h SquarePoseCovariance) at most
-  // chi^2(6 dof, 0.999) = 22.46. A 10-16 px square's pose is pinned only where its corners are: the
+  // ... or, in the marker graph, within the square poses' noise: the squared Mahalanobis distance of a
+  // frame's relative pose from the edge's under twice the frame's covariance (composed of its two squares'
+  // IPPE poses with consistency_noise_px on every corner coordinate, mapper/graph.h SquarePoseCovariance) at
+  // most chi^2(6 dof, 0.999) = 22.46. A 10-16 px square's pose is pinned only where its corners are: the
   // tolerances above rejected 18 of 26 frames of a marker pair that the true corners + noise agree in
   // (0: the tolerances above only).
   double consistency_noise_px = 0.5;

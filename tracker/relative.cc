@@ -5,13 +5,12 @@
 
 namespace mcmt {
 
-Matrix6d Adjoint(const Rigid3& a_from_b) {
-  const Eigen::Matrix3d r = a_from_b.linear();
-  Matrix6d ad = Matrix6d::Zero();
-  ad.topLeftCorner<3, 3>() = r;
-  ad.topRightCorner<3, 3>() = Skew(a_from_b.translation()) * r;
-  ad.bottomRightCorner<3, 3>() = r;
-  return ad;
+Matrix6d AdjointTranslationFirst(const Rigid3& a_from_b) {
+  const Matrix6d ad = Adjoint(a_from_b);  // (rotation, translation)
+  Matrix6d swapped;
+  swapped << ad.bottomRightCorner<3, 3>(), ad.bottomLeftCorner<3, 3>(), ad.topRightCorner<3, 3>(),
+      ad.topLeftCorner<3, 3>();
+  return swapped;
 }
 
 RelativePose ComposeRelative(const Rigid3& rig_from_of, const Matrix6d& covariance_of,
@@ -19,7 +18,7 @@ RelativePose ComposeRelative(const Rigid3& rig_from_of, const Matrix6d& covarian
   RelativePose out;
   const Rigid3 in_from_rig = Inverse(rig_from_in);
   out.in_from_of = Normalized(in_from_rig * rig_from_of);
-  const Matrix6d ad = Adjoint(in_from_rig);
+  const Matrix6d ad = AdjointTranslationFirst(in_from_rig);
   out.covariance = ad * (covariance_of + covariance_in) * ad.transpose();
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose());  // exactly symmetric
   return out;

@@ -6,13 +6,12 @@
 
 namespace mcmt {
 
-// The adjoint of a_from_b for perturbations in object_pose_t's order (tx, ty, tz, rx, ry, rz) and core's
-// left perturbation Exp(delta) * pose = rotation about the origin then a translation (PerturbLeft): a
-// perturbation delta_b in frame b is the perturbation Ad(a_from_b) * delta_b in frame a,
-//   a_from_b * Exp(delta_b) * b_from_a = Exp(Ad(a_from_b) * delta_b)   (to first order),
+// core's Adjoint (core/se3.h) for perturbations in object_pose_t's order (tx, ty, tz, rx, ry, rz) and core's
+// left perturbation Exp(delta) * pose = rotation about the origin then a translation (PerturbLeft): the
+// same matrix with its blocks swapped,
 //   Ad = [ R  [t]x R ]
 //        [ 0    R    ]   with R, t the rotation and translation of a_from_b.
-Matrix6d Adjoint(const Rigid3& a_from_b);
+Matrix6d AdjointTranslationFirst(const Rigid3& a_from_b);
 
 struct RelativePose {
   Rigid3 in_from_of = Rigid3::Identity();

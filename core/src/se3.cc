@@ -114,6 +114,15 @@ Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta) {
   return out;
 }
 
+Matrix6d Adjoint(const Rigid3& a_from_b) {
+  const Eigen::Matrix3d r = a_from_b.linear();
+  Matrix6d ad = Matrix6d::Zero();
+  ad.topLeftCorner<3, 3>() = r;
+  ad.bottomLeftCorner<3, 3>() = Skew(a_from_b.translation()) * r;
+  ad.bottomRightCorner<3, 3>() = r;
+  return ad;
+}
+
 Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt) {
   Rigid3 out = pose;
   out.linear() = RotationFromVector(dt * Eigen::Vector3d(twist[0], twist[1], twist[2])) * pose.linear();
