@@ -18,6 +18,7 @@
 // the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -165,6 +166,11 @@ inline void PhiAndDensityOfTwo(__m128d z, __m128d gauss, double* big, double* sm
 // model's evaluation (side_model.cc); declared here for its test.
 void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
                   double* big_phi, double* small_phi);
+
+// The Cholesky factor L (lower triangle of *a; the upper is left as it was) of the side model's 8 x 8
+// normal matrices, as Eigen::LLT computes it, to the bit; false where LLT reports a numerical issue.
+// Declared here for its test (side_model.cc).
+bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a);
 
 // Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
 // sigma. Returns false when the fit fails, finds no contrast between the border and the code, or finds

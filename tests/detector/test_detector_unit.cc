@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -1058,6 +1059,46 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
       }
     }
 #endif
+}
+
+// CholeskyLower (the side model's Levenberg-Marquardt steps, BoundedStep) is Eigen::LLT's factorisation to
+// the bit: normal matrices J^T J of random Jacobians with columns of scales 1e-3 to 1e3, damped as FitOnce
+// damps them, with parameters held as BoundedStep holds them (row and column zero, diagonal 1), nearly
+// singular ones; and it fails where LLT reports a numerical issue (an indefinite matrix, a zero column).
+TEST(SideModel, CholeskyIsEigens) {
+  using Matrix8 = Eigen::Matrix<double, 8, 8>;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int factorised = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Eigen::Matrix<double, 40, 8> jacobian;
+    for (int c = 0; c < 8; ++c) {
+      const double scale = std::pow(10.0, -3.0 + 6.0 * uniform(rng));
+      for (int r = 0; r < 40; ++r) jacobian(r, c) = scale * normal(rng);
+    }
+    if (trial % 5 == 1) jacobian.col(7) = jacobian.col(6) * 0.999 + 1e-9 * jacobian.col(5);  // near-singular
+    Matrix8 a = jacobian.transpose() * jacobian;
+    const double lambda = std::pow(10.0, -7.0 + 7.0 * uniform(rng));
+    for (int k = 0; k < 8; ++k) a(k, k) += lambda * a(k, k) + 1e-9;
+    if (trial % 3 == 2)
+      for (int k = 0; k < 8; ++k)
+        if (uniform(rng) < 0.4) a.row(k).setZero(), a.col(k).setZero(), a(k, k) = 1.0;
+    if (trial % 50 == 7) a(3, 3) = -1.0;                          // indefinite
+    if (trial % 50 == 9) a.row(2).setZero(), a.col(2).setZero();  // a zero pivot
+    const Eigen::LLT<Matrix8> llt(a);
+    Matrix8 l = a;
+    const bool ok = CholeskyLower(&l);
+    ASSERT_EQ(ok, llt.info() == Eigen::Success) << "trial " << trial;
+    if (!ok) continue;
+    ++factorised;
+    const Matrix8& expected = llt.matrixLLT();
+    for (int c = 0; c < 8; ++c)
+      for (int r = c; r < 8; ++r)
+        ASSERT_EQ(std::memcmp(&l(r, c), &expected(r, c), sizeof(double)), 0)
+            << "trial " << trial << " L(" << r << ", " << c << ") " << l(r, c) << " vs " << expected(r, c);
+  }
+  EXPECT_GT(factorised, 2800);
 }
 
 }  // namespace
