@@ -57,6 +57,36 @@ int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::a
   return static_cast<int>(g);
 }
 
+namespace {
+
+constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
+constexpr int kRegions = kBoundaries + 1;
+enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
+// A margin differs from the border's level by at least this fraction of the border-to-code contrast
+// (a print's margin is paper or ink of the other colour; FitSideProfiles).
+constexpr double kMinMarginContrast = 0.4;
+// A margin narrower than half a cell whose excess over the surround, times its width, is below this
+// fraction of a cell times the code-to-surround contrast is no print's margin either: a faint strip at the
+// width's bound (0.2 cell) that pairs with a per-side gamma off the image's (0.8-0.9 on linear renders) and
+// moves the edge outward on markers without a margin (FitSideModels). The narrowest margin a print has is
+// paper over the surround (excess 1) about 0.3 cell wide (the reference renderer's "hard"), 0.3 of a cell;
+// the fitted products of real margins under blur, shading and sharpening stay above 0.1 but for a few
+// sides of "hard" (5 of 2871 two-level fits of its map). On the no-margin map 0.04 left 166 strips at the
+// width's bound with products 0.04-0.1 (+0.10..0.15 px outward each, a fifth of the map's -0.215 %):
+// bench/results/2026-12-06-nomargin.md.
+constexpr double kMinMarginExcess = 0.1;
+// The fitted levels' bounds: the 8-bit range with some room for noise (FitOnce).
+constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
+// A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
+constexpr double kHaloMaxCells = 0.25;
+
+using Normal = Eigen::Matrix<double, kParams, kParams>;
+using Vector = Eigen::Matrix<double, kParams, 1>;
+
+static_assert(kParams == 8, "CholeskyLower factorises 8 x 8 normal matrices");
+
+}  // namespace
+
 // Phi and phi of the boundary at `bound` at every bin (z = (bound - u) / sigma) into `zs`, `big_phi`,
 // `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
 // the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
@@ -154,31 +184,6 @@ bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a) {
 }
 
 namespace {
-
-constexpr int kBoundaries = SideProfiles::kRows + 2;  // margin's far side, outer edge, kRows inner
-constexpr int kRegions = kBoundaries + 1;
-enum Param { kE, kSigma, kL0, kL1, kS1, kS2, kQ, kGamma, kParams };
-static_assert(kParams == 8, "CholeskyLower factorises 8 x 8 normal matrices");
-// A margin differs from the border's level by at least this fraction of the border-to-code contrast
-// (a print's margin is paper or ink of the other colour; FitSideProfiles).
-constexpr double kMinMarginContrast = 0.4;
-// A margin narrower than half a cell whose excess over the surround, times its width, is below this
-// fraction of a cell times the code-to-surround contrast is no print's margin either: a faint strip at the
-// width's bound (0.2 cell) that pairs with a per-side gamma off the image's (0.8-0.9 on linear renders) and
-// moves the edge outward on markers without a margin (FitSideModels). The narrowest margin a print has is
-// paper over the surround (excess 1) about 0.3 cell wide (the reference renderer's "hard"), 0.3 of a cell;
-// the fitted products of real margins under blur, shading and sharpening stay above 0.1 but for a few
-// sides of "hard" (5 of 2871 two-level fits of its map). On the no-margin map 0.04 left 166 strips at the
-// width's bound with products 0.04-0.1 (+0.10..0.15 px outward each, a fifth of the map's -0.215 %):
-// bench/results/2026-12-06-nomargin.md.
-constexpr double kMinMarginExcess = 0.1;
-// The fitted levels' bounds: the 8-bit range with some room for noise (FitOnce).
-constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
-// A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
-constexpr double kHaloMaxCells = 0.25;
-
-using Normal = Eigen::Matrix<double, kParams, kParams>;
-using Vector = Eigen::Matrix<double, kParams, 1>;
 
 // Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
 // b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
