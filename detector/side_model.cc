@@ -83,14 +83,21 @@ constexpr double kHaloMaxCells = 0.25;
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
 
+static_assert(kParams == 8, "CholeskyLower factorises 8 x 8 normal matrices");
+
+}  // namespace
+
 // Phi and phi of the boundary at `bound` at every bin (z = (bound - u) / sigma) into `zs`, `big_phi`,
 // `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
 // the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
 // exp(-(z - h)^2 / 2) = exp(-z^2 / 2) exp(z h - h^2 / 2)), restarted from std::exp every 16 bins (relative
 // error below 1e-13, far below PhiAndDensity's 1.5e-7). `step_ratio`: exp(-h^2), the same for every
 // boundary of one evaluation (computed once by Evaluate). z falls with the bin (as computed, too: every
-// operation is monotonic), so the bins within 7 sigmas are one run, found from both ends; z is computed
-// two bins at a time (SSE2, the same operations lane by lane).
+// operation is monotonic), so the bins within 7 sigmas are one run, found from both ends. With SSE2, z,
+// the bins beyond 7 sigmas and Phi and phi of the run (PhiAndDensityOfTwo, the recurrence still bin by bin)
+// are computed two bins at a time, by the same operations lane by lane: the same values as bin by bin
+// (SideModel.FillBoundaryIsBinByBins). bench_detector's 10 accurate frames: 25.27 -> 20.16 M instructions
+// in FillBoundary itself (refcost).
 void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
                   double* big_phi, double* small_phi) {
   const double h = s.du * inv_sigma;
@@ -108,20 +115,75 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
   int first = 0, last = n - 1;
   while (first < n && far(first)) ++first;
   while (last >= first && far(last)) --last;
-  auto beyond = [&](int k) { big_phi[k] = zs[k] > 0 ? 1.0 : 0.0, small_phi[k] = 0.0; };
-  for (int k = 0; k < first; ++k) beyond(k);
-  for (int k = std::max(first, last + 1); k < n; ++k) beyond(k);
+  // Bins [from, to) beyond 7 sigmas: Phi 1 or 0 by the sign of z, phi 0.
+  auto beyond = [&](int from, int to) {
+    int k = from;
+#ifdef __SSE2__
+    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+    for (; k + 1 < to; k += 2) {
+      _mm_storeu_pd(big_phi + k, _mm_and_pd(_mm_cmpgt_pd(_mm_loadu_pd(zs + k), zero), one));
+      _mm_storeu_pd(small_phi + k, zero);
+    }
+#endif
+    for (; k < to; ++k) big_phi[k] = zs[k] > 0 ? 1.0 : 0.0, small_phi[k] = 0.0;
+  };
+  beyond(0, first);
+  beyond(std::max(first, last + 1), n);
   double gauss = 0, ratio = 0;
-  for (int k = first; k <= last; ++k) {
-    const double z = zs[k];
+  auto next_gauss = [&](int k) {  // exp(-z^2 / 2) at bin k, the bins taken in order from `first`
     if ((k - first) % 16 == 0) {
+      const double z = zs[k];
       gauss = std::exp(-0.5 * z * z), ratio = std::exp(z * h - 0.5 * h * h);
     } else {
       gauss *= ratio, ratio *= step_ratio;
     }
-    PhiAndDensityOf(z, gauss, &big_phi[k], &small_phi[k]);
+    return gauss;
+  };
+  int k = first;
+#ifdef __SSE2__
+  for (; k < last; k += 2) {
+    const double g0 = next_gauss(k), g1 = next_gauss(k + 1);
+    PhiAndDensityOfTwo(_mm_loadu_pd(zs + k), _mm_set_pd(g1, g0), big_phi + k, small_phi + k);
+  }
+#endif
+  for (; k <= last; ++k) {
+    const double g = next_gauss(k);
+    PhiAndDensityOf(zs[k], g, &big_phi[k], &small_phi[k]);
   }
 }
+
+// Eigen::LLT's factorisation (its unblocked algorithm, Eigen 3.4) by its operations in their
+// order, without its calls per column (a dynamic-size matrix-vector product each) and its L1 norm: the
+// same L in the lower triangle, to the bit (SideModel.CholeskyIsEigens). False where LLT reports a
+// numerical issue (a pivot not above 0). For each column k:
+//   L_kk = sqrt(A_kk - sum_j<k L_kj^2),   L_ik = (A_ik - sum_j<k L_ij L_kj) / L_kk  (i > k),
+// each sum from j = 0 up (Eigen: the squared norm's sum from the first term, the product's from 0).
+// In bench_detector's 10 accurate frames LLT took 5.45 M instructions (3.11 M of them in those products);
+// FitOnce with this 100.31 -> 96.08 M (refcost).
+bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a) {
+  Eigen::Matrix<double, 8, 8>& m = *a;
+  for (int k = 0; k < 8; ++k) {
+    double x = m(k, k);
+    if (k > 0) {
+      double norm = m(k, 0) * m(k, 0);
+      for (int j = 1; j < k; ++j) norm += m(k, j) * m(k, j);
+      x -= norm;
+    }
+    if (x <= 0.0) return false;
+    m(k, k) = x = std::sqrt(x);
+    for (int i = k + 1; i < 8; ++i) {
+      if (k > 0) {
+        double dot = 0.0;
+        for (int j = 0; j < k; ++j) dot += m(i, j) * m(k, j);
+        m(i, k) -= dot;
+      }
+      m(i, k) /= x;
+    }
+  }
+  return true;
+}
+
+namespace {
 
 // Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
 // b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
@@ -660,6 +722,14 @@ double LevelNear(const SideProfiles& s, double u, int row, int colour) {
   return count > 0 ? sum / count : NAN;
 }
 
+// The solution of L L^T x = rhs for CholeskyLower's L (its lower triangle), as Eigen::LLT::solve.
+Vector SolveCholesky(const Normal& l, const Vector& rhs) {
+  Vector x = rhs;
+  l.triangularView<Eigen::Lower>().solveInPlace(x);
+  l.adjoint().triangularView<Eigen::Upper>().solveInPlace(x);
+  return x;
+}
+
 // The damped Gauss-Newton step from p that stays within [lo, hi]: a parameter whose step would cross
 // its bound is held at the bound and the others are solved again (a plain clamp after the solve would
 // leave the free parameters compensating for a move that did not happen, and the fit crawls along the
@@ -676,8 +746,8 @@ Vector BoundedStep(const Normal& a, const Vector& jtr, const double* p, const do
       m.row(k).setZero(), m.col(k).setZero(), m(k, k) = 1.0, rhs[k] = held[k];
     }
     // The damped normal matrix is positive definite: Cholesky (LDLT where it is not, numerically).
-    const Eigen::LLT<Normal> llt(m);
-    step = llt.info() == Eigen::Success ? Vector(llt.solve(rhs)) : Vector(m.ldlt().solve(rhs));
+    Normal l = m;
+    step = CholeskyLower(&l) ? SolveCholesky(l, rhs) : Vector(m.ldlt().solve(rhs));
     bool changed = false;
     for (int k = 0; k < kParams; ++k) {
       if (fixed[k] || (p[k] + step[k] <= hi[k] && p[k] + step[k] >= lo[k])) continue;

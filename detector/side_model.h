@@ -18,12 +18,16 @@
 // the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace mcmt {
 
@@ -138,6 +142,35 @@ inline void PhiAndDensityOf(double z, double gauss, double* big, double* small) 
 inline void PhiAndDensity(double z, double* big, double* small) {
   PhiAndDensityOf(z, std::exp(-0.5 * z * z), big, small);
 }
+
+#ifdef __SSE2__
+// PhiAndDensityOf at two points (z and gauss in lanes 0 and 1) into big[0..1], small[0..1], by its
+// operations lane by lane: the same values (FillBoundary; SideModel.FillBoundaryIsBinByBins).
+inline void PhiAndDensityOfTwo(__m128d z, __m128d gauss, double* big, double* small) {
+  const __m128d one = _mm_set1_pd(1.0);
+  const __m128d x = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), z), _mm_set1_pd(M_SQRT1_2));
+  const __m128d t = _mm_div_pd(one, _mm_add_pd(one, _mm_mul_pd(_mm_set1_pd(0.3275911), x)));
+  __m128d poly = _mm_add_pd(_mm_set1_pd(-1.453152027), _mm_mul_pd(t, _mm_set1_pd(1.061405429)));
+  poly = _mm_add_pd(_mm_set1_pd(1.421413741), _mm_mul_pd(t, poly));
+  poly = _mm_add_pd(_mm_set1_pd(-0.284496736), _mm_mul_pd(t, poly));
+  poly = _mm_add_pd(_mm_set1_pd(0.254829592), _mm_mul_pd(t, poly));
+  const __m128d tail = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(0.5), t), poly), gauss);
+  const __m128d upper = _mm_cmpge_pd(z, _mm_setzero_pd());  // z >= 0 (false for NaN, as the scalar test)
+  _mm_storeu_pd(big, _mm_or_pd(_mm_and_pd(upper, _mm_sub_pd(one, tail)), _mm_andnot_pd(upper, tail)));
+  _mm_storeu_pd(small, _mm_mul_pd(_mm_set1_pd(0.3989422804014327), gauss));
+}
+#endif
+
+// Phi, phi and z of the boundary at `bound` at every bin of `s` (z = (bound - u) / sigma, `inv_sigma`:
+// 1 / sigma, `step_ratio`: exp(-(du / sigma)^2)) into zs, big_phi and small_phi (s.bins each). The side
+// model's evaluation (side_model.cc); declared here for its test.
+void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
+                  double* big_phi, double* small_phi);
+
+// The Cholesky factor L (lower triangle of *a; the upper is left as it was) of the side model's 8 x 8
+// normal matrices, as Eigen::LLT computes it, to the bit; false where LLT reports a numerical issue.
+// Declared here for its test (side_model.cc).
+bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a);
 
 // Least-squares fit (Levenberg-Marquardt) of the model above. `start` (optional) warm-starts e and
 // sigma. Returns false when the fit fails, finds no contrast between the border and the code, or finds

@@ -3,9 +3,13 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
@@ -987,6 +991,114 @@ TEST(SideModel, AFitIsTheSameWhicheverBinsArePaired) {
   std::printf("edge %.17g / %.17g px, gamma %.17g / %.17g\n", fits[0].e, fits[1].e, fits[0].gamma,
               fits[1].gamma);
   for (int k = 0; k < 8; ++k) EXPECT_EQ(fits[0].params[k], fits[1].params[k]) << "parameter " << k;
+}
+
+// FillBoundary (Phi and phi of a side model's boundary at every bin) fills z, the bins beyond 7 sigmas and
+// Phi and phi two bins at a time (SSE2, PhiAndDensityOfTwo). Its values are the bin-by-bin definition's
+// to the bit: boundaries before, within and beyond the bins, blur from 0.15 px to 4 px (runs within 7
+// sigmas of every length and parity, restarts of the Gaussian's recurrence every 16 bins), even and odd
+// bin counts. PhiAndDensityOfTwo is PhiAndDensityOf lane by lane, also at 0, -0, NaN and infinities.
+TEST(SideModel, FillBoundaryIsBinByBins) {
+  // The definition (FillBoundary before its two-bin code, refcost).
+  const auto reference = [](const SideProfiles& s, double bound, double inv_sigma, double step_ratio,
+                            double* zs, double* big_phi, double* small_phi) {
+    const double h = s.du * inv_sigma;
+    const int n = s.bins;
+    for (int j = 0; j < n; ++j) zs[j] = (bound - (s.u0 + j * s.du)) * inv_sigma;
+    int first = 0, last = n - 1;
+    while (first < n && std::abs(zs[first]) > 7.0) ++first;
+    while (last >= first && std::abs(zs[last]) > 7.0) --last;
+    for (int k = 0; k < n; ++k)
+      if (k < first || k > last) big_phi[k] = zs[k] > 0 ? 1.0 : 0.0, small_phi[k] = 0.0;
+    double gauss = 0, ratio = 0;
+    for (int k = first; k <= last; ++k) {
+      const double z = zs[k];
+      if ((k - first) % 16 == 0) {
+        gauss = std::exp(-0.5 * z * z), ratio = std::exp(z * h - 0.5 * h * h);
+      } else {
+        gauss *= ratio, ratio *= step_ratio;
+      }
+      PhiAndDensityOf(z, gauss, &big_phi[k], &small_phi[k]);
+    }
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int cases = 0;
+  for (int bins : {1, 2, 3, 6, 7, 16, 17, 33, 64, 101}) {
+    for (int trial = 0; trial < 200; ++trial, ++cases) {
+      SideProfiles s;
+      const double cell = 0.5 + 6.0 * uniform(rng);
+      s.Reset(-2.0 * cell * uniform(rng), std::clamp(cell / 4.0, 0.1, 0.5), bins, cell);
+      const double sigma = 0.15 + 3.85 * uniform(rng), inv_sigma = 1.0 / sigma;
+      const double bound = s.u0 - 10.0 + (s.OuterU() - s.u0 + 20.0) * uniform(rng);
+      const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
+      std::vector<double> z(bins), big(bins), small(bins), z0(bins), big0(bins), small0(bins);
+      FillBoundary(s, bound, inv_sigma, step_ratio, z.data(), big.data(), small.data());
+      reference(s, bound, inv_sigma, step_ratio, z0.data(), big0.data(), small0.data());
+      for (int j = 0; j < bins; ++j) {
+        ASSERT_EQ(z[j], z0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+        ASSERT_EQ(big[j], big0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+        ASSERT_EQ(small[j], small0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+      }
+    }
+  }
+  EXPECT_EQ(cases, 2000);
+#ifdef __SSE2__
+  const double inf = std::numeric_limits<double>::infinity();
+  const double zs[] = {0.0, -0.0, NAN, inf, -inf, 1e-300, -1e-300, 0.3, -0.3, 6.99, -6.99, 40.0, -40.0};
+  for (double z0 : zs)
+    for (double z1 : zs) {
+      double big[2], small[2], big0[2], small0[2];
+      PhiAndDensityOfTwo(_mm_set_pd(z1, z0), _mm_set_pd(std::exp(-0.5 * z1 * z1), std::exp(-0.5 * z0 * z0)),
+                         big, small);
+      PhiAndDensity(z0, &big0[0], &small0[0]);
+      PhiAndDensity(z1, &big0[1], &small0[1]);
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(std::memcmp(&big[k], &big0[k], sizeof(double)), 0) << z0 << " " << z1 << " lane " << k;
+        EXPECT_EQ(std::memcmp(&small[k], &small0[k], sizeof(double)), 0) << z0 << " " << z1 << " lane " << k;
+      }
+    }
+#endif
+}
+
+// CholeskyLower (the side model's Levenberg-Marquardt steps, BoundedStep) is Eigen::LLT's factorisation to
+// the bit: normal matrices J^T J of random Jacobians with columns of scales 1e-3 to 1e3, damped as FitOnce
+// damps them, with parameters held as BoundedStep holds them (row and column zero, diagonal 1), nearly
+// singular ones; and it fails where LLT reports a numerical issue (an indefinite matrix, a zero column).
+TEST(SideModel, CholeskyIsEigens) {
+  using Matrix8 = Eigen::Matrix<double, 8, 8>;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int factorised = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Eigen::Matrix<double, 40, 8> jacobian;
+    for (int c = 0; c < 8; ++c) {
+      const double scale = std::pow(10.0, -3.0 + 6.0 * uniform(rng));
+      for (int r = 0; r < 40; ++r) jacobian(r, c) = scale * normal(rng);
+    }
+    if (trial % 5 == 1) jacobian.col(7) = jacobian.col(6) * 0.999 + 1e-9 * jacobian.col(5);  // near-singular
+    Matrix8 a = jacobian.transpose() * jacobian;
+    const double lambda = std::pow(10.0, -7.0 + 7.0 * uniform(rng));
+    for (int k = 0; k < 8; ++k) a(k, k) += lambda * a(k, k) + 1e-9;
+    if (trial % 3 == 2)
+      for (int k = 0; k < 8; ++k)
+        if (uniform(rng) < 0.4) a.row(k).setZero(), a.col(k).setZero(), a(k, k) = 1.0;
+    if (trial % 50 == 7) a(3, 3) = -1.0;                          // indefinite
+    if (trial % 50 == 9) a.row(2).setZero(), a.col(2).setZero();  // a zero pivot
+    const Eigen::LLT<Matrix8> llt(a);
+    Matrix8 l = a;
+    const bool ok = CholeskyLower(&l);
+    ASSERT_EQ(ok, llt.info() == Eigen::Success) << "trial " << trial;
+    if (!ok) continue;
+    ++factorised;
+    const Matrix8& expected = llt.matrixLLT();
+    for (int c = 0; c < 8; ++c)
+      for (int r = c; r < 8; ++r)
+        ASSERT_EQ(std::memcmp(&l(r, c), &expected(r, c), sizeof(double)), 0)
+            << "trial " << trial << " L(" << r << ", " << c << ") " << l(r, c) << " vs " << expected(r, c);
+  }
+  EXPECT_GT(factorised, 2800);
 }
 
 }  // namespace
