@@ -266,6 +266,55 @@ TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
   EXPECT_GT(multi.cameras.size(), 1u);
 }
 
+// A single square seen at an angle (IPPE sure of its best solution), tracked from a prediction on the
+// mirror solution (as after a run of frontal, ambiguous frames): the prediction's branch may be kept
+// (continuity), but then the pose must not be published as sure. Before the fix, the mirror pose came out
+// STATUS_TRACKING (the status looked only at the IPPE ratio, not at which solution was published).
+TEST(PoseEstimator, MirrorPoseFromAPredictionIsNotPublishedAsSure) {
+  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
+  o.rig.num_cameras = 1;
+  const TrackerSim s = SimulateTracking(o);
+  const PoseEstimator est(s.map);
+  const auto& cam = s.map.cameras[0];
+  const double side = s.map.FindMarker(0)->size;
+  int sure = 0, mirror_kept = 0;
+  for (double tilt_deg : {8.0, 12.0, 16.0, 20.0, 25.0, 30.0, 40.0}) {
+    for (const double noise : {0.0, 0.1}) {
+      Rigid3 cam_from_marker = Rigid3::Identity();
+      cam_from_marker.linear() = (Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) *
+                                  Eigen::AngleAxisd(tilt_deg * kDeg, Eigen::Vector3d::UnitY()))
+                                     .toRotationMatrix();
+      cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
+      const Rigid3 rig_from_object = cam.rig_from_cam * cam_from_marker;  // marker 0 = object frame
+      std::vector<MarkerObservation> obs;  // marker 0 alone (a side marker may show at the larger tilts)
+      for (const auto& ob : ObservationsFromViews(s.DetectAt(rig_from_object, 1, 1, noise, 3)))
+        if (ob.id == 0) obs.push_back(ob);
+      ASSERT_EQ(obs.size(), 1u);
+      const SquarePose sp = EstimateSquarePose(cam.model, obs[0].corners, side);
+      ASSERT_TRUE(sp.ok);
+      if (sp.num_hypotheses < 2 || sp.ratio < 2.0) continue;
+      ++sure;
+      // From the truth: sure and right.
+      const PoseSolution right = est.Solve(obs, &rig_from_object);
+      ASSERT_TRUE(right.ok());
+      EXPECT_EQ(right.status, PoseStatus::kTracking) << tilt_deg;
+      EXPECT_LT(RotationAngle(right.rig_from_object, rig_from_object), 3.0 * kDeg) << tilt_deg;
+      // From the mirror solution.
+      const Rigid3 mirror = cam.rig_from_cam * sp.hypotheses[1].cam_from_marker;
+      const PoseSolution sol = est.Solve(obs, &mirror);
+      ASSERT_TRUE(sol.ok());
+      if (RotationAngle(sol.rig_from_object, rig_from_object) > 5.0 * kDeg) {
+        ++mirror_kept;
+        EXPECT_EQ(sol.status, PoseStatus::kAmbiguous)
+            << "tilt " << tilt_deg << " deg, noise " << noise << " px, IPPE ratio " << sp.ratio << ": pose "
+            << RotationAngle(sol.rig_from_object, rig_from_object) / kDeg << " deg off published as tracking";
+      }
+    }
+  }
+  EXPECT_GT(sure, 4);
+  EXPECT_GT(mirror_kept, 0);  // the case exists (continuity keeps the prediction's branch)
+}
+
 TEST(PoseEstimator, UnmappedObservationsAreIgnoredAndNothingIsLost) {
   const TrackerSim s = SimulateTracking(TrackerSession());
   const PoseEstimator est(s.map);
