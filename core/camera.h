@@ -70,6 +70,10 @@ struct CameraModel {
   DistortionModel model = DistortionModel::kNone;
   std::vector<double> distortion;  // radtan: 4, 5 or 8 values; fisheye: 4; none: empty
 
+  // An undistorted camera of width x height px with focal length focal_px (fx = fy) and principal point
+  // (cx, cy) px.
+  static CameraModel Pinhole(int width, int height, double focal_px, double cx, double cy);
+
   // Throws std::invalid_argument naming the problem (non-positive focal length, wrong count...).
   void Validate() const;
 

@@ -37,6 +37,16 @@ DistortionModel DistortionModelFromName(const std::string& name) {
   throw std::invalid_argument("unknown distortion model '" + name + "' (valid: none, radtan, fisheye)");
 }
 
+CameraModel CameraModel::Pinhole(int width, int height, double focal_px, double cx, double cy) {
+  CameraModel c;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = focal_px;
+  c.cx = cx;
+  c.cy = cy;
+  return c;
+}
+
 void CameraModel::Validate() const {
   if (width <= 0 || height <= 0)
     throw std::invalid_argument("image size must be positive, got " + std::to_string(width) + "x" +

@@ -157,11 +157,7 @@ RigMap TwoBodyMap() {
   map.reference_camera = "cam0";
   MapCamera cam;
   cam.name = "cam0";
-  cam.model.width = 640;
-  cam.model.height = 480;
-  cam.model.fx = cam.model.fy = 500;
-  cam.model.cx = 320;
-  cam.model.cy = 240;
+  cam.model = CameraModel::Pinhole(640, 480, 500, 320, 240);
   cam.rig_from_cam.translation() = Eigen::Vector3d(0.1, 0.2, 0.3);
   map.cameras.push_back(cam);
   MapObject tool, floor;

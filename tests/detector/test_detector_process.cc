@@ -78,12 +78,8 @@ class Recording {
         cv::imwrite((dir / cam / name).string(), image);
         markers[cam] += static_cast<int>(truth.size());
       }
-      CameraModel model;
-      model.width = scene.width;
-      model.height = scene.height;
-      model.fx = model.fy = scene.focal;
-      model.cx = scene.width / 2.0;
-      model.cy = scene.height / 2.0;
+      CameraModel model =
+          CameraModel::Pinhole(scene.width, scene.height, scene.focal, scene.width / 2.0, scene.height / 2.0);
       WriteIntrinsicsOpenCv((dir / (cam + ".yml")).string(), model);
       yaml += "  - name: " + cam + "\n    intrinsics: " + cam + ".yml\n    source: " + cam + "/\n";
     }
@@ -328,12 +324,7 @@ TEST(DetectorProcess, BadInputGivesOneLineNamingCameraAndFile) {
   }
   {
     // Intrinsics for 640x480, frames 320x240.
-    CameraModel model;
-    model.width = 640;
-    model.height = 480;
-    model.fx = model.fy = 500;
-    model.cx = 320;
-    model.cy = 240;
+    CameraModel model = CameraModel::Pinhole(640, 480, 500, 320, 240);
     WriteIntrinsicsOpenCv((rec.dir / "cam2.yml").string(), model);
     const std::string out = RunFailing({"--config", rec.rig, "--camera", "cam2", "--lcm-url", url}, rec.dir);
     EXPECT_NE(out.find("cam2"), std::string::npos) << out;
@@ -387,11 +378,7 @@ TEST(DetectorProcess, LaunchDetectMode) {
 TEST(DetectorProcess, LaunchStopsEveryoneWhenOneFails) {
   Recording rec("launchfail");
   // cam1's intrinsics do not match its frames: it fails; the looping others must be stopped.
-  CameraModel model;
-  model.width = 100;
-  model.height = 100;
-  model.fx = model.fy = 100;
-  model.cx = model.cy = 50;
+  CameraModel model = CameraModel::Pinhole(100, 100, 100, 50, 50);
   WriteIntrinsicsOpenCv((rec.dir / "cam1.yml").string(), model);
   Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "detect",
                    "--lcm-url", Url(7706), "--loop"},

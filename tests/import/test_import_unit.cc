@@ -57,11 +57,7 @@ struct Scene {
   Rigid3 cam_from_marker;
   double side = 0.16;
   Scene() {
-    camera.width = 1280;
-    camera.height = 1024;
-    camera.fx = camera.fy = 600;
-    camera.cx = 640;
-    camera.cy = 512;
+    camera = CameraModel::Pinhole(1280, 1024, 600, 640, 512);
     cam_from_marker =
         RigidFromRvecTvec(Eigen::Vector3d(M_PI + 0.2, 0.1, 0.3), Eigen::Vector3d(0.1, -0.05, 1.0));
   }
@@ -302,12 +298,7 @@ TEST(ImportKalibr, ReadsRadtanAndEquidistantAndNamesBadKeys) {
 
 TEST(ImportCsv, MakesASessionTheRigReadsBack) {
   TempDir dir("import_csv");
-  CameraModel m;
-  m.width = 640;
-  m.height = 480;
-  m.fx = m.fy = 500;
-  m.cx = 320;
-  m.cy = 240;
+  CameraModel m = CameraModel::Pinhole(640, 480, 500, 320, 240);
   std::filesystem::create_directories(dir / "calib");
   WriteIntrinsicsOpenCv(dir / "calib/c.yml", m);
   std::ofstream(dir / "rig.yaml") << "markers:\n  dictionary: DICT_4X4_50\n  size: 0.05\ncameras:\n"

@@ -42,11 +42,7 @@ RigMap BodiesMap() {
   for (int i = 0; i < 2; ++i) {
     MapCamera c;
     c.name = "cam" + std::to_string(i);
-    c.model.width = 640;
-    c.model.height = 480;
-    c.model.fx = c.model.fy = 500;
-    c.model.cx = 320;
-    c.model.cy = 240;
+    c.model = CameraModel::Pinhole(640, 480, 500, 320, 240);
     c.rig_from_cam = i == 0 ? Rigid3::Identity() : SomeRigid(rng, 1.0);
     map.cameras.push_back(c);
   }

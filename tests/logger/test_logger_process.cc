@@ -230,12 +230,7 @@ TEST_F(LoggerProcessTest, KillNineLeavesADecodableLog) {
 
 // SIGTERM closes cleanly; the sidecar holds the config, intrinsics, counts and the frames lost.
 TEST_F(LoggerProcessTest, SigtermClosesAndSidecarCountsLoss) {
-  CameraModel model;
-  model.width = 640;
-  model.height = 480;
-  model.fx = model.fy = 500;
-  model.cx = 320;
-  model.cy = 240;
+  CameraModel model = CameraModel::Pinhole(640, 480, 500, 320, 240);
   WriteIntrinsicsOpenCv(dir_ + "/left.yml", model);
   WriteIntrinsicsOpenCv(dir_ + "/right.yml", model);
   const std::string rig_text =
@@ -412,12 +407,7 @@ TEST_F(LoggerProcessTest, BadInputGivesOneClearLine) {
                  "--recv-buf-mb: must be in [0, 1000000], got '-1'");
   one_line_error({Bin("mcmt-logger"), "--out", dir_ + "/x.lcmlog", "--config", dir_ + "/norig.yaml"},
                  "norig.yaml");
-  CameraModel model;
-  model.width = 640;
-  model.height = 480;
-  model.fx = model.fy = 500;
-  model.cx = 320;
-  model.cy = 240;
+  CameraModel model = CameraModel::Pinhole(640, 480, 500, 320, 240);
   WriteIntrinsicsOpenCv(dir_ + "/c.yml", model);
   WriteText(
       dir_ + "/typo.yaml",

@@ -550,12 +550,7 @@ namespace {
 // A camera whose clock reads 8 ms late (utime = capture + 8 ms) sees, at each frame, the object where
 // the reference camera saw it: its offset comes out as +8 ms (true capture time = utime - offset).
 TEST(MapperSelfCal, TimeOffsetSignOnAMovingMarker) {
-  CameraModel camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 500;
-  camera.cx = 320;
-  camera.cy = 240;
+  CameraModel camera = CameraModel::Pinhole(640, 480, 500, 320, 240);
   BundleProblem bp;
   bp.models = {&camera, &camera};
   Rigid3 cam1_from_rig = Rigid3::Identity();

@@ -174,12 +174,7 @@ TEST(MapperStages, MarkerGraphRecoversTheLayoutAndRejectsAStaticMarker) {
 // from frame to frame is still not attached. mcmt-sim's grained surface at 1.3 m (marker 2, 0.71 px mean
 // corner error) lost its map over 1-3 of 26 frames of one pair (bench/results/2026-12-06-knife.md).
 TEST(MapperStages, SmallSquaresAgreeWithinTheirPosesNoise) {
-  CameraModel camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 420;
-  camera.cx = 320;
-  camera.cy = 240;
+  CameraModel camera = CameraModel::Pinhole(640, 480, 420, 320, 240);
   const double side = 0.04;
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.4);

@@ -144,12 +144,7 @@ TEST(MapperGraph, InconsistentPairHasLittleSupport) {
 // the measured variance is within 30 % of the prediction (measured: within 7 %; the tilt is the loosest,
 // 3.7 deg).
 TEST(MapperGraph, SquarePoseCovarianceMatchesTheSpreadOfNoisyPoses) {
-  CameraModel camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 600;
-  camera.cx = 320;
-  camera.cy = 240;
+  CameraModel camera = CameraModel::Pinhole(640, 480, 600, 320, 240);
   const double side = 0.025, sigma_px = 0.5;
   const Rigid3 cam_from_marker = Pose(0.7, 0.1, 0.3, 0.05, -0.03, 0.9);
   const MarkerCorners3d corners = MarkerCornersInMarker(side);
@@ -283,12 +278,7 @@ TEST(MapperBundle, ResidualJacobianMatchesNumericDifferentiation) {
 }
 
 TEST(MapperBundle, PointBehindCameraFailsTheEvaluation) {
-  CameraModel model;
-  model.width = 640;
-  model.height = 480;
-  model.fx = model.fy = 500;
-  model.cx = 320;
-  model.cy = 240;
+  CameraModel model = CameraModel::Pinhole(640, 480, 500, 320, 240);
   MarkerCorners2d observed{};
   std::unique_ptr<ceres::CostFunction> cost(ReprojectionCost::Create(&model, observed, 0.04));
   std::array<PoseBlock, 3> blocks = {BlockFromRigid(Pose(0, 0, 0, 0, 0, -1)),

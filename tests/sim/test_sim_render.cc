@@ -34,11 +34,7 @@ constexpr double kBlack = 25.0;
 sim::SimCamera PinholeCamera(int w, int h, double f, double cx, double cy) {
   sim::SimCamera cam;
   cam.name = "cam0";
-  cam.model.width = w;
-  cam.model.height = h;
-  cam.model.fx = cam.model.fy = f;
-  cam.model.cx = cx;
-  cam.model.cy = cy;
+  cam.model = CameraModel::Pinhole(w, h, f, cx, cy);
   return cam;  // rig_from_cam = identity: the rig frame is the camera frame
 }
 
