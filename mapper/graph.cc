@@ -1,6 +1,7 @@
 #include "mapper/graph.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <queue>
 #include <tuple>
@@ -12,6 +13,28 @@
 
 namespace mcmt {
 
+MahalanobisFactor::MahalanobisFactor(const Matrix6d& covariance) {
+  const Eigen::LLT<Matrix6d> llt(covariance);
+  valid_ = llt.info() == Eigen::Success;
+  if (!valid_) return;
+  const Matrix6d l = llt.matrixL();
+  for (int row = 0; row < 6; ++row)
+    for (int col = 0; col <= row; ++col) l_[Index(row, col)] = l(row, col);
+}
+
+double MahalanobisFactor::SquaredDistance(const Vector6d& delta) const {
+  if (!valid_) return std::numeric_limits<double>::infinity();
+  // y = L^-1 delta: L y = delta, row by row.
+  double y[6], sum = 0.0;
+  for (int row = 0; row < 6; ++row) {
+    double v = delta[row];
+    for (int col = 0; col < row; ++col) v -= l_[Index(row, col)] * y[col];
+    y[row] = v / l_[Index(row, row)];
+    sum += y[row] * y[row];
+  }
+  return sum;
+}
+
 void PairCandidates::AddEvent(const std::vector<Rigid3>& candidates,
                               const std::vector<Matrix6d>& covariances) {
   if (candidates.empty()) return;
@@ -19,7 +42,7 @@ void PairCandidates::AddEvent(const std::vector<Rigid3>& candidates,
     a_from_b.push_back(c);
     event.push_back(num_events);
   }
-  covariance.insert(covariance.end(), covariances.begin(), covariances.end());
+  for (const Matrix6d& c : covariances) noise.emplace_back(2.0 * c);
   ++num_events;
 }
 
@@ -29,7 +52,7 @@ bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& opti
   return TranslationDistance(x, y) <= options.max_distance_m + options.max_distance_rel * scale;
 }
 
-bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
+bool Consistent(const Rigid3& x, const MahalanobisFactor& x_noise, const Rigid3& y,
                 const ConsistencyOptions& options) {
   if (Consistent(x, y, options)) return true;
   if (!(options.max_mahalanobis_sq > 0)) return false;
@@ -41,7 +64,7 @@ bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
   const Rigid3 d = Inverse(y) * x;
   Vector6d delta;
   delta << VectorFromRotation(d.rotation()), d.translation();
-  return delta.dot((2.0 * x_covariance).ldlt().solve(delta)) <= options.max_mahalanobis_sq;
+  return x_noise.SquaredDistance(delta) <= options.max_mahalanobis_sq;
 }
 
 Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double observed_side_px,
@@ -70,11 +93,11 @@ Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double
 }
 
 int EventSupport(const PairCandidates& pair, const Rigid3& x, const ConsistencyOptions& consistency) {
-  const bool with_covariance = pair.covariance.size() == pair.a_from_b.size();
+  const bool with_covariance = pair.noise.size() == pair.a_from_b.size();
   int support = 0, last_supported = -1;
   for (size_t i = 0; i < pair.a_from_b.size(); ++i) {
     if (pair.event[i] == last_supported) continue;
-    if (with_covariance ? Consistent(pair.a_from_b[i], pair.covariance[i], x, consistency)
+    if (with_covariance ? Consistent(pair.a_from_b[i], pair.noise[i], x, consistency)
                         : Consistent(pair.a_from_b[i], x, consistency)) {
       last_supported = pair.event[i];
       ++support;

@@ -12,6 +12,23 @@
 
 namespace mcmt {
 
+// A covariance C kept for squared Mahalanobis distances delta^T C^-1 delta only: its lower Cholesky factor
+// C = L L^T packed row by row (21 doubles: 168 bytes instead of a Matrix6d's 288), the distance |L^-1
+// delta|^2 by forward substitution (21 multiply-adds, no factorisation per test). A covariance that is not
+// positive definite gives a factor whose every distance is infinite.
+class MahalanobisFactor {
+ public:
+  MahalanobisFactor() = default;
+  explicit MahalanobisFactor(const Matrix6d& covariance);
+  double SquaredDistance(const Vector6d& delta) const;
+  bool valid() const { return valid_; }
+
+ private:
+  static constexpr int Index(int row, int col) { return row * (row + 1) / 2 + col; }
+  double l_[21] = {};
+  bool valid_ = false;
+};
+
 // Candidates of a_from_b for one pair of nodes (a < b), grouped by the co-observation event
 // (frame and camera, or frame) that produced them: one event yields one or more candidates
 // (one per combination of kept IPPE hypotheses).
@@ -22,9 +39,11 @@ struct PairCandidates {
   int num_events = 0;            // events stored (a strided subset when there were many)
   int64_t total_events = 0;      // events seen in all
   int64_t total_candidates = 0;  // candidates seen in all (s in the paper)
-  // Per candidate (or empty: unknown), the covariance of a_from_b under a_from_b * Exp(delta), delta =
-  // (rotation vector, translation) in b's frame, from the noise of the square poses it was composed of.
-  std::vector<Matrix6d> covariance;
+  // Per candidate (or empty: unknown), twice the covariance of a_from_b under a_from_b * Exp(delta), delta =
+  // (rotation vector, translation) in b's frame, from the noise of the square poses it was composed of
+  // (Consistent's test). One factor per candidate: up to max_events x 4 per pair.
+  std::vector<MahalanobisFactor> noise;
+  // `covariances`: empty, or one per candidate (of a_from_b, not yet doubled).
   void AddEvent(const std::vector<Rigid3>& candidates, const std::vector<Matrix6d>& covariances = {});
 };
 
@@ -33,12 +52,13 @@ struct ConsistencyOptions {
   double max_angle_rad = 15.0 * 3.14159265358979323846 / 180.0;
   double max_distance_m = 0.02;
   double max_distance_rel = 0.15;  // plus this fraction of the translation's length
-  // Also the same when x has a covariance (PairCandidates::covariance) and the squared Mahalanobis distance
+  // Also the same when x has a covariance (PairCandidates::noise) and the squared Mahalanobis distance
   // of their difference under twice x's covariance is at most this (0: the tolerances above only).
   double max_mahalanobis_sq = 0.0;
 };
 bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& options);
-bool Consistent(const Rigid3& x, const Matrix6d& x_covariance, const Rigid3& y,
+// `x_noise`: twice x's covariance (PairCandidates::noise).
+bool Consistent(const Rigid3& x, const MahalanobisFactor& x_noise, const Rigid3& y,
                 const ConsistencyOptions& options);
 
 // Covariance of a square's pose cam_from_marker under cam_from_marker * Exp(delta) (delta = rotation vector,
