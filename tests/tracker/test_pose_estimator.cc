@@ -238,6 +238,17 @@ TEST(PoseEstimator, SingleCameraSingleMarker) {
   EXPECT_GT(tracking, 0);
 }
 
+// cam_from_marker of a square 1.2 m in front of the camera, facing it (turned half a turn about x) and
+// tilted by tilt_deg about its y axis.
+Rigid3 SquareInFrontOfTheCamera(double tilt_deg) {
+  Rigid3 cam_from_marker = Rigid3::Identity();
+  cam_from_marker.linear() = (Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) *
+                              Eigen::AngleAxisd(tilt_deg * kDeg, Eigen::Vector3d::UnitY()))
+                                 .toRotationMatrix();
+  cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
+  return cam_from_marker;
+}
+
 TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
   sim::SessionOptions o = TrackerSession(150, 1, 0.3);
   o.rig.num_cameras = 1;
@@ -245,10 +256,7 @@ TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
   const PoseEstimator est(s.map);
   // A marker facing the camera squarely: both IPPE solutions nearly equally good.
   const auto& cam = s.map.cameras[0];
-  Rigid3 cam_from_marker = Rigid3::Identity();
-  cam_from_marker.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
-  const Rigid3 rig_from_object = cam.rig_from_cam * cam_from_marker;  // marker 0 = object frame
+  const Rigid3 rig_from_object = cam.rig_from_cam * SquareInFrontOfTheCamera(0.0);  // marker 0 = object frame
   const auto views = s.DetectAt(rig_from_object, 1, 1, 0.3, 3);
   auto obs = ObservationsFromViews(views);
   ASSERT_EQ(obs.size(), 1u);
@@ -280,12 +288,7 @@ TEST(PoseEstimator, MirrorPoseFromAPredictionIsNotPublishedAsSure) {
   int sure = 0, mirror_kept = 0;
   for (double tilt_deg : {8.0, 12.0, 16.0, 20.0, 25.0, 30.0, 40.0}) {
     for (const double noise : {0.0, 0.1}) {
-      Rigid3 cam_from_marker = Rigid3::Identity();
-      cam_from_marker.linear() = (Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) *
-                                  Eigen::AngleAxisd(tilt_deg * kDeg, Eigen::Vector3d::UnitY()))
-                                     .toRotationMatrix();
-      cam_from_marker.translation() = Eigen::Vector3d(0.01, 0.02, 1.2);
-      const Rigid3 rig_from_object = cam.rig_from_cam * cam_from_marker;  // marker 0 = object frame
+      const Rigid3 rig_from_object = cam.rig_from_cam * SquareInFrontOfTheCamera(tilt_deg);  // marker 0
       std::vector<MarkerObservation> obs;  // marker 0 alone (a side marker may show at the larger tilts)
       for (const auto& ob : ObservationsFromViews(s.DetectAt(rig_from_object, 1, 1, noise, 3)))
         if (ob.id == 0) obs.push_back(ob);
