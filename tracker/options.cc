@@ -48,7 +48,9 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
            .Add("corner_weight_floor", OptionTable<O>::Of(&O::corner_weighting, &CornerWeighting::floor), "",
                 kCornerWeightFloorHelp, AtLeast(0))
            .Add("ambiguity_ratio", &O::ambiguity_ratio, "",
-                "tau_e: a single square with IPPE ratio below it is ambiguous", AtLeast(1))
+                "tau_e: a single square is ambiguous when its IPPE ratio, or the RMS ratio of its best other "
+                "refined pose (> 1 deg away) to the published one, is below it",
+                AtLeast(1))
            .Add("max_gap_s", &O::max_gap_s, "s", "no prediction across a longer gap (re-initialise)",
                 Above(0))
            .Add("min_sigma_px", &O::min_sigma_px, "px",

@@ -62,7 +62,7 @@ struct TrackerOptions {
   int max_iterations = 20;       // Levenberg-Marquardt iterations per start
   double huber_px = 1.0;         // Huber threshold of the robust loss, pixels (corner distance)
   double outlier_px = 4.0;       // a marker observation whose RMS corner error exceeds this is dropped
-  double ambiguity_ratio = 2.0;  // tau_e: a single square with IPPE ratio below it is ambiguous
+  double ambiguity_ratio = 2.0;  // tau_e: see options.cc (IPPE ratio, or refined other pose)
   double max_gap_s = 0.5;        // no prediction across a gap longer than this (re-initialise)
   double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
   int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
