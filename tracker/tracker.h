@@ -59,13 +59,14 @@ struct TrackerOptions {
   // a camera's first messages) is rejected with a warning naming the camera; 0: no check.
   double max_clock_jump_s = 5.0;
   // Solver.
-  int max_iterations = 20;       // Levenberg-Marquardt iterations per start
-  double huber_px = 1.0;         // Huber threshold of the robust loss, pixels (corner distance)
-  double outlier_px = 4.0;       // a marker observation whose RMS corner error exceeds this is dropped
-  double ambiguity_ratio = 2.0;  // tau_e: see options.cc (IPPE ratio, or refined other pose)
-  double max_gap_s = 0.5;        // no prediction across a gap longer than this (re-initialise)
-  double min_sigma_px = 0.02;    // floor of the residual standard deviation used for the covariance
-  int max_start_markers = 12;    // when lost: IPPE hypotheses of at most this many observations
+  int max_iterations = 20;             // Levenberg-Marquardt iterations per start
+  double huber_px = 1.0;               // Huber threshold of the robust loss, pixels (corner distance)
+  double outlier_px = 4.0;             // a marker observation whose RMS corner error exceeds this is dropped
+  double ambiguity_ratio = 2.0;        // tau_e: see options.cc (IPPE ratio, or refined other pose)
+  double max_gap_s = 0.5;              // no prediction across a gap longer than this (re-initialise)
+  double min_sigma_px = 0.02;          // floor of the residual standard deviation used for the covariance
+  double noise_prior_residuals = 8.0;  // nu0: pseudo-residuals at the map's noise in that deviation
+  int max_start_markers = 12;          // when lost: IPPE hypotheses of at most this many observations
   // How a corner's x and y residuals weigh (keys corner_weights and corner_weight_floor; core/marker.h: a
   // corner where the marker's sides meet at a narrow angle is barely located along them).
   CornerWeighting corner_weighting;
