@@ -238,6 +238,13 @@ TEST(PoseEstimator, SingleCameraSingleMarker) {
   EXPECT_GT(tracking, 0);
 }
 
+// The tracker's session (TrackerSession, 0.3 px noise) seen by its first camera only.
+TrackerSim OneCameraSim() {
+  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
+  o.rig.num_cameras = 1;
+  return SimulateTracking(o);
+}
+
 // cam_from_marker of a square 1.2 m in front of the camera, facing it (turned half a turn about x) and
 // tilted by tilt_deg about its y axis.
 Rigid3 SquareInFrontOfTheCamera(double tilt_deg) {
@@ -250,9 +257,7 @@ Rigid3 SquareInFrontOfTheCamera(double tilt_deg) {
 }
 
 TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
-  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
-  o.rig.num_cameras = 1;
-  const TrackerSim s = SimulateTracking(o);
+  const TrackerSim s = OneCameraSim();
   const PoseEstimator est(s.map);
   // A marker facing the camera squarely: both IPPE solutions nearly equally good.
   const auto& cam = s.map.cameras[0];
@@ -279,9 +284,7 @@ TEST(PoseEstimator, FrontalSquareIsAmbiguousButMultiMarkerIsNot) {
 // (continuity), but then the pose must not be published as sure. Before the fix, the mirror pose came out
 // STATUS_TRACKING (the status looked only at the IPPE ratio, not at which solution was published).
 TEST(PoseEstimator, MirrorPoseFromAPredictionIsNotPublishedAsSure) {
-  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
-  o.rig.num_cameras = 1;
-  const TrackerSim s = SimulateTracking(o);
+  const TrackerSim s = OneCameraSim();
   const PoseEstimator est(s.map);
   const auto& cam = s.map.cameras[0];
   const double side = s.map.FindMarker(0)->size;
@@ -373,9 +376,7 @@ TEST(PoseEstimator, CovarianceMatchesTheActualError) {
 // most are ambiguous), 0.15 px noise, the map's rms_px that noise's per-corner RMS, tracked from the truth.
 // Measured: nu0 = 0 (before) 19.7 % beyond the bound, mean NEES 16.8; nu0 = 8: 0 %, mean 2.95.
 TEST(PoseEstimator, SingleSquareCovarianceIsNotOverconfident) {
-  sim::SessionOptions o = TrackerSession(150, 1, 0.3);
-  o.rig.num_cameras = 1;
-  TrackerSim s = SimulateTracking(o);
+  TrackerSim s = OneCameraSim();
   const double noise_px = 0.15;
   s.map.cameras[0].rms_px = std::sqrt(2.0) * noise_px;
   const auto& cam = s.map.cameras[0];
