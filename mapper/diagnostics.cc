@@ -279,14 +279,12 @@ void CameraStatistics(const MapResult& result, const std::vector<ObservationResi
       if (!r.inlier) continue;
       ++c.inliers;
       sq += r.rms_px * r.rms_px;
-      double side = 0;
       for (int k = 0; k < 4; ++k) {
-        side += 0.25 * (r.observed[k] - r.observed[(k + 1) % 4]).norm();
         const int cx = std::clamp(int(r.observed[k].x() * cells / mc.model.width), 0, cells - 1);
         const int cy = std::clamp(int(r.observed[k].y() * cells / mc.model.height), 0, cells - 1);
         covered[cy * cells + cx] = 1;
       }
-      sides.push_back(side);
+      sides.push_back(MeanSideLength(r.observed));
     }
     c.rejected = c.observations - c.inliers;
     c.rms_px = c.inliers ? std::sqrt(sq / c.inliers) : 0.0;

@@ -67,11 +67,17 @@ bool Consistent(const Rigid3& x, const MahalanobisFactor& x_noise, const Rigid3&
   return x_noise.SquaredDistance(delta) <= options.max_mahalanobis_sq;
 }
 
+double MeanSideLength(const MarkerCorners2d& corners) {
+  double side = 0.0;
+  for (int k = 0; k < 4; ++k) side += 0.25 * (corners[(k + 1) % 4] - corners[k]).norm();
+  return side;
+}
+
 Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double observed_side_px,
                               double sigma_px) {
   const Eigen::Matrix3d r = cam_from_marker.rotation();
   const MarkerCorners3d corners = MarkerCornersInMarker(side);
-  Eigen::Vector2d image[4];
+  MarkerCorners2d image;
   Matrix6d information = Matrix6d::Zero();
   for (int k = 0; k < 4; ++k) {
     const Eigen::Vector3d p = cam_from_marker * corners[k];
@@ -84,9 +90,7 @@ Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double
     const Eigen::Matrix<double, 2, 6> j = projection * dp;
     information += j.transpose() * j;
   }
-  double normalised_side = 0.0;
-  for (int k = 0; k < 4; ++k) normalised_side += 0.25 * (image[(k + 1) % 4] - image[k]).norm();
-  const double sigma = sigma_px * normalised_side / std::max(observed_side_px, 1e-9);
+  const double sigma = sigma_px * MeanSideLength(image) / std::max(observed_side_px, 1e-9);
   information /= sigma * sigma;
   information.diagonal() += Vector6d::Ones();  // the prior: 1 rad, 1 m (0.26 rad: the same supports)
   return information.inverse();

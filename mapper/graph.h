@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/marker.h"
 #include "core/medoid.h"
 #include "core/se3.h"
 
@@ -61,10 +62,14 @@ bool Consistent(const Rigid3& x, const Rigid3& y, const ConsistencyOptions& opti
 bool Consistent(const Rigid3& x, const MahalanobisFactor& x_noise, const Rigid3& y,
                 const ConsistencyOptions& options);
 
+// The mean of a quad's four side lengths (pixels for image corners).
+double MeanSideLength(const MarkerCorners2d& corners);
+
 // Covariance of a square's pose cam_from_marker under cam_from_marker * Exp(delta) (delta = rotation vector,
 // translation, in the marker's frame), from independent noise of sigma_px on each corner coordinate:
 // (J^T J / sigma^2 + prior)^-1 with J the pinhole Jacobian of the four corners' normalised image points,
-// sigma in normalised units = sigma_px x the side's length there / its length in pixels (observed_side_px),
+// sigma in normalised units = sigma_px x the side's length there / its length in pixels (observed_side_px:
+// MeanSideLength of the observed corners),
 // and a weak prior (1 rad, 1 m) where the corners do not pin the pose (a face-on square's tilt).
 Matrix6d SquarePoseCovariance(const Rigid3& cam_from_marker, double side, double observed_side_px,
                               double sigma_px);

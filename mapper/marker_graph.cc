@@ -295,8 +295,7 @@ std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs, double p
     GraphItem item;
     item.group = ob.view;
     item.node = ob.marker;
-    double side_px = 0.0;
-    for (int k = 0; k < 4; ++k) side_px += 0.25 * (ob.corners[(k + 1) % 4] - ob.corners[k]).norm();
+    const double side_px = MeanSideLength(ob.corners);
     for (int h = 0; h < ob.kept; ++h) {
       const Rigid3& cam_from_marker = ob.pose.hypotheses[h].cam_from_marker;
       item.node_from_common.push_back(Inverse(cam_from_marker));

@@ -57,9 +57,9 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 "floor of the residual standard deviation of the covariance", AtLeast(0))
            .Add("noise_prior_residuals", &O::noise_prior_residuals, "",
                 "the covariance's noise variance pools the frame's residuals with this many pseudo-residuals "
-                "at the map's noise (its cameras' rms_px^2 / 2 per coordinate): sigma^2 = (RSS + nu0 "
-                "sigma0^2) "
-                "/ (N - 6 + nu0); a single square alone has N - 6 = 2 (0: the frame's residuals alone)",
+                "at the map's noise (its cameras' rms_px^2 / 2 per coordinate): "
+                "sigma^2 = (RSS + nu0 sigma0^2) / (N - 6 + nu0); a single square alone has N - 6 = 2 "
+                "(0: the frame's residuals alone)",
                 AtLeast(0))
            .Add("max_start_markers", &O::max_start_markers, "",
                 "when lost: IPPE hypotheses of at most this many "

@@ -149,10 +149,8 @@ TEST(MapperGraph, SquarePoseCovarianceMatchesTheSpreadOfNoisyPoses) {
   const Rigid3 cam_from_marker = Pose(0.7, 0.1, 0.3, 0.05, -0.03, 0.9);
   const MarkerCorners3d corners = MarkerCornersInMarker(side);
   MarkerCorners2d truth;
-  double side_px = 0.0;
   for (int k = 0; k < 4; ++k) truth[k] = camera.Project(cam_from_marker * corners[k]);
-  for (int k = 0; k < 4; ++k) side_px += 0.25 * (truth[(k + 1) % 4] - truth[k]).norm();
-  const Matrix6d predicted = SquarePoseCovariance(cam_from_marker, side, side_px, sigma_px);
+  const Matrix6d predicted = SquarePoseCovariance(cam_from_marker, side, MeanSideLength(truth), sigma_px);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0.0, sigma_px);
   std::vector<Vector6d> deltas;
