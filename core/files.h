@@ -122,7 +122,20 @@ RigMap ReadMap(const std::string& path);  // throws FileFormatError naming file 
 // trajectory.csv: header "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers", one row per frame
 // with a solution; the pose is rig_from_object. The mapper's with time offsets adds the columns
 // "wx,wy,wz,vx,vy,vz" (kTrajectoryVelocityHeader): the velocity its bundle adjustment moved the frame's
-// pose along to each observation's capture time.
+// pose along to each observation's capture time. The tracker's poses.csv (and mcmt-export's from
+// object_pose_t) adds "status,sigma_position_m,sigma_rotation_rad" (PoseQuality), after the velocity's
+// when both are there.
+
+// A tracker's pose: its status and its 1-sigma uncertainty along the worst direction, from object_pose_t's
+// status and covariance (QualityOfPose).
+struct PoseQuality {
+  bool ambiguous = false;           // STATUS_AMBIGUOUS (a single square; may be its mirror), else TRACKING
+  double sigma_position_m = 0.0;    // sqrt of the largest eigenvalue of the origin's PositionCovariance
+  double sigma_rotation_rad = 0.0;  // sqrt of the largest eigenvalue of the rotation block
+};
+// `covariance` in object_pose_t's order (x, y, z, then rotation; a perturbation in the rig frame).
+PoseQuality QualityOfPose(const Rigid3& rig_from_object, const Matrix6d& covariance, bool ambiguous);
+
 struct TrajectoryRow {
   int64_t utime = 0;
   int64_t seq = 0;
@@ -133,6 +146,8 @@ struct TrajectoryRow {
   // (wx, wy, wz) rad/s, (vx, vy, vz) m/s, a twist in the rig frame: the pose dt seconds after utime is
   // (Exp(dt w) R, t + dt v) with (R, t) = rig_from_object. None: the row has no velocity.
   std::optional<std::array<double, 6>> velocity;
+  // None: the row has no status nor covariance (the mapper's trajectory).
+  std::optional<PoseQuality> quality;
 };
 
 // The row re-expressed in another rig frame: pose and velocity (rotated) of new_rig_from_rig * pose.
@@ -140,13 +155,20 @@ void MoveToRig(const Rigid3& new_rig_from_rig, TrajectoryRow* row);
 
 extern const char kTrajectoryHeader[];
 extern const char kTrajectoryVelocityHeader[];  // kTrajectoryHeader + ",wx,wy,wz,vx,vy,vz"
-// Either of the two headers (a trailing '\r' allowed).
+// kTrajectoryHeader [+ the velocity's columns] [+ ",status,sigma_position_m,sigma_rotation_rad"].
+std::string TrajectoryHeader(bool velocity, bool quality);
+// One of the four headers (a trailing '\r' allowed).
 bool IsTrajectoryHeader(const std::string& line);
-// No newline; with `velocity`, the six velocity columns follow (empty when the row has none).
-std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity = false);
-// With the velocity columns when some row has a velocity.
-void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows);
-// Either header; throws FileFormatError naming the file, the line and the column.
+// No newline; with `velocity`, the six velocity columns follow (empty when the row has none), with
+// `quality` the three PoseQuality columns ("tracking" or "ambiguous", then the two sigmas; empty when the
+// row has none).
+std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity = false, bool quality = false);
+// The three quality fields, each after a comma (",ambiguous,0.0012,0.0034"; ",,," for none).
+std::string PoseQualityCsv(const std::optional<PoseQuality>& quality);
+// With the velocity columns when some row has a velocity, the quality columns when some row has one or
+// `quality` asks for them (the tracker's poses.csv has them even with no row).
+void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows, bool quality = false);
+// Any of the headers; throws FileFormatError naming the file, the line and the column.
 std::vector<TrajectoryRow> ReadTrajectory(const std::string& path);
 
 // A body's file beside the asked one: "dir/name.ext" + "tool" -> "dir/name_tool.ext" (no extension:

@@ -152,8 +152,9 @@ struct MapMessage {
 // False with a one-line reason in *error (a foreign fingerprint, a damaged buffer, an invalid camera model
 // or layout); never throws.
 bool DecodeMapMessage(const void* data, size_t size, MapMessage* out, std::string* error = nullptr);
-// A tracker pose as a trajectory row (utime, seq, rig_from_object, rms_px, cameras, markers); the status
-// is the caller's to check.
+// A tracker pose as a trajectory row (utime, seq, rig_from_object, rms_px, cameras, markers, and for a
+// TRACKING or AMBIGUOUS pose its quality: QualityOfPose of its covariance); the status is the caller's to
+// check (a LOST pose has no quality).
 TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg);
 MarkerCorners2d CornersOf(const marker_t& marker);
 

@@ -53,6 +53,13 @@ Rigid3 PerturbLeft(const Rigid3& pose, const Vector6d& delta);
 //        [ [t]x R  R ]   with R, t the rotation and translation of a_from_b.
 Matrix6d Adjoint(const Rigid3& a_from_b);
 
+// Covariance of a body's origin (its position t in the rig) from a pose covariance in object_pose_t's
+// convention. Exp(delta) * pose moves the origin to Exp(w) t + v ~= t + v - [t]x w, so
+//   Sigma_t = A Sigma A^T,  A = [ I  -[t]x ].
+// The translation block alone also holds the rotation's lever arm about the rig origin (1 mrad at 1 m
+// is 1 mm), several times the position's own uncertainty.
+Eigen::Matrix3d PositionCovariance(const Rigid3& rig_from_object, const Matrix6d& covariance);
+
 // The pose dt seconds on along a constant twist (wx, wy, wz rad/s, vx, vy, vz m/s, in the frame the pose
 // maps into): (Exp(dt w) R, t + dt v) (the mapper's frame velocities with time offsets).
 Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt);

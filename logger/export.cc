@@ -4,6 +4,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cinttypes>
 #include <cstdio>
@@ -114,7 +115,7 @@ namespace {
 // The poses of one stream as poses CSV and TUM text.
 struct PoseText {
   PoseExport out;
-  std::string poses_csv = std::string(kTrajectoryHeader) + "\n";
+  std::string poses_csv = TrajectoryHeader(false, true) + "\n";  // a tracker's poses: with the quality
   std::string tum = kTumHeader;
 };
 
@@ -198,8 +199,8 @@ LogExportResult ExportFromLog(const std::string& log, const LogExportRequest& re
       stream.poses_csv += std::to_string(pose.utime) + "," + std::to_string(pose.seq);
       for (double v : {p[0], p[1], p[2], q[0], q[1], q[2], q[3], pose.rms_px})
         stream.poses_csv += "," + G17(v);
-      stream.poses_csv +=
-          "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) + "\n";
+      stream.poses_csv += "," + std::to_string(pose.num_cameras) + "," + std::to_string(pose.num_markers) +
+                          PoseQualityCsv(FromObjectPoseMsg(pose).quality) + "\n";
       stream.tum += TumLine(pose.utime, p, q);
       ++stream.out.rows;
     }
@@ -232,8 +233,12 @@ LogExportResult ExportFromTrajectory(const std::string& csv, const LogExportRequ
     PoseText p;
     p.out.body = body;
     p.out.source = path;
-    for (const TrajectoryRow& row : ReadTrajectory(path)) {
-      p.poses_csv += TrajectoryCsvLine(row) + "\n";
+    const std::vector<TrajectoryRow> rows = ReadTrajectory(path);
+    const bool quality =
+        std::any_of(rows.begin(), rows.end(), [](const TrajectoryRow& r) { return r.quality.has_value(); });
+    p.poses_csv = TrajectoryHeader(false, quality) + "\n";
+    for (const TrajectoryRow& row : rows) {
+      p.poses_csv += TrajectoryCsvLine(row, false, quality) + "\n";
       const Eigen::Vector3d t = row.rig_from_object.translation();
       p.tum += TumLine(row.utime, t.data(), QuaternionWxyz(row.rig_from_object).data());
       ++p.out.rows;

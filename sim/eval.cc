@@ -183,7 +183,10 @@ void EvaluatePoses(const GroundTruth& truth, const std::vector<TrajectoryRow>& t
   for (const SimFrame& f : truth.frames) by_seq[f.seq] = &f;
   std::set<int64_t> seen;
   std::vector<double> trans, rot;
+  std::vector<double> status_trans[2], status_rot[2];  // [ambiguous]
+  int beyond_position = 0, beyond_rotation = 0;
   std::vector<Eigen::Vector3d> est_pos, gt_pos;
+  std::vector<double> sigma_mm;  // per est_pos: the row's finite position sigma, else NAN
   const Rigid3 B_inv = Inverse(B);
   for (const TrajectoryRow& row : trajectory) {
     auto it = by_seq.find(row.seq);
@@ -195,17 +198,44 @@ void EvaluatePoses(const GroundTruth& truth, const std::vector<TrajectoryRow>& t
     const Rigid3 est = A * row.rig_from_object * B_inv;
     trans.push_back(1000.0 * TranslationDistance(est, gt));
     rot.push_back(AngleDeg(est.linear(), gt.linear()));
+    if (const auto& q = row.quality) {
+      ++r.frames_with_quality;
+      status_trans[q->ambiguous].push_back(trans.back());
+      status_rot[q->ambiguous].push_back(rot.back());
+      if (std::isfinite(q->sigma_position_m) && std::isfinite(q->sigma_rotation_rad)) {
+        ++r.frames_with_sigma;
+        beyond_position += trans.back() > 3000.0 * q->sigma_position_m;
+        beyond_rotation += rot.back() > 3.0 * q->sigma_rotation_rad * 180.0 / M_PI;
+      }
+    }
     est_pos.push_back((row.rig_from_object * B_inv).translation());
+    const bool sigma = row.quality && std::isfinite(row.quality->sigma_position_m) &&
+                       std::isfinite(row.quality->sigma_rotation_rad);
+    sigma_mm.push_back(sigma ? 1000.0 * row.quality->sigma_position_m : NAN);
     gt_pos.push_back(gt.translation());
   }
   r.frames_with_pose = static_cast<int>(seen.size());
   r.object_translation_mm = ComputeStats(trans);
   r.object_rotation_deg = ComputeStats(rot);
+  r.ambiguous_frames = static_cast<int>(status_trans[1].size());
+  r.tracking_translation_mm = ComputeStats(status_trans[0]);
+  r.tracking_rotation_deg = ComputeStats(status_rot[0]);
+  r.ambiguous_translation_mm = ComputeStats(status_trans[1]);
+  r.ambiguous_rotation_deg = ComputeStats(status_rot[1]);
+  if (r.frames_with_sigma > 0) {
+    r.beyond_3sigma_position = static_cast<double>(beyond_position) / r.frames_with_sigma;
+    r.beyond_3sigma_rotation = static_cast<double>(beyond_rotation) / r.frames_with_sigma;
+  }
   if (!est_pos.empty()) {
     const Rigid3 align = AlignRigid(est_pos, gt_pos);
     std::vector<double> d;
     for (size_t i = 0; i < est_pos.size(); ++i) d.push_back(1000.0 * (align * est_pos[i] - gt_pos[i]).norm());
     r.object_translation_aligned_mm = ComputeStats(d);
+    if (r.frames_with_sigma > 0) {
+      int beyond = 0;
+      for (size_t i = 0; i < d.size(); ++i) beyond += std::isfinite(sigma_mm[i]) && d[i] > 3.0 * sigma_mm[i];
+      r.beyond_3sigma_position_aligned = static_cast<double>(beyond) / r.frames_with_sigma;
+    }
   }
 }
 
@@ -339,6 +369,25 @@ void PoseLines(std::ostringstream& s, const EvalResult& r, const std::string& wh
     StatsLine(s, what + " rotation error (deg)", r.object_rotation_deg);
     StatsLine(s, what + " translation error (mm)", r.object_translation_mm);
   }
+  if (r.ambiguous_frames > 0) {  // else the tracking poses are all of them
+    StatsLine(s, "  tracking: rotation (deg)", r.tracking_rotation_deg);
+    StatsLine(s, "  tracking: translation (mm)", r.tracking_translation_mm);
+    StatsLine(s, "  ambiguous: rotation (deg)", r.ambiguous_rotation_deg);
+    StatsLine(s, "  ambiguous: translation (mm)", r.ambiguous_translation_mm);
+  }
+}
+
+// "poses with a covariance: ..." (a tracker's trajectory only).
+void CovarianceLine(std::ostringstream& s, const EvalResult& r) {
+  if (r.frames_with_quality == 0) return;
+  s << "poses with a status: " << r.frames_with_quality << " (" << r.ambiguous_frames << " ambiguous)";
+  if (r.frames_with_sigma > 0)
+    s << "; error beyond 3 sigma: position " << Fmt(100.0 * r.beyond_3sigma_position, 1) << " %, rotation "
+      << Fmt(100.0 * r.beyond_3sigma_rotation, 1)
+      << " % of poses (a right covariance: at most 2.9 %; it holds the map fixed); position after the "
+         "trajectory's own alignment "
+      << Fmt(100.0 * r.beyond_3sigma_position_aligned, 1) << " %";
+  s << "\n";
 }
 
 void CameraTable(std::ostringstream& s, const EvalResult& r) {
@@ -418,7 +467,19 @@ std::string JsonObject(const EvalResult& r) {
     << JsonNumber(r.gt_frames ? double(r.frames_with_pose) / r.gt_frames : 0.0)
     << ",\n    \"translation_mm\": " << JsonStats(r.object_translation_mm)
     << ",\n    \"rotation_deg\": " << JsonStats(r.object_rotation_deg)
-    << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm) << "}";
+    << ",\n    \"translation_mm_trajectory_aligned\": " << JsonStats(r.object_translation_aligned_mm);
+  if (r.frames_with_quality > 0)
+    s << ",\n    \"frames_with_status\": " << r.frames_with_quality
+      << ", \"ambiguous_frames\": " << r.ambiguous_frames
+      << ",\n    \"tracking\": {\"translation_mm\": " << JsonStats(r.tracking_translation_mm)
+      << ", \"rotation_deg\": " << JsonStats(r.tracking_rotation_deg) << "}"
+      << ",\n    \"ambiguous\": {\"translation_mm\": " << JsonStats(r.ambiguous_translation_mm)
+      << ", \"rotation_deg\": " << JsonStats(r.ambiguous_rotation_deg) << "}"
+      << ",\n    \"beyond_3_sigma\": {\"frames\": " << r.frames_with_sigma
+      << ", \"position\": " << JsonNumber(r.beyond_3sigma_position)
+      << ", \"rotation\": " << JsonNumber(r.beyond_3sigma_rotation)
+      << ", \"position_trajectory_aligned\": " << JsonNumber(r.beyond_3sigma_position_aligned) << "}";
+  s << "}";
   return s.str();
 }
 
@@ -439,6 +500,7 @@ std::string FormatTable(const EvalResult& r) {
   MarkersMapped(s, r);
   s << "; map RMS reprojection error " << Fmt(r.map_rms_px) << " px\n";
   if (r.has_trajectory) FramesWithPose(s, r);
+  CovarianceLine(s, r);
   CameraTable(s, r);
   MarkerTable(s, r);
   return s.str();
@@ -556,9 +618,10 @@ std::string FormatBodiesTable(const std::vector<BodyResult>& bodies) {
     MarkersMapped(s, r);
     s << "\n";
     if (!b.is_static) {
-      if (r.has_trajectory)
+      if (r.has_trajectory) {
         FramesWithPose(s, r);
-      else
+        CovarianceLine(s, r);
+      } else
         s << "poses: not evaluated (give --trajectory OUTDIR or a log of MCMT_POSE_" << ChannelSuffix(b.name)
           << ")\n";
     }

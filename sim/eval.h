@@ -62,6 +62,19 @@ struct EvalResult {
   int gt_frames = 0, frames_with_pose = 0;
   Stats object_translation_mm, object_rotation_deg;
   Stats object_translation_aligned_mm;  // own Horn alignment of trajectory positions (paper style)
+  // Poses with a status and covariance (a tracker's: TrajectoryRow::quality), counted once per frame as
+  // above. The errors of TRACKING and AMBIGUOUS poses apart, and how often an error is beyond 3 sigma along
+  // the covariance's worst direction. That sigma bounds every direction, so of a right covariance's 3-D
+  // errors at most P(chi-square(3) > 9) = 2.9 % lie beyond it (rotation likewise). The tracker's covariance
+  // holds the map fixed: the map's own error (the camera and layout figures) is not in it. Poses whose sigma
+  // is not finite are left out of the fractions.
+  int frames_with_quality = 0, ambiguous_frames = 0, frames_with_sigma = 0;
+  Stats tracking_translation_mm, tracking_rotation_deg, ambiguous_translation_mm, ambiguous_rotation_deg;
+  double beyond_3sigma_position = NAN, beyond_3sigma_rotation = NAN;  // fractions of frames_with_sigma
+  // The same for object_translation_aligned_mm's errors: the trajectory's own rigid alignment takes out
+  // what every pose shares (most of the map's error), leaving the frame-to-frame noise the covariance
+  // describes.
+  double beyond_3sigma_position_aligned = NAN;
   double map_rms_px = 0;
   Rigid3 gt_rig_from_est_rig = Rigid3::Identity();
   Rigid3 gt_object_from_est_object = Rigid3::Identity();

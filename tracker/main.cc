@@ -96,10 +96,10 @@ void OpenLcms(const Cli& c, const mcmt::RigConfig& rig, const mcmt::ArgParser& a
 // One file per pose stream: OUT for a single object, else OUT's name + _NAME (poses_tool.csv); the
 // partial files go only once every final file is written.
 void WriteTrajectories(const Cli& c, const mcmt::TrackerNodeOptions& options, const mcmt::TrackerNode& node) {
-  if (node.streams().empty()) mcmt::WriteTrajectory(c.out_path, {});  // no map came
+  if (node.streams().empty()) mcmt::WriteTrajectory(c.out_path, {}, true);  // no map came
   for (const mcmt::PoseStream& s : node.streams()) {
     const std::string path = s.single ? c.out_path : mcmt::BodyPath(c.out_path, s.name);
-    mcmt::WriteTrajectory(path, s.trajectory);
+    mcmt::WriteTrajectory(path, s.trajectory, true);
     if (!c.quiet)
       std::cerr << "mcmt-tracker: wrote " << s.trajectory.size() << " poses to " << path << std::endl;
   }

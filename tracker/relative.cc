@@ -24,11 +24,4 @@ RelativePose ComposeRelative(const Rigid3& rig_from_of, const Matrix6d& covarian
   return out;
 }
 
-Eigen::Matrix3d PositionCovariance(const Rigid3& rig_from_object, const Matrix6d& covariance) {
-  Eigen::Matrix<double, 3, 6> a;
-  a << Eigen::Matrix3d::Identity(), -Skew(rig_from_object.translation());
-  const Eigen::Matrix3d c = a * covariance * a.transpose();
-  return 0.5 * (c + c.transpose());
-}
-
 }  // namespace mcmt

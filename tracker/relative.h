@@ -31,11 +31,6 @@ struct RelativePose {
 RelativePose ComposeRelative(const Rigid3& rig_from_of, const Matrix6d& covariance_of,
                              const Rigid3& rig_from_in, const Matrix6d& covariance_in);
 
-// Covariance of the body's origin (its position t in the rig) from a pose covariance in object_pose_t's
-// convention. Exp(delta) * pose moves the origin to Exp(w) t + v ~= t + v - [t]x w, so
-//   Sigma_t = A Sigma A^T,  A = [ I  -[t]x ].
-// The translation block alone also holds the rotation's lever arm about the rig origin (1 mrad at 1 m
-// is 1 mm), several times the position's own uncertainty.
-Eigen::Matrix3d PositionCovariance(const Rigid3& rig_from_object, const Matrix6d& covariance);
+// The covariance of the body's origin alone is core's PositionCovariance (core/se3.h).
 
 }  // namespace mcmt

@@ -48,7 +48,7 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
   if (options_.keep_trajectory && !options_.partial_path.empty()) {
     partial_.reset(std::fopen(options_.partial_path.c_str(), "w"));
     if (!partial_) throw std::runtime_error(options_.partial_path + ": cannot write");
-    std::fprintf(partial_.get(), "%s\n", kTrajectoryHeader);
+    std::fprintf(partial_.get(), "%s\n", TrajectoryHeader(false, true).c_str());
     std::fflush(partial_.get());
   }
   if (map) {
@@ -140,7 +140,7 @@ void TrackerNode::SetStreams(const RigMap& map) {
       const std::string path = PartialPath(options_.partial_path, p.name, false);
       partial.reset(std::fopen(path.c_str(), "w"));
       if (!partial) throw std::runtime_error(path + ": cannot write");
-      std::fprintf(partial.get(), "%s\n", kTrajectoryHeader);
+      std::fprintf(partial.get(), "%s\n", TrajectoryHeader(false, true).c_str());
       std::fflush(partial.get());
     }
     streams.push_back(std::move(st));
@@ -574,9 +574,10 @@ void TrackerNode::Emit(size_t stream, const SyncedFrame& frame, const PoseSoluti
     row.rms_px = sol.rms_px;
     row.cameras = static_cast<int>(sol.cameras.size());
     row.markers = static_cast<int>(sol.markers.size());
+    row.quality = FromObjectPoseMsg(msg).quality;  // as mcmt-export computes it from the published pose
     st.trajectory.push_back(row);
     if (std::FILE* f = stream_partials_[stream].get()) {
-      std::fprintf(f, "%s\n", TrajectoryCsvLine(row).c_str());
+      std::fprintf(f, "%s\n", TrajectoryCsvLine(row, false, true).c_str());
       std::fflush(f);
     }
   }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -555,17 +556,48 @@ const char kTrajectoryHeader[] = "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,
 const char kTrajectoryVelocityHeader[] =
     "utime,seq,tx,ty,tz,qw,qx,qy,qz,rms_px,cameras,markers,wx,wy,wz,vx,vy,vz";
 
+namespace {
+
+const char kQualityColumns[] = ",status,sigma_position_m,sigma_rotation_rad";
+const char kStatusTracking[] = "tracking";
+const char kStatusAmbiguous[] = "ambiguous";
+
+}  // namespace
+
+PoseQuality QualityOfPose(const Rigid3& rig_from_object, const Matrix6d& covariance, bool ambiguous) {
+  // The largest eigenvalue of each block: the standard deviation along the worst direction. A covariance
+  // that is not positive semi-definite (a degenerate solve) has no finite sigma.
+  auto worst_sigma = [](const Eigen::Matrix3d& c) {
+    const Eigen::Vector3d ev =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c, Eigen::EigenvaluesOnly).eigenvalues();
+    return std::isfinite(ev(2)) && ev(0) >= -1e-12 * std::abs(ev(2)) ? std::sqrt(std::max(0.0, ev(2))) : NAN;
+  };
+  PoseQuality q;
+  q.ambiguous = ambiguous;
+  q.sigma_position_m = worst_sigma(PositionCovariance(rig_from_object, covariance));
+  q.sigma_rotation_rad = worst_sigma(covariance.bottomRightCorner<3, 3>());
+  return q;
+}
+
 void MoveToRig(const Rigid3& new_rig_from_rig, TrajectoryRow* row) {
   row->rig_from_object = Normalized(new_rig_from_rig * row->rig_from_object);
   if (row->velocity) row->velocity = TwistIn(new_rig_from_rig, *row->velocity);
 }
 
-bool IsTrajectoryHeader(const std::string& line) {
-  const std::string s = !line.empty() && line.back() == '\r' ? line.substr(0, line.size() - 1) : line;
-  return s == kTrajectoryHeader || s == kTrajectoryVelocityHeader;
+std::string TrajectoryHeader(bool velocity, bool quality) {
+  return std::string(velocity ? kTrajectoryVelocityHeader : kTrajectoryHeader) +
+         (quality ? kQualityColumns : "");
 }
 
-std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity) {
+bool IsTrajectoryHeader(const std::string& line) {
+  const std::string s = !line.empty() && line.back() == '\r' ? line.substr(0, line.size() - 1) : line;
+  for (bool velocity : {false, true})
+    for (bool quality : {false, true})
+      if (s == TrajectoryHeader(velocity, quality)) return true;
+  return false;
+}
+
+std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity, bool quality) {
   const auto q = QuaternionWxyz(row.rig_from_object);
   const Eigen::Vector3d t = row.rig_from_object.translation();
   std::string line = std::to_string(row.utime) + "," + std::to_string(row.seq);
@@ -573,14 +605,23 @@ std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity) {
   line += "," + std::to_string(row.cameras) + "," + std::to_string(row.markers);
   if (velocity)
     for (int k = 0; k < 6; ++k) line += "," + (row.velocity ? CsvNum((*row.velocity)[k]) : std::string());
+  if (quality) line += PoseQualityCsv(row.quality);
   return line;
 }
 
-void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows) {
+std::string PoseQualityCsv(const std::optional<PoseQuality>& q) {
+  if (!q) return ",,,";
+  return std::string(",") + (q->ambiguous ? kStatusAmbiguous : kStatusTracking) + "," +
+         CsvNum(q->sigma_position_m) + "," + CsvNum(q->sigma_rotation_rad);
+}
+
+void WriteTrajectory(const std::string& path, const std::vector<TrajectoryRow>& rows, bool quality) {
   const bool velocity =
       std::any_of(rows.begin(), rows.end(), [](const TrajectoryRow& r) { return r.velocity.has_value(); });
-  std::string content = std::string(velocity ? kTrajectoryVelocityHeader : kTrajectoryHeader) + "\n";
-  for (const auto& row : rows) content += TrajectoryCsvLine(row, velocity) + "\n";
+  quality = quality || std::any_of(rows.begin(), rows.end(),
+                                   [](const TrajectoryRow& r) { return r.quality.has_value(); });
+  std::string content = TrajectoryHeader(velocity, quality) + "\n";
+  for (const auto& row : rows) content += TrajectoryCsvLine(row, velocity, quality) + "\n";
   WriteFileAtomic(path, content);
 }
 
@@ -589,9 +630,34 @@ namespace {
 const char* const kTrajectoryColumns[] = {"utime",  "seq",     "tx",      "ty", "tz", "qw", "qx", "qy", "qz",
                                           "rms_px", "cameras", "markers", "wx", "wy", "wz", "vx", "vy", "vz"};
 
-// One row of the trajectory's fields (12, or 18 with the velocity columns: all six given or all empty);
-// `where` is "FILE:LINE: ".
-TrajectoryRow ParseTrajectoryRow(const std::vector<std::string>& fields, const std::string& where) {
+bool AllEmpty(const std::vector<std::string>& fields, size_t begin, size_t end) {
+  return std::all_of(fields.begin() + begin, fields.begin() + end,
+                     [](const std::string& f) { return f.empty(); });
+}
+
+// The three quality fields from fields[at..at+2]: all empty (none) or a status word and two sigmas.
+std::optional<PoseQuality> ParseQuality(const std::vector<std::string>& fields, size_t at,
+                                        const std::string& where) {
+  if (AllEmpty(fields, at, at + 3)) return std::nullopt;
+  PoseQuality q;
+  if (fields[at] == kStatusAmbiguous)
+    q.ambiguous = true;
+  else if (fields[at] != kStatusTracking)
+    throw FileFormatError(where + "status: expected '" + kStatusTracking + "' or '" + kStatusAmbiguous +
+                          "', got '" + fields[at] +
+                          "' (the status and sigma columns are all given or all empty)");
+  const char* names[2] = {"sigma_position_m", "sigma_rotation_rad"};
+  double* values[2] = {&q.sigma_position_m, &q.sigma_rotation_rad};
+  for (int k = 0; k < 2; ++k)  // "nan": a pose whose covariance had no finite sigma (QualityOfPose)
+    if (!ParseDouble(fields[at + 1 + k], values[k]) || *values[k] < 0 || std::isinf(*values[k]))
+      throw FileFormatError(where + names[k] + ": not a number >= 0: '" + fields[at + 1 + k] + "'");
+  return q;
+}
+
+// One row of the trajectory's fields (12, + 6 velocity columns: all six given or all empty, + 3 quality
+// columns); `where` is "FILE:LINE: ".
+TrajectoryRow ParseTrajectoryRow(const std::vector<std::string>& fields, bool velocity, bool quality,
+                                 const std::string& where) {
   TrajectoryRow row;
   int64_t cams = 0, marks = 0;
   double v[8];
@@ -614,15 +680,14 @@ TrajectoryRow ParseTrajectoryRow(const std::vector<std::string>& fields, const s
   row.rms_px = v[7];
   row.cameras = static_cast<int>(cams);
   row.markers = static_cast<int>(marks);
-  const bool none =
-      std::all_of(fields.begin() + 12, fields.end(), [](const std::string& f) { return f.empty(); });
-  if (fields.size() == 18 && !none) {
+  if (velocity && !AllEmpty(fields, 12, 18)) {
     row.velocity.emplace();
     for (int k = 0; k < 6; ++k)
       if (!ParseDouble(fields[12 + k], &(*row.velocity)[k]) || !std::isfinite((*row.velocity)[k]))
         throw FileFormatError(where + kTrajectoryColumns[12 + k] + ": not a finite number: '" +
                               fields[12 + k] + "' (the velocity columns are all given or all empty)");
   }
+  if (quality) row.quality = ParseQuality(fields, velocity ? 18 : 12, where);
   return row;
 }
 
@@ -634,6 +699,7 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
   std::string line;
   int line_number = 0;
   size_t columns = 0;  // of the header; 0 before it
+  bool velocity = false, quality = false;
   while (std::getline(in, line)) {
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -641,9 +707,12 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
     if (columns == 0) {
       if (!IsTrajectoryHeader(line))
-        throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) + "' (or '" +
-                              kTrajectoryVelocityHeader + "')");
-      columns = line == kTrajectoryHeader ? 12 : 18;
+        throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) +
+                              "' (optionally followed by ',wx,wy,wz,vx,vy,vz' and then '" + kQualityColumns +
+                              "')");
+      velocity = line.find(",wx,") != std::string::npos;
+      quality = line.find(",status,") != std::string::npos;
+      columns = 12 + (velocity ? 6 : 0) + (quality ? 3 : 0);
       continue;
     }
     std::vector<std::string> fields;
@@ -654,7 +723,7 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     if (fields.size() != columns)
       throw FileFormatError(where + "expected " + std::to_string(columns) + " fields, got " +
                             std::to_string(fields.size()));
-    rows.push_back(ParseTrajectoryRow(fields, where));
+    rows.push_back(ParseTrajectoryRow(fields, velocity, quality, where));
   }
   if (columns == 0)
     throw FileFormatError(path + ": empty file (expected the header '" + std::string(kTrajectoryHeader) +

@@ -528,6 +528,13 @@ TrajectoryRow FromObjectPoseMsg(const object_pose_t& msg) {
   row.rms_px = msg.rms_px;
   row.cameras = msg.num_cameras;
   row.markers = msg.num_markers;
+  if (msg.status == object_pose_t::STATUS_TRACKING || msg.status == object_pose_t::STATUS_AMBIGUOUS) {
+    Matrix6d covariance;
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b < 6; ++b) covariance(a, b) = msg.covariance[a][b];
+    row.quality =
+        QualityOfPose(row.rig_from_object, covariance, msg.status == object_pose_t::STATUS_AMBIGUOUS);
+  }
   return row;
 }
 

@@ -123,6 +123,13 @@ Matrix6d Adjoint(const Rigid3& a_from_b) {
   return ad;
 }
 
+Eigen::Matrix3d PositionCovariance(const Rigid3& rig_from_object, const Matrix6d& covariance) {
+  Eigen::Matrix<double, 3, 6> a;
+  a << Eigen::Matrix3d::Identity(), -Skew(rig_from_object.translation());
+  const Eigen::Matrix3d c = a * covariance * a.transpose();
+  return 0.5 * (c + c.transpose());
+}
+
 Rigid3 MovedAlong(const Rigid3& pose, const std::array<double, 6>& twist, double dt) {
   Rigid3 out = pose;
   out.linear() = RotationFromVector(dt * Eigen::Vector3d(twist[0], twist[1], twist[2])) * pose.linear();

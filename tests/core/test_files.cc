@@ -274,6 +274,78 @@ TEST(Files, TrajectoryVelocitiesRoundTrip) {
   EXPECT_LT(RotationAngle(want, got), 1e-12);
 }
 
+// A tracker's poses carry their status and worst-direction sigmas (PoseQuality): bit-exact through the
+// file, with or without the velocity columns; a row without one has the three columns empty; the
+// tracker's header has them even with no row.
+TEST(Files, TrajectoryQualityRoundTrip) {
+  TempDir dir;
+  std::vector<TrajectoryRow> rows(3);
+  for (int i = 0; i < 3; ++i) {
+    rows[i].utime = 1000 + i;
+    rows[i].seq = i;
+  }
+  rows[0].quality = PoseQuality{false, 1.0 / 3.0 * 1e-3, 2e-4};
+  rows[2].quality = PoseQuality{true, 0.0078125, 0.25};
+  const std::string path = dir.File("poses.csv");
+  WriteTrajectory(path, rows);
+  std::string text = ReadFile(path);
+  EXPECT_EQ(text.rfind(std::string(kTrajectoryHeader) + ",status,sigma_position_m,sigma_rotation_rad\n", 0),
+            0u)
+      << text;
+  EXPECT_NE(text.find("\n1001,1,0,0,0,1,0,0,0,0,0,0,,,\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\n1002,2,0,0,0,1,0,0,0,0,0,0,ambiguous,0.0078125,0.25\n"), std::string::npos) << text;
+  auto same = [&](const std::vector<TrajectoryRow>& back) {
+    ASSERT_EQ(back.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_EQ(back[i].quality.has_value(), rows[i].quality.has_value()) << i;
+      if (!rows[i].quality) continue;
+      EXPECT_EQ(back[i].quality->ambiguous, rows[i].quality->ambiguous) << i;
+      EXPECT_EQ(back[i].quality->sigma_position_m, rows[i].quality->sigma_position_m) << i;
+      EXPECT_EQ(back[i].quality->sigma_rotation_rad, rows[i].quality->sigma_rotation_rad) << i;
+    }
+  };
+  same(ReadTrajectory(path));
+  // After the velocity's columns (21 in all).
+  rows[1].velocity = std::array<double, 6>{0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+  WriteTrajectory(path, rows);
+  text = ReadFile(path);
+  EXPECT_EQ(text.rfind(TrajectoryHeader(true, true) + "\n", 0), 0u) << text;
+  EXPECT_NE(text.find("\n1000,0,0,0,0,1,0,0,0,0,0,0,,,,,,,tracking,"), std::string::npos) << text;
+  same(ReadTrajectory(path));
+  EXPECT_TRUE(ReadTrajectory(path)[1].velocity.has_value());
+  EXPECT_TRUE(IsTrajectoryHeader(TrajectoryHeader(false, true) + "\r"));
+  EXPECT_TRUE(IsTrajectoryHeader(TrajectoryHeader(true, true)));
+  EXPECT_FALSE(IsTrajectoryHeader(std::string(kTrajectoryHeader) + ",status"));
+  // No quality: the columns are left out; asked for: the header has them with no row.
+  WriteTrajectory(path, {}, true);
+  EXPECT_EQ(ReadFile(path), TrajectoryHeader(false, true) + "\n");
+  for (TrajectoryRow& r : rows) r.quality.reset(), r.velocity.reset();
+  WriteTrajectory(path, rows);
+  EXPECT_EQ(ReadFile(path).rfind(std::string(kTrajectoryHeader) + "\n", 0), 0u);
+}
+
+// The worst-direction sigmas of a pose covariance in object_pose_t's order. The rotation turns about the
+// rig origin, so the origin's position moves by -[t]x w: an object at t = (0, 0, 1) m with rotation
+// variances (a, b, c) about x, y, z and no translation variance has position variances (b, a, 0).
+TEST(Files, QualityOfPoseIsTheWorstSigma) {
+  const Rigid3 pose(Eigen::Translation3d(0, 0, 1));
+  Matrix6d c = Matrix6d::Zero();
+  c.diagonal() << 0, 0, 0, 1e-6, 4e-6, 9e-6;
+  PoseQuality q = QualityOfPose(pose, c, false);
+  EXPECT_NEAR(q.sigma_position_m, 2e-3, 1e-12);
+  EXPECT_NEAR(q.sigma_rotation_rad, 3e-3, 1e-12);
+  EXPECT_FALSE(q.ambiguous);
+  // Translation alone: its own worst axis.
+  c.diagonal() << 1e-6, 2.5e-5, 4e-6, 0, 0, 0;
+  q = QualityOfPose(pose, c, true);
+  EXPECT_NEAR(q.sigma_position_m, 5e-3, 1e-12);
+  EXPECT_EQ(q.sigma_rotation_rad, 0.0);
+  EXPECT_TRUE(q.ambiguous);
+  // Not positive semi-definite (a degenerate solve): no finite sigma.
+  c(0, 0) = -1e-3;
+  EXPECT_TRUE(std::isnan(QualityOfPose(pose, c, false).sigma_position_m));
+}
+
 TEST(Files, TrajectoryErrorsNameTheLine) {
   TempDir dir;
   auto error = [&](const std::string& text) -> std::string {
@@ -305,6 +377,18 @@ TEST(Files, TrajectoryErrorsNameTheLine) {
                   "t.csv:2: vx: not a finite number");
   EXPECT_CONTAINS(error(h + "1,2,0,0,0,1,0,0,0,0.5,1,1,0,0,0,0,0,0\n"),
                   "t.csv:2: expected 12 fields, got 18");
+  // The quality columns: a status word and two sigmas >= 0 (nan: no finite sigma), or all empty.
+  const std::string hq = TrajectoryHeader(false, true) + "\n";
+  EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,lost,0.001,0.01\n"),
+                  "t.csv:2: status: expected 'tracking' or 'ambiguous', got 'lost'");
+  EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,tracking,-0.001,0.01\n"),
+                  "t.csv:2: sigma_position_m: not a number >= 0: '-0.001'");
+  EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,ambiguous,0.001,\n"),
+                  "t.csv:2: sigma_rotation_rad: not a number >= 0: ''");
+  EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1\n"), "t.csv:2: expected 15 fields, got 12");
+  EXPECT_TRUE(std::isnan(
+      ReadTrajectory(dir.Write("nan.csv", hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,tracking,nan,0.01\n"))[0]
+          .quality->sigma_position_m));
   // CRLF line ends are accepted.
   const std::string crlf = std::string(kTrajectoryHeader) + "\r\n1,2,0,0,0,1,0,0,0,0.5,1,1\r\n";
   EXPECT_EQ(ReadTrajectory(dir.Write("crlf.csv", crlf)).size(), 1u);

@@ -398,6 +398,11 @@ TEST(LcmUtil, ObjectPoseAsTrajectoryRow) {
   msg.rms_px = 0.25;
   msg.num_cameras = 3;
   msg.num_markers = 7;
+  msg.status = object_pose_t::STATUS_AMBIGUOUS;
+  Matrix6d covariance = Matrix6d::Zero();
+  covariance.diagonal() << 4e-6, 1e-6, 9e-6, 1e-4, 4e-4, 2.5e-5;
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) msg.covariance[a][b] = covariance(a, b);
   const TrajectoryRow row = FromObjectPoseMsg(msg);
   EXPECT_EQ(row.utime, 1234567);
   EXPECT_EQ(row.seq, 42);
@@ -406,6 +411,16 @@ TEST(LcmUtil, ObjectPoseAsTrajectoryRow) {
   EXPECT_EQ(row.rms_px, 0.25);
   EXPECT_EQ(row.cameras, 3);
   EXPECT_EQ(row.markers, 7);
+  // The status and the covariance's worst sigmas: QualityOfPose of the message's pose.
+  ASSERT_TRUE(row.quality.has_value());
+  EXPECT_TRUE(row.quality->ambiguous);
+  const PoseQuality want = QualityOfPose(row.rig_from_object, covariance, true);
+  EXPECT_EQ(row.quality->sigma_position_m, want.sigma_position_m);
+  EXPECT_NEAR(row.quality->sigma_rotation_rad, 0.02, 1e-15);
+  msg.status = object_pose_t::STATUS_TRACKING;
+  EXPECT_FALSE(FromObjectPoseMsg(msg).quality->ambiguous);
+  msg.status = object_pose_t::STATUS_LOST;  // no pose, so no quality
+  EXPECT_FALSE(FromObjectPoseMsg(msg).quality.has_value());
 }
 
 class Counter {

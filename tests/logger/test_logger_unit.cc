@@ -219,7 +219,7 @@ TEST_F(ExportTest, PosesCsvAndTumHoldTheTrackedPoses) {
     std::string header, first;
     std::getline(csv, header);
     std::getline(csv, first);
-    EXPECT_EQ(header, kTrajectoryHeader);
+    EXPECT_EQ(header, TrajectoryHeader(false, true));  // with the status and sigma columns
     const object_pose_t p0 = MakePose(0, 0);
     char expected[512];
     std::snprintf(expected, sizeof(expected), "%lld,0,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,2,3",
@@ -227,8 +227,13 @@ TEST_F(ExportTest, PosesCsvAndTumHoldTheTrackedPoses) {
                   p0.rig_from_object.position[1], p0.rig_from_object.position[2],
                   p0.rig_from_object.orientation[0], p0.rig_from_object.orientation[1],
                   p0.rig_from_object.orientation[2], p0.rig_from_object.orientation[3], p0.rms_px);
-    EXPECT_EQ(first, expected);
+    EXPECT_EQ(first.substr(0, first.find(",tracking,")), expected);
   }
+  // The status and worst-direction sigmas of each message's covariance (1e-6 on the diagonal): rotation
+  // 1 mrad; the origin at t moves by the rotation's lever arm too, variance 1e-6 (1 + |t|^2) at most.
+  EXPECT_FALSE(rows[0].quality->ambiguous);
+  EXPECT_NEAR(rows[0].quality->sigma_rotation_rad, 1e-3, 1e-15);
+  EXPECT_NEAR(rows[0].quality->sigma_position_m, 1e-3 * std::sqrt(1.0 + 0.04 + 2.25), 1e-15);
   std::ifstream tum(req.tum);
   std::string line;
   std::getline(tum, line);

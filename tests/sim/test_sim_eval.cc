@@ -322,6 +322,59 @@ TEST(SimEval, ObjectTranslationErrorOnSomeFrames) {
   EXPECT_GT(r.object_translation_aligned_mm.max, 0.5);
 }
 
+// A tracker's poses (with a status and sigmas) are reported by status too, and checked against their
+// sigmas: 5 ambiguous frames 10 mm off with a 1 mm sigma (beyond 3 sigma), one tracking frame 2 mm off
+// (within), one without a finite sigma (left out of the fraction).
+TEST(SimEval, AmbiguousPosesAndSigmasAreReportedApart) {
+  const GroundTruth t = MakeTruth(3, 20);
+  Estimate e = ToEstimate(t, 0, 1);
+  auto shift = [&](TrajectoryRow* row, double metres) {
+    row->rig_from_object.pretranslate(Inverse(e.gt_rig_from_est).linear() * Eigen::Vector3d(metres, 0, 0));
+  };
+  const EvalResult plain = Evaluate(t, &e.map, &e.trajectory);
+  EXPECT_EQ(plain.frames_with_quality, 0);
+  EXPECT_EQ(FormatTable(plain).find("poses with a status"), std::string::npos);
+  for (size_t i = 0; i < e.trajectory.size(); ++i) {
+    TrajectoryRow& row = e.trajectory[i];
+    row.quality = PoseQuality{i % 4 == 0, 1e-3, 0.01};
+    if (i % 4 == 0) shift(&row, 0.010);
+  }
+  shift(&e.trajectory[2], 0.002);
+  e.trajectory[3].quality->sigma_position_m = NAN;
+  const EvalResult r = Evaluate(t, &e.map, &e.trajectory);
+  EXPECT_EQ(r.frames_with_quality, 20);
+  EXPECT_EQ(r.ambiguous_frames, 5);
+  EXPECT_EQ(r.frames_with_sigma, 19);
+  EXPECT_EQ(r.ambiguous_translation_mm.count, 5);
+  EXPECT_NEAR(r.ambiguous_translation_mm.mean, 10.0, 1e-9);
+  EXPECT_EQ(r.tracking_translation_mm.count, 15);
+  EXPECT_NEAR(r.tracking_translation_mm.max, 2.0, 1e-9);
+  EXPECT_NEAR(r.tracking_rotation_deg.max, 0.0, 1e-9);
+  EXPECT_NEAR(r.beyond_3sigma_position, 5.0 / 19.0, 1e-12);
+  EXPECT_EQ(r.beyond_3sigma_rotation, 0.0);
+  const std::string table = FormatTable(r);
+  EXPECT_NE(table.find("ambiguous: translation (mm)"), std::string::npos) << table;
+  EXPECT_NE(table.find("poses with a status: 20 (5 ambiguous); error beyond 3 sigma: position 26.3 %"),
+            std::string::npos)
+      << table;
+  const std::string json = FormatJson(r);
+  EXPECT_NE(json.find("\"ambiguous_frames\": 5"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"beyond_3_sigma\": {\"frames\": 19, \"position\": 0.263157"), std::string::npos)
+      << json;
+
+  // An error every pose shares (5 mm, as a map's error is) is beyond 3 sigma in every frame, and after the
+  // trajectory's own alignment in none.
+  Estimate shared = ToEstimate(t, 0, 1);
+  for (TrajectoryRow& row : shared.trajectory) {
+    row.quality = PoseQuality{false, 1e-3, 0.01};
+    row.rig_from_object.pretranslate(Inverse(shared.gt_rig_from_est).linear() * Eigen::Vector3d(0, 0.005, 0));
+  }
+  const EvalResult rs = Evaluate(t, &shared.map, &shared.trajectory);
+  EXPECT_EQ(rs.beyond_3sigma_position, 1.0);
+  EXPECT_EQ(rs.beyond_3sigma_position_aligned, 0.0);
+  EXPECT_LT(rs.object_translation_aligned_mm.max, 1e-6);
+}
+
 // The estimate's choice of frames does not matter: any rigid change of its rig frame and of its object
 // frame, applied consistently to map and trajectory, gives the same figures.
 TEST(SimEval, InvariantToTheEstimatesRigAndObjectFrames) {
@@ -565,6 +618,10 @@ TEST(SimEval, ReadTrajectoryAnyReadsCsvAndPoseLogToTheSameRows) {
     EXPECT_EQ(csv[i].cameras, e.trajectory[i].cameras);
     EXPECT_LT((csv[i].rig_from_object.matrix() - e.trajectory[i].rig_from_object.matrix()).norm(), 1e-14);
     EXPECT_LT((log[i].rig_from_object.matrix() - csv[i].rig_from_object.matrix()).norm(), 1e-14);
+    // The log's poses carry their status (the CSV written from rows without one has none).
+    ASSERT_TRUE(log[i].quality.has_value());
+    EXPECT_EQ(log[i].quality->ambiguous, i % 4 == 1);
+    EXPECT_FALSE(csv[i].quality.has_value());
   }
   // Both evaluate to zero error.
   const EvalResult r = Evaluate(t, &e.map, &log);
