@@ -211,9 +211,10 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
   test::Child tracker(
       // The detector processes publish each frame at a shared wall-clock schedule (--start-wall-utime, 2 s
       // ahead); one ready late (a loaded machine) publishes its frames already due at once: a generous
-      // frame deadline lets every frame wait for all three.
+      // frame deadline and wait let every frame wait for all three. (With the default 100 ms wait, a run
+      // on a machine at load 8 dropped every view of one camera as late: max_cams 2.)
       {kBin + "/mcmt-tracker", "--config", dir + "/rig.yaml", "--map", dir + "/map.yaml", "--lcm-url", url,
-       "--deadline-ms", "3000"},
+       "--deadline-ms", "3000", "--max-wait-ms", "3000"},
       tracker_err);
   ASSERT_TRUE(test::WaitForText(tracker_err, "ready", 20)) << test::ReadText(tracker_err);
   lcm::LCM lcm(url + "&recv_buf_size=4194304");  // sees every message on the group
