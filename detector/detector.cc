@@ -1736,7 +1736,10 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   }
   std::vector<std::vector<cv::Point2f>> corners, rejected;
   std::vector<int> ids;
-  cv::aruco::detectMarkers(view, dictionary_, corners, ids, p, rejected);
+  {
+    const ArucoContourFloor floor(p->minMarkerPerimeterRate, p->minSideLengthCanonicalImg);
+    cv::aruco::detectMarkers(view, dictionary_, corners, ids, p, rejected);
+  }
   std::vector<Raw> out;
   out.reserve(ids.size());
   for (size_t i = 0; i < ids.size(); ++i) {
