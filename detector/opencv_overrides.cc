@@ -415,6 +415,33 @@ Function LibraryDefinition(const char* symbol) {
 
 void LinkOpenCvOverrides() {}
 
+namespace {
+// The floor of ArucoContourFloor in this thread: minMarkerPerimeterRate (0: none) and
+// minSideLengthCanonicalImg.
+thread_local double contour_floor_rate = 0;
+thread_local int contour_floor_side = 0;
+
+// The fewest points a border of a `size` binary image needs for cv::aruco::detectMarkers to look at it,
+// under this thread's ArucoContourFloor (0: none; opencv_overrides.h).
+size_t ArucoContourMinimum(cv::Size size) {
+  if (!(contour_floor_rate > 0)) return 0;
+  size_t floor = static_cast<unsigned int>(contour_floor_rate * std::max(size.width, size.height));
+  if (contour_floor_side > 0) floor = std::min(floor, 4 * static_cast<size_t>(contour_floor_side));
+  return floor;
+}
+}  // namespace
+
+ArucoContourFloor::ArucoContourFloor(double min_perimeter_rate, int min_side_canonical)
+    : previous_rate_(contour_floor_rate), previous_side_(contour_floor_side) {
+  contour_floor_rate = min_perimeter_rate > 0 ? min_perimeter_rate : 0;
+  contour_floor_side = min_side_canonical;
+}
+
+ArucoContourFloor::~ArucoContourFloor() {
+  contour_floor_rate = previous_rate_;
+  contour_floor_side = previous_side_;
+}
+
 bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst) {
   if (src.type() != CV_8UC1 || k % 2 != 1 || k < 3 || k > 15 || at < -256 || at > 256) return false;
   const int offset = BoxMeanThresholdOffset(k * k);
@@ -510,14 +537,19 @@ void findContours(InputArray image_array, OutputArrayOfArrays contours_array, in
   }
   thread_local std::vector<Point> points;
   thread_local std::vector<size_t> ends;
-  mcmt::ListBorders(image_array.getMat(), offset, &points, &ends);
+  const Mat image = image_array.getMat();
+  mcmt::ListBorders(image, offset, &points, &ends);
   auto& contours = *static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj());
-  const size_t n = ends.size();
-  contours.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t begin = k == 0 ? 0 : ends[k - 1];
-    contours[n - 1 - k].assign(points.begin() + static_cast<std::ptrdiff_t>(begin),
-                               points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
+  // Borders the aruco module would drop unseen are left out (ArucoContourFloor; 0: none).
+  const size_t floor = mcmt::ArucoContourMinimum(image.size());
+  auto begin_of = [&](size_t k) { return k == 0 ? 0 : ends[k - 1]; };
+  size_t kept = 0;
+  for (size_t k = 0; k < ends.size(); ++k) kept += ends[k] - begin_of(k) >= floor;
+  contours.resize(kept);
+  for (size_t k = 0; k < ends.size(); ++k) {
+    if (ends[k] - begin_of(k) < floor) continue;
+    contours[--kept].assign(points.begin() + static_cast<std::ptrdiff_t>(begin_of(k)),
+                            points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
   }
 }
 

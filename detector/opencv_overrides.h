@@ -18,4 +18,24 @@ void LinkOpenCvOverrides();
 // 8-bit with k odd, 3 to 15, and |at| <= 256.
 bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst);
 
+// cv::aruco::detectMarkers (OpenCV 4.6, _findMarkerContours) drops every border cv::findContours returns
+// with fewer points than (unsigned)(minMarkerPerimeterRate * max(cols, rows)) of its binary image, or than
+// 4 minSideLengthCanonicalImg where it passes that (ArUco3), before looking at it. While one lives, mcmt's
+// findContours (RETR_LIST, in this thread) leaves out the borders shorter than the smaller of the two: the
+// aruco module sees the same candidates in the same order, without a vector allocated, copied and freed
+// for each speck of the binary image (26,194 borders in bench_detector's 10 accurate frames, a few dozen
+// of them long enough; sideray). Other callers of findContours are not affected; neither are OpenCV's
+// worker threads where it runs detectMarkers' windows in parallel (they see no floor).
+class ArucoContourFloor {
+ public:
+  ArucoContourFloor(double min_perimeter_rate, int min_side_canonical);
+  ~ArucoContourFloor();
+  ArucoContourFloor(const ArucoContourFloor&) = delete;
+  ArucoContourFloor& operator=(const ArucoContourFloor&) = delete;
+
+ private:
+  double previous_rate_;
+  int previous_side_;
+};
+
 }  // namespace mcmt

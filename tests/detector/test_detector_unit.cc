@@ -505,6 +505,89 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
   }
 }
 
+// ArucoContourFloor (opencv_overrides.h): under it mcmt's findContours returns OpenCV's borders of at least
+// min((unsigned)(rate * max(cols, rows)), 4 side) points (4 side only where side > 0), in OpenCV's order,
+// and every border again once it is gone (floors nest). cv::aruco::detectMarkers, which drops the shorter
+// borders itself, finds the same markers, corners and rejected candidates under it as without it.
+TEST(CandidateSearch, ArucoContourFloorLeavesOutOnlyWhatArucoDrops) {
+  const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
+  using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  cv::Mat frame(240, 320, CV_8U);  // a textured frame's binary image, as the aruco module's
+  cv::randu(frame, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(0, 0), 2.0);
+  cv::rectangle(frame, cv::Rect(60, 40, 90, 80), cv::Scalar(10), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(75, 55, 60, 50), cv::Scalar(240), cv::FILLED);
+  cv::Mat mean;
+  cv::blur(frame, mean, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  const cv::Mat binary = mean - frame >= 7;
+  std::vector<std::vector<cv::Point>> all, ours;
+  opencv(binary, all, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point());
+  auto longer = [&](size_t floor) {
+    std::vector<std::vector<cv::Point>> kept;
+    for (const auto& c : all)
+      if (c.size() >= floor) kept.push_back(c);
+    return kept;
+  };
+  for (double rate : {0.01, 0.05, 0.1, 0.3})
+    for (int side : {0, 4, 8, 32}) {
+      SCOPED_TRACE(::testing::Message() << "rate " << rate << " side " << side);
+      size_t floor = static_cast<unsigned int>(rate * 320);
+      if (side > 0) floor = std::min(floor, 4 * static_cast<size_t>(side));
+      {
+        const ArucoContourFloor aruco(rate, side);
+        program(binary, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point());
+      }
+      ASSERT_EQ(ours, longer(floor));
+      ASSERT_LT(ours.size(), all.size());  // specks are left out
+    }
+  {
+    const ArucoContourFloor outer(0.3, 0);
+    {
+      const ArucoContourFloor inner(0.05, 0);
+      program(binary, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point());
+      ASSERT_EQ(ours, longer(16));
+    }
+    program(binary, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point());
+    ASSERT_EQ(ours, longer(96));
+  }
+  program(binary, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point());
+  ASSERT_EQ(ours, all);
+
+  // detectMarkers on rendered scenes (textured surround, markers of 15-60 px), with mcmt's smallest
+  // perimeter (40 px) and a larger one, and ArUco3's canonical side passed as mcmt passes it.
+  // One thread: OpenCV's workers see no floor (it is the calling thread's), as in bench_detector.
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  auto dict = LoadDictionary("DICT_6X6_250");
+  std::mt19937_64 rng(7);
+  int markers = 0;
+  for (int image = 0; image < 4; ++image) {
+    std::vector<testing::RenderedMarker> truth;
+    const cv::Mat gray = testing::RenderScene(*dict, testing::SceneOptions(), rng, &truth);
+    for (double min_perimeter : {40.0, 120.0}) {
+      SCOPED_TRACE(::testing::Message() << "image " << image << " min perimeter " << min_perimeter);
+      cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
+      p->minMarkerPerimeterRate = min_perimeter / std::max(gray.cols, gray.rows);
+      p->minSideLengthCanonicalImg = 32;
+      std::vector<std::vector<cv::Point2f>> corners[2], rejected[2];
+      std::vector<int> ids[2];
+      cv::aruco::detectMarkers(gray, dict, corners[0], ids[0], p, rejected[0]);
+      {
+        const ArucoContourFloor aruco(p->minMarkerPerimeterRate, p->minSideLengthCanonicalImg);
+        cv::aruco::detectMarkers(gray, dict, corners[1], ids[1], p, rejected[1]);
+      }
+      ASSERT_EQ(ids[0], ids[1]);
+      ASSERT_EQ(corners[0], corners[1]);
+      ASSERT_EQ(rejected[0], rejected[1]);
+      markers += static_cast<int>(ids[0].size());
+    }
+  }
+  cv::setNumThreads(threads);
+  EXPECT_GT(markers, 20);
+}
+
 // The detector's cv::warpPerspective (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and with INTER_NEAREST and a constant border on 8-bit images it gives
 // OpenCV's own images bit for bit: random quads of a noise image to marker-sized squares (as the aruco
