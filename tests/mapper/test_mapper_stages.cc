@@ -338,6 +338,19 @@ TEST(MapperStages, ObjectPosesFollowTheTruthInTheReferenceFrames) {
   EXPECT_LT(sum_m / compared, 0.03);
 }
 
+// The observations kept through the bundle adjustment (the mapper's peak memory) are allocated at their
+// size: grown by doubling they took up to twice it (an 8-camera board session, 3000 frames: 58.7 instead
+// of 41.6 MB of Observation, 14.7 instead of 10.4 of BundleObservation).
+TEST(MapperStages, ObservationsAreAllocatedAtTheirSize) {
+  Pipeline p(Scene(60));
+  EXPECT_EQ(p.observations.obs.capacity(), p.observations.obs.size());
+  const MapperBundle bundle =
+      MakeBundleProblem(p.observations, p.Names(), p.layout, p.cameras, p.poses, p.models, &p.report);
+  ASSERT_GT(bundle.problem.observations.size(), 100u);
+  EXPECT_EQ(bundle.problem.observations.capacity(), bundle.problem.observations.size());
+  EXPECT_EQ(bundle.observation.capacity(), bundle.observation.size());
+}
+
 TEST(MapperStages, RefinementKeepsTheReferencesAndRejectsAGrossObservation) {
   Pipeline p(Scene(60));
   // One observation 20 px off.
