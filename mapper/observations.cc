@@ -142,12 +142,15 @@ Observations CollectObservations(const std::vector<StoredMessage>& messages, con
 }
 
 void EstimateHypotheses(const std::vector<CameraModel>& models, double tau_e, int threads,
-                        std::vector<Observation>* obs) {
-  ParallelFor(static_cast<int>(obs->size()), threads, [&](int i) {
-    Observation& ob = (*obs)[i];
+                        Observations* observations) {
+  std::vector<Observation>& obs = observations->obs;
+  std::vector<SquarePose>& poses = observations->poses;
+  poses.assign(obs.size(), SquarePose());
+  ParallelFor(static_cast<int>(obs.size()), threads, [&](int i) {
+    Observation& ob = obs[i];
     if (!(ob.side > 0)) return;
-    ob.pose = EstimateSquarePose(models[ob.camera], ob.corners, ob.side);
-    ob.kept = NumKeptHypotheses(ob.pose, tau_e);
+    poses[i] = EstimateSquarePose(models[ob.camera], ob.corners, ob.side);
+    ob.kept = NumKeptHypotheses(poses[i], tau_e);
   });
 }
 
