@@ -91,7 +91,7 @@ void InitialiseBody(const std::vector<StoredMessage>& messages, const std::vecto
   try {
     if (body->options.marker_ids.empty()) throw MapperError("no marker of its ids was detected");
     body->observations = CollectObservations(messages, frames, in.camera_names, body->options, &own);
-    EstimateHypotheses(in.models, body->options.tau_e, threads, &body->observations.obs);
+    EstimateHypotheses(in.models, body->options.tau_e, threads, &body->observations);
     for (const Observation& ob : body->observations.obs) report->ambiguous_observations += ob.kept == 2;
     body->layout = BuildMarkerGraph(body->observations, body->options, threads, &own);
     body->views = FitViews(body->observations, body->layout, in.models, threads);

@@ -50,7 +50,7 @@ std::vector<GraphEdge> RigidPairs(const Observations& observations, const Mapper
   edge_options.consistency = ConsistencyFor(o);
   std::vector<GraphEdge> rigid;
   for (const GraphEdge& e :
-       BuildGraphEdges(MarkerItems(observations.obs), observations.NumMarkers(), edge_options, threads))
+       BuildGraphEdges(MarkerItems(observations), observations.NumMarkers(), edge_options, threads))
     if (e.stored_events >= o.min_marker_support && e.SupportFraction() >= kRigidFraction) rigid.push_back(e);
   return rigid;
 }
@@ -89,7 +89,8 @@ std::vector<MarkerMotion> StaticInCameras(const Observations& observations, cons
     for (size_t k = 0; k < obs.size(); k += stride) {
       const Observation& ob = observations.obs[obs[k]];
       std::vector<Rigid3> candidates;
-      for (int h = 0; h < ob.kept; ++h) candidates.push_back(ob.pose.hypotheses[h].cam_from_marker);
+      const SquarePose& pose = observations.poses[obs[k]];
+      for (int h = 0; h < ob.kept; ++h) candidates.push_back(pose.hypotheses[h].cam_from_marker);
       pair.AddEvent(candidates);
     }
     const GraphEdge e = EvaluateEdge(pair, medoid, o.tau_n, still);
@@ -126,7 +127,7 @@ AutoBodies GroupIntoBodies(const std::vector<StoredMessage>& messages,
       AssembleFrames(messages, static_cast<int>(in.camera_names.size()), o.sync_tolerance_us());
   MapReport scratch;
   Observations observations = CollectObservations(messages, frames, in.camera_names, options, &scratch);
-  EstimateHypotheses(in.models, options.tau_e, threads, &observations.obs);
+  EstimateHypotheses(in.models, options.tau_e, threads, &observations);
   const int n = observations.NumMarkers();
   const std::vector<GraphEdge> rigid = RigidPairs(observations, options, threads);
   const std::vector<MarkerMotion> motion = StaticInCameras(observations, options);

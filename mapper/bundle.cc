@@ -91,11 +91,15 @@ bool LeftPoseManifold::MinusJacobian(const double*, double* jacobian) const {
 
 ReprojectionCost::ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
                                    const CornerWeights* weights)
-    : cost_(camera, observed, side, false, nullptr, weights) {}
+    : camera_(camera),
+      observed_(observed),
+      side_(side),
+      weights_(weights ? std::make_unique<const CornerWeights>(*weights) : nullptr) {}
 
 bool ReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
                                 double** jacobians) const {
-  return cost_.Evaluate(parameters, residuals, jacobians);
+  const ObservationCostInputs r{camera_, &observed_, side_, weights_.get(), false, nullptr};
+  return EvaluateObservation(r, parameter_block_sizes(), parameters, residuals, jacobians);
 }
 
 std::vector<double> IntrinsicsVector(const CameraModel& model) {
@@ -155,41 +159,77 @@ SelfCalibrationCost::SelfCalibrationCost(const CameraModel* camera, const Marker
                                          const CornerWeights* weights)
     : camera_(camera),
       observed_(observed),
-      corners_(MarkerCornersInMarker(side)),
+      side_(side),
       weighted_(weights != nullptr),
       weights_(weights ? *weights : CornerWeights()),
       with_intrinsics_(with_intrinsics),
       time_(time ? *time : ObservationTime{}),
-      with_time_(time != nullptr),
-      with_drift_(time != nullptr && time->with_drift) {
+      with_time_(time != nullptr) {
   set_num_residuals(8);
   std::vector<int32_t>* sizes = mutable_parameter_block_sizes();
   *sizes = {7, 7, 7};
   if (with_intrinsics_) sizes->push_back(4 + static_cast<int>(camera->distortion.size()));
   if (with_time_) sizes->push_back(1);
-  if (with_drift_) sizes->push_back(1);
+  if (with_time_ && time_.with_drift) sizes->push_back(1);
 }
 
 bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* residuals,
                                    double** jacobians) const {
-  const int intrinsics_block = with_intrinsics_ ? 3 : -1;
-  const int time_block = with_time_ ? (with_intrinsics_ ? 4 : 3) : -1;
-  const int drift_block = with_drift_ ? time_block + 1 : -1;
+  const ObservationCostInputs r{camera_,
+                                &observed_,
+                                side_,
+                                weighted_ ? &weights_ : nullptr,
+                                with_intrinsics_,
+                                with_time_ ? &time_ : nullptr};
+  return EvaluateObservation(r, parameter_block_sizes(), parameters, residuals, jacobians);
+}
+
+namespace {
+
+// Residuals and Jacobian rows (blocks of `sizes` columns) of each corner k multiplied by weights[k].
+void Weigh(const CornerWeights& weights, const std::vector<int32_t>& sizes, double* residuals,
+           double** jacobians) {
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Matrix2d& w = weights[k];
+    Eigen::Map<Eigen::Vector2d> r(residuals + 2 * k);
+    r = w * r;
+    if (!jacobians) continue;
+    for (size_t b = 0; b < sizes.size(); ++b) {
+      if (!jacobians[b]) continue;
+      Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>> rows(
+          jacobians[b] + 2 * k * sizes[b], 2, sizes[b]);
+      rows = w * rows;
+    }
+  }
+}
+
+}  // namespace
+
+bool EvaluateObservation(const ObservationCostInputs& in, const std::vector<int32_t>& sizes,
+                         double const* const* parameters, double* residuals, double** jacobians) {
+  const bool with_intrinsics = in.with_intrinsics, with_time = in.time != nullptr;
+  const bool with_drift = with_time && in.time->with_drift;
+  const ObservationTime time = with_time ? *in.time : ObservationTime{};
+  const MarkerCorners2d& observed = *in.observed;
+  const MarkerCorners3d corners = MarkerCornersInMarker(in.side);
+  const int intrinsics_block = with_intrinsics ? 3 : -1;
+  const int time_block = with_time ? (with_intrinsics ? 4 : 3) : -1;
+  const int drift_block = with_drift ? time_block + 1 : -1;
   CameraModel refined;  // also IntrinsicsJacobian's scratch (its coefficients shifted and restored)
-  if (with_intrinsics_) refined = ModelWithIntrinsics(*camera_, parameters[intrinsics_block]);
-  const CameraModel& camera = with_intrinsics_ ? refined : *camera_;
+  if (with_intrinsics) refined = ModelWithIntrinsics(*in.camera, parameters[intrinsics_block]);
+  const CameraModel& camera = with_intrinsics ? refined : *in.camera;
   const Rigid3 cam_from_rig = RigidFromBlock(parameters[0]);
   const Rigid3 object_from_marker = RigidFromBlock(parameters[1]);
   Rigid3 rig_from_object = RigidFromBlock(parameters[2]);
   // The pose at the capture time: rotation Exp(dt w) * R, translation t + dt v.
   Eigen::Vector3d w = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
   Eigen::Matrix3d r_dt = Eigen::Matrix3d::Identity();
-  if (with_time_ && time_.velocity) {
-    w = Eigen::Vector3d(time_.velocity[0], time_.velocity[1], time_.velocity[2]);
-    v = Eigen::Vector3d(time_.velocity[3], time_.velocity[4], time_.velocity[5]);
+  if (with_time && time.velocity) {
+    w = Eigen::Vector3d(time.velocity[0], time.velocity[1], time.velocity[2]);
+    v = Eigen::Vector3d(time.velocity[3], time.velocity[4], time.velocity[5]);
     // capture time = utime - offset (- drift * clock_s)
-    double dt = time_.time_s - parameters[time_block][0];
-    if (with_drift_) dt -= parameters[drift_block][0] * time_.clock_s;
+    double dt = time.time_s - parameters[time_block][0];
+    if (with_drift) dt -= parameters[drift_block][0] * time.clock_s;
     r_dt = RotationFromVector(dt * w);
     rig_from_object.linear() = r_dt * rig_from_object.linear();
     rig_from_object.translation() += dt * v;
@@ -199,14 +239,14 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
   const int n_intr = 4 + static_cast<int>(camera.distortion.size());
   using RowJ = Eigen::Matrix<double, 8, 7, Eigen::RowMajor>;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d p_obj = object_from_marker * corners_[k];
+    const Eigen::Vector3d p_obj = object_from_marker * corners[k];
     const Eigen::Vector3d p_rig = rig_from_object * p_obj;
     const Eigen::Vector3d p_cam = cam_from_rig * p_rig;
     Eigen::Vector2d pixel;
     Eigen::Matrix<double, 2, 3> dpix;
     if (!camera.Project(p_cam, &pixel, jacobians ? &dpix : nullptr)) return false;
-    residuals[2 * k] = pixel.x() - observed_[k].x();
-    residuals[2 * k + 1] = pixel.y() - observed_[k].y();
+    residuals[2 * k] = pixel.x() - observed[k].x();
+    residuals[2 * k + 1] = pixel.y() - observed[k].y();
     if (!jacobians) continue;
     if (jacobians[0]) {
       Eigen::Map<RowJ> j(jacobians[0]);
@@ -240,29 +280,13 @@ bool SelfCalibrationCost::Evaluate(double const* const* parameters, double* resi
         jacobians[time_block][2 * k + 1] = d.y();
       }
       if (drift_block >= 0 && jacobians[drift_block]) {
-        jacobians[drift_block][2 * k] = d.x() * time_.clock_s;
-        jacobians[drift_block][2 * k + 1] = d.y() * time_.clock_s;
+        jacobians[drift_block][2 * k] = d.x() * time.clock_s;
+        jacobians[drift_block][2 * k + 1] = d.y() * time.clock_s;
       }
     }
   }
-  if (weighted_) Weigh(residuals, jacobians);
+  if (in.weights) Weigh(*in.weights, sizes, residuals, jacobians);
   return true;
-}
-
-void SelfCalibrationCost::Weigh(double* residuals, double** jacobians) const {
-  const std::vector<int32_t>& sizes = parameter_block_sizes();
-  for (int k = 0; k < 4; ++k) {
-    const Eigen::Matrix2d& w = weights_[k];
-    Eigen::Map<Eigen::Vector2d> r(residuals + 2 * k);
-    r = w * r;
-    if (!jacobians) continue;
-    for (size_t b = 0; b < sizes.size(); ++b) {
-      if (!jacobians[b]) continue;
-      Eigen::Map<Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor>> rows(
-          jacobians[b] + 2 * k * sizes[b], 2, sizes[b]);
-      rows = w * rows;
-    }
-  }
 }
 
 CameraModel BundleProblem::Model(int camera) const {

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,21 @@ struct ObservationTime {
   double clock_s = 0.0;  // utime minus the time reference, seconds (with_drift)
 };
 
+// What one observation's residual reads (SelfCalibrationCost and ReprojectionCost keep it each their own
+// way) and the residual with its Jacobians, blocks of `sizes` (cam_from_rig, object_from_marker,
+// rig_from_object, then the intrinsics when with_intrinsics, the time offset and the drift when `time`
+// says so): SelfCalibrationCost's arithmetic below.
+struct ObservationCostInputs {
+  const CameraModel* camera = nullptr;
+  const MarkerCorners2d* observed = nullptr;
+  double side = 0.0;
+  const CornerWeights* weights = nullptr;  // null: the corners weigh equally
+  bool with_intrinsics = false;
+  const ObservationTime* time = nullptr;  // null: the clocks are not unknowns
+};
+bool EvaluateObservation(const ObservationCostInputs& residual, const std::vector<int32_t>& sizes,
+                         double const* const* parameters, double* residuals, double** jacobians);
+
 // Residual of one marker observation with the camera's intrinsics and clock as unknowns. Parameter
 // blocks: cam_from_rig, object_from_marker, rig_from_object (PoseBlock each), then the intrinsics
 // (IntrinsicsVector's layout) when `with_intrinsics`, then the time offset (1, seconds) when `with_time`,
@@ -79,18 +95,14 @@ class SelfCalibrationCost : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
-  // Residuals and Jacobian rows of each corner k multiplied by weights_[k].
-  void Weigh(double* residuals, double** jacobians) const;
-
   const CameraModel* camera_;  // size and distortion model (and the intrinsics when they are not a block)
   MarkerCorners2d observed_;
-  MarkerCorners3d corners_;
+  double side_;  // the marker's corners in its frame: MarkerCornersInMarker(side_)
   bool weighted_;
   CornerWeights weights_;
   bool with_intrinsics_;
   ObservationTime time_;
   bool with_time_;
-  bool with_drift_;
 };
 
 // Residual of one marker observation, 8 values:
@@ -104,6 +116,11 @@ class SelfCalibrationCost : public ceres::CostFunction {
 //   d p_cam / d(dr_marker, dt_marker) = R_cam R_frame [ -[p_obj - t_marker]x , I ]
 // chained with the camera model's d pixel / d p_cam. Evaluation fails (step rejected) when a corner
 // falls behind the camera.
+// The same arithmetic as SelfCalibrationCost's with the intrinsics given and no clock (one function), but
+// only what it reads is stored: the bundle holds one per observation through its solves, next to Ceres'
+// Jacobian the largest part of the mapper's peak memory (an 8-camera board session: 128 instead of 448
+// bytes per observation, the corner weights apart when there are any; the corners in the marker's frame
+// from the side, no inner cost function with its own block sizes).
 class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
  public:
   ReprojectionCost(const CameraModel* camera, const MarkerCorners2d& observed, double side,
@@ -115,7 +132,10 @@ class ReprojectionCost : public ceres::SizedCostFunction<8, 7, 7, 7> {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
-  SelfCalibrationCost cost_;  // with the intrinsics given and no clock
+  const CameraModel* camera_;
+  MarkerCorners2d observed_;
+  double side_;
+  std::unique_ptr<const CornerWeights> weights_;  // null: the corners weigh equally
 };
 
 // d pixel / d intrinsics (2 x (4 + n), row-major into `out`) at normalised coordinates (x, y). `camera`'s

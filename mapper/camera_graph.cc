@@ -28,7 +28,8 @@ bool FitView(const Observations& observations, std::pair<int, int> range, const 
     if (!layout.placed[obs[i].marker] || obs[i].kept == 0) continue;
     ++used_markers;
     for (int h = 0; h < obs[i].kept; ++h)
-      cands.push_back(obs[i].pose.hypotheses[h].cam_from_marker * marker_from_object[obs[i].marker]);
+      cands.push_back(observations.poses[i].hypotheses[h].cam_from_marker *
+                      marker_from_object[obs[i].marker]);
     const MarkerCorners3d corners = MarkerCornersInMarker(obs[i].side);
     for (int c = 0; c < 4; ++c)
       points.push_back({&models[view->camera], nullptr, layout.object_from_marker[obs[i].marker] * corners[c],

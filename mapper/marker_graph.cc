@@ -165,18 +165,19 @@ TreePoses CamerasFromSingleMarkers(const Observations& observations, EdgeOptions
     if (obs[i].kept == 0) continue;
     order.push_back(i);
     num_cameras = std::max(num_cameras, obs[i].camera + 1);
-    depths.push_back(obs[i].pose.best().cam_from_marker.translation().norm());
+    depths.push_back(observations.poses[i].best().cam_from_marker.translation().norm());
   }
   const auto key = [&](int i) { return std::make_pair(obs[i].frame, obs[i].marker); };
   std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return key(x) < key(y); });
   std::vector<GraphItem> items(order.size());
   for (size_t k = 0; k < order.size(); ++k) {
     const Observation& ob = obs[order[k]];
+    const SquarePose& pose = observations.poses[order[k]];
     items[k].group = k == 0 ? 0 : items[k - 1].group + (key(order[k]) != key(order[k - 1]));
     items[k].node = ob.camera;
     for (int h = 0; h < ob.kept; ++h) {
-      items[k].node_from_common.push_back(ob.pose.hypotheses[h].cam_from_marker);
-      items[k].common_from_node.push_back(Inverse(ob.pose.hypotheses[h].cam_from_marker));
+      items[k].node_from_common.push_back(pose.hypotheses[h].cam_from_marker);
+      items[k].common_from_node.push_back(Inverse(pose.hypotheses[h].cam_from_marker));
     }
   }
   options.medoid.point_scale = std::max(0.1, Median(depths));
@@ -192,18 +193,20 @@ TreePoses CamerasFromSingleMarkers(const Observations& observations, EdgeOptions
 std::vector<PairCandidates> RigPairs(const Observations& observations, const TreePoses& rig, int max_events) {
   std::vector<GraphItem> items;
   std::vector<double> facing;  // per item
-  for (const Observation& ob : observations.obs) {
+  for (size_t i = 0; i < observations.obs.size(); ++i) {
+    const Observation& ob = observations.obs[i];
+    const SquarePose& pose = observations.poses[i];
     if (ob.kept == 0 || ob.camera >= static_cast<int>(rig.placed.size()) || !rig.placed[ob.camera]) continue;
     int same = -1;
     for (int k = static_cast<int>(items.size()) - 1; k >= 0 && items[k].group == ob.frame; --k)
       if (items[k].node == ob.marker) same = k;
-    const double cosine = FacingCosine(ob.pose.best().cam_from_marker);
+    const double cosine = FacingCosine(pose.best().cam_from_marker);
     if (same >= 0 && facing[same] >= cosine) continue;
     GraphItem item;
     item.group = ob.frame;
     item.node = ob.marker;
     for (int h = 0; h < ob.kept; ++h) {
-      item.common_from_node.push_back(rig.root_from_node[ob.camera] * ob.pose.hypotheses[h].cam_from_marker);
+      item.common_from_node.push_back(rig.root_from_node[ob.camera] * pose.hypotheses[h].cam_from_marker);
       item.node_from_common.push_back(Inverse(item.common_from_node.back()));
     }
     if (same >= 0) {
@@ -288,16 +291,17 @@ class RigCheck {
 
 }  // namespace
 
-std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs, double pose_noise_px) {
+std::vector<GraphItem> MarkerItems(const Observations& observations, double pose_noise_px) {
   std::vector<GraphItem> items;
-  for (const Observation& ob : obs) {
+  for (size_t i = 0; i < observations.obs.size(); ++i) {
+    const Observation& ob = observations.obs[i];
     if (ob.kept == 0) continue;
     GraphItem item;
     item.group = ob.view;
     item.node = ob.marker;
     const double side_px = MeanSideLength(ob.corners);
     for (int h = 0; h < ob.kept; ++h) {
-      const Rigid3& cam_from_marker = ob.pose.hypotheses[h].cam_from_marker;
+      const Rigid3& cam_from_marker = observations.poses[i].hypotheses[h].cam_from_marker;
       item.node_from_common.push_back(Inverse(cam_from_marker));
       item.common_from_node.push_back(cam_from_marker);
       if (pose_noise_px > 0)
@@ -339,8 +343,7 @@ MarkerLayout BuildMarkerGraph(const Observations& observations, const MapperOpti
   edge_options.tau_n = o.tau_n;
   edge_options.consistency = ConsistencyFor(o);
   edge_options.consistency.max_mahalanobis_sq = kPoseNoiseChiSquare;
-  layout.edges =
-      BuildGraphEdges(MarkerItems(observations.obs, o.consistency_noise_px), n, edge_options, threads);
+  layout.edges = BuildGraphEdges(MarkerItems(observations, o.consistency_noise_px), n, edge_options, threads);
   const RigCheck rig(observations, edge_options, o, threads);
   const std::vector<GraphEdge> verified = rig.Verified(layout.edges, observations.marker_ids, report);
   // The reference as the paper chooses it, from the edges one camera verifies (the rig's edges count

@@ -24,9 +24,10 @@ FrameCandidates CandidatesOf(const Observations& observations, int begin, int en
     const Observation& ob = observations.obs[i];
     if (first_camera < 0) first_camera = ob.camera;
     out.one_camera = out.one_camera && ob.camera == first_camera;
-    for (int h = 0; h < ob.pose.num_hypotheses; ++h) {
+    const SquarePose& square = observations.poses[i];
+    for (int h = 0; h < square.num_hypotheses; ++h) {
       const Rigid3 pose =
-          rig_from_cam[ob.camera] * ob.pose.hypotheses[h].cam_from_marker * marker_from_object[ob.marker];
+          rig_from_cam[ob.camera] * square.hypotheses[h].cam_from_marker * marker_from_object[ob.marker];
       if (h < ob.kept) {
         out.kept.push_back(pose);
         out.source.push_back(i);

@@ -114,6 +114,15 @@ Observations CollectObservations(const std::vector<StoredMessage>& messages, con
   whitelist.ids = options.marker_ids;
   Observations out;
   out.camera_messages.assign(camera_names.size(), 0);
+  // Reserved for every whitelisted detection (the duplicates, rarely any, are the slack): grown by
+  // doubling, the 448-byte observations took up to 2x their size from here to the end of the bundle
+  // adjustment, the mapper's peak (8-camera board, 3000 frames: 58.7 MB for 92800 observations instead of
+  // 41.6).
+  size_t accepted = 0;
+  for (const Frame& frame : frames)
+    for (int mi : frame.messages)
+      for (const StoredMarker& mk : messages[mi].markers) accepted += whitelist.Accepts(mk.id);
+  out.obs.reserve(accepted);
   int view_count = 0;
   for (size_t f = 0; f < frames.size(); ++f) {
     for (int mi : frames[f].messages) {
@@ -133,12 +142,15 @@ Observations CollectObservations(const std::vector<StoredMessage>& messages, con
 }
 
 void EstimateHypotheses(const std::vector<CameraModel>& models, double tau_e, int threads,
-                        std::vector<Observation>* obs) {
-  ParallelFor(static_cast<int>(obs->size()), threads, [&](int i) {
-    Observation& ob = (*obs)[i];
+                        Observations* observations) {
+  std::vector<Observation>& obs = observations->obs;
+  std::vector<SquarePose>& poses = observations->poses;
+  poses.assign(obs.size(), SquarePose());
+  ParallelFor(static_cast<int>(obs.size()), threads, [&](int i) {
+    Observation& ob = obs[i];
     if (!(ob.side > 0)) return;
-    ob.pose = EstimateSquarePose(models[ob.camera], ob.corners, ob.side);
-    ob.kept = NumKeptHypotheses(ob.pose, tau_e);
+    poses[i] = EstimateSquarePose(models[ob.camera], ob.corners, ob.side);
+    ob.kept = NumKeptHypotheses(poses[i], tau_e);
   });
 }
 

@@ -68,13 +68,16 @@ struct Observation {
   int64_t utime = 0;  // of the camera's message (its capture time, in its own clock)
   MarkerCorners2d corners;
   double side = 0.0;
-  SquarePose pose;  // EstimateHypotheses
-  int kept = 0;     // hypotheses kept by the ratio test (0: unusable)
+  int kept = 0;  // hypotheses kept by the ratio test (0: unusable)
 };
 
 struct Observations {
   std::vector<Observation> obs;  // ordered by frame, then message, then detection
-  std::vector<int> marker_ids;   // marker index -> id, in order of first detection
+  // Per observation its square's pose hypotheses (EstimateHypotheses), read by the graphs and the initial
+  // object poses only: a vector of their own, released before the bundle adjustment (SolvePass), whose
+  // peak they added 320 of the 448 bytes of every observation to while they were a member of it.
+  std::vector<SquarePose> poses;
+  std::vector<int> marker_ids;  // marker index -> id, in order of first detection
   std::map<int, int> marker_index;
   std::vector<int> camera_messages;        // detections messages per camera
   std::vector<std::pair<int, int>> views;  // [begin, end) of obs with the same view
@@ -88,7 +91,7 @@ Observations CollectObservations(const std::vector<StoredMessage>& messages, con
 
 // Step 1: both IPPE hypotheses per observation, `kept` by the ratio test tau_e.
 void EstimateHypotheses(const std::vector<CameraModel>& models, double tau_e, int threads,
-                        std::vector<Observation>* obs);
+                        Observations* observations);
 
 // ---------------------------------------------------------------------------------------------------
 // Step 3: the marker graph (first: it also finds the ids that are not on the object).
@@ -105,7 +108,7 @@ struct MarkerLayout {
 // The marker graph's items (mapper/graph.h): one per observation with a kept hypothesis, marker_from_cam
 // and cam_from_marker per hypothesis, grouped by view (camera frame).
 // pose_noise_px > 0: each hypothesis with its SquarePoseCovariance for that corner noise.
-std::vector<GraphItem> MarkerItems(const std::vector<Observation>& obs, double pose_noise_px = 0.0);
+std::vector<GraphItem> MarkerItems(const Observations& observations, double pose_noise_px = 0.0);
 
 // Fills report->rejected_markers (and warnings with --allow-partial); throws MapperError for a marker
 // that cannot be connected (unless allow_partial) or a reference_marker never detected.

@@ -183,7 +183,7 @@ MapResult SolveUpdate(const std::vector<StoredMessage>& messages,
       AssembleFrames(on_clock, static_cast<int>(camera_names.size()), o.sync_tolerance_us());
   report.frames_assembled = static_cast<int>(frames.size());
   Observations observations = CollectObservations(on_clock, frames, camera_names, o, &report);
-  EstimateHypotheses(models, o.tau_e, threads, &observations.obs);
+  EstimateHypotheses(models, o.tau_e, threads, &observations);
   const MarkerLayout layout = LayoutFromMap(old_map, observations);
   const std::vector<ViewPose> views = FitViews(observations, layout, models, threads);
   CameraPlacement cameras = PlacementFromMap(old_map, camera_names);

@@ -2,8 +2,12 @@
 // and accuracy at the paper's radii. Each mapping runs as its own process (`mcmt-mapper --log`), so the
 // peak RSS is that process's (wait4 rusage) and the time includes reading the log.
 //
-//   bench_mapper [--quick] [--frames 300,1000,3000,10000] [--cameras 3,5,8] [--threads N] [--no-accuracy]
+//   bench_mapper [--quick] [--frames 300,1000,3000,10000] [--cameras 3,5,8] [--object four_sided]
+//                [--threads N] [--no-accuracy]
 //                [--rendered [--rendered-frames 100]]   (accuracy from rendered images, needs sim + detector)
+//
+// The peak memory of a long session (issue 15's mapmem, 2026-12-07): an 8-camera board session, about 31
+// observations a frame, `bench_mapper --object board --cameras 8 --frames 1000,3000,10000 --no-accuracy`.
 //
 // Logs come from `mcmt-sim --detections-only`.
 // Prints markdown tables.
@@ -86,11 +90,12 @@ double JsonValue(const std::string& json, const std::string& key) {
 
 // Writes DIR/rig.yaml, DIR/ground_truth.yaml and DIR/detections.lcmlog with mcmt-sim; returns the log.
 // Exits with a one-line reason when mcmt-sim fails.
-std::string MakeLog(const std::string& dir, int frames, int cameras, double radius) {
+std::string MakeLog(const std::string& dir, int frames, int cameras, double radius,
+                    const std::string& object) {
   fs::create_directories(dir);
   const std::string sim = kBin + "/mcmt-sim";
   const ProcessResult r = RunProcess(
-      {sim, "--out", dir, "--detections-only", "--object", "four_sided", "--cameras", std::to_string(cameras),
+      {sim, "--out", dir, "--detections-only", "--object", object, "--cameras", std::to_string(cameras),
        "--frames", std::to_string(frames), "--radius", std::to_string(radius), "--seed", "1"},
       dir + "/sim.out");
   if (r.code != 0 || !fs::exists(dir + "/detections.lcmlog")) {
@@ -107,7 +112,7 @@ int main(int argc, char** argv) {
   std::vector<int> frames_list = {300, 1000, 3000, 10000}, cameras_list = {3, 5, 8};
   bool accuracy = true, rendered = false;
   int rendered_frames = 100;
-  std::string threads = "0";
+  std::string threads = "0", object = "four_sided";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") {
@@ -117,6 +122,8 @@ int main(int argc, char** argv) {
       frames_list = ParseList(argv[++i]);
     } else if (a == "--cameras" && i + 1 < argc) {
       cameras_list = ParseList(argv[++i]);
+    } else if (a == "--object" && i + 1 < argc) {
+      object = argv[++i];
     } else if (a == "--threads" && i + 1 < argc) {
       threads = argv[++i];
     } else if (a == "--rendered") {
@@ -127,8 +134,8 @@ int main(int argc, char** argv) {
       accuracy = false;
     } else {
       std::cerr
-          << "usage: bench_mapper [--quick] [--frames LIST] [--cameras LIST] [--threads N] [--no-accuracy] "
-             "[--rendered [--rendered-frames N]]\n";
+          << "usage: bench_mapper [--quick] [--frames LIST] [--cameras LIST] [--object NAME] [--threads N] "
+             "[--no-accuracy] [--rendered [--rendered-frames N]]\n";
       return a == "--help" ? 0 : 2;
     }
   }
@@ -147,7 +154,7 @@ int main(int argc, char** argv) {
   for (int cameras : cameras_list) {
     for (int frames : frames_list) {
       const std::string dir = root + "/f" + std::to_string(frames) + "_c" + std::to_string(cameras);
-      const std::string log = MakeLog(dir, frames, cameras, 1.0);
+      const std::string log = MakeLog(dir, frames, cameras, 1.0, object);
       const ProcessResult r = RunProcess(
           {mapper, "--config", dir + "/rig.yaml", "--log", log, "--out", dir + "/out", "--threads", threads},
           dir + "/mapper.out");
@@ -169,7 +176,7 @@ int main(int argc, char** argv) {
   }
   std::cout
       << "\nlogs: "
-      << "mcmt-sim --detections-only --object four_sided"
+      << "mcmt-sim --detections-only --object " << object
       << ", corner noise 0.1 px; mapping = the mapper's own total (report.json), init = everything before "
          "the bundle adjustment.\n";
 
