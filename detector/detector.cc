@@ -594,7 +594,7 @@ struct SideRay {
   int index;
   double along;
   double delta;
-  std::array<uint8_t, SideProfiles::kRows> pattern;
+  std::array<uint8_t, SideProfiles::kPatternRows> pattern;
   std::array<double, SideProfiles::kRows> depths, other;
   // The steps where the ray crosses a column boundary between cells of different colours inside a code
   // row (SideProfiles::RowStep; AddRowSteps).
@@ -679,7 +679,8 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   const double end_column = column_at(t_max);
   if (!std::isfinite(end_column) || end_column < 0.0 || end_column > cells) return false;
   ray->row_step_count = 0;
-  for (int r = 1; r <= SideProfiles::kRows && r < cells; ++r) {
+  // Rows 1..kPatternRows: row 3 starts about 3 cells in, beyond t_max.
+  for (int r = 1; r <= SideProfiles::kPatternRows && r < cells; ++r) {
     if (t[r] >= t_max) break;
     const double t_out = std::isfinite(t[r + 1]) ? std::min(t[r + 1], t_max) : t_max;
     const double in = column_at(t[r]), out = column_at(t_out);
@@ -783,11 +784,13 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       // border into its margin) the row is not the code the model takes it for: in the skew pass
       // (TurnSkewedSides) the ray is not used. (Elsewhere too it would move the corners of passes that
       // settle: fast mode's corners then left the accurate mode's, black tool 3 markers lost.)
-      if (skew_pass && (at < 0.0 || at > cells)) {
+      // Row 3 (SideProfiles::kRows), seen only in the profiles' inner tail, does not drop the ray.
+      if (skew_pass && r <= SideProfiles::kPatternRows && (at < 0.0 || at > cells)) {
         ok = false;
         break;
       }
-      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
+      if (r <= SideProfiles::kPatternRows)
+        ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
       const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
       const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
       const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
@@ -948,7 +951,7 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.normals = &normals;
   rays.cell = cell;
   rays.du = std::clamp(cell / 4.0, 0.1, 0.5);
-  rays.u0 = -(SideProfiles::kRows - 0.4) * cell;
+  rays.u0 = -SideProfiles::kReachCells * cell;
   const double u1 = 1.6 * cell + 1.0;
   rays.bins = static_cast<int>(std::ceil((u1 - rays.u0) / rays.du)) + 1;
   rays.fit_gamma = fit_gamma;

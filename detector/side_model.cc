@@ -32,9 +32,9 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   steps.clear();
 }
 
-int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
-                         const std::array<double, kRows>& other, const RowStep* ray_steps,
-                         int ray_step_count) {
+int SideProfiles::AddRay(const std::array<uint8_t, kPatternRows>& pattern,
+                         const std::array<double, kRows>& depths, const std::array<double, kRows>& other,
+                         const RowStep* ray_steps, int ray_step_count) {
   size_t g = 0;
   // A ray with steps is a group of its own; the others group by pattern among the groups without steps.
   if (ray_step_count == 0)
@@ -709,9 +709,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
 }
 
 // Mean of the groups' profiles at the bin nearest u, over the groups whose row `row` (0: the border;
-// 1..kRows: code rows; -1: any) has colour `colour`.
+// 1..kPatternRows: code rows; -1: any) has colour `colour`.
 double LevelNear(const SideProfiles& s, double u, int row, int colour) {
-  assert(row <= SideProfiles::kRows);  // the patterns hold rows 1..kRows
+  assert(row <= SideProfiles::kPatternRows);  // the patterns hold rows 1..kPatternRows
   const int j = std::clamp(static_cast<int>(std::lround((u - s.u0) / s.du)), 0, s.bins - 1);
   double sum = 0, count = 0;
   for (size_t g = 0; g < s.patterns.size(); ++g) {
@@ -793,9 +793,10 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
+  // Rows 1..kPatternRows: row 3's tail beyond the profiles' end shows no level of its own.
   bool code_contrast = false;
   for (size_t g = 0; g < s.patterns.size(); ++g)
-    for (int r = 0; r < SideProfiles::kRows; ++r)
+    for (int r = 0; r < SideProfiles::kPatternRows; ++r)
       code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
                                         (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g] ||
                                          HasRowStep(s, static_cast<int>(g), r + 1)));
