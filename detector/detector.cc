@@ -771,6 +771,14 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       if (!ok) break;
       // Depth of the boundary between rows r-1 and r, px inward from the ray's origin (raw pixels).
       ray.depths[r - 1] = (origins[i] - map.ToImage(q + t[r] * dir)).dot(normals[i]);
+      // Row 3 more than 5 blur sigmas (the last fit's) beyond the profiles' inner end (kReachCells border
+      // depths inside; Phi(-5) = 3e-7 of the contrast there) takes row 2's share, without its sum along the
+      // side: the two-row model, whose row 3 boundary has no step (FillBoundaries skips it).
+      if (r > SideProfiles::kPatternRows &&
+          ray.depths[r - 1] - SideProfiles::kReachCells * ray.depths[0] > 5.0 * sigma_along) {
+        ray.other[r - 1] = ray.other[r - 2];
+        continue;
+      }
       // The row's column at the middle of its stretch of the ray, and the part of the row's level that
       // comes from cells of the other colour under blur along the side (Gaussian of sigma_along px).
       const double at = AlongSide(unit_from_ideal, side, q + 0.5 * (t[r] + t[r + 1]) * dir) * cells;
@@ -784,8 +792,8 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       // border into its margin) the row is not the code the model takes it for: in the skew pass
       // (TurnSkewedSides) the ray is not used. (Elsewhere too it would move the corners of passes that
       // settle: fast mode's corners then left the accurate mode's, black tool 3 markers lost.)
-      // Row 3 (SideProfiles::kRows), seen only in the profiles' inner tail, does not drop the ray.
-      if (skew_pass && r <= SideProfiles::kPatternRows && (at < 0.0 || at > cells)) {
+      // So for row 3 where it is in the profiles' reach (above).
+      if (skew_pass && (at < 0.0 || at > cells)) {
         ok = false;
         break;
       }

@@ -111,6 +111,13 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
     _mm_storeu_pd(zs + j, _mm_mul_pd(_mm_sub_pd(bound2, _mm_add_pd(u02, _mm_mul_pd(js, du2))), inv_sigma2));
 #endif
   for (; j < n; ++j) zs[j] = (bound - (u0 + j * du)) * inv_sigma;
+  // Every bin beyond 7 sigmas on one side (z falls with the bin): Phi 0 or 1, phi 0 (as the loops below
+  // give them; row 3's boundary on most sides, SideProfiles::kRows).
+  if (n > 0 && (zs[0] < -7.0 || zs[n - 1] > 7.0)) {
+    std::fill(big_phi, big_phi + n, zs[0] < -7.0 ? 0.0 : 1.0);
+    std::fill(small_phi, small_phi + n, 0.0);
+    return;
+  }
   auto far = [&](int k) { return std::abs(zs[k]) > 7.0; };
   int first = 0, last = n - 1;
   while (first < n && far(first)) ++first;
@@ -548,8 +555,17 @@ void FillBoundaries(const SideProfiles& s, const double* p, double* zs, double* 
   fill(0, p[kE] + p[kQ]);
   fill(1, p[kE]);
   for (int g = 0; g < static_cast<int>(s.patterns.size()); ++g)
-    for (int r = 0; r < SideProfiles::kRows; ++r)
+    for (int r = 0; r < SideProfiles::kRows; ++r) {
+      // Row 3 with row 2's share on every ray of the group (beyond the profiles' reach, CollectSideRays):
+      // no step at its boundary, which is then left out (Phi, phi, z 0 at every bin).
+      if (r == SideProfiles::kRows - 1 && s.other_sum[g][r] == s.other_sum[g][r - 1]) {
+        const size_t i = static_cast<size_t>(2 + g * SideProfiles::kRows + r) * n;
+        std::fill(&zs[i], &zs[i] + n, 0.0), std::fill(&big_phi[i], &big_phi[i] + n, 0.0);
+        std::fill(&small_phi[i], &small_phi[i] + n, 0.0);
+        continue;
+      }
       fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
+    }
 }
 
 // Group g's region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other,
