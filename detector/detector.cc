@@ -717,6 +717,54 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   return true;
 }
 
+// Scratch (alongside): the along-side kernel's CDF at x px. Mode 0: Gaussian of sigma (main). Mode 1:
+// Gaussian of s = sqrt(sigma^2 - 1/4) convolved with the quadratic B-spline (pixel box and bilinear
+// triangle): s^3 times the third central difference (unit steps) of Psi3(t) = ((t^3 + 3t) Phi(t) + (t^2 +
+// 2) phi(t)) / 6, the triple antiderivative of Phi. Mode 2: Gaussian of sqrt(sigma^2 - 1/6) convolved
+// with the triangle only (second difference of Psi2 = ((t^2 + 1) Phi + t phi) / 2). Mode 3: box only.
+// Mode 4: the side's own pixel axes: along a side at angle theta to the image's x axis the pixel box
+// projects to U(a) (x) U(b) and the bilinear triangle to U(a)^2 (x) U(b)^2 (a = |cos|, b = |sin|, or
+// swapped so that a >= b); the three U(b) are folded into the Gaussian (s^2 = sigma^2 - 1/4 + b^2 / 4,
+// variance kept): s^3 / a^3 times the third central difference (steps a) of Psi3(x / s).
+inline double AlongKernelCdf(double x, double sigma, double scale, double cols, double a = 1.0,
+                             double b = 0.0) {
+  static const int mode = std::getenv("MCMT_AL_KERNEL") ? std::atoi(std::getenv("MCMT_AL_KERNEL")) : 0;
+  static const double smin = std::getenv("MCMT_AL_SMIN") ? std::atof(std::getenv("MCMT_AL_SMIN")) : 0.1;
+  if (mode == 0) return Phi(cols * scale);
+  if (mode == 4) {
+    const double s = std::sqrt(std::max(sigma * sigma - 0.25 + 0.25 * b * b, smin * smin));
+    if (x <= -1.5 * a - 7.0 * s) return 0.0;
+    if (x >= 1.5 * a + 7.0 * s) return 1.0;
+    auto psi3 = [&](double t) {
+      double big, small;
+      PhiAndDensity(t, &big, &small);
+      return ((t * t * t + 3.0 * t) * big + (t * t + 2.0) * small) / 6.0;
+    };
+    const double r = s / a;
+    return r * r * r *
+           (psi3((x + 1.5 * a) / s) - 3.0 * psi3((x + 0.5 * a) / s) + 3.0 * psi3((x - 0.5 * a) / s) -
+            psi3((x - 1.5 * a) / s));
+  }
+  const double var = mode == 1 ? 0.25 : mode == 2 ? 1.0 / 6.0 : 1.0 / 12.0;
+  const double half = mode == 1 ? 1.5 : mode == 2 ? 1.0 : 0.5;
+  const double s = std::sqrt(std::max(sigma * sigma - var, smin * smin));
+  if (x <= -half - 7.0 * s) return 0.0;
+  if (x >= half + 7.0 * s) return 1.0;
+  auto psi = [&](double t, int order) {
+    double big, small;
+    PhiAndDensity(t, &big, &small);
+    if (order == 1) return t * big + small;
+    if (order == 2) return 0.5 * ((t * t + 1.0) * big + t * small);
+    return ((t * t * t + 3.0 * t) * big + (t * t + 2.0) * small) / 6.0;
+  };
+  if (mode == 1)
+    return s * s * s *
+           (psi((x + 1.5) / s, 3) - 3.0 * psi((x + 0.5) / s, 3) + 3.0 * psi((x - 0.5) / s, 3) -
+            psi((x - 1.5) / s, 3));
+  if (mode == 2) return s * s * (psi((x + 1.0) / s, 2) - 2.0 * psi(x / s, 2) + psi((x - 1.0) / s, 2));
+  return s * (psi((x + 0.5) / s, 1) - psi((x - 0.5) / s, 1));
+}
+
 // The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
 // depth (px), or NaN with fewer than 4 rays. Only rays in the middle of a code column are used, away from
 // the corners, each followed inward across the marker's rows (`skew_pass`: TurnSkewedSides's).
@@ -759,6 +807,9 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
     const Eigen::Vector2d dir = (map.ToIdeal(origins[i] - normals[i]) - q).normalized();  // inward
+    const double nx = std::abs(normals[i].x()) / normals[i].norm(),
+                 ny = std::abs(normals[i].y()) / normals[i].norm();
+    const double axis_a = std::max(nx, ny), axis_b = std::min(nx, ny);
     double t[SideProfiles::kRows + 2];
     t[0] = 0.0;
     for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
@@ -807,11 +858,32 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       double other = 0, phi_at[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
       auto phi = [&](int k) {
         double& v = phi_at[k - (c - 3)];
-        if (std::isnan(v)) v = Phi((k - at) * scale);
+        if (std::isnan(v))
+          v = AlongKernelCdf((k - at) * column_px, sigma_along, scale, (k - at), axis_a, axis_b);
         return v;
       };
       for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
         if (r < cells && cell_of(r, k)) other += phi(k + 1) - phi(k);
+      // Scratch (alongside, MCMT_AL_STRETCH): the share over the row's whole stretch of the ray (Simpson:
+      // its ends and middle 1 : 4 : 1), not only at its middle (the ray drifts across columns).
+      static const int stretch =
+          std::getenv("MCMT_AL_STRETCH") ? std::atoi(std::getenv("MCMT_AL_STRETCH")) : 0;
+      if (stretch && r < cells) {
+        auto share_at = [&](double pos) {
+          double o = 0;
+          const int cc = static_cast<int>(std::floor(pos));
+          for (int k = std::max(0, cc - 3); k <= std::min(cells - 1, cc + 3); ++k)
+            if (cell_of(r, k))
+              o +=
+                  AlongKernelCdf((k + 1 - pos) * column_px, sigma_along, scale, k + 1 - pos, axis_a, axis_b) -
+                  AlongKernelCdf((k - pos) * column_px, sigma_along, scale, k - pos, axis_a, axis_b);
+          return o;
+        };
+        const double at_in = AlongSide(unit_from_ideal, side, q + t[r] * dir) * cells;
+        const double at_out = AlongSide(unit_from_ideal, side, q + t[r + 1] * dir) * cells;
+        if (std::isfinite(at_in) && std::isfinite(at_out))
+          other = (share_at(at_in) + 4.0 * other + share_at(at_out)) / 6.0;
+      }
       ray.other[r - 1] = other;
     }
     if (ok)
@@ -1357,7 +1429,10 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   if (!crossed && r->kept_lines) *r->kept_lines = true;
   if (!model_pass) return true;
   SideFit& fit = r->side_fits[side];
-  const double sigma_along = fit.warm ? fit.sigma : 0.8;
+  // Scratch (pixelbox): MCMT_PB_ALONG scales the along-side blur of the rows' `other`.
+  static const double along_scale =
+      std::getenv("MCMT_PB_ALONG") ? std::atof(std::getenv("MCMT_PB_ALONG")) : 1.0;
+  const double sigma_along = (fit.warm ? fit.sigma : 0.8) * along_scale;
   // The line's direction is the crossings' where their levels have the marker's polarity (the border's
   // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
   // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the

@@ -83,8 +83,9 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
     };
     m.corners = {image(0, 0), image(cells, 0), image(cells, cells), image(0, cells)};
     m.side_px = side, m.view_angle_deg = 0;
-    const cv::Mat bits =
+    cv::Mat bits =
         cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(m.id, m.id + 1), dict.markerSize);
+    if (Env("UNIFORM", 0)) bits.setTo(1);  // the code all the other colour: no column or row-3 steps
     auto phi = [](double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); };
     auto rect = [&](double u, double v, double u0, double v0, double u1, double v1) {
       return (phi((u1 - u) / sb) - phi((u0 - u) / sb)) * (phi((v1 - v) / sb) - phi((v0 - v) / sb));
@@ -251,8 +252,9 @@ int main(int argc, char** argv) {
       ++total;
       std::array<cv::Point2d, 4> c;
       for (int k = 0; k < 4; ++k) c[k] = t.corners[k] + cv::Point2d(perturb(rng), perturb(rng));
-      const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+      cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
           dict->bytesList.rowRange(t.id, t.id + 1), dict->markerSize);
+      if (Env("UNIFORM", 0)) bits.setTo(1);
       double sigma = NAN;
       if (detect) {
         const marker_t* m = nullptr;
