@@ -825,8 +825,10 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       // Row 3 more than 5 blur sigmas (the last fit's) beyond the profiles' inner end (kReachCells border
       // depths inside; Phi(-5) = 3e-7 of the contrast there) takes row 2's share, without its sum along the
       // side: the two-row model, whose row 3 boundary has no step (FillBoundaries skips it).
+      // Scratch (combo): MCMT_ROW3=0 takes row 2's share for row 3 on every ray (the two-row model).
+      static const bool row3_off = std::getenv("MCMT_ROW3") && std::atoi(std::getenv("MCMT_ROW3")) == 0;
       if (r > SideProfiles::kPatternRows &&
-          ray.depths[r - 1] - SideProfiles::kReachCells * ray.depths[0] > 5.0 * sigma_along) {
+          (row3_off || ray.depths[r - 1] - SideProfiles::kReachCells * ray.depths[0] > 5.0 * sigma_along)) {
         ray.other[r - 1] = ray.other[r - 2];
         continue;
       }
@@ -1450,6 +1452,21 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                            gamma_hint, r->held_gamma > 0, r->polarity, r->paper, &r->side_profiles, &fit,
                            turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn);
   r->side_modelled[side] = std::isfinite(e);
+  if (std::getenv("MCMT_TRACE")) {  // Scratch (combo): each side fit
+    const SideProfiles& sp = r->side_profiles;
+    double o2 = 0, o3 = 0, d3 = 0;
+    int n = 0;
+    for (size_t g = 0; g < sp.patterns.size(); ++g)
+      o2 += sp.other_sum[g][1], o3 += sp.other_sum[g][2], d3 += sp.depth_sum[g][2], n += sp.rays[g];
+    std::fprintf(stderr,
+                 "TRACE pass %d side %d corner0 %.2f %.2f d01 %.2f %.2f e %+.3f sigma %.3f gamma %.2f%s single %d "
+                 "L0 %.1f L1 %.1f S1 %.1f S2 %.1f q %.2f cell %.2f u0 %.2f groups %zu rays %d other2 %.3f "
+                 "other3 %.3f depth3 %.2f skew %d\n",
+                 pass, side, r->img[0].x(), r->img[0].y(), r->img[1].x() - r->img[0].x(), r->img[1].y() - r->img[0].y(), e, fit.sigma, fit.gamma, fit.gamma_fitted ? "f" : "h",
+                 fit.single_surround, fit.params[2], fit.params[3], fit.params[4], fit.params[5], fit.params[6],
+                 sp.cell, sp.u0, sp.patterns.size(), n, n ? o2 / n : 0.0, n ? o3 / n : 0.0, n ? d3 / n : 0.0,
+                 r->skew_turn ? 1 : 0);
+  }
   if (!std::isfinite(e)) return true;
   r->side_unfitted[side] = false;
   tilt *= turn_weight;
