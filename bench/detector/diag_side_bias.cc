@@ -74,7 +74,8 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
   for (int i = 0; i < markers; ++i) {
     testing::RenderedMarker m;
     m.id = std::uniform_int_distribution<int>(0, dict.bytesList.rows - 1)(rng);
-    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll = 2 * M_PI * uni(rng);
+    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll0 = 2 * M_PI * uni(rng),
+                 roll = Env("ROLL", -1) >= 0 ? Env("ROLL", 0) * M_PI / 180 : roll0;  // scratch (combo)
     const double cx = 80 + (i % 5) * 120 + uni(rng), cy = 120 + (i / 5) * 240 + uni(rng);
     const double co = std::cos(roll), si = std::sin(roll), sb = blur / scale;
     auto image = [&](double u, double v) {
