@@ -1034,7 +1034,9 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.cell = cell;
   rays.du = std::clamp(cell / 4.0, 0.1, 0.5);
   rays.u0 = -SideProfiles::kReachCells * cell;
-  const double u1 = 1.6 * cell + 1.0;
+  // Scratch (combo): MCMT_OUT_PX, the profiles' outward reach beyond 1.6 cells (px, 1).
+  static const double out_px = std::getenv("MCMT_OUT_PX") ? std::atof(std::getenv("MCMT_OUT_PX")) : 1.0;
+  const double u1 = 1.6 * cell + out_px;
   rays.bins = static_cast<int>(std::ceil((u1 - rays.u0) / rays.du)) + 1;
   rays.fit_gamma = fit_gamma;
   rays.gamma_hint = gamma_hint;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -926,7 +927,10 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // -0.205 -> -0.222 %).
   const bool halo = p[kQ] < kHaloMaxCells * s.cell && (p[kS1] - p[kL0]) * (p[kL1] - p[kL0]) < 0 &&
                     (p[kS1] < kLevelMin + 0.5 || p[kS1] > kLevelMax - 0.5);
-  if (!code_contrast || (!faint && !unseen && !halo &&
+  // Scratch (combo): MCMT_NO_SINGLE=1 never refits with one surround level; =2 only not for `unseen`.
+  static const int no_single = std::getenv("MCMT_NO_SINGLE") ? std::atoi(std::getenv("MCMT_NO_SINGLE")) : 0;
+  if (no_single == 1) return true;
+  if (!code_contrast || (!faint && !(unseen && no_single != 2) && !halo &&
                          std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
   *fit = start;
