@@ -594,7 +594,7 @@ struct SideRay {
   int index;
   double along;
   double delta;
-  std::array<uint8_t, SideProfiles::kPatternRows> pattern;
+  std::array<uint8_t, SideProfiles::kRows> pattern;
   std::array<double, SideProfiles::kRows> depths, other;
   // The steps where the ray crosses a column boundary between cells of different colours inside a code
   // row (SideProfiles::RowStep; AddRowSteps).
@@ -679,8 +679,7 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   const double end_column = column_at(t_max);
   if (!std::isfinite(end_column) || end_column < 0.0 || end_column > cells) return false;
   ray->row_step_count = 0;
-  // Rows 1..kPatternRows: row 3 starts about 3 cells in, beyond t_max.
-  for (int r = 1; r <= SideProfiles::kPatternRows && r < cells; ++r) {
+  for (int r = 1; r <= SideProfiles::kRows && r < cells; ++r) {
     if (t[r] >= t_max) break;
     const double t_out = std::isfinite(t[r + 1]) ? std::min(t[r + 1], t_max) : t_max;
     const double in = column_at(t[r]), out = column_at(t_out);
@@ -715,54 +714,6 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
     if (stepped) ray->pattern[r - 1] = cell_of(r, c_in), ray->other[r - 1] = cell_of(r, c_in);
   }
   return true;
-}
-
-// Scratch (alongside): the along-side kernel's CDF at x px. Mode 0: Gaussian of sigma (main). Mode 1:
-// Gaussian of s = sqrt(sigma^2 - 1/4) convolved with the quadratic B-spline (pixel box and bilinear
-// triangle): s^3 times the third central difference (unit steps) of Psi3(t) = ((t^3 + 3t) Phi(t) + (t^2 +
-// 2) phi(t)) / 6, the triple antiderivative of Phi. Mode 2: Gaussian of sqrt(sigma^2 - 1/6) convolved
-// with the triangle only (second difference of Psi2 = ((t^2 + 1) Phi + t phi) / 2). Mode 3: box only.
-// Mode 4: the side's own pixel axes: along a side at angle theta to the image's x axis the pixel box
-// projects to U(a) (x) U(b) and the bilinear triangle to U(a)^2 (x) U(b)^2 (a = |cos|, b = |sin|, or
-// swapped so that a >= b); the three U(b) are folded into the Gaussian (s^2 = sigma^2 - 1/4 + b^2 / 4,
-// variance kept): s^3 / a^3 times the third central difference (steps a) of Psi3(x / s).
-inline double AlongKernelCdf(double x, double sigma, double scale, double cols, double a = 1.0,
-                             double b = 0.0) {
-  static const int mode = std::getenv("MCMT_AL_KERNEL") ? std::atoi(std::getenv("MCMT_AL_KERNEL")) : 0;
-  static const double smin = std::getenv("MCMT_AL_SMIN") ? std::atof(std::getenv("MCMT_AL_SMIN")) : 0.1;
-  if (mode == 0) return Phi(cols * scale);
-  if (mode == 4) {
-    const double s = std::sqrt(std::max(sigma * sigma - 0.25 + 0.25 * b * b, smin * smin));
-    if (x <= -1.5 * a - 7.0 * s) return 0.0;
-    if (x >= 1.5 * a + 7.0 * s) return 1.0;
-    auto psi3 = [&](double t) {
-      double big, small;
-      PhiAndDensity(t, &big, &small);
-      return ((t * t * t + 3.0 * t) * big + (t * t + 2.0) * small) / 6.0;
-    };
-    const double r = s / a;
-    return r * r * r *
-           (psi3((x + 1.5 * a) / s) - 3.0 * psi3((x + 0.5 * a) / s) + 3.0 * psi3((x - 0.5 * a) / s) -
-            psi3((x - 1.5 * a) / s));
-  }
-  const double var = mode == 1 ? 0.25 : mode == 2 ? 1.0 / 6.0 : 1.0 / 12.0;
-  const double half = mode == 1 ? 1.5 : mode == 2 ? 1.0 : 0.5;
-  const double s = std::sqrt(std::max(sigma * sigma - var, smin * smin));
-  if (x <= -half - 7.0 * s) return 0.0;
-  if (x >= half + 7.0 * s) return 1.0;
-  auto psi = [&](double t, int order) {
-    double big, small;
-    PhiAndDensity(t, &big, &small);
-    if (order == 1) return t * big + small;
-    if (order == 2) return 0.5 * ((t * t + 1.0) * big + t * small);
-    return ((t * t * t + 3.0 * t) * big + (t * t + 2.0) * small) / 6.0;
-  };
-  if (mode == 1)
-    return s * s * s *
-           (psi((x + 1.5) / s, 3) - 3.0 * psi((x + 0.5) / s, 3) + 3.0 * psi((x - 0.5) / s, 3) -
-            psi((x - 1.5) / s, 3));
-  if (mode == 2) return s * s * (psi((x + 1.0) / s, 2) - 2.0 * psi(x / s, 2) + psi((x - 1.0) / s, 2));
-  return s * (psi((x + 0.5) / s, 1) - psi((x - 0.5) / s, 1));
 }
 
 // The rays of side `side` a model fit uses (FitSide's arguments) into `rays`, and the border cell's mean
@@ -807,9 +758,6 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
     const Eigen::Vector2d dir = (map.ToIdeal(origins[i] - normals[i]) - q).normalized();  // inward
-    const double nx = std::abs(normals[i].x()) / normals[i].norm(),
-                 ny = std::abs(normals[i].y()) / normals[i].norm();
-    const double axis_a = std::max(nx, ny), axis_b = std::min(nx, ny);
     double t[SideProfiles::kRows + 2];
     t[0] = 0.0;
     for (int r = 1; r <= SideProfiles::kRows + 1; ++r) {
@@ -822,16 +770,6 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       if (!ok) break;
       // Depth of the boundary between rows r-1 and r, px inward from the ray's origin (raw pixels).
       ray.depths[r - 1] = (origins[i] - map.ToImage(q + t[r] * dir)).dot(normals[i]);
-      // Row 3 more than 5 blur sigmas (the last fit's) beyond the profiles' inner end (kReachCells border
-      // depths inside; Phi(-5) = 3e-7 of the contrast there) takes row 2's share, without its sum along the
-      // side: the two-row model, whose row 3 boundary has no step (FillBoundaries skips it).
-      // Scratch (combo): MCMT_ROW3=0 takes row 2's share for row 3 on every ray (the two-row model).
-      static const bool row3_off = std::getenv("MCMT_ROW3") && std::atoi(std::getenv("MCMT_ROW3")) == 0;
-      if (r > SideProfiles::kPatternRows &&
-          (row3_off || ray.depths[r - 1] - SideProfiles::kReachCells * ray.depths[0] > 5.0 * sigma_along)) {
-        ray.other[r - 1] = ray.other[r - 2];
-        continue;
-      }
       // The row's column at the middle of its stretch of the ray, and the part of the row's level that
       // comes from cells of the other colour under blur along the side (Gaussian of sigma_along px).
       const double at = AlongSide(unit_from_ideal, side, q + 0.5 * (t[r] + t[r + 1]) * dir) * cells;
@@ -845,13 +783,11 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       // border into its margin) the row is not the code the model takes it for: in the skew pass
       // (TurnSkewedSides) the ray is not used. (Elsewhere too it would move the corners of passes that
       // settle: fast mode's corners then left the accurate mode's, black tool 3 markers lost.)
-      // So for row 3 where it is in the profiles' reach (above).
       if (skew_pass && (at < 0.0 || at > cells)) {
         ok = false;
         break;
       }
-      if (r <= SideProfiles::kPatternRows)
-        ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
+      ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
       const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
       const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
       const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
@@ -860,32 +796,11 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       double other = 0, phi_at[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
       auto phi = [&](int k) {
         double& v = phi_at[k - (c - 3)];
-        if (std::isnan(v))
-          v = AlongKernelCdf((k - at) * column_px, sigma_along, scale, (k - at), axis_a, axis_b);
+        if (std::isnan(v)) v = Phi((k - at) * scale);
         return v;
       };
       for (int k = std::max(0, c - 3); k <= std::min(cells - 1, c + 3); ++k)
         if (r < cells && cell_of(r, k)) other += phi(k + 1) - phi(k);
-      // Scratch (alongside, MCMT_AL_STRETCH): the share over the row's whole stretch of the ray (Simpson:
-      // its ends and middle 1 : 4 : 1), not only at its middle (the ray drifts across columns).
-      static const int stretch =
-          std::getenv("MCMT_AL_STRETCH") ? std::atoi(std::getenv("MCMT_AL_STRETCH")) : 0;
-      if (stretch && r < cells) {
-        auto share_at = [&](double pos) {
-          double o = 0;
-          const int cc = static_cast<int>(std::floor(pos));
-          for (int k = std::max(0, cc - 3); k <= std::min(cells - 1, cc + 3); ++k)
-            if (cell_of(r, k))
-              o +=
-                  AlongKernelCdf((k + 1 - pos) * column_px, sigma_along, scale, k + 1 - pos, axis_a, axis_b) -
-                  AlongKernelCdf((k - pos) * column_px, sigma_along, scale, k - pos, axis_a, axis_b);
-          return o;
-        };
-        const double at_in = AlongSide(unit_from_ideal, side, q + t[r] * dir) * cells;
-        const double at_out = AlongSide(unit_from_ideal, side, q + t[r + 1] * dir) * cells;
-        if (std::isfinite(at_in) && std::isfinite(at_out))
-          other = (share_at(at_in) + 4.0 * other + share_at(at_out)) / 6.0;
-      }
       ray.other[r - 1] = other;
     }
     if (ok)
@@ -1033,10 +948,8 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   rays.normals = &normals;
   rays.cell = cell;
   rays.du = std::clamp(cell / 4.0, 0.1, 0.5);
-  rays.u0 = -SideProfiles::kReachCells * cell;
-  // Scratch (combo): MCMT_OUT_PX, the profiles' outward reach beyond 1.6 cells (px, 1).
-  static const double out_px = std::getenv("MCMT_OUT_PX") ? std::atof(std::getenv("MCMT_OUT_PX")) : 1.0;
-  const double u1 = 1.6 * cell + out_px;
+  rays.u0 = -(SideProfiles::kRows - 0.4) * cell;
+  const double u1 = 1.6 * cell + 1.0;
   rays.bins = static_cast<int>(std::ceil((u1 - rays.u0) / rays.du)) + 1;
   rays.fit_gamma = fit_gamma;
   rays.gamma_hint = gamma_hint;
@@ -1433,10 +1346,7 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
   if (!crossed && r->kept_lines) *r->kept_lines = true;
   if (!model_pass) return true;
   SideFit& fit = r->side_fits[side];
-  // Scratch (pixelbox): MCMT_PB_ALONG scales the along-side blur of the rows' `other`.
-  static const double along_scale =
-      std::getenv("MCMT_PB_ALONG") ? std::atof(std::getenv("MCMT_PB_ALONG")) : 1.0;
-  const double sigma_along = (fit.warm ? fit.sigma : 0.8) * along_scale;
+  const double sigma_along = fit.warm ? fit.sigma : 0.8;
   // The line's direction is the crossings' where their levels have the marker's polarity (the border's
   // side darker for a normal print: the outer edge). Without a crossing, or with levels of the other
   // order (the crossings mix the code's edge in: the line lies up to a cell inside along part of the
@@ -1454,21 +1364,6 @@ bool LocateSide(Refinement* r, const std::array<Eigen::Vector2d, 4>& ideal,
                            gamma_hint, r->held_gamma > 0, r->polarity, r->paper, &r->side_profiles, &fit,
                            turn_weight > 0 ? &tilt : nullptr, &tilt_at, r->skew_turn);
   r->side_modelled[side] = std::isfinite(e);
-  if (std::getenv("MCMT_TRACE")) {  // Scratch (combo): each side fit
-    const SideProfiles& sp = r->side_profiles;
-    double o2 = 0, o3 = 0, d3 = 0;
-    int n = 0;
-    for (size_t g = 0; g < sp.patterns.size(); ++g)
-      o2 += sp.other_sum[g][1], o3 += sp.other_sum[g][2], d3 += sp.depth_sum[g][2], n += sp.rays[g];
-    std::fprintf(stderr,
-                 "TRACE pass %d side %d corner0 %.2f %.2f d01 %.2f %.2f e %+.3f sigma %.3f gamma %.2f%s single %d "
-                 "L0 %.1f L1 %.1f S1 %.1f S2 %.1f q %.2f cell %.2f u0 %.2f groups %zu rays %d other2 %.3f "
-                 "other3 %.3f depth3 %.2f skew %d\n",
-                 pass, side, r->img[0].x(), r->img[0].y(), r->img[1].x() - r->img[0].x(), r->img[1].y() - r->img[0].y(), e, fit.sigma, fit.gamma, fit.gamma_fitted ? "f" : "h",
-                 fit.single_surround, fit.params[2], fit.params[3], fit.params[4], fit.params[5], fit.params[6],
-                 sp.cell, sp.u0, sp.patterns.size(), n, n ? o2 / n : 0.0, n ? o3 / n : 0.0, n ? d3 / n : 0.0,
-                 r->skew_turn ? 1 : 0);
-  }
   if (!std::isfinite(e)) return true;
   r->side_unfitted[side] = false;
   tilt *= turn_weight;

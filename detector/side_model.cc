@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -33,9 +32,9 @@ void SideProfiles::Reset(double u0_, double du_, int bins_, double cell_) {
   steps.clear();
 }
 
-int SideProfiles::AddRay(const std::array<uint8_t, kPatternRows>& pattern,
-                         const std::array<double, kRows>& depths, const std::array<double, kRows>& other,
-                         const RowStep* ray_steps, int ray_step_count) {
+int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
+                         const std::array<double, kRows>& other, const RowStep* ray_steps,
+                         int ray_step_count) {
   size_t g = 0;
   // A ray with steps is a group of its own; the others group by pattern among the groups without steps.
   if (ray_step_count == 0)
@@ -112,13 +111,6 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
     _mm_storeu_pd(zs + j, _mm_mul_pd(_mm_sub_pd(bound2, _mm_add_pd(u02, _mm_mul_pd(js, du2))), inv_sigma2));
 #endif
   for (; j < n; ++j) zs[j] = (bound - (u0 + j * du)) * inv_sigma;
-  // Every bin beyond 7 sigmas on one side (z falls with the bin): Phi 0 or 1, phi 0 (as the loops below
-  // give them; row 3's boundary on most sides, SideProfiles::kRows).
-  if (n > 0 && (zs[0] < -7.0 || zs[n - 1] > 7.0)) {
-    std::fill(big_phi, big_phi + n, zs[0] < -7.0 ? 0.0 : 1.0);
-    std::fill(small_phi, small_phi + n, 0.0);
-    return;
-  }
   auto far = [&](int k) { return std::abs(zs[k]) > 7.0; };
   int first = 0, last = n - 1;
   while (first < n && far(first)) ++first;
@@ -556,17 +548,8 @@ void FillBoundaries(const SideProfiles& s, const double* p, double* zs, double* 
   fill(0, p[kE] + p[kQ]);
   fill(1, p[kE]);
   for (int g = 0; g < static_cast<int>(s.patterns.size()); ++g)
-    for (int r = 0; r < SideProfiles::kRows; ++r) {
-      // Row 3 with row 2's share on every ray of the group (beyond the profiles' reach, CollectSideRays):
-      // no step at its boundary, which is then left out (Phi, phi, z 0 at every bin).
-      if (r == SideProfiles::kRows - 1 && s.other_sum[g][r] == s.other_sum[g][r - 1]) {
-        const size_t i = static_cast<size_t>(2 + g * SideProfiles::kRows + r) * n;
-        std::fill(&zs[i], &zs[i] + n, 0.0), std::fill(&big_phi[i], &big_phi[i] + n, 0.0);
-        std::fill(&small_phi[i], &small_phi[i] + n, 0.0);
-        continue;
-      }
+    for (int r = 0; r < SideProfiles::kRows; ++r)
       fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
-    }
 }
 
 // Group g's region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other,
@@ -726,9 +709,9 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
 }
 
 // Mean of the groups' profiles at the bin nearest u, over the groups whose row `row` (0: the border;
-// 1..kPatternRows: code rows; -1: any) has colour `colour`.
+// 1..kRows: code rows; -1: any) has colour `colour`.
 double LevelNear(const SideProfiles& s, double u, int row, int colour) {
-  assert(row <= SideProfiles::kPatternRows);  // the patterns hold rows 1..kPatternRows
+  assert(row <= SideProfiles::kRows);  // the patterns hold rows 1..kRows
   const int j = std::clamp(static_cast<int>(std::lround((u - s.u0) / s.du)), 0, s.bins - 1);
   double sum = 0, count = 0;
   for (size_t g = 0; g < s.patterns.size(); ++g) {
@@ -810,10 +793,9 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
-  // Rows 1..kPatternRows: row 3's tail beyond the profiles' end shows no level of its own.
   bool code_contrast = false;
   for (size_t g = 0; g < s.patterns.size(); ++g)
-    for (int r = 0; r < SideProfiles::kPatternRows; ++r)
+    for (int r = 0; r < SideProfiles::kRows; ++r)
       code_contrast = code_contrast || ((r + 1) * c < 2.0 - s.u0 &&
                                         (s.patterns[g][r] != 0 || s.other_sum[g][r] > 0.05 * s.rays[g] ||
                                          HasRowStep(s, static_cast<int>(g), r + 1)));
@@ -927,10 +909,7 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // -0.205 -> -0.222 %).
   const bool halo = p[kQ] < kHaloMaxCells * s.cell && (p[kS1] - p[kL0]) * (p[kL1] - p[kL0]) < 0 &&
                     (p[kS1] < kLevelMin + 0.5 || p[kS1] > kLevelMax - 0.5);
-  // Scratch (combo): MCMT_NO_SINGLE=1 never refits with one surround level; =2 only not for `unseen`.
-  static const int no_single = std::getenv("MCMT_NO_SINGLE") ? std::atoi(std::getenv("MCMT_NO_SINGLE")) : 0;
-  if (no_single == 1) return true;
-  if (!code_contrast || (!faint && !(unseen && no_single != 2) && !halo &&
+  if (!code_contrast || (!faint && !unseen && !halo &&
                          std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
   *fit = start;

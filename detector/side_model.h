@@ -8,17 +8,14 @@
 //   B_0 = e + q   (far side of the margin: level S2 beyond, S1 between; both free, q free),
 //   B_1 = e       (the outer edge: the unknown we want),
 //   B_{1+r} = e - r c  (r = 1..kRows: the boundaries between the border (row 0) and the code rows
-//                       1..kRows, c = the depth of one cell here, known from the marker's geometry;
-//                       row kRows's level goes on inward).
+//                       1..kRows, c = the depth of one cell here, known from the marker's geometry).
 // The rows' levels are the border's colour L0 or the other colour L1 as the code says at each place
-// along the side: the profiles are averaged per pattern of rows 1..kPatternRows (a group), and all
-// groups share e, sigma, L0, L1, S1, S2, q. Row 3 lies beyond the profiles' inner end (1.6 cells inside
-// the edge, kReachCells) and is seen only in their blurred tail: it enters by its part of the other
-// colour (other_sum), not by the groups' pattern (which would double the groups). The inner boundaries are
-// edges known on both sides; the outer edge brings its own evidence with its surround's levels estimated, not
-// assumed; the blur sigma is fitted. A fitted margin level S1 near the border's L0 is no margin a print can
-// have (it would be border): that fit has slid the edge into the border (on markers without a margin, about
-// 0.5 px inward), and the side is fitted again with one surround level (S2 = S1, no q).
+// along the side: the profiles are averaged per pattern of the rows (a group), and all groups share
+// e, sigma, L0, L1, S1, S2, q. The inner boundaries are edges known on both sides; the outer edge
+// brings its own evidence with its surround's levels estimated, not assumed; the blur sigma is fitted.
+// A fitted margin level S1 near the border's L0 is no margin a print can have (it would be border):
+// that fit has slid the edge into the border (on markers without a margin, about 0.5 px inward), and
+// the side is fitted again with one surround level (S2 = S1, no q).
 #pragma once
 
 #include <Eigen/Core>
@@ -35,20 +32,8 @@
 namespace mcmt {
 
 struct SideProfiles {
-  // Code rows modelled inside the border. Row 3 (kRows = 2 took row 2's colour on inward) is in the
-  // profiles' reach on small blurred cells: its boundary lies 1.4 c beyond their inner end, 1.7 fitted
-  // sigmas on 1.2 px cells at blur 0.85 px, and a row 3 of the other colour than row 2's put the edge
-  // 0.039 px inward there (0.073 px at blur 1.0; 1.5 px cells 0.012 / 0.027 px; exact 1-D profiles,
-  // diag_pixelbox ROW3=1, bench/results/2026-12-06-pixelbox.md and -coderow3.md). Where it lies beyond 7
-  // sigmas of every bin (cells over 5 sigmas) its Phi is 0 at every bin and the model is the same to the bit
-  // as with two rows.
-  static constexpr int kRows = 3;
-  // The rows whose colours group the rays (patterns); row 3 only by its `other` part.
-  static constexpr int kPatternRows = 2;
-  // The profiles reach this many cells inside the edge (FitSide's u0 = -kReachCells c: 0.4 cell short of
-  // row 2's inner boundary).
-  static constexpr double kReachCells = 1.6;
-  double u0 = 0, du = 0.25;  // bin j is at u = u0 + j * du
+  static constexpr int kRows = 2;  // code rows modelled inside the border
+  double u0 = 0, du = 0.25;        // bin j is at u = u0 + j * du
   int bins = 0;
   double OuterU() const { return u0 + (bins - 1) * du; }  // the last bin's u: the profiles' outer end
   // Encoded images (gamma unknown): the model's linear values are encoded as 255 (f / 255)^(1 / gamma)
@@ -78,19 +63,18 @@ struct SideProfiles {
   // two-level model's margin level is then tied to the paper's by a soft two-sided penalty (MarginPenalty
   // and MarginWeight in side_model.cc).
   double paper = 0;
-  // Per group: the colour (0: border's, 1: other) of rows 1..kPatternRows, the summed profile / counts,
-  // and the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
+  // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
+  // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
-  std::vector<std::array<uint8_t, kPatternRows>> patterns;
+  std::vector<std::array<uint8_t, kRows>> patterns;
   std::vector<double> sum, count;  // group * bins + bin
   std::vector<std::array<double, kRows>> depth_sum;
   // Per group: the summed fractions of each row's level that is the other colour at the rays (blur
-  // along the side mixes in the neighbouring columns' cells; row 3's also differs from ray to ray of a
-  // group).
+  // along the side mixes in the neighbouring columns' cells).
   std::vector<std::array<double, kRows>> other_sum;
   std::vector<int> rays;
-  // A ray crossing a column boundary inside code row `row` (1..kPatternRows) where the two cells differ has
-  // one more blurred step there, `depth` px inward from its origin (as the rows' depths), the level changing
+  // A ray crossing a column boundary inside code row `row` (1..kRows) where the two cells differ has one
+  // more blurred step there, `depth` px inward from its origin (as the rows' depths), the level changing
   // by delta (L1 - L0) (delta +1 / -1) until the row's inner boundary, its blur sigma * sigma_scale (the
   // ray crosses the column boundary obliquely; detector.cc AddRowSteps). A ray with steps is a group of
   // its own; its rows' `other` is then the colour where it enters the row.
@@ -104,7 +88,7 @@ struct SideProfiles {
 
   void Reset(double u0_, double du_, int bins_, double cell_);
   // The group of a pattern (created if new), with one more ray whose row boundaries lie at `depths`.
-  int AddRay(const std::array<uint8_t, kPatternRows>& pattern, const std::array<double, kRows>& depths,
+  int AddRay(const std::array<uint8_t, kRows>& pattern, const std::array<double, kRows>& depths,
              const std::array<double, kRows>& other, const RowStep* ray_steps = nullptr,
              int ray_step_count = 0);
   void Add(int group, int bin, double value) {

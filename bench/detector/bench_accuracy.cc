@@ -56,40 +56,6 @@ int main(int argc, char** argv) {
   std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
   if (const char* spec = std::getenv("MCMT_IMAGING_OVERRIDE"))
     for (testing::Imaging& im : catalogue) testing::OverrideImaging(spec, &im);
-  // Scratch (combo): MCMT_CATALOGUE_DUMP=FILE: DetectorAccuracy.ImagingCatalogueOnReferenceRenders' renders
-  // (15-60 px, seed 11, `images` images) of the conditions matching `only`, each true marker found written
-  // as: condition image id side_px view_deg, 4 true corners, 4 found corners.
-  if (const char* path = std::getenv("MCMT_CATALOGUE_DUMP")) {
-    std::ofstream out(path);
-    out.precision(10);
-    auto dict = LoadDictionary("DICT_6X6_250");
-    for (size_t c = 0; c < catalogue.size(); ++c) {
-      const testing::Imaging& im = catalogue[c];
-      if (only && !std::strstr(im.name.c_str(), only)) continue;
-      testing::ReferenceScene scene;
-      scene.min_side_px = 15, scene.max_side_px = 60;
-      MarkerDetector detector = testing::ReferenceDetector(im, DetectorOptions(), "DICT_6X6_250");
-      std::mt19937_64 rng(11);
-      Accuracy a;
-      for (int i = 0; i < images; ++i) {
-        std::vector<testing::RenderedMarker> truth;
-        const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
-        const std::vector<marker_t> markers = detector.Detect(image);
-        testing::Score(truth, markers, &a);
-        for (const auto& t : truth)
-          for (const marker_t& m : markers) {
-            if (m.id != t.id) continue;
-            out << c << ' ' << i << ' ' << t.id << ' ' << t.side_px << ' ' << t.view_angle_deg;
-            for (int k = 0; k < 4; ++k) out << ' ' << t.corners[k].x << ' ' << t.corners[k].y;
-            for (int k = 0; k < 4; ++k) out << ' ' << m.corners[k][0] << ' ' << m.corners[k][1];
-            out << '\n';
-          }
-      }
-      std::printf("%s: offset %+.4f median %.4f (%zu corners)\n", im.name.c_str(), a.MeanOffset(),
-                  a.MedianError(), a.corners.errors.size());
-    }
-    return 0;
-  }
   for (size_t c = 0; c < catalogue.size(); ++c) {
     const testing::Imaging& im = catalogue[c];
     if (only && !std::strstr(im.name.c_str(), only)) continue;

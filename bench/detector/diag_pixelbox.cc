@@ -8,7 +8,7 @@
 // renderer's pixel-area sampling).
 // Environment: PHASE=1 one phase per side (every ray of a side at the same phase, as an axis-aligned
 // side; the offsets are the mean over the 16 sides' fits), ROW3=1 code row 3 of either colour (the model
-// has row 3: SideProfiles::kRows), QUANT=1 the profile's values rounded to integers.
+// takes row 2's colour on), QUANT=1 the profile's values rounded to integers.
 //   diag_pixelbox [MARGIN_CELLS] [SURFACE]   prints edge offset (px, + outward) and fitted sigma per cell x
 //   blur
 #include <cmath>
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
         int fits = 0, singles = 0;
         for (int side = 0; side < (per_phase ? 16 : 1); ++side) {
           SideProfiles s;
-          const double du = std::clamp(cell / 4.0, 0.1, 0.5), u0 = -SideProfiles::kReachCells * cell;
+          const double du = std::clamp(cell / 4.0, 0.1, 0.5), u0 = -(SideProfiles::kRows - 0.4) * cell;
           const double u1 = 1.6 * cell + 1.0;
           s.Reset(u0, du, static_cast<int>(std::ceil((u1 - u0) / du)) + 1, cell);
           s.polarity = 1;
@@ -88,8 +88,8 @@ int main(int argc, char** argv) {
                                          {xe - cell, r1 - ink},
                                          {xe - 2 * cell, r2 - r1},
                                          {xe - 3 * cell, r3 - r2}};
-              const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)},
-                                     {cell, 2 * cell, 3 * cell}, {1.0 * c1, 1.0 * c2, 1.0 * c3});
+              const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)}, {cell, 2 * cell},
+                                     {1.0 * c1, 1.0 * c2});
               for (int j = 0; j < s.bins; ++j) {
                 const double v = Value(edges, s2, sigma, mode, xe + u0 + j * du);
                 s.Add(g, j, quant ? std::round(v) : v);

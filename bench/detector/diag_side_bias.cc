@@ -74,8 +74,7 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
   for (int i = 0; i < markers; ++i) {
     testing::RenderedMarker m;
     m.id = std::uniform_int_distribution<int>(0, dict.bytesList.rows - 1)(rng);
-    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll0 = 2 * M_PI * uni(rng),
-                 roll = Env("ROLL", -1) >= 0 ? Env("ROLL", 0) * M_PI / 180 : roll0;  // scratch (combo)
+    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll = 2 * M_PI * uni(rng);
     const double cx = 80 + (i % 5) * 120 + uni(rng), cy = 120 + (i / 5) * 240 + uni(rng);
     const double co = std::cos(roll), si = std::sin(roll), sb = blur / scale;
     auto image = [&](double u, double v) {
@@ -84,9 +83,8 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
     };
     m.corners = {image(0, 0), image(cells, 0), image(cells, cells), image(0, cells)};
     m.side_px = side, m.view_angle_deg = 0;
-    cv::Mat bits =
+    const cv::Mat bits =
         cv::aruco::Dictionary::getBitsFromByteList(dict.bytesList.rowRange(m.id, m.id + 1), dict.markerSize);
-    if (Env("UNIFORM", 0)) bits.setTo(1);  // the code all the other colour: no column or row-3 steps
     auto phi = [](double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); };
     auto rect = [&](double u, double v, double u0, double v0, double u1, double v1) {
       return (phi((u1 - u) / sb) - phi((u0 - u) / sb)) * (phi((v1 - v) / sb) - phi((v0 - v) / sb));
@@ -253,9 +251,8 @@ int main(int argc, char** argv) {
       ++total;
       std::array<cv::Point2d, 4> c;
       for (int k = 0; k < 4; ++k) c[k] = t.corners[k] + cv::Point2d(perturb(rng), perturb(rng));
-      cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+      const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
           dict->bytesList.rowRange(t.id, t.id + 1), dict->markerSize);
-      if (Env("UNIFORM", 0)) bits.setTo(1);
       double sigma = NAN;
       if (detect) {
         const marker_t* m = nullptr;

@@ -263,8 +263,6 @@ int main(int argc, char** argv) {
       for (size_t c = 0; c < cameras.size(); ++c) {
         DetectorOptions options;
         if (const char* e = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = e;
-        // Scratch (alongside): the camera's gamma known and held (DetectorOptions::gamma; 0 fitted per side).
-        if (const char* e = std::getenv("MCMT_DETECTOR_GAMMA")) options.gamma = std::atof(e);
         // An inverted print's markers searched as such (markers.inverted, and `inverted` as a rig config
         // defaults it).
         MarkerConfig markers = session.markers;
