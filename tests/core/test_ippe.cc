@@ -173,6 +173,38 @@ TEST(Ippe, RandomFacingSquaresAreSolvedExactly) {
   EXPECT_LT(worst_mirror, 1e-4 * kDeg);
 }
 
+// Squares seen exactly along their normal (random positions and turns, 0.5-2 m), exact corners: every one
+// is solved. On 787e6cc 1.4 % were not (OpenCV's square root of a rounding residue below 0 made both
+// solutions NaN; 283 of 20000, 17 of these 2000).
+TEST(Ippe, SquaresSeenAlongTheirNormalAreSolved) {
+  const CameraModel cam = CameraModel::Pinhole(1280, 960, 1000, 639.5, 479.5);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  int unsolved = 0;
+  double worst = 0;
+  for (int n = 0; n < 2000; ++n) {
+    const Eigen::Vector3d p =
+        Eigen::Vector3d(0.5 * u(rng), 0.4 * u(rng), 1).normalized() * (0.5 + 1.5 * u01(rng));
+    const Eigen::Vector3d v = -p.normalized();
+    Eigen::Matrix3d facing;
+    facing.col(2) = v;
+    facing.col(0) = v.unitOrthogonal();
+    facing.col(1) = v.cross(facing.col(0));
+    Rigid3 truth = Rigid3::Identity();
+    truth.linear() = facing * Eigen::AngleAxisd(u(rng) * kPi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    truth.translation() = p;
+    std::mt19937_64 no_noise(0);
+    const SquarePose pose = EstimateSquarePose(cam, ProjectSquare(cam, truth, 0.05, 0, &no_noise), 0.05);
+    if (!pose.ok) {
+      ++unsolved;
+      continue;
+    }
+    worst = std::max(worst, RotationAngle(pose.best().cam_from_marker, truth));
+  }
+  EXPECT_EQ(unsolved, 0);
+  EXPECT_LT(worst, 1e-4);  // rad: seen along the normal the tilt is a square root of rounding
+}
+
 TEST(Ippe, NoisyCloseSquareKeepsTruthAmongHypothesesWithLargeRatio) {
   const CameraModel cam = TestCamera();
   std::mt19937_64 rng(2);
