@@ -25,7 +25,9 @@ struct SquarePose {
 };
 
 // corners_px: distorted pixels in ArUco order. Undistorts with the camera model, solves with
-// cv::solvePnPGeneric(SOLVEPNP_IPPE_SQUARE), measures errors in distorted pixels.
+// cv::solvePnPGeneric(SOLVEPNP_IPPE_SQUARE) in the square's frame turned by one of its flips (so that the
+// rotation OpenCV converts to a Rodrigues vector is never near a half turn; ippe.cc), measures errors in
+// distorted pixels.
 SquarePose EstimateSquarePose(const CameraModel& camera, const MarkerCorners2d& corners_px, double side);
 
 // The hypotheses worth keeping under the paper's rule: only the best when ratio >= tau_e, else both.

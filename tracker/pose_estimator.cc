@@ -371,13 +371,13 @@ void PoseEstimator::Describe(const std::vector<Obs>& obs, const Refined& best, P
       sol->status = PoseStatus::kAmbiguous;
     // A sure IPPE ratio (>= ambiguity_ratio) does not vouch for the pose published: from a prediction the
     // pose may stay on the mirror branch (continuity decides in RefineHypotheses, and with every observation
-    // explained the hypotheses are not even tried), and OpenCV's IPPE solutions themselves can be off (a
-    // square tilted 8 deg, exact corners: its best solution is the mirror at 0.047 px, the other 75 deg off
-    // at 7.3 px, ratio 156). So the square's ambiguity is judged again on refined poses: from the published
-    // pose's mirror (the square's normal n reflected about the line of sight v, n' = 2 (n.v) v - n, turned
-    // about the square's centre) and from both IPPE solutions, each refined on this square; a refined pose
-    // more than 1 deg from the published one with an RMS below ambiguity_ratio x the published RMS (the IPPE
-    // ratio's test, e2 / e1 < tau_e, on refined poses) makes the pose ambiguous. The pose is unchanged.
+    // explained the hypotheses are not even tried; until core/src/ippe.cc's flip of 2026-12-07 the IPPE
+    // solutions of squares facing the camera could themselves be up to 180 deg off on exact corners). So the
+    // square's ambiguity is judged again on refined poses: from the published pose's mirror (the square's
+    // normal n reflected about the line of sight v, n' = 2 (n.v) v - n, turned about the square's centre)
+    // and from both IPPE solutions, each refined on this square; a refined pose more than 1 deg from the
+    // published one with an RMS below ambiguity_ratio x the published RMS (the IPPE ratio's test,
+    // e2 / e1 < tau_e, on refined poses) makes the pose ambiguous. The pose is unchanged.
     // Measured on the demo's idle log fed one camera at a time (1500 frames): 6 of 603 single-square poses
     // flagged tracking were 14-53 deg off (cam4 frames 13-22, on the mirror since the frontal frame 8).
     if (sol->status == PoseStatus::kTracking) {
