@@ -79,9 +79,6 @@ constexpr double kMinMarginExcess = 0.1;
 constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
 // A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
 constexpr double kHaloMaxCells = 0.25;
-// A margin's far side counts as beyond the profiles' outer end (FitSideModels' `unseen`) where it lies this
-// many fitted blurs beyond it: there its step leaves the last bin within Phi(-2) = 2.3 % of its contrast.
-constexpr double kUnseenSigmas = 2.0;
 
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
@@ -898,15 +895,10 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // grey, 25.6 px at 71 deg: q 1.9 or 7.5 px, S2 88 or -20 by the start; with blurside3's row-3 terms fast
   // mode's corners were 0.21 px from the accurate mode's, bench/results/2026-12-05-blurside3.md). On main
   // it took the reference renderer's "hard" map from +0.96 to +0.68 % (BENCHMARKS.md, 2026-12-05 evening).
-  // Beyond the end by kUnseenSigmas blurs: a far side just past the end still darkens the last bins (by
-  // Phi(-z), 16 % at z = 1), which one level cannot follow; the one-level refit of such wide paper margins
-  // (sticky for the later passes) lowered its level and moved the edge outward: reference renderer, blur
-  // 1.2, 15-22 px, 3-cell margin +0.039 -> +0.006 px, its maps (margin_cells=3) plain -0.061 -> -0.009 %,
-  // blur 1.2 -0.138 -> +0.031 % (bench/results/2026-12-07-widemargin.md).
   const double* p = fit->params.data();
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
-  const bool unseen = p[kE] + p[kQ] > s.OuterU() + kUnseenSigmas * p[kSigma];
+  const bool unseen = p[kE] + p[kQ] > s.OuterU();
   // Nor is a strip at the margin's narrowest (kHaloMaxCells) whose level lies beyond the border's, away
   // from the code's, at the level's bound (darker than black for a normal print): a print's margin is
   // paper, or surround of any level but then not a strip of a fifth of a cell. It is the edge's own
