@@ -386,9 +386,9 @@ TEST(Files, TrajectoryErrorsNameTheLine) {
   EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,ambiguous,0.001,\n"),
                   "t.csv:2: sigma_rotation_rad: not a number >= 0: ''");
   EXPECT_CONTAINS(error(hq + "1,2,0,0,0,1,0,0,0,0.5,1,1\n"), "t.csv:2: expected 15 fields, got 12");
-  EXPECT_TRUE(std::isnan(
-      ReadTrajectory(dir.Write("nan.csv", hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,tracking,nan,0.01\n"))[0]
-          .quality->sigma_position_m));
+  EXPECT_TRUE(
+      std::isnan(ReadTrajectory(dir.Write("nan.csv", hq + "1,2,0,0,0,1,0,0,0,0.5,1,1,tracking,nan,0.01\n"))[0]
+                     .quality->sigma_position_m));
   // CRLF line ends are accepted.
   const std::string crlf = std::string(kTrajectoryHeader) + "\r\n1,2,0,0,0,1,0,0,0,0.5,1,1\r\n";
   EXPECT_EQ(ReadTrajectory(dir.Write("crlf.csv", crlf)).size(), 1u);

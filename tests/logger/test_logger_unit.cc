@@ -14,9 +14,9 @@
 #include "core/config.h"
 #include "core/files.h"
 #include "core/lcm_util.h"
+#include "core/log_writer.h"
 #include "core/marker.h"
 #include "core/se3.h"
-#include "core/log_writer.h"
 #include "logger/export.h"
 #include "logger/session_logger.h"
 #include "test_util.h"
@@ -661,7 +661,8 @@ TEST_F(ExportTest, MapFromALogIsTheLastRigMapOnMcmtMap) {
     ReadMapOrLog(no_map);
     FAIL();
   } catch (const LogFormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("n.lcmlog: no map (rig_map2_t or rig_map_t) on MCMT_MAP"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("n.lcmlog: no map (rig_map2_t or rig_map_t) on MCMT_MAP"),
+              std::string::npos)
         << e.what();
   }
   // A map.yaml still reads as a map.
