@@ -198,20 +198,20 @@ void EvaluatePoses(const GroundTruth& truth, const std::vector<TrajectoryRow>& t
     const Rigid3 est = A * row.rig_from_object * B_inv;
     trans.push_back(1000.0 * TranslationDistance(est, gt));
     rot.push_back(AngleDeg(est.linear(), gt.linear()));
-    if (const auto& q = row.quality) {
+    const std::optional<PoseQuality>& q = row.quality;
+    const bool sigma = q && std::isfinite(q->sigma_position_m) && std::isfinite(q->sigma_rotation_rad);
+    if (q) {
       ++r.frames_with_quality;
       status_trans[q->ambiguous].push_back(trans.back());
       status_rot[q->ambiguous].push_back(rot.back());
-      if (std::isfinite(q->sigma_position_m) && std::isfinite(q->sigma_rotation_rad)) {
-        ++r.frames_with_sigma;
-        beyond_position += trans.back() > 3000.0 * q->sigma_position_m;
-        beyond_rotation += rot.back() > 3.0 * q->sigma_rotation_rad * 180.0 / M_PI;
-      }
+    }
+    if (sigma) {
+      ++r.frames_with_sigma;
+      beyond_position += trans.back() > 3000.0 * q->sigma_position_m;
+      beyond_rotation += rot.back() > 3.0 * q->sigma_rotation_rad * 180.0 / M_PI;
     }
     est_pos.push_back((row.rig_from_object * B_inv).translation());
-    const bool sigma = row.quality && std::isfinite(row.quality->sigma_position_m) &&
-                       std::isfinite(row.quality->sigma_rotation_rad);
-    sigma_mm.push_back(sigma ? 1000.0 * row.quality->sigma_position_m : NAN);
+    sigma_mm.push_back(sigma ? 1000.0 * q->sigma_position_m : NAN);
     gt_pos.push_back(gt.translation());
   }
   r.frames_with_pose = static_cast<int>(seen.size());
@@ -377,7 +377,7 @@ void PoseLines(std::ostringstream& s, const EvalResult& r, const std::string& wh
   }
 }
 
-// "poses with a covariance: ..." (a tracker's trajectory only).
+// "poses with a status: ...": their count and the errors beyond 3 sigma (a tracker's trajectory only).
 void CovarianceLine(std::ostringstream& s, const EvalResult& r) {
   if (r.frames_with_quality == 0) return;
   s << "poses with a status: " << r.frames_with_quality << " (" << r.ambiguous_frames << " ambiguous)";
