@@ -15,6 +15,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "core/version.h"
 
@@ -589,13 +590,20 @@ std::string TrajectoryHeader(bool velocity, bool quality) {
          (quality ? kQualityColumns : "");
 }
 
-bool IsTrajectoryHeader(const std::string& line) {
+namespace {
+
+// Which of the four headers `line` is (a trailing '\r' allowed): {velocity, quality}; none for another line.
+std::optional<std::pair<bool, bool>> TrajectoryHeaderColumns(const std::string& line) {
   const std::string s = !line.empty() && line.back() == '\r' ? line.substr(0, line.size() - 1) : line;
   for (bool velocity : {false, true})
     for (bool quality : {false, true})
-      if (s == TrajectoryHeader(velocity, quality)) return true;
-  return false;
+      if (s == TrajectoryHeader(velocity, quality)) return std::make_pair(velocity, quality);
+  return std::nullopt;
 }
+
+}  // namespace
+
+bool IsTrajectoryHeader(const std::string& line) { return TrajectoryHeaderColumns(line).has_value(); }
 
 std::string TrajectoryCsvLine(const TrajectoryRow& row, bool velocity, bool quality) {
   const auto q = QuaternionWxyz(row.rig_from_object);
@@ -706,12 +714,12 @@ std::vector<TrajectoryRow> ReadTrajectory(const std::string& path) {
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
     if (columns == 0) {
-      if (!IsTrajectoryHeader(line))
+      const auto header = TrajectoryHeaderColumns(line);
+      if (!header)
         throw FileFormatError(where + "expected the header '" + std::string(kTrajectoryHeader) +
                               "' (optionally followed by ',wx,wy,wz,vx,vy,vz' and then '" + kQualityColumns +
                               "')");
-      velocity = line.find(",wx,") != std::string::npos;
-      quality = line.find(",status,") != std::string::npos;
+      std::tie(velocity, quality) = *header;
       columns = 12 + (velocity ? 6 : 0) + (quality ? 3 : 0);
       continue;
     }

@@ -226,18 +226,25 @@ TEST(Files, TrajectoryRoundTrips) {
   EXPECT_TRUE(ReadTrajectory(dir.File("empty.csv")).empty());
 }
 
+// n rows at utime 1000 + i, seq i, identity poses (the trajectory format tests' rows).
+std::vector<TrajectoryRow> NumberedRows(int n) {
+  std::vector<TrajectoryRow> rows(n);
+  for (int i = 0; i < n; ++i) {
+    rows[i].utime = 1000 + i;
+    rows[i].seq = i;
+  }
+  return rows;
+}
+
 // The mapper's trajectory with time offsets keeps each row's velocity (kTrajectoryVelocityHeader):
 // bit-exact; a file without the columns (every earlier one) reads as rows without velocity; rows
 // without one are written with the six columns empty beside rows with one.
 TEST(Files, TrajectoryVelocitiesRoundTrip) {
   TempDir dir;
-  std::vector<TrajectoryRow> rows(3);
-  for (int i = 0; i < 3; ++i) {
-    rows[i].utime = 1000 + i;
-    rows[i].seq = i;
+  std::vector<TrajectoryRow> rows = NumberedRows(3);
+  for (int i = 0; i < 3; ++i)
     if (i != 1)
       rows[i].velocity = std::array<double, 6>{0.1 * i, -1.0 / 3.0, 2e-7, 0.5, -0.25 * i, 1.0 / 7.0};
-  }
   const std::string path = dir.File("trajectory.csv");
   WriteTrajectory(path, rows);
   const std::string text = ReadFile(path);
@@ -279,11 +286,7 @@ TEST(Files, TrajectoryVelocitiesRoundTrip) {
 // tracker's header has them even with no row.
 TEST(Files, TrajectoryQualityRoundTrip) {
   TempDir dir;
-  std::vector<TrajectoryRow> rows(3);
-  for (int i = 0; i < 3; ++i) {
-    rows[i].utime = 1000 + i;
-    rows[i].seq = i;
-  }
+  std::vector<TrajectoryRow> rows = NumberedRows(3);
   rows[0].quality = PoseQuality{false, 1.0 / 3.0 * 1e-3, 2e-4};
   rows[2].quality = PoseQuality{true, 0.0078125, 0.25};
   const std::string path = dir.File("poses.csv");
