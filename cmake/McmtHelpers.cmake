@@ -7,7 +7,7 @@
 function(mcmt_add_test)
   cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${T_NAME} ${T_SOURCES})
-  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} mcmt_test_udpm GTest::gtest GTest::gtest_main)
   target_compile_definitions(${T_NAME} PRIVATE
     MCMT_SOURCE_DIR="${PROJECT_SOURCE_DIR}" MCMT_BIN_DIR="${MCMT_BIN_DIR}")
   set_target_properties(${T_NAME} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)

@@ -1,6 +1,9 @@
-// A detections_t published over real UDP multicast on loopback arrives byte-equal.
+// A detections_t published over real UDP multicast on loopback arrives byte-equal; the tests' udpm ports
+// (tests/support/udpm.h) are never shared with another run.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -8,12 +11,13 @@
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "tests/support/udpm.h"
 
 namespace mcmt {
 namespace {
 
-// Port 7600 belongs to the core tests (7600-7619).
-constexpr char kUrl[] = "udpm://239.255.76.67:7600?ttl=0";
+// Ports 7600-7619 belong to the core tests (shifted by the run's offset: tests/support/udpm.h).
+std::string Url() { return test::UdpmUrl(7600); }
 
 class Receiver {
  public:
@@ -33,8 +37,8 @@ detections_t Sample();
 TEST(Udpm, DetectionsRoundTripByteEqual) {
   std::unique_ptr<lcm::LCM> publisher, subscriber;
   try {
-    publisher = OpenLcm(kUrl);
-    subscriber = OpenLcm(kUrl);
+    publisher = OpenLcm(Url());
+    subscriber = OpenLcm(Url());
   } catch (const std::exception& e) {
     GTEST_SKIP() << "UDP multicast unavailable here: " << e.what();
   }
@@ -51,7 +55,8 @@ TEST(Udpm, DetectionsRoundTripByteEqual) {
     got = HandleUntil(
         *subscriber, [&] { return receiver.count_ > 0; }, std::chrono::milliseconds(200));
   }
-  ASSERT_TRUE(got) << "nothing received on " << kUrl << " (multicast route? ip route add 224.0.0.0/4 dev lo)";
+  ASSERT_TRUE(got) << "nothing received on " << Url()
+                   << " (multicast route? ip route add 224.0.0.0/4 dev lo)";
   EXPECT_EQ(receiver.channel_, "MCMT_DETECTIONS_CAM3");
   EXPECT_EQ(receiver.bytes_, sent);
   const detections_t back = DecodeOrThrow<detections_t>(receiver.bytes_.data(), receiver.bytes_.size());
@@ -89,10 +94,10 @@ detections_t Sample() {
 
 // Across processes: a forked child publishes, the parent receives the same bytes.
 TEST(Udpm, DetectionsFromAnotherProcess) {
-  constexpr char kChildUrl[] = "udpm://239.255.76.67:7601?ttl=0";
+  const std::string child_url = test::UdpmUrl(7601);
   std::unique_ptr<lcm::LCM> subscriber;
   try {
-    subscriber = OpenLcm(kChildUrl);
+    subscriber = OpenLcm(child_url);
   } catch (const std::exception& e) {
     GTEST_SKIP() << "UDP multicast unavailable here: " << e.what();
   }
@@ -103,7 +108,7 @@ TEST(Udpm, DetectionsFromAnotherProcess) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     // Child: its own LCM instance; publish until killed (at most ~10 s).
-    lcm::LCM publisher(kChildUrl);
+    lcm::LCM publisher(child_url);
     if (!publisher.good()) ::_exit(3);
     const std::vector<uint8_t> bytes = Encode(Sample());
     for (int i = 0; i < 500; ++i) {
@@ -117,8 +122,32 @@ TEST(Udpm, DetectionsFromAnotherProcess) {
   ::kill(child, SIGTERM);
   int status = 0;
   ::waitpid(child, &status, 0);
-  ASSERT_TRUE(got) << "nothing received from the child process on " << kChildUrl;
+  ASSERT_TRUE(got) << "nothing received from the child process on " << child_url;
   EXPECT_EQ(receiver.bytes_, expected);
+}
+
+// Two runs of the suite on one machine (a CI clone and a worktree) never share a port: a port another
+// run holds is skipped, and one process keeps the port it claimed.
+TEST(UdpmPorts, APortHeldByAnotherRunIsSkipped) {
+  constexpr int kBase = 7619;  // the core tests' last port
+  int other_fd = -1;
+  int other_port = 0;
+  for (int slot = 0; slot < test::kUdpmSlots && other_fd < 0; ++slot) {  // the other run's claim
+    other_port = kBase + slot * test::kUdpmSlotStride;
+    other_fd = ::open(test::UdpmLockPath(other_port).c_str(), O_RDWR | O_CREAT, 0666);
+    ASSERT_GE(other_fd, 0) << test::UdpmLockPath(other_port);
+    if (::flock(other_fd, LOCK_EX | LOCK_NB) != 0) {
+      ::close(other_fd);
+      other_fd = -1;
+    }
+  }
+  ASSERT_GE(other_fd, 0) << "every slot of " << kBase << " is held";
+  const int port = test::UdpmPort(kBase);
+  EXPECT_NE(port, other_port);
+  EXPECT_EQ((port - kBase) % test::kUdpmSlotStride, 0) << port;
+  EXPECT_EQ(test::UdpmPort(kBase), port);  // the same port for the whole process
+  EXPECT_EQ(test::UdpmUrl(kBase), "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0");
+  ::close(other_fd);
 }
 
 }  // namespace

@@ -26,12 +26,13 @@
 #include "tests/detector/synthetic.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/udpm.h"
 
 namespace mcmt {
 namespace {
 namespace fs = std::filesystem;
 
-std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+using test::UdpmUrl;
 
 struct Child {
   pid_t pid = -1;
@@ -155,7 +156,7 @@ const std::string kDetector = std::string(MCMT_BIN_DIR) + "/mcmt-detector";
 
 TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
   Recording rec("proc");
-  Receiver rx(Url(7700));
+  Receiver rx(UdpmUrl(7700));
   ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
   std::vector<Child> children;
   for (int c = 0; c < Recording::kCameras; ++c) {
@@ -163,8 +164,8 @@ TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
     children.push_back(
         // --fps 0 is the rig's own rate (image folders: 30), as its help says (scripts/run-pipeline once
         // passed it and the detector refused it).
-        Spawn({kDetector, "--config", rec.rig, "--camera", cam, "--lcm-url", Url(7700), "--rate", "realtime",
-               "--fps", "0"},
+        Spawn({kDetector, "--config", rec.rig, "--camera", cam, "--lcm-url", UdpmUrl(7700), "--rate",
+               "realtime", "--fps", "0"},
               (rec.dir / (cam + ".out")).string()));
     ASSERT_GT(children.back().pid, 0);
   }
@@ -183,11 +184,11 @@ TEST(DetectorProcess, ThreeDetectorsPublishEveryFrameInOrder) {
 // tracker dropped its views as later than the other cameras'.)
 TEST(DetectorProcess, LateStartPacesFromTheSharedStart) {
   Recording rec("late");
-  Receiver rx(Url(7712));
+  Receiver rx(UdpmUrl(7712));
   ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
   constexpr double kFps = 5.0;
   const int64_t start = NowUtime() - 1000000;  // 1 s before the process is even started
-  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7712), "--rate",
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", UdpmUrl(7712), "--rate",
                    "realtime", "--fps", "5", "--start-wall-utime", std::to_string(start), "--quiet"},
                   (rec.dir / "late.out").string());
   ASSERT_GT(c.pid, 0);
@@ -215,12 +216,12 @@ TEST(DetectorProcess, LateStartPacesFromTheSharedStart) {
 // most views as late.)
 TEST(DetectorProcess, MaxLagDropsFramesASlowDetectorCannotTake) {
   Recording rec("lag");
-  Receiver rx(Url(7714));
+  Receiver rx(UdpmUrl(7714));
   ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
   constexpr int kPublished = 120;
   constexpr double kFps = 2000.0, kMaxLagMs = 20.0;
   const int64_t start = NowUtime() + 1500000;  // after the process's start-up
-  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7714), "--rate",
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", UdpmUrl(7714), "--rate",
                    "realtime", "--fps", "2000", "--loop", "--max-frames", std::to_string(kPublished),
                    "--start-wall-utime", std::to_string(start), "--max-lag-ms", "20"},
                   (rec.dir / "lag.out").string());
@@ -259,9 +260,9 @@ TEST(DetectorProcess, MaxLagDropsFramesASlowDetectorCannotTake) {
 TEST(DetectorProcess, ToneAutoPublishesWhatDetectRecordingGives) {
   Recording rec("tone");
   std::ofstream(rec.rig, std::ios::app) << "detector:\n  tone: auto\n  tone_markers: 12\n";
-  Receiver rx(Url(7716));
+  Receiver rx(UdpmUrl(7716));
   ASSERT_TRUE(rx.good()) << "LCM udpm unavailable (multicast route? ip route add 224.0.0.0/4 dev lo)";
-  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", Url(7716), "--quiet"},
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", UdpmUrl(7716), "--quiet"},
                   (rec.dir / "tone.out").string());
   ASSERT_GT(c.pid, 0);
   rx.Receive(1, Recording::kFrames, 60.0);
@@ -280,9 +281,9 @@ TEST(DetectorProcess, ToneAutoPublishesWhatDetectRecordingGives) {
 
 TEST(DetectorProcess, SigintStopsALoopingDetectorCleanly) {
   Recording rec("sigint");
-  Receiver rx(Url(7702));
+  Receiver rx(UdpmUrl(7702));
   ASSERT_TRUE(rx.good());
-  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", Url(7702), "--loop",
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam1", "--lcm-url", UdpmUrl(7702), "--loop",
                    "--rate", "realtime"},
                   (rec.dir / "out.txt").string());
   rx.Receive(1, Recording::kFrames + 3, 30.0);  // more frames than the recording: it loops
@@ -361,10 +362,10 @@ TEST(DetectorProcess, BadInputGivesOneLineNamingCameraAndFile) {
 // scripts/mcmt-launch in detect mode: one detector per camera, output prefixed, exit 0 at the end.
 TEST(DetectorProcess, LaunchDetectMode) {
   Recording rec("launch");
-  Receiver rx(Url(7704));
+  Receiver rx(UdpmUrl(7704));
   ASSERT_TRUE(rx.good());
   Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "detect",
-                   "--lcm-url", Url(7704), "--rate", "realtime"},
+                   "--lcm-url", UdpmUrl(7704), "--rate", "realtime"},
                   (rec.dir / "launch.txt").string());
   rx.Receive(Recording::kCameras, Recording::kFrames, 40.0);
   const int rc = WaitExit(c, 30.0);
@@ -381,7 +382,7 @@ TEST(DetectorProcess, LaunchStopsEveryoneWhenOneFails) {
   CameraModel model = CameraModel::Pinhole(100, 100, 100, 50, 50);
   WriteIntrinsicsOpenCv((rec.dir / "cam1.yml").string(), model);
   Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "detect",
-                   "--lcm-url", Url(7706), "--loop"},
+                   "--lcm-url", UdpmUrl(7706), "--loop"},
                   (rec.dir / "launch.txt").string());
   const int rc = WaitExit(c, 40.0);
   const std::string out = test::ReadText(c.out_path);
@@ -398,7 +399,7 @@ TEST(DetectorProcess, LaunchRecordMode) {
   Recording rec("record");
   const std::string log = (rec.dir / "session.lcmlog").string();
   Child c = Spawn({"/bin/bash", std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-launch", rec.rig, "record",
-                   "--out", log, "--lcm-url", Url(7708)},
+                   "--out", log, "--lcm-url", UdpmUrl(7708)},
                   (rec.dir / "launch.txt").string());
   const int rc = WaitExit(c, 60.0);
   const std::string out = test::ReadText(c.out_path);
@@ -428,12 +429,12 @@ class ImageReceiver {
 
 TEST(DetectorProcess, ImagesAreRateLimitedJpegsNamingTheirFrame) {
   Recording rec("images");
-  ImageReceiver rx(Url(7710));
+  ImageReceiver rx(UdpmUrl(7710));
   ASSERT_TRUE(rx.lcm_.good());
   // 12 frames at 30 fps = 0.4 s of message time, at most 10 images/s: frames 0, 3, 6, 9.
   std::string yaml = test::ReadText(rec.rig) + "detector:\n  image_rate: 10\n";
   std::ofstream(rec.rig) << yaml;
-  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", Url(7710), "--images",
+  Child c = Spawn({kDetector, "--config", rec.rig, "--camera", "cam0", "--lcm-url", UdpmUrl(7710), "--images",
                    "--rate", "realtime"},
                   (rec.dir / "out.txt").string());
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);

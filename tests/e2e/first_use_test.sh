@@ -3,7 +3,8 @@
 #   --version on every program and script; script --help prints only its comment block; mcmt-launch's camera
 #   list on one line; mcmt-mapper refuses another session's --out without --force and records its version
 #   in map.yaml and report.json; mcmt-replay shows progress (plain lines in a pipe, a bar on a terminal);
-#   mcmt-spy without a display says so in one line. Replay on udpm port 7778 (logger range).
+#   mcmt-spy without a display says so in one line. Replay on udpm port 7778 (logger range;
+#   tests/e2e/udpm_port.sh).
 #   first_use_test.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 SRC="$1"
@@ -63,7 +64,9 @@ fi
 ok "mcmt-mapper --out / --force / versions"
 
 # mcmt-replay: progress, plain in a pipe, a bar with ETA on a terminal (script gives it a pty).
-URL="udpm://239.255.76.67:7778?ttl=0"
+source "$SRC/tests/e2e/udpm_port.sh"
+udpm_port 7778 || exit 1
+URL="udpm://239.255.76.67:$PORT?ttl=0"
 "$SRC/scripts/mcmt-replay" "$WORK/sim/detections.lcmlog" --lcm-url "$URL" 2>"$WORK/replay.txt" || fail "mcmt-replay"
 grep -q "^mcmt-replay detections.lcmlog: 100 % .* kB, .* kB/s, done in 0:0" "$WORK/replay.txt" ||
   fail "mcmt-replay plain progress: $(cat "$WORK/replay.txt")"

@@ -15,7 +15,8 @@ NA="mcmt_cam_$ID"
 NB="mcmt_cpu_$ID"
 VA="vmc$ID"
 VB="vmp$ID"
-PORT=7830
+source "$(dirname "$0")/udpm_port.sh"
+udpm_port 7830 || exit 1
 URL="udpm://239.255.76.67:$PORT?ttl=1"
 
 fail() { echo "netns_test: FAIL: $*" >&2; exit 1; }

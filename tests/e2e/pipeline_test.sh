@@ -11,7 +11,9 @@ OUT="$BUILD/tests/e2e_pipeline"
 # 10 fps: CPU time to spare beside the test ctest runs in parallel. (The failures once seen here, 4 of 5
 # cameras' views all dropped as late, were detectors ready after --start-wall-utime pacing from their own
 # late start: fixed in detector/node.cc.)
-export MCMT_BUILD_DIR="$BUILD" MCMT_DEMO_OUT="$OUT" MCMT_DEMO_FRAMES=120 MCMT_DEMO_PORT=7832 MCMT_DEMO_RATE=realtime
+source "$SRC/tests/e2e/udpm_port.sh"
+udpm_port 7832 || exit 1
+export MCMT_BUILD_DIR="$BUILD" MCMT_DEMO_OUT="$OUT" MCMT_DEMO_FRAMES=120 MCMT_DEMO_PORT=$PORT MCMT_DEMO_RATE=realtime
 export MCMT_DEMO_FPS=10
 "$SRC/scripts/run-pipeline" >"$BUILD/tests/e2e_pipeline.log" 2>&1 || {
   tail -n 40 "$BUILD/tests/e2e_pipeline.log"; echo "pipeline_test: FAIL: run-pipeline failed"; exit 1; }

@@ -53,8 +53,8 @@ TEST_F(LoggerPipelineTest, RealDetectorsRecordedThenReplayedGiveIdenticalLogs) {
   const std::string a = dir_ + "/a.lcmlog", b = dir_ + "/b.lcmlog";
   const int total = kCameras * kFrames;
   {
-    Child logger({Bin("mcmt-logger"), "--out", a, "--config", rig, "--lcm-url", Url(7768), "--status-seconds",
-                  "0", "--max-messages", std::to_string(total), "--max-seconds", "120"},
+    Child logger({Bin("mcmt-logger"), "--out", a, "--config", rig, "--lcm-url", UdpmUrl(7768),
+                  "--status-seconds", "0", "--max-messages", std::to_string(total), "--max-seconds", "120"},
                  dir_ + "/a.out", dir_ + "/a.err");
     ASSERT_TRUE(WaitFor(dir_ + "/a.yaml", 10)) << ReadText(dir_ + "/a.err");
     std::vector<std::unique_ptr<Child>> detectors;
@@ -62,7 +62,7 @@ TEST_F(LoggerPipelineTest, RealDetectorsRecordedThenReplayedGiveIdenticalLogs) {
       const std::string cam = "cam" + std::to_string(c);
       detectors.push_back(std::make_unique<Child>(
           std::vector<std::string>{Bin("mcmt-detector"), "--config", rig, "--camera", cam, "--lcm-url",
-                                   Url(7768), "--rate", "max", "--quiet"},
+                                   UdpmUrl(7768), "--rate", "max", "--quiet"},
           dir_ + "/" + cam + ".out", dir_ + "/" + cam + ".err"));
     }
     for (int c = 0; c < kCameras; ++c)
@@ -82,12 +82,13 @@ TEST_F(LoggerPipelineTest, RealDetectorsRecordedThenReplayedGiveIdenticalLogs) {
   EXPECT_EQ(side["config"]["text"].as<std::string>(), ReadText(rig));
   EXPECT_EQ(side["config"]["intrinsics"].size(), static_cast<size_t>(kCameras));
   {
-    Child logger({Bin("mcmt-logger"), "--out", b, "--lcm-url", Url(7769), "--status-seconds", "0",
+    Child logger({Bin("mcmt-logger"), "--out", b, "--lcm-url", UdpmUrl(7769), "--status-seconds", "0",
                   "--max-messages", std::to_string(total), "--max-seconds", "120"},
                  dir_ + "/b.out", dir_ + "/b.err");
     ASSERT_TRUE(WaitFor(dir_ + "/b.yaml", 10)) << ReadText(dir_ + "/b.err");
-    ASSERT_EQ(RunProgram({"/usr/bin/lcm-logplayer", "--speed=1", "--lcm-url=" + Url(7769), a}, nullptr, &err),
-              0)
+    ASSERT_EQ(
+        RunProgram({"/usr/bin/lcm-logplayer", "--speed=1", "--lcm-url=" + UdpmUrl(7769), a}, nullptr, &err),
+        0)
         << err;
     ASSERT_EQ(logger.Wait(60), 0) << ReadText(dir_ + "/b.err");
   }
@@ -130,7 +131,7 @@ TEST_F(LoggerPipelineTest, DetectionsCsvRoundTripGivesTheSameMap) {
   // lcm-logger's own recording of the same log's messages.
   const std::string theirs = dir_ + "/theirs.lcmlog";
   {
-    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--lcm-url=" + Url(7769) + "&recv_buf_size=4000000",
+    Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--lcm-url=" + UdpmUrl(7769) + "&recv_buf_size=4000000",
                       "--flush-interval=20", theirs},
                      dir_ + "/l.out", dir_ + "/l.err");
     const std::vector<LogEvent> events = ReadEventLog(log);
@@ -186,13 +187,13 @@ TEST_F(LoggerPipelineTest, DetectionsCsvRoundTripGivesTheSameMap) {
   // The poses it publishes, recorded by mcmt-logger and exported, are its own trajectory file.
   {
     const std::string tracked = dir_ + "/tracked.lcmlog";
-    Child logger({Bin("mcmt-logger"), "--out", tracked, "--lcm-url", Url(7768), "--channels", "MCMT_POSE",
+    Child logger({Bin("mcmt-logger"), "--out", tracked, "--lcm-url", UdpmUrl(7768), "--channels", "MCMT_POSE",
                   "--status-seconds", "0"},
                  dir_ + "/t.out", dir_ + "/t.err");
     ASSERT_TRUE(WaitFor(dir_ + "/tracked.yaml", 10)) << ReadText(dir_ + "/t.err");
     const std::string direct = dir_ + "/poses_direct.csv";
     ASSERT_EQ(RunProgram({Bin("mcmt-tracker"), "--config", rig, "--map", m1 + "/map.yaml", "--log", log,
-                          "--out", direct, "--lcm-url", Url(7768), "--quiet"},
+                          "--out", direct, "--lcm-url", UdpmUrl(7768), "--quiet"},
                          &out, &err, 120),
               0)
         << err;

@@ -41,7 +41,7 @@ std::vector<Msg> MakeTraffic(int frames) {
 }
 
 void Publish(int port, const std::vector<Msg>& msgs, int pause_every = 4) {
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(UdpmUrl(port));
   ASSERT_TRUE(lcm.good());
   for (size_t i = 0; i < msgs.size(); ++i) {
     lcm.publish(msgs[i].channel, msgs[i].data.data(), static_cast<unsigned>(msgs[i].data.size()));
@@ -76,7 +76,7 @@ class LoggerProcessTest : public ::testing::Test {
   void SetUp() override { dir_ = MakeTempDir("proc"); }
   void TearDown() override { RemoveTree(dir_); }
   std::vector<std::string> LoggerArgs(const std::string& out, int port) {
-    return {Bin("mcmt-logger"), "--out", out, "--lcm-url", Url(port), "--status-seconds", "0"};
+    return {Bin("mcmt-logger"), "--out", out, "--lcm-url", UdpmUrl(port), "--status-seconds", "0"};
   }
   std::string dir_;
 };
@@ -94,7 +94,7 @@ TEST_F(LoggerProcessTest, RecordThenReplayThroughLcmLogplayerGivesIdenticalMessa
     ASSERT_TRUE(WaitFor(dir_ + "/a.yaml", 10)) << ReadText(dir_ + "/a.err");
     Publish(7760, traffic);
     // Not recorded: another system's channel.
-    lcm::LCM(Url(7760)).publish("OTHER_SYSTEM", "x", 1);
+    lcm::LCM(UdpmUrl(7760)).publish("OTHER_SYSTEM", "x", 1);
     ASSERT_EQ(logger.Wait(60), 0) << ReadText(dir_ + "/a.err");
   }
   ExpectSameMessages(ReadMessages(a), traffic);
@@ -104,8 +104,9 @@ TEST_F(LoggerProcessTest, RecordThenReplayThroughLcmLogplayerGivesIdenticalMessa
     Child logger(args, dir_ + "/b.out", dir_ + "/b.err");
     ASSERT_TRUE(WaitFor(dir_ + "/b.yaml", 10));
     std::string err;
-    ASSERT_EQ(RunProgram({"/usr/bin/lcm-logplayer", "--speed=1", "--lcm-url=" + Url(7761), a}, nullptr, &err),
-              0)
+    ASSERT_EQ(
+        RunProgram({"/usr/bin/lcm-logplayer", "--speed=1", "--lcm-url=" + UdpmUrl(7761), a}, nullptr, &err),
+        0)
         << err;
     ASSERT_EQ(logger.Wait(60), 0) << ReadText(dir_ + "/b.err");
   }
@@ -128,7 +129,7 @@ TEST_F(LoggerProcessTest, InteroperatesWithLcmLoggerBothWays) {
   const std::string theirs = dir_ + "/theirs.lcmlog";
   {
     Child lcm_logger({"/usr/bin/lcm-logger", "-q", "--channel=MCMT_.*",
-                      "--lcm-url=" + Url(7765) + "&recv_buf_size=4000000", "--flush-interval=20", theirs},
+                      "--lcm-url=" + UdpmUrl(7765) + "&recv_buf_size=4000000", "--flush-interval=20", theirs},
                      dir_ + "/l.out", dir_ + "/l.err");
     ASSERT_TRUE(PublishIntoLcmLogger(7765, theirs, traffic))
         << CountNonProbeEvents(theirs) << " of " << traffic.size()
@@ -178,7 +179,7 @@ TEST_F(LoggerProcessTest, KillNineLeavesADecodableLog) {
   args.insert(args.end(), {"--flush-ms", "20"});
   Child logger(args, dir_ + "/k.out", dir_ + "/k.err");
   ASSERT_TRUE(WaitFor(dir_ + "/k.yaml", 10));
-  lcm::LCM lcm(Url(7762));
+  lcm::LCM lcm(UdpmUrl(7762));
   std::vector<std::vector<uint8_t>> sent;
   long long first_batch_bytes = 0;
   int64_t seq = 0;
@@ -331,7 +332,7 @@ TEST_F(LoggerProcessTest, SplitByMinutesRotatesOnTime) {
   Child logger(args, dir_ + "/t.out", dir_ + "/t.err");
   ASSERT_TRUE(WaitFor(dir_ + "/t.yaml", 10)) << ReadText(dir_ + "/t.err");
   std::vector<Msg> traffic;
-  lcm::LCM lcm(Url(7764));
+  lcm::LCM lcm(UdpmUrl(7764));
   // Publish until three parts exist (time-based, so no fixed count), then a last message.
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   for (int64_t seq = 0; !FileExists(LogPartName(log, 2)) && std::chrono::steady_clock::now() < until; ++seq) {
@@ -371,7 +372,7 @@ TEST_F(LoggerProcessTest, McmtReplayPlaysSplitSessions) {
   Child logger(args, dir_ + "/p.out", dir_ + "/p.err");
   ASSERT_TRUE(WaitFor(dir_ + "/played.yaml", 10));
   std::string stdout_text, err;
-  ASSERT_EQ(RunProgram({replay, session, "--speed", "1", "--lcm-url", Url(7764)}, &stdout_text, &err), 0)
+  ASSERT_EQ(RunProgram({replay, session, "--speed", "1", "--lcm-url", UdpmUrl(7764)}, &stdout_text, &err), 0)
       << err;
   EXPECT_NE(err.find("split.00.lcmlog"), std::string::npos) << err;
   EXPECT_NE(err.find("split.01.lcmlog"), std::string::npos) << err;
@@ -425,14 +426,14 @@ TEST_F(LoggerProcessTest, InvalidChannelRegexIsRefusedBeforeAnyFileExists) {
   const std::string log = dir_ + "/regex.lcmlog";
   for (const char* regex : {"([", "MCMT_(", "*"}) {
     const int code = RunProgram(
-        {Bin("mcmt-logger"), "--out", log, "--channels", regex, "--lcm-url", Url(7777)}, &out, &err);
+        {Bin("mcmt-logger"), "--out", log, "--channels", regex, "--lcm-url", UdpmUrl(7777)}, &out, &err);
     EXPECT_EQ(code, 1) << regex << ": " << err;
     EXPECT_NE(err.find("invalid regex '" + std::string(regex) + "'"), std::string::npos) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     EXPECT_FALSE(FileExists(log)) << regex;
     EXPECT_FALSE(FileExists(dir_ + "/regex.yaml")) << regex;
   }
-  EXPECT_EQ(RunProgram({Bin("mcmt-logger"), "--out", log, "--channels", "MCMT_.*", "--lcm-url", Url(7777),
+  EXPECT_EQ(RunProgram({Bin("mcmt-logger"), "--out", log, "--channels", "MCMT_.*", "--lcm-url", UdpmUrl(7777),
                         "--max-seconds", "0.3"},
                        &out, &err),
             0)

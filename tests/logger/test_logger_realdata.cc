@@ -21,8 +21,8 @@ TEST(LoggerRealData, CaliscopeDetectorsRecordedAndReplayedIdentically) {
   const int kCameras = 4, kFrames = 30, kTotal = kCameras * kFrames;
   const std::string a = dir + "/a.lcmlog", b = dir + "/b.lcmlog";
   {
-    Child logger({Bin("mcmt-logger"), "--out", a, "--config", rig, "--lcm-url", Url(7775), "--status-seconds",
-                  "0", "--max-messages", std::to_string(kTotal), "--max-seconds", "120"},
+    Child logger({Bin("mcmt-logger"), "--out", a, "--config", rig, "--lcm-url", UdpmUrl(7775),
+                  "--status-seconds", "0", "--max-messages", std::to_string(kTotal), "--max-seconds", "120"},
                  dir + "/a.out", dir + "/a.err");
     ASSERT_TRUE(WaitFor(dir + "/a.yaml", 10)) << ReadText(dir + "/a.err");
     std::vector<std::unique_ptr<Child>> detectors;
@@ -30,7 +30,7 @@ TEST(LoggerRealData, CaliscopeDetectorsRecordedAndReplayedIdentically) {
       const std::string cam = "cam" + std::to_string(c);
       detectors.push_back(std::make_unique<Child>(
           std::vector<std::string>{Bin("mcmt-detector"), "--config", rig, "--camera", cam, "--lcm-url",
-                                   Url(7775), "--rate", "max", "--max-frames", std::to_string(kFrames),
+                                   UdpmUrl(7775), "--rate", "max", "--max-frames", std::to_string(kFrames),
                                    "--quiet"},
           dir + "/" + cam + ".out", dir + "/" + cam + ".err"));
     }
@@ -46,14 +46,15 @@ TEST(LoggerRealData, CaliscopeDetectorsRecordedAndReplayedIdentically) {
     EXPECT_EQ(side["loss"]["cameras"]["cam" + std::to_string(c)]["frames"].as<int>(), kFrames);
   EXPECT_EQ(side["config"]["intrinsics"].size(), static_cast<size_t>(kCameras));
   {
-    Child logger({Bin("mcmt-logger"), "--out", b, "--lcm-url", Url(7776), "--status-seconds", "0",
+    Child logger({Bin("mcmt-logger"), "--out", b, "--lcm-url", UdpmUrl(7776), "--status-seconds", "0",
                   "--max-messages", std::to_string(kTotal), "--max-seconds", "120"},
                  dir + "/b.out", dir + "/b.err");
     ASSERT_TRUE(WaitFor(dir + "/b.yaml", 10)) << ReadText(dir + "/b.err");
     std::string out, err;
-    ASSERT_EQ(RunProgram({std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-replay", a, "--lcm-url", Url(7776)},
-                         &out, &err, 120),
-              0)
+    ASSERT_EQ(
+        RunProgram({std::string(MCMT_SOURCE_DIR) + "/scripts/mcmt-replay", a, "--lcm-url", UdpmUrl(7776)},
+                   &out, &err, 120),
+        0)
         << err;
     ASSERT_EQ(logger.Wait(60), 0) << ReadText(dir + "/b.err");
   }

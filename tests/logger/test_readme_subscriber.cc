@@ -14,7 +14,7 @@ using namespace mcmt_test;
 
 TEST(ReadmeSubscriber, KeepsEveryLineWhenRedirectedAndStoppedWithCtrlC) {
   const std::string dir = MakeTempDir("readme");
-  const std::string url = Url(7777);
+  const std::string url = UdpmUrl(7777);
   ::setenv("LCM_DEFAULT_URL", url.c_str(), 1);  // the subscriber's lcm::LCM() uses it
   Child subscriber({MCMT_README_SUBSCRIBER}, dir + "/out.txt", dir + "/err.txt");
   lcm::LCM lcm(url);

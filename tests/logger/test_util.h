@@ -22,6 +22,7 @@
 #include "mcmt/object_pose_t.hpp"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/udpm.h"
 
 namespace mcmt_test {
 
@@ -52,7 +53,7 @@ inline void WriteText(const std::string& path, const std::string& text) {
 
 using mcmt::test::Bin;
 
-inline std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+using mcmt::test::UdpmUrl;
 
 using mcmt::test::Child;  // stdout and stderr into files (tests/support)
 
@@ -101,7 +102,7 @@ inline size_t CountNonProbeEvents(const std::string& file) {
 // lcm-logger has no readiness signal and flushes only when a message arrives: publish probes on `port`
 // until `file` holds at least `count` non-probe events (count 0: until it holds anything). Up to 20 s.
 inline bool ProbeUntilRecorded(int port, const std::string& file, size_t count = 0) {
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(UdpmUrl(port));
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   for (;;) {
     if (count == 0 ? FileSize(file) > 0 : CountNonProbeEvents(file) >= count) return true;
@@ -120,7 +121,7 @@ inline bool ProbeUntilRecorded(int port, const std::string& file, size_t count =
 constexpr size_t kLcmLoggerBatch = 16;
 template <typename Messages>
 bool PublishIntoLcmLogger(int port, const std::string& file, const Messages& messages) {
-  lcm::LCM lcm(Url(port));
+  lcm::LCM lcm(UdpmUrl(port));
   if (!lcm.good() || !ProbeUntilRecorded(port, file)) return false;
   for (size_t i = 0; i < messages.size(); ++i) {
     lcm.publish(messages[i].channel, messages[i].data.data(), static_cast<unsigned>(messages[i].data.size()));

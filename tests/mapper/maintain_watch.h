@@ -19,11 +19,10 @@
 #include "mcmt/mapper_status_t.hpp"
 #include "mcmt/object_pose_t.hpp"
 #include "mcmt/tracker_status_t.hpp"
+#include "tests/support/udpm.h"
 
 namespace mcmt {
 namespace test {
-
-inline std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 
 struct Received {
   std::mutex mutex;

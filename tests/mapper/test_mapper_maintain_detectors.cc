@@ -56,7 +56,7 @@ TEST(MapperMaintainDetectors, RenderedBumpFoundReestimatedAndNoPoseCorrupted) {
   // cam2 is re-estimated from the default 200 frames (mapper.maintain_frames), within the 300
   // frames of the bump: 0.420 mm on this session (150 frames: 0.574, decided by two 10 px markers at
   // 74-75 deg; BENCHMARKS.md "Which corners moved").
-  const std::string url = test::Url(7990);
+  const std::string url = test::UdpmUrl(7990);
   test::Received got;
   test::Subscriber subscriber(url, &got);
   ASSERT_TRUE(subscriber.good());

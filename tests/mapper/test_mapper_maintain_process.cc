@@ -36,7 +36,7 @@ using namespace std::chrono_literals;
 using test::Health;
 using test::Received;
 using test::Subscriber;
-using test::Url;
+using test::UdpmUrl;
 
 constexpr int kFrames = 1050;  // margin: under load the sixth camera's map came as late as frame 899
 constexpr int kBumpFrame = 150;
@@ -75,7 +75,7 @@ TEST(MapperMaintainProcess, BumpedCameraReestimatedNewCameraAddedNoPoseCorrupted
   std::map<int64_t, Rigid3> truth_at;
   for (const TrajectoryRow& r : truth_rows) truth_at[r.seq] = r.rig_from_object;
 
-  const std::string url = Url(7980);
+  const std::string url = UdpmUrl(7980);
   Received got;
   Subscriber subscriber(url, &got);
   ASSERT_TRUE(subscriber.good());

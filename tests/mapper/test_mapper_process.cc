@@ -27,6 +27,7 @@
 #include "tests/support/mapper_sim.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/udpm.h"
 
 namespace mcmt {
 namespace {
@@ -204,7 +205,7 @@ pid_t SpawnCollectingMapper(lcm::LCM& lcm, const std::string& rig, const std::st
 }
 
 TEST(MapperProcess, LiveOverUdpmSolvesOnCommand) {
-  const std::string url = "udpm://239.255.76.67:7720?ttl=0";
+  const std::string url = test::UdpmUrl(7720);
   lcm::LCM lcm(url);
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
   const sim::Session session = Simulate(60, 43);
@@ -299,7 +300,7 @@ TEST(MapperProcess, LiveChecksTheOutputFolderFirst) {
   WriteFileAtomic(dir + "/file.txt", "x\n");
   const auto start = std::chrono::steady_clock::now();
   const CommandResult r = RunCommand("timeout 10 " + kMapper + " --config " + rig + " --out " + dir +
-                                     "/file.txt/out --lcm-url 'udpm://239.255.76.67:7721?ttl=0'");
+                                     "/file.txt/out --lcm-url '" + test::UdpmUrl(7721) + "'");
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("--out " + dir + "/file.txt/out"), std::string::npos) << r.output;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
@@ -308,7 +309,7 @@ TEST(MapperProcess, LiveChecksTheOutputFolderFirst) {
 
 // Issue 14: whatever a live mapper collected is kept (a detections log in OUTDIR) when the solve fails.
 TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
-  const std::string url = "udpm://239.255.76.67:7722?ttl=0";
+  const std::string url = test::UdpmUrl(7722);
   lcm::LCM lcm(url);
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
   const sim::Session session = Simulate(30, 45);
@@ -355,7 +356,7 @@ TEST(MapperProcess, LiveKeepsWhatItCollectedWhenTheSolveFails) {
 // silently had fewer frames. Every message of bursts sent with no pause must be collected (before: 186,
 // 205 and 239 of 300 in three runs).
 TEST(MapperProcess, LiveCollectsABurstWithoutLosingMessages) {
-  const std::string url = "udpm://239.255.76.67:7723?ttl=0";
+  const std::string url = test::UdpmUrl(7723);
   lcm::LCM lcm(url);
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
   const sim::Session session = Simulate(60, 49);

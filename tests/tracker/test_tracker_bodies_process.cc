@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/support/udpm.h"
 #include "tests/tracker/bodies_session.h"
 
 namespace mcmt {
@@ -23,7 +24,7 @@ using tracker_test::Bodies;
 using tracker_test::BodiesSession;
 
 const std::string kTracker = test::Bin("mcmt-tracker");
-std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+using test::UdpmUrl;
 
 struct Received {
   std::map<std::string, std::map<int64_t, object_pose_t>> by_channel;  // channel -> seq -> pose
@@ -39,7 +40,7 @@ struct Received {
 
 TEST(TrackerBodiesProcess, EachBodyOnItsChannelOverUdpm) {
   const BodiesSession& s = Bodies();
-  const std::string url = Url(7940);
+  const std::string url = UdpmUrl(7940);
   lcm::LCM lcm(url + "&recv_buf_size=4194304");
   if (!lcm.good()) GTEST_SKIP() << "no multicast (ip route add 224.0.0.0/4 dev lo): " << url;
   Received got;
@@ -125,7 +126,7 @@ TEST(TrackerBodiesProcess, EachBodyOnItsChannelOverUdpm) {
 // Bad streams: the process does not start, one line naming the file, the key and the name.
 TEST(TrackerBodiesProcess, BadStreamsStopItWithOneLine) {
   const BodiesSession& s = Bodies();
-  const std::string url = Url(7941);
+  const std::string url = UdpmUrl(7941);
   struct Case {
     std::string section, expected;
   };

@@ -14,6 +14,7 @@
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/tracker_sim.h"
+#include "tests/support/udpm.h"
 #include "tracker/tracker.h"
 
 namespace mcmt {
@@ -26,10 +27,10 @@ using test::WaitForText;
 
 const std::string kTracker = test::Bin("mcmt-tracker");
 
-std::string Url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+using test::UdpmUrl;
 // This test's own LCM instances: a large receive buffer, since they see every message on the group
 // (their own detections included) and a burst of small datagrams fills the default buffer quickly.
-std::string TestUrl(int port) { return Url(port) + "&recv_buf_size=4194304"; }
+std::string TestUrl(int port) { return UdpmUrl(port) + "&recv_buf_size=4194304"; }
 
 // One session on disk (the simulator's, tests/support/tracker_sim.h, 90 frames): rig.yaml, map.yaml (exact),
 // detections.lcmlog.
@@ -77,7 +78,7 @@ std::unique_ptr<test::Child> StartLiveTracker(const Session& x, int port, const 
                                               const std::string& err) {
   auto tracker =
       std::make_unique<test::Child>(std::vector<std::string>{kTracker, "--config", x.rig, "--map", x.map,
-                                                             "--lcm-url", Url(port), "--out", out_csv},
+                                                             "--lcm-url", UdpmUrl(port), "--out", out_csv},
                                     err);
   if (WaitForText(err, "ready", 20)) return tracker;
   return nullptr;  // killed by Child's destructor
@@ -260,7 +261,7 @@ TEST(TrackerProcess, LogplayerReplayGivesTheSamePosesAsLogMode) {
   PoseCollector collector(lcm);
   // Receive while the player plays (udpm delivers every message on the group to every socket: an idle
   // receiver would overflow its buffer).
-  test::Child player({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + Url(port), x.log},
+  test::Child player({"/usr/bin/lcm-logplayer", "--speed=3", "--lcm-url=" + UdpmUrl(port), x.log},
                      x.dir + "/player.txt");
   Receive(
       lcm, [&] { return collector.poses.size() >= x.views().size(); }, 20s);
@@ -322,8 +323,8 @@ TEST(TrackerProcess, LogModePublishesWithLcmUrl) {
   ASSERT_TRUE(lcm.good());
   PoseCollector collector(lcm);
   const std::string err = x.dir + "/logpub.txt";
-  test::Child tracker({kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", Url(port)},
-                      err);
+  test::Child tracker(
+      {kTracker, "--config", x.rig, "--map", x.map, "--log", x.log, "--lcm-url", UdpmUrl(port)}, err);
   Receive(
       lcm, [&] { return collector.poses.size() >= x.views().size(); }, 20s);
   EXPECT_EQ(tracker.Wait(20), 0) << ReadText(err);
@@ -337,7 +338,7 @@ TEST(TrackerProcess, LiveWaitsForMapMessage) {
   const Session& x = Session::Get();
   const int port = 7743;
   const std::string err = x.dir + "/waitmap.txt";
-  test::Child tracker({kTracker, "--config", x.rig, "--lcm-url", Url(port)}, err);
+  test::Child tracker({kTracker, "--config", x.rig, "--lcm-url", UdpmUrl(port)}, err);
   ASSERT_TRUE(WaitForText(err, "ready", 20)) << ReadText(err);
   lcm::LCM lcm(TestUrl(port));
   PoseCollector collector(lcm);

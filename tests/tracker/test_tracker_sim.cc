@@ -16,6 +16,7 @@
 #include "sim/sim.h"
 #include "tests/support/process.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/udpm.h"
 
 namespace mcmt {
 namespace {
@@ -206,7 +207,7 @@ TEST(TrackerWithDetectors, DetectorsAndTrackerAsProcessesOverUdpm) {
   const sim::GroundTruth truth = sim::ReadGroundTruth(dir + "/ground_truth.yaml");
   std::vector<TrajectoryRow> truth_rows;
   WriteMap(dir + "/map.yaml", sim::MapFromGroundTruth(truth, 0, 0, &truth_rows));
-  const std::string url = "udpm://239.255.76.67:7744?ttl=0";
+  const std::string url = test::UdpmUrl(7744);
   const std::string tracker_err = dir + "/tracker.txt";
   test::Child tracker(
       // The detector processes publish each frame at a shared wall-clock schedule (--start-wall-utime, 2 s

@@ -11,6 +11,7 @@
 #include "core/lcm_util.h"
 #include "core/log_writer.h"
 #include "core/objects.h"
+#include "tests/support/udpm.h"
 #include "tests/viz/viz_test_util.h"
 #include "viz/scene.h"
 
@@ -93,7 +94,7 @@ TEST(VizBodiesProcess, SnapshotOfAMapperFolderDrawsEveryBody) {
 // Live: the tracker's per-body channels, each body named by the message's object field.
 TEST(VizBodiesProcess, LivePosesOnPerBodyChannelsOverUdpm) {
   TempDir dir("bodies_live");
-  const std::string url = "udpm://239.255.76.67:7950?ttl=0";
+  const std::string url = test::UdpmUrl(7950);
   const auto rig = MakeBodiesTestRig(24);
   WriteMap(dir / "map.yaml", rig.map);
   std::atomic<bool> done{false};

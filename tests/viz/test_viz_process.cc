@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/lcm_util.h"
+#include "tests/support/udpm.h"
 #include "tests/viz/viz_test_util.h"
 #include "viz/scene.h"
 
@@ -247,7 +248,7 @@ TEST(VizProcess, ALogWithoutPosesSaysToAddTheTrajectory) {
 
 TEST(VizProcess, LiveLcmOverUdpmWritesASnapshotAfterNPoses) {
   TempDir dir("live");
-  const std::string url = "udpm://239.255.76.67:7781?ttl=0";
+  const std::string url = test::UdpmUrl(7781);
   const auto rig = MakeTestRig(3, 1);
   std::atomic<bool> done{false};
   testing::ProcessResult result;
@@ -298,7 +299,7 @@ TEST(VizProcess, LiveLcmOverUdpmWritesASnapshotAfterNPoses) {
 // 100 ms apart, stay well under the kernel's socket buffer (the mapper's burst test says why).
 TEST(VizProcess, LiveHeadlessCountsEveryPoseOfABurst) {
   TempDir dir("burst");
-  const std::string url = "udpm://239.255.76.67:7783?ttl=0";
+  const std::string url = test::UdpmUrl(7783);
   auto lcm = OpenLcm(url);
   const auto rig = MakeTestRig(3, 1);
   constexpr int kBursts = 6, kBurst = 50;
@@ -330,7 +331,7 @@ TEST(VizProcess, LiveHeadlessCountsEveryPoseOfABurst) {
 
 TEST(VizProcess, LiveHeadlessWithoutAMapTimesOutWithAClearMessage) {
   TempDir dir("timeout");
-  const auto r = RunCommand(VizBin() + " --lcm-url 'udpm://239.255.76.67:7787?ttl=0' --snapshot " +
+  const auto r = RunCommand(VizBin() + " --lcm-url '" + test::UdpmUrl(7787) + "' --snapshot " +
                                 (dir / "never.png") + " --timeout 1",
                             30);
   EXPECT_EQ(r.exit_code, 1) << r.output;
@@ -348,7 +349,7 @@ TEST(VizProcess, LiveWindowWithoutDisplayExitsWithAClearMessage) {
   const auto rig = MakeTestRig(2, 2);
   WriteMap(dir / "map.yaml", rig.map);
   const auto r = RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + VizBin() + " --map " + (dir / "map.yaml") +
-                                " --lcm-url 'udpm://239.255.76.67:7782?ttl=0'",
+                                " --lcm-url '" + test::UdpmUrl(7782) + "'",
                             30);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.exit_code, 124) << "timed out: " << r.output;  // coreutils timeout
@@ -387,7 +388,7 @@ TEST(VizProcess, LiveWindowUnderXvfbShowsPosesWithBoundedRedraws) {
   TempDir dir("window");
   const auto rig = MakeTestRig(3, 1);
   WriteMap(dir / "map.yaml", rig.map);
-  const std::string url = "udpm://239.255.76.67:7788?ttl=0";
+  const std::string url = test::UdpmUrl(7788);
   std::atomic<bool> done{false};
   testing::ProcessResult result;
   std::thread viewer([&] {
