@@ -10,12 +10,16 @@
 // SUPERSAMPLING (sim::RenderOptions::supersampling, 0: exact area), FLAT (bits: 1 no light gradient, 2 no
 // shading, 4 no background texture).
 // cond: the reference renderer under the condition of tests/detector/reference_renderer.h's
-// ImagingCatalogue() whose name contains NAME (bench_accuracy's), 0-75 deg unless ANGLE.
+// ImagingCatalogue() whose name contains NAME (bench_accuracy's), 0-75 deg unless ANGLE, with the fields
+// MCMT_IMAGING_OVERRIDE names set ("blur_sigma=1.05,jpeg_quality=70", as bench_imaging_maps').
 // exact: RenderExact below (fronto-parallel, the continuous blurred image point-sampled, no noise).
 // Environment: ANGLE (max view angle, deg, 60), MARKERS (per image, 10), NOISE (grey levels, 2),
 // MARGIN (cells, ref, 1), SURFACE (ref, 0.5), PERTURB (px, 0.3), FITGAMMA (1: gamma fitted per side as
 // the detector's default, 0: linear), SEED (1), PER (print each marker),
-// SMOOTH (px: each image smoothed by a Gaussian of this sigma first, as the detector's sharp_smoothing).
+// SMOOTH (px: each image smoothed by a Gaussian of this sigma first, as the detector's sharp_smoothing),
+// IDS (exact: ids drawn from 0..IDS-1 instead of the whole dictionary, and each (id, side)'s mean offset
+// printed; sim prints it always: the rig's object carries ids 0-3), START_OUT (px: every start corner moved
+// this far outward from the marker's centre, after PERTURB).
 // The last line: each side's signed offset (the mean of its ends' along its normal) by the marker's extent
 // across the side (px along the side's normal: its cells' depth x cells).
 #include <cmath>
@@ -73,7 +77,8 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
   const int markers = static_cast<int>(Env("MARKERS", 10));
   for (int i = 0; i < markers; ++i) {
     testing::RenderedMarker m;
-    m.id = std::uniform_int_distribution<int>(0, dict.bytesList.rows - 1)(rng);
+    const int ids = static_cast<int>(Env("IDS", 0));
+    m.id = std::uniform_int_distribution<int>(0, ids > 0 ? ids - 1 : dict.bytesList.rows - 1)(rng);
     const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll = 2 * M_PI * uni(rng);
     const double cx = 80 + (i % 5) * 120 + uni(rng), cy = 120 + (i / 5) * 240 + uni(rng);
     const double co = std::cos(roll), si = std::sin(roll), sb = blur / scale;
@@ -211,7 +216,9 @@ int main(int argc, char** argv) {
   }
   const bool reference = std::string(argv[1]) == "ref" || std::string(argv[1]) == "cond";
   const testing::Imaging* condition = nullptr;
-  const std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  std::vector<testing::Imaging> catalogue = testing::ImagingCatalogue();
+  if (const char* spec = std::getenv("MCMT_IMAGING_OVERRIDE"))
+    for (testing::Imaging& im : catalogue) testing::OverrideImaging(spec, &im);
   if (std::string(argv[1]) == "cond") {
     for (const testing::Imaging& im : catalogue)
       if (!condition && im.name.find(argv[2]) != std::string::npos) condition = &im;
@@ -237,6 +244,7 @@ int main(int argc, char** argv) {
   constexpr int kBands = sizeof(kExtentBands) / sizeof(kExtentBands[0]) - 1;
   std::vector<double> side_by_extent[kBands];
   std::map<int, std::vector<double>> per_id;
+  std::map<std::pair<int, int>, std::vector<double>> per_id_side;  // (id, side k): middle offsets (IDS)
   ShapeByAngle shape;
   // An inverted print's markers searched and refined as such.
   MarkerDetector detector = testing::ReferenceDetector(condition ? *condition : testing::Imaging());
@@ -251,6 +259,12 @@ int main(int argc, char** argv) {
       ++total;
       std::array<cv::Point2d, 4> c;
       for (int k = 0; k < 4; ++k) c[k] = t.corners[k] + cv::Point2d(perturb(rng), perturb(rng));
+      if (Env("START_OUT", 0) != 0) {  // START_OUT (px): every start corner moved outward from the centre
+        cv::Point2d mid(0, 0);
+        for (const auto& p : t.corners) mid += p * 0.25;
+        for (int k = 0; k < 4; ++k)
+          c[k] += (t.corners[k] - mid) * (Env("START_OUT", 0) / cv::norm(t.corners[k] - mid));
+      }
       const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
           dict->bytesList.rowRange(t.id, t.id + 1), dict->markerSize);
       double sigma = NAN;
@@ -275,6 +289,7 @@ int main(int argc, char** argv) {
         if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;
         const double d0 = n.dot(c[k] - a), d1 = n.dot(c[(k + 1) % 4] - b);
         side_mid.push_back(std::abs(0.5 * (d0 + d1))), side_turn.push_back(std::abs(0.5 * (d1 - d0)));
+        per_id_side[{t.id, k}].push_back(0.5 * (d0 + d1));
         const double extent =
             0.5 * (std::abs(n.dot(t.corners[(k + 2) % 4] - a)) + std::abs(n.dot(t.corners[(k + 3) % 4] - a)));
         for (int band = 0; band < kBands; ++band)
@@ -292,6 +307,9 @@ int main(int argc, char** argv) {
   };
   if (std::string(argv[1]) == "sim") {
     ForEachSimImage(blur, side0, side1, images, refine);
+    for (const auto& [key, offsets] : per_id_side)
+      std::printf("id %d side %d: %zu, offset %+.4f px\n", key.first, key.second, offsets.size(),
+                  testing::MeanOf(offsets));
     for (const auto& [id, offsets] : per_id)
       std::printf("id %d: %zu corners, offset %+.4f px\n", id, offsets.size(), testing::MeanOf(offsets));
   }
@@ -320,5 +338,9 @@ int main(int argc, char** argv) {
                   testing::MeanOf(side_by_extent[band]), side_by_extent[band].size(),
                   StandardError(side_by_extent[band]));
   std::printf("\n");
+  if (Env("IDS", 0) > 0)  // each (id, side)'s mean middle offset, outward + (IDS: ids drawn from 0..IDS-1)
+    for (const auto& [key, offsets] : per_id_side)
+      std::printf("id %d side %d: %zu, offset %+.4f px (se %.4f)\n", key.first, key.second, offsets.size(),
+                  testing::MeanOf(offsets), StandardError(offsets));
   shape.Print();
 }

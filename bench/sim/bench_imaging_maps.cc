@@ -33,6 +33,13 @@
 //                               condition; no reference map)
 //   MCMT_IMAGING_OVERRIDE=SPEC  with MCMT_IMAGING_RENDERER=reference: every catalogue condition with the
 //                               Imaging fields SPEC names set ("motion_px=0,jpeg_quality=0"; ablations)
+//   MCMT_IMAGING_SIM_OVERRIDE=SPEC  with mcmt-sim's renders: the RenderOptions fields SPEC names set in the
+//                               session and every camera ("surface_albedo=0.45,blur_sigma=0.5"); a field
+//                               prefixed "cN." only in camera N ("c0.blur_sigma=0.5"; ablations). "cN."
+//                               acts only on rows with per-camera options (--imaging random), and not on
+//                               the surface_* fields (the renderer takes those from the session's options)
+//   MCMT_IMAGING_CAMERA=N       detect camera N's frames only (with MCMT_IMAGING_DUMP: one camera's corners;
+//                               the maps fail for want of the other cameras)
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
 //                               mapping (an oracle: what an isotropic size bias of the corners costs the
 //                               map's scale; negative P enlarges)
@@ -103,6 +110,68 @@ std::vector<Condition> Conditions() {
     c.push_back({"--imaging random, seed " + std::to_string(seed), r});
   }
   return c;
+}
+
+// One RenderOptions field by name (MCMT_IMAGING_SIM_OVERRIDE); false if it is not one of these.
+bool SetRenderField(const std::string& field, double value, sim::RenderOptions* o) {
+  if (field == "surface_albedo")
+    o->surface_albedo = value;
+  else if (field == "surface_texture")
+    o->surface_texture = value;
+  else if (field == "surface_tint")
+    o->surface_tint[0] = o->surface_tint[1] = o->surface_tint[2] = value;
+  else if (field == "shading")
+    o->shading = value;
+  else if (field == "lighting_gradient")
+    o->lighting_gradient = value;
+  else if (field == "vignetting")
+    o->vignetting = value;
+  else if (field == "blur_sigma")
+    o->blur_sigma = value;
+  else if (field == "defocus_radius")
+    o->defocus_radius = value;
+  else if (field == "noise_sigma")
+    o->noise_sigma = value;
+  else if (field == "shot_noise")
+    o->shot_noise = value;
+  else if (field == "gamma")
+    o->gamma = value;
+  else if (field == "sharpen")
+    o->sharpen = value;
+  else if (field == "jpeg_quality")
+    o->jpeg_quality = static_cast<int>(value);
+  else if (field == "quiet_zone_cells")
+    o->quiet_zone_cells = static_cast<int>(value);
+  else
+    return false;
+  return true;
+}
+
+// MCMT_IMAGING_SIM_OVERRIDE applied to the session's options and its cameras' (top of the file).
+void OverrideRender(const std::string& spec, sim::RenderOptions* render) {
+  size_t start = 0;
+  while (start < spec.size()) {
+    size_t end = spec.find(',', start);
+    if (end == std::string::npos) end = spec.size();
+    const std::string item = spec.substr(start, end - start);
+    start = end + 1;
+    const size_t eq = item.find('=');
+    std::string field = item.substr(0, eq);
+    const double value = eq == std::string::npos ? 0.0 : std::atof(item.c_str() + eq + 1);
+    int camera = -1;
+    if (field.size() > 2 && field[0] == 'c' && field.find('.') != std::string::npos) {
+      camera = std::atoi(field.c_str() + 1);
+      field = field.substr(field.find('.') + 1);
+    }
+    bool ok = true;
+    if (camera < 0) ok = SetRenderField(field, value, render);
+    for (size_t c = 0; c < render->cameras.size() && ok; ++c)
+      if (camera < 0 || static_cast<int>(c) == camera) ok = SetRenderField(field, value, &render->cameras[c]);
+    if (!ok) {
+      std::fprintf(stderr, "MCMT_IMAGING_SIM_OVERRIDE: unknown field '%s'\n", item.c_str());
+      std::exit(2);
+    }
+  }
 }
 
 // The marker's corners scaled by `factor` about their centroid (MCMT_IMAGING_SHRINK_PCT).
@@ -230,12 +299,15 @@ int main(int argc, char** argv) {
       const sim::SimObject& object = session.object;
       const std::vector<sim::SimFrame>& trajectory = session.trajectory;
       sim::RenderOptions render = condition.render;
+      if (const char* spec = std::getenv("MCMT_IMAGING_SIM_OVERRIDE")) OverrideRender(spec, &render);
       sim::Renderer renderer(object, session.markers.dictionary, render);
       const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(session.markers.dictionary);
       if (dump && !condition.reference)
         for (size_t c = 0; c < cameras.size(); ++c)
-          std::fprintf(stderr, "condition %zu camera %zu: %s\n", ci, c,
-                       sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str());
+          std::fprintf(stderr, "condition %zu camera %zu: %s, tint %.3f\n", ci, c,
+                       sim::DescribeImaging(render.ForCamera(static_cast<int>(c))).c_str(),
+                       0.114 * render.surface_tint[0] + 0.587 * render.surface_tint[1] +
+                           0.299 * render.surface_tint[2]);
       MapperOptions mo = session.Mapping();
       if (const char* e = std::getenv("MCMT_VIEW_WEIGHT_POWER")) mo.view_weight_power = std::atof(e);
       if (const char* e = std::getenv("MCMT_CORNER_WEIGHTS")) mo.corner_weighting.mode = e;
@@ -260,7 +332,9 @@ int main(int argc, char** argv) {
       std::mt19937 rng(7);
       std::normal_distribution<double> noise(0.0, kReferenceNoisePx);
       long long detected = 0;
+      const char* camera_env = std::getenv("MCMT_IMAGING_CAMERA");
       for (size_t c = 0; c < cameras.size(); ++c) {
+        if (camera_env && std::atoi(camera_env) != static_cast<int>(c)) continue;
         DetectorOptions options;
         if (const char* e = std::getenv("MCMT_CANDIDATE_SEARCH")) options.candidate_search = e;
         // An inverted print's markers searched as such (markers.inverted, and `inverted` as a rig config
