@@ -49,12 +49,20 @@ inline bool Sample(const cv::Mat& gray, double x, double y, float* value) {
 }
 
 #ifdef __SSE2__
-// A pixel's 2 x 2 block (top left, top right, bottom left, bottom right) in the low 4 bytes.
-inline __m128i PixelBlock(const uint8_t* p, size_t step) {
-  uint16_t top, bottom;
-  std::memcpy(&top, p, 2);
-  std::memcpy(&bottom, p + step, 2);
-  return _mm_cvtsi32_si128(static_cast<int>(top | (static_cast<uint32_t>(bottom) << 16)));
+// The 2 x 2 blocks of the pixels at p0 and p1 (rows `step` bytes apart) in the low 8 bytes: p0's top left,
+// top right, bottom left, bottom right, then p1's. Each row's two bytes are one 16-bit load inserted into
+// its word (pinsrw from memory): the same bytes in the same places as two blocks built in scalar registers
+// (top | bottom << 16) and interleaved (_mm_unpacklo_epi32), with 4 instructions less per pair of samples.
+inline __m128i PixelBlocks(const uint8_t* p0, const uint8_t* p1, size_t step) {
+  uint16_t word[4];
+  std::memcpy(&word[0], p0, 2);
+  std::memcpy(&word[1], p0 + step, 2);
+  std::memcpy(&word[2], p1, 2);
+  std::memcpy(&word[3], p1 + step, 2);
+  __m128i v = _mm_cvtsi32_si128(word[0]);
+  v = _mm_insert_epi16(v, word[1], 1);
+  v = _mm_insert_epi16(v, word[2], 2);
+  return _mm_insert_epi16(v, word[3], 3);
 }
 
 // The SampleInside values at (x[0], y[0]) and (x[1], y[1]) of the image at `data` (rows `step` bytes
@@ -66,8 +74,7 @@ inline __m128 SampleTwoInside(const uint8_t* data, size_t step, __m128d x, __m12
   const uint8_t* p0 = data + _mm_cvtsi128_si32(yi) * step + _mm_cvtsi128_si32(xi);
   const uint8_t* p1 =
       data + _mm_cvtsi128_si32(_mm_srli_si128(yi, 4)) * step + _mm_cvtsi128_si32(_mm_srli_si128(xi, 4));
-  const __m128i blocks =
-      _mm_unpacklo_epi8(_mm_unpacklo_epi32(PixelBlock(p0, step), PixelBlock(p1, step)), zero);
+  const __m128i blocks = _mm_unpacklo_epi8(PixelBlocks(p0, p1, step), zero);
   const __m128 v0 = _mm_cvtepi32_ps(_mm_unpacklo_epi16(blocks, zero));
   const __m128 v1 = _mm_cvtepi32_ps(_mm_unpackhi_epi16(blocks, zero));
   const __m128 left = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(2, 0, 2, 0));  // top 0, bottom 0, top 1, bottom 1
