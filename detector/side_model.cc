@@ -916,9 +916,11 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // within their bounds counts only kUnseenSigmas blurs beyond the end: its far side just past the end still
   // darkens the last bins, and the one-level refit of such wide paper margins (sticky for the later passes)
   // lowered its level and moved the edge outward (3-cell margins: 87 % of sides single; reference renderer,
-  // blur 1.2, 15-22 px, 3-cell margin +0.042 -> +0.024 px, WidePaperMarginsDoNotMoveCornersOutward). A level
-  // at its bound is a valley (as for `halo`): without that condition "hard"'s id 96 (above) moved 0.064 px
-  // with its start; without the cell's depth 0.108 px (bench/results/2026-12-07-margin2.md).
+  // blur 1.2, 15-22 px, 3-cell margin +0.042 -> +0.024 px, WidePaperMarginsDoNotMoveCornersOutward; its
+  // map with margin_cells=3 -0.138 -> -0.040 %). A level at its bound is a valley (as for `halo`): without
+  // that condition "hard"'s id 96 (above) moved 0.064 px with its start; without the cell's depth 0.108 px.
+  // The cell's depth costs the plain 3-cell map its gain (-0.060 %, -0.007 without it): its sides lie on
+  // cells under 1.5 px (bench/results/2026-12-07-margin2.md).
   bool levels_inside = true;
   for (int k : {kL0, kL1, kS1, kS2})
     levels_inside = levels_inside && p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5;
