@@ -79,6 +79,20 @@ constexpr double kMinMarginExcess = 0.1;
 constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
 // A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
 constexpr double kHaloMaxCells = 0.25;
+// A paper margin's far side counts as beyond the profiles' outer end (FitSideModels' `unseen`) only where
+// it lies this many fitted blurs beyond it: closer, its step still darkens the last bins by Phi(-z) of its
+// contrast (16 % at z = 1, 2.3 % at z = 2), which one surround level cannot follow.
+constexpr double kUnseenSigmas = 2.0;
+// ... where the margin is paper: its level within this fraction of the border-to-code contrast of the
+// code's other colour (a normal print's paper). With 0.6 the probe's webcam marker (seed 31, image 5, id
+// 129) was refined 2.07 px apart from two starts (main 0.44; bench/results/2026-12-07-widemargin.md).
+constexpr double kPaperMarginContrast = 0.25;
+// ... and only on cells at least this deep (px along the side's normal): on cells about a pixel deep the
+// profiles fix a margin's area but not its width and level apart (SideProfiles::paper), and the two-level
+// fit of a 0.3-cell margin over a light surface (the reference renderer's "hard", seed 51 image 4 id 96,
+// side cell 1.29 px) slid to a 2.7-cell "paper" margin whose far step 0.4 px beyond the end took any level
+// (S2 36-90): the marker was refined 0.105 px apart from two starts (bound 0.1; main 0.0003).
+constexpr double kPaperReachMinCell = 1.5;
 
 using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
@@ -898,7 +912,21 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   const double* p = fit->params.data();
   const bool faint = p[kQ] < 0.5 * s.cell && p[kQ] * std::abs(p[kS1] - p[kS2]) <
                                                  kMinMarginExcess * s.cell * std::abs(p[kL1] - p[kS2]);
-  const bool unseen = p[kE] + p[kQ] > s.OuterU();
+  // A paper margin (kPaperMarginContrast) on cells of kPaperReachMinCell px or more whose levels all lie
+  // within their bounds counts only kUnseenSigmas blurs beyond the end: its far side just past the end still
+  // darkens the last bins, and the one-level refit of such wide paper margins (sticky for the later passes)
+  // lowered its level and moved the edge outward (3-cell margins: 87 % of sides single; reference renderer,
+  // blur 1.2, 15-22 px, 3-cell margin +0.042 -> +0.024 px, WidePaperMarginsDoNotMoveCornersOutward; its
+  // map with margin_cells=3 -0.138 -> -0.040 %). A level at its bound is a valley (as for `halo`): without
+  // that condition "hard"'s id 96 (above) moved 0.064 px with its start; without the cell's depth 0.108 px.
+  // The cell's depth costs the plain 3-cell map its gain (-0.060 %, -0.007 without it): its sides lie on
+  // cells under 1.5 px (bench/results/2026-12-07-margin2.md).
+  bool levels_inside = true;
+  for (int k : {kL0, kL1, kS1, kS2})
+    levels_inside = levels_inside && p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5;
+  const bool paper_reach = s.cell >= kPaperReachMinCell && levels_inside &&
+                           std::abs(p[kS1] - p[kL1]) < kPaperMarginContrast * std::abs(p[kL1] - p[kL0]);
+  const bool unseen = p[kE] + p[kQ] > s.OuterU() + (paper_reach ? kUnseenSigmas * p[kSigma] : 0.0);
   // Nor is a strip at the margin's narrowest (kHaloMaxCells) whose level lies beyond the border's, away
   // from the code's, at the level's bound (darker than black for a normal print): a print's margin is
   // paper, or surround of any level but then not a strip of a fifth of a cell. It is the edge's own
