@@ -390,8 +390,37 @@ void FillPoseSigmas(const PoseBlock& cam_from_rig_block, CameraDiagnostics* cam)
   cam->has_covariance = true;
 }
 
-// Marginal covariance of every non-reference camera pose, scaled by the residuals' variance.
-void PoseCovariance(const Rebuilt& r, Diagnostics* d) {
+// The joint covariance of the cameras and markers with a slot (Diagnostics::map_covariance), `cov` the
+// inverse information, scaled by s2.
+MapCovariance JointCovariance(const RigMap& map, const ReducedSystem& sys, const Eigen::MatrixXd& cov,
+                              double s2) {
+  MapCovariance out;
+  std::vector<int> slots;
+  for (size_t c = 0; c < map.cameras.size(); ++c)
+    if (sys.camera_slot[c] >= 0) {
+      out.cameras.push_back(map.cameras[c].name);
+      slots.push_back(sys.camera_slot[c]);
+    }
+  int markers = 0;
+  for (size_t m = 0; m < map.markers.size(); ++m) markers += sys.marker_slot[m] >= 0;
+  if (static_cast<int>(out.cameras.size()) + markers <= kMaxMapCovarianceEntries)
+    for (size_t m = 0; m < map.markers.size(); ++m)
+      if (sys.marker_slot[m] >= 0) {
+        out.markers.push_back(map.markers[m].id);
+        slots.push_back(sys.marker_slot[m]);
+      }
+  const int n = static_cast<int>(slots.size());
+  out.matrix.resize(6 * n, 6 * n);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      out.matrix.block<6, 6>(6 * a, 6 * b) = s2 * cov.block<6, 6>(6 * slots[a], 6 * slots[b]);
+  out.matrix = 0.5 * (out.matrix + out.matrix.transpose()).eval();
+  return out;
+}
+
+// Marginal covariance of every non-reference camera pose, scaled by the residuals' variance, and the joint
+// covariance of the cameras and markers.
+void PoseCovariance(const RigMap& map, const Rebuilt& r, Diagnostics* d) {
   const ReducedSystem sys = BuildReducedSystem(r, d->observations);
   d->residual_sigma_px =
       sys.residuals > sys.parameters ? std::sqrt(sys.sum_sq / (sys.residuals - sys.parameters)) : 0.0;
@@ -416,6 +445,7 @@ void PoseCovariance(const Rebuilt& r, Diagnostics* d) {
       FillPoseSigmas(r.bp.cam_from_rig[c], &cam);
     }
   }
+  if (ok) d->map_covariance = JointCovariance(map, sys, cov, s2);
 }
 
 }  // namespace
@@ -426,7 +456,7 @@ Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions
   Rebuilt r = Rebuild(result, &d.observations);
   FillResiduals(r, &d.observations);
   CameraStatistics(result, d.observations, &d);
-  if (options.covariance) PoseCovariance(r, &d);
+  if (options.covariance) PoseCovariance(result.map, r, &d);
   return d;
 }
 

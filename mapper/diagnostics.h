@@ -18,9 +18,11 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/map_covariance.h"
 #include "mapper/mapper.h"
 
 namespace mcmt {
@@ -73,7 +75,14 @@ struct Diagnostics {
   std::vector<ObservationResidual> observations;
   std::vector<CameraDiagnostics> cameras;  // map order
   double residual_sigma_px = 0.0;          // sqrt(sum r^2 / (residuals - parameters)), per coordinate
+  // The joint covariance of the camera and marker poses (core/map_covariance.h; the cameras' blocks are
+  // CameraDiagnostics::covariance), scaled by residual_sigma_px^2. Cameras and markers together when they
+  // are at most kMaxMapCovarianceEntries, else the cameras alone (a board of many markers would make
+  // map.yaml megabytes long). None when the poses are not determined or the covariance was not asked for.
+  std::optional<MapCovariance> map_covariance;
 };
+
+constexpr int kMaxMapCovarianceEntries = 32;
 
 Diagnostics ComputeDiagnostics(const MapResult& result, const DiagnosticsOptions& options = {});
 // The same of the map's object, with several bodies of the first moving one (DiagnosticsView).

@@ -77,7 +77,10 @@ void WriteSet(const std::string& dir, const MapResult& result, const Diagnostics
   if (result.report.auto_bodies.ran)  // objects: auto / ids: auto: the objects: section found
     WriteFileAtomic(dir + "/objects.yaml", result.report.auto_bodies.objects_yaml);
   WriteFileAtomic(dir + "/report.json", WithDiagnostics(ReportJson(result), diagnostics));
-  WriteMap(dir + "/map.yaml", result.map);  // last: its presence means the rest is there
+  // Last: its presence means the rest is there. With the map's covariance (single-object maps, whose
+  // frames are the reference camera's and marker's as in the diagnostics' problem; core/map_covariance.h).
+  const bool covariance = result.map.objects.empty() && diagnostics.map_covariance;
+  WriteMapWithCovariance(dir + "/map.yaml", result.map, covariance ? &*diagnostics.map_covariance : nullptr);
 }
 
 bool IsOutputFile(const std::string& name) {

@@ -384,8 +384,8 @@ void CovarianceLine(std::ostringstream& s, const EvalResult& r) {
   if (r.frames_with_sigma > 0)
     s << "; error beyond 3 sigma: position " << Fmt(100.0 * r.beyond_3sigma_position, 1) << " %, rotation "
       << Fmt(100.0 * r.beyond_3sigma_rotation, 1)
-      << " % of poses (a right covariance: at most 2.9 %; it holds the map fixed); position after the "
-         "trajectory's own alignment "
+      << " % of poses (a right covariance: at most 2.9 %; without the map's covariance it holds the map "
+         "fixed); position after the trajectory's own alignment "
       << Fmt(100.0 * r.beyond_3sigma_position_aligned, 1) << " %";
   s << "\n";
 }

@@ -65,9 +65,10 @@ struct EvalResult {
   // Poses with a status and covariance (a tracker's: TrajectoryRow::quality), counted once per frame as
   // above. The errors of TRACKING and AMBIGUOUS poses apart, and how often an error is beyond 3 sigma along
   // the covariance's worst direction. That sigma bounds every direction, so of a right covariance's 3-D
-  // errors at most P(chi-square(3) > 9) = 2.9 % lie beyond it (rotation likewise). The tracker's covariance
-  // holds the map fixed: the map's own error (the camera and layout figures) is not in it. Poses whose sigma
-  // is not finite are left out of the fractions.
+  // errors at most P(chi-square(3) > 9) = 2.9 % lie beyond it (rotation likewise). Without the map's
+  // covariance (map.yaml's, core/map_covariance.h) the tracker's covariance holds the map fixed: the map's
+  // own error (the camera and layout figures) is not in it. Poses whose sigma is not finite are left out of
+  // the fractions.
   int frames_with_quality = 0, ambiguous_frames = 0, frames_with_sigma = 0;
   Stats tracking_translation_mm, tracking_rotation_deg, ambiguous_translation_mm, ambiguous_rotation_deg;
   double beyond_3sigma_position = NAN, beyond_3sigma_rotation = NAN;  // fractions of frames_with_sigma

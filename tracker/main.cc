@@ -121,9 +121,12 @@ int Main(int argc, char** argv) {
   if (!args.Parse(argc, argv, &exit_code)) return exit_code;
 
   const mcmt::RigConfig rig = mcmt::LoadRigConfig(c.config);
-  const mcmt::TrackerNodeOptions options = OptionsOf(rig, c, args);
+  mcmt::TrackerNodeOptions options = OptionsOf(rig, c, args);
   std::optional<mcmt::RigMap> map;
   if (!c.map_path.empty()) map = mcmt::ReadMap(c.map_path);
+  // The map's own uncertainty (mcmt-mapper writes it into map.yaml; older maps have none): the poses'
+  // covariances then hold the map's error too (tracker.map_uncertainty).
+  if (!c.map_path.empty()) options.map_covariance = mcmt::ReadMapCovariance(c.map_path);
   if (map) mcmt::CheckMapMatchesRig(*map, rig, c.map_path);
 
   std::unique_ptr<lcm::LCM> input, output;

@@ -61,6 +61,9 @@ const OptionTable<TrackerOptions>& TrackerOptionTable() {
                 "sigma^2 = (RSS + nu0 sigma0^2) / (N - 6 + nu0); a single square alone has N - 6 = 2 "
                 "(0: the frame's residuals alone)",
                 AtLeast(0))
+           .Add("map_uncertainty", &O::map_uncertainty,
+                "the published covariance holds the map's error (the map file's covariance, written by "
+                "mcmt-mapper) as well as the frame's noise; false: the frame's noise alone")
            .Add("max_start_markers", &O::max_start_markers, "",
                 "when lost: IPPE hypotheses of at most this many "
                 "observations",

@@ -28,6 +28,7 @@
 #include "core/frame_sync.h"
 #include "core/lcm_util.h"
 #include "core/log_reader.h"
+#include "core/map_covariance.h"
 #include "core/marker.h"
 #include "core/rigid_pose.h"
 #include "core/se3.h"
@@ -66,7 +67,10 @@ struct TrackerOptions {
   double max_gap_s = 0.5;              // no prediction across a gap longer than this (re-initialise)
   double min_sigma_px = 0.02;          // floor of the residual standard deviation used for the covariance
   double noise_prior_residuals = 8.0;  // nu0: pseudo-residuals at the map's noise in that deviation
-  int max_start_markers = 12;          // when lost: IPPE hypotheses of at most this many observations
+  // The published covariance holds the map's error too when the map file has its covariance
+  // (core/map_covariance.h; PoseEstimator::Describe); false: the frame's noise alone, as before.
+  bool map_uncertainty = true;
+  int max_start_markers = 12;  // when lost: IPPE hypotheses of at most this many observations
   // How a corner's x and y residuals weigh (keys corner_weights and corner_weight_floor; core/marker.h: a
   // corner where the marker's sides meet at a narrow angle is barely located along them).
   CornerWeighting corner_weighting;
@@ -156,8 +160,11 @@ struct PoseSolution {
   PoseStatus status = PoseStatus::kLost;
   Rigid3 rig_from_object = Rigid3::Identity();
   // Covariance in object_pose_t's order (tx, ty, tz, rx, ry, rz) for rig_from_object = Exp(delta) *
-  // estimate, scaled by the residual variance (floored at min_sigma_px^2).
+  // estimate: the frame's noise (scaled by the residual variance, floored at min_sigma_px^2) plus, with
+  // the map's covariance, the map's error propagated through the solve.
   Matrix6d covariance = Matrix6d::Zero();
+  // The frame's noise alone: `covariance` without the map's share.
+  Matrix6d noise_covariance = Matrix6d::Zero();
   double rms_px = 0.0;               // RMS corner error of the observations used
   std::vector<std::string> cameras;  // cameras whose markers were used (sorted)
   std::vector<int> markers;          // distinct marker ids used (sorted)
@@ -173,7 +180,9 @@ struct PoseSolution {
 class PoseEstimator {
  public:
   // Throws std::invalid_argument when the map has no camera or no marker or a bad camera model.
-  PoseEstimator(const RigMap& map, const TrackerOptions& options = {});
+  // map_covariance: the map's (ReadMapCovariance), whose error then enters every pose's covariance.
+  PoseEstimator(const RigMap& map, const TrackerOptions& options = {},
+                const MapCovariance* map_covariance = nullptr);
 
   // prior: predicted rig_from_object (nullptr when lost). Deterministic for the same inputs.
   PoseSolution Solve(const std::vector<MarkerObservation>& observations, const Rigid3* prior) const;
@@ -252,11 +261,17 @@ class PoseEstimator {
   void RefineHypotheses(const std::vector<Obs>& obs, Refined* best, bool* from_prior, int* iterations) const;
   // sol's pose, covariance, RMS, counts, cameras, markers and status from the refined solution.
   void Describe(const std::vector<Obs>& obs, const Refined& best, PoseSolution* sol) const;
+  // The map's share of the pose covariance (rotation first, about the rig origin): blocks[i] the active
+  // observation i's J^T J at `pose`, h_inverse the inverse of their sum.
+  Matrix6d MapShare(const std::vector<Obs>& obs, const std::vector<char>& active, const Rigid3& pose,
+                    const std::vector<Matrix6d>& blocks, const Matrix6d& h_inverse) const;
 
   RigMap map_;
   TrackerOptions options_;
   std::vector<Camera> cameras_;
   std::vector<Marker> markers_;
+  std::optional<MapCovariance> map_covariance_;
+  std::vector<int> camera_entry_, marker_entry_;  // per camera / marker: its entry in map_covariance_, or -1
   std::map<std::string, int> camera_index_;
   std::map<int, int> marker_index_;
 };
@@ -321,6 +336,9 @@ struct TrackerNodeOptions {
   // single one is then removed).
   std::string partial_path;
   bool quiet = false;  // no status lines (warnings are always printed)
+  // The map file's covariance (ReadMapCovariance): with tracker.map_uncertainty the poses' covariances
+  // hold the map's error. Used with the map file's map only: a map from MCMT_MAP has none.
+  std::optional<MapCovariance> map_covariance;
 };
 
 class TrackerNode {
@@ -439,6 +457,7 @@ class TrackerNode {
   std::map<std::string, int64_t> late_views_;  // per camera
   DuplicateFilter duplicates_;
   bool waits_for_map_ = false;  // no map file: maps come from MCMT_MAP
+  bool map_from_file_ = false;  // the map in use is the map file's (options_.map_covariance is its)
   TrackerStats stats_;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> partial_{nullptr, &std::fclose};
   std::vector<double> latencies_ms_;  // since the last status line

@@ -53,6 +53,7 @@ TrackerNode::TrackerNode(lcm::LCM& lcm, const RigConfig& rig, const TrackerNodeO
   }
   if (map) {
     CheckMapMatchesRig(*map, rig_, "map");
+    map_from_file_ = true;
     SetMap(*map, "map file");
   }
   // LCM queues 30 messages per subscription by default and drops the rest: a burst of detections
@@ -106,8 +107,12 @@ void TrackerNode::SetStreams(const RigMap& map) {
     if (plan[s].body < 0) continue;
     Body b;
     b.stream = s;
-    b.estimator =
-        std::make_unique<PoseEstimator>(single ? map : map.ObjectMap(plan[s].body), options_.tracker);
+    // The map file's covariance describes a single-object map's frames (the mapper writes none for
+    // several bodies) and only that map: a newer map from MCMT_MAP comes without one.
+    const MapCovariance* covariance =
+        single && map_from_file_ && options_.map_covariance ? &*options_.map_covariance : nullptr;
+    b.estimator = std::make_unique<PoseEstimator>(single ? map : map.ObjectMap(plan[s].body),
+                                                  options_.tracker, covariance);
     b.motion = MotionModel(options_.tracker.max_gap_s);
     body_index[plan[s].body] = static_cast<int>(bodies.size());
     if (!single)
@@ -219,7 +224,11 @@ void TrackerNode::SetMap(const RigMap& map, const std::string& origin) {
           << (map.objects[k].is_static ? " static" : "");
       s << ")";
     }
-    s << ", rms " << map.rms_px << " px; poses on ";
+    s << ", rms " << map.rms_px << " px";
+    if (map.objects.empty() && map_from_file_ && options_.map_covariance && options_.tracker.map_uncertainty)
+      s << ", its covariance in the poses' (" << options_.map_covariance->cameras.size() << " cameras, "
+        << options_.map_covariance->markers.size() << " markers)";
+    s << "; poses on ";
     for (size_t k = 0; k < streams_.size(); ++k) s << (k ? ", " : "") << streams_[k].channel;
     std::cerr << s.str() << std::endl;
   }
@@ -243,6 +252,7 @@ void TrackerNode::OnMap(const void* data, size_t size) {
   if (estimator_ && msg.utime <= map_utime_) return;  // the same map again, or an older one
   try {
     CheckMapMatchesRig(msg.map, rig_, kMapChannel);
+    map_from_file_ = false;
     SetMap(msg.map, std::string(kMapChannel) + " (utime " + std::to_string(msg.utime) + ")");
     map_utime_ = msg.utime;
   } catch (const std::exception& e) {

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "core/map_covariance.h"
 #include "core/version.h"
 
 namespace mcmt {
@@ -328,7 +329,7 @@ RigMap RigMap::ObjectMap(size_t k) const {
   return out;
 }
 
-void WriteMap(const std::string& path, const RigMap& map) {
+std::string MapYaml(const RigMap& map) {
   std::ostringstream out;
   out << "# mcmt map: rig frame = reference camera, object frame = reference marker.\n";
   out << "# rig_from_cam maps camera points into the rig frame; object_from_marker maps marker points into\n";
@@ -383,8 +384,10 @@ void WriteMap(const std::string& path, const RigMap& map) {
       WriteMarkers(out, "    ", o.markers);
     }
   }
-  WriteFileAtomic(path, out.str());
+  return out.str();
 }
+
+void WriteMap(const std::string& path, const RigMap& map) { WriteFileAtomic(path, MapYaml(map)); }
 
 std::string DuplicateYamlKey(const YAML::Node& root) {
   if (root.IsSequence()) {

@@ -3,6 +3,7 @@
 #include <random>
 
 #include "core/files.h"
+#include "core/map_covariance.h"
 #include "test_util.h"
 
 namespace mcmt {
@@ -116,6 +117,60 @@ TEST(Files, MapRoundTripsExactly) {
   RigMap empty;
   WriteMap(dir.File("empty.yaml"), empty);
   ExpectSameMap(empty, ReadMap(dir.File("empty.yaml")));
+}
+
+// map.yaml's optional covariance (core/map_covariance.h): written after the map, read back to 9 significant
+// digits; the map itself reads as without it; a map without the key has none; a malformed one is refused
+// naming the key.
+TEST(Files, MapCovarianceRoundTripsAndIsOptional) {
+  TempDir dir;
+  const RigMap map = RandomMap(4);
+  MapCovariance c;
+  c.cameras = {"cam1", "cam \"2\""};
+  c.markers = {17};
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal(0.0, 1e-4);
+  Eigen::MatrixXd l(18, 18);
+  for (int r = 0; r < 18; ++r)
+    for (int k = 0; k < 18; ++k) l(r, k) = normal(rng);
+  c.matrix = l * l.transpose();
+  const std::string path = dir.File("map.yaml");
+  WriteMapWithCovariance(path, map, &c);
+  ExpectSameMap(map, ReadMap(path));
+  const std::optional<MapCovariance> back = ReadMapCovariance(path);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->cameras, c.cameras);
+  EXPECT_EQ(back->markers, c.markers);
+  EXPECT_TRUE(back->matrix.isApprox(c.matrix, 1e-8));
+  EXPECT_EQ(back->CameraEntry("cam \"2\""), 1);
+  EXPECT_EQ(back->MarkerEntry(17), 2);
+  EXPECT_EQ(back->MarkerEntry(18), -1);
+  EXPECT_EQ(back->CameraEntry("cam0"), -1);
+  WriteMap(dir.File("plain.yaml"), map);
+  EXPECT_FALSE(ReadMapCovariance(dir.File("plain.yaml")));
+  WriteMapWithCovariance(dir.File("none.yaml"), map, nullptr);
+  EXPECT_EQ(ReadFile(dir.File("none.yaml")), ReadFile(dir.File("plain.yaml")));
+  const std::string text = ReadFile(path);
+  auto error = [&](const std::string& edited) {
+    try {
+      ReadMapCovariance(dir.Write("bad.yaml", edited));
+    } catch (const FileFormatError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error(Replace(text, "  markers: [17]", "  markers: [17, 18]"))
+                .find("covariance.matrix: expected 24 rows"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(text, "  markers: [17]", "  markers: [17, 17]"))
+                .find("covariance.markers: a marker is listed twice"),
+            std::string::npos);
+  Eigen::MatrixXd asymmetric = c.matrix;
+  asymmetric(0, 1) *= 2.0;
+  MapCovariance bad = c;
+  bad.matrix = asymmetric;
+  WriteMapWithCovariance(dir.File("asym.yaml"), map, &bad);
+  EXPECT_THROW(ReadMapCovariance(dir.File("asym.yaml")), FileFormatError);
 }
 
 TEST(Files, MapWithoutRotationMatrixUsesQuaternion) {
