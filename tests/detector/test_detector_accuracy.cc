@@ -613,19 +613,11 @@ TEST(DetectorAccuracy, SmallMarkersOnADarkSurroundAreRefined) {
 // one surround level (FitSideModels' `unseen`), that level came out low and the corners +0.042 px outward
 // (now +0.018; the blur 1.2 map -0.138 % with margin_cells=3; bench/results/2026-12-07-widemargin.md).
 TEST(DetectorAccuracy, WidePaperMarginsDoNotMoveCornersOutward) {
-  auto dict = LoadDictionary("DICT_6X6_250");
   testing::Imaging im = testing::CatalogueCondition("gaussian blur 1.2");
   im.margin_cells = 3;
   testing::ReferenceScene scene;
   scene.min_side_px = 15, scene.max_side_px = 22, scene.max_angle_deg = 60, scene.markers = 10;
-  MarkerDetector detector = testing::ReferenceDetector(im);
-  std::mt19937_64 rng(7);
-  testing::Accuracy a;
-  for (int i = 0; i < 30; ++i) {
-    std::vector<testing::RenderedMarker> truth;
-    const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
-    testing::Score(truth, detector.Detect(image), &a);
-  }
+  const testing::Accuracy a = testing::MeasureReference("DICT_6X6_250", scene, im, DetectorOptions(), 30, 7);
   std::printf("3-cell margin, blur 1.2: found %d/%d, offset %+.4f px, median %.3f px\n", a.found_small,
               a.visible_small, a.MeanOffset(), a.MedianError());
   EXPECT_EQ(a.wrong_ids, 0);
