@@ -611,7 +611,7 @@ TEST(DetectorAccuracy, SmallMarkersOnADarkSurroundAreRefined) {
 // margin under the catalogue's gaussian blur 1.2. The margin's far side lies just beyond the side
 // profiles' outer end (1.6 cells + 1 px) and its blurred step still darkens their last bins; fitted with
 // one surround level (FitSideModels' `unseen`), that level came out low and the corners +0.042 px outward
-// (now +0.018; the blur 1.2 map -0.138 % with margin_cells=3; bench/results/2026-12-07-widemargin.md).
+// (now +0.024; the blur 1.2 map with margin_cells=3 -0.138 -> -0.040 %; bench/results/2026-12-07-margin2.md).
 TEST(DetectorAccuracy, WidePaperMarginsDoNotMoveCornersOutward) {
   testing::Imaging im = testing::CatalogueCondition("gaussian blur 1.2");
   im.margin_cells = 3;
