@@ -35,6 +35,13 @@ for name in names:
     if name != "cameras" and one[name] != before[name]:
         failures.append(f"--only cameras changed table {name}")
 
+# The components table runs the bench_* programs only: build/bench's diag_* diagnostics (some need
+# arguments; one printed 10000 lines) are not benchmarks.
+listing = ["bench_core", "diag_side_bias", "bench_accuracy", "CMakeFiles", "bench_detector", "diag_hard",
+           "bench_imaging_maps", "Makefile"]
+if bench_run.component_benches(listing) != ["bench_core", "bench_detector"]:
+    failures.append(f"components would run {bench_run.component_benches(listing)}")
+
 # Idempotent: merging nothing gives the same tables back.
 same = bench_run.split_sections(bench_run.merge_sections(old, {}, names, "test machine"))
 if same != before:
