@@ -147,28 +147,30 @@ bool SetRenderField(const std::string& field, double value, sim::RenderOptions* 
   return true;
 }
 
-// MCMT_IMAGING_SIM_OVERRIDE applied to the session's options and its cameras' (top of the file).
+// MCMT_IMAGING_SIM_OVERRIDE applied to the session's options and its cameras' (top of the file); a
+// malformed item or an unknown field stops the bench with one line naming it.
 void OverrideRender(const std::string& spec, sim::RenderOptions* render) {
-  size_t start = 0;
-  while (start < spec.size()) {
-    size_t end = spec.find(',', start);
-    if (end == std::string::npos) end = spec.size();
-    const std::string item = spec.substr(start, end - start);
-    start = end + 1;
-    const size_t eq = item.find('=');
-    std::string field = item.substr(0, eq);
-    const double value = eq == std::string::npos ? 0.0 : std::atof(item.c_str() + eq + 1);
-    int camera = -1;
+  std::vector<testing::OverrideItem> items;
+  try {
+    items = testing::ParseOverrideSpec(spec);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "MCMT_IMAGING_SIM_OVERRIDE: %s\n", e.what());
+    std::exit(2);
+  }
+  for (const testing::OverrideItem& item : items) {
+    std::string field = item.name;
+    int camera = -1;  // "cN.field": camera N only
     if (field.size() > 2 && field[0] == 'c' && field.find('.') != std::string::npos) {
       camera = std::atoi(field.c_str() + 1);
       field = field.substr(field.find('.') + 1);
     }
     bool ok = true;
-    if (camera < 0) ok = SetRenderField(field, value, render);
+    if (camera < 0) ok = SetRenderField(field, item.value, render);
     for (size_t c = 0; c < render->cameras.size() && ok; ++c)
-      if (camera < 0 || static_cast<int>(c) == camera) ok = SetRenderField(field, value, &render->cameras[c]);
+      if (camera < 0 || static_cast<int>(c) == camera)
+        ok = SetRenderField(field, item.value, &render->cameras[c]);
     if (!ok) {
-      std::fprintf(stderr, "MCMT_IMAGING_SIM_OVERRIDE: unknown field '%s'\n", item.c_str());
+      std::fprintf(stderr, "MCMT_IMAGING_SIM_OVERRIDE: unknown field '%s'\n", item.text.c_str());
       std::exit(2);
     }
   }

@@ -89,6 +89,36 @@ inline Imaging CatalogueCondition(const std::string& name) {
   throw std::invalid_argument("no imaging condition named \"" + name + "\" in ImagingCatalogue()");
 }
 
+// One "name=value" item of a benches' override spec ("motion_px=0,jpeg_quality=0").
+struct OverrideItem {
+  std::string text, name;  // "motion_px=0", "motion_px"
+  double value = 0.0;
+};
+
+// The items of a spec, in order. Throws std::invalid_argument naming the item when one has no '=' or a
+// value that is not a number. The one parser of MCMT_IMAGING_OVERRIDE (OverrideImaging) and of
+// bench_imaging_maps' MCMT_IMAGING_SIM_OVERRIDE.
+inline std::vector<OverrideItem> ParseOverrideSpec(const std::string& spec) {
+  std::vector<OverrideItem> items;
+  size_t begin = 0;
+  while (begin < spec.size()) {
+    const size_t end = std::min(spec.find(',', begin), spec.size());
+    OverrideItem it;
+    it.text = spec.substr(begin, end - begin);
+    begin = end + 1;
+    const size_t eq = it.text.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("imaging override \"" + it.text + "\": no '='");
+    it.name = it.text.substr(0, eq);
+    const std::string value_text = it.text.substr(eq + 1);
+    char* parsed_end = nullptr;
+    it.value = std::strtod(value_text.c_str(), &parsed_end);
+    if (value_text.empty() || *parsed_end != '\0')
+      throw std::invalid_argument("imaging override \"" + it.text + "\": not a number");
+    items.push_back(it);
+  }
+  return items;
+}
+
 // Diagnostics (benches' MCMT_IMAGING_OVERRIDE): sets the fields a spec like "motion_px=0,jpeg_quality=0"
 // names to its values (numbers; sharpen_linear and inverted 0 or 1). Throws std::invalid_argument on an
 // unknown field or a value that is not a number.
@@ -113,18 +143,9 @@ inline void OverrideImaging(const std::string& spec, Imaging* im) {
                                   {"gamma", &Imaging::gamma},
                                   {"sharpen", &Imaging::sharpen},
                                   {"exposure", &Imaging::exposure}};
-  size_t begin = 0;
-  while (begin < spec.size()) {
-    const size_t end = std::min(spec.find(',', begin), spec.size());
-    const std::string item = spec.substr(begin, end - begin);
-    begin = end + 1;
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("imaging override \"" + item + "\": no '='");
-    const std::string name = item.substr(0, eq), value_text = item.substr(eq + 1);
-    char* parsed_end = nullptr;
-    const double value = std::strtod(value_text.c_str(), &parsed_end);
-    if (value_text.empty() || *parsed_end != '\0')
-      throw std::invalid_argument("imaging override \"" + item + "\": not a number");
+  for (const OverrideItem& item : ParseOverrideSpec(spec)) {
+    const std::string& name = item.name;
+    const double value = item.value;
     if (name == "jpeg_quality") {
       im->jpeg_quality = static_cast<int>(value);
     } else if (name == "sharpen_linear") {
@@ -137,7 +158,7 @@ inline void OverrideImaging(const std::string& spec, Imaging* im) {
       if (f == std::end(kFields)) throw std::invalid_argument("imaging override: no field \"" + name + "\"");
       im->*(f->member) = value;
     }
-    im->name += " [" + item + "]";
+    im->name += " [" + item.text + "]";
   }
 }
 
