@@ -379,10 +379,8 @@ void FillPoseSigmas(const PoseBlock& cam_from_rig_block, CameraDiagnostics* cam)
   const Rigid3 cam_from_rig = RigidFromBlock(cam_from_rig_block.data());
   const Eigen::Matrix3d rt = cam_from_rig.linear().transpose();
   const Eigen::Vector3d t = cam_from_rig.translation();
-  Eigen::Matrix3d tx;
-  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
   Eigen::Matrix<double, 3, 6> j;
-  j << -rt * tx, -rt;
+  j << -rt * Skew(t), -rt;
   const Eigen::Matrix3d cov_c = j * cam->covariance * j.transpose();
   cam->sigma_position_mm = 1000.0 * cov_c.diagonal().cwiseMax(0).cwiseSqrt();
   cam->sigma_rotation_deg =

@@ -11,6 +11,7 @@
 
 #include "core/ippe.h"
 #include "core/marker.h"
+#include "core/math.h"
 #include "core/rigid_pose.h"
 #include "tracker/tracker.h"
 
@@ -339,11 +340,9 @@ Matrix6d PoseEstimator::MapShare(const std::vector<Obs>& obs, const std::vector<
     if (marker >= 0) {
       const Eigen::Matrix3d r = pose.linear();
       const Eigen::Vector3d c = pose * markers_[obs[i].marker].object_from_marker.translation();
-      Eigen::Matrix3d cx;
-      cx << 0, -c.z(), c.y(), c.z(), 0, -c.x(), -c.y(), c.x(), 0;
       Matrix6d e = Matrix6d::Zero();
       e.topLeftCorner<3, 3>() = r;
-      e.bottomLeftCorner<3, 3>() = cx * r;
+      e.bottomLeftCorner<3, 3>() = Skew(c) * r;
       e.bottomRightCorner<3, 3>() = r;
       g.middleCols<6>(6 * marker) += w * e;
     }
