@@ -1,5 +1,6 @@
 // Maps from rendered sessions under varied imaging: the paper's rig (5 cameras on a circle, 640x480,
-// four-sided object with 4 cm markers, 300 frames), each session rendered under one imaging condition,
+// four-sided object with 4 cm markers unless a row names another, 300 frames), each session rendered under
+// one imaging condition,
 // every frame detected by mcmt's detector (accurate mode, the camera's intrinsics), mapped by the mapper,
 // evaluated against the ground truth: metric scale error (least-squares ratio of all camera-to-camera
 // distances, estimate over truth), camera position and configuration errors (sim/eval.h). Prints a
@@ -38,6 +39,9 @@
 //                               prefixed "cN." only in camera N ("c0.blur_sigma=0.5"; ablations). "cN."
 //                               acts only on rows with per-camera options (--imaging random), and not on
 //                               the surface_* fields (the renderer takes those from the session's options)
+//   MCMT_IMAGING_OBJECT=KIND    every row's session with this object (mcmt-sim's kinds: four_sided, box,
+//                               pentagon, cube, board; its default marker size), e.g. the pentagon's small
+//                               markers drawn by the reference renderer
 //   MCMT_IMAGING_CAMERA=N       detect camera N's frames only (with MCMT_IMAGING_DUMP: one camera's corners;
 //                               the maps fail for want of the other cameras)
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
@@ -78,7 +82,22 @@ struct Condition {
   std::string name;
   sim::RenderOptions render;
   const testing::Imaging* reference = nullptr;  // drawn by the reference renderer under this instead
+  sim::ObjectKind object = sim::ObjectKind::kFourSided;
 };
+
+// MCMT_IMAGING_OBJECT: every row's object; an unknown kind stops the bench naming it.
+std::vector<Condition> WithObjectOverride(std::vector<Condition> c) {
+  const char* e = std::getenv("MCMT_IMAGING_OBJECT");
+  if (!e) return c;
+  try {
+    const sim::ObjectKind kind = sim::ObjectKindFromName(e);
+    for (Condition& row : c) row.object = kind;
+  } catch (const std::exception& ex) {
+    std::fprintf(stderr, "MCMT_IMAGING_OBJECT=%s: %s\n", e, ex.what());
+    std::exit(2);
+  }
+  return c;
+}
 
 std::vector<Condition> Conditions() {
   std::vector<Condition> c;
@@ -109,6 +128,15 @@ std::vector<Condition> Conditions() {
     sim::RenderOptions r = sim::RandomImaging(plain, 5, seed);
     c.push_back({"--imaging random, seed " + std::to_string(seed), r});
   }
+  // Rows appended here keep the indices above (MCMT_IMAGING_CONDITIONS in the write-ups).
+  // Small markers on small faces: 2.5 cm markers, 11-15 px at 1.0 m, the next face about 2 cells away.
+  c.push_back({"pentagon object (2.5 cm markers)", plain, nullptr, sim::ObjectKind::kPentagon});
+  // Wide paper margins: the margin's far side near the end of the side profiles' outward reach.
+  sim::RenderOptions wide = plain;
+  wide.quiet_zone_cells = 2;
+  c.push_back({"2-cell paper margin", wide});
+  wide.quiet_zone_cells = 3, wide.blur_sigma = 1.2;
+  c.push_back({"3-cell paper margin, blur 1.2", wide});
   return c;
 }
 
@@ -271,6 +299,7 @@ int main(int argc, char** argv) {
   const double shrink_pct = shrink_env ? std::atof(shrink_env) : 0.0;
   std::unique_ptr<EventLogWriter> save;
   if (const char* path = std::getenv("MCMT_IMAGING_SAVE")) save = std::make_unique<EventLogWriter>(path);
+  const std::vector<Condition> conditions = WithObjectOverride(Conditions());
   FILE* dump = nullptr;
   if (const char* path = std::getenv("MCMT_IMAGING_DUMP")) {
     dump = std::fopen(path, "w");
@@ -283,20 +312,23 @@ int main(int argc, char** argv) {
                  "in_image,border_px,x,y\n");
   }
   std::printf(
-      "## Maps under varied imaging (paper's rig, 5 cameras, 640x480, four-sided object, 4 cm markers, %d "
-      "frames)\n\n",
+      "## Maps under varied imaging (paper's rig, 5 cameras, 640x480, four-sided object with 4 cm markers "
+      "unless the row names another, %d frames)\n\n",
       frames);
   std::printf(
       "| imaging | radius m | scale error %% | camera position mm (mean / max) | configuration mm (mean) | "
       "markers detected per frame | true corners + noise: scale error %% | true corners + noise: camera "
       "position mm (mean / max) |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
-  const std::vector<Condition> conditions = Conditions();
   for (double radius : radii)
     for (size_t ci = 0; ci < conditions.size(); ++ci) {
       if (!only.empty() && std::find(only.begin(), only.end(), static_cast<int>(ci)) == only.end()) continue;
       const Condition& condition = conditions[ci];
-      const testing::RenderedMapSession session = testing::MakeRenderedMapSession(radius, frames);
+      sim::ObjectOptions object_options;
+      object_options.kind = condition.object;
+      object_options.marker_size = -1.0;  // the kind's default (pentagon 2.5 cm, the others 4 cm)
+      const testing::RenderedMapSession session =
+          testing::MakeRenderedMapSession(radius, frames, object_options);
       const std::vector<sim::SimCamera>& cameras = session.cameras;
       const sim::SimObject& object = session.object;
       const std::vector<sim::SimFrame>& trajectory = session.trajectory;

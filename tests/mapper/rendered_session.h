@@ -1,7 +1,7 @@
 // The paper's rig rendered and detected in memory, frame by frame (no files, no LCM): the sessions of
 // bench_imaging_maps and MapperRenderedViews. 5 cameras on a circle of `radius` m at half its height,
-// 640x480, the default four-sided object with 4 cm markers (DICT_6X6_250), a trajectory scaled with
-// the radius.
+// 640x480, an object (by default the four-sided one with 4 cm markers; DICT_6X6_250), a trajectory scaled
+// with the radius.
 #pragma once
 
 #include <vector>
@@ -57,19 +57,22 @@ struct RenderedMapSession {
   }
 };
 
-inline RenderedMapSession MakeRenderedMapSession(double radius, int frames) {
+// `object`: the body and its markers (default: the four-sided object with 4 cm markers); the markers' size
+// in `markers` is its first marker's.
+inline RenderedMapSession MakeRenderedMapSession(double radius, int frames,
+                                                 const sim::ObjectOptions& object = sim::ObjectOptions()) {
   RenderedMapSession s;
   sim::RigOptions ro;
   ro.radius = radius;
   ro.camera_height = 0.5 * radius;
   s.cameras = sim::MakeRig(ro);
-  s.object = sim::MakeObject(sim::ObjectOptions());
+  s.object = sim::MakeObject(object);
   sim::TrajectoryOptions to;
   to.frames = frames;
   to.position_radius = 0.15 * radius, to.vertical_range = 0.08 * radius;
   s.trajectory = sim::MakeTrajectory(to);
   s.markers.dictionary = "DICT_6X6_250";
-  s.markers.size = 0.04;
+  s.markers.size = s.object.markers.front().size;
   for (const auto& m : s.object.markers) s.markers.ids.push_back(m.id);
   return s;
 }
