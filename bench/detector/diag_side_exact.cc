@@ -1,0 +1,295 @@
+// The side model's fixed point on one (marker id, side) of an exactly known blurred print, without an
+// image: the profiles are the continuous Gaussian-blurred pattern itself (closed form, as
+// diag_side_bias's RenderExact), sampled along the rays the detector uses (CollectSideRays' choice of rays,
+// grouping, depths and blur along the side), and fitted by FitSideProfiles. Prints the fitted edge (px,
+// outward +; the truth is 0) and each group's residuals, so that a model term that does not match a
+// blurred print shows apart from pixel sampling, the crossings' direction and the passes.
+//   diag_side_exact ID SIDE BLUR_PX SIDE_PX
+// Environment: LINE (px: the profiles' line moved outward), TILT (px per side length: the line turned,
+// outward at the side's end), ALONG (px: blur along the side the model assumes; default BLUR_PX), FITGAMMA
+// (1), DUMP (print the profiles, the model and the residuals), PIX (1: the profiles bilinear samples of a
+// point-sampled 8-bit image, roll ROLL deg and offset OFFX/OFFY px, as the detector samples images),
+// CROSS (1: the line is the crossings' of the detector's model passes, about the true line, iterated
+// with the model's offset: the detector's fixed point; prints the line's offset at the middle and tilt;
+// clean rays and medians as CrossingLine), PAPER (SideProfiles::paper, 0). With DUMP also each ray's
+// crossing about the true line, of the profiles and of the fitted model (`clean`: CleanNeighbour's).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "core/dictionary.h"
+#include "detector/side_model.h"
+
+using namespace mcmt;
+
+namespace {
+double Env(const char* key, double fallback) {
+  return std::getenv(key) ? std::atof(std::getenv(key)) : fallback;
+}
+double Phi(double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); }
+
+struct Print {
+  cv::Mat bits;
+  int cells = 8;
+  double scale = 1.8;  // px per cell
+  double sb = 0.5;     // blur, cells
+  double margin = 1.0, ext = 3.5;
+  double bg = 0.4 * 255, surface = 0.5 * 255, paper = 0.85 * 255, ink = 0.04 * 255;
+  int Cell(int row, int col) const {  // 1: differs from the border (GridCell)
+    if (row <= 0 || col <= 0 || row >= cells - 1 || col >= cells - 1) return 0;
+    return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
+  }
+  double Rect(double x, double y, double x0, double y0, double x1, double y1) const {
+    return (Phi((x1 - x) / sb) - Phi((x0 - x) / sb)) * (Phi((y1 - y) / sb) - Phi((y0 - y) / sb));
+  }
+  // Linear level at (x, y) (cells: x the column, y the row).
+  double At(double x, double y) const {
+    double f = bg + (surface - bg) * Rect(x, y, -ext, -ext, cells + ext, cells + ext) +
+               (paper - surface) * Rect(x, y, -margin, -margin, cells + margin, cells + margin) +
+               (ink - paper) * Rect(x, y, 0, 0, cells, cells);
+    for (int r = 1; r + 1 < cells; ++r)
+      for (int c = 1; c + 1 < cells; ++c)
+        if (Cell(r, c)) f += (paper - ink) * Rect(x, y, c, r, c + 1, r + 1);
+    return f;
+  }
+};
+
+// Side `side`'s start corner, direction along it and outward normal (cells), as UnitPoint.
+void SideFrame(int side, int cells, double* p, double* a, double* n) {
+  const double c = cells;
+  const double table[4][6] = {
+      {0, 0, 1, 0, 0, -1}, {c, 0, 0, 1, 1, 0}, {c, c, -1, 0, 0, 1}, {0, c, 0, -1, -1, 0}};
+  p[0] = table[side][0], p[1] = table[side][1], a[0] = table[side][2], a[1] = table[side][3];
+  n[0] = table[side][4], n[1] = table[side][5];
+}
+
+// InnerCell: row `row` inward of column `col` along side `side`.
+int InnerCell(const Print& m, int side, int col, int row) {
+  const int c = m.cells;
+  switch (side) {
+    case 0:
+      return m.Cell(row, col);
+    case 1:
+      return m.Cell(col, c - 1 - row);
+    case 2:
+      return m.Cell(c - 1 - row, c - 1 - col);
+    default:
+      return m.Cell(c - 1 - col, row);
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 5) {
+    std::fprintf(stderr, "usage: diag_side_exact ID SIDE BLUR_PX SIDE_PX\n");
+    return 2;
+  }
+  auto dict = LoadDictionary("DICT_6X6_250");
+  Print m;
+  const int id = std::atoi(argv[1]), side = std::atoi(argv[2]);
+  const double blur = std::atof(argv[3]), side_px = std::atof(argv[4]);
+  m.bits = cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(id, id + 1), dict->markerSize);
+  m.cells = dict->markerSize + 2;
+  m.scale = side_px / m.cells, m.sb = blur / m.scale;
+  const int cells = m.cells;
+  double p0[2], a[2], nrm[2];
+  SideFrame(side, cells, p0, a, nrm);
+  const double cell = m.scale;  // px, fronto-parallel
+  const double margin_t = std::min(0.3, std::max(0.6 * cell, 1.5) / side_px);
+  const int n_rays = 4 * cells;
+  const double du = std::clamp(cell / 4.0, 0.1, 0.5), u0 = -(SideProfiles::kRows - 0.4) * cell;
+  const int bins = static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1;
+  const bool pix = Env("PIX", 0) > 0;
+  const double roll = Env("ROLL", 0) * M_PI / 180, offx = Env("OFFX", 0.3), offy = Env("OFFY", 0.7);
+  // The point at `along` (0..1) and `out` px outward of the true side: its level (continuous, or the
+  // detector's bilinear sample of the point-sampled 8-bit image with the marker rolled and offset).
+  auto level = [&](double along, double out) {
+    const double x = p0[0] + a[0] * along * cells + nrm[0] * out / m.scale;
+    const double y = p0[1] + a[1] * along * cells + nrm[1] * out / m.scale;
+    if (!pix) return m.At(x, y);
+    const double co = std::cos(roll), si = std::sin(roll);
+    const double X = (co * x - si * y) * m.scale + offx, Y = (si * x + co * y) * m.scale + offy;
+    auto px = [&](double i, double j) {  // pixel (i, j)'s centre sample, 8-bit
+      const double xx = i - offx, yy = j - offy;
+      const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
+      return std::round(std::clamp(m.At(cx, cy), 0.0, 255.0));
+    };
+    const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
+    return (1 - ty) * ((1 - tx) * px(fx, fy) + tx * px(fx + 1, fy)) +
+           ty * ((1 - tx) * px(fx, fy + 1) + tx * px(fx + 1, fy + 1));
+  };
+  double line = Env("LINE", 0), tilt = Env("TILT", 0);
+  SideProfiles s;
+  SideFit fit;
+  double sigma_along = Env("ALONG", blur);
+  const bool cross = Env("CROSS", 0) > 0;
+  for (int iter = 0; iter < (cross ? 12 : 1); ++iter) {
+    if (cross) {  // CrossingLine about the current line, model passes' sampling
+      const double h = std::clamp(0.5 * cell, 0.75, 3.0), ds = h / 5;
+      std::vector<double> ins, outs, ts, xs;
+      std::vector<std::vector<double>> profs;
+      std::vector<char> clean;
+      for (int i = 0; i < n_rays; ++i) {
+        const double t = margin_t + (1 - 2 * margin_t) * (i + 0.5) / n_rays;
+        const double off = line + tilt * (t - 0.5);
+        std::vector<double> prof(11);
+        for (int j = 0; j < 11; ++j) prof[j] = level(t, off - h + j * ds);
+        bool c = true;
+        for (double d : {-0.5, 0.0, 0.5}) {
+          const int col = std::clamp(static_cast<int>(std::floor(t * cells + d)), 0, cells - 1);
+          if (InnerCell(m, side, col, 1)) c = false;
+        }
+        clean.push_back(c), profs.push_back(prof), ts.push_back(t);
+      }
+      int n_clean = 0;
+      for (char c : clean) n_clean += c;
+      const bool use_clean = n_clean >= std::max(4, n_rays / 5);
+      for (int i = 0; i < n_rays; ++i)
+        if (!use_clean || clean[i]) ins.push_back(profs[i][0]), outs.push_back(profs[i][10]);
+      auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+      };
+      const double mid = 0.5 * (median(ins) + median(outs));
+      double st = 0, sx = 0, stt = 0, stx = 0;
+      int k = 0;
+      for (int i = 0; i < n_rays; ++i) {
+        if (use_clean && !clean[i]) continue;
+        double best = 1e9;
+        for (int j = 0; j + 1 < 11; ++j) {
+          const double v0 = profs[i][j] - mid, v1 = profs[i][j + 1] - mid;
+          if (v0 <= 0 && v1 > 0) {
+            const double at = -h + (j + v0 / (v0 - v1)) * ds;
+            if (std::abs(at) < std::abs(best)) best = at;
+          }
+        }
+        if (best > 1e8) continue;
+        const double x = line + tilt * (ts[i] - 0.5) + best;  // crossing, px outward of the truth
+        st += ts[i], sx += x, stt += ts[i] * ts[i], stx += ts[i] * x, ++k;
+      }
+      const double slope = (k * stx - st * sx) / (k * stt - st * st), icpt = (sx - slope * st) / k;
+      tilt = slope, line = icpt + 0.5 * slope;
+      if (std::getenv("DUMP"))
+        std::printf("crossings: %d rays (clean %d), line %+.4f tilt %+.4f\n", k, use_clean, line, tilt);
+    }
+    s.Reset(u0, du, bins, cell);
+    s.fit_gamma = Env("FITGAMMA", 1) > 0;
+    s.polarity = 1;
+    s.paper = Env("PAPER", 0);
+    for (int i = 0; i < n_rays; ++i) {
+      const double t = margin_t + (1 - 2 * margin_t) * (i + 0.5) / n_rays;
+      const double at = t * cells;
+      const int col = static_cast<int>(std::floor(at));
+      const double frac = at - col;
+      if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
+      if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
+      std::array<uint8_t, SideProfiles::kRows> pattern;
+      std::array<double, SideProfiles::kRows> depths, other;
+      for (int r = 1; r <= SideProfiles::kRows; ++r) {
+        pattern[r - 1] = static_cast<uint8_t>(InnerCell(m, side, col, r));
+        depths[r - 1] = r * cell;
+        double o = 0;
+        for (int k = std::max(0, col - 3); k <= std::min(cells - 1, col + 3); ++k)
+          if (InnerCell(m, side, k, r))
+            o += Phi((k + 1 - at) * cell / sigma_along) - Phi((k - at) * cell / sigma_along);
+        other[r - 1] = o;
+      }
+      const int g = s.AddRay(pattern, depths, other);
+      const double off = line + tilt * (t - 0.5);
+      for (int j = 0; j < bins; ++j) s.Add(g, j, level(t, off + u0 + j * du));
+    }
+    if (iter > 0) fit.e = 0.0;
+    if (!FitSideProfiles(s, &fit)) {
+      std::printf("fit failed\n");
+      return 1;
+    }
+    fit.warm = true;
+    if (cross) line += fit.e;
+    if (std::getenv("ALONG") == nullptr) sigma_along = fit.sigma;
+    if (std::getenv("DUMP") || iter == (cross ? 11 : 0))
+      std::printf(
+          "id %d side %d: e %+.4f px (edge at %+.4f, tilt %+.4f) sigma %.3f gamma %.3f L0 %.1f L1 %.1f S1 "
+          "%.1f S2 %.1f q %.2f single %d groups %zu\n",
+          id, side, fit.e, cross ? line : line + fit.e, tilt, fit.sigma, fit.gamma, fit.params[2],
+          fit.params[3], fit.params[4], fit.params[5], fit.params[6], fit.single_surround, s.patterns.size());
+  }
+  {  // DUMP: each ray's crossing about the true line, of the profiles and of the fitted side model (with
+     // the marker's extent along the side: the adjacent sides' edges), as CrossingLine finds them
+    const double h = std::clamp(0.5 * cell, 0.75, 3.0), ds = h / 5, sg = fit.sigma;
+    const double* q = fit.params.data();
+    for (int i = 0; i < n_rays; ++i) {
+      const double t = margin_t + (1 - 2 * margin_t) * (i + 0.5) / n_rays, at = t * cells;
+      const int col = static_cast<int>(std::floor(at));
+      bool c = true;
+      for (double d : {-0.5, 0.0, 0.5}) {
+        const int cc = std::clamp(static_cast<int>(std::floor(at + d)), 0, cells - 1);
+        if (InnerCell(m, side, cc, 1)) c = false;
+      }
+      double lev[2];
+      for (int r = 1; r <= 2; ++r) {
+        double o = 0;
+        for (int k = std::max(0, col - 3); k <= std::min(cells - 1, col + 3); ++k)
+          if (InnerCell(m, side, k, r)) o += Phi((k + 1 - at) * cell / sg) - Phi((k - at) * cell / sg);
+        lev[r - 1] = q[2] + (q[3] - q[2]) * o;
+      }
+      double dp[11], mp[11];
+      for (int j = 0; j < 11; ++j) {
+        const double u = -h + j * ds;
+        dp[j] = level(t, u);
+        const double pq = Phi((q[6] - u) / sg), p0 = Phi(-u / sg), p1 = Phi((-cell - u) / sg),
+                     p2 = Phi((-2 * cell - u) / sg);
+        const double x = at * cell, len = cells * cell;
+        const double kp = Phi((len - x) / sg) - Phi(-x / sg),
+                     mq = Phi((len + q[6] - x) / sg) - Phi((-q[6] - x) / sg);
+        mp[j] = q[5] + (q[4] - q[5]) * pq * mq + (q[2] - q[4]) * p0 * kp + (lev[0] - q[2]) * p1 +
+                (lev[1] - lev[0]) * p2;
+        if (s.fit_gamma) mp[j] = 255.0 * std::pow(std::max(mp[j], 0.5) / 255.0, 1.0 / fit.gamma);
+      }
+      double xs[2];
+      for (int w = 0; w < 2; ++w) {
+        const double* pr = w ? mp : dp;
+        const double mid = 0.5 * (m.ink + m.paper);  // the border's and the code's (a fixed level: the
+                                                     // crossings' differences along the side matter)
+        double best = 1e9;
+        for (int j = 0; j + 1 < 11; ++j) {
+          const double v0 = pr[j] - mid, v1 = pr[j + 1] - mid;
+          if (v0 <= 0 && v1 > 0) {
+            const double x = -h + (j + v0 / (v0 - v1)) * ds;
+            if (std::abs(x) < std::abs(best)) best = x;
+          }
+        }
+        xs[w] = best;
+      }
+      if (std::getenv("DUMP"))
+        std::printf("ray t %.3f clean %d crossing data %+.4f model %+.4f\n", t, c, xs[0], xs[1]);
+    }
+  }
+  if (std::getenv("DUMP"))
+    for (size_t g = 0; g < s.patterns.size(); ++g) {
+      std::printf("group %zu pattern %d%d rays %d other %.3f %.3f\n", g, s.patterns[g][0], s.patterns[g][1],
+                  s.rays[g], s.other_sum[g][0] / s.rays[g], s.other_sum[g][1] / s.rays[g]);
+      // The model at the fit (side_model.h's regions) and the residual, per bin.
+      const double* q = fit.params.data();
+      const double sg = fit.sigma, e = fit.e;
+      const double bound[4] = {e + q[6], e, e - s.depth_sum[g][0] / s.rays[g],
+                               e - s.depth_sum[g][1] / s.rays[g]};
+      const double lev[5] = {fit.single_surround ? q[4] : q[5], q[4], q[2],
+                             q[2] + (q[3] - q[2]) * s.other_sum[g][0] / s.rays[g],
+                             q[2] + (q[3] - q[2]) * s.other_sum[g][1] / s.rays[g]};
+      double rss = 0;
+      for (int j = 0; j < bins; ++j) {
+        const double u = u0 + j * du;
+        double f = 0;
+        for (int k = 0; k < 5; ++k)
+          f += lev[k] *
+               ((k == 0 ? 1.0 : Phi((bound[k - 1] - u) / sg)) - (k == 4 ? 0.0 : Phi((bound[k] - u) / sg)));
+        if (s.fit_gamma) f = 255.0 * std::pow(std::max(f, 0.5) / 255.0, 1.0 / fit.gamma);
+        const double data = s.sum[g * bins + j] / s.count[g * bins + j];
+        std::printf("  u %+.2f data %6.2f model %6.2f res %+.2f\n", u, data, f, data - f);
+        rss += (data - f) * (data - f) * s.count[g * bins + j];
+      }
+      std::printf(" group rss %.2f\n", rss);
+    }
+  return 0;
+}
