@@ -75,8 +75,12 @@ struct Diagnostics {
   std::vector<ObservationResidual> observations;
   std::vector<CameraDiagnostics> cameras;  // map order
   double residual_sigma_px = 0.0;          // sqrt(sum r^2 / (residuals - parameters)), per coordinate
+  // The part of it every frame of a track (one camera seeing one marker) shares, per coordinate: the
+  // residuals' track means beyond what independent errors give (diagnostics.cc TrackBiasTerm).
+  double track_bias_sigma_px = 0.0;
   // The joint covariance of the camera and marker poses (core/map_covariance.h; the cameras' blocks are
-  // CameraDiagnostics::covariance), scaled by residual_sigma_px^2. Cameras and markers together when they
+  // CameraDiagnostics::covariance), scaled by residual_sigma_px^2, with the tracks' shared bias
+  // (track_bias_sigma_px) propagated as a correlated error. Cameras and markers together when they
   // are at most kMaxMapCovarianceEntries, else the cameras alone (a board of many markers would make
   // map.yaml megabytes long). None when the poses are not determined or the covariance was not asked for.
   std::optional<MapCovariance> map_covariance;
