@@ -525,7 +525,7 @@ double MarginPenalty(const SideProfiles& s, const double* p, bool single, double
   return weight * (p[kS1] - paper);
 }
 
-// MarginPenalty's W for a fit starting from p:
+// MarginPenalty's W for a fit starting from p (the last factor 1 with SideProfiles::tie_paper):
 //   G = SmoothStep(a, 0.1, 0.2) (1 - SmoothStep(q / c, 2.5, 3.5)) (1 - SmoothStep(b, 0.1, 0.2)),
 //   a = q (S1 - S2) / (c (P_lin - L0)),   b = (S2 - L0) / (P_lin - L0),
 // by the margin's area a (width times excess over the surround, as a part of a cell times the paper's
@@ -545,7 +545,8 @@ double MarginWeight(const SideProfiles& s, const double* p) {
   const double c = s.cell, a = p[kQ] * (p[kS1] - p[kS2]) / (c * contrast);
   const double b = (p[kS2] - p[kL0]) / contrast;
   const double gate = SmoothStep(a, 0.1, 0.2) * (1.0 - SmoothStep(p[kQ] / c, 2.5, 3.5));
-  return std::sqrt(kPaperWeightPerRay * rays) * gate * (1.0 - SmoothStep(b, 0.1, 0.2));
+  // With SideProfiles::tie_paper the margin is paper whatever lies beyond it.
+  return std::sqrt(kPaperWeightPerRay * rays) * gate * (s.tie_paper ? 1.0 : 1.0 - SmoothStep(b, 0.1, 0.2));
 }
 
 // Phi, phi and z of every boundary at every bin (Evaluate's rows): row 0 the margin's far side e + q,
@@ -957,6 +958,37 @@ bool EdgeHasStep(const SideProfiles& s, const SideFit& fit) {
   if (s.polarity == 0 || !std::isfinite(border) || !std::isfinite(beyond) || !std::isfinite(code))
     return true;
   return (beyond - border) * s.polarity >= kMinEdgeStep * std::abs(code - border);
+}
+
+double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit) {
+  if (fit.single_surround || s.polarity <= 0 || s.bins < 2 || !(s.cell < kSecondStepMaxCell)) return NAN;
+  const double* p = fit.params.data();
+  const double sign = p[kS1] > p[kS2] ? 1.0 : -1.0;  // towards the margin's level
+  auto bin_of = [&](double u) {
+    return std::clamp(static_cast<int>(std::ceil((u - s.u0) / s.du)), 0, s.bins - 1);
+  };
+  // sign times the profiles' mean over groups at bin j (NaN without samples there).
+  auto level = [&](int j) {
+    double sum = 0, count = 0;
+    for (size_t g = 0; g < s.patterns.size(); ++g)
+      sum += s.sum[g * s.bins + j], count += s.count[g * s.bins + j];
+    return count > 0 ? sign * sum / count : NAN;
+  };
+  double peak = -HUGE_VAL;
+  for (int j = bin_of(fit.e); j <= bin_of(fit.e + p[kQ]); ++j) peak = std::max(peak, level(j));
+  int dip = -1;
+  double dip_level = HUGE_VAL, back = -HUGE_VAL;
+  for (int j = bin_of(fit.e + p[kQ] + p[kSigma]); j < s.bins; ++j) {
+    const double v = level(j);
+    if (!std::isfinite(v)) continue;
+    if (v < dip_level) dip = j, dip_level = v, back = -HUGE_VAL;
+    back = std::max(back, v);
+  }
+  const double dip_u = s.u0 + dip * s.du - fit.e;
+  if (dip < 0 || dip_u > kSecondStepMaxDip * s.cell || !(peak > dip_level) ||
+      !(back - dip_level >= kSecondStepRise * (peak - dip_level)))
+    return NAN;
+  return dip_u;
 }
 
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {

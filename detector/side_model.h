@@ -63,6 +63,10 @@ struct SideProfiles {
   // two-level model's margin level is then tied to the paper's by a soft two-sided penalty (MarginPenalty
   // and MarginWeight in side_model.cc).
   double paper = 0;
+  // The margin's level is tied to the paper's (MarginWeight in side_model.cc) whatever the level beyond it:
+  // set where the profiles show a second step beyond the margin (SecondStepBeyondMargin), so that the
+  // surround beyond the margin is not one level and its fitted level says nothing about the margin's.
+  bool tie_paper = false;
   // Per group: the colour (0: border's, 1: other) of rows 1..kRows, the summed profile / counts, and
   // the summed depths (px inward from the outer edge) of the boundaries between rows r-1 and r
   // (r = 1..kRows: perspective makes them differ along a side and from row to row) and their count.
@@ -109,6 +113,8 @@ struct SideFit {
   // `beyond_e`): the profiles are to be sampled about that edge again (FitSide in detector.cc).
   bool beyond = false;
   double beyond_e = 0;
+  // SecondStepBeyondMargin of the last whole-side fit (FitWholeSide in detector.cc): px beyond `e`, or NaN.
+  double second_step = NAN;
   // All parameters (e, sigma, L0, L1, S1, S2, q, gamma); `warm`: start from them (e relative to the
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};
@@ -126,6 +132,34 @@ struct SideFit {
 // unknown.
 constexpr double kMinEdgeStep = 0.15;
 bool EdgeHasStep(const SideProfiles& s, const SideFit& fit);
+
+// A second step beyond the margin (issue 15, smallface: bench/results/2026-12-07-smallface.md). On a small
+// face the marker and its margin nearly fill it: 1.25-1.5 cells of the face lie beyond a 1-cell margin
+// before the face's edge, the next face, the body's top or the other marker's margin (mcmt-sim's pentagon,
+// 11-15 px markers on cells of 1.4 px), all within the profiles' reach (1.6 cells + 1 px, 2.3 cells
+// there). The model has one level beyond the margin; a step back towards the margin's level at the reach's
+// end made the fitted margins narrow and bright (q 0.4-0.85 cell for 1, S1 186-255 for the paper's
+// 163-174) and the edges +0.052 px outward (the pentagon's map -0.727 %).
+// The profiles (mean over groups per bin) beyond the fitted margin's far side, from one fitted blur past
+// it (e + q + sigma), have a dip (their extreme away from the margin's level), and after it they come back
+// towards the margin's level by at least kSecondStepRise of the margin's excess over the dip (its peak
+// between e and e + q). Returns the dip's u less e (px), or NaN where there is no such step, the fit has
+// one surround level or the polarity is not a normal print's (and beyond the two bounds below).
+constexpr double kSecondStepRise = 0.1;
+// ... only on cells under this depth (px across the side): there the reach's 1 px is half a cell or more,
+// 2.1 cells and more beyond the edge. On deeper cells it ends within 2.1 cells, and what passed the test
+// there was no face's edge: sharpening's rebound, a texture (bench_accuracy --quick: hard -0.028 -> -0.040
+// px, black tool +0.002 -> +0.006 without the gate).
+constexpr double kSecondStepMaxCell = 2.0;
+// ... and only where the dip lies within this many cells of the edge (a face ending at most about 1.5
+// cells beyond a 1-cell margin, where the surround has no level of its own between the steps). The
+// reference renderer's rig faces end 3 cells beyond the edge, their dips at 2.1-2.4 cells: there the rule
+// took the brighter clutter's outward pull from the silhouette sides and not the darker clutter's inward
+// one (its test sees only a step back towards the margin's level), and moved the plain map +0.047 ->
+// +0.063 %, black tool +0.031 -> +0.049 % (with this bound +0.052, +0.036; the pentagon's sides keep
+// their gain: its dips lie at 1.75-2.0 cells).
+constexpr double kSecondStepMaxDip = 2.1;
+double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
 
 // The standard normal distribution Phi(z) and density phi(z) given gauss = exp(-z^2 / 2): Abramowitz and
 // Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).
