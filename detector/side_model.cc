@@ -117,6 +117,7 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
   const double h = s.du * inv_sigma;
   const double u0 = s.u0, du = s.du;
   const int n = s.bins;
+  if (n <= 0) return;
   int j = 0;
 #ifdef __SSE2__
   const __m128d bound2 = _mm_set1_pd(bound), u02 = _mm_set1_pd(u0), du2 = _mm_set1_pd(du);
@@ -125,10 +126,33 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
     _mm_storeu_pd(zs + j, _mm_mul_pd(_mm_sub_pd(bound2, _mm_add_pd(u02, _mm_mul_pd(js, du2))), inv_sigma2));
 #endif
   for (; j < n; ++j) zs[j] = (bound - (u0 + j * du)) * inv_sigma;
-  auto far = [&](int k) { return std::abs(zs[k]) > 7.0; };
-  int first = 0, last = n - 1;
-  while (first < n && far(first)) ++first;
-  while (last >= first && far(last)) --last;
+  // The run's ends, found from estimates instead of walks over the far bins from both ends. z falls with
+  // the bin, so the bins with z > 7 are a prefix and those with z < -7 a suffix: `first` is the prefix's
+  // length, walked to from j = (bound - u0 - 7 sigma) / du (where z = 7, truncated), and `last` the bin
+  // before the suffix (at least first - 1), walked to from (bound - u0 + 7 sigma) / du, by the same
+  // comparisons on zs. The bins beyond 7 sigmas and the run are those of the scans from both ends
+  // (where a bin's z jumps from above 7 to below -7 the scan from bin 0 went on to n: the run is empty
+  // either way, and every bin is filled by the sign of its z). bench_detector's 10 accurate frames:
+  // FillBoundary 20.16 -> 19.79 M instructions.
+  auto estimate = [&](double sevens) {
+    const double j = (bound - u0 + sevens / inv_sigma) / du;
+    return std::isfinite(j) ? static_cast<int>(std::clamp(j, 0.0, static_cast<double>(n - 1))) : 0;
+  };
+  int first = estimate(-7.0);
+  if (zs[first] > 7.0) {
+    while (first < n && zs[first] > 7.0) ++first;
+  } else {
+    while (first > 0 && !(zs[first - 1] > 7.0)) --first;
+  }
+  int last = first - 1;
+  if (first < n) {
+    last = std::max(first, estimate(7.0));
+    if (zs[last] < -7.0) {
+      while (last >= first && zs[last] < -7.0) --last;
+    } else {
+      while (last + 1 < n && !(zs[last + 1] < -7.0)) ++last;
+    }
+  }
   // Bins [from, to) beyond 7 sigmas: Phi 1 or 0 by the sign of z, phi 0.
   auto beyond = [&](int from, int to) {
     int k = from;
