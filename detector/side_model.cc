@@ -117,6 +117,7 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
   const double h = s.du * inv_sigma;
   const double u0 = s.u0, du = s.du;
   const int n = s.bins;
+  if (n <= 0) return;
   int j = 0;
 #ifdef __SSE2__
   const __m128d bound2 = _mm_set1_pd(bound), u02 = _mm_set1_pd(u0), du2 = _mm_set1_pd(du);
@@ -125,10 +126,33 @@ void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double 
     _mm_storeu_pd(zs + j, _mm_mul_pd(_mm_sub_pd(bound2, _mm_add_pd(u02, _mm_mul_pd(js, du2))), inv_sigma2));
 #endif
   for (; j < n; ++j) zs[j] = (bound - (u0 + j * du)) * inv_sigma;
-  auto far = [&](int k) { return std::abs(zs[k]) > 7.0; };
-  int first = 0, last = n - 1;
-  while (first < n && far(first)) ++first;
-  while (last >= first && far(last)) --last;
+  // The run's ends, found from estimates instead of walks over the far bins from both ends. z falls with
+  // the bin, so the bins with z > 7 are a prefix and those with z < -7 a suffix: `first` is the prefix's
+  // length, walked to from j = (bound - u0 - 7 sigma) / du (where z = 7, truncated), and `last` the bin
+  // before the suffix (at least first - 1), walked to from (bound - u0 + 7 sigma) / du, by the same
+  // comparisons on zs. The bins beyond 7 sigmas and the run are those of the scans from both ends
+  // (where a bin's z jumps from above 7 to below -7 the scan from bin 0 went on to n: the run is empty
+  // either way, and every bin is filled by the sign of its z). bench_detector's 10 accurate frames:
+  // FillBoundary 20.16 -> 19.79 M instructions.
+  auto estimate = [&](double sevens) {
+    const double j = (bound - u0 + sevens / inv_sigma) / du;
+    return std::isfinite(j) ? static_cast<int>(std::clamp(j, 0.0, static_cast<double>(n - 1))) : 0;
+  };
+  int first = estimate(-7.0);
+  if (zs[first] > 7.0) {
+    while (first < n && zs[first] > 7.0) ++first;
+  } else {
+    while (first > 0 && !(zs[first - 1] > 7.0)) --first;
+  }
+  int last = first - 1;
+  if (first < n) {
+    last = std::max(first, estimate(7.0));
+    if (zs[last] < -7.0) {
+      while (last >= first && zs[last] < -7.0) --last;
+    } else {
+      while (last + 1 < n && !(zs[last + 1] < -7.0)) ++last;
+    }
+  }
   // Bins [from, to) beyond 7 sigmas: Phi 1 or 0 by the sign of z, phi 0.
   auto beyond = [&](int from, int to) {
     int k = from;
@@ -225,6 +249,39 @@ void NormalRow(const double* const* columns, const double* weights, const double
 #endif
 }
 
+// NormalRow<kA> and NormalRow<kB> (kA < kB) in one pass over the rows: each sum the same products added
+// in the same order (the same values), the weights, the residuals and the columns b <= kA loaded once for
+// both. NormalEquations pairs row a with row count - 1 - a (kA + 2 + kB + 2 = count + 3 accumulators, at
+// most 11 of the 16 SSE2 registers). bench_detector's 10 accurate frames: NormalRow<0..7> 20.4 M
+// instructions -> NormalRows 19.0 M (accurate 297.68 -> 296.53 M).
+template <int kA, int kB>
+void NormalRows(const double* const* columns, const double* weights, const double* residuals, size_t rows,
+                double (*sums_a)[2], double (*sums_b)[2]) {
+  static_assert(kA < kB, "two different rows, the smaller first");
+#ifdef __SSE2__
+  __m128d acc_a[kA + 2], acc_b[kB + 2];
+  for (int b = 0; b <= kA + 1; ++b) acc_a[b] = _mm_setzero_pd();
+  for (int b = 0; b <= kB + 1; ++b) acc_b[b] = _mm_setzero_pd();
+  for (size_t i = 0; i < rows; i += 2) {
+    const __m128d w = _mm_load_pd(weights + i), r = _mm_load_pd(residuals + i);
+    const __m128d wa = _mm_mul_pd(w, _mm_load_pd(columns[kA] + i));
+    const __m128d wb = _mm_mul_pd(w, _mm_load_pd(columns[kB] + i));
+    for (int b = 0; b <= kB; ++b) {
+      const __m128d column = _mm_load_pd(columns[b] + i);
+      if (b <= kA) acc_a[b] = _mm_add_pd(acc_a[b], _mm_mul_pd(wa, column));
+      acc_b[b] = _mm_add_pd(acc_b[b], _mm_mul_pd(wb, column));
+    }
+    acc_a[kA + 1] = _mm_add_pd(acc_a[kA + 1], _mm_mul_pd(wa, r));
+    acc_b[kB + 1] = _mm_add_pd(acc_b[kB + 1], _mm_mul_pd(wb, r));
+  }
+  for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums_a[b], acc_a[b]);
+  for (int b = 0; b <= kB + 1; ++b) _mm_storeu_pd(sums_b[b], acc_b[b]);
+#else
+  NormalRow<kA>(columns, weights, residuals, rows, sums_a);
+  NormalRow<kB>(columns, weights, residuals, rows, sums_b);
+#endif
+}
+
 // The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
 // jacobian + k * stride, `used` rows, zero from there to an even count; jacobian, weights and residuals
 // 16-byte aligned and the stride even: NormalRow), the weights and the
@@ -242,12 +299,53 @@ void NormalEquations(const double* jacobian, size_t stride, const double* weight
   using Row = void (*)(const double* const*, const double*, const double*, size_t, double(*)[2]);
   static constexpr Row kRowOf[kParams] = {NormalRow<0>, NormalRow<1>, NormalRow<2>, NormalRow<3>,
                                           NormalRow<4>, NormalRow<5>, NormalRow<6>, NormalRow<7>};
+  using Rows =
+      void (*)(const double* const*, const double*, const double*, size_t, double(*)[2], double(*)[2]);
+  // Row a with row count - 1 - a (count 5 to 8: single surround and gamma held, either or neither).
+  auto rows_of = [](int a, int b) -> Rows {
+    switch (a * kParams + b) {
+      case 0 * kParams + 4:
+        return NormalRows<0, 4>;
+      case 1 * kParams + 3:
+        return NormalRows<1, 3>;
+      case 0 * kParams + 5:
+        return NormalRows<0, 5>;
+      case 1 * kParams + 4:
+        return NormalRows<1, 4>;
+      case 2 * kParams + 3:
+        return NormalRows<2, 3>;
+      case 0 * kParams + 6:
+        return NormalRows<0, 6>;
+      case 1 * kParams + 5:
+        return NormalRows<1, 5>;
+      case 2 * kParams + 4:
+        return NormalRows<2, 4>;
+      case 0 * kParams + 7:
+        return NormalRows<0, 7>;
+      case 1 * kParams + 6:
+        return NormalRows<1, 6>;
+      case 2 * kParams + 5:
+        return NormalRows<2, 5>;
+      case 3 * kParams + 4:
+        return NormalRows<3, 4>;
+      default:
+        return nullptr;
+    }
+  };
+  double sums[kParams][kParams + 1][2];  // row a's: with columns b <= a, then with the residuals
+  for (int a = 0, b = count - 1; a <= b; ++a, --b) {
+    const Rows both = a < b ? rows_of(a, b) : nullptr;
+    if (both) {
+      both(columns, weights, residuals, rows, sums[a], sums[b]);
+    } else {
+      kRowOf[a](columns, weights, residuals, rows, sums[a]);
+      if (b != a) kRowOf[b](columns, weights, residuals, rows, sums[b]);
+    }
+  }
   for (int a = 0; a < count; ++a) {
-    double sums[kParams + 1][2];  // with columns b <= a, then with the residuals
-    kRowOf[a](columns, weights, residuals, rows, sums);
     for (int b = 0; b <= a; ++b)
-      (*jtj)(active[a], active[b]) = (*jtj)(active[b], active[a]) = sums[b][0] + sums[b][1];
-    (*jtr)[active[a]] = sums[a + 1][0] + sums[a + 1][1];
+      (*jtj)(active[a], active[b]) = (*jtj)(active[b], active[a]) = sums[a][b][0] + sums[a][b][1];
+    (*jtr)[active[a]] = sums[a][a + 1][0] + sums[a][a + 1][1];
   }
 }
 
