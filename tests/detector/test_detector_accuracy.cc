@@ -71,6 +71,11 @@ struct Bounds {
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"hard", {0.04, 0.18, 0.99, 1.00}},
+      // No margin on a grey surface met the 0.02 px offset only because two markers of its first image (ids
+      // 123 and 240, 16-20 px at 67-69 deg) fell back to cornerSubPix, up to 1.63 px inward: +0.008 px.
+      // Refined (SmoothedRefinementACellOffIsRefinedUnsmoothed) the condition shows its own outward bias,
+      // +0.022 px (median 0.058 -> 0.054 px): a shortfall (bench/results/2026-12-07-id123.md).
+      {"no margin, grey surface", {0.025, 0.10, 0.99, 0.90}},
   };
   return s;
 }
