@@ -2254,6 +2254,26 @@ bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed,
   // unrefined marker, not a confusing region.
   if (refined && !reads(r->corners)) refined = false, slid = !kept_lines;
   if (refined) return true;
+  // A sharp frame's marker whose refinement on the smoothed region failed, or ended a cell off after a
+  // side kept its line, is refined again from its candidate on the region itself before it falls back to
+  // cornerSubPix. On cells about a pixel deep across a foreshortened side the smoothing (sharp_smoothing,
+  // 0.6 px) blurs the border into the first code rows: that side's fit lost them (its gamma at its bound,
+  // in the skew pass border and code levels 8 apart) and the side ended 1.3 px outward, the code read a
+  // cell off, and cornerSubPix placed the marker's corners up to 1.63 px off (catalogue test, no margin
+  // on grey, id 123, 15.9 px at 69 deg); refined on the unsmoothed region from the same candidate they end
+  // within 0.25 px. bench_accuracy 8: corners > 0.5 px off 463 -> 450 (bench/results/2026-12-07-id123.md).
+  // A marker dropped as a cell off without a kept line (`slid`) stays dropped: rescued so, 2 of 5 had
+  // corners 0.53 and 0.93 px off.
+  if (smoothed && !slid) {
+    std::array<cv::Point2d, 4> plain = candidate;
+    cv::Rect roi;
+    const cv::Mat* source = RefineRegion(gray, *r, &roi);
+    bool plain_kept = false;
+    if (RefineInRegion(*source, roi, *r, &plain, nullptr, &plain_kept) && reads(plain)) {
+      r->corners = plain;
+      return true;
+    }
+  }
   r->corners = candidate;
   // A refinement a cell off is dropped: the marker's surroundings mislead edge fits, and a corner a
   // pixel off passes a bundle adjustment's outlier test yet biases it. No clean edge on some side (a

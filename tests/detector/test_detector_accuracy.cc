@@ -71,6 +71,11 @@ struct Bounds {
 const std::map<std::string, Bounds>& Shortfalls() {
   static const std::map<std::string, Bounds> s = {
       {"hard", {0.04, 0.18, 0.99, 1.00}},
+      // No margin on a grey surface met the 0.02 px offset only because two markers of its first image (ids
+      // 123 and 240, 16-20 px at 67-69 deg) fell back to cornerSubPix, up to 1.63 px inward: +0.008 px.
+      // Refined (SmoothedRefinementACellOffIsRefinedUnsmoothed) the condition shows its own outward bias,
+      // +0.022 px (median 0.058 -> 0.054 px): a shortfall (bench/results/2026-12-07-id123.md).
+      {"no margin, grey surface", {0.025, 0.10, 0.99, 0.90}},
   };
   return s;
 }
@@ -627,6 +632,38 @@ TEST(DetectorAccuracy, SmallMarkersOnADarkSurroundAreRefined) {
   }
   ASSERT_GT(markers, 300);
   EXPECT_LE(unrefined, 0.025 * markers);
+}
+
+// A sharp frame's marker refined on its smoothed region a cell off is refined again on the region itself
+// (MarkerDetector::RefineCorners). The catalogue test's first "no margin, grey surface" image (seed 11):
+// id 123, 15.9 px at 69 deg, cells about a pixel deep across its foreshortened sides. On the smoothed
+// region one such side's fit lost the code rows and ended 1.3 px outward, the code read a cell off, and
+// the marker fell back to cornerSubPix, its corners 0.31-1.63 px off (bench/results/2026-12-07-id123.md).
+// Asserted: every marker of the image found and refined, each corner within 0.5 px.
+TEST(DetectorAccuracy, SmoothedRefinementACellOffIsRefinedUnsmoothed) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const testing::Imaging im = testing::CatalogueCondition("no margin, grey surface");
+  testing::ReferenceScene scene;
+  scene.min_side_px = 15, scene.max_side_px = 60;
+  MarkerDetector detector = testing::ReferenceDetector(im);
+  std::mt19937_64 rng(11);
+  std::vector<testing::RenderedMarker> truth;
+  const cv::Mat image = testing::RenderReference(*dict, scene, im, rng, &truth);
+  const std::vector<marker_t> markers = detector.Detect(image);
+  bool found123 = false;
+  for (const marker_t& m : markers)
+    for (const testing::RenderedMarker& t : truth) {
+      if (t.id != m.id) continue;
+      found123 = found123 || m.id == 123;
+      for (int k = 0; k < 4; ++k) {
+        const double error = std::hypot(m.corners[k][0] - t.corners[k].x, m.corners[k][1] - t.corners[k].y);
+        std::printf("id %3d (%.1f px, %.1f deg) corner %d: %.3f px\n", t.id, t.side_px, t.view_angle_deg, k,
+                    error);
+        EXPECT_LE(error, 0.5) << "id " << t.id << " corner " << k;
+      }
+    }
+  EXPECT_TRUE(found123);
+  EXPECT_EQ(detector.stats().refine_failures, 0);
 }
 
 // A wide paper margin is not taken for the surround: small markers (15-22 px, 0-60 deg) with a 3-cell
