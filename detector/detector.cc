@@ -1487,14 +1487,8 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   constexpr int kMaxModelPasses = 6;
   // A model-only round (RefineMarkerCorners) starts from corners settled by the passes before it: its
   // first (cold) pass moving them less than kRoundSettledPx ends it (a second pass moved them by 1e-4 to
-  // 1e-3 px more: bench/results/2026-12-05-speed4.md), and so does any later pass. The cold pass moves
-  // the corners away (median 0.006 px in bench_detector) and the warm passes bring them back: a round's
-  // net move was below 0.005 px on 37 of 41 markers while its passes moved 0.004-0.02 px each. 0.008 px
-  // (0.004 before) saves 5.2 / 6.1 % of the accurate / fast mode's instructions; corners moved 0.002 px
-  // on average (bench_detector 20 2 640), the start probe at seeds 31/41/51 gave 5/9/5 markers > 0.02 px
-  // apart (4/9/8 at 0.004), bench_accuracy --quick's offsets and medians the same
-  // (bench/results/2026-12-07-settle.md).
-  constexpr double kRoundSettledPx = 0.008;
+  // 1e-3 px more: bench/results/2026-12-05-speed4.md).
+  constexpr double kRoundSettledPx = 0.004;
   // The first refinement's model passes only bring the corners near the edges, and the model-only
   // rounds after it (RefineMarkerCorners) settle them from fits started cold: those passes stop at
   // kFirstSettledPx (kRoundSettledPx as the rounds: 7.56 passes per marker in bench_detector; 0.02 px:
