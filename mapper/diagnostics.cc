@@ -449,7 +449,7 @@ std::vector<int> OutputEntries(const RigMap& map, const ReducedSystem& sys, MapC
 // It sees only the part of the bias the map did not absorb (on the demo 0.019 px from the residuals,
 // 0.024 px from the true errors), so it errs small. With sb2 = 0 the covariance is s2 S^-1: on independent
 // noise the residuals' track means are mostly smaller than that expectation, and then the covariance is
-// af08a72's.
+// the one without this term, bit for bit.
 // Measured: the demo's camera centres 4.80 -> 2.47 variances per axis, its poses beyond 3 sigma in the
 // map's frames 78.7 -> 0.0 %; what is left is a bias all markers share (the map's scale, which the
 // residuals cannot see: bench/results/2026-12-07-corrcov.md).
