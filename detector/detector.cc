@@ -2239,6 +2239,12 @@ bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed,
     if (candidate_mismatches < 0) candidate_mismatches = mismatches(candidate);
     return mismatches(corners) <= candidate_mismatches + cells;
   };
+  // The refinement on the marker's region of the frame itself (not smoothed), from `corners`.
+  auto refine_unsmoothed = [&](std::array<cv::Point2d, 4>* corners, bool* kept) {
+    cv::Rect roi;
+    const cv::Mat* source = RefineRegion(gray, *r, &roi);
+    return RefineInRegion(*source, roi, *r, corners, nullptr, kept);
+  };
   bool slid = false;  // edges fitted, but a cell off: the region is too confusing to trust
   bool kept_lines = false;
   bool refined = false;
@@ -2246,9 +2252,7 @@ bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed,
     refined = smoothed->refined, kept_lines = smoothed->kept_lines;
     if (refined) r->corners = smoothed->corners;
   } else {
-    cv::Rect roi;
-    const cv::Mat* source = RefineRegion(gray, *r, &roi);
-    refined = RefineInRegion(*source, roi, *r, &r->corners, nullptr, &kept_lines);
+    refined = refine_unsmoothed(&r->corners, &kept_lines);
   }
   // A cell off after a side kept its line (no clean crossing: the edge is not clear there) is an
   // unrefined marker, not a confusing region.
@@ -2266,10 +2270,8 @@ bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed,
   // corners 0.53 and 0.93 px off.
   if (smoothed && !slid) {
     std::array<cv::Point2d, 4> plain = candidate;
-    cv::Rect roi;
-    const cv::Mat* source = RefineRegion(gray, *r, &roi);
     bool plain_kept = false;
-    if (RefineInRegion(*source, roi, *r, &plain, nullptr, &plain_kept) && reads(plain)) {
+    if (refine_unsmoothed(&plain, &plain_kept) && reads(plain)) {
       r->corners = plain;
       return true;
     }
