@@ -22,6 +22,7 @@
 #include <set>
 #include <string>
 
+#include "bench/detector/diag_support.h"
 #include "tests/detector/chessboard_truth.h"
 
 using namespace mcmt;
@@ -35,7 +36,7 @@ struct Sample {
   double u, value;
 };
 
-double Phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+using diag::Phi;
 
 // Levenberg-Marquardt on `params` for sum over samples of (model(params, u) - value)^2, numeric Jacobian.
 template <typename Model>

@@ -16,12 +16,13 @@
 #include <cstdlib>
 #include <vector>
 
+#include "bench/detector/diag_support.h"
 #include "detector/side_model.h"
 
 using namespace mcmt;
 
 namespace {
-double Phi(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+using diag::Phi;
 double phi(double z) { return 0.3989422804014327 * std::exp(-0.5 * z * z); }
 // The antiderivative of Phi: d/dt (t Phi(t) + phi(t)) = Phi(t).
 double IntPhi(double t) { return t * Phi(t) + phi(t); }

@@ -29,6 +29,7 @@
 #include <map>
 #include <string>
 
+#include "bench/detector/diag_support.h"
 #include "core/dictionary.h"
 #include "detector/detector.h"
 #include "tests/detector/accuracy.h"
@@ -37,9 +38,7 @@
 using namespace mcmt;
 
 namespace {
-double Env(const char* key, double fallback) {
-  return std::getenv(key) ? std::atof(std::getenv(key)) : fallback;
-}
+using diag::Env;
 
 cv::Mat Render(const cv::aruco::Dictionary& dict, bool reference, double blur, double side0, double side1,
                std::mt19937_64& rng, std::vector<testing::RenderedMarker>* truth,

@@ -18,16 +18,15 @@
 #include <cstdlib>
 #include <vector>
 
+#include "bench/detector/diag_support.h"
 #include "core/dictionary.h"
 #include "detector/side_model.h"
 
 using namespace mcmt;
 
 namespace {
-double Env(const char* key, double fallback) {
-  return std::getenv(key) ? std::atof(std::getenv(key)) : fallback;
-}
-double Phi(double z) { return 0.5 * std::erfc(-z * M_SQRT1_2); }
+using diag::Env;
+using diag::Phi;
 
 struct Print {
   cv::Mat bits;
