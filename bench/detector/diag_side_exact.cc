@@ -11,7 +11,10 @@
 // point-sampled 8-bit image, roll ROLL deg and offset OFFX/OFFY px, as the detector samples images),
 // CROSS (1: the line is the crossings' of the detector's model passes, about the true line, iterated
 // with the model's offset: the detector's fixed point; prints the line's offset at the middle and tilt;
-// clean rays and medians as CrossingLine), PAPER (SideProfiles::paper, 0). With DUMP also each ray's
+// clean rays and medians as CrossingLine), PAPER (SideProfiles::paper, 0), BOX (with PIX: each pixel the
+// mean of BOX x BOX point samples of its square, the pixel's area as mcmt-sim renders it; 1: its centre),
+// QUANT (with PIX, 1: rounded to 8 bits), INK / PAPERL / SURFACE / BG (the print's linear levels, 0-255),
+// MARGIN / EXT (cells: the margin, and the surface beyond the marker's edge). With DUMP also each ray's
 // crossing about the true line, of the profiles and of the fitted model (`clean`: CleanNeighbour's).
 #include <cmath>
 #include <cstdio>
@@ -90,6 +93,8 @@ int main(int argc, char** argv) {
   const double blur = std::atof(argv[3]), side_px = std::atof(argv[4]);
   m.bits = cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(id, id + 1), dict->markerSize);
   m.cells = dict->markerSize + 2;
+  m.ink = Env("INK", m.ink), m.paper = Env("PAPERL", m.paper), m.surface = Env("SURFACE", m.surface);
+  m.bg = Env("BG", m.bg), m.margin = Env("MARGIN", m.margin), m.ext = Env("EXT", m.ext);
   m.scale = side_px / m.cells, m.sb = blur / m.scale;
   const int cells = m.cells;
   double p0[2], a[2], nrm[2];
@@ -101,6 +106,8 @@ int main(int argc, char** argv) {
   const int bins = static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1;
   const bool pix = Env("PIX", 0) > 0;
   const double roll = Env("ROLL", 0) * M_PI / 180, offx = Env("OFFX", 0.3), offy = Env("OFFY", 0.7);
+  const int box = std::max(1, static_cast<int>(Env("BOX", 1)));  // PIX: box x box samples per pixel
+  const bool quant = Env("QUANT", 1) > 0;                        // PIX: rounded to 8 bits
   // The point at `along` (0..1) and `out` px outward of the true side: its level (continuous, or the
   // detector's bilinear sample of the point-sampled 8-bit image with the marker rolled and offset).
   auto level = [&](double along, double out) {
@@ -109,10 +116,16 @@ int main(int argc, char** argv) {
     if (!pix) return m.At(x, y);
     const double co = std::cos(roll), si = std::sin(roll);
     const double X = (co * x - si * y) * m.scale + offx, Y = (si * x + co * y) * m.scale + offy;
-    auto px = [&](double i, double j) {  // pixel (i, j)'s centre sample, 8-bit
-      const double xx = i - offx, yy = j - offy;
-      const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
-      return std::round(std::clamp(m.At(cx, cy), 0.0, 255.0));
+    auto px = [&](double i, double j) {  // pixel (i, j): its centre sample or its box's mean, 8-bit
+      double sum = 0;
+      for (int bj = 0; bj < box; ++bj)
+        for (int bi = 0; bi < box; ++bi) {
+          const double xx = i - offx + (bi + 0.5) / box - 0.5, yy = j - offy + (bj + 0.5) / box - 0.5;
+          const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
+          sum += m.At(cx, cy);
+        }
+      const double v = std::clamp(sum / (box * box), 0.0, 255.0);
+      return quant ? std::round(v) : v;
     };
     const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
     return (1 - ty) * ((1 - tx) * px(fx, fy) + tx * px(fx + 1, fy)) +

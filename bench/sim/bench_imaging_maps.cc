@@ -38,7 +38,8 @@
 //                               session and every camera ("surface_albedo=0.45,blur_sigma=0.5"); a field
 //                               prefixed "cN." only in camera N ("c0.blur_sigma=0.5"; ablations). "cN."
 //                               acts only on rows with per-camera options (--imaging random), and not on
-//                               the surface_* fields (the renderer takes those from the session's options)
+//                               the surface_* fields (the renderer takes those from the session's options);
+//                               "supersampling=S": S x S point samples per pixel instead of the exact box
 //   MCMT_IMAGING_OBJECT=KIND    every row's session with this object (mcmt-sim's kinds: four_sided, box,
 //                               pentagon, cube, board; its default marker size), e.g. the pentagon's small
 //                               markers drawn by the reference renderer
@@ -170,6 +171,8 @@ bool SetRenderField(const std::string& field, double value, sim::RenderOptions* 
     o->jpeg_quality = static_cast<int>(value);
   else if (field == "quiet_zone_cells")
     o->quiet_zone_cells = static_cast<int>(value);
+  else if (field == "supersampling")
+    o->supersampling = static_cast<int>(value);
   else
     return false;
   return true;
