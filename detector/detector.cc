@@ -2241,9 +2241,9 @@ bool MarkerDetector::RefineCorners(const cv::Mat& gray, const Refined* smoothed,
     refined_mismatches = mismatches(corners);
     return refined_mismatches <= candidate_mismatches + cells;
   };
-  // The refinement on the marker's region of the frame itself (not smoothed), from `corners`, the region
-  // about the candidate, where it starts (about the smoothed refinement's corners, as id123's retry took
-  // it, the 5 markers it refined in bench_accuracy 8 ended the same).
+  // The refinement on the marker's region of the frame itself (not smoothed), from `corners`. The region
+  // is the candidate's, where the refinement starts. (id123's retry took it about the rejected smoothed
+  // refinement's corners; the 5 markers it refines in bench_accuracy 8 end the same either way.)
   auto refine_unsmoothed = [&](std::array<cv::Point2d, 4>* corners, bool* kept) {
     cv::Rect roi;
     Raw about = *r;
