@@ -182,6 +182,15 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
                          double* blur_sigma = nullptr, bool fit_gamma = false, bool* kept_lines = nullptr,
                          int polarity = 0, double held_gamma = 0.0);
 
+// What the refinements (RefineMarkerCorners) of this thread have done since it started: model passes
+// (every side located with the side model, or kept where it had settled), side-model fits (FitSide: one
+// side's profiles fitted, with its refits) and model-only rounds. Their cost is about proportional to the
+// side fits (issue 15's speed: bench/results/2026-12-07-passes.md); tests bound them.
+struct RefinementCounts {
+  long long model_passes = 0, side_fits = 0, rounds = 0;
+};
+RefinementCounts RefinementCountsOnThisThread();
+
 struct QuadSearch;  // detector/candidates.h
 class QuadFinder;   // detector/candidates.h
 

@@ -234,6 +234,57 @@ TEST(DetectorUnit, ARefinementDoesNotEndCellsFromItsStart) {
   }
 }
 
+// The refinement's side-model fits, whose number its cost follows (issue 15's speed:
+// bench/results/2026-12-07-passes.md), on two markers (noise 2, the one-cell white margin on grey) refined
+// from their corners moved by 0.3 / 0.2 px, so that a change adding passes where the corners had settled
+// shows here:
+// - a sharp fronto-parallel 40 px marker: 18 fits in 2 model passes of the first refinement and one
+//   model-only round of 3 passes (a settled side keeps its line: kSideSettledPx);
+// - a 24 px marker foreshortened to half its height and turned by 0.3 rad: its one model-only round moves
+//   the corners 0.005-0.01 px with the sides' surround choices those of the refinement before it, and
+//   ends the rounds there (kRepeatSettledPx in RefineMarkerCorners). 11dbc98 ran a second round: 38 fits
+//   instead of 28, the corners 7e-5 px apart.
+TEST(DetectorUnit, SettledMarkersTakeFewSideFits) {
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const int cells = dict->markerSize + 2;
+  struct Case {
+    int id;
+    float width, squash, turn;
+    long long max_fits, max_rounds;
+    double max_error;  // px from the truth (0.32 px on the second: 12 px high, cells of 1.5 px)
+  };
+  for (const Case& c : {Case{7, 40, 1.0f, 0.0f, 20, 1, 0.1}, Case{23, 24, 0.5f, 0.3f, 28, 1, 0.4}}) {
+    const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(c.id, c.id + 1),
+                                                                    dict->markerSize);
+    const float cx = 300.3f, cy = 200.6f, hx[4] = {-1, 1, 1, -1}, hy[4] = {-1, -1, 1, 1};
+    std::array<cv::Point2f, 4> quad;
+    for (int k = 0; k < 4; ++k) {
+      // A trapezium (the far side shorter) of height squash * width, turned by `turn`.
+      const float x = 0.5f * c.width * hx[k] * (1.0f + 0.15f * (1 - c.squash) * hy[k]),
+                  y = 0.5f * c.width * c.squash * hy[k];
+      quad[k] = {cx + x * std::cos(c.turn) - y * std::sin(c.turn),
+                 cy + x * std::sin(c.turn) + y * std::cos(c.turn)};
+    }
+    const cv::Mat image = RenderQuads(*dict, {{c.id, quad}}, 1);
+    std::array<cv::Point2d, 4> corners;
+    for (int k = 0; k < 4; ++k) corners[k] = cv::Point2d(quad[k]) + cv::Point2d(k % 2 ? 0.3 : -0.3, 0.2);
+    const RefinementCounts before = RefinementCountsOnThisThread();
+    ASSERT_TRUE(
+        RefineMarkerCorners(image, cells, bits, nullptr, 1, &corners, true, nullptr, true, nullptr, 1));
+    const RefinementCounts after = RefinementCountsOnThisThread();
+    double error = 0;
+    for (int k = 0; k < 4; ++k) error = std::max(error, cv::norm(corners[k] - cv::Point2d(quad[k])));
+    const long long fits = after.side_fits - before.side_fits, rounds = after.rounds - before.rounds;
+    std::printf(
+        "id %d, %.0f px, squash %.1f, turn %.1f: %lld side fits, %lld model passes, %lld rounds, %.3f px "
+        "from the truth\n",
+        c.id, c.width, c.squash, c.turn, fits, after.model_passes - before.model_passes, rounds, error);
+    EXPECT_LE(error, c.max_error) << c.id;
+    EXPECT_LE(fits, c.max_fits) << c.id;
+    EXPECT_LE(rounds, c.max_rounds) << c.id;
+  }
+}
+
 // A box's next face turning into view: a foreshortened marker (16 x 40 px, as at about 65 degrees) appears
 // a side (40 px) beside a tracked one. Fast mode finds it in the frame it appears in (it searches a band of
 // fast_band_sides around each tracked marker every frame; before, only at the next full search, up to
