@@ -983,19 +983,31 @@ double FitSide(const cv::Mat& gray, const cv::Mat& bits, int cells, int side, co
   if (!FitWholeSide(rays, profiles, fit)) return NAN;
   // A second step beyond the margin (SecondStepBeyondMargin: a small face's edge or next face, the other
   // marker's margin) is no part of the model: the side is fitted again (warm) with the profiles ending
-  // kSecondStepCut cell before the dip and the margin tied to the paper. The pentagon's 60-frame video
+  // kSecondStepCut cell before the dip (smallface: always with the margin tied to the paper; now where the
+  // free refit's margin stays too bright, below). The pentagon's 60-frame video
   // session (diag_session, 1300 sides): +0.053 -> +0.021 px outward; each side ends about where it is
   // without face shading (+0.025 with shading 0 on main; the rest is these cells' own, present on sides
   // with no step beyond). Ending at the dip: +0.028; 0.5 cell before it +0.015 (top and bottom sides -0.003
   // / +0.008 against +0.015 / +0.034 unshaded); the cut alone (margin free) +0.028, the tie alone +0.040.
   // The pentagon's map (bench_imaging_maps' row) -0.728 -> -0.228 %, cameras 7.29 -> 2.32 mm.
   constexpr double kSecondStepCut = 0.3;
+  // The refit leaves the margin free first, and ties it only where it stays brighter than the paper
+  // (kSecondStepTieExcess; stepfix, bench/results/2026-12-07-stepfix.md: with the collapsed-margin gate
+  // in SecondStepBeyondMargin, maps mcmt-sim box +0.025 -> +0.020 %, reference wood +0.417 -> +0.409,
+  // mcmt-sim pentagon -0.232 -> -0.240). The tied fit starts from the first fit, as before.
   if (std::isfinite(fit->second_step)) {
-    SideFit again = *fit;
     const double end = fit->e + fit->second_step - kSecondStepCut * cell;
     rays.bins = std::min(rays.bins, static_cast<int>(std::ceil((end - rays.u0) / rays.du)) + 1);
-    rays.tie_paper = true;
-    if (FitWholeSide(rays, profiles, &again)) *fit = again;
+    SideFit untied = *fit;
+    const bool untied_ok = FitWholeSide(rays, profiles, &untied);
+    // Without the paper's level (NaN) the tie has no effect (MarginWeight): the free fit is kept.
+    if (!untied_ok || MarginExcessOverPaper(*profiles, untied) > kSecondStepTieExcess) {
+      SideFit again = *fit;
+      rays.tie_paper = true;
+      if (FitWholeSide(rays, profiles, &again)) *fit = again;
+    } else {
+      *fit = untied;
+    }
   }
   if (tilt) TurnSide(rays, profiles, fit, tilt, tilt_at);
   return fit->e;

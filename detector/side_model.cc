@@ -590,6 +590,9 @@ void FillRowSteps(const SideProfiles& s, const double* p, int g, bool derivative
   }
 }
 
+// The margin's width's lower bound in cells (FitOnce).
+constexpr double kMinMarginCells = 0.2;
+
 // The margin's penalty (SideProfiles::paper) counts as this many observations of the paper's level per
 // ray.
 constexpr double kPaperWeightPerRay = 1.0;
@@ -903,7 +906,7 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, SideFit* fit, 
   for (int k : {kL0, kL1, kS1, kS2}) lo[k] = kLevelMin, hi[k] = kLevelMax;
   // Margins from a fifth of a cell (0.4 before: a 0.3-cell margin could not be modelled, its corners
   // sat 0.03 px further inward on the reference renderer's "hard" condition).
-  lo[kQ] = 0.2 * c, hi[kQ] = 4.0 * c;
+  lo[kQ] = kMinMarginCells * c, hi[kQ] = 4.0 * c;
   // Gamma is free only where the side shows the code's level next to the border's (SideProfiles::gamma_hint).
   // A row's boundary with the border counts where the profiles reach it (within 2 px of their inner end).
   bool code_contrast = false;
@@ -1058,9 +1061,20 @@ bool EdgeHasStep(const SideProfiles& s, const SideFit& fit) {
   return (beyond - border) * s.polarity >= kMinEdgeStep * std::abs(code - border);
 }
 
+double MarginExcessOverPaper(const SideProfiles& s, const SideFit& fit) {
+  if (!(s.paper > 0)) return NAN;
+  const double* p = fit.params.data();
+  const double paper = LinearPaper(s, p), contrast = paper - p[kL0];
+  return contrast > 0 ? (p[kS1] - paper) / contrast : NAN;
+}
+
 double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit) {
   if (fit.single_surround || s.polarity <= 0 || s.bins < 2 || !(s.cell < kSecondStepMaxCell)) return NAN;
   const double* p = fit.params.data();
+  // A margin at its width's bound (within a thousandth of a cell) and not far brighter than the paper.
+  if (p[kQ] < (kMinMarginCells + 0.001) * s.cell &&
+      !(MarginExcessOverPaper(s, fit) >= kSecondStepCollapsedExcess))
+    return NAN;
   const double sign = p[kS1] > p[kS2] ? 1.0 : -1.0;  // towards the margin's level
   auto bin_of = [&](double u) {
     return std::clamp(static_cast<int>(std::ceil((u - s.u0) / s.du)), 0, s.bins - 1);

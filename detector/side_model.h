@@ -159,7 +159,30 @@ constexpr double kSecondStepMaxCell = 2.0;
 // +0.063 %, black tool +0.031 -> +0.049 % (with this bound +0.052, +0.036; the pentagon's sides keep
 // their gain: its dips lie at 1.75-2.0 cells).
 constexpr double kSecondStepMaxDip = 2.1;
+// ... and not where the fit's margin lies at its width's lower bound (a fifth of a cell) with its level
+// less than kSecondStepCollapsedExcess of the paper's contrast to the border above the paper's
+// (MarginExcessOverPaper): that margin's far side is not measured, and the window "beyond" it starts inside
+// the true margin's blurred fall (issue 15, stepfix: bench/results/2026-12-07-stepfix.md). On the
+// reference renderer's wood (half-cell margin, grain) 67 % of the sides the rule fired on were such fits,
+// their dip at 1.07 cells (median, within half a cell of the window's start) and their margin 0.32 above
+// the paper: the profiles' fall to the grain's trough, not a step. Where a real second step pushes a
+// margin to the bound it is pushed far past the paper: 0.83 (median; 10th percentile 0.65) on mcmt-sim's
+// pentagon (15 % of its sides), 0.85 on its box (3 %).
+constexpr double kSecondStepCollapsedExcess = 0.5;
 double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
+
+// The fitted margin's level above the paper's (SideProfiles::paper, linear at the fit's gamma), as a part
+// of the paper's contrast to the border: (S1 - P_lin) / (P_lin - L0); NaN without the paper's level.
+double MarginExcessOverPaper(const SideProfiles& s, const SideFit& fit);
+
+// Where SecondStepBeyondMargin finds a step, the side is fitted again on the profiles ending before it
+// (FitSide in detector.cc), first with the margin free. The margin is tied to the paper
+// (SideProfiles::tie_paper) only where that fit's margin is still brighter than the paper by more than
+// this part of the contrast (MarginExcessOverPaper): the step's brighter tail still pushes it. Elsewhere
+// the free margin is the print's paper already and the tie moved the edge inward by nothing it measured
+// (stepfix: the tie moved the refit's edges a further -0.022 px on the reference pentagon, -0.011 on
+// mcmt-sim's box, -0.007 on wood, whatever the margin's level).
+constexpr double kSecondStepTieExcess = 0.1;
 
 // The standard normal distribution Phi(z) and density phi(z) given gauss = exp(-z^2 / 2): Abramowitz and
 // Stegun 7.1.26 for erfc (absolute error below 1.5e-7 in Phi, far below the profiles' noise).

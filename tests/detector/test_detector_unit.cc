@@ -994,6 +994,67 @@ TEST(SideModel, ADarkSurroundsMarginIsTiedToThePaperFromBothSides) {
   EXPECT_LT(std::abs(level_sum / fits), 0.01);
   EXPECT_LT(std::abs(e_sum / fits), 0.005);
 }
+
+// SecondStepBeyondMargin (issue 15) on two synthetic small sides (cells of 1.5-1.75 px, blur 0.35-0.5
+// cell, 16 rays, noise 4 grey levels, 50 draws). A real second step: a 1-cell margin on a dark face that
+// ends 1.25 cells beyond the margin at a bright one (the pentagon's; its fitted margin 0.49 cell, too
+// bright): the rule fires on every draw, the dip at 1.65 cells. A grain-like rise: a 0.35-cell margin on a
+// surface at 0.4 of the paper whose level rises 12 levels per cell across the reach (the reference
+// renderer's wood): the first fit's margin collapses to its width's lower bound, its far side is not
+// measured, and the rule must not fire (11dbc98 fired on all 50 draws; stepfix, kSecondStepCollapsedExcess).
+TEST(SideModel, SecondStepNeedsAMeasuredMargin) {
+  const double paper = 200, border = 15;
+  const auto phi = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  struct Case {
+    double cell, sigma_cells, margin_cells, surface, face_end_cells, beyond, slope_per_cell;
+  };
+  // Returns the fraction of draws where the rule fired and the mean dip (cells beyond the edge).
+  const auto run = [&](const Case& k, double* dip_cells, double* q_cells) {
+    const double cell = k.cell, sigma = k.sigma_cells * cell, margin = k.margin_cells * cell;
+    const double face_end = k.face_end_cells * cell;
+    const auto profile = [&](double u, int c1, int c2) {
+      const double row1 = c1 ? paper : border, row2 = c2 ? paper : border;
+      const double surface = k.surface + k.slope_per_cell * std::max(0.0, u - margin) / cell;
+      return surface + (paper - surface) * phi((margin - u) / sigma) + (border - paper) * phi(-u / sigma) +
+             (row1 - border) * phi((-cell - u) / sigma) + (row2 - row1) * phi((-2 * cell - u) / sigma) +
+             (k.beyond - k.surface) * phi((u - face_end) / sigma);
+    };
+    std::mt19937_64 rng(15);
+    std::normal_distribution<double> gauss(0.0, 4.0);
+    int fired = 0, fits = 0;
+    double dip_sum = 0, q_sum = 0;
+    for (int draw = 0; draw < 50; ++draw) {
+      SideProfiles s;
+      const double du = cell / 4.0, u0 = -(SideProfiles::kRows - 0.4) * cell;
+      s.Reset(u0, du, static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1, cell);
+      s.polarity = 1;
+      s.paper = paper;
+      for (int ray = 0; ray < 16; ++ray) {
+        const int c1 = ray % 2, c2 = (ray / 2) % 2;
+        const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)}, {cell, 2 * cell},
+                               {1.0 * c1, 1.0 * c2});
+        for (int j = 0; j < s.bins; ++j) s.Add(g, j, profile(s.u0 + j * s.du, c1, c2) + gauss(rng));
+      }
+      SideFit fit;
+      if (!FitSideProfiles(s, &fit)) continue;
+      ++fits;
+      q_sum += fit.params[6] / cell;  // q
+      const double dip = SecondStepBeyondMargin(s, fit);
+      if (std::isfinite(dip)) ++fired, dip_sum += (dip + fit.e) / cell;
+    }
+    *dip_cells = fired ? dip_sum / fired : NAN;
+    *q_cells = fits ? q_sum / fits : NAN;
+    return fits ? static_cast<double>(fired) / fits : 0.0;
+  };
+  double dip = 0, q = 0;
+  const double step = run({1.5, 0.5, 1.0, 60, 2.25, 180, 0.0}, &dip, &q);
+  std::printf("second step: fired %.2f, dip %.2f cells, margin %.2f cells\n", step, dip, q);
+  EXPECT_GT(step, 0.9);
+  EXPECT_NEAR(dip, 1.75, 0.5);
+  const double grain = run({1.75, 0.35, 0.35, 80, 100, 80, 12.0}, &dip, &q);
+  std::printf("grain: fired %.2f, dip %.2f cells, margin %.2f cells\n", grain, dip, q);
+  EXPECT_LT(grain, 0.1);
+}
 }  // namespace
 }  // namespace mcmt
 
