@@ -946,6 +946,26 @@ TEST(SideModel, ARayCrossingAColumnBoundaryIsFittedWithItsStep) {
   EXPECT_GT(std::abs(fits[0].e - edge), 0.05);
 }
 
+// Side profiles of 16 rays, binned cell / 4 from SideProfiles::kRows - 0.4 cells inside the edge to 1.6
+// cells + 1 px beyond it (the detector's reach), whose two code rows take the four colour pairs in turn
+// (row 1 ray % 2, row 2 (ray / 2) % 2); each bin is profile(u, row1, row2) plus a draw of `gauss`.
+template <class Profile>
+SideProfiles SixteenRayProfiles(double cell, double paper, const Profile& profile,
+                                std::normal_distribution<double>& gauss, std::mt19937_64& rng) {
+  SideProfiles s;
+  const double du = cell / 4.0, u0 = -(SideProfiles::kRows - 0.4) * cell;
+  s.Reset(u0, du, static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1, cell);
+  s.polarity = 1;
+  s.paper = paper;
+  for (int ray = 0; ray < 16; ++ray) {
+    const int c1 = ray % 2, c2 = (ray / 2) % 2;
+    const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)}, {cell, 2 * cell},
+                           {1.0 * c1, 1.0 * c2});
+    for (int j = 0; j < s.bins; ++j) s.Add(g, j, profile(s.u0 + j * s.du, c1, c2) + gauss(rng));
+  }
+  return s;
+}
+
 // A half-cell paper margin between the border's black and a dark grey surface (0.15 of the paper's level,
 // condition 14 of the reference renderer's catalogue), cells 2.2 px deep, blur 0.76 px, noisy profiles:
 // the margin's level and width trade along a valley (a brighter margin fits narrower, its near edge
@@ -971,17 +991,7 @@ TEST(SideModel, ADarkSurroundsMarginIsTiedToThePaperFromBothSides) {
   int fits = 0;
   constexpr int kDraws = 400;
   for (int draw = 0; draw < kDraws; ++draw) {
-    SideProfiles s;
-    const double du = cell / 4.0, u0 = -(SideProfiles::kRows - 0.4) * cell;
-    s.Reset(u0, du, static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1, cell);
-    s.polarity = 1;
-    s.paper = paper;
-    for (int ray = 0; ray < 16; ++ray) {
-      const int c1 = ray % 2, c2 = (ray / 2) % 2;
-      const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)}, {cell, 2 * cell},
-                             {1.0 * c1, 1.0 * c2});
-      for (int j = 0; j < s.bins; ++j) s.Add(g, j, profile(s.u0 + j * s.du, c1, c2) + gauss(rng));
-    }
+    const SideProfiles s = SixteenRayProfiles(cell, paper, profile, gauss, rng);
     SideFit fit;
     if (!FitSideProfiles(s, &fit) || fit.single_surround) continue;
     e_sum += fit.e - edge;
@@ -1024,17 +1034,7 @@ TEST(SideModel, SecondStepNeedsAMeasuredMargin) {
     int fired = 0, fits = 0;
     double dip_sum = 0, q_sum = 0;
     for (int draw = 0; draw < 50; ++draw) {
-      SideProfiles s;
-      const double du = cell / 4.0, u0 = -(SideProfiles::kRows - 0.4) * cell;
-      s.Reset(u0, du, static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1, cell);
-      s.polarity = 1;
-      s.paper = paper;
-      for (int ray = 0; ray < 16; ++ray) {
-        const int c1 = ray % 2, c2 = (ray / 2) % 2;
-        const int g = s.AddRay({static_cast<uint8_t>(c1), static_cast<uint8_t>(c2)}, {cell, 2 * cell},
-                               {1.0 * c1, 1.0 * c2});
-        for (int j = 0; j < s.bins; ++j) s.Add(g, j, profile(s.u0 + j * s.du, c1, c2) + gauss(rng));
-      }
+      const SideProfiles s = SixteenRayProfiles(cell, paper, profile, gauss, rng);
       SideFit fit;
       if (!FitSideProfiles(s, &fit)) continue;
       ++fits;
