@@ -517,8 +517,55 @@ TrackBias TrackBiasTerm(const Rebuilt& r, const ReducedSystem& sys, const Eigen:
   return out_term;
 }
 
+// The printed marker size's error: a common scale (mapper.marker_size_sigma_percent).
+//
+// Every marker of a print shares its scale error (printers scale pages by 0.1-1 %, a ruler reads a 4 cm
+// marker to a few 0.1 mm), and the detector's shared outward corner bias acts the same way (0.01-0.4 % on
+// rendered images, BENCHMARKS.md). All marker sizes x k = 1 + e explain the same images with every
+// distance in the map x k, so the map absorbs e whole and the residuals (and s2 S^-1, TrackBiasTerm)
+// cannot see it. Only a stated prior holds it. Measured (mcmt-sim's rendered 1.3 m session, seed 7, whose
+// map is 0.124 % small; camera centres' squared error per variance per axis, 1 for a right covariance, and
+// tracked positions beyond 3 sigma in the map's frames; bench/results/2026-12-07-printscale.md): sigma 0
+// 9.73 and 86.0 %, 0.05 % 3.98 and 0.0 %, 0.1 % 1.50 and 0.0 %, 0.15 % 0.74; scripts/demo's (-0.023 %)
+// 2.47 / 0.88 / 0.33 at 0 / 0.05 / 0.1 %.
+//
+// The reference camera and the reference marker are held fixed (their poses define the rig and object
+// frames), so the similarity acts about their origins: a camera centre c = -R^T t of cam_from_rig (R, t)
+// goes to c_ref + k (c - c_ref), c_ref the reference camera's centre (0 unless the rig frame is a static
+// body's, rig_frame), rotations unchanged; t = -R c gives dt = -R e (c - c_ref) = e (t + R c_ref). A marker
+// of object_from_marker (R_m, t_m) goes to t_ref + k (t_m - t_ref) with its corners' k-times size, so dt_m =
+// e (t_m - t_ref), t_ref the reference marker's. dr = 0 everywhere. With e ~ N(0, sigma^2) the written
+// entries' covariance gains sigma^2 v v^T, v the stacked (dr, dt) / e of this function, correlated across
+// every camera and marker; a camera centre's covariance gains sigma^2 (c - c_ref)(c - c_ref)^T (its sigma
+// along c - c_ref grows to sqrt(sigma_before^2 + sigma^2 |c - c_ref|^2), across unchanged), the reference's
+// nothing. The estimate is not changed.
+Eigen::VectorXd MarkerSizeScaleDirection(const RigMap& map, const Rebuilt& r, const ReducedSystem& sys,
+                                         bool with_markers) {
+  const BundleProblem& bp = r.bp;
+  Eigen::Vector3d c_ref = Eigen::Vector3d::Zero(), t_ref = Eigen::Vector3d::Zero();
+  if (r.reference_camera >= 0) {
+    const Rigid3 ref = RigidFromBlock(bp.cam_from_rig[r.reference_camera].data());
+    c_ref = -ref.linear().transpose() * ref.translation();
+  }
+  if (r.reference_marker >= 0)
+    t_ref = RigidFromBlock(bp.object_from_marker[r.reference_marker].data()).translation();
+  std::vector<Eigen::Vector3d> dt;
+  for (size_t c = 0; c < map.cameras.size(); ++c)
+    if (sys.camera_slot[c] >= 0) {
+      const Rigid3 cam_from_rig = RigidFromBlock(bp.cam_from_rig[c].data());
+      dt.push_back(cam_from_rig.translation() + cam_from_rig.linear() * c_ref);
+    }
+  for (size_t m = 0; with_markers && m < map.markers.size(); ++m)
+    if (sys.marker_slot[m] >= 0)
+      dt.push_back(RigidFromBlock(bp.object_from_marker[m].data()).translation() - t_ref);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(6 * dt.size());
+  for (size_t e = 0; e < dt.size(); ++e) v.segment<3>(6 * e + 3) = dt[e];
+  return v;
+}
+
 // Marginal covariance of every non-reference camera pose and the joint covariance of the cameras and
-// markers: s2 S^-1 with the tracks' bias (TrackBiasTerm) added.
+// markers: s2 S^-1 with the tracks' bias (TrackBiasTerm) and the marker size's scale
+// (MarkerSizeScaleDirection) added.
 void PoseCovariance(const RigMap& map, const Rebuilt& r, Diagnostics* d) {
   const ReducedSystem sys = BuildReducedSystem(r, d->observations);
   d->residual_sigma_px =
@@ -540,6 +587,11 @@ void PoseCovariance(const RigMap& map, const Rebuilt& r, Diagnostics* d) {
       for (size_t b = 0; b < out.size(); ++b)
         joint.matrix.block<6, 6>(6 * a, 6 * b) = se2 * cov.block<6, 6>(6 * out[a], 6 * out[b]);
     if (bias.sb2 > 0) joint.matrix += bias.sb2 * bias.sum_wtw;
+    const double k2 = d->options.marker_size_sigma * d->options.marker_size_sigma;
+    if (k2 > 0) {
+      const Eigen::VectorXd v = MarkerSizeScaleDirection(map, r, sys, !joint.markers.empty());
+      joint.matrix.noalias() += k2 * v * v.transpose();
+    }
     joint.matrix = 0.5 * (joint.matrix + joint.matrix.transpose()).eval();
   }
   for (size_t c = 0; c < d->cameras.size(); ++c) {
@@ -621,6 +673,7 @@ std::string DiagnosticsJson(const Diagnostics& d) {
     << ",\n    \"print_tolerance\": " << JsonNumber(d.options.print_tolerance)
     << ",\n    \"residual_sigma_px\": " << JsonNumber(d.residual_sigma_px)
     << ",\n    \"track_bias_sigma_px\": " << JsonNumber(d.track_bias_sigma_px)
+    << ",\n    \"marker_size_sigma_percent\": " << JsonNumber(100.0 * d.options.marker_size_sigma)
     << ",\n    \"rules\": {\"fair_rms_ratio\": " << JsonNumber(o.fair_rms_ratio)
     << ", \"poor_rms_ratio\": " << JsonNumber(o.poor_rms_ratio)
     << ", \"fair_rejected\": " << JsonNumber(o.fair_rejected)

@@ -37,6 +37,10 @@ struct DiagnosticsOptions {
   double poor_coverage = 0.03, fair_coverage = 0.25;   // ... coverage is below these, ...
   int poor_observations = 10, fair_observations = 50;  // ... or it kept fewer inliers than these.
   bool covariance = true;
+  // The printed marker size's relative 1-sigma (mapper.marker_size_sigma_percent / 100): a scale every
+  // marker shares, which no residual can see; it enters the covariance as a common scale (diagnostics.cc
+  // MarkerSizeScaleDirection). 0: the size is exact.
+  double marker_size_sigma = 0.0;
 };
 
 struct ObservationResidual {
@@ -80,7 +84,8 @@ struct Diagnostics {
   double track_bias_sigma_px = 0.0;
   // The joint covariance of the camera and marker poses (core/map_covariance.h; the cameras' blocks are
   // CameraDiagnostics::covariance), scaled by residual_sigma_px^2, with the tracks' shared bias
-  // (track_bias_sigma_px) propagated as a correlated error. Cameras and markers together when they
+  // (track_bias_sigma_px) propagated as a correlated error, and the marker size's common scale
+  // (options.marker_size_sigma) about the reference camera and marker. Cameras and markers together when they
   // are at most kMaxMapCovarianceEntries, else the cameras alone (a board of many markers would make
   // map.yaml megabytes long). None when the poses are not determined or the covariance was not asked for.
   std::optional<MapCovariance> map_covariance;

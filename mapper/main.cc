@@ -41,7 +41,7 @@ struct Cli {
   std::string config, log, out, lcm_url, reference_camera, old_map, pose_channel = mcmt::kPoseChannel;
   bool refine_layout = false, maintain = false;
   int frames = 0;
-  double seconds = 0.0;
+  double seconds = 0.0, marker_size_sigma_percent = 0.0;
   bool allow_partial = false, publish = false, no_refine = false, force = false;
   int threads = -1;
 };
@@ -69,6 +69,10 @@ void DeclareOptions(mcmt::ArgParser* args, Cli* c) {
                   "else the best connected)");
   args->AddInt("threads", &c->threads, "solver threads (-1: mapper.threads of the rig YAML, 0: all cores)",
                mcmt::AtLeast(-1));
+  args->AddDouble(
+      "marker-size-sigma-percent", &c->marker_size_sigma_percent,
+      "the printed marker size's relative 1-sigma in %, instead of mapper.marker_size_sigma_percent",
+      mcmt::InRange(0, 10, false, true));
   args->AddFlag("no-refine", &c->no_refine, "initialisation only (no bundle adjustment)");
   args->AddFlag("force", &c->force, "overwrite the results of another session in --out");
   args->AddString(
@@ -99,7 +103,7 @@ void DeclareOptions(mcmt::ArgParser* args, Cli* c) {
 }
 
 // The rig YAML's mapper: section with the command line's overrides.
-mcmt::MapperOptions OptionsOf(const mcmt::RigConfig& rig, const Cli& c) {
+mcmt::MapperOptions OptionsOf(const mcmt::RigConfig& rig, const Cli& c, bool size_sigma_given) {
   mcmt::MapperOptions options = mcmt::MapperOptions::FromConfig(rig);
   if (c.allow_partial) options.allow_partial = true;
   if (!c.reference_camera.empty()) {
@@ -110,6 +114,7 @@ mcmt::MapperOptions OptionsOf(const mcmt::RigConfig& rig, const Cli& c) {
   }
   if (c.threads >= 0) options.threads = c.threads;
   if (c.no_refine) options.refine = false;
+  if (size_sigma_given) options.marker_size_sigma_percent = c.marker_size_sigma_percent;
   return options;
 }
 
@@ -169,7 +174,7 @@ int Run(int argc, char** argv) {
   if (!args.Parse(argc, argv, &code)) return code;
 
   const mcmt::RigConfig rig = mcmt::LoadRigConfig(c.config);
-  const mcmt::MapperOptions options = OptionsOf(rig, c);
+  const mcmt::MapperOptions options = OptionsOf(rig, c, args.Given("marker-size-sigma-percent"));
   if (!args.Given("lcm-url")) c.lcm_url = rig.lcm_url;
   if (c.maintain) return Maintain(rig, options, c.old_map, c.log, c.out, c.lcm_url, c.pose_channel);
   if (c.out.empty()) throw std::runtime_error("--out is required (the output folder)");

@@ -607,6 +607,7 @@ MapResult Mapper::Solve() {
   if (!options_.bodies.empty()) {
     MapResult result = SolveBodies(s.messages, inputs, options_);
     result.detections = s.inputs;
+    result.report.marker_size_sigma_percent = options_.marker_size_sigma_percent;
     CheckSupported(options_, &result);
     return result;
   }
@@ -618,6 +619,7 @@ MapResult Mapper::Solve() {
                          : SolveWithEpochs(s.messages, inputs, options_, &splits);
   result.detections = s.inputs;  // for the diagnostics (mapper/diagnostics.h)
   MergeCameraEpochs(splits, s.camera_names, &result);
+  result.report.marker_size_sigma_percent = options_.marker_size_sigma_percent;
   CheckSupported(options_, &result);
   return result;
 }

@@ -158,6 +158,11 @@ struct MapperOptions {
   // unsupported_side_fraction x its markers' median side (0: no check).
   double unsupported_rms_ratio = 3.0;
   double unsupported_side_fraction = 0.04;
+  // The printed marker size's relative 1-sigma, percent: a scale every marker shares, which the map absorbs
+  // whole; the covariance the mapper writes (map.yaml covariance, report.json diagnostics) holds it as a
+  // common scale about the reference camera and marker (mapper/diagnostics.cc MarkerSizeScaleDirection).
+  // 0: the size is exact. The estimate is not changed.
+  double marker_size_sigma_percent = 0.0;
 
   // Marker ids that do not belong to the rigid object: a marker must be seen together with another
   // marker (same camera, same frame) in at least min_marker_support frames, in at least
@@ -283,6 +288,7 @@ struct MapReport {
   std::string termination;
   std::string linear_solver;
   int threads = 0;
+  double marker_size_sigma_percent = 0.0;    // MapperOptions', for the diagnostics' covariance
   std::vector<IntrinsicsReport> intrinsics;  // cameras whose intrinsics were considered for refinement
   AutoBodies auto_bodies;                    // objects: auto / ids: auto
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order

@@ -58,6 +58,11 @@ const OptionTable<MapperOptions>& MapperOptionTable() {
                 AtLeast(0))
            .Add("unsupported_side_fraction", &O::unsupported_side_fraction, "",
                 "... and above this fraction of its markers' median side in pixels (0.04: 4 %)", AtLeast(0))
+           .Add("marker_size_sigma_percent", &O::marker_size_sigma_percent, "%",
+                "the printed marker size's relative 1-sigma (print scale, measuring): the covariance the "
+                "mapper writes holds it as a scale every position shares (0: the size is exact; "
+                "docs/report.md)",
+                InRange(0, 10, false, true))
            .Add("min_marker_support", &O::min_marker_support, "frames",
                 "a marker must be seen with another (same camera, same frame) this often to be placed",
                 AtLeast(1))

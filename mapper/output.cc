@@ -224,7 +224,9 @@ std::string ReportJson(const MapResult& result) {
 }
 
 std::string WriteMapOutputs(const std::string& outdir, const MapResult& result) {
-  const Diagnostics diagnostics = ComputeObjectDiagnostics(result);  // mapper/diagnostics.h
+  DiagnosticsOptions options;
+  options.marker_size_sigma = result.report.marker_size_sigma_percent / 100.0;
+  const Diagnostics diagnostics = ComputeObjectDiagnostics(result, options);  // mapper/diagnostics.h
   const std::string verdicts = VerdictLines(diagnostics);
   fs::path out = fs::absolute(outdir).lexically_normal();
   if (!out.has_filename()) out = out.parent_path();

@@ -83,6 +83,18 @@ TEST(MapperOptions, FileErrorsNameTheKey) {
             "mapper.refine_intrinsics_cameras: no camera named 'cam9'");
   EXPECT_EQ(FromConfigError("sync_key", "sync: {tolerance_us: 1}\n").substr(0, 29),
             "sync.tolerance_us: unknown ke");
+  // The printed marker size's sigma: a percentage, 0 (exact) up to below 10 %.
+  EXPECT_EQ(FromConfigError("size_sigma", "  marker_size_sigma_percent: -0.1\n"),
+            "mapper.marker_size_sigma_percent: must be in [0, 10), got -0.1");
+  EXPECT_EQ(FromConfigError("size_sigma_big", "  marker_size_sigma_percent: 10\n"),
+            "mapper.marker_size_sigma_percent: must be in [0, 10), got 10");
+  EXPECT_EQ(FromConfigError("size_sigma_text", "  marker_size_sigma_percent: much\n").substr(0, 34),
+            "mapper.marker_size_sigma_percent: ");
+  EXPECT_EQ(MapperOptions::FromConfig(
+                LoadRigConfig(PinnedRigWith("size_sigma_ok", "  marker_size_sigma_percent: 0.25\n")))
+                .marker_size_sigma_percent,
+            0.25);
+  EXPECT_EQ(MapperOptions().marker_size_sigma_percent, 0.0);
 }
 
 // Checks that FromConfig made and Validate skipped before (options built in code) now fail the same way.
@@ -128,6 +140,9 @@ TEST(MapperOptions, OptionsBuiltInCodeGetTheFileChecks) {
   o = MapperOptions();
   o.intrinsics.observability_ratio = 0;
   EXPECT_EQ(error(o), "mapper.observability_ratio: must be in (0, 1], got 0");
+  o = MapperOptions();
+  o.marker_size_sigma_percent = 12;
+  EXPECT_EQ(error(o), "mapper.marker_size_sigma_percent: must be in [0, 10), got 12");
 }
 
 TEST(MapperOptions, DocsTableListsEveryKey) {

@@ -125,6 +125,27 @@ TEST(MapperProcess, MapsALogAndWarnsAboutForeignMessages) {
   }
   EXPECT_EQ(ReadFile(dir + "/single1/map.yaml"), ReadFile(dir + "/single2/map.yaml"));
   EXPECT_EQ(ReadFile(dir + "/single1/trajectory.csv"), ReadFile(dir + "/single2/trajectory.csv"));
+  // The printed size's sigma changes the written covariance and report.json's value only.
+  const CommandResult sized =
+      RunCommand(kMapper + " --config " + rig + " --log " + dir +
+                 "/session.lcmlog --threads 1 --marker-size-sigma-percent 0.2 --out " + dir + "/sized");
+  ASSERT_EQ(sized.code, 0) << sized.output;
+  const std::string plain_yaml = ReadFile(dir + "/single1/map.yaml"),
+                    sized_yaml = ReadFile(dir + "/sized/map.yaml");
+  const size_t cov = plain_yaml.find("\ncovariance:");
+  ASSERT_NE(cov, std::string::npos);
+  const auto after_written_by = [](const std::string& s, size_t end) {
+    const size_t line = s.find('\n', s.find("written_by"));
+    return s.substr(line, end - line);
+  };
+  EXPECT_EQ(after_written_by(plain_yaml, cov),
+            after_written_by(sized_yaml, sized_yaml.find("\ncovariance:")));
+  EXPECT_NE(plain_yaml.substr(cov), sized_yaml.substr(sized_yaml.find("\ncovariance:")));
+  EXPECT_EQ(ReadFile(dir + "/single1/trajectory.csv"), ReadFile(dir + "/sized/trajectory.csv"));
+  EXPECT_NE(ReadFile(dir + "/single1/report.json").find("\"marker_size_sigma_percent\": 0,"),
+            std::string::npos);
+  EXPECT_NE(ReadFile(dir + "/sized/report.json").find("\"marker_size_sigma_percent\": 0.2,"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 
@@ -161,6 +182,15 @@ TEST(MapperProcess, BadInputGivesOneLineErrors) {
                "--frames: must be >= 0, got '-1'");
   expect_error("--config " + rig + " --log " + dir + "/s.lcmlog --out " + dir + "/out --seconds nan",
                "--seconds: must be >= 0, got 'nan'");
+  expect_error(
+      "--config " + rig + " --log " + dir + "/s.lcmlog --out " + dir + "/out --marker-size-sigma-percent -1",
+      "--marker-size-sigma-percent: must be in [0, 10), got '-1'");
+  expect_error(
+      "--config " + rig + " --log " + dir + "/s.lcmlog --out " + dir + "/out --marker-size-sigma-percent 10",
+      "--marker-size-sigma-percent: must be in [0, 10), got '10'");
+  const std::string big = WriteRig(dir, session, "mapper:\n  marker_size_sigma_percent: 15\n");
+  expect_error("--config " + big + " --log " + dir + "/s.lcmlog --out " + dir + "/out",
+               "mapper.marker_size_sigma_percent: must be in [0, 10), got 15");
   fs::remove_all(dir);
 }
 
