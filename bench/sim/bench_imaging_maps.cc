@@ -45,6 +45,15 @@
 //                               markers drawn by the reference renderer
 //   MCMT_IMAGING_CAMERA=N       detect camera N's frames only (with MCMT_IMAGING_DUMP: one camera's corners;
 //                               the maps fail for want of the other cameras)
+//   MCMT_IMAGING_SIDE_ORACLE=R[:LO-HI]  an oracle (measuring only): the sides whose role R names (comma-
+//                               separated: top, bottom, near, far, or all) lose their mean offset along the
+//                               true side's outward normal before mapping; their tilt and the other sides'
+//                               offsets are kept. Roles as 2026-12-07-seeds13-split.py: side 0 (corners 0-1)
+//                               top, 2 bottom, of 1 / 3 the longer in the image near, the other far. With
+//                               :LO-HI only markers seen at view angles LO-HI deg. With "tilt" in R the
+//                               named sides lose instead their ends' difference (each end set to the side's
+//                               mean), with "both" both (the side's two corners at the truth along its
+//                               normal)
 //   MCMT_IMAGING_SHRINK_PCT=P   each detected marker's corners moved P % of the way to their centroid before
 //                               mapping (an oracle: what an isotropic size bias of the corners costs the
 //                               map's scale; negative P enlarges)
@@ -207,6 +216,70 @@ void OverrideRender(const std::string& spec, sim::RenderOptions* render) {
   }
 }
 
+// MCMT_IMAGING_SIDE_ORACLE (see the top of the file).
+struct SideOracle {
+  bool role[4] = {false, false, false, false};  // top, bottom, near, far
+  bool offset = true, tilt = false;
+  double lo_deg = -1.0, hi_deg = 1e9;
+};
+
+SideOracle ParseSideOracle(const char* text) {
+  SideOracle o;
+  if (!text || !*text) return o;
+  std::string s = text;
+  const size_t colon = s.find(':');
+  if (colon != std::string::npos) {
+    std::sscanf(s.c_str() + colon + 1, "%lf-%lf", &o.lo_deg, &o.hi_deg);
+    s = s.substr(0, colon);
+  }
+  const char* names[4] = {"top", "bottom", "near", "far"};
+  for (int r = 0; r < 4; ++r)
+    o.role[r] = s.find(names[r]) != std::string::npos || s.find("all") != std::string::npos;
+  o.tilt = s.find("tilt") != std::string::npos || s.find("both") != std::string::npos;
+  o.offset = s.find("tilt") == std::string::npos;
+  return o;
+}
+
+// Moves the detected corners so that each side the oracle names has zero mean offset along the true side's
+// outward normal: corner j is on sides j - 1 and j; its error d is changed to d' with d'.n_k = d.n_k - o_k
+// for the named sides k of the two (o_k: the mean of the side's two corners' d.n_k), d'.n_k = d.n_k else.
+void ApplySideOracle(const SideOracle& o, const sim::MarkerView& v, marker_t* m) {
+  if (v.view_angle_deg < o.lo_deg || v.view_angle_deg >= o.hi_deg) return;
+  double n[4][2], off[4], len[4], end[4][2];
+  const double cx = (v.corners[0][0] + v.corners[1][0] + v.corners[2][0] + v.corners[3][0]) / 4;
+  const double cy = (v.corners[0][1] + v.corners[1][1] + v.corners[2][1] + v.corners[3][1]) / 4;
+  for (int k = 0; k < 4; ++k) {
+    const int j = (k + 1) % 4;
+    const double ex = v.corners[j][0] - v.corners[k][0], ey = v.corners[j][1] - v.corners[k][1];
+    len[k] = std::hypot(ex, ey);
+    n[k][0] = ey / len[k], n[k][1] = -ex / len[k];
+    const double mx = (v.corners[k][0] + v.corners[j][0]) / 2, my = (v.corners[k][1] + v.corners[j][1]) / 2;
+    if (n[k][0] * (mx - cx) + n[k][1] * (my - cy) < 0) n[k][0] = -n[k][0], n[k][1] = -n[k][1];
+    for (int e = 0; e < 2; ++e) {
+      const int c = e == 0 ? k : j;
+      end[k][e] =
+          (m->corners[c][0] - v.corners[c][0]) * n[k][0] + (m->corners[c][1] - v.corners[c][1]) * n[k][1];
+    }
+    off[k] = 0.5 * (end[k][0] + end[k][1]);
+  }
+  // The change along side k's normal at its end e (0: corner k, 1: corner k + 1).
+  auto change = [&](int k, int e) {
+    return -(o.offset ? off[k] : 0.0) - (o.tilt ? end[k][e] - off[k] : 0.0);
+  };
+  const int near = len[1] >= len[3] ? 1 : 3;
+  bool named[4];
+  for (int k = 0; k < 4; ++k) named[k] = o.role[k == 0 ? 0 : k == 2 ? 1 : k == near ? 2 : 3];
+  for (int j = 0; j < 4; ++j) {
+    const int a = (j + 3) % 4, b = j;  // the corner's two sides
+    const double ra = named[a] ? change(a, 1) : 0.0, rb = named[b] ? change(b, 0) : 0.0;
+    // Solve delta.n_a = ra, delta.n_b = rb.
+    const double det = n[a][0] * n[b][1] - n[a][1] * n[b][0];
+    if (std::fabs(det) < 1e-9) continue;
+    m->corners[j][0] += (ra * n[b][1] - rb * n[a][1]) / det;
+    m->corners[j][1] += (rb * n[a][0] - ra * n[b][0]) / det;
+  }
+}
+
 // The marker's corners scaled by `factor` about their centroid (MCMT_IMAGING_SHRINK_PCT).
 void ScaleAboutCentroid(double factor, marker_t* m) {
   if (factor == 1.0) return;
@@ -300,6 +373,7 @@ int main(int argc, char** argv) {
   const DropRule drop = ParseDropRule(std::getenv("MCMT_IMAGING_DROP"));
   const char* shrink_env = std::getenv("MCMT_IMAGING_SHRINK_PCT");
   const double shrink_pct = shrink_env ? std::atof(shrink_env) : 0.0;
+  const SideOracle side_oracle = ParseSideOracle(std::getenv("MCMT_IMAGING_SIDE_ORACLE"));
   std::unique_ptr<EventLogWriter> save;
   if (const char* path = std::getenv("MCMT_IMAGING_SAVE")) save = std::make_unique<EventLogWriter>(path);
   const std::vector<Condition> conditions = WithObjectOverride(Conditions());
@@ -410,6 +484,7 @@ int main(int argc, char** argv) {
                                        (drop.err_px > 0 && max_err > drop.err_px) ||
                                        (drop.angle_deg > 0 && v->view_angle_deg > drop.angle_deg));
             if (!dropped) kept.push_back(m);
+            if (!dropped && v) ApplySideOracle(side_oracle, *v, &kept.back());
           }
           d.markers = kept;
           for (marker_t& m : d.markers) ScaleAboutCentroid(1.0 - shrink_pct / 100.0, &m);
