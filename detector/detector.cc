@@ -1183,12 +1183,15 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
     const float* prof = &s.profiles[static_cast<size_t>(i) * m];
     // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
     double best = 1e9;
+    // Each sample's (v - mid) * sign computed once and carried to the next step (fastfit).
+    float v0 = (prof[0] - mid) * sign;
     for (int j = 0; j + 1 < m; ++j) {
-      const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+      const float v1 = (prof[j + 1] - mid) * sign;
       if (v0 <= 0.f && v1 > 0.f) {
         const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
         if (std::abs(at) < std::abs(best)) best = at;
       }
+      v0 = v1;
     }
     if (best > 1e8) continue;
     points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));
