@@ -84,10 +84,60 @@ inline __m128 SampleTwoInside(const uint8_t* data, size_t step, __m128d x, __m12
   const __m128 bottom = _mm_shuffle_ps(rows, rows, _MM_SHUFFLE(3, 1, 3, 1));
   return _mm_add_ps(top, _mm_mul_ps(fy, _mm_sub_ps(bottom, top)));
 }
+
+// The SampleInside values at the four points (x01, y01) (lanes 0, 1) and (x23, y23) (lanes 2, 3) of the
+// image at `data`, by the same operations lane by lane (so the same values as SampleTwoInside and
+// SampleInside). One sample per float lane: the eight 16-bit rows of the four 2x2 blocks inserted as
+// the tops then the bottoms, widened to 32-bit lanes (left pixel | right pixel << 16) and split by a
+// mask and a shift, so that each bilinear step is one operation for four samples (SampleTwoInside's
+// interleave and its two shuffles per step are gone), and the four pixel offsets y step + x come from one
+// pmaddwd instead of four scalar multiplications. bench_detector's 10 accurate frames: SampleRayInside
+// 28.26 -> 24.99 M instructions, accurate 288.29 -> 285.02 M (fastfit).
+inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_weights, __m128d x01,
+                               __m128d y01, __m128d x23, __m128d y23) {
+  const __m128i xi01 = _mm_cvttpd_epi32(x01), yi01 = _mm_cvttpd_epi32(y01);
+  const __m128i xi23 = _mm_cvttpd_epi32(x23), yi23 = _mm_cvttpd_epi32(y23);
+  const __m128 fx = _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(x01, _mm_cvtepi32_pd(xi01))),
+                                  _mm_cvtpd_ps(_mm_sub_pd(x23, _mm_cvtepi32_pd(xi23))));
+  const __m128 fy = _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(y01, _mm_cvtepi32_pd(yi01))),
+                                  _mm_cvtpd_ps(_mm_sub_pd(y23, _mm_cvtepi32_pd(yi23))));
+  // The pixels' offsets y step + x, 32-bit lanes: (x | y << 16) times (1 | step << 16), each pair of
+  // 16-bit products added (pmaddwd). Exact where x, y and step are below 2^15 (the caller's check).
+  const __m128i xy =
+      _mm_or_si128(_mm_unpacklo_epi64(xi01, xi23), _mm_slli_epi32(_mm_unpacklo_epi64(yi01, yi23), 16));
+  const __m128i offsets = _mm_madd_epi16(xy, offset_weights);
+  const uint8_t* p[4] = {data + _mm_cvtsi128_si32(offsets),
+                         data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 4)),
+                         data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 8)),
+                         data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 12))};
+  uint16_t top[4], bottom[4];
+  for (int i = 0; i < 4; ++i) {
+    std::memcpy(&top[i], p[i], 2);
+    std::memcpy(&bottom[i], p[i] + step, 2);
+  }
+  __m128i v = _mm_cvtsi32_si128(top[0]);
+  v = _mm_insert_epi16(v, top[1], 1);
+  v = _mm_insert_epi16(v, top[2], 2);
+  v = _mm_insert_epi16(v, top[3], 3);
+  v = _mm_insert_epi16(v, bottom[0], 4);
+  v = _mm_insert_epi16(v, bottom[1], 5);
+  v = _mm_insert_epi16(v, bottom[2], 6);
+  v = _mm_insert_epi16(v, bottom[3], 7);
+  const __m128i zero = _mm_setzero_si128(), low = _mm_set1_epi32(0xffff);
+  const __m128i tops = _mm_unpacklo_epi8(v, zero), bottoms = _mm_unpackhi_epi8(v, zero);
+  const __m128 top_left = _mm_cvtepi32_ps(_mm_and_si128(tops, low));
+  const __m128 top_right = _mm_cvtepi32_ps(_mm_srli_epi32(tops, 16));
+  const __m128 bottom_left = _mm_cvtepi32_ps(_mm_and_si128(bottoms, low));
+  const __m128 bottom_right = _mm_cvtepi32_ps(_mm_srli_epi32(bottoms, 16));
+  const __m128 upper = _mm_add_ps(top_left, _mm_mul_ps(fx, _mm_sub_ps(top_right, top_left)));
+  const __m128 lower = _mm_add_ps(bottom_left, _mm_mul_ps(fx, _mm_sub_ps(bottom_right, bottom_left)));
+  return _mm_add_ps(upper, _mm_mul_ps(fy, _mm_sub_ps(lower, upper)));
+}
 #endif
 
 // Samples at the points origin + (s0 + j ds) direction, begin <= j < end, all Inside, into out[j - begin]
-// (SampleInside's values; with SSE2 two at a time, by the same operations).
+// (SampleInside's values; with SSE2 four at a time by the same operations, two at a time for fewer than four
+// samples or an image of 2^15 or more pixels or bytes across).
 void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const Eigen::Vector2d& direction,
                      double s0, double ds, int begin, int end, float* out) {
 #ifdef __SSE2__
@@ -100,6 +150,25 @@ void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const E
     const __m128d s = _mm_add_pd(first, _mm_mul_pd(js, width));
     return SampleTwoInside(data, step, _mm_add_pd(ox, _mm_mul_pd(s, dx)), _mm_add_pd(oy, _mm_mul_pd(s, dy)));
   };
+  const bool small = step < 32768 && gray.cols < 32768 && gray.rows < 32768;  // SampleFourInside's offsets
+  if (small && end - begin >= 4) {
+    // Four at a time; the last four end at `end` (overlapping the ones before where the count is not a
+    // multiple of four: those samples are written again with the same values).
+    const __m128i offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
+    auto four_at = [&](int j) {
+      const __m128d js = _mm_set_pd(j + 1.0, j);
+      const __m128d s01 = _mm_add_pd(first, _mm_mul_pd(js, width));
+      const __m128d s23 = _mm_add_pd(first, _mm_mul_pd(_mm_add_pd(js, two), width));
+      _mm_storeu_ps(out + j - begin,
+                    SampleFourInside(data, step, offset_weights, _mm_add_pd(ox, _mm_mul_pd(s01, dx)),
+                                     _mm_add_pd(oy, _mm_mul_pd(s01, dy)), _mm_add_pd(ox, _mm_mul_pd(s23, dx)),
+                                     _mm_add_pd(oy, _mm_mul_pd(s23, dy))));
+    };
+    int j = begin;
+    for (; j + 4 <= end; j += 4) four_at(j);
+    if (j < end) four_at(end - 4);
+    return;
+  }
   int j = begin;
   for (__m128d js = _mm_set_pd(j + 1.0, j); j + 1 < end; j += 2, js = _mm_add_pd(js, two))
     _mm_storel_pi(reinterpret_cast<__m64*>(out + j - begin), at(js));
@@ -1114,12 +1183,15 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
     const float* prof = &s.profiles[static_cast<size_t>(i) * m];
     // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
     double best = 1e9;
+    // Each sample's (v - mid) * sign computed once and carried to the next step (fastfit).
+    float v0 = (prof[0] - mid) * sign;
     for (int j = 0; j + 1 < m; ++j) {
-      const float v0 = (prof[j] - mid) * sign, v1 = (prof[j + 1] - mid) * sign;
+      const float v1 = (prof[j + 1] - mid) * sign;
       if (v0 <= 0.f && v1 > 0.f) {
         const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
         if (std::abs(at) < std::abs(best)) best = at;
       }
+      v0 = v1;
     }
     if (best > 1e8) continue;
     points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));
