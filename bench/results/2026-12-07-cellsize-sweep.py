@@ -3,7 +3,7 @@
 # rolls and two pixel offsets, per cell size (CELLS, px). Pass diag_side_exact's options in the environment, e.g.
 #   INK=25 PAPERL=225 PIX=1 BOX=8 python3 2026-12-07-cellsize-sweep.py   (B: blur px, default 0.01: none)
 import os, re, subprocess, sys, statistics
-exe = os.environ.get('EXE', '/work/blursearch/build/bench/diag_side_exact')
+exe = os.environ.get('EXE', os.path.join(os.path.dirname(os.path.abspath(__file__)), '../../build/bench/diag_side_exact'))
 cells = [float(x) for x in os.environ.get('CELLS', '1.3 1.6 1.9 2.2 2.5').split()]
 blur = os.environ.get('B', '0.01')
 rolls = os.environ.get('ROLLS', '0 17 33 61').split()

@@ -4,7 +4,6 @@ end difference (top / bottom: near end - far end, half; near / far: corner k - c
 outward normal, from a bench_imaging_maps MCMT_IMAGING_DUMP. With B: A less B, paired."""
 import csv, math, sys
 from collections import defaultdict
-sys.path.insert(0,'/work/simsize13/bench/results')
 def markers(path):
     g = defaultdict(dict)
     for r in csv.DictReader(open(path)):
