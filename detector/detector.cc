@@ -1627,7 +1627,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
   }
   if (choices)
     for (int side = 0; side < 4; ++side)
-      (*choices)[side] = {r.side_fits[side].single_surround, r.side_fits[side].params[6]};
+      (*choices)[side] = {r.side_fits[side].single_surround, r.side_fits[side].margin_width()};
   std::array<Eigen::Vector2d, 4>& img = r.img;
   if (model_fit && !model_converged && model_passes >= 2)
     for (int k = 0; k < 4; ++k) img[k] = 0.5 * (img[k] + previous[k]);

@@ -98,6 +98,7 @@ using Normal = Eigen::Matrix<double, kParams, kParams>;
 using Vector = Eigen::Matrix<double, kParams, 1>;
 
 static_assert(kParams == 8, "CholeskyLower factorises 8 x 8 normal matrices");
+static_assert(kQ == 6, "SideFit::margin_width() reads params[kQ] as params[6]");
 
 }  // namespace
 

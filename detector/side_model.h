@@ -119,6 +119,9 @@ struct SideFit {
   // profiles' line as given in `e`) instead of from the profiles.
   std::array<double, 8> params{};
   bool warm = false;
+  // The margin's width q (params[6]), px: where the margin's far side lies beyond the edge (held, not
+  // fitted, where single_surround).
+  double margin_width() const { return params[6]; }
 };
 
 // The profiles show a step at the fit's outer edge (fit.e about the profiles' line), of the marker's

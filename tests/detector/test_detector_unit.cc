@@ -1038,7 +1038,7 @@ TEST(SideModel, SecondStepNeedsAMeasuredMargin) {
       SideFit fit;
       if (!FitSideProfiles(s, &fit)) continue;
       ++fits;
-      q_sum += fit.params[6] / cell;  // q
+      q_sum += fit.margin_width() / cell;
       const double dip = SecondStepBeyondMargin(s, fit);
       if (std::isfinite(dip)) ++fired, dip_sum += (dip + fit.e) / cell;
     }
