@@ -6,16 +6,19 @@
 // blurred print shows apart from pixel sampling, the crossings' direction and the passes.
 //   diag_side_exact ID SIDE BLUR_PX SIDE_PX
 // Environment: LINE (px: the profiles' line moved outward), TILT (px per side length: the line turned,
-// outward at the side's end), ALONG (px: blur along the side the model assumes; default BLUR_PX), FITGAMMA
-// (1), DUMP (print the profiles, the model and the residuals), PIX (1: the profiles bilinear samples of a
-// point-sampled 8-bit image, roll ROLL deg and offset OFFX/OFFY px, as the detector samples images),
-// CROSS (1: the line is the crossings' of the detector's model passes, about the true line, iterated
-// with the model's offset: the detector's fixed point; prints the line's offset at the middle and tilt;
-// clean rays and medians as CrossingLine), PAPER (SideProfiles::paper, 0), BOX (with PIX: each pixel the
-// mean of BOX x BOX point samples of its square, the pixel's area as mcmt-sim renders it; 1: its centre),
-// QUANT (with PIX, 1: rounded to 8 bits), INK / PAPERL / SURFACE / BG (the print's linear levels, 0-255),
-// MARGIN / EXT (cells: the margin, and the surface beyond the marker's edge). With DUMP also each ray's
-// crossing about the true line, of the profiles and of the fitted model (`clean`: CleanNeighbour's).
+// outward at the side's end), ALONG (px: blur along the side the model assumes; default BLUR_PX, with PIX and
+// the pixel's spread), FITGAMMA (1), DUMP (print the profiles, the model and the residuals), PIX (1: the
+// profiles bilinear samples of a point-sampled 8-bit image, roll ROLL deg and offset OFFX/OFFY px, as the
+// detector samples images), CROSS (1: the line is the crossings' of the detector's model passes, about the
+// true line, iterated with the model's offset: the detector's fixed point; prints the line's offset at the
+// middle and tilt; clean rays and medians as CrossingLine), PAPER (SideProfiles::paper, 0), BOX (with PIX:
+// each pixel the mean of BOX x BOX point samples of its square, the pixel's area as mcmt-sim renders it; 1:
+// its centre), QUANT (with PIX, 1: rounded to 8 bits), INK / PAPERL / SURFACE / BG (the print's linear
+// levels, 0-255), MARGIN / EXT (cells: the margin, and the surface beyond the marker's edge), ENDS (the first
+// and last code columns with rays, 1 as the detector), ROWCAP (r: rows r and deeper from the side take row r
+// - 1's colour, as the model's last row reaches inward without end), TRUTHSTART (1: the first fit
+// warm-started at the print's own parameters). With DUMP also each ray's crossing about the true line, of the
+// profiles and of the fitted model (`clean`: CleanNeighbour's).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -38,8 +41,18 @@ struct Print {
   double sb = 0.5;     // blur, cells
   double margin = 1.0, ext = 3.5;
   double bg = 0.4 * 255, surface = 0.5 * 255, paper = 0.85 * 255, ink = 0.04 * 255;
+  int side = 0, row_cap = 0;  // ROWCAP: rows from `side` this deep and deeper take row ROWCAP - 1's colour
   int Cell(int row, int col) const {  // 1: differs from the border (GridCell)
     if (row <= 0 || col <= 0 || row >= cells - 1 || col >= cells - 1) return 0;
+    if (row_cap > 0) {
+      const int depth = side == 0 ? row : side == 1 ? cells - 1 - col : side == 2 ? cells - 1 - row : col;
+      if (depth >= row_cap) {  // row_cap - 1's colour (the model's last row reaches inward without end)
+        const int k = row_cap - 1;
+        const int r = side == 0 ? k : side == 2 ? cells - 1 - k : row;
+        const int c = side == 1 ? cells - 1 - k : side == 3 ? k : col;
+        return Cell(r, c);
+      }
+    }
     return bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0;
   }
   double Rect(double x, double y, double x0, double y0, double x1, double y1) const {
@@ -96,6 +109,7 @@ int main(int argc, char** argv) {
   m.ink = Env("INK", m.ink), m.paper = Env("PAPERL", m.paper), m.surface = Env("SURFACE", m.surface);
   m.bg = Env("BG", m.bg), m.margin = Env("MARGIN", m.margin), m.ext = Env("EXT", m.ext);
   m.scale = side_px / m.cells, m.sb = blur / m.scale;
+  m.side = side, m.row_cap = static_cast<int>(Env("ROWCAP", 0));
   const int cells = m.cells;
   double p0[2], a[2], nrm[2];
   SideFrame(side, cells, p0, a, nrm);
@@ -132,9 +146,16 @@ int main(int argc, char** argv) {
            ty * ((1 - tx) * px(fx, fy + 1) + tx * px(fx + 1, fy + 1));
   };
   double line = Env("LINE", 0), tilt = Env("TILT", 0);
+  const int ends = static_cast<int>(Env("ENDS", 1));  // the first and last code columns used
   SideProfiles s;
   SideFit fit;
-  double sigma_along = Env("ALONG", blur);
+  // The blur along the side the model's code rows assume (the detector's: the previous pass's fitted
+  // sigma): with PIX the pixel's spread too (its box (1 - 1 / BOX^2) / 12 px^2, the bilinear sample's tent
+  // 1 / 6), as the fitted sigma has it (0.44-0.51 px on sharp small cells). The optical blur alone made
+  // the rows' cells of the other colour a hard step along the side: sharp 1.3 px cells +0.009 px outward
+  // with the line at the truth (cellsize table B), +0.003 (se 0.006) with the pixel's spread (smallcell).
+  const double pixel_var = pix ? 1.0 / 6.0 + (1.0 - 1.0 / (box * box)) / 12.0 : 0.0;
+  double sigma_along = Env("ALONG", std::sqrt(blur * blur + pixel_var));
   const bool cross = Env("CROSS", 0) > 0;
   for (int iter = 0; iter < (cross ? 12 : 1); ++iter) {
     if (cross) {  // CrossingLine about the current line, model passes' sampling
@@ -196,6 +217,7 @@ int main(int argc, char** argv) {
       const double frac = at - col;
       if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
       if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
+      if (col < ends || col > cells - 1 - ends) continue;
       std::array<uint8_t, SideProfiles::kRows> pattern;
       std::array<double, SideProfiles::kRows> depths, other;
       for (int r = 1; r <= SideProfiles::kRows; ++r) {
@@ -212,6 +234,10 @@ int main(int argc, char** argv) {
       for (int j = 0; j < bins; ++j) s.Add(g, j, level(t, off + u0 + j * du));
     }
     if (iter > 0) fit.e = 0.0;
+    if (iter == 0 && Env("TRUTHSTART", 0) > 0) {  // warm start at the print's own parameters
+      fit.params = {0.0, blur, m.ink, m.paper, m.paper, m.surface, m.margin * cell, 1.0};
+      fit.e = 0.0, fit.sigma = blur, fit.warm = true;
+    }
     if (!FitSideProfiles(s, &fit)) {
       std::printf("fit failed\n");
       return 1;
