@@ -18,7 +18,8 @@
 // the detector's default, 0: linear), SEED (1), PER (print each marker),
 // SMOOTH (px: each image smoothed by a Gaussian of this sigma first, as the detector's sharp_smoothing),
 // IDS (exact: ids drawn from 0..IDS-1 instead of the whole dictionary, and each (id, side)'s mean offset
-// printed; sim prints it always: the rig's object carries ids 0-3), START_OUT (px: every start corner moved
+// printed; sim prints it always: the rig's object carries ids 0-3), ROLL (exact: every marker's roll, deg),
+// SIDES (file: each side's offset, to pair runs), START_OUT (px: every start corner moved
 // this far outward from the marker's centre, after PERTURB).
 // The last line: each side's signed offset (the mean of its ends' along its normal) by the marker's extent
 // across the side (px along the side's normal: its cells' depth x cells).
@@ -78,7 +79,9 @@ cv::Mat RenderExact(const cv::aruco::Dictionary& dict, double blur, double side0
     testing::RenderedMarker m;
     const int ids = static_cast<int>(Env("IDS", 0));
     m.id = std::uniform_int_distribution<int>(0, ids > 0 ? ids - 1 : dict.bytesList.rows - 1)(rng);
-    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells, roll = 2 * M_PI * uni(rng);
+    const double side = side0 + (side1 - side0) * uni(rng), scale = side / cells,
+                 roll_draw = 2 * M_PI * uni(rng),  // drawn with ROLL too: the same sizes and positions
+        roll = Env("ROLL", -1) >= 0 ? Env("ROLL", 0) * M_PI / 180 : roll_draw;
     const double cx = 80 + (i % 5) * 120 + uni(rng), cy = 120 + (i / 5) * 240 + uni(rng);
     const double co = std::cos(roll), si = std::sin(roll), sb = blur / scale;
     auto image = [&](double u, double v) {
@@ -249,6 +252,9 @@ int main(int argc, char** argv) {
   MarkerDetector detector = testing::ReferenceDetector(condition ? *condition : testing::Imaging());
   const int polarity = condition && condition->inverted ? -1 : 1;
   const bool detect = Env("DETECT", 0) > 0;
+  // SIDES (file): every side's marker number, side, extent across it (px) and offset (px, outward +), to
+  // pair two runs side by side (bench/results/2026-12-07-sharpstep-pair.py).
+  FILE* sides_out = std::getenv("SIDES") ? std::fopen(std::getenv("SIDES"), "w") : nullptr;
   auto refine = [&](const cv::Mat& rendered, const std::vector<testing::RenderedMarker>& truth) {
     // SMOOTH: as the detector's refinement on sharp frames (DetectorOptions::sharp_smoothing).
     cv::Mat image = rendered;
@@ -291,6 +297,7 @@ int main(int argc, char** argv) {
         per_id_side[{t.id, k}].push_back(0.5 * (d0 + d1));
         const double extent =
             0.5 * (std::abs(n.dot(t.corners[(k + 2) % 4] - a)) + std::abs(n.dot(t.corners[(k + 3) % 4] - a)));
+        if (sides_out) std::fprintf(sides_out, "%d %d %.3f %.6f\n", total, k, extent, 0.5 * (d0 + d1));
         for (int band = 0; band < kBands; ++band)
           if (extent >= kExtentBands[band] && extent < kExtentBands[band + 1])
             side_by_extent[band].push_back(0.5 * (d0 + d1));
@@ -342,4 +349,5 @@ int main(int argc, char** argv) {
       std::printf("id %d side %d: %zu, offset %+.4f px (se %.4f)\n", key.first, key.second, offsets.size(),
                   testing::MeanOf(offsets), StandardError(offsets));
   shape.Print();
+  if (sides_out) std::fclose(sides_out);
 }
