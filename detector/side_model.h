@@ -184,9 +184,10 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
 // beyond the margin's far side, at least kDetrendMinBins bins) is taken off the plateau's bins of every
 // group, the level at the plateau's start kept, and the side is refitted warm: *fit is that refit where it
 // succeeds (true). Not where a level of the fit lies at its bound: such a fit's margin is a valley, not a
-// measured margin, and its plateau may hold the paper's own far side (the reference renderer's white
-// two-cell margin lost a marker, and steep views' short diagonals grew +0.13 %). The profiles keep the
-// detrended plateau either way.
+// measured margin, and its plateau may hold the paper's own far side (without this condition the reference
+// renderer's white two-cell margin lost a marker: each pass's warm fit kept S1 at 275 and each detrend took
+// off a rise larger than the side's contrast; bench/results/2026-12-07-shade3h.md). Where the refit fails,
+// *fit is unchanged and the profiles keep the detrended plateau (false).
 constexpr double kDetrendMaxCellPx = 2.0;
 constexpr double kDetrendStartSigmas = 1.75;
 constexpr int kDetrendMinBins = 3;
