@@ -942,6 +942,7 @@ bool FitWholeSide(const SideRays& side, SideProfiles* profiles, SideFit* fit) {
   if (fit->warm) fit->e = 0.0;
   double shift = 0.0;
   bool ok = FitSideProfiles(*profiles, fit);
+  if (ok) DetrendSurround(profiles, fit);  // a face's shade beyond the margin (side_model.h)
   if (!ok && fit->wrong_polarity) {
     const SideFit wrong = *fit;
     shift = side.cell;
@@ -1003,6 +1004,7 @@ void TurnSide(const SideRays& side, SideProfiles* profiles, SideFit* fit, double
     SideFit again = *fit;
     again.e = 0.0;
     if (!FitSideProfiles(*profiles, &again)) break;
+    DetrendSurround(profiles, &again);
     again.e += fit->e;
     *fit = again;
   }

@@ -1104,6 +1104,59 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit) {
   return dip_u;
 }
 
+// DetrendSurround: the fit's surround part at u, in the profiles' units,
+//   f(u) = enc(S2 + (S1 - S2) Phi((e + q - u) / sigma) + (L0 - S1) Phi((e - u) / sigma)),
+// enc the fitted gamma's encoding (none unless fit_gamma): the blurred margin's and the edge's tails over the
+// far level S2. The plateau is the bins j with u_j >= a = e + q + kDetrendStartSigmas sigma; each bin's
+// residual r_j = (sum over groups of the bin's samples) / (their count) - f(u_j), its weight w_j that count.
+// The weighted least-squares line r = m + b (u - a) gives
+//   b = sum w (x - x_mean)(r - r_mean) / sum w (x - x_mean)^2,  x = u - a,
+// and every group's bin j of the plateau loses b (u_j - a) per sample (sum -= count b (u_j - a)): the
+// plateau's level at a is kept, its slope taken off. No significance test: a third level's tail over the
+// last 3-4 bins is not significant on one side, but it is systematic over many (shade3's variants C, D).
+bool DetrendSurround(SideProfiles* s, SideFit* fit) {
+  if (s->edge_only || !(s->cell < kDetrendMaxCellPx) || fit->single_surround || s->bins < 6) return false;
+  const double* p = fit->params.data();
+  for (int k : {kL0, kL1, kS1, kS2})
+    if (!(p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5)) return false;
+  const double start = p[kE] + p[kQ] + kDetrendStartSigmas * p[kSigma];
+  const int first = std::max(0, static_cast<int>(std::ceil((start - s->u0) / s->du)));
+  const int n = s->bins - first;
+  if (n < kDetrendMinBins) return false;
+  const double inv_sigma = 1.0 / p[kSigma];
+  double sw = 0, swx = 0, swr = 0, swxx = 0, swxr = 0;
+  int used = 0;  // bins with samples
+  for (int j = first; j < s->bins; ++j) {
+    double sum = 0, count = 0;
+    for (size_t g = 0; g < s->patterns.size(); ++g)
+      sum += s->sum[g * s->bins + j], count += s->count[g * s->bins + j];
+    if (!(count > 0)) continue;
+    const double u = s->u0 + j * s->du, x = u - start;
+    double far_side, edge, density;
+    PhiAndDensity((p[kE] + p[kQ] - u) * inv_sigma, &far_side, &density);
+    PhiAndDensity((p[kE] - u) * inv_sigma, &edge, &density);
+    double f = p[kS2] + (p[kS1] - p[kS2]) * far_side + (p[kL0] - p[kS1]) * edge;
+    if (s->fit_gamma) f = 255.0 * std::pow(std::max(f, 0.5) / 255.0, 1.0 / p[kGamma]);
+    const double r = sum / count - f;
+    sw += count, swx += count * x, swr += count * r, swxx += count * x * x, swxr += count * x * r;
+    ++used;
+  }
+  if (used < kDetrendMinBins) return false;
+  const double sxx = swxx - swx * swx / sw, sxr = swxr - swx * swr / sw;
+  if (!(sxx > 0)) return false;
+  const double slope = sxr / sxx;
+  for (size_t g = 0; g < s->patterns.size(); ++g)
+    for (int j = first; j < s->bins; ++j) {
+      const size_t k = g * s->bins + j;
+      s->sum[k] -= s->count[k] * slope * (s->u0 + j * s->du - start);
+    }
+  SideFit again = *fit;
+  again.warm = true;
+  if (!FitSideProfiles(*s, &again)) return false;
+  *fit = again;
+  return true;
+}
+
 bool FitSideProfiles(const SideProfiles& s, SideFit* fit) {
   fit->wrong_polarity = fit->beyond = false;
   bool code_contrast = true;

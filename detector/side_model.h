@@ -174,6 +174,25 @@ constexpr double kSecondStepMaxDip = 2.1;
 constexpr double kSecondStepCollapsedExcess = 0.5;
 double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
 
+// The surround's plateau detrended (issue 15, shade3 / shade3h: bench/results/2026-12-07-shade3.md,
+// 2026-12-07-shade3h.md). A face's shade beyond the margin (a third level: mcmt-sim's face shading, the
+// reference renderer's darker clutter) lies 1-1.5 cells beyond a 1-cell margin on small cells, its blurred
+// tail within the profiles' reach; the model has one level beyond the margin, and the tail pulled the edge
+// (mcmt-sim 1.3 m: +0.0075 px outward, +0.016 on cells of 1.0-1.5 px; exact profiles on 1.3 px cells, a
+// brighter vs a darker face 2.5 cells out: 0.0185 px apart). After a successful two-level fit on cells under
+// kDetrendMaxCellPx, the straight-line trend of the plateau's residuals (from kDetrendStartSigmas blurs
+// beyond the margin's far side, at least kDetrendMinBins bins) is taken off the plateau's bins of every
+// group, the level at the plateau's start kept, and the side is refitted warm: *fit is that refit where it
+// succeeds (true). Not where a level of the fit lies at its bound: such a fit's margin is a valley, not a
+// measured margin, and its plateau may hold the paper's own far side (without this condition the reference
+// renderer's white two-cell margin lost a marker: each pass's warm fit kept S1 at 275 and each detrend took
+// off a rise larger than the side's contrast; bench/results/2026-12-07-shade3h.md). Where the refit fails,
+// *fit is unchanged and the profiles keep the detrended plateau (false).
+constexpr double kDetrendMaxCellPx = 2.0;
+constexpr double kDetrendStartSigmas = 1.75;
+constexpr int kDetrendMinBins = 3;
+bool DetrendSurround(SideProfiles* s, SideFit* fit);
+
 // The fitted margin's level above the paper's (SideProfiles::paper, linear at the fit's gamma), as a part
 // of the paper's contrast to the border: (S1 - P_lin) / (P_lin - L0); NaN without the paper's level.
 double MarginExcessOverPaper(const SideProfiles& s, const SideFit& fit);

@@ -18,7 +18,8 @@
 // and last code columns with rays, 1 as the detector), ROWCAP (r: rows r and deeper from the side take row r
 // - 1's colour, as the model's last row reaches inward without end), TRUTHSTART (1: the first fit
 // warm-started at the print's own parameters). With DUMP also each ray's crossing about the true line, of the
-// profiles and of the fitted model (`clean`: CleanNeighbour's).
+// profiles and of the fitted model (`clean`: CleanNeighbour's). NODETREND (1: no DetrendSurround after the
+// fit, which the detector's whole-side fits take on cells under 2 px).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -242,6 +243,9 @@ int main(int argc, char** argv) {
       std::printf("fit failed\n");
       return 1;
     }
+    // As the detector's whole-side fits: the surround's trend taken off on cells under 2 px, a warm refit
+    // (DetrendSurround); NODETREND=1: the fit alone (main before shade3h).
+    if (std::getenv("NODETREND") == nullptr) DetrendSurround(&s, &fit);
     fit.warm = true;
     if (cross) line += fit.e;
     if (std::getenv("ALONG") == nullptr) sigma_along = fit.sigma;

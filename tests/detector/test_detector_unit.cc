@@ -1055,6 +1055,51 @@ TEST(SideModel, SecondStepNeedsAMeasuredMargin) {
   std::printf("grain: fired %.2f, dip %.2f cells, margin %.2f cells\n", grain, dip, q);
   EXPECT_LT(grain, 0.1);
 }
+
+// A face's shade beyond the margin (DetrendSurround, issue 15: bench/results/2026-12-07-shade3h.md): a
+// 1-cell paper margin on a grey face (127) that ends 2.5 cells beyond the edge at a darker (89) or a
+// brighter (165) level, cells of 1.3 px, blur 0.5 px, 16 rays, noise 2 grey levels, 40 draws each. The
+// model has one level beyond the margin and the third level's blurred tail lies within the profiles' reach:
+// fitted alone (main 55fcdd5's side fit) the brighter face put the edge further outward than the darker
+// one. The detrended refit's edges must not depend on the face's shade beyond (within 0.006 px of each
+// other) and stay within 0.02 px of the truth.
+TEST(SideModel, AFacesShadeBeyondTheMarginDoesNotMoveTheEdge) {
+  const double cell = 1.3, sigma = 0.5, margin = cell, face_end = 2.5 * cell;
+  const double paper = 225, border = 25, face = 127;
+  const auto phi = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  double plain[2] = {0, 0}, detrended[2] = {0, 0};
+  const double beyond_levels[2] = {89, 165};
+  for (int b = 0; b < 2; ++b) {
+    const double beyond = beyond_levels[b];
+    const auto profile = [&](double u, int c1, int c2) {
+      const double row1 = c1 ? paper : border, row2 = c2 ? paper : border;
+      return face + (paper - face) * phi((margin - u) / sigma) + (border - paper) * phi(-u / sigma) +
+             (row1 - border) * phi((-cell - u) / sigma) + (row2 - row1) * phi((-2 * cell - u) / sigma) +
+             (beyond - face) * phi((u - face_end) / sigma);
+    };
+    std::mt19937_64 rng(15);
+    std::normal_distribution<double> gauss(0.0, 2.0);
+    constexpr int kDraws = 40;
+    int fits = 0;
+    for (int draw = 0; draw < kDraws; ++draw) {
+      SideProfiles s = SixteenRayProfiles(cell, paper, profile, gauss, rng);
+      SideFit fit;
+      if (!FitSideProfiles(s, &fit)) continue;
+      plain[b] += fit.e / kDraws;
+      EXPECT_TRUE(DetrendSurround(&s, &fit)) << "beyond " << beyond << " draw " << draw;
+      detrended[b] += fit.e / kDraws;
+      ++fits;
+    }
+    ASSERT_EQ(fits, kDraws) << "beyond " << beyond;
+    std::printf("face %.0f, beyond %.0f: edge %+.4f px fitted alone, %+.4f px detrended\n", face, beyond,
+                plain[b], detrended[b]);
+  }
+  std::printf("brighter - darker: %+.4f px fitted alone, %+.4f px detrended\n", plain[1] - plain[0],
+              detrended[1] - detrended[0]);
+  EXPECT_LT(std::abs(detrended[1] - detrended[0]), 0.006);
+  EXPECT_LT(std::abs(detrended[0]), 0.02);
+  EXPECT_LT(std::abs(detrended[1]), 0.02);
+}
 }  // namespace
 }  // namespace mcmt
 
