@@ -1115,7 +1115,10 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit) {
 // plateau's level at a is kept, its slope taken off. No significance test: a third level's tail over the
 // last 3-4 bins is not significant on one side, but it is systematic over many (shade3's variants C, D).
 bool DetrendSurround(SideProfiles* s, SideFit* fit) {
-  if (s->edge_only || !(s->cell < kDetrendMaxCellPx) || fit->single_surround || s->bins < 6) return false;
+  // The slope taken off fades from cells of kDetrendFullCellPx to kDetrendMaxCellPx, so that a marker whose
+  // cells lie near the limit does not have the rule switch on and off between passes as its quad moves.
+  const double weight = 1.0 - SmoothStep(s->cell, kDetrendFullCellPx, kDetrendMaxCellPx);
+  if (s->edge_only || !(weight > 0) || fit->single_surround || s->bins < 6) return false;
   const double* p = fit->params.data();
   for (int k : {kL0, kL1, kS1, kS2})
     if (!(p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5)) return false;
@@ -1144,7 +1147,7 @@ bool DetrendSurround(SideProfiles* s, SideFit* fit) {
   if (used < kDetrendMinBins) return false;
   const double sxx = swxx - swx * swx / sw, sxr = swxr - swx * swr / sw;
   if (!(sxx > 0)) return false;
-  const double slope = sxr / sxx;
+  const double slope = weight * sxr / sxx;
   for (size_t g = 0; g < s->patterns.size(); ++g)
     for (int j = first; j < s->bins; ++j) {
       const size_t k = g * s->bins + j;

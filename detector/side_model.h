@@ -180,15 +180,16 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
 // tail within the profiles' reach; the model has one level beyond the margin, and the tail pulled the edge
 // (mcmt-sim 1.3 m: +0.0075 px outward, +0.016 on cells of 1.0-1.5 px; exact profiles on 1.3 px cells, a
 // brighter vs a darker face 2.5 cells out: 0.0185 px apart). After a successful two-level fit on cells under
-// kDetrendMaxCellPx, the straight-line trend of the plateau's residuals (from kDetrendStartSigmas blurs
-// beyond the margin's far side, at least kDetrendMinBins bins) is taken off the plateau's bins of every
-// group, the level at the plateau's start kept, and the side is refitted warm: *fit is that refit where it
-// succeeds (true). Not where a level of the fit lies at its bound: such a fit's margin is a valley, not a
-// measured margin, and its plateau may hold the paper's own far side (without this condition the reference
-// renderer's white two-cell margin lost a marker: each pass's warm fit kept S1 at 275 and each detrend took
-// off a rise larger than the side's contrast; bench/results/2026-12-07-shade3h.md). Where the refit fails,
-// *fit is unchanged and the profiles keep the detrended plateau (false).
-constexpr double kDetrendMaxCellPx = 2.0;
+// kDetrendMaxCellPx (the whole trend under kDetrendFullCellPx, fading between), the straight-line trend of
+// the plateau's residuals (from kDetrendStartSigmas blurs beyond the margin's far side, at least
+// kDetrendMinBins bins) is taken off the plateau's bins of every group, the level at the plateau's start
+// kept, and the side is refitted warm: *fit is that refit where it succeeds (true). Not where a level of the
+// fit lies at its bound: such a fit's margin is a valley, not a measured margin, and its plateau may hold the
+// paper's own far side (without this condition the reference renderer's white two-cell margin lost a marker:
+// each pass's warm fit kept S1 at 275 and each detrend took off a rise larger than the side's contrast;
+// bench/results/2026-12-07-shade3h.md). Where the refit fails, *fit is unchanged and the profiles keep the
+// detrended plateau (false).
+constexpr double kDetrendFullCellPx = 1.75, kDetrendMaxCellPx = 2.25;  // the trend's weight 1 -> 0 between
 constexpr double kDetrendStartSigmas = 1.75;
 constexpr int kDetrendMinBins = 3;
 bool DetrendSurround(SideProfiles* s, SideFit* fit);
