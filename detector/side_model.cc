@@ -77,6 +77,14 @@ constexpr double kMinMarginContrast = 0.4;
 constexpr double kMinMarginExcess = 0.1;
 // The fitted levels' bounds: the 8-bit range with some room for noise (FitOnce).
 constexpr double kLevelMin = -20.0, kLevelMax = 275.0;
+// A fitted level within half a grey level of its bound is at the bound: the fit ran into it (a valley, not a
+// measured level).
+bool LevelInsideBounds(double level) { return level > kLevelMin + 0.5 && level < kLevelMax - 0.5; }
+bool LevelsInsideBounds(const double* p) {  // L0, L1, S1 and S2 of a fit's parameters
+  for (int k : {kL0, kL1, kS1, kS2})
+    if (!LevelInsideBounds(p[k])) return false;
+  return true;
+}
 // A margin fitted narrower than this (cells; its bound is 0.2) is at its narrowest (FitSideModels).
 constexpr double kHaloMaxCells = 0.25;
 // A paper margin's far side counts as beyond the profiles' outer end (FitSideModels' `unseen`) only where
@@ -1024,9 +1032,7 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // that condition "hard"'s id 96 (above) moved 0.064 px with its start; without the cell's depth 0.108 px.
   // The cell's depth costs the plain 3-cell map its gain (-0.060 %, -0.007 without it): its sides lie on
   // cells under 1.5 px (bench/results/2026-12-07-margin2.md).
-  bool levels_inside = true;
-  for (int k : {kL0, kL1, kS1, kS2})
-    levels_inside = levels_inside && p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5;
+  const bool levels_inside = LevelsInsideBounds(p);
   const bool paper_reach = s.cell >= kPaperReachMinCell && levels_inside &&
                            std::abs(p[kS1] - p[kL1]) < kPaperMarginContrast * std::abs(p[kL1] - p[kL0]);
   const bool unseen = p[kE] + p[kQ] > s.OuterU() + (paper_reach ? kUnseenSigmas * p[kSigma] : 0.0);
@@ -1039,7 +1045,7 @@ bool FitSideModels(const SideProfiles& s, SideFit* fit, bool* code_contrast_out)
   // bench/results/2026-12-06-onevalley.md; without the level's bound the rule moved the no-margin map
   // -0.205 -> -0.222 %).
   const bool halo = p[kQ] < kHaloMaxCells * s.cell && (p[kS1] - p[kL0]) * (p[kL1] - p[kL0]) < 0 &&
-                    (p[kS1] < kLevelMin + 0.5 || p[kS1] > kLevelMax - 0.5);
+                    !LevelInsideBounds(p[kS1]);
   if (!code_contrast || (!faint && !unseen && !halo &&
                          std::abs(p[kS1] - p[kL0]) >= kMinMarginContrast * std::abs(p[kL1] - p[kL0])))
     return true;
@@ -1120,8 +1126,7 @@ bool DetrendSurround(SideProfiles* s, SideFit* fit) {
   const double weight = 1.0 - SmoothStep(s->cell, kDetrendFullCellPx, kDetrendMaxCellPx);
   if (s->edge_only || !(weight > 0) || fit->single_surround || s->bins < 6) return false;
   const double* p = fit->params.data();
-  for (int k : {kL0, kL1, kS1, kS2})
-    if (!(p[k] > kLevelMin + 0.5 && p[k] < kLevelMax - 0.5)) return false;
+  if (!LevelsInsideBounds(p)) return false;
   const double start = p[kE] + p[kQ] + kDetrendStartSigmas * p[kSigma];
   const int first = std::max(0, static_cast<int>(std::ceil((start - s->u0) / s->du)));
   const int n = s->bins - first;
