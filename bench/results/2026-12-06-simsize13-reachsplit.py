@@ -10,24 +10,15 @@ borders the neighbouring face the camera also sees), the shorter the "far" one (
 background lies 3 cells beyond). rel % = 100 * offset / that distance across (the side's share of the
 marker's size error; opposite sides add).
   python3 2026-12-06-simsize13-reachsplit.py A.csv B.csv [label]"""
-import csv
 import math
 import sys
-from collections import defaultdict
+
+from corner_dump import marker_rows, truth_and_error
 
 
 def markers(path):
-    g = defaultdict(dict)
-    for r in csv.DictReader(open(path)):
-        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
-    out = {}
-    for key, c in g.items():
-        if len(c) != 4:
-            continue
-        t = [(float(c[k]['x']), float(c[k]['y'])) for k in range(4)]
-        e = [(float(c[k]['dx']), float(c[k]['dy'])) for k in range(4)]
-        out[key] = (t, e, float(c[0]['view_deg']), float(c[0]['size_px']), c[0]['fully_visible'] == '1')
-    return out
+    return {key: (*truth_and_error(c), float(c[0]['view_deg']), float(c[0]['size_px']),
+                  c[0]['fully_visible'] == '1') for key, c in marker_rows(path).items()}
 
 
 def sides(t, e):

@@ -6,27 +6,18 @@ and cell depth as 2026-12-06-simsize13-reachsplit.py (side 0 top, 2 bottom, of 1
   python3 2026-12-07-seeds13-split.py A.csv [B.csv]         by camera, role, view, cell, camera x role / view
   python3 2026-12-07-seeds13-split.py --ids A.csv [B.csv]   by marker id and side k (ArUco corners k -> k+1)
 With B, each side's offset is A's less B's on the markers (camera, seq, id) found in both (paired)."""
-import csv, math, sys
+import math, sys
 from collections import defaultdict
 
 IDS = '--ids' in sys.argv
 if IDS:
     sys.argv.remove('--ids')
-from collections import defaultdict
+
+from corner_dump import marker_rows, truth_and_error
 
 def markers(path):
-    g = defaultdict(dict)
-    for r in csv.DictReader(open(path)):
-        if r.get('y') is None: continue
-        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
-    out = {}
-    for key, c in g.items():
-        if len(c) != 4: continue
-        t = [(float(c[k]['x']), float(c[k]['y'])) for k in range(4)]
-        e = [(float(c[k]['dx']), float(c[k]['dy'])) for k in range(4)]
-        out[key] = (t, e, float(c[0]['view_deg']), float(c[0]['size_px']), c[0]['fully_visible'] == '1',
-                    c[0]['occluded'] == '1')
-    return out
+    return {key: (*truth_and_error(c), float(c[0]['view_deg']), float(c[0]['size_px']),
+                  c[0]['fully_visible'] == '1', c[0]['occluded'] == '1') for key, c in marker_rows(path).items()}
 
 def sides(t, e):
     cx = sum(p[0] for p in t) / 4; cy = sum(p[1] for p in t) / 4

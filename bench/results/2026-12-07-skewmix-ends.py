@@ -1,19 +1,11 @@
 #!/usr/bin/env python3
 """Issue 15 (helper skewmix): per side of a bench_imaging_maps MCMT_IMAGING_DUMP (one condition), by the side's smaller true corner angle at its two ends: mean offset / acute end / obtuse end (px, outward +).
 With B: A less B paired."""
-import csv, math, sys
+import math, sys
 from collections import defaultdict
+from corner_dump import marker_rows, truth_and_error
 def markers(path):
-    g = defaultdict(dict)
-    for r in csv.DictReader(open(path)):
-        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
-    out = {}
-    for key, c in g.items():
-        if len(c) != 4: continue
-        t = [(float(c[k]['x']), float(c[k]['y'])) for k in range(4)]
-        e = [(float(c[k]['dx']), float(c[k]['dy'])) for k in range(4)]
-        out[key] = (t, e)
-    return out
+    return {key: truth_and_error(c) for key, c in marker_rows(path).items()}
 def ang(t,k):
     p,u,w=t[k],t[(k-1)%4],t[(k+1)%4]
     v1=(u[0]-p[0],u[1]-p[1]); v2=(w[0]-p[0],w[1]-p[1])

@@ -1,18 +1,14 @@
 #!/usr/bin/env python3
 """Issue 15 (helper tail): mean error of the quad's acute angles (detected - true, deg; + = too square) per
 acute-angle bin and view band, from a bench_imaging_maps MCMT_IMAGING_DUMP. With B: A less B, paired."""
-import csv, math, sys
+import math, sys
 from collections import defaultdict
+from corner_dump import marker_rows, truth_and_error
 def load(p):
-    g = defaultdict(dict)
-    for r in csv.DictReader(open(p)):
-        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
     out={}
-    for key,c in g.items():
-        if len(c)!=4: continue
-        t=[(float(c[k]['x']),float(c[k]['y'])) for k in range(4)]
-        d=[(float(c[k]['x'])+float(c[k]['dx']),float(c[k]['y'])+float(c[k]['dy'])) for k in range(4)]
-        out[key]=(t,d,float(c[0]['view_deg']))
+    for key,c in marker_rows(p).items():
+        t,e=truth_and_error(c)
+        out[key]=(t,[(t[k][0]+e[k][0],t[k][1]+e[k][1]) for k in range(4)],float(c[0]['view_deg']))
     return out
 def angles(q):
     a=[]

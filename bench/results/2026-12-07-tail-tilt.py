@@ -2,20 +2,11 @@
 """Issue 15 (helper tail): per side role (as 2026-12-07-seeds13-split.py) and view band, the mean offset and the
 end difference (top / bottom: near end - far end, half; near / far: corner k - corner k+1, half), px along the
 outward normal, from a bench_imaging_maps MCMT_IMAGING_DUMP. With B: A less B, paired."""
-import csv, math, sys
+import math, sys
 from collections import defaultdict
+from corner_dump import marker_rows, truth_and_error
 def markers(path):
-    g = defaultdict(dict)
-    for r in csv.DictReader(open(path)):
-        if r.get('y') is None: continue
-        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
-    out = {}
-    for key, c in g.items():
-        if len(c) != 4: continue
-        t = [(float(c[k]['x']), float(c[k]['y'])) for k in range(4)]
-        e = [(float(c[k]['dx']), float(c[k]['dy'])) for k in range(4)]
-        out[key] = (t, e, float(c[0]['view_deg']))
-    return out
+    return {key: (*truth_and_error(c), float(c[0]['view_deg'])) for key, c in marker_rows(path).items()}
 def feats(t, e):
     cx = sum(p[0] for p in t) / 4; cy = sum(p[1] for p in t) / 4
     S=[]

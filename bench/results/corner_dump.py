@@ -1,0 +1,23 @@
+"""The reader of bench_imaging_maps corner dumps (MCMT_IMAGING_DUMP: one CSV line per detected corner) that
+the split scripts beside it share (issue 15: 2026-12-06-simsize13-reachsplit.py, 2026-12-07-seeds13-split.py,
+-tail-tilt.py, -tail-acute.py, -skewmix-ends.py). They import it from their own folder."""
+import csv
+from collections import defaultdict
+
+
+def marker_rows(path):
+    """(camera, seq, id) -> the marker's four corner rows (CSV dicts) by corner index 0-3, in the dump's order.
+    Markers with fewer than four corners are left out, as are truncated lines (no `y`)."""
+    g = defaultdict(dict)
+    for r in csv.DictReader(open(path)):
+        if r.get('y') is None:
+            continue
+        g[(r['camera'], r['seq'], r['id'])][int(r['corner'])] = r
+    return {key: c for key, c in g.items() if len(c) == 4}
+
+
+def truth_and_error(c):
+    """A marker's true corners (x, y) and its detected corners' errors (dx, dy), px, corners 0-3."""
+    t = [(float(c[k]['x']), float(c[k]['y'])) for k in range(4)]
+    e = [(float(c[k]['dx']), float(c[k]['dy'])) for k in range(4)]
+    return t, e
