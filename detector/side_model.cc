@@ -833,17 +833,24 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
   return cost;
 }
 
+// The samples of bin j over the groups whose row `row` (0: the border; 1..kRows: code rows; -1: any) has
+// colour `colour`: their sum and their count.
+void BinSamples(const SideProfiles& s, int j, double* sum, double* count, int row = -1, int colour = 0) {
+  assert(row <= SideProfiles::kRows);  // the patterns hold rows 1..kRows
+  *sum = 0, *count = 0;
+  for (size_t g = 0; g < s.patterns.size(); ++g) {
+    if (row >= 1 && s.patterns[g][row - 1] != colour) continue;
+    *sum += s.sum[g * s.bins + j];
+    *count += s.count[g * s.bins + j];
+  }
+}
+
 // Mean of the groups' profiles at the bin nearest u, over the groups whose row `row` (0: the border;
 // 1..kRows: code rows; -1: any) has colour `colour`.
 double LevelNear(const SideProfiles& s, double u, int row, int colour) {
-  assert(row <= SideProfiles::kRows);  // the patterns hold rows 1..kRows
   const int j = std::clamp(static_cast<int>(std::lround((u - s.u0) / s.du)), 0, s.bins - 1);
-  double sum = 0, count = 0;
-  for (size_t g = 0; g < s.patterns.size(); ++g) {
-    if (row >= 1 && s.patterns[g][row - 1] != colour) continue;
-    sum += s.sum[g * s.bins + j];
-    count += s.count[g * s.bins + j];
-  }
+  double sum, count;
+  BinSamples(s, j, &sum, &count, row, colour);
   return count > 0 ? sum / count : NAN;
 }
 
@@ -1088,9 +1095,8 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit) {
   };
   // sign times the profiles' mean over groups at bin j (NaN without samples there).
   auto level = [&](int j) {
-    double sum = 0, count = 0;
-    for (size_t g = 0; g < s.patterns.size(); ++g)
-      sum += s.sum[g * s.bins + j], count += s.count[g * s.bins + j];
+    double sum, count;
+    BinSamples(s, j, &sum, &count);
     return count > 0 ? sign * sum / count : NAN;
   };
   double peak = -HUGE_VAL;
@@ -1135,9 +1141,8 @@ bool DetrendSurround(SideProfiles* s, SideFit* fit) {
   double sw = 0, swx = 0, swr = 0, swxx = 0, swxr = 0;
   int used = 0;  // bins with samples
   for (int j = first; j < s->bins; ++j) {
-    double sum = 0, count = 0;
-    for (size_t g = 0; g < s->patterns.size(); ++g)
-      sum += s->sum[g * s->bins + j], count += s->count[g * s->bins + j];
+    double sum, count;
+    BinSamples(*s, j, &sum, &count);
     if (!(count > 0)) continue;
     const double u = s->u0 + j * s->du, x = u - start;
     double far_side, edge, density;
