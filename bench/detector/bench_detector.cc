@@ -6,7 +6,8 @@
 // Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
 // by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search;
 // MCMT_BENCH_BAND=sides: fast mode's fast_band_sides; MCMT_BENCH_MISSES: the markers fast mode missed and
-// how far they were from its markers of the frame before, on stderr.)
+// how far they were from its markers of the frame before, on stderr; MCMT_CORNER_DUMP=FILE: every marker's
+// corners to FILE, to 17 digits.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -83,6 +84,9 @@ int main(int argc, char** argv) {
   // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
   const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
   cv::setNumThreads(1);
+  // MCMT_CORNER_DUMP=FILE: every marker's corners (mode, width, camera, frame, id, x0 y0 ... x3 y3 to 17
+  // digits), to compare builds or code paths (cmp).
+  FILE* dump = std::getenv("MCMT_CORNER_DUMP") ? std::fopen(std::getenv("MCMT_CORNER_DUMP"), "w") : nullptr;
   const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(
       frames, std::getenv("MCMT_BENCH_BLUR") ? std::atof(std::getenv("MCMT_BENCH_BLUR")) : 0.0);
   const sim::SimObject& object = scene.object;
@@ -171,6 +175,15 @@ int main(int argc, char** argv) {
                                  m.corners[0][0], m.corners[0][1], m.corners[2][0], m.corners[2][1]);
               }
         const size_t frame_index = &image - &images[c][0];
+        if (dump)
+          for (const auto* markers : {&a, &f})
+            for (const auto& m : *markers) {
+              std::fprintf(dump, "%s %d %d %zu %d", markers == &a ? "accurate" : "fast", size[0], c,
+                           frame_index, m.id);
+              for (int k = 0; k < 4; ++k)
+                std::fprintf(dump, " %.17g %.17g", m.corners[k][0], m.corners[k][1]);
+              std::fprintf(dump, "\n");
+            }
         const auto views = sim::ProjectMarkers(cameras[c], object, trajectory[frame_index].rig_from_object);
         // Markers fully visible within 75 degrees; of those, the domain (at least 15 px).
         auto view_of = [&](int id) -> const sim::MarkerView* {
@@ -218,5 +231,6 @@ int main(int argc, char** argv) {
   std::printf(
       "\nPeak resident memory of this benchmark (all images of one resolution held in memory): %.0f MB\n",
       PeakRssMb());
+  if (dump) std::fclose(dump);
   return 0;
 }
