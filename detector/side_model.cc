@@ -2,11 +2,21 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #ifdef __SSE2__
 #include <emmintrin.h>
+#endif
+// The AVX2 code (side_model_lanes.inc): GCC on x86-64, its functions compiled for AVX2 by #pragma GCC target
+// and run only where the CPU has it (no -mavx2: the binaries run on any x86-64).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MCMT_SIDE_HAS_AVX2 1
+#include <immintrin.h>
+#else
+#define MCMT_SIDE_HAS_AVX2 0
 #endif
 
 namespace mcmt {
@@ -110,95 +120,6 @@ static_assert(kQ == 6, "SideFit::margin_width() reads params[kQ] as params[6]");
 
 }  // namespace
 
-// Phi and phi of the boundary at `bound` at every bin (z = (bound - u) / sigma) into `zs`, `big_phi`,
-// `small_phi`. Beyond 7 sigmas Phi is 0 or 1 within 1.3e-12 and phi below 1e-10: no exponential. Within,
-// the Gaussian exp(-z^2 / 2) follows the bins by a product recurrence (z falls by h = du / sigma per bin:
-// exp(-(z - h)^2 / 2) = exp(-z^2 / 2) exp(z h - h^2 / 2)), restarted from std::exp every 16 bins (relative
-// error below 1e-13, far below PhiAndDensity's 1.5e-7). `step_ratio`: exp(-h^2), the same for every
-// boundary of one evaluation (computed once by Evaluate). z falls with the bin (as computed, too: every
-// operation is monotonic), so the bins within 7 sigmas are one run, found from both ends. With SSE2, z,
-// the bins beyond 7 sigmas and Phi and phi of the run (PhiAndDensityOfTwo, the recurrence still bin by bin)
-// are computed two bins at a time, by the same operations lane by lane: the same values as bin by bin
-// (SideModel.FillBoundaryIsBinByBins). bench_detector's 10 accurate frames: 25.27 -> 20.16 M instructions
-// in FillBoundary itself (refcost).
-void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
-                  double* big_phi, double* small_phi) {
-  const double h = s.du * inv_sigma;
-  const double u0 = s.u0, du = s.du;
-  const int n = s.bins;
-  if (n <= 0) return;
-  int j = 0;
-#ifdef __SSE2__
-  const __m128d bound2 = _mm_set1_pd(bound), u02 = _mm_set1_pd(u0), du2 = _mm_set1_pd(du);
-  const __m128d inv_sigma2 = _mm_set1_pd(inv_sigma), two = _mm_set1_pd(2.0);
-  for (__m128d js = _mm_set_pd(1.0, 0.0); j + 1 < n; j += 2, js = _mm_add_pd(js, two))
-    _mm_storeu_pd(zs + j, _mm_mul_pd(_mm_sub_pd(bound2, _mm_add_pd(u02, _mm_mul_pd(js, du2))), inv_sigma2));
-#endif
-  for (; j < n; ++j) zs[j] = (bound - (u0 + j * du)) * inv_sigma;
-  // The run's ends, found from estimates instead of walks over the far bins from both ends. z falls with
-  // the bin, so the bins with z > 7 are a prefix and those with z < -7 a suffix: `first` is the prefix's
-  // length, walked to from j = (bound - u0 - 7 sigma) / du (where z = 7, truncated), and `last` the bin
-  // before the suffix (at least first - 1), walked to from (bound - u0 + 7 sigma) / du, by the same
-  // comparisons on zs. The bins beyond 7 sigmas and the run are those of the scans from both ends
-  // (where a bin's z jumps from above 7 to below -7 the scan from bin 0 went on to n: the run is empty
-  // either way, and every bin is filled by the sign of its z). bench_detector's 10 accurate frames:
-  // FillBoundary 20.16 -> 19.79 M instructions.
-  auto estimate = [&](double sevens) {
-    const double j = (bound - u0 + sevens / inv_sigma) / du;
-    return std::isfinite(j) ? static_cast<int>(std::clamp(j, 0.0, static_cast<double>(n - 1))) : 0;
-  };
-  int first = estimate(-7.0);
-  if (zs[first] > 7.0) {
-    while (first < n && zs[first] > 7.0) ++first;
-  } else {
-    while (first > 0 && !(zs[first - 1] > 7.0)) --first;
-  }
-  int last = first - 1;
-  if (first < n) {
-    last = std::max(first, estimate(7.0));
-    if (zs[last] < -7.0) {
-      while (last >= first && zs[last] < -7.0) --last;
-    } else {
-      while (last + 1 < n && !(zs[last + 1] < -7.0)) ++last;
-    }
-  }
-  // Bins [from, to) beyond 7 sigmas: Phi 1 or 0 by the sign of z, phi 0.
-  auto beyond = [&](int from, int to) {
-    int k = from;
-#ifdef __SSE2__
-    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
-    for (; k + 1 < to; k += 2) {
-      _mm_storeu_pd(big_phi + k, _mm_and_pd(_mm_cmpgt_pd(_mm_loadu_pd(zs + k), zero), one));
-      _mm_storeu_pd(small_phi + k, zero);
-    }
-#endif
-    for (; k < to; ++k) big_phi[k] = zs[k] > 0 ? 1.0 : 0.0, small_phi[k] = 0.0;
-  };
-  beyond(0, first);
-  beyond(std::max(first, last + 1), n);
-  double gauss = 0, ratio = 0;
-  auto next_gauss = [&](int k) {  // exp(-z^2 / 2) at bin k, the bins taken in order from `first`
-    if ((k - first) % 16 == 0) {
-      const double z = zs[k];
-      gauss = std::exp(-0.5 * z * z), ratio = std::exp(z * h - 0.5 * h * h);
-    } else {
-      gauss *= ratio, ratio *= step_ratio;
-    }
-    return gauss;
-  };
-  int k = first;
-#ifdef __SSE2__
-  for (; k < last; k += 2) {
-    const double g0 = next_gauss(k), g1 = next_gauss(k + 1);
-    PhiAndDensityOfTwo(_mm_loadu_pd(zs + k), _mm_set_pd(g1, g0), big_phi + k, small_phi + k);
-  }
-#endif
-  for (; k <= last; ++k) {
-    const double g = next_gauss(k);
-    PhiAndDensityOf(zs[k], g, &big_phi[k], &small_phi[k]);
-  }
-}
-
 // Eigen::LLT's factorisation (its unblocked algorithm, Eigen 3.4) by its operations in their
 // order, without its calls per column (a dynamic-size matrix-vector product each) and its L1 norm: the
 // same L in the lower triangle, to the bit (SideModel.CholeskyIsEigens). False where LLT reports a
@@ -231,132 +152,6 @@ bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a) {
 }
 
 namespace {
-
-// Row `kA` of the normal equations' lower triangle: the sums over `rows` (even) of w a b for the columns
-// b = columns[0..kA] and of w a r (sums[kA + 1]), a = columns[kA], each as the sum of its even and of
-// its odd rows (two SSE2 lanes; kA fixed, so the sums stay in registers). The columns, weights and
-// residuals start 16-byte aligned (aligned loads, which the multiplications take as operands).
-template <int kA>
-void NormalRow(const double* const* columns, const double* weights, const double* residuals, size_t rows,
-               double (*sums)[2]) {
-#ifdef __SSE2__
-  __m128d acc[kA + 2];
-  for (int b = 0; b <= kA + 1; ++b) acc[b] = _mm_setzero_pd();
-  for (size_t i = 0; i < rows; i += 2) {
-    const __m128d wa = _mm_mul_pd(_mm_load_pd(weights + i), _mm_load_pd(columns[kA] + i));
-    for (int b = 0; b <= kA; ++b) acc[b] = _mm_add_pd(acc[b], _mm_mul_pd(wa, _mm_load_pd(columns[b] + i)));
-    acc[kA + 1] = _mm_add_pd(acc[kA + 1], _mm_mul_pd(wa, _mm_load_pd(residuals + i)));
-  }
-  for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums[b], acc[b]);
-#else
-  for (int b = 0; b <= kA + 1; ++b) sums[b][0] = sums[b][1] = 0.0;
-  for (size_t i = 0; i < rows; ++i) {
-    const double wa = weights[i] * columns[kA][i];
-    for (int b = 0; b <= kA; ++b) sums[b][i % 2] += wa * columns[b][i];
-    sums[kA + 1][i % 2] += wa * residuals[i];
-  }
-#endif
-}
-
-// NormalRow<kA> and NormalRow<kB> (kA < kB) in one pass over the rows: each sum the same products added
-// in the same order (the same values), the weights, the residuals and the columns b <= kA loaded once for
-// both. NormalEquations pairs row a with row count - 1 - a (kA + 2 + kB + 2 = count + 3 accumulators, at
-// most 11 of the 16 SSE2 registers). bench_detector's 10 accurate frames: NormalRow<0..7> 20.4 M
-// instructions -> NormalRows 19.0 M (accurate 297.68 -> 296.53 M).
-template <int kA, int kB>
-void NormalRows(const double* const* columns, const double* weights, const double* residuals, size_t rows,
-                double (*sums_a)[2], double (*sums_b)[2]) {
-  static_assert(kA < kB, "two different rows, the smaller first");
-#ifdef __SSE2__
-  __m128d acc_a[kA + 2], acc_b[kB + 2];
-  for (int b = 0; b <= kA + 1; ++b) acc_a[b] = _mm_setzero_pd();
-  for (int b = 0; b <= kB + 1; ++b) acc_b[b] = _mm_setzero_pd();
-  for (size_t i = 0; i < rows; i += 2) {
-    const __m128d w = _mm_load_pd(weights + i), r = _mm_load_pd(residuals + i);
-    const __m128d wa = _mm_mul_pd(w, _mm_load_pd(columns[kA] + i));
-    const __m128d wb = _mm_mul_pd(w, _mm_load_pd(columns[kB] + i));
-    for (int b = 0; b <= kB; ++b) {
-      const __m128d column = _mm_load_pd(columns[b] + i);
-      if (b <= kA) acc_a[b] = _mm_add_pd(acc_a[b], _mm_mul_pd(wa, column));
-      acc_b[b] = _mm_add_pd(acc_b[b], _mm_mul_pd(wb, column));
-    }
-    acc_a[kA + 1] = _mm_add_pd(acc_a[kA + 1], _mm_mul_pd(wa, r));
-    acc_b[kB + 1] = _mm_add_pd(acc_b[kB + 1], _mm_mul_pd(wb, r));
-  }
-  for (int b = 0; b <= kA + 1; ++b) _mm_storeu_pd(sums_a[b], acc_a[b]);
-  for (int b = 0; b <= kB + 1; ++b) _mm_storeu_pd(sums_b[b], acc_b[b]);
-#else
-  NormalRow<kA>(columns, weights, residuals, rows, sums_a);
-  NormalRow<kB>(columns, weights, residuals, rows, sums_b);
-#endif
-}
-
-// The normal equations J^T W J and J^T W r from the Jacobian's columns (parameter k's at
-// jacobian + k * stride, `used` rows, zero from there to an even count; jacobian, weights and residuals
-// 16-byte aligned and the stride even: NormalRow), the weights and the
-// residuals. Columns that are zero by the model (S2 and q with one surround level, gamma on linear
-// profiles) are left out: their rows and columns are zero. Each symmetric pair is formed once.
-void NormalEquations(const double* jacobian, size_t stride, const double* weights, const double* residuals,
-                     size_t used, bool single, bool fit_gamma, Normal* jtj, Vector* jtr) {
-  int active[kParams], count = 0;
-  const double* columns[kParams];
-  for (int k = 0; k < kParams; ++k)
-    if (!((single && (k == kS2 || k == kQ)) || (!fit_gamma && k == kGamma)))
-      columns[count] = jacobian + k * stride, active[count++] = k;
-  jtj->setZero(), jtr->setZero();
-  const size_t rows = (used + 1) / 2 * 2;
-  using Row = void (*)(const double* const*, const double*, const double*, size_t, double(*)[2]);
-  static constexpr Row kRowOf[kParams] = {NormalRow<0>, NormalRow<1>, NormalRow<2>, NormalRow<3>,
-                                          NormalRow<4>, NormalRow<5>, NormalRow<6>, NormalRow<7>};
-  using Rows =
-      void (*)(const double* const*, const double*, const double*, size_t, double(*)[2], double(*)[2]);
-  // Row a with row count - 1 - a (count 5 to 8: single surround and gamma held, either or neither).
-  auto rows_of = [](int a, int b) -> Rows {
-    switch (a * kParams + b) {
-      case 0 * kParams + 4:
-        return NormalRows<0, 4>;
-      case 1 * kParams + 3:
-        return NormalRows<1, 3>;
-      case 0 * kParams + 5:
-        return NormalRows<0, 5>;
-      case 1 * kParams + 4:
-        return NormalRows<1, 4>;
-      case 2 * kParams + 3:
-        return NormalRows<2, 3>;
-      case 0 * kParams + 6:
-        return NormalRows<0, 6>;
-      case 1 * kParams + 5:
-        return NormalRows<1, 5>;
-      case 2 * kParams + 4:
-        return NormalRows<2, 4>;
-      case 0 * kParams + 7:
-        return NormalRows<0, 7>;
-      case 1 * kParams + 6:
-        return NormalRows<1, 6>;
-      case 2 * kParams + 5:
-        return NormalRows<2, 5>;
-      case 3 * kParams + 4:
-        return NormalRows<3, 4>;
-      default:
-        return nullptr;
-    }
-  };
-  double sums[kParams][kParams + 1][2];  // row a's: with columns b <= a, then with the residuals
-  for (int a = 0, b = count - 1; a <= b; ++a, --b) {
-    const Rows both = a < b ? rows_of(a, b) : nullptr;
-    if (both) {
-      both(columns, weights, residuals, rows, sums[a], sums[b]);
-    } else {
-      kRowOf[a](columns, weights, residuals, rows, sums[a]);
-      if (b != a) kRowOf[b](columns, weights, residuals, rows, sums[b]);
-    }
-  }
-  for (int a = 0; a < count; ++a) {
-    for (int b = 0; b <= a; ++b)
-      (*jtj)(active[a], active[b]) = (*jtj)(active[b], active[a]) = sums[a][b][0] + sums[a][b][1];
-    (*jtr)[active[a]] = sums[a][a + 1][0] + sums[a][a + 1][1];
-  }
-}
 
 // exp(x) for |x| below 700 within about 2 ulp, without a library call: x = k ln 2 + r with |r| <= ln 2 / 2
 // (ln 2 in two parts, the first exact times k), e^r by its Taylor series to r^13 (truncation below
@@ -398,205 +193,11 @@ inline double LogInline(double x) {
   return k * kLn2High + (2.0 * s + 2.0 * s * s2 * series + k * kLn2Low);
 }
 
-#ifdef __SSE2__
-// Two lanes of v (a constant in memory where declared constexpr: no broadcast per use).
-constexpr __m128d Both(double v) { return __m128d{v, v}; }
-
-// a where `mask`, else b.
-inline __m128d Select(__m128d mask, __m128d a, __m128d b) {
-  return _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b));
-}
-
-// The constants of the two-lane code below. Evaluate hands TwoBins a copy the compiler cannot see into,
-// so they are read from memory where used (GCC rebuilds a literal constant from a scalar at each use).
-struct LaneConstants {
-  __m128d sign = Both(-0.0), one = Both(1.0), two = Both(2.0), half = Both(0.5),
-          two_52 = Both(4503599627370496.0);
-  // ExpInline2
-  __m128d exp_round = Both(kExpRound), log2e = Both(1.4426950408889634), ln2_high = Both(kLn2High),
-          ln2_low = Both(kLn2Low), exp_bias = Both(4503599627370496.0 + 1023.0), exp_limit = Both(700.0);
-  __m128d inverse_factorial[14] = {
-      Both(kInverseFactorial[0]),  Both(kInverseFactorial[1]),  Both(kInverseFactorial[2]),
-      Both(kInverseFactorial[3]),  Both(kInverseFactorial[4]),  Both(kInverseFactorial[5]),
-      Both(kInverseFactorial[6]),  Both(kInverseFactorial[7]),  Both(kInverseFactorial[8]),
-      Both(kInverseFactorial[9]),  Both(kInverseFactorial[10]), Both(kInverseFactorial[11]),
-      Both(kInverseFactorial[12]), Both(kInverseFactorial[13])};
-  // LogInline2: [i] = 1 / (2 i + 1)
-  __m128d inverse_odd[11] = {Both(0.0),      Both(1.0 / 3),  Both(1.0 / 5),  Both(1.0 / 7),
-                             Both(1.0 / 9),  Both(1.0 / 11), Both(1.0 / 13), Both(1.0 / 15),
-                             Both(1.0 / 17), Both(1.0 / 19), Both(1.0 / 21)};
-  __m128d mantissa = _mm_castsi128_pd(_mm_set1_epi64x(0x000fffffffffffffLL));
-  __m128d log_bias = Both(1023.0), sqrt2 = Both(M_SQRT2), log_min = Both(2.2250738585072014e-308),
-          log_max = Both(1.7976931348623157e308);
-  // TwoBins
-  __m128d per_255 = Both(1.0 / 255.0), full_255 = Both(255.0);
-};
-
-// ExpInline and LogInline on two lanes, by the same operations lane by lane (so the same values), for
-// arguments within their ranges (ExpInline: |x| < 700; LogInline: positive normal x).
-inline __m128d ExpInline2(__m128d x, const LaneConstants& c) {
-  const __m128d k = _mm_sub_pd(_mm_add_pd(_mm_mul_pd(x, c.log2e), c.exp_round), c.exp_round);
-  const __m128d r = _mm_sub_pd(_mm_sub_pd(x, _mm_mul_pd(k, c.ln2_high)), _mm_mul_pd(k, c.ln2_low));
-  __m128d e = c.inverse_factorial[13];
-  for (int i = 12; i >= 0; --i) e = _mm_add_pd(c.inverse_factorial[i], _mm_mul_pd(r, e));
-  // 2^k: k + 1023 is the low bits of k + 1023 + 2^52 (an integer below 2^53: exact), moved to the exponent.
-  const __m128d two_k = _mm_castsi128_pd(_mm_slli_epi64(_mm_castpd_si128(_mm_add_pd(k, c.exp_bias)), 52));
-  return _mm_mul_pd(e, two_k);
-}
-
-inline __m128d LogInline2(__m128d x, const LaneConstants& c) {
-  // The biased exponent (x positive: the sign bit is 0) as a double: its bits under those of 2^52.
-  const __m128d biased =
-      _mm_sub_pd(_mm_or_pd(_mm_castsi128_pd(_mm_srli_epi64(_mm_castpd_si128(x), 52)), c.two_52), c.two_52);
-  __m128d exponent = _mm_sub_pd(biased, c.log_bias);
-  __m128d m = _mm_or_pd(_mm_and_pd(x, c.mantissa), c.one);  // (1.0's bits: 0x3ff0000000000000)
-  const __m128d high = _mm_cmpgt_pd(m, c.sqrt2);
-  m = Select(high, _mm_mul_pd(m, c.half), m);
-  exponent = _mm_add_pd(exponent, _mm_and_pd(high, c.one));
-  const __m128d f = _mm_sub_pd(m, c.one);
-  const __m128d s = _mm_div_pd(f, _mm_add_pd(c.two, f)), s2 = _mm_mul_pd(s, s);
-  __m128d series = c.inverse_odd[10];
-  for (int i = 9; i >= 1; --i) series = _mm_add_pd(c.inverse_odd[i], _mm_mul_pd(s2, series));
-  const __m128d two_s = _mm_mul_pd(c.two, s);
-  const __m128d sum = _mm_add_pd(_mm_add_pd(two_s, _mm_mul_pd(_mm_mul_pd(two_s, s2), series)),
-                                 _mm_mul_pd(exponent, c.ln2_low));
-  return _mm_add_pd(_mm_mul_pd(exponent, c.ln2_high), sum);
-}
-
-// One group's values that Evaluate's bins share, in both lanes: region levels, their steps at the
-// boundaries, the rows' parts of the other colour, 1 / sigma, 1 / gamma and L1 - L0 (the row steps' unit).
-struct GroupLanes {
-  __m128d level[kRegions], step[kBoundaries], other[kRegions], border_part[kRegions];
-  __m128d inv_sigma, inv_gamma, level_difference;
-};
-
-// Evaluate's model, residual and Jacobian row of bins j and j + 1 of one group (both with a weight),
-// two lanes by the operations of its bin-by-bin code (so the same values): their rows at `used` and
-// `used + 1`, their squared residuals added to *cost (bin j's first). `row_steps`: the group's row steps
-// at the bins (FillRowSteps' part, d_e, d_sigma), read with kRowSteps only (an instance without them for
-// the groups without steps: the same instructions as before the steps). False, with nothing written, where
-// the gamma's log or exp would leave its range (a NaN or huge model value): the bins are then evaluated
-// one by one.
-template <bool kRowSteps>
-inline bool TwoBins(bool fit_gamma, bool single, const LaneConstants& constants, const GroupLanes& group,
-                    const double* const* big_of, const double* const* small_of, const double* const* z_of,
-                    const double* const* row_steps, const double* count, const double* sum, int j,
-                    double* cost, double* const* column, double* weight_of, double* residual_of,
-                    size_t used) {
-  const __m128d zero = _mm_setzero_pd();
-  __m128d indicator[kRegions], f = zero;
-  for (int r = 0; r < kRegions; ++r) {
-    const __m128d upper = r == 0 ? constants.one : _mm_loadu_pd(big_of[r - 1] + j);
-    const __m128d lower = r == kRegions - 1 ? zero : _mm_loadu_pd(big_of[r] + j);
-    indicator[r] = _mm_sub_pd(upper, lower);
-    f = _mm_add_pd(f, _mm_mul_pd(group.level[r], indicator[r]));
-  }
-  __m128d step_part = zero;
-  if (kRowSteps) {
-    step_part = _mm_loadu_pd(row_steps[0] + j);
-    f = _mm_add_pd(f, _mm_mul_pd(group.level_difference, step_part));
-  }
-  __m128d scale = constants.one, gamma_grad = zero;
-  if (fit_gamma) {
-    const __m128d at = _mm_max_pd(constants.half, f);  // std::max(f, 0.5), also for NaN
-    const __m128d x = _mm_mul_pd(at, constants.per_255);
-    const __m128d normal = _mm_and_pd(_mm_cmpge_pd(x, constants.log_min), _mm_cmple_pd(x, constants.log_max));
-    if (_mm_movemask_pd(normal) != 3) return false;
-    const __m128d log_lin = LogInline2(x, constants), g = group.inv_gamma;
-    const __m128d y = _mm_mul_pd(log_lin, g);
-    if (_mm_movemask_pd(_mm_cmplt_pd(_mm_andnot_pd(constants.sign, y), constants.exp_limit)) != 3)
-      return false;
-    const __m128d enc = _mm_mul_pd(constants.full_255, ExpInline2(y, constants));
-    scale = _mm_div_pd(_mm_mul_pd(enc, g), at);
-    gamma_grad = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_xor_pd(enc, constants.sign), log_lin), g), g);
-    const __m128d below = _mm_cmplt_pd(f, at), off = _mm_sub_pd(f, at);
-    const __m128d slope = _mm_sub_pd(_mm_div_pd(_mm_mul_pd(gamma_grad, g), at), _mm_mul_pd(scale, g));
-    gamma_grad = Select(below, _mm_add_pd(gamma_grad, _mm_mul_pd(slope, off)), gamma_grad);
-    f = Select(below, _mm_add_pd(enc, _mm_mul_pd(scale, off)), enc);
-  }
-  const __m128d w = _mm_loadu_pd(count + j);
-  const __m128d r = _mm_sub_pd(f, _mm_div_pd(_mm_loadu_pd(sum + j), w));
-  double squares[2];
-  _mm_storeu_pd(squares, _mm_mul_pd(_mm_mul_pd(w, r), r));
-  *cost += squares[0];
-  *cost += squares[1];
-  __m128d grad[kGamma];
-  for (int p = 0; p < kGamma; ++p) grad[p] = zero;
-  for (int b = 0; b < kBoundaries; ++b) {
-    const __m128d d = _mm_mul_pd(_mm_mul_pd(group.step[b], _mm_loadu_pd(small_of[b] + j)), group.inv_sigma);
-    grad[kE] = _mm_add_pd(grad[kE], d);
-    grad[kSigma] = _mm_sub_pd(grad[kSigma], _mm_mul_pd(d, _mm_loadu_pd(z_of[b] + j)));
-    if (b == 0) grad[kQ] = _mm_add_pd(grad[kQ], d);
-  }
-  grad[single ? kS1 : kS2] = _mm_add_pd(grad[single ? kS1 : kS2], indicator[0]);
-  grad[kS1] = _mm_add_pd(grad[kS1], indicator[1]);
-  for (int q = 2; q < kRegions; ++q) {
-    grad[kL0] = _mm_add_pd(grad[kL0], _mm_mul_pd(group.border_part[q], indicator[q]));
-    grad[kL1] = _mm_add_pd(grad[kL1], _mm_mul_pd(group.other[q], indicator[q]));
-  }
-  if (kRowSteps) {
-    grad[kE] = _mm_add_pd(grad[kE], _mm_mul_pd(group.level_difference, _mm_loadu_pd(row_steps[1] + j)));
-    grad[kSigma] =
-        _mm_add_pd(grad[kSigma], _mm_mul_pd(group.level_difference, _mm_loadu_pd(row_steps[2] + j)));
-    grad[kL0] = _mm_sub_pd(grad[kL0], step_part), grad[kL1] = _mm_add_pd(grad[kL1], step_part);
-  }
-  for (int p = 0; p < kGamma; ++p) _mm_storeu_pd(column[p] + used, _mm_mul_pd(grad[p], scale));
-  _mm_storeu_pd(column[kGamma] + used, gamma_grad);
-  _mm_storeu_pd(weight_of + used, w);
-  _mm_storeu_pd(residual_of + used, r);
-  return true;
-}
-#endif
-
 // Whether group g has a step (SideProfiles::RowStep) in code row `row`.
 bool HasRowStep(const SideProfiles& s, int g, int row) {
   for (int k = s.first_step[g]; k < s.first_step[g] + s.steps[g]; ++k)
     if (s.row_steps[k].row == row) return true;
   return false;
-}
-
-// Group g's row steps (SideProfiles::RowStep) at every bin: their part of the model, in units of L1 - L0,
-// into part[j], and its derivatives by e and sigma into d_e[j], d_sigma[j] (with `derivatives`). A step
-// is the cell beyond the column boundary: blurred across the boundary (along the ray, sigma k) and across
-// the row's boundaries (B_in outer, B_out inner: none for the last row), as a product (exact for
-// boundaries at right angles):
-//   sum over steps of delta Phi((e - depth - u) / (sigma k)) [Phi((B_in - u) / sigma) - Phi((B_out - u) /
-//   sigma)]
-// The bracket (the row's band) and the row boundaries' phi and z are the group's boundaries' (Evaluate's
-// big_of, small_of, z_of: boundary b's at [b][j]); each step's Phi((e - depth - u) / (sigma k)) is filled
-// over the bins once (FillBoundary with 1 / (sigma k)).
-void FillRowSteps(const SideProfiles& s, const double* p, int g, bool derivatives,
-                  const double* const* big_of, const double* const* small_of, const double* const* z_of,
-                  double* part, double* d_e, double* d_sigma) {
-  const int n = s.bins;
-  std::fill(part, part + n, 0.0);
-  if (derivatives) std::fill(d_e, d_e + n, 0.0), std::fill(d_sigma, d_sigma + n, 0.0);
-  thread_local std::vector<double> cross_z, cross, cross_density;
-  cross_z.resize(n), cross.resize(n), cross_density.resize(n);
-  const double inv_sigma = 1.0 / p[kSigma];
-  for (int k = s.first_step[g]; k < s.first_step[g] + s.steps[g]; ++k) {
-    const SideProfiles::RowStep& step = s.row_steps[k];
-    const double inv_width = inv_sigma / step.sigma_scale, h = s.du * inv_width;
-    FillBoundary(s, p[kE] - step.depth, inv_width, std::exp(-h * h), cross_z.data(), cross.data(),
-                 cross_density.data());
-    const int b_in = 1 + step.row;  // the row's outer boundary (rows 1..kRows: boundaries 2..kRows + 1)
-    const bool last = step.row == SideProfiles::kRows;  // no inner boundary
-    for (int j = 0; j < n; ++j) {
-      const double band = big_of[b_in][j] - (last ? 0.0 : big_of[b_in + 1][j]);
-      part[j] += step.delta * cross[j] * band;
-      if (!derivatives) continue;
-      // d Phi(z) / d e = phi / (sigma k), d Phi(z) / d sigma = -phi z / sigma.
-      const double in_density = small_of[b_in][j], z_in = z_of[b_in][j];
-      const double out_density = last ? 0.0 : small_of[b_in + 1][j], z_out = last ? 0.0 : z_of[b_in + 1][j];
-      d_e[j] += step.delta *
-                (cross_density[j] / step.sigma_scale * band + cross[j] * (in_density - out_density)) *
-                inv_sigma;
-      d_sigma[j] -=
-          step.delta *
-          (cross_density[j] * cross_z[j] * band + cross[j] * (in_density * z_in - out_density * z_out)) *
-          inv_sigma;
-    }
-  }
 }
 
 // The margin's width's lower bound in cells (FitOnce).
@@ -659,24 +260,6 @@ double MarginWeight(const SideProfiles& s, const double* p) {
   return std::sqrt(kPaperWeightPerRay * rays) * gate * (s.tie_paper ? 1.0 : 1.0 - SmoothStep(b, 0.1, 0.2));
 }
 
-// Phi, phi and z of every boundary at every bin (Evaluate's rows): row 0 the margin's far side e + q,
-// row 1 the outer edge e, then per group its kRows inner boundaries at e less their mean depths (they
-// differ by group under perspective).
-void FillBoundaries(const SideProfiles& s, const double* p, double* zs, double* big_phi, double* small_phi) {
-  const int n = s.bins;
-  const double inv_sigma = 1.0 / p[kSigma];
-  const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);  // FillBoundary's, once
-  auto fill = [&](int row, double bound) {
-    const size_t i = static_cast<size_t>(row) * n;
-    FillBoundary(s, bound, inv_sigma, step_ratio, &zs[i], &big_phi[i], &small_phi[i]);
-  };
-  fill(0, p[kE] + p[kQ]);
-  fill(1, p[kE]);
-  for (int g = 0; g < static_cast<int>(s.patterns.size()); ++g)
-    for (int r = 0; r < SideProfiles::kRows; ++r)
-      fill(2 + g * SideProfiles::kRows + r, p[kE] - s.depth_sum[g][r] / s.rays[g]);
-}
-
 // Group g's region levels: S2, S1, then the border L0 and rows 1..kRows, each L0 + (L1 - L0) * other,
 // `other` the share of the row's cells of the other colour than the border's along the group's rays.
 void RegionLevels(const SideProfiles& s, const double* p, bool single, int g, double* other, double* level) {
@@ -693,145 +276,68 @@ void AddPenalty(double penalty, const double* penalty_grad, Normal* jtj, Vector*
   *jtj += g * g.transpose(), *jtr += penalty * g;
 }
 
-// Model values, and with `jtj` / `jtr` the normal equations, for parameters p, with the margin's penalty
-// of weight `margin_weight` (MarginPenalty). Returns the weighted squared residual sum and the penalty's
-// square.
+// The side model's evaluation (side_model_lanes.inc) as SSE2 code, and on x86-64 with GCC also as AVX2
+// code chosen at run time (SideModelUsesAvx2): the same values to the bit.
+#define MCMT_SIDE_AVX2 0
+namespace sse2 {
+#include "detector/side_model_lanes.inc"
+}  // namespace sse2
+#undef MCMT_SIDE_AVX2
+#if MCMT_SIDE_HAS_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#define MCMT_SIDE_AVX2 1
+namespace avx2 {
+#include "detector/side_model_lanes.inc"
+}  // namespace avx2
+#undef MCMT_SIDE_AVX2
+#pragma GCC pop_options
+#endif
+
+// Whether the AVX2 code runs: the CPU has it and MCMT_NO_AVX2 is unset or "0" (read once), or as the test
+// hook UseSideModelAvx2 set it.
+std::atomic<bool>& Avx2Chosen() {
+  static std::atomic<bool> chosen{
+      SideModelAvx2Available() &&
+      !(std::getenv("MCMT_NO_AVX2") && std::strcmp(std::getenv("MCMT_NO_AVX2"), "0"))};
+  return chosen;
+}
+
 double Evaluate(const SideProfiles& s, const double* p, bool single, double margin_weight, Normal* jtj,
                 Vector* jtr) {
-  const int n = s.bins;
-  const int groups = static_cast<int>(s.patterns.size());
-  // Phi and phi of every boundary at every bin: the margin's far side and the outer edge are shared
-  // by all groups, the inner boundaries are per group (their depths differ under perspective).
-  const int rows_per_group = kBoundaries + (groups - 1) * SideProfiles::kRows;
-  // The Jacobian's columns (one per parameter, `used` rows each: the bins with a weight) and the
-  // weights and residuals of those bins.
-  thread_local std::vector<double> big_phi, small_phi, zs, jacobian, weights, residuals, row_steps;
-  row_steps.resize(3 * static_cast<size_t>(n));
-  big_phi.resize(static_cast<size_t>(rows_per_group) * n);
-  small_phi.resize(big_phi.size());
-  zs.resize(big_phi.size());
-  // At least one row more than the bins (an even count of rows, NormalEquations), itself even: every
-  // column starts 16-byte aligned (NormalRow), as the vectors' storage does.
-  const size_t capacity = (static_cast<size_t>(groups) * n + 2) / 2 * 2;
-  if (jtj) jacobian.resize(kParams * capacity), weights.resize(capacity), residuals.resize(capacity);
-  const double inv_sigma = 1.0 / p[kSigma], inv_gamma = 1.0 / p[kGamma];
-  FillBoundaries(s, p, zs.data(), big_phi.data(), small_phi.data());
-  double cost = 0;
-  size_t used = 0;
-  double* column[kParams];  // the Jacobian's, the weights' and the residuals' data (no reloads)
-  for (int k = 0; k < kParams; ++k) column[k] = jtj ? jacobian.data() + k * capacity : nullptr;
-  double* const weight_of = weights.data();
-  double* const residual_of = residuals.data();
-#ifdef __SSE2__
-  LaneConstants constants;
-  __asm__("" : "+m"(constants));  // its values hidden from the optimiser (LaneConstants)
+#if MCMT_SIDE_HAS_AVX2
+  if (Avx2Chosen().load(std::memory_order_relaxed))
+    return avx2::Evaluate(s, p, single, margin_weight, jtj, jtr);
 #endif
-  for (int g = 0; g < groups; ++g) {
-    // Boundary b's Phi, phi and z at the bins.
-    const double *big_of[kBoundaries], *small_of[kBoundaries], *z_of[kBoundaries];
-    for (int b = 0; b < kBoundaries; ++b) {
-      const size_t row = static_cast<size_t>(b < 2 ? b : 2 + g * SideProfiles::kRows + (b - 2)) * n;
-      big_of[b] = &big_phi[row], small_of[b] = &small_phi[row], z_of[b] = &zs[row];
-    }
-    const double* count = &s.count[static_cast<size_t>(g) * n];
-    // The group's row steps at the bins (FillRowSteps): their part, its derivatives by e and sigma.
-    const bool stepped = s.steps[g] > 0;
-    double* const step_part = row_steps.data();
-    double* const step_d_e = step_part + n;
-    double* const step_d_sigma = step_d_e + n;
-    const double* const row_steps_of[3] = {step_part, step_d_e, step_d_sigma};
-    if (stepped)
-      FillRowSteps(s, p, g, jtj != nullptr, big_of, small_of, z_of, step_part, step_d_e, step_d_sigma);
-    const double* sum = &s.sum[static_cast<size_t>(g) * n];
-    double other[kRegions], level[kRegions];
-    RegionLevels(s, p, single, g, other, level);
-    // Bin j's model value, residual and Jacobian row (the rows of bins with a weight, in bin order).
-    auto bin = [&](int j) {
-      const double w = count[j];
-      if (w <= 0) return;
-      double f = 0, indicator[kRegions], gamma_grad = 0;
-      for (int k = 0; k < kRegions; ++k) {
-        const double upper = k == 0 ? 1.0 : big_of[k - 1][j];
-        const double lower = k == kRegions - 1 ? 0.0 : big_of[k][j];
-        indicator[k] = upper - lower;
-        f += level[k] * indicator[k];
-      }
-      if (stepped) f += (p[kL1] - p[kL0]) * step_part[j];
-      double scale = 1.0;  // d encoded / d linear
-      if (s.fit_gamma) {   // encoded: 255 exp(log(f / 255) / gamma), one log and one exp
-        // Below 0.5 (no log of 0) the curve continues along its tangent there: a clip would hold the
-        // model at 0.5 where an image's black is 0, push the dark level below 0 and with it the edge
-        // towards the dark side (0.09 px on a sharp printed sheet).
-        const double at = std::max(f, 0.5), log_lin = LogInline(at * (1.0 / 255.0));
-        const double enc = 255.0 * ExpInline(log_lin * inv_gamma);
-        scale = enc * inv_gamma / at;
-        gamma_grad = -enc * log_lin * inv_gamma * inv_gamma;
-        if (f < at) {
-          gamma_grad += (gamma_grad * inv_gamma / at - scale * inv_gamma) * (f - at);
-          f = enc + scale * (f - at);
-        } else {
-          f = enc;
-        }
-      }
-      const double r = f - sum[j] / w;
-      cost += w * r * r;
-      if (!jtj) return;
-      double grad[kParams] = {};
-      for (int b = 0; b < kBoundaries; ++b) {
-        const double d = (level[b + 1] - level[b]) * small_of[b][j] * inv_sigma;  // d f / d bound_b
-        grad[kE] += d;
-        grad[kSigma] -= d * z_of[b][j];
-        if (b == 0) grad[kQ] += d;
-      }
-      grad[single ? kS1 : kS2] += indicator[0], grad[kS1] += indicator[1];
-      for (int k = 2; k < kRegions; ++k)
-        grad[kL0] += (1.0 - other[k]) * indicator[k], grad[kL1] += other[k] * indicator[k];
-      if (stepped) {
-        grad[kE] += (p[kL1] - p[kL0]) * step_d_e[j], grad[kSigma] += (p[kL1] - p[kL0]) * step_d_sigma[j];
-        grad[kL0] -= step_part[j], grad[kL1] += step_part[j];
-      }
-      for (int k = 0; k < kGamma; ++k) column[k][used] = grad[k] * scale;
-      column[kGamma][used] = gamma_grad;
-      weight_of[used] = w, residual_of[used] = r;
-      ++used;
-    };
-    int j = 0;
-#ifdef __SSE2__
-    if (jtj) {
-      GroupLanes lanes;
-      for (int k = 0; k < kRegions; ++k)
-        lanes.level[k] = _mm_set1_pd(level[k]), lanes.other[k] = _mm_set1_pd(other[k]),
-        lanes.border_part[k] = _mm_set1_pd(1.0 - other[k]);
-      for (int b = 0; b < kBoundaries; ++b) lanes.step[b] = _mm_set1_pd(level[b + 1] - level[b]);
-      lanes.inv_sigma = _mm_set1_pd(inv_sigma), lanes.inv_gamma = _mm_set1_pd(inv_gamma);
-      lanes.level_difference = _mm_set1_pd(p[kL1] - p[kL0]);
-      for (; j + 1 < n; j += 2)
-        if (!(count[j] > 0 && count[j + 1] > 0) ||
-            !(stepped
-                  ? TwoBins<true>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, row_steps_of,
-                                  count, sum, j, &cost, column, weight_of, residual_of, used)
-                  : TwoBins<false>(s.fit_gamma, single, constants, lanes, big_of, small_of, z_of, nullptr,
-                                   count, sum, j, &cost, column, weight_of, residual_of, used)))
-          bin(j), bin(j + 1);
-        else
-          used += 2;
-    }
-#endif
-    for (; j < n; ++j) bin(j);
-  }
-  double penalty_grad[kParams];
-  const double penalty = MarginPenalty(s, p, single, margin_weight, penalty_grad);
-  cost += penalty * penalty;
-  if (!jtj) return cost;
-  if (used % 2) {  // the pad row: no weight
-    for (int k = 0; k < kParams; ++k) jacobian[k * capacity + used] = 0.0;
-    weights[used] = 0.0, residuals[used] = 0.0;
-  }
-  NormalEquations(jacobian.data(), capacity, weights.data(), residuals.data(), used, single, s.fit_gamma, jtj,
-                  jtr);
-  AddPenalty(penalty, penalty_grad, jtj, jtr);
-  return cost;
+  return sse2::Evaluate(s, p, single, margin_weight, jtj, jtr);
 }
+
+}  // namespace
+
+bool SideModelAvx2Available() {
+#if MCMT_SIDE_HAS_AVX2
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+bool SideModelUsesAvx2() { return Avx2Chosen().load(std::memory_order_relaxed); }
+
+bool UseSideModelAvx2(bool use) {
+  return Avx2Chosen().exchange(use && SideModelAvx2Available(), std::memory_order_relaxed);
+}
+
+void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
+                  double* big_phi, double* small_phi) {
+#if MCMT_SIDE_HAS_AVX2
+  if (SideModelUsesAvx2())
+    return avx2::FillBoundaryLanes(s, bound, inv_sigma, step_ratio, zs, big_phi, small_phi);
+#endif
+  sse2::FillBoundaryLanes(s, bound, inv_sigma, step_ratio, zs, big_phi, small_phi);
+}
+
+namespace {
 
 // The samples of bin j over the groups whose row `row` (0: the border; 1..kRows: code rows; -1: any) has
 // colour `colour`: their sum and their count.
