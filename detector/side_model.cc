@@ -328,6 +328,12 @@ bool UseSideModelAvx2(bool use) {
   return Avx2Chosen().exchange(use && SideModelAvx2Available(), std::memory_order_relaxed);
 }
 
+double EvaluateSideModel(const SideProfiles& s, const std::array<double, 8>& p, bool single,
+                         double margin_weight, Eigen::Matrix<double, 8, 8>* jtj,
+                         Eigen::Matrix<double, 8, 1>* jtr) {
+  return Evaluate(s, p.data(), single, margin_weight, jtj, jtr);
+}
+
 void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
                   double* big_phi, double* small_phi) {
 #if MCMT_SIDE_HAS_AVX2

@@ -257,6 +257,14 @@ bool UseSideModelAvx2(bool use);
 void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
                   double* big_phi, double* small_phi);
 
+// FitSideProfiles' evaluation at parameters p (e, sigma, L0, L1, S1, S2, q, gamma; `single`: one surround
+// level S1, S2 and q unused), with the margin's penalty of weight `margin_weight`: the weighted squared
+// residuals plus the penalty's square, and with jtj and jtr (both or neither) the normal equations J^T W J
+// and J^T W r. Declared here for its test (SideModel.Avx2IsSse2).
+double EvaluateSideModel(const SideProfiles& s, const std::array<double, 8>& p, bool single,
+                         double margin_weight, Eigen::Matrix<double, 8, 8>* jtj,
+                         Eigen::Matrix<double, 8, 1>* jtr);
+
 // The Cholesky factor L (lower triangle of *a; the upper is left as it was) of the side model's 8 x 8
 // normal matrices, as Eigen::LLT computes it, to the bit; false where LLT reports a numerical issue.
 // Declared here for its test (side_model.cc).

@@ -1308,6 +1308,129 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
 #endif
 }
 
+// The side model's AVX2 code (four bins at a time, chosen at run time where the CPU has it) gives the SSE2
+// code's values to the bit, so that the corners do not depend on the machine: FitSideProfiles on random
+// sides (blur, cell, edge, margin or none, gamma fitted or not, the paper's level and polarity for the
+// margin's penalty, groups with row steps, empty bins in runs and alone, noise) through both, every
+// parameter compared by its bits; FillBoundary through both. Skipped where the CPU (or the build: GCC on
+// x86-64) has no AVX2.
+TEST(SideModel, Avx2IsSse2) {
+  if (!SideModelAvx2Available())
+    GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
+  const bool was = UseSideModelAvx2(true);
+  ASSERT_TRUE(SideModelUsesAvx2());
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const auto phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  int fitted = 0, gamma_fits = 0, stepped = 0, evaluations = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const double cell = 0.9 + 4.0 * uniform(rng), sigma = 0.3 + 1.5 * uniform(rng), edge = uniform(rng) - 0.5;
+    const double gamma = uniform(rng) < 0.5 ? 1.0 : 1.8 + 0.6 * uniform(rng);
+    const double border = 10 + 40 * uniform(rng), code = 170 + 70 * uniform(rng);
+    const double margin = uniform(rng) < 0.3 ? 0.0 : (0.3 + 1.5 * uniform(rng)) * cell;
+    const double surround = 20 + 200 * uniform(rng), paper = code - 20 * uniform(rng);
+    // Linear light across the side (u outward), the row boundaries at `depths` inward.
+    const auto linear = [&](double u, const std::array<uint8_t, 2>& pattern,
+                            const std::array<double, 2>& depths) {
+      const double row1 = pattern[0] ? code : border, row2 = pattern[1] ? code : border;
+      return row2 + (row1 - row2) * phi((u - (edge - depths[1])) / sigma) +
+             (border - row1) * phi((u - (edge - depths[0])) / sigma) +
+             (paper - border) * phi((u - edge) / sigma) +
+             (surround - paper) * phi((u - edge - margin) / sigma);
+    };
+    const double du = std::clamp(cell / 4.0, 0.1, 0.5);
+    const int bins =
+        6 + static_cast<int>((3.5 * cell + 2.0 * sigma + margin) / du * uniform(rng) + 0.6 * cell / du);
+    SideProfiles s;
+    s.Reset(edge - 2.2 * cell - du * uniform(rng), du, bins, cell);
+    s.fit_gamma = gamma != 1.0;
+    s.polarity = trial % 3 == 0 ? 0 : 1;
+    s.paper = trial % 2 ? paper : 0.0;
+    s.tie_paper = trial % 5 == 0;
+    const std::array<uint8_t, 2> patterns[4] = {{1, 0}, {0, 1}, {1, 1}, {0, 0}};
+    for (int ray = 0; ray < 16; ++ray) {
+      const std::array<uint8_t, 2>& pattern = patterns[ray % 4];
+      const std::array<double, 2> depths = {cell * (1.0 + 0.05 * uniform(rng)),
+                                            cell * (2.0 + 0.1 * uniform(rng))};
+      // Every fourth ray of some sides crosses a column boundary in row 1: a group of its own.
+      SideProfiles::RowStep step{1, depths[0] + 0.3 * cell, pattern[0] ? -1.0 : 1.0, 1.0 + uniform(rng)};
+      const bool with_step = trial % 4 == 1 && ray % 4 == 0;
+      stepped += with_step;
+      const int g = s.AddRay(pattern, depths, {1.0 * pattern[0], 1.0 * pattern[1]},
+                             with_step ? &step : nullptr, with_step ? 1 : 0);
+      const int gap = static_cast<int>(bins * uniform(rng));  // a run of empty bins on some rays
+      for (int j = 0; j < bins; ++j) {
+        if (uniform(rng) < 0.08 || (ray % 5 == 2 && j >= gap && j < gap + 3)) continue;
+        const double value = linear(s.u0 + j * du, pattern, depths);
+        s.Add(g, j, 255.0 * std::pow(std::max(value, 0.0) / 255.0, 1.0 / gamma) + 2.0 * (uniform(rng) - 0.5));
+      }
+    }
+    SideFit fits[2];
+    bool ok[2];
+    for (int path = 0; path < 2; ++path) {
+      UseSideModelAvx2(path == 0);
+      if (trial % 7 == 3)
+        fits[path].warm = true,
+        fits[path].params = {0.1, sigma, border, code, paper, surround, std::max(margin, 0.3 * cell), gamma};
+      ok[path] = FitSideProfiles(s, &fits[path]);
+    }
+    ASSERT_EQ(ok[0], ok[1]) << "trial " << trial;
+    fitted += ok[0], gamma_fits += ok[0] && fits[0].gamma_fitted;
+    for (int k = 0; k < 8; ++k)
+      ASSERT_EQ(std::memcmp(&fits[0].params[k], &fits[1].params[k], sizeof(double)), 0)
+          << "trial " << trial << " parameter " << k << ": " << fits[0].params[k] << " / "
+          << fits[1].params[k];
+    for (const auto field : {&SideFit::e, &SideFit::sigma, &SideFit::contrast, &SideFit::gamma})
+      ASSERT_EQ(std::memcmp(&(fits[0].*field), &(fits[1].*field), sizeof(double)), 0) << "trial " << trial;
+    ASSERT_EQ(fits[0].single_surround, fits[1].single_surround) << "trial " << trial;
+    // The evaluation itself (cost, J^T W J, J^T W r) at points about the truth, also where a fit failed.
+    for (int point = 0; point < 4; ++point) {
+      const std::array<double, 8> p = {edge + 0.3 * (uniform(rng) - 0.5),
+                                       sigma * (0.7 + 0.6 * uniform(rng)),
+                                       border + 10 * uniform(rng),
+                                       code - 10 * uniform(rng),
+                                       paper + 20 * (uniform(rng) - 0.5),
+                                       surround + 20 * (uniform(rng) - 0.5),
+                                       std::max(margin, 0.2 * cell) * (0.8 + 0.4 * uniform(rng)),
+                                       gamma * (0.9 + 0.2 * uniform(rng))};
+      const bool single = point == 3;
+      const double weight = point == 2 ? 4.0 * uniform(rng) : 0.0;
+      double costs[2][2];
+      Eigen::Matrix<double, 8, 8> jtj[2];
+      Eigen::Matrix<double, 8, 1> jtr[2];
+      for (int path = 0; path < 2; ++path) {
+        UseSideModelAvx2(path == 0);
+        costs[path][0] = EvaluateSideModel(s, p, single, weight, nullptr, nullptr);
+        costs[path][1] = EvaluateSideModel(s, p, single, weight, &jtj[path], &jtr[path]);
+      }
+      ASSERT_EQ(std::memcmp(costs[0], costs[1], sizeof costs[0]), 0)
+          << "trial " << trial << " point " << point << ": " << costs[0][1] << " / " << costs[1][1];
+      ASSERT_EQ(std::memcmp(jtj[0].data(), jtj[1].data(), sizeof jtj[0]), 0) << "trial " << trial;
+      ASSERT_EQ(std::memcmp(jtr[0].data(), jtr[1].data(), sizeof jtr[0]), 0) << "trial " << trial;
+      evaluations += std::isfinite(costs[0][1]);
+    }
+    // FillBoundary about a random boundary (before, within, beyond the bins).
+    const double bound = s.u0 - 5.0 + (s.OuterU() - s.u0 + 10.0) * uniform(rng), inv_sigma = 1.0 / sigma;
+    std::vector<double> out[2][3];
+    for (int path = 0; path < 2; ++path) {
+      UseSideModelAvx2(path == 0);
+      for (auto& v : out[path]) v.assign(bins, -1.0);
+      FillBoundary(s, bound, inv_sigma, std::exp(-du * du * inv_sigma * inv_sigma), out[path][0].data(),
+                   out[path][1].data(), out[path][2].data());
+    }
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(std::memcmp(out[0][k].data(), out[1][k].data(), bins * sizeof(double)), 0)
+          << "trial " << trial;
+  }
+  UseSideModelAvx2(was);
+  std::printf(
+      "%d of 300 sides fitted (%d with gamma fitted), %d rays with row steps, %d finite evaluations\n",
+      fitted, gamma_fits, stepped, evaluations);
+  EXPECT_GT(fitted, 150);
+  EXPECT_GT(gamma_fits, 50);
+  EXPECT_GT(evaluations, 1000);
+}
+
 // CholeskyLower (the side model's Levenberg-Marquardt steps, BoundedStep) is Eigen::LLT's factorisation to
 // the bit: normal matrices J^T J of random Jacobians with columns of scales 1e-3 to 1e3, damped as FitOnce
 // damps them, with parameters held as BoundedStep holds them (row and column zero, diagonal 1), nearly
