@@ -1244,7 +1244,8 @@ TEST(SideModel, AFitIsTheSameWhicheverBinsArePaired) {
 // Phi and phi two bins at a time (SSE2, PhiAndDensityOfTwo). Its values are the bin-by-bin definition's
 // to the bit: boundaries before, within and beyond the bins, blur from 0.15 px to 4 px (runs within 7
 // sigmas of every length and parity, restarts of the Gaussian's recurrence every 16 bins), even and odd
-// bin counts. PhiAndDensityOfTwo is PhiAndDensityOf lane by lane, also at 0, -0, NaN and infinities.
+// bin counts; through the SSE2 code and the AVX2 code (four bins at a time: SideModel.Avx2IsSse2).
+// PhiAndDensityOfTwo is PhiAndDensityOf lane by lane, also at 0, -0, NaN and infinities.
 TEST(SideModel, FillBoundaryIsBinByBins) {
   // The definition (FillBoundary before its two-bin code, refcost).
   const auto reference = [](const SideProfiles& s, double bound, double inv_sigma, double step_ratio,
@@ -1268,28 +1269,36 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
       PhiAndDensityOf(z, gauss, &big_phi[k], &small_phi[k]);
     }
   };
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  int cases = 0;
-  for (int bins : {1, 2, 3, 6, 7, 16, 17, 33, 64, 101}) {
-    for (int trial = 0; trial < 200; ++trial, ++cases) {
-      SideProfiles s;
-      const double cell = 0.5 + 6.0 * uniform(rng);
-      s.Reset(-2.0 * cell * uniform(rng), std::clamp(cell / 4.0, 0.1, 0.5), bins, cell);
-      const double sigma = 0.15 + 3.85 * uniform(rng), inv_sigma = 1.0 / sigma;
-      const double bound = s.u0 - 10.0 + (s.OuterU() - s.u0 + 20.0) * uniform(rng);
-      const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
-      std::vector<double> z(bins), big(bins), small(bins), z0(bins), big0(bins), small0(bins);
-      FillBoundary(s, bound, inv_sigma, step_ratio, z.data(), big.data(), small.data());
-      reference(s, bound, inv_sigma, step_ratio, z0.data(), big0.data(), small0.data());
-      for (int j = 0; j < bins; ++j) {
-        ASSERT_EQ(z[j], z0[j]) << bins << " bins, trial " << trial << ", bin " << j;
-        ASSERT_EQ(big[j], big0[j]) << bins << " bins, trial " << trial << ", bin " << j;
-        ASSERT_EQ(small[j], small0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+  // Through the SSE2 code and, where the CPU has it, the AVX2 code (four bins at a time).
+  const bool was = SideModelUsesAvx2();
+  for (const bool avx2 : {false, true}) {
+    if (avx2 && !SideModelAvx2Available()) continue;
+    UseSideModelAvx2(avx2);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    int cases = 0;
+    for (int bins : {1, 2, 3, 4, 5, 6, 7, 16, 17, 33, 64, 101}) {
+      for (int trial = 0; trial < 200; ++trial, ++cases) {
+        SideProfiles s;
+        const double cell = 0.5 + 6.0 * uniform(rng);
+        s.Reset(-2.0 * cell * uniform(rng), std::clamp(cell / 4.0, 0.1, 0.5), bins, cell);
+        const double sigma = 0.15 + 3.85 * uniform(rng), inv_sigma = 1.0 / sigma;
+        const double bound = s.u0 - 10.0 + (s.OuterU() - s.u0 + 20.0) * uniform(rng);
+        const double h = s.du * inv_sigma, step_ratio = std::exp(-h * h);
+        std::vector<double> z(bins), big(bins), small(bins), z0(bins), big0(bins), small0(bins);
+        FillBoundary(s, bound, inv_sigma, step_ratio, z.data(), big.data(), small.data());
+        reference(s, bound, inv_sigma, step_ratio, z0.data(), big0.data(), small0.data());
+        for (int j = 0; j < bins; ++j) {
+          ASSERT_EQ(z[j], z0[j]) << bins << " bins, trial " << trial << ", bin " << j
+                                 << (avx2 ? ", AVX2" : "");
+          ASSERT_EQ(big[j], big0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+          ASSERT_EQ(small[j], small0[j]) << bins << " bins, trial " << trial << ", bin " << j;
+        }
       }
     }
+    EXPECT_EQ(cases, 2400);
   }
-  EXPECT_EQ(cases, 2000);
+  UseSideModelAvx2(was);
 #ifdef __SSE2__
   const double inf = std::numeric_limits<double>::infinity();
   const double zs[] = {0.0, -0.0, NAN, inf, -inf, 1e-300, -1e-300, 0.3, -0.3, 6.99, -6.99, 40.0, -40.0};
