@@ -316,7 +316,8 @@ double Evaluate(const SideProfiles& s, const double* p, bool single, double marg
 
 bool SideModelAvx2Available() {
 #if MCMT_SIDE_HAS_AVX2
-  return __builtin_cpu_supports("avx2");
+  __builtin_cpu_init();  // (where called before the constructors that run it: static initialisers)
+  return __builtin_cpu_supports("avx2");  // (libgcc: also that the OS saves the AVX registers)
 #else
   return false;
 #endif
