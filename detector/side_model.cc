@@ -671,14 +671,24 @@ bool DetrendSurround(SideProfiles* s, SideFit* fit) {
   const double sxx = swxx - swx * swx / sw, sxr = swxr - swx * swr / sw;
   if (!(sxx > 0)) return false;
   const double slope = weight * sxr / sxx;
+  // The plateau's sums as they were, for a refit that fails: the profiles must stay those *fit was fitted
+  // to (SecondStepBeyondMargin and the next passes read them against it).
+  thread_local std::vector<double> kept;
+  kept.clear();
   for (size_t g = 0; g < s->patterns.size(); ++g)
     for (int j = first; j < s->bins; ++j) {
       const size_t k = g * s->bins + j;
+      kept.push_back(s->sum[k]);
       s->sum[k] -= s->count[k] * slope * (s->u0 + j * s->du - start);
     }
   SideFit again = *fit;
   again.warm = true;
-  if (!FitSideProfiles(*s, &again)) return false;
+  if (!FitSideProfiles(*s, &again)) {
+    size_t i = 0;
+    for (size_t g = 0; g < s->patterns.size(); ++g)
+      for (int j = first; j < s->bins; ++j) s->sum[g * s->bins + j] = kept[i++];
+    return false;
+  }
   *fit = again;
   return true;
 }

@@ -187,8 +187,7 @@ double SecondStepBeyondMargin(const SideProfiles& s, const SideFit& fit);
 // fit lies at its bound: such a fit's margin is a valley, not a measured margin, and its plateau may hold the
 // paper's own far side (without this condition the reference renderer's white two-cell margin lost a marker:
 // each pass's warm fit kept S1 at 275 and each detrend took off a rise larger than the side's contrast;
-// bench/results/2026-12-07-shade3h.md). Where the refit fails, *fit is unchanged and the profiles keep the
-// detrended plateau (false).
+// bench/results/2026-12-07-shade3h.md). Where the refit fails, *fit and the profiles are unchanged (false).
 constexpr double kDetrendFullCellPx = 1.75, kDetrendMaxCellPx = 2.25;  // the trend's weight 1 -> 0 between
 constexpr double kDetrendStartSigmas = 1.75;
 constexpr int kDetrendMinBins = 3;

@@ -1107,6 +1107,29 @@ TEST(SideModel, AFacesShadeBeyondTheMarginDoesNotMoveTheEdge) {
   EXPECT_LT(std::abs(detrended[0]), 0.02);
   EXPECT_LT(std::abs(detrended[1]), 0.02);
 }
+
+// A detrend whose refit fails leaves the profiles as they were, not only the fit: SecondStepBeyondMargin and
+// the later passes read the profiles against the fit (0934722 left the detrended plateau in them). The
+// shaded side above, fitted, then its polarity turned so that the warm refit fails as the wrong polarity
+// (the only way to make a warm refit from a good fit fail on purpose): every bin's sum must come back
+// bit for bit.
+TEST(SideModel, AFailedDetrendRefitLeavesTheProfiles) {
+  const double cell = 1.3, paper = 225;
+  const auto profile = ShadedFaceProfile(cell, 0.5, 165);
+  std::mt19937_64 rng(15);
+  std::normal_distribution<double> gauss(0.0, 2.0);
+  SideProfiles s = SixteenRayProfiles(cell, paper, profile, gauss, rng);
+  SideFit fit;
+  ASSERT_TRUE(FitSideProfiles(s, &fit));
+  const std::vector<double> sums = s.sum;
+  const SideFit before = fit;
+  s.polarity = -s.polarity;
+  EXPECT_FALSE(DetrendSurround(&s, &fit));
+  EXPECT_EQ(fit.params, before.params);
+  int changed = 0;
+  for (size_t k = 0; k < sums.size(); ++k) changed += s.sum[k] != sums[k];
+  EXPECT_EQ(changed, 0) << "of " << sums.size() << " bins' sums";
+}
 }  // namespace
 }  // namespace mcmt
 
