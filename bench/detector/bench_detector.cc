@@ -6,7 +6,9 @@
 // Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
 // by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search;
 // MCMT_BENCH_BAND=sides: fast mode's fast_band_sides; MCMT_BENCH_MISSES: the markers fast mode missed and
-// how far they were from its markers of the frame before, on stderr.)
+// how far they were from its markers of the frame before, on stderr; MCMT_CORNER_DUMP=FILE: every marker
+// found, one line each: image width, camera, frame, mode (0 accurate, 1 fast), id and the four corners in
+// hexadecimal floating point (%a), so that two builds' corners can be compared to the bit with cmp.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -82,6 +84,8 @@ int main(int argc, char** argv) {
   const int only_width = argc > 3 ? std::atoi(argv[3]) : 0;
   // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
   const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
+  FILE* corner_dump =
+      std::getenv("MCMT_CORNER_DUMP") ? std::fopen(std::getenv("MCMT_CORNER_DUMP"), "w") : nullptr;
   cv::setNumThreads(1);
   const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(
       frames, std::getenv("MCMT_BENCH_BLUR") ? std::atof(std::getenv("MCMT_BENCH_BLUR")) : 0.0);
@@ -144,6 +148,15 @@ int main(int argc, char** argv) {
         std::vector<int> ids;
         if (only.empty() || only == "stock") cv::aruco::detectMarkers(image, dict, corners, ids, params);
         auto t3 = ThreadSeconds();
+        if (corner_dump)
+          for (const auto* found : {&a, &f})
+            for (const auto& m : *found) {
+              std::fprintf(corner_dump, "%d %d %zu %d %d", size[0], c,
+                           static_cast<size_t>(&image - &images[c][0]), found == &a ? 0 : 1, m.id);
+              for (int k = 0; k < 4; ++k)
+                std::fprintf(corner_dump, " %a %a", m.corners[k][0], m.corners[k][1]);
+              std::fprintf(corner_dump, "\n");
+            }
         accurate_ms += 1000 * (t1 - t0);
         fast_ms += 1000 * (t2 - t1);
         stock_ms += 1000 * (t3 - t2);
@@ -218,5 +231,6 @@ int main(int argc, char** argv) {
   std::printf(
       "\nPeak resident memory of this benchmark (all images of one resolution held in memory): %.0f MB\n",
       PeakRssMb());
+  if (corner_dump) std::fclose(corner_dump);
   return 0;
 }
