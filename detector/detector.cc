@@ -212,6 +212,20 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
   return sampled;
 }
 
+// The n samples of SampleLine into out[0..n): SampleLine's values where it samples (into `out` directly
+// where both ends are inside: no copy), the others left as they were; returns how many were sampled.
+inline int SampleLineInto(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+                          const Eigen::Vector2d& direction, double s0, double ds, float* out) {
+  const double s1 = s0 + (n - 1) * ds;
+  if (Inside(gray, origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
+      Inside(gray, origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y())) {
+    SampleRayInside(gray, origin, direction, s0, ds, 0, n, out);
+    return n;
+  }
+  return SampleLine(gray, n, origin, direction, s0, ds,
+                    [&](int j, const float* v, int count) { std::copy(v, v + count, out + j); });
+}
+
 // sum[j] += values[j], count[j] += 1 for j < n (SSE2: two at a time, each the same addition).
 inline void AddSamples(const float* values, int n, double* sum, double* count) {
   int j = 0;
@@ -495,14 +509,13 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
   return true;
 }
 
-// Is the inner neighbour of side `side` at position u (cells from the side's start corner) of the
-// border's colour? Side 0 runs corner 0 -> 1 (top, left to right), 1: right side top to bottom,
-// 2: bottom right to left, 3: left bottom to top.
-bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
-  if (bits.empty()) return true;
-  for (double du : {-0.5, 0.0, 0.5}) {
-    int j = static_cast<int>(std::floor(u + du));
-    j = std::clamp(j, 0, cells - 1);
+// The inner neighbours of side `side` (the cells next to its border cells, cells from the side's start
+// corner): flags[j] = 1 where cell j differs from the border's colour, for j < cells. Side 0 runs corner
+// 0 -> 1 (top, left to right), 1: right side top to bottom, 2: bottom right to left, 3: left bottom to top.
+// Read once per SampleSide (CleanNeighbour read them at every ray, with a floor and a cv::Mat::empty
+// call per look-up).
+void InnerNeighbours(const cv::Mat& bits, int cells, int side, uint8_t* flags) {
+  for (int j = 0; j < cells; ++j) {
     int row = 0, col = 0;
     switch (side) {
       case 0:
@@ -518,8 +531,17 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
         row = cells - 1 - j, col = 1;
         break;
     }
-    if (GridCell(bits, cells, row, col)) return false;
+    flags[j] = static_cast<uint8_t>(GridCell(bits, cells, row, col));
   }
+}
+
+// Is the inner neighbour of the side at position u (cells from the side's start corner, 0 <= u) of the
+// border's colour, within half a cell either way? `flags`: the side's InnerNeighbours. The cell index is
+// clamp(int(u + du), 0, cells - 1): for u + du >= 0 int() is the floor, and for -1 < u + du < 0 both
+// clamp to 0.
+inline bool CleanNeighbour(const uint8_t* flags, int cells, double u) {
+  for (double du : {-0.5, 0.0, 0.5})
+    if (flags[std::clamp(static_cast<int>(u + du), 0, cells - 1)]) return false;
   return true;
 }
 
@@ -1134,6 +1156,11 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   s->clean.assign(n, 0);
   s->valid.assign(n, 0);
   s->num_clean = 0, s->num_valid = 0;
+  // Without the marker's bits every ray is clean.
+  const bool no_bits = bits.empty();
+  thread_local std::vector<uint8_t> neighbours;
+  neighbours.resize(cells);
+  if (!no_bits) InnerNeighbours(bits, cells, side, neighbours.data());
   for (int i = 0; i < n; ++i) {
     const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
     const Eigen::Vector2d q = a + t * (b - a);
@@ -1146,12 +1173,10 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
     s->ideal_origins[i] = q;
     s->normals[i] = normal;
     float* prof = &s->profiles[static_cast<size_t>(i) * m];
-    if (SampleLine(gray, m, p, normal, -s->h, s->ds,
-                   [&](int j, const float* v, int n) { std::copy(v, v + n, prof + j); }) < m)
-      continue;
+    if (SampleLineInto(gray, m, p, normal, -s->h, s->ds, prof) < m) continue;
     s->valid[i] = 1;
     ++s->num_valid;
-    s->clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
+    s->clean[i] = no_bits || CleanNeighbour(neighbours.data(), cells, t * cells) ? 1 : 0;
     s->num_clean += s->clean[i];
   }
   return s->num_valid >= 4;
