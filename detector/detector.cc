@@ -261,13 +261,27 @@ PixelMap MapOf(const CameraModel* camera) {
   return map;
 }
 
+// The upper median of *values (Median's: element n/2 of the sorted values, 0 for none), reordering
+// them in place (Median takes a copy: an allocation per call).
+double UpperMedianInPlace(std::vector<float>* values) {
+  if (values->empty()) return 0.0;
+  const auto mid = values->begin() + values->size() / 2;
+  std::nth_element(values->begin(), mid, values->end());
+  return static_cast<double>(*mid);
+}
+
 // A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
 struct Line {
   Eigen::Vector2d n;
   double c;
 };
 
-bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
+bool FitLine(const std::vector<Eigen::Vector2d>& line_points, Line* line) {
+  // Working copies held by the thread (FitLine took the points by value and allocated three vectors per
+  // round: four allocations per CrossingLine).
+  thread_local std::vector<Eigen::Vector2d> points, kept;
+  thread_local std::vector<float> abs_res, res_copy;
+  points.assign(line_points.begin(), line_points.end());
   for (int round = 0; round < 3; ++round) {
     if (points.size() < 3) return false;
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -284,12 +298,12 @@ bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
     line->c = line->n.dot(mean);
     if (round == 2) break;
     // Residuals; drop those beyond 3 robust sigmas (at least 0.25 px).
-    std::vector<float> abs_res(points.size());
+    abs_res.resize(points.size());
     for (size_t i = 0; i < points.size(); ++i)
       abs_res[i] = static_cast<float>(std::abs(line->n.dot(points[i]) - line->c));
-    const double threshold = std::max(0.25, 3.0 * 1.4826 * Median(abs_res));
-    std::vector<Eigen::Vector2d> kept;
-    kept.reserve(points.size());
+    res_copy.assign(abs_res.begin(), abs_res.end());
+    const double threshold = std::max(0.25, 3.0 * 1.4826 * UpperMedianInPlace(&res_copy));
+    kept.clear();
     for (size_t i = 0; i < points.size(); ++i)
       if (abs_res[i] <= threshold) kept.push_back(points[i]);
     if (kept.size() == points.size()) break;
@@ -1200,7 +1214,7 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
     inside.push_back(s.profiles[static_cast<size_t>(i) * m]);
     outside.push_back(s.profiles[static_cast<size_t>(i) * m + m - 1]);
   }
-  *level_in = Median(inside), *level_out = Median(outside);
+  *level_in = UpperMedianInPlace(&inside), *level_out = UpperMedianInPlace(&outside);
   if (!(std::abs(*level_out - *level_in) >= 8.0)) return false;
   const float mid = static_cast<float>(0.5 * (*level_in + *level_out));
   const float sign = *level_out > *level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
@@ -1208,17 +1222,42 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
   for (int i = 0; i < n; ++i) {
     if (!s.valid[i] || (use_clean && !s.clean[i])) continue;
     const float* prof = &s.profiles[static_cast<size_t>(i) * m];
-    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre: the
+    // steps j with v_j <= 0 < v_j+1, v = (prof - mid) * sign, in order of j.
     double best = 1e9;
-    // Each sample's (v - mid) * sign computed once and carried to the next step (fastfit).
-    float v0 = (prof[0] - mid) * sign;
-    for (int j = 0; j + 1 < m; ++j) {
-      const float v1 = (prof[j + 1] - mid) * sign;
-      if (v0 <= 0.f && v1 > 0.f) {
-        const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
-        if (std::abs(at) < std::abs(best)) best = at;
+    auto value = [&](int j) { return (prof[j] - mid) * sign; };
+    auto take = [&](int j) {
+      const float v0 = value(j), v1 = value(j + 1);
+      const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
+      if (std::abs(at) < std::abs(best)) best = at;
+    };
+    if (m <= 64) {
+      // Every sample's sign bits at once (SSE2: four at a time, the same float operations), then the
+      // crossings from the bits: v_j <= 0 (bit j of at_or_below) and v_j+1 > 0 (bit j + 1 of above).
+      uint64_t at_or_below = 0, above = 0;
+      int j = 0;
+#ifdef __SSE2__
+      const __m128 mids = _mm_set1_ps(mid), signs = _mm_set1_ps(sign), zero = _mm_setzero_ps();
+      auto four_at = [&](int j0) {  // the bits of samples j0 .. j0 + 3
+        const __m128 v = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(prof + j0), mids), signs);
+        at_or_below |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmple_ps(v, zero))) << j0;
+        above |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmpgt_ps(v, zero))) << j0;
+      };
+      for (; j + 4 <= m; j += 4) four_at(j);
+      // The last four end at m (overlapping the ones before: those bits are set again, the same).
+      if (j < m && m >= 4) four_at(m - 4), j = m;
+#endif
+      for (; j < m; ++j) {
+        const float v = value(j);
+        at_or_below |= static_cast<uint64_t>(v <= 0.f) << j;
+        above |= static_cast<uint64_t>(v > 0.f) << j;
       }
-      v0 = v1;
+      for (uint64_t crossings = at_or_below & (above >> 1) & ((uint64_t{1} << (m - 1)) - 1); crossings;
+           crossings &= crossings - 1)
+        take(__builtin_ctzll(crossings));
+    } else {
+      for (int j = 0; j + 1 < m; ++j)
+        if (value(j) <= 0.f && value(j + 1) > 0.f) take(j);
     }
     if (best > 1e8) continue;
     points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));
