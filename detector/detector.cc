@@ -212,13 +212,20 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
   return sampled;
 }
 
+// Whether SampleLine's n points origin + (s0 + j ds) direction are all inside the image (its first and
+// last are: the points move monotonically), by SampleLine's test.
+inline bool RayInside(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+                      const Eigen::Vector2d& direction, double s0, double ds) {
+  const double s1 = s0 + (n - 1) * ds;
+  return Inside(gray, origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
+         Inside(gray, origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y());
+}
+
 // The n samples of SampleLine into out[0..n): SampleLine's values where it samples (into `out` directly
 // where both ends are inside: no copy), the others left as they were; returns how many were sampled.
 inline int SampleLineInto(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
                           const Eigen::Vector2d& direction, double s0, double ds, float* out) {
-  const double s1 = s0 + (n - 1) * ds;
-  if (Inside(gray, origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
-      Inside(gray, origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y())) {
+  if (RayInside(gray, n, origin, direction, s0, ds)) {
     SampleRayInside(gray, origin, direction, s0, ds, 0, n, out);
     return n;
   }
@@ -239,6 +246,19 @@ inline void AddSamples(const float* values, int n, double* sum, double* count) {
   }
 #endif
   for (; j < n; ++j) sum[j] += values[j], count[j] += 1.0;
+}
+
+// sum[j] += values[j] for j < n (SSE2: two at a time, each the same addition).
+inline void AddToSums(const float* values, int n, double* sum) {
+  int j = 0;
+#ifdef __SSE2__
+  for (; j + 1 < n; j += 2) {
+    const __m128d v =
+        _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + j))));
+    _mm_storeu_pd(sum + j, _mm_add_pd(_mm_loadu_pd(sum + j), v));
+  }
+#endif
+  for (; j < n; ++j) sum[j] += values[j];
 }
 
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
@@ -746,6 +766,9 @@ struct SideRays {
     profiles->polarity = polarity;
     profiles->paper = paper;
     profiles->tie_paper = tie_paper;
+    thread_local std::vector<float> values;
+    thread_local std::vector<int> whole_rays;  // per group: its rays inside the image at every bin
+    whole_rays.clear();
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
@@ -753,11 +776,28 @@ struct SideRays {
       const double ox = (*origins)[rays[r].index].x(), oy = (*origins)[rays[r].index].y();
       const double nx = (*normals)[rays[r].index].x(), ny = (*normals)[rays[r].index].y();
       const double first_s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0;
-      // The group's profile sums and counts (SideProfiles::Add).
+      // The group's profile sums and counts (SideProfiles::Add). A ray inside the image at every bin adds
+      // its samples to the sums here and its count to every bin's below, once per group: the same sums
+      // in the same order, and the same counts (whole numbers, exact in any order).
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
-      SampleLine(*gray, bins, Eigen::Vector2d(ox, oy), Eigen::Vector2d(nx, ny), first_s, du,
-                 [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
+      const Eigen::Vector2d origin(ox, oy), normal(nx, ny);
+      if (RayInside(*gray, bins, origin, normal, first_s, du)) {
+        values.resize(bins);
+        SampleRayInside(*gray, origin, normal, first_s, du, 0, bins, values.data());
+        AddToSums(values.data(), bins, sum);
+        if (whole_rays.size() <= static_cast<size_t>(group)) whole_rays.resize(group + 1, 0);
+        ++whole_rays[group];
+      } else {
+        SampleLine(*gray, bins, origin, normal, first_s, du,
+                   [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
+      }
+    }
+    for (size_t g = 0; g < whole_rays.size(); ++g) {
+      if (whole_rays[g] == 0) continue;
+      const double rays_g = whole_rays[g];
+      double* count = &profiles->count[g * bins];
+      for (int j = 0; j < bins; ++j) count[j] += rays_g;
     }
   }
 };
