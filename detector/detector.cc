@@ -138,8 +138,9 @@ inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_
 // Samples at the points origin + (s0 + j ds) direction, begin <= j < end, all Inside, into out[j - begin]
 // (SampleInside's values; with SSE2 four at a time by the same operations, two at a time for fewer than four
 // samples or an image of 2^15 or more pixels or bytes across).
-void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const Eigen::Vector2d& direction,
-                     double s0, double ds, int begin, int end, float* out) {
+__attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin,
+                                                           const Eigen::Vector2d& direction, double s0,
+                                                           double ds, int begin, int end, float* out) {
 #ifdef __SSE2__
   const uint8_t* data = gray.data;
   const size_t step = gray.step[0];
