@@ -910,7 +910,10 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
     const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
     const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
-    SideRay ray{static_cast<int>(i), along, (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    // Built in place at the end of `rays` (removed again where the ray is not used): no copy of it.
+    rays->emplace_back();
+    SideRay& ray = rays->back();
+    ray.index = static_cast<int>(i), ray.along = along, ray.delta = (on_line - origins[i]).dot(normals[i]);
     // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
@@ -973,9 +976,11 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     if (ok)
       ok = AddRowSteps(row_cells, cells, side, map, ideal_from_unit, unit_from_ideal, origins[i], normals[i],
                        q, dir, t, &ray);
-    if (!ok) continue;
+    if (!ok) {
+      rays->pop_back();
+      continue;
+    }
     depth_sum += ray.depths[0];
-    rays->push_back(ray);
   }
   if (rays->size() < 4) return NAN;
   return depth_sum / rays->size();
@@ -1211,6 +1216,9 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   s->clean.assign(n, 0);
   s->valid.assign(n, 0);
   s->num_clean = 0, s->num_valid = 0;
+  // Without a camera every ray's tangent is dir normalized again (as it was, once for all rays).
+  Eigen::Vector2d dir_tangent = dir;
+  dir_tangent.normalize();
   // Without the marker's bits every ray is clean.
   const bool no_bits = bits.empty();
   thread_local std::vector<uint8_t> neighbours;
@@ -1220,8 +1228,11 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
     const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
     const Eigen::Vector2d q = a + t * (b - a);
     const Eigen::Vector2d p = map.ToImage(q);
-    Eigen::Vector2d tangent = map.camera ? (map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir)) : dir;
-    tangent.normalize();
+    Eigen::Vector2d tangent = dir_tangent;
+    if (map.camera) {
+      tangent = map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir);
+      tangent.normalize();
+    }
     Eigen::Vector2d normal(tangent.y(), -tangent.x());
     if (normal.dot(p - centre) < 0) normal = -normal;
     s->origins[i] = p;
