@@ -106,10 +106,18 @@ inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_
   const __m128i xy =
       _mm_or_si128(_mm_unpacklo_epi64(xi01, xi23), _mm_slli_epi32(_mm_unpacklo_epi64(yi01, yi23), 16));
   const __m128i offsets = _mm_madd_epi16(xy, offset_weights);
+#ifdef __x86_64__
+  // The offsets (non-negative, below 2^31) two at a time through 64-bit registers (sampcost).
+  const uint64_t offsets01 = static_cast<uint64_t>(_mm_cvtsi128_si64(offsets));
+  const uint64_t offsets23 = static_cast<uint64_t>(_mm_cvtsi128_si64(_mm_unpackhi_epi64(offsets, offsets)));
+  const uint8_t* p[4] = {data + static_cast<uint32_t>(offsets01), data + (offsets01 >> 32),
+                         data + static_cast<uint32_t>(offsets23), data + (offsets23 >> 32)};
+#else
   const uint8_t* p[4] = {data + _mm_cvtsi128_si32(offsets),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 4)),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 8)),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 12))};
+#endif
   uint16_t top[4], bottom[4];
   for (int i = 0; i < 4; ++i) {
     std::memcpy(&top[i], p[i], 2);
@@ -156,8 +164,7 @@ __attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, 
     // Four at a time; the last four end at `end` (overlapping the ones before where the count is not a
     // multiple of four: those samples are written again with the same values).
     const __m128i offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
-    auto four_at = [&](int j) {
-      const __m128d js = _mm_set_pd(j + 1.0, j);
+    auto four_at = [&](int j, __m128d js) {  // js: (j, j + 1)
       const __m128d s01 = _mm_add_pd(first, _mm_mul_pd(js, width));
       const __m128d s23 = _mm_add_pd(first, _mm_mul_pd(_mm_add_pd(js, two), width));
       _mm_storeu_ps(out + j - begin,
@@ -165,9 +172,12 @@ __attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, 
                                      _mm_add_pd(oy, _mm_mul_pd(s01, dy)), _mm_add_pd(ox, _mm_mul_pd(s23, dx)),
                                      _mm_add_pd(oy, _mm_mul_pd(s23, dy))));
     };
+    // (j, j + 1) carried from four to four: whole numbers, the same values as converted from j.
+    const __m128d four = _mm_set1_pd(4.0);
     int j = begin;
-    for (; j + 4 <= end; j += 4) four_at(j);
-    if (j < end) four_at(end - 4);
+    __m128d js = _mm_set_pd(j + 1.0, j);
+    for (; j + 4 <= end; j += 4, js = _mm_add_pd(js, four)) four_at(j, js);
+    if (j < end) four_at(end - 4, _mm_set_pd(end - 3.0, end - 4.0));
     return;
   }
   int j = begin;
