@@ -841,7 +841,10 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   // renderer (17 px markers) +0.040 -> +0.052 % (test_mapper_rendered's bound 0.05 %).
   constexpr double kMinSin = 0.3, kMinCellPx = 4.0;
   if (ray->depths[0] < kMinCellPx) return true;  // one colour per row, and kept (as before the steps)
-  const SideRay plain = *ray;
+  // What the steps change, to undo them (the whole ray was copied here; sampcost). The ray comes without
+  // steps (CollectSideRays' new ray: no steps, all zero).
+  const std::array<uint8_t, SideProfiles::kRows> plain_pattern = ray->pattern;
+  const std::array<double, SideProfiles::kRows> plain_other = ray->other;
   const double t_max = 2.0 * t[1];
   const double end_column = column_at(t_max);
   if (!std::isfinite(end_column) || end_column < 0.0 || end_column > cells) return false;
@@ -868,7 +871,9 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
       const double t_k = boundary_normal.dot(boundary.point - q) / den;
       const double sin_angle = std::abs(den);  // |sin| of the angle between the ray and the boundary
       if (sin_angle < kMinSin) {
-        *ray = plain;
+        // The ray as it came: the steps written here back to zeros, its rows' colours.
+        for (int k = 0; k < ray->row_step_count; ++k) ray->row_steps[k] = SideProfiles::RowStep{};
+        ray->row_step_count = 0, ray->pattern = plain_pattern, ray->other = plain_other;
         return true;
       }
       SideProfiles::RowStep& step = ray->row_steps[ray->row_step_count++];
@@ -1220,9 +1225,10 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   s->ds = s->h / steps;
   const int n = s->n, m = s->m;
   s->profiles.assign(static_cast<size_t>(n) * m, 0.f);
-  s->origins.assign(n, Eigen::Vector2d::Zero());
-  s->ideal_origins.assign(n, Eigen::Vector2d::Zero());
-  s->normals.assign(n, Eigen::Vector2d::Zero());
+  // (Every ray's origin, ideal origin and normal is set below: no zeros first.)
+  s->origins.resize(n);
+  s->ideal_origins.resize(n);
+  s->normals.resize(n);
   s->clean.assign(n, 0);
   s->valid.assign(n, 0);
   s->num_clean = 0, s->num_valid = 0;
