@@ -106,10 +106,18 @@ inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_
   const __m128i xy =
       _mm_or_si128(_mm_unpacklo_epi64(xi01, xi23), _mm_slli_epi32(_mm_unpacklo_epi64(yi01, yi23), 16));
   const __m128i offsets = _mm_madd_epi16(xy, offset_weights);
+#ifdef __x86_64__
+  // The offsets (non-negative, below 2^31) two at a time through 64-bit registers (sampcost).
+  const uint64_t offsets01 = static_cast<uint64_t>(_mm_cvtsi128_si64(offsets));
+  const uint64_t offsets23 = static_cast<uint64_t>(_mm_cvtsi128_si64(_mm_unpackhi_epi64(offsets, offsets)));
+  const uint8_t* p[4] = {data + static_cast<uint32_t>(offsets01), data + (offsets01 >> 32),
+                         data + static_cast<uint32_t>(offsets23), data + (offsets23 >> 32)};
+#else
   const uint8_t* p[4] = {data + _mm_cvtsi128_si32(offsets),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 4)),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 8)),
                          data + _mm_cvtsi128_si32(_mm_srli_si128(offsets, 12))};
+#endif
   uint16_t top[4], bottom[4];
   for (int i = 0; i < 4; ++i) {
     std::memcpy(&top[i], p[i], 2);
@@ -138,8 +146,9 @@ inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_
 // Samples at the points origin + (s0 + j ds) direction, begin <= j < end, all Inside, into out[j - begin]
 // (SampleInside's values; with SSE2 four at a time by the same operations, two at a time for fewer than four
 // samples or an image of 2^15 or more pixels or bytes across).
-void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const Eigen::Vector2d& direction,
-                     double s0, double ds, int begin, int end, float* out) {
+__attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin,
+                                                           const Eigen::Vector2d& direction, double s0,
+                                                           double ds, int begin, int end, float* out) {
 #ifdef __SSE2__
   const uint8_t* data = gray.data;
   const size_t step = gray.step[0];
@@ -155,8 +164,7 @@ void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const E
     // Four at a time; the last four end at `end` (overlapping the ones before where the count is not a
     // multiple of four: those samples are written again with the same values).
     const __m128i offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
-    auto four_at = [&](int j) {
-      const __m128d js = _mm_set_pd(j + 1.0, j);
+    auto four_at = [&](int j, __m128d js) {  // js: (j, j + 1)
       const __m128d s01 = _mm_add_pd(first, _mm_mul_pd(js, width));
       const __m128d s23 = _mm_add_pd(first, _mm_mul_pd(_mm_add_pd(js, two), width));
       _mm_storeu_ps(out + j - begin,
@@ -164,9 +172,12 @@ void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin, const E
                                      _mm_add_pd(oy, _mm_mul_pd(s01, dy)), _mm_add_pd(ox, _mm_mul_pd(s23, dx)),
                                      _mm_add_pd(oy, _mm_mul_pd(s23, dy))));
     };
+    // (j, j + 1) carried from four to four: whole numbers, the same values as converted from j.
+    const __m128d four = _mm_set1_pd(4.0);
     int j = begin;
-    for (; j + 4 <= end; j += 4) four_at(j);
-    if (j < end) four_at(end - 4);
+    __m128d js = _mm_set_pd(j + 1.0, j);
+    for (; j + 4 <= end; j += 4, js = _mm_add_pd(js, four)) four_at(j, js);
+    if (j < end) four_at(end - 4, _mm_set_pd(end - 3.0, end - 4.0));
     return;
   }
   int j = begin;
@@ -212,6 +223,27 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
   return sampled;
 }
 
+// Whether SampleLine's n points origin + (s0 + j ds) direction are all inside the image (its first and
+// last are: the points move monotonically), by SampleLine's test.
+inline bool RayInside(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+                      const Eigen::Vector2d& direction, double s0, double ds) {
+  const double s1 = s0 + (n - 1) * ds;
+  return Inside(gray, origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
+         Inside(gray, origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y());
+}
+
+// The n samples of SampleLine into out[0..n): SampleLine's values where it samples (into `out` directly
+// where both ends are inside: no copy), the others left as they were; returns how many were sampled.
+inline int SampleLineInto(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+                          const Eigen::Vector2d& direction, double s0, double ds, float* out) {
+  if (RayInside(gray, n, origin, direction, s0, ds)) {
+    SampleRayInside(gray, origin, direction, s0, ds, 0, n, out);
+    return n;
+  }
+  return SampleLine(gray, n, origin, direction, s0, ds,
+                    [&](int j, const float* v, int count) { std::copy(v, v + count, out + j); });
+}
+
 // sum[j] += values[j], count[j] += 1 for j < n (SSE2: two at a time, each the same addition).
 inline void AddSamples(const float* values, int n, double* sum, double* count) {
   int j = 0;
@@ -225,6 +257,19 @@ inline void AddSamples(const float* values, int n, double* sum, double* count) {
   }
 #endif
   for (; j < n; ++j) sum[j] += values[j], count[j] += 1.0;
+}
+
+// sum[j] += values[j] for j < n (SSE2: two at a time, each the same addition).
+inline void AddToSums(const float* values, int n, double* sum) {
+  int j = 0;
+#ifdef __SSE2__
+  for (; j + 1 < n; j += 2) {
+    const __m128d v =
+        _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + j))));
+    _mm_storeu_pd(sum + j, _mm_add_pd(_mm_loadu_pd(sum + j), v));
+  }
+#endif
+  for (; j < n; ++j) sum[j] += values[j];
 }
 
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
@@ -247,13 +292,27 @@ PixelMap MapOf(const CameraModel* camera) {
   return map;
 }
 
+// The upper median of *values (Median's: element n/2 of the sorted values, 0 for none), reordering
+// them in place (Median takes a copy: an allocation per call).
+double UpperMedianInPlace(std::vector<float>* values) {
+  if (values->empty()) return 0.0;
+  const auto mid = values->begin() + values->size() / 2;
+  std::nth_element(values->begin(), mid, values->end());
+  return static_cast<double>(*mid);
+}
+
 // A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
 struct Line {
   Eigen::Vector2d n;
   double c;
 };
 
-bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
+bool FitLine(const std::vector<Eigen::Vector2d>& line_points, Line* line) {
+  // Working copies held by the thread (FitLine took the points by value and allocated three vectors per
+  // round: four allocations per CrossingLine).
+  thread_local std::vector<Eigen::Vector2d> points, kept;
+  thread_local std::vector<float> abs_res, res_copy;
+  points.assign(line_points.begin(), line_points.end());
   for (int round = 0; round < 3; ++round) {
     if (points.size() < 3) return false;
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -270,12 +329,12 @@ bool FitLine(std::vector<Eigen::Vector2d> points, Line* line) {
     line->c = line->n.dot(mean);
     if (round == 2) break;
     // Residuals; drop those beyond 3 robust sigmas (at least 0.25 px).
-    std::vector<float> abs_res(points.size());
+    abs_res.resize(points.size());
     for (size_t i = 0; i < points.size(); ++i)
       abs_res[i] = static_cast<float>(std::abs(line->n.dot(points[i]) - line->c));
-    const double threshold = std::max(0.25, 3.0 * 1.4826 * Median(abs_res));
-    std::vector<Eigen::Vector2d> kept;
-    kept.reserve(points.size());
+    res_copy.assign(abs_res.begin(), abs_res.end());
+    const double threshold = std::max(0.25, 3.0 * 1.4826 * UpperMedianInPlace(&res_copy));
+    kept.clear();
     for (size_t i = 0; i < points.size(); ++i)
       if (abs_res[i] <= threshold) kept.push_back(points[i]);
     if (kept.size() == points.size()) break;
@@ -495,14 +554,13 @@ bool DeconvolvedCells(const cv::Mat& gray, const std::array<cv::Point2d, 4>& cor
   return true;
 }
 
-// Is the inner neighbour of side `side` at position u (cells from the side's start corner) of the
-// border's colour? Side 0 runs corner 0 -> 1 (top, left to right), 1: right side top to bottom,
-// 2: bottom right to left, 3: left bottom to top.
-bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
-  if (bits.empty()) return true;
-  for (double du : {-0.5, 0.0, 0.5}) {
-    int j = static_cast<int>(std::floor(u + du));
-    j = std::clamp(j, 0, cells - 1);
+// The inner neighbours of side `side` (the cells next to its border cells, cells from the side's start
+// corner): flags[j] = 1 where cell j differs from the border's colour, for j < cells. Side 0 runs corner
+// 0 -> 1 (top, left to right), 1: right side top to bottom, 2: bottom right to left, 3: left bottom to top.
+// Read once per SampleSide (CleanNeighbour read them at every ray, with a floor and a cv::Mat::empty
+// call per look-up).
+void InnerNeighbours(const cv::Mat& bits, int cells, int side, uint8_t* flags) {
+  for (int j = 0; j < cells; ++j) {
     int row = 0, col = 0;
     switch (side) {
       case 0:
@@ -518,8 +576,17 @@ bool CleanNeighbour(const cv::Mat& bits, int cells, int side, double u) {
         row = cells - 1 - j, col = 1;
         break;
     }
-    if (GridCell(bits, cells, row, col)) return false;
+    flags[j] = static_cast<uint8_t>(GridCell(bits, cells, row, col));
   }
+}
+
+// Is the inner neighbour of the side at position u (cells from the side's start corner, 0 <= u) of the
+// border's colour, within half a cell either way? `flags`: the side's InnerNeighbours. The cell index is
+// clamp(int(u + du), 0, cells - 1): for u + du >= 0 int() is the floor, and for -1 < u + du < 0 both
+// clamp to 0.
+inline bool CleanNeighbour(const uint8_t* flags, int cells, double u) {
+  for (double du : {-0.5, 0.0, 0.5})
+    if (flags[std::clamp(static_cast<int>(u + du), 0, cells - 1)]) return false;
   return true;
 }
 
@@ -710,6 +777,9 @@ struct SideRays {
     profiles->polarity = polarity;
     profiles->paper = paper;
     profiles->tie_paper = tie_paper;
+    thread_local std::vector<float> values;
+    thread_local std::vector<int> whole_rays;  // per group: its rays inside the image at every bin
+    whole_rays.clear();
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
@@ -717,11 +787,28 @@ struct SideRays {
       const double ox = (*origins)[rays[r].index].x(), oy = (*origins)[rays[r].index].y();
       const double nx = (*normals)[rays[r].index].x(), ny = (*normals)[rays[r].index].y();
       const double first_s = rays[r].delta + shift + tilt * (rays[r].along - split) + u0;
-      // The group's profile sums and counts (SideProfiles::Add).
+      // The group's profile sums and counts (SideProfiles::Add). A ray inside the image at every bin adds
+      // its samples to the sums here and its count to every bin's below, once per group: the same sums
+      // in the same order, and the same counts (whole numbers, exact in any order).
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
-      SampleLine(*gray, bins, Eigen::Vector2d(ox, oy), Eigen::Vector2d(nx, ny), first_s, du,
-                 [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
+      const Eigen::Vector2d origin(ox, oy), normal(nx, ny);
+      if (RayInside(*gray, bins, origin, normal, first_s, du)) {
+        values.resize(bins);
+        SampleRayInside(*gray, origin, normal, first_s, du, 0, bins, values.data());
+        AddToSums(values.data(), bins, sum);
+        if (whole_rays.size() <= static_cast<size_t>(group)) whole_rays.resize(group + 1, 0);
+        ++whole_rays[group];
+      } else {
+        SampleLine(*gray, bins, origin, normal, first_s, du,
+                   [&](int j, const float* v, int n) { AddSamples(v, n, sum + j, count + j); });
+      }
+    }
+    for (size_t g = 0; g < whole_rays.size(); ++g) {
+      if (whole_rays[g] == 0) continue;
+      const double rays_g = whole_rays[g];
+      double* count = &profiles->count[g * bins];
+      for (int j = 0; j < bins; ++j) count[j] += rays_g;
     }
   }
 };
@@ -754,7 +841,10 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
   // renderer (17 px markers) +0.040 -> +0.052 % (test_mapper_rendered's bound 0.05 %).
   constexpr double kMinSin = 0.3, kMinCellPx = 4.0;
   if (ray->depths[0] < kMinCellPx) return true;  // one colour per row, and kept (as before the steps)
-  const SideRay plain = *ray;
+  // What the steps change, to undo them (the whole ray was copied here; sampcost). The ray comes without
+  // steps (CollectSideRays' new ray: no steps, all zero).
+  const std::array<uint8_t, SideProfiles::kRows> plain_pattern = ray->pattern;
+  const std::array<double, SideProfiles::kRows> plain_other = ray->other;
   const double t_max = 2.0 * t[1];
   const double end_column = column_at(t_max);
   if (!std::isfinite(end_column) || end_column < 0.0 || end_column > cells) return false;
@@ -781,7 +871,9 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
       const double t_k = boundary_normal.dot(boundary.point - q) / den;
       const double sin_angle = std::abs(den);  // |sin| of the angle between the ray and the boundary
       if (sin_angle < kMinSin) {
-        *ray = plain;
+        // The ray as it came: the steps written here back to zeros, its rows' colours.
+        for (int k = 0; k < ray->row_step_count; ++k) ray->row_steps[k] = SideProfiles::RowStep{};
+        ray->row_step_count = 0, ray->pattern = plain_pattern, ray->other = plain_other;
         return true;
       }
       SideProfiles::RowStep& step = ray->row_steps[ray->row_step_count++];
@@ -833,7 +925,10 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
     const Eigen::Vector2d on_line_ideal = q - (line.n.dot(q) - line.c) * line.n;
     const Eigen::Vector2d on_line = map.ToImage(on_line_ideal);
-    SideRay ray{static_cast<int>(i), along, (on_line - origins[i]).dot(normals[i]), {}, {}, {}};
+    // Built in place at the end of `rays` (removed again where the ray is not used): no copy of it.
+    rays->emplace_back();
+    SideRay& ray = rays->back();
+    ray.index = static_cast<int>(i), ray.along = along, ray.delta = (on_line - origins[i]).dot(normals[i]);
     // Follow the ray inward (in ideal pixels): where it crosses the boundaries of rows 1..kRows + 1
     // (lines of the marker's grid, not parallel to the side under perspective and not crossed at
     // right angles, so the ray drifts across columns), and which column it is in within each row.
@@ -896,9 +991,11 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     if (ok)
       ok = AddRowSteps(row_cells, cells, side, map, ideal_from_unit, unit_from_ideal, origins[i], normals[i],
                        q, dir, t, &ray);
-    if (!ok) continue;
+    if (!ok) {
+      rays->pop_back();
+      continue;
+    }
     depth_sum += ray.depths[0];
-    rays->push_back(ray);
   }
   if (rays->size() < 4) return NAN;
   return depth_sum / rays->size();
@@ -1128,30 +1225,40 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   s->ds = s->h / steps;
   const int n = s->n, m = s->m;
   s->profiles.assign(static_cast<size_t>(n) * m, 0.f);
-  s->origins.assign(n, Eigen::Vector2d::Zero());
-  s->ideal_origins.assign(n, Eigen::Vector2d::Zero());
-  s->normals.assign(n, Eigen::Vector2d::Zero());
+  // (Every ray's origin, ideal origin and normal is set below: no zeros first.)
+  s->origins.resize(n);
+  s->ideal_origins.resize(n);
+  s->normals.resize(n);
   s->clean.assign(n, 0);
   s->valid.assign(n, 0);
   s->num_clean = 0, s->num_valid = 0;
+  // Without a camera every ray's tangent is dir normalized again (as it was, once for all rays).
+  Eigen::Vector2d dir_tangent = dir;
+  dir_tangent.normalize();
+  // Without the marker's bits every ray is clean.
+  const bool no_bits = bits.empty();
+  thread_local std::vector<uint8_t> neighbours;
+  neighbours.resize(cells);
+  if (!no_bits) InnerNeighbours(bits, cells, side, neighbours.data());
   for (int i = 0; i < n; ++i) {
     const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
     const Eigen::Vector2d q = a + t * (b - a);
     const Eigen::Vector2d p = map.ToImage(q);
-    Eigen::Vector2d tangent = map.camera ? (map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir)) : dir;
-    tangent.normalize();
+    Eigen::Vector2d tangent = dir_tangent;
+    if (map.camera) {
+      tangent = map.ToImage(q + 0.5 * dir) - map.ToImage(q - 0.5 * dir);
+      tangent.normalize();
+    }
     Eigen::Vector2d normal(tangent.y(), -tangent.x());
     if (normal.dot(p - centre) < 0) normal = -normal;
     s->origins[i] = p;
     s->ideal_origins[i] = q;
     s->normals[i] = normal;
     float* prof = &s->profiles[static_cast<size_t>(i) * m];
-    if (SampleLine(gray, m, p, normal, -s->h, s->ds,
-                   [&](int j, const float* v, int n) { std::copy(v, v + n, prof + j); }) < m)
-      continue;
+    if (SampleLineInto(gray, m, p, normal, -s->h, s->ds, prof) < m) continue;
     s->valid[i] = 1;
     ++s->num_valid;
-    s->clean[i] = CleanNeighbour(bits, cells, side, t * cells) ? 1 : 0;
+    s->clean[i] = no_bits || CleanNeighbour(neighbours.data(), cells, t * cells) ? 1 : 0;
     s->num_clean += s->clean[i];
   }
   return s->num_valid >= 4;
@@ -1175,7 +1282,7 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
     inside.push_back(s.profiles[static_cast<size_t>(i) * m]);
     outside.push_back(s.profiles[static_cast<size_t>(i) * m + m - 1]);
   }
-  *level_in = Median(inside), *level_out = Median(outside);
+  *level_in = UpperMedianInPlace(&inside), *level_out = UpperMedianInPlace(&outside);
   if (!(std::abs(*level_out - *level_in) >= 8.0)) return false;
   const float mid = static_cast<float>(0.5 * (*level_in + *level_out));
   const float sign = *level_out > *level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
@@ -1183,17 +1290,42 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
   for (int i = 0; i < n; ++i) {
     if (!s.valid[i] || (use_clean && !s.clean[i])) continue;
     const float* prof = &s.profiles[static_cast<size_t>(i) * m];
-    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre.
+    // Crossing of the mid level (inside -> outside direction) nearest to the profile's centre: the
+    // steps j with v_j <= 0 < v_j+1, v = (prof - mid) * sign, in order of j.
     double best = 1e9;
-    // Each sample's (v - mid) * sign computed once and carried to the next step (fastfit).
-    float v0 = (prof[0] - mid) * sign;
-    for (int j = 0; j + 1 < m; ++j) {
-      const float v1 = (prof[j + 1] - mid) * sign;
-      if (v0 <= 0.f && v1 > 0.f) {
-        const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
-        if (std::abs(at) < std::abs(best)) best = at;
+    auto value = [&](int j) { return (prof[j] - mid) * sign; };
+    auto take = [&](int j) {
+      const float v0 = value(j), v1 = value(j + 1);
+      const double at = -s.h + (j + v0 / (v0 - v1)) * s.ds;
+      if (std::abs(at) < std::abs(best)) best = at;
+    };
+    if (m <= 64) {
+      // Every sample's sign bits at once (SSE2: four at a time, the same float operations), then the
+      // crossings from the bits: v_j <= 0 (bit j of at_or_below) and v_j+1 > 0 (bit j + 1 of above).
+      uint64_t at_or_below = 0, above = 0;
+      int j = 0;
+#ifdef __SSE2__
+      const __m128 mids = _mm_set1_ps(mid), signs = _mm_set1_ps(sign), zero = _mm_setzero_ps();
+      auto four_at = [&](int j0) {  // the bits of samples j0 .. j0 + 3
+        const __m128 v = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(prof + j0), mids), signs);
+        at_or_below |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmple_ps(v, zero))) << j0;
+        above |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmpgt_ps(v, zero))) << j0;
+      };
+      for (; j + 4 <= m; j += 4) four_at(j);
+      // The last four end at m (overlapping the ones before: those bits are set again, the same).
+      if (j < m && m >= 4) four_at(m - 4), j = m;
+#endif
+      for (; j < m; ++j) {
+        const float v = value(j);
+        at_or_below |= static_cast<uint64_t>(v <= 0.f) << j;
+        above |= static_cast<uint64_t>(v > 0.f) << j;
       }
-      v0 = v1;
+      for (uint64_t crossings = at_or_below & (above >> 1) & ((uint64_t{1} << (m - 1)) - 1); crossings;
+           crossings &= crossings - 1)
+        take(__builtin_ctzll(crossings));
+    } else {
+      for (int j = 0; j + 1 < m; ++j)
+        if (value(j) <= 0.f && value(j + 1) > 0.f) take(j);
     }
     if (best > 1e8) continue;
     points.push_back(map.ToIdeal(s.origins[i] + best * s.normals[i]));

@@ -47,8 +47,14 @@ int SideProfiles::AddRay(const std::array<uint8_t, kRows>& pattern, const std::a
                          int ray_step_count) {
   size_t g = 0;
   // A ray with steps is a group of its own; the others group by pattern among the groups without steps.
+  // (The patterns compared element by element: std::array's != called memcmp for its two bytes.)
+  auto same_pattern = [&](const std::array<uint8_t, kRows>& p) {
+    for (int r = 0; r < kRows; ++r)
+      if (p[r] != pattern[r]) return false;
+    return true;
+  };
   if (ray_step_count == 0)
-    while (g < patterns.size() && (patterns[g] != pattern || steps[g] > 0)) ++g;
+    while (g < patterns.size() && (!same_pattern(patterns[g]) || steps[g] > 0)) ++g;
   else
     g = patterns.size();
   if (g == patterns.size()) {

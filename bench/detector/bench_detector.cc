@@ -6,8 +6,9 @@
 // Gaussian of sigma px; MCMT_BENCH_DEBUG: markers whose fast-mode corners differ from the accurate mode's
 // by more than 0.02 px, on stderr; MCMT_CANDIDATE_SEARCH=opencv|own: both modes' candidate_search;
 // MCMT_BENCH_BAND=sides: fast mode's fast_band_sides; MCMT_BENCH_MISSES: the markers fast mode missed and
-// how far they were from its markers of the frame before, on stderr; MCMT_CORNER_DUMP=FILE: every marker's
-// corners to FILE, to 17 digits.)
+// how far they were from its markers of the frame before, on stderr; MCMT_CORNER_DUMP=FILE: every marker
+// found, one line each: image width, camera, frame, mode (0 accurate, 1 fast), id and the four corners in
+// hexadecimal floating point (%a), so that two builds' corners can be compared to the bit with cmp.)
 #include <sys/resource.h>
 #include <time.h>
 
@@ -83,10 +84,9 @@ int main(int argc, char** argv) {
   const int only_width = argc > 3 ? std::atoi(argv[3]) : 0;
   // MCMT_BENCH_ONLY=accurate|fast|stock: run only that detector (instruction counts per mode, callgrind).
   const std::string only = std::getenv("MCMT_BENCH_ONLY") ? std::getenv("MCMT_BENCH_ONLY") : "";
+  FILE* corner_dump =
+      std::getenv("MCMT_CORNER_DUMP") ? std::fopen(std::getenv("MCMT_CORNER_DUMP"), "w") : nullptr;
   cv::setNumThreads(1);
-  // MCMT_CORNER_DUMP=FILE: every marker's corners (mode, width, camera, frame, id, x0 y0 ... x3 y3 to 17
-  // digits), to compare builds or code paths (cmp).
-  FILE* dump = std::getenv("MCMT_CORNER_DUMP") ? std::fopen(std::getenv("MCMT_CORNER_DUMP"), "w") : nullptr;
   const testing::DetectorBenchScene scene = testing::MakeDetectorBenchScene(
       frames, std::getenv("MCMT_BENCH_BLUR") ? std::atof(std::getenv("MCMT_BENCH_BLUR")) : 0.0);
   const sim::SimObject& object = scene.object;
@@ -148,6 +148,15 @@ int main(int argc, char** argv) {
         std::vector<int> ids;
         if (only.empty() || only == "stock") cv::aruco::detectMarkers(image, dict, corners, ids, params);
         auto t3 = ThreadSeconds();
+        if (corner_dump)
+          for (const auto* found : {&a, &f})
+            for (const auto& m : *found) {
+              std::fprintf(corner_dump, "%d %d %zu %d %d", size[0], c,
+                           static_cast<size_t>(&image - &images[c][0]), found == &a ? 0 : 1, m.id);
+              for (int k = 0; k < 4; ++k)
+                std::fprintf(corner_dump, " %a %a", m.corners[k][0], m.corners[k][1]);
+              std::fprintf(corner_dump, "\n");
+            }
         accurate_ms += 1000 * (t1 - t0);
         fast_ms += 1000 * (t2 - t1);
         stock_ms += 1000 * (t3 - t2);
@@ -175,15 +184,6 @@ int main(int argc, char** argv) {
                                  m.corners[0][0], m.corners[0][1], m.corners[2][0], m.corners[2][1]);
               }
         const size_t frame_index = &image - &images[c][0];
-        if (dump)
-          for (const auto* markers : {&a, &f})
-            for (const auto& m : *markers) {
-              std::fprintf(dump, "%s %d %d %zu %d", markers == &a ? "accurate" : "fast", size[0], c,
-                           frame_index, m.id);
-              for (int k = 0; k < 4; ++k)
-                std::fprintf(dump, " %.17g %.17g", m.corners[k][0], m.corners[k][1]);
-              std::fprintf(dump, "\n");
-            }
         const auto views = sim::ProjectMarkers(cameras[c], object, trajectory[frame_index].rig_from_object);
         // Markers fully visible within 75 degrees; of those, the domain (at least 15 px).
         auto view_of = [&](int id) -> const sim::MarkerView* {
@@ -231,6 +231,6 @@ int main(int argc, char** argv) {
   std::printf(
       "\nPeak resident memory of this benchmark (all images of one resolution held in memory): %.0f MB\n",
       PeakRssMb());
-  if (dump) std::fclose(dump);
+  if (corner_dump) std::fclose(corner_dump);
   return 0;
 }
