@@ -23,7 +23,8 @@
 // (bench/results/2026-12-07-sharptent.md): NOTENT (with PIX, 1: each profile value the pixel's value read at
 // the point itself, no pixel grid and no bilinear tent), PHASEAVG (with PIX, k: each profile value the mean
 // over k x k pixel phases: the profiles convolved with the phase-averaged kernel, fitted once), RAYS (rays
-// per cell along the side, 4), DU (the bin width's factor, 1), SWEEP (a file of pixel phases: the fit
+// per cell along the side, 4), DU (the bin width's factor, 1), FRAC (the rays' least distance from their
+// column's ends, part of a column: 0.1 as the detector), SWEEP (a file of pixel phases: the fit
 // averaged over ids, sides and phases per roll; at main()), SWEEPDUMP (1: each phase's mean too).
 #include <cmath>
 #include <cstdio>
@@ -180,6 +181,8 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
   };
   double line = Env("LINE", 0), tilt = Env("TILT", 0);
   const int ends = static_cast<int>(Env("ENDS", 1));  // the first and last code columns used
+  // FRAC: the rays used lie at least this part of a column from its ends (0.1 as the detector).
+  const double frac_min = Env("FRAC", 0.1);
   SideProfiles s;
   SideFit fit;
   // The blur along the side the model's code rows assume (the detector's: the previous pass's fitted
@@ -253,6 +256,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
       if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
       if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
       if (col < ends || col > cells - 1 - ends) continue;
+      if (frac < frac_min || frac > 1.0 - frac_min) continue;
       std::array<uint8_t, SideProfiles::kRows> pattern;
       std::array<double, SideProfiles::kRows> depths, other;
       for (int r = 1; r <= SideProfiles::kRows; ++r) {

@@ -8,7 +8,7 @@ EXE=${EXE:-build/bench/diag_side_exact}
 IDS=${IDS:-16}
 BLURS=${1:-0.01}
 SIDES=${2:-9 12 16 20}
-ROWS=${3:-head quant0 gamma0 phaseavg box gauss du half rays8 rowcap3 tent}
+ROWS=${3:-head quant0 gamma0 phaseavg box gauss gaussbox du half rays8 rowcap3 tent}
 T=$(mktemp -d)
 python3 -c "
 for j in range(8):
@@ -24,6 +24,9 @@ for blur in $BLURS; do for side in $SIDES; do for row in $ROWS; do
     phaseavg) out=$(SWEEP=$T/ph1 PIX=1 BOX=4 PHASEAVG=8 "$EXE" "$IDS" -1 "$blur" "$side") ;;
     box) out=$(SWEEP=$T/ph1 PIX=1 BOX=4 NOTENT=1 "$EXE" "$IDS" -1 "$blur" "$side") ;;
     gauss) out=$(SWEEP=$T/ph1 "$EXE" "$IDS" -1 "$eq" "$side") ;;
+    gaussbox)  # the Gaussian of the box's variance alone and the blur: NOTENT's (box) control
+      eqbox=$(python3 -c "print('%.6f' % (($blur ** 2 + (1 - 1 / 16) / 12) ** 0.5))")
+      out=$(SWEEP=$T/ph1 "$EXE" "$IDS" -1 "$eqbox" "$side") ;;
     du) out=$(SWEEP=$T/ph64 PIX=1 BOX=4 DU=0.5 "$EXE" "$IDS" -1 "$blur" "$side") ;;
     half) out=$(SWEEP=$T/ph64 PIX=1 BOX=4 DU=0.5 RAYS=8 "$EXE" "$IDS" -1 "$blur" "$side") ;;
     rays8) out=$(SWEEP=$T/ph64 PIX=1 BOX=4 RAYS=8 "$EXE" "$IDS" -1 "$blur" "$side") ;;
