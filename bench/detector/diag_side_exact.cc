@@ -24,7 +24,9 @@
 // the point itself, no pixel grid and no bilinear tent), PHASEAVG (with PIX, k: each profile value the mean
 // over k x k pixel phases: the profiles convolved with the phase-averaged kernel, fitted once), RAYS (rays
 // per cell along the side, 4), DU (the bin width's factor, 1), FRAC (the rays' least distance from their
-// column's ends, part of a column: 0.1 as the detector), SWEEP (a file of pixel phases: the fit
+// column's ends, part of a column: 0.1 as the detector), OTHEREXACT (with PIX, 1: the code rows' parts of
+// the other colour read through the same pixels and bilinear reads as the profiles, not from a Gaussian
+// along the side), SWEEP (a file of pixel phases: the fit
 // averaged over ids, sides and phases per roll; at main()), SWEEPDUMP (1: each phase's mean too).
 #include <cmath>
 #include <cstdio>
@@ -138,15 +140,20 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
   const double co = std::cos(roll), si = std::sin(roll);
   // Pixel values at one phase, cached: pixel (i, j) -> its centre sample or its box's mean, 8-bit.
   std::vector<std::unordered_map<int64_t, double>> cache(phase_avg * phase_avg);
-  auto pixel_at = [&](double i, double j, double ox, double oy) {
+  // Pixel (i, j)'s value of the image f (print coordinates, cells), unrounded.
+  auto pixel_of = [&](const auto& f, double i, double j, double ox, double oy) {
     double sum = 0;
     for (int bj = 0; bj < box; ++bj)
       for (int bi = 0; bi < box; ++bi) {
         const double xx = i - ox + (bi + 0.5) / box - 0.5, yy = j - oy + (bj + 0.5) / box - 0.5;
         const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
-        sum += m.At(cx, cy);
+        sum += f(cx, cy);
       }
-    const double v = std::clamp(sum / (box * box), 0.0, 255.0);
+    return sum / (box * box);
+  };
+  auto pixel_at = [&](double i, double j, double ox, double oy) {
+    const double v =
+        std::clamp(pixel_of([&](double x, double y) { return m.At(x, y); }, i, j, ox, oy), 0.0, 255.0);
     return quant ? std::round(v) : v;
   };
   // The point at `along` (0..1) and `out` px outward of the true side: its level (continuous, or the
@@ -176,6 +183,40 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
         const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
         total += (1 - ty) * ((1 - tx) * px(fx, fy) + tx * px(fx + 1, fy)) +
                  ty * ((1 - tx) * px(fx, fy + 1) + tx * px(fx + 1, fy + 1));
+      }
+    return total / (phase_avg * phase_avg);
+  };
+  // OTHEREXACT=1 (with PIX, sharptent): each row's part of the other colour at a ray (the model's code
+  // rows, `other`) read as the profiles are, not from a Gaussian along the side: the image of row r's
+  // cells (1 where the column is of the other colour, along the side only, blurred by the print's blur)
+  // through the same pixels, phases and bilinear read, at the ray's point in the row's middle.
+  const bool other_exact = pix && Env("OTHEREXACT", 0) > 0;
+  auto exact_other = [&](double along, int r) {
+    auto row_image = [&](double x, double y) {                   // print coordinates (cells)
+      const double c = (x - p0[0]) * a[0] + (y - p0[1]) * a[1];  // along the side, cells
+      double v = 0;
+      for (int k = 0; k < cells; ++k)
+        if (InnerCell(m, side, k, r)) v += Phi((k + 1 - c) / m.sb) - Phi((k - c) / m.sb);
+      return v;
+    };
+    const double out = -(r + 0.5) * m.scale;  // px outward: the row's middle
+    const double x = p0[0] + a[0] * along * cells + nrm[0] * out / m.scale;
+    const double y = p0[1] + a[1] * along * cells + nrm[1] * out / m.scale;
+    double total = 0;
+    for (int pj = 0; pj < phase_avg; ++pj)
+      for (int pi = 0; pi < phase_avg; ++pi) {
+        const double ox = offx + static_cast<double>(pi) / phase_avg;
+        const double oy = offy + static_cast<double>(pj) / phase_avg;
+        const double X = (co * x - si * y) * m.scale + ox, Y = (si * x + co * y) * m.scale + oy;
+        if (no_tent) {
+          total += pixel_of(row_image, X, Y, ox, oy);
+          continue;
+        }
+        const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
+        total += (1 - ty) * ((1 - tx) * pixel_of(row_image, fx, fy, ox, oy) +
+                             tx * pixel_of(row_image, fx + 1, fy, ox, oy)) +
+                 ty * ((1 - tx) * pixel_of(row_image, fx, fy + 1, ox, oy) +
+                       tx * pixel_of(row_image, fx + 1, fy + 1, ox, oy));
       }
     return total / (phase_avg * phase_avg);
   };
@@ -267,6 +308,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
           if (InnerCell(m, side, k, r))
             o += Phi((k + 1 - at) * cell / sigma_along) - Phi((k - at) * cell / sigma_along);
         other[r - 1] = o;
+        if (other_exact) other[r - 1] = exact_other(t, r);
       }
       const int g = s.AddRay(pattern, depths, other);
       const double off = line + tilt * (t - 0.5);
