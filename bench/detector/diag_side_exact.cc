@@ -19,10 +19,20 @@
 // - 1's colour, as the model's last row reaches inward without end), TRUTHSTART (1: the first fit
 // warm-started at the print's own parameters). With DUMP also each ray's crossing about the true line, of the
 // profiles and of the fitted model (`clean`: CleanNeighbour's). NODETREND (1: no DetrendSurround after the
-// fit, which the detector's whole-side fits take on cells under 2 px).
+// fit, which the detector's whole-side fits take on cells under 2 px). sharptent's
+// (bench/results/2026-12-07-sharptent.md): NOTENT (with PIX, 1: each profile value the pixel's value read at
+// the point itself, no pixel grid and no bilinear tent), PHASEAVG (with PIX, k: each profile value the mean
+// over k x k pixel phases: the profiles convolved with the phase-averaged kernel, fitted once), RAYS (rays
+// per cell along the side, 4), DU (the bin width's factor, 1), FRAC (the rays' least distance from their
+// column's ends, part of a column: 0.1 as the detector), OTHEREXACT (with PIX, 1: the code rows' parts of
+// the other colour read through the same pixels and bilinear reads as the profiles, not from a Gaussian
+// along the side), SWEEP (a file of pixel phases: the fit
+// averaged over ids, sides and phases per roll; at main()), SWEEPDUMP (1: each phase's mean too).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "bench/detector/diag_support.h"
@@ -96,15 +106,12 @@ int InnerCell(const Print& m, int side, int col, int row) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (argc < 5) {
-    std::fprintf(stderr, "usage: diag_side_exact ID SIDE BLUR_PX SIDE_PX\n");
-    return 2;
-  }
-  auto dict = LoadDictionary("DICT_6X6_250");
+// One fit of side `side` of marker `id` (the program's arguments; the pixel phase offx / offy and the
+// roll in deg as OFFX / OFFY / ROLL). Prints as before unless `quiet`; *e_out: the fitted edge (px,
+// outward +). Returns the exit code (0: fitted).
+int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blur, double side_px,
+        double offx, double offy, double roll_deg, bool quiet, double* e_out) {
   Print m;
-  const int id = std::atoi(argv[1]), side = std::atoi(argv[2]);
-  const double blur = std::atof(argv[3]), side_px = std::atof(argv[4]);
   m.bits = cv::aruco::Dictionary::getBitsFromByteList(dict->bytesList.rowRange(id, id + 1), dict->markerSize);
   m.cells = dict->markerSize + 2;
   m.ink = Env("INK", m.ink), m.paper = Env("PAPERL", m.paper), m.surface = Env("SURFACE", m.surface);
@@ -116,38 +123,107 @@ int main(int argc, char** argv) {
   SideFrame(side, cells, p0, a, nrm);
   const double cell = m.scale;  // px, fronto-parallel
   const double margin_t = std::min(0.3, std::max(0.6 * cell, 1.5) / side_px);
-  const int n_rays = 4 * cells;
-  const double du = std::clamp(cell / 4.0, 0.1, 0.5), u0 = -(SideProfiles::kRows - 0.4) * cell;
+  // RAYS: rays per cell along the side (4 as the detector); DU: the bin width's factor (1: the detector's).
+  const int n_rays = static_cast<int>(std::lround(Env("RAYS", 4) * cells));
+  const double du = Env("DU", 1) * std::clamp(cell / 4.0, 0.1, 0.5), u0 = -(SideProfiles::kRows - 0.4) * cell;
   const int bins = static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1;
   const bool pix = Env("PIX", 0) > 0;
-  const double roll = Env("ROLL", 0) * M_PI / 180, offx = Env("OFFX", 0.3), offy = Env("OFFY", 0.7);
+  const double roll = roll_deg * M_PI / 180;
   const int box = std::max(1, static_cast<int>(Env("BOX", 1)));  // PIX: box x box samples per pixel
   const bool quant = Env("QUANT", 1) > 0;                        // PIX: rounded to 8 bits
+  // sharptent's switches (bench/results/2026-12-07-sharptent.md), with PIX: NOTENT=1 the pixels' values
+  // read at the point itself (its box's mean centred there, or the point sample with BOX=1: no bilinear
+  // tent, no pixel grid); PHASEAVG=k each profile value the mean of k x k pixel phases (offx + i / k,
+  // offy + j / k): the profiles convolved with the phase-averaged kernel, fitted once.
+  const bool no_tent = Env("NOTENT", 0) > 0;
+  const int phase_avg = std::max(1, static_cast<int>(Env("PHASEAVG", 1)));
+  const double co = std::cos(roll), si = std::sin(roll);
+  // Pixel values at one phase, cached: pixel (i, j) -> its centre sample or its box's mean, 8-bit.
+  std::vector<std::unordered_map<int64_t, double>> cache(phase_avg * phase_avg);
+  // Pixel (i, j)'s value of the image f (print coordinates, cells), unrounded.
+  auto pixel_of = [&](const auto& f, double i, double j, double ox, double oy) {
+    double sum = 0;
+    for (int bj = 0; bj < box; ++bj)
+      for (int bi = 0; bi < box; ++bi) {
+        const double xx = i - ox + (bi + 0.5) / box - 0.5, yy = j - oy + (bj + 0.5) / box - 0.5;
+        const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
+        sum += f(cx, cy);
+      }
+    return sum / (box * box);
+  };
+  auto pixel_at = [&](double i, double j, double ox, double oy) {
+    const double v =
+        std::clamp(pixel_of([&](double x, double y) { return m.At(x, y); }, i, j, ox, oy), 0.0, 255.0);
+    return quant ? std::round(v) : v;
+  };
   // The point at `along` (0..1) and `out` px outward of the true side: its level (continuous, or the
   // detector's bilinear sample of the point-sampled 8-bit image with the marker rolled and offset).
   auto level = [&](double along, double out) {
     const double x = p0[0] + a[0] * along * cells + nrm[0] * out / m.scale;
     const double y = p0[1] + a[1] * along * cells + nrm[1] * out / m.scale;
     if (!pix) return m.At(x, y);
-    const double co = std::cos(roll), si = std::sin(roll);
-    const double X = (co * x - si * y) * m.scale + offx, Y = (si * x + co * y) * m.scale + offy;
-    auto px = [&](double i, double j) {  // pixel (i, j): its centre sample or its box's mean, 8-bit
-      double sum = 0;
-      for (int bj = 0; bj < box; ++bj)
-        for (int bi = 0; bi < box; ++bi) {
-          const double xx = i - offx + (bi + 0.5) / box - 0.5, yy = j - offy + (bj + 0.5) / box - 0.5;
-          const double cx = (co * xx + si * yy) / m.scale, cy = (-si * xx + co * yy) / m.scale;
-          sum += m.At(cx, cy);
+    double total = 0;
+    for (int pj = 0; pj < phase_avg; ++pj)
+      for (int pi = 0; pi < phase_avg; ++pi) {
+        const double ox = offx + static_cast<double>(pi) / phase_avg;
+        const double oy = offy + static_cast<double>(pj) / phase_avg;
+        const double X = (co * x - si * y) * m.scale + ox, Y = (si * x + co * y) * m.scale + oy;
+        if (no_tent) {
+          total += pixel_at(X, Y, ox, oy);
+          continue;
         }
-      const double v = std::clamp(sum / (box * box), 0.0, 255.0);
-      return quant ? std::round(v) : v;
+        auto& memo = cache[pj * phase_avg + pi];
+        auto px = [&](double i, double j) {
+          const int64_t key = (static_cast<int64_t>(i) + (1 << 20)) * (int64_t{1} << 21) +
+                              (static_cast<int64_t>(j) + (1 << 20));
+          auto it = memo.find(key);
+          if (it != memo.end()) return it->second;
+          return memo[key] = pixel_at(i, j, ox, oy);
+        };
+        const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
+        total += (1 - ty) * ((1 - tx) * px(fx, fy) + tx * px(fx + 1, fy)) +
+                 ty * ((1 - tx) * px(fx, fy + 1) + tx * px(fx + 1, fy + 1));
+      }
+    return total / (phase_avg * phase_avg);
+  };
+  // OTHEREXACT=1 (with PIX, sharptent): each row's part of the other colour at a ray (the model's code
+  // rows, `other`) read as the profiles are, not from a Gaussian along the side: the image of row r's
+  // cells (1 where the column is of the other colour, along the side only, blurred by the print's blur)
+  // through the same pixels, phases and bilinear read, at the ray's point in the row's middle.
+  const bool other_exact = pix && Env("OTHEREXACT", 0) > 0;
+  auto exact_other = [&](double along, int r) {
+    auto row_image = [&](double x, double y) {                   // print coordinates (cells)
+      const double c = (x - p0[0]) * a[0] + (y - p0[1]) * a[1];  // along the side, cells
+      double v = 0;
+      for (int k = 0; k < cells; ++k)
+        if (InnerCell(m, side, k, r)) v += Phi((k + 1 - c) / m.sb) - Phi((k - c) / m.sb);
+      return v;
     };
-    const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
-    return (1 - ty) * ((1 - tx) * px(fx, fy) + tx * px(fx + 1, fy)) +
-           ty * ((1 - tx) * px(fx, fy + 1) + tx * px(fx + 1, fy + 1));
+    const double out = -(r + 0.5) * m.scale;  // px outward: the row's middle
+    const double x = p0[0] + a[0] * along * cells + nrm[0] * out / m.scale;
+    const double y = p0[1] + a[1] * along * cells + nrm[1] * out / m.scale;
+    double total = 0;
+    for (int pj = 0; pj < phase_avg; ++pj)
+      for (int pi = 0; pi < phase_avg; ++pi) {
+        const double ox = offx + static_cast<double>(pi) / phase_avg;
+        const double oy = offy + static_cast<double>(pj) / phase_avg;
+        const double X = (co * x - si * y) * m.scale + ox, Y = (si * x + co * y) * m.scale + oy;
+        if (no_tent) {
+          total += pixel_of(row_image, X, Y, ox, oy);
+          continue;
+        }
+        const double fx = std::floor(X), fy = std::floor(Y), tx = X - fx, ty = Y - fy;
+        total += (1 - ty) * ((1 - tx) * pixel_of(row_image, fx, fy, ox, oy) +
+                             tx * pixel_of(row_image, fx + 1, fy, ox, oy)) +
+                 ty * ((1 - tx) * pixel_of(row_image, fx, fy + 1, ox, oy) +
+                       tx * pixel_of(row_image, fx + 1, fy + 1, ox, oy));
+      }
+    return total / (phase_avg * phase_avg);
   };
   double line = Env("LINE", 0), tilt = Env("TILT", 0);
   const int ends = static_cast<int>(Env("ENDS", 1));  // the first and last code columns used
+  // FRAC: the rays used lie at least this part of a column from its ends (0.1 as the detector).
+  const double frac_min = Env("FRAC", 0.1);
   SideProfiles s;
   SideFit fit;
   // The blur along the side the model's code rows assume (the detector's: the previous pass's fitted
@@ -155,7 +231,9 @@ int main(int argc, char** argv) {
   // 1 / 6), as the fitted sigma has it (0.44-0.51 px on sharp small cells). The optical blur alone made
   // the rows' cells of the other colour a hard step along the side: sharp 1.3 px cells +0.009 px outward
   // with the line at the truth (cellsize table B), +0.003 (se 0.006) with the pixel's spread (smallcell).
-  const double pixel_var = pix ? 1.0 / 6.0 + (1.0 - 1.0 / (box * box)) / 12.0 : 0.0;
+  // (NOTENT: the box's alone.)
+  const double pixel_var =
+      pix ? (Env("NOTENT", 0) > 0 ? 0.0 : 1.0 / 6.0) + (1.0 - 1.0 / (box * box)) / 12.0 : 0.0;
   double sigma_along = Env("ALONG", std::sqrt(blur * blur + pixel_var));
   const bool cross = Env("CROSS", 0) > 0;
   for (int iter = 0; iter < (cross ? 12 : 1); ++iter) {
@@ -219,6 +297,7 @@ int main(int argc, char** argv) {
       if (col < 1 || col > cells - 2 || frac < 0.1 || frac > 0.9) continue;
       if ((col == 1 && frac < 0.4) || (col == cells - 2 && frac > 0.6)) continue;
       if (col < ends || col > cells - 1 - ends) continue;
+      if (frac < frac_min || frac > 1.0 - frac_min) continue;
       std::array<uint8_t, SideProfiles::kRows> pattern;
       std::array<double, SideProfiles::kRows> depths, other;
       for (int r = 1; r <= SideProfiles::kRows; ++r) {
@@ -229,6 +308,7 @@ int main(int argc, char** argv) {
           if (InnerCell(m, side, k, r))
             o += Phi((k + 1 - at) * cell / sigma_along) - Phi((k - at) * cell / sigma_along);
         other[r - 1] = o;
+        if (other_exact) other[r - 1] = exact_other(t, r);
       }
       const int g = s.AddRay(pattern, depths, other);
       const double off = line + tilt * (t - 0.5);
@@ -240,7 +320,7 @@ int main(int argc, char** argv) {
       fit.e = 0.0, fit.sigma = blur, fit.warm = true;
     }
     if (!FitSideProfiles(s, &fit)) {
-      std::printf("fit failed\n");
+      if (!quiet) std::printf("fit failed\n");
       return 1;
     }
     // As the detector's whole-side fits: the surround's trend taken off on cells under 2 px, a warm refit
@@ -249,13 +329,15 @@ int main(int argc, char** argv) {
     fit.warm = true;
     if (cross) line += fit.e;
     if (std::getenv("ALONG") == nullptr) sigma_along = fit.sigma;
-    if (std::getenv("DUMP") || iter == (cross ? 11 : 0))
+    if (!quiet && (std::getenv("DUMP") || iter == (cross ? 11 : 0)))
       std::printf(
           "id %d side %d: e %+.4f px (edge at %+.4f, tilt %+.4f) sigma %.3f gamma %.3f L0 %.1f L1 %.1f S1 "
           "%.1f S2 %.1f q %.2f single %d groups %zu\n",
           id, side, fit.e, cross ? line : line + fit.e, tilt, fit.sigma, fit.gamma, fit.params[2],
           fit.params[3], fit.params[4], fit.params[5], fit.params[6], fit.single_surround, s.patterns.size());
   }
+  *e_out = fit.e;
+  if (quiet) return 0;
   {  // DUMP: each ray's crossing about the true line, of the profiles and of the fitted side model (with
      // the marker's extent along the side: the adjacent sides' edges), as CrossingLine finds them
     const double h = std::clamp(0.5 * cell, 0.75, 3.0), ds = h / 5, sg = fit.sigma;
@@ -333,5 +415,78 @@ int main(int argc, char** argv) {
       }
       std::printf(" group rss %.2f\n", rss);
     }
+  return 0;
+}
+
+int main(int argc, char** argv) {
+  if (argc < 5) {
+    std::fprintf(stderr, "usage: diag_side_exact ID SIDE BLUR_PX SIDE_PX\n");
+    return 2;
+  }
+  auto dict = LoadDictionary("DICT_6X6_250");
+  const int id = std::atoi(argv[1]), side = std::atoi(argv[2]);
+  const double blur = std::atof(argv[3]), side_px = std::atof(argv[4]);
+  const char* sweep = std::getenv("SWEEP");
+  if (sweep == nullptr) {
+    double e = 0;
+    return Run(dict, id, side, blur, side_px, Env("OFFX", 0.3), Env("OFFY", 0.7), Env("ROLL", 0), false, &e);
+  }
+  // SWEEP=file (sharptent): the fit averaged over pixel phases, as 2026-12-07-sharpstep-phases.sh in one
+  // process. The file holds one phase "OFFX OFFY" per line; for each roll of ROLLS (default
+  // "13 37 58 77"), each phase's mean e over ids 0 .. ID - 1 (the first argument: the id count) and sides
+  // 0-3 (SIDE < 0; else that side alone), then their mean and se over the phases (SWEEPDUMP=1: each
+  // phase's too). A failed fit counts apart.
+  std::vector<std::pair<double, double>> phases;
+  if (FILE* f = std::fopen(sweep, "r")) {
+    double x, y;
+    while (std::fscanf(f, "%lf %lf", &x, &y) == 2) phases.emplace_back(x, y);
+    std::fclose(f);
+  }
+  if (phases.empty()) {
+    std::fprintf(stderr, "SWEEP: no phases read from %s\n", sweep);
+    return 2;
+  }
+  const char* rolls_env = std::getenv("ROLLS");
+  std::vector<double> rolls;
+  {
+    const std::string text = rolls_env ? rolls_env : "13 37 58 77";
+    size_t at = 0;
+    while (at < text.size()) {
+      size_t used = 0;
+      try {
+        rolls.push_back(std::stod(text.substr(at), &used));
+      } catch (...) {
+        break;
+      }
+      at += used;
+    }
+  }
+  double all_sum = 0;
+  int all_n = 0;
+  for (double roll : rolls) {
+    double s = 0, ss = 0;
+    int failed = 0;
+    for (const auto& [ox, oy] : phases) {
+      double sum = 0;
+      int n = 0;
+      for (int i = 0; i < id; ++i)
+        for (int k = side < 0 ? 0 : side; k <= (side < 0 ? 3 : side); ++k) {
+          double e = 0;
+          if (Run(dict, i, k, blur, side_px, ox, oy, roll, true, &e) == 0)
+            sum += e, ++n;
+          else
+            ++failed;
+        }
+      const double mean = n > 0 ? sum / n : NAN;
+      if (std::getenv("SWEEPDUMP")) std::printf("phase %.4f %.4f: %+.4f (%d sides)\n", ox, oy, mean, n);
+      s += mean, ss += mean * mean;
+    }
+    const double k = phases.size(), mean = s / k;
+    const double se = k > 1 ? std::sqrt(std::max(0.0, ss / k - mean * mean) / (k - 1)) : NAN;
+    std::printf("roll %g: phase mean %+.4f (se over phases %.4f; %d phases, %d fits failed)\n", roll, mean,
+                se, static_cast<int>(k), failed);
+    all_sum += mean, ++all_n;
+  }
+  std::printf("all rolls: %+.4f\n", all_sum / all_n);
   return 0;
 }
