@@ -61,4 +61,17 @@ inline double LogInline(double x) {
   return k * kLn2High + (2.0 * s + 2.0 * s * s2 * series + k * kLn2Low);
 }
 
+// pow(x, y) = exp(y log x) for positive normal x and finite y, exactly x where y = 1 (linear images:
+// gamma 1) and 1 where x = 1; elsewhere (x <= 0, infinities, NaN) std::pow. Relative error at most
+// 4.5e-16 |y log x| + 2e-16: LogInline's error times y, then ExpInline's
+// (SideModel.PowInlineIsWithinItsBound; measured 2.35e-15, about 10 ulp, for x within [0.5 / 255, 1] and y
+// within [0.2, 5]; std::pow: 0.52 ulp).
+inline double PowInline(double x, double y) {
+  if (y == 1.0) return x;
+  if (x == 1.0) return 1.0;
+  if (!(x >= 2.2250738585072014e-308 && x <= 1.7976931348623157e308) || !(std::abs(y) < 1e300))
+    return std::pow(x, y);
+  return ExpInline(y * LogInline(x));
+}
+
 }  // namespace mcmt

@@ -172,7 +172,7 @@ constexpr double kPaperWeightPerRay = 1.0;
 // The paper's level P (SideProfiles::paper) in the model's linear units at gamma p[kGamma]:
 // P_lin = 255 (P / 255)^gamma where the profiles are encoded.
 double LinearPaper(const SideProfiles& s, const double* p) {
-  return s.fit_gamma ? 255.0 * std::pow(s.paper / 255.0, p[kGamma]) : s.paper;
+  return s.fit_gamma ? 255.0 * PowInline(s.paper / 255.0, p[kGamma]) : s.paper;
 }
 
 // The two-level model's margin tied to the paper (SideProfiles::paper): a soft penalty on a margin level
@@ -194,7 +194,7 @@ double MarginPenalty(const SideProfiles& s, const double* p, bool single, double
   if (single || !(weight > 0)) return 0.0;
   const double paper = LinearPaper(s, p);
   grad[kS1] = weight;
-  if (s.fit_gamma) grad[kGamma] = -weight * paper * std::log(s.paper / 255.0);
+  if (s.fit_gamma) grad[kGamma] = -weight * paper * LogInline(s.paper / 255.0);
   return weight * (p[kS1] - paper);
 }
 
