@@ -6,10 +6,10 @@
 // their two- and four-lane copies (ExpInline2 / 4, LogInline2 / 4 in side_model_lanes.inc) give the same
 // values lane by lane.
 //
-// Accuracy against the exact function (SideModel.ExpInlineIsWithinItsBound / LogInlineIsWithinItsBound,
-// against long double expl / logl): ExpInline relative error below 2.5e-16 (about 1 ulp) for |x| < 700;
-// LogInline absolute error below 2.5e-16 |log x| + 1e-16 (about 1 ulp) for positive normal x. Outside
-// those ranges (and for NaN) both call std::exp / std::log.
+// Accuracy against the exact function (SideModel.ExpInlineAndLogInlineAreWithinTheirBounds, against long
+// double expl / logl): ExpInline relative error below 2.5e-16 (measured 1.73e-16, 1.15 ulp) for |x| < 700;
+// LogInline relative error below 4e-16 (measured 3.28e-16, 2 ulp) for positive normal x. Outside those
+// ranges (and for NaN) both call std::exp / std::log.
 // In bench_detector's 10 accurate 640 px frames, the 177,000 exponentials of PhiAndDensity (the
 // rays' Phi in CollectSideRays, PaperLevel, DetrendSurround) and FillBoundary took 9.31 M instructions in
 // libm (52 per call, the call included) (expcost).
