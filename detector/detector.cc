@@ -1477,7 +1477,7 @@ double PaperLevel(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& cor
           total += g, other += GridCell(bits, cells, row + dr, col + dc) * g;
         }
       const double w = other / total;
-      const double value = 255.0 * std::pow(values[row * cells + col] / 255.0, gamma);
+      const double value = 255.0 * PowInline(values[row * cells + col] / 255.0, gamma);
       if (w >= kPaperWhite) white_cells.emplace_back(w, value);
       if (w <= 1.0 - kPaperWhite) black_sum += value, ++blacks;
     }
@@ -1509,7 +1509,7 @@ double MarkerPaperLevel(const Refinement& r) {
   double gamma = 1.0;
   if (r.fit_gamma) gamma = r.held_gamma > 0 ? r.held_gamma : gammas > 0 ? gamma_sum / gammas : 1.0;
   const double linear = PaperLevel(r.gray, r.img, r.bits, r.cells, kPaperBlurFactor * sigma, gamma);
-  return linear > 0 ? 255.0 * std::pow(linear / 255.0, 1.0 / gamma) : 0.0;
+  return linear > 0 ? 255.0 * PowInline(linear / 255.0, 1.0 / gamma) : 0.0;
 }
 
 thread_local RefinementCounts refinement_counts;  // RefinementCountsOnThisThread

@@ -159,45 +159,7 @@ bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a) {
 
 namespace {
 
-// exp(x) for |x| below 700 within about 2 ulp, without a library call: x = k ln 2 + r with |r| <= ln 2 / 2
-// (ln 2 in two parts, the first exact times k), e^r by its Taylor series to r^13 (truncation below
-// 1e-17), times 2^k set in the exponent's bits.
-// 1.5 * 2^52: adding and subtracting it rounds to an integer.
-constexpr double kExpRound = 6755399441055744.0;
-constexpr double kLn2High = 0.6931471803691238, kLn2Low = 1.9082149292705877e-10;
-constexpr double kInverseFactorial[14] = {
-    1.0,        1.0,         1.0 / 2,      1.0 / 6,       1.0 / 24,       1.0 / 120,       1.0 / 720,
-    1.0 / 5040, 1.0 / 40320, 1.0 / 362880, 1.0 / 3628800, 1.0 / 39916800, 1.0 / 479001600, 1.0 / 6227020800};
-inline double ExpInline(double x) {
-  if (!(std::abs(x) < 700.0)) return std::exp(x);  // also NaN
-  const double k = (x * 1.4426950408889634 + kExpRound) - kExpRound;
-  const double r = (x - k * kLn2High) - k * kLn2Low;
-  double e = kInverseFactorial[13];
-  for (int i = 12; i >= 0; --i) e = kInverseFactorial[i] + r * e;
-  const uint64_t bits = static_cast<uint64_t>(static_cast<int64_t>(k) + 1023) << 52;
-  double two_k;
-  std::memcpy(&two_k, &bits, sizeof two_k);
-  return e * two_k;
-}
-
-// log(x) for a positive normal x within about 2 ulp, without a library call: x = m 2^e with m within
-// [sqrt(1/2), sqrt(2)), log m = 2 atanh(s), s = (m - 1) / (m + 1) (|s| <= 0.172), by its series to s^21
-// (truncation below 1e-17).
-inline double LogInline(double x) {
-  if (!(x >= 2.2250738585072014e-308 && x <= 1.7976931348623157e308)) return std::log(x);  // also NaN
-  uint64_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
-  int exponent = static_cast<int>((bits >> 52) & 0x7ff) - 1023;
-  bits = (bits & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL;
-  double m;
-  std::memcpy(&m, &bits, sizeof m);
-  if (m > M_SQRT2) m *= 0.5, ++exponent;
-  const double f = m - 1.0, s = f / (2.0 + f), s2 = s * s;
-  double series = 1.0 / 21;
-  for (int odd = 19; odd >= 3; odd -= 2) series = 1.0 / odd + s2 * series;
-  const double k = exponent;
-  return k * kLn2High + (2.0 * s + 2.0 * s * s2 * series + k * kLn2Low);
-}
+// ExpInline and LogInline: detector/exp_log.h.
 
 // Whether group g has a step (SideProfiles::RowStep) in code row `row`.
 bool HasRowStep(const SideProfiles& s, int g, int row) {
@@ -216,7 +178,7 @@ constexpr double kPaperWeightPerRay = 1.0;
 // The paper's level P (SideProfiles::paper) in the model's linear units at gamma p[kGamma]:
 // P_lin = 255 (P / 255)^gamma where the profiles are encoded.
 double LinearPaper(const SideProfiles& s, const double* p) {
-  return s.fit_gamma ? 255.0 * std::pow(s.paper / 255.0, p[kGamma]) : s.paper;
+  return s.fit_gamma ? 255.0 * PowInline(s.paper / 255.0, p[kGamma]) : s.paper;
 }
 
 // The two-level model's margin tied to the paper (SideProfiles::paper): a soft penalty on a margin level
@@ -238,7 +200,7 @@ double MarginPenalty(const SideProfiles& s, const double* p, bool single, double
   if (single || !(weight > 0)) return 0.0;
   const double paper = LinearPaper(s, p);
   grad[kS1] = weight;
-  if (s.fit_gamma) grad[kGamma] = -weight * paper * std::log(s.paper / 255.0);
+  if (s.fit_gamma) grad[kGamma] = -weight * paper * LogInline(s.paper / 255.0);
   return weight * (p[kS1] - paper);
 }
 

@@ -29,6 +29,8 @@
 #include <emmintrin.h>
 #endif
 
+#include "detector/exp_log.h"
+
 namespace mcmt {
 
 struct SideProfiles {
@@ -217,9 +219,9 @@ inline void PhiAndDensityOf(double z, double gauss, double* big, double* small) 
   *small = 0.3989422804014327 * gauss;
 }
 
-// The same with its one exponential.
+// The same with its one exponential (ExpInline: no libm call, the same value on every machine).
 inline void PhiAndDensity(double z, double* big, double* small) {
-  PhiAndDensityOf(z, std::exp(-0.5 * z * z), big, small);
+  PhiAndDensityOf(z, ExpInline(-0.5 * z * z), big, small);
 }
 
 #ifdef __SSE2__
