@@ -630,7 +630,7 @@ bool DetrendSurround(SideProfiles* s, SideFit* fit) {
     PhiAndDensity((p[kE] + p[kQ] - u) * inv_sigma, &far_side, &density);
     PhiAndDensity((p[kE] - u) * inv_sigma, &edge, &density);
     double f = p[kS2] + (p[kS1] - p[kS2]) * far_side + (p[kL0] - p[kS1]) * edge;
-    if (s->fit_gamma) f = 255.0 * std::pow(std::max(f, 0.5) / 255.0, 1.0 / p[kGamma]);
+    if (s->fit_gamma) f = 255.0 * PowInline(std::max(f, 0.5) / 255.0, 1.0 / p[kGamma]);
     const double r = sum / count - f;
     sw += count, swx += count * x, swr += count * r, swxx += count * x * x, swxr += count * x * r;
     ++used;
