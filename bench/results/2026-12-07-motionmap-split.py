@@ -80,3 +80,8 @@ for lo, hi in ((0, 1.4), (1.4, 1.8), (1.8, 2.2), (2.2, 2.6), (2.6, 10)):
         v = [x[4] for x in sides if lo <= x[8] < hi and plo <= x[0] < phi_]
         cells.append('%+.4f (%d)' % (sum(v) / len(v), len(v)) if v else '-')
     print('| %g-%g | %s |' % (lo, hi, ' | '.join(cells)))
+print('\n| side index | cells depth across / length along, view >= 50 deg | view < 30 deg |\n|---|---|---|')
+for k in range(4):
+    v = [x[8] / (x[1] / 8) for x in sides if x[7] == k and x[3] >= 50]
+    w = [x[8] / (x[1] / 8) for x in sides if x[7] == k and x[3] < 30]
+    print('| %d | %.3f (%d) | %.3f (%d) |' % (k, sum(v) / len(v), len(v), sum(w) / len(w), len(w)))
