@@ -27,7 +27,10 @@
 // column's ends, part of a column: 0.1 as the detector), OTHEREXACT (with PIX, 1: the code rows' parts of
 // the other colour read through the same pixels and bilinear reads as the profiles, not from a Gaussian
 // along the side), SWEEP (a file of pixel phases: the fit
-// averaged over ids, sides and phases per roll; at main()), SWEEPDUMP (1: each phase's mean too).
+// averaged over ids, sides and phases per roll; at main()), SWEEPDUMP (1: each phase's mean too). motionmap's
+// (bench/results/2026-12-07-motionmap.md): MOTION (px) / MOTIONDEG (deg from the side's outward normal, 0
+// default: across the side): the print also blurred by a line of that length (the reference renderer's
+// motion_px, a box kernel); ASPECT (below).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -69,8 +72,22 @@ struct Print {
   double Rect(double x, double y, double x0, double y0, double x1, double y1) const {
     return (Phi((x1 - x) / sb) - Phi((x0 - x) / sb)) * (Phi((y1 - y) / sb) - Phi((y0 - y) / sb));
   }
-  // Linear level at (x, y) (cells: x the column, y the row).
+  // MOTION: a line of motion_cells (cells) along (motion_x, motion_y), a unit vector, averaged at
+  // motion_samples points (the reference renderer's motion blur, its line's bilinear splats aside).
+  double motion_cells = 0, motion_x = 1, motion_y = 0;
+  int motion_samples = 1;
+  // Linear level at (x, y) (cells: x the column, y the row), with the motion line when MOTION is set.
   double At(double x, double y) const {
+    if (motion_cells <= 0) return AtStill(x, y);
+    double f = 0;
+    for (int i = 0; i < motion_samples; ++i) {
+      const double t = ((i + 0.5) / motion_samples - 0.5) * motion_cells;
+      f += AtStill(x + t * motion_x, y + t * motion_y);
+    }
+    return f / motion_samples;
+  }
+  // Linear level at (x, y) (cells) of the still (Gaussian-blurred) print.
+  double AtStill(double x, double y) const {
     double f = bg + (surface - bg) * Rect(x, y, -ext, -ext, cells + ext, cells + ext) +
                (paper - surface) * Rect(x, y, -margin, -margin, cells + margin, cells + margin) +
                (ink - paper) * Rect(x, y, 0, 0, cells, cells);
@@ -121,12 +138,35 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
   const int cells = m.cells;
   double p0[2], a[2], nrm[2];
   SideFrame(side, cells, p0, a, nrm);
+  // MOTION (px): the print blurred by a line of this length (a box kernel, as the reference renderer's
+  // motion_px) at MOTIONDEG deg from the side's outward normal (0: across the side, 90: along it).
+  if (const double motion_px = Env("MOTION", 0); motion_px > 0) {
+    const double th = Env("MOTIONDEG", 0) * M_PI / 180;
+    m.motion_cells = motion_px / m.scale;  // along: cells of the side's length; across: ASPECT's depth
+    const double aspect = Env("ASPECT", 1.0);
+    if (aspect != 1.0 && Env("MOTIONDEG", 0) != 0) {
+      std::fprintf(stderr, "ASPECT with MOTIONDEG 0 only\n");
+      return 2;
+    }
+    if (aspect != 1.0 && Env("PIX", 0) > 0) {
+      std::fprintf(stderr, "ASPECT without PIX only\n");
+      return 2;
+    }
+    m.motion_cells /= aspect;
+    m.motion_x = std::cos(th) * nrm[0] + std::sin(th) * a[0];
+    m.motion_y = std::cos(th) * nrm[1] + std::sin(th) * a[1];
+    m.motion_samples = std::max(2, static_cast<int>(std::ceil(16 * motion_px)));
+  }
   const double cell = m.scale;  // px, fronto-parallel
+  // ASPECT (continuous profiles only): the cells' depth across the side this fraction of their length along
+  // it (a foreshortened side: the print squeezed across the side, as at a view angle acos(ASPECT) about it).
+  const double aspect = Env("ASPECT", 1.0), cell_across = cell * aspect;
   const double margin_t = std::min(0.3, std::max(0.6 * cell, 1.5) / side_px);
   // RAYS: rays per cell along the side (4 as the detector); DU: the bin width's factor (1: the detector's).
   const int n_rays = static_cast<int>(std::lround(Env("RAYS", 4) * cells));
-  const double du = Env("DU", 1) * std::clamp(cell / 4.0, 0.1, 0.5), u0 = -(SideProfiles::kRows - 0.4) * cell;
-  const int bins = static_cast<int>(std::ceil((1.6 * cell + 1.0 - u0) / du)) + 1;
+  const double du = Env("DU", 1) * std::clamp(cell_across / 4.0, 0.1, 0.5);
+  const double u0 = -(SideProfiles::kRows - 0.4) * cell_across;
+  const int bins = static_cast<int>(std::ceil((1.6 * cell_across + 1.0 - u0) / du)) + 1;
   const bool pix = Env("PIX", 0) > 0;
   const double roll = roll_deg * M_PI / 180;
   const int box = std::max(1, static_cast<int>(Env("BOX", 1)));  // PIX: box x box samples per pixel
@@ -161,7 +201,11 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
   auto level = [&](double along, double out) {
     const double x = p0[0] + a[0] * along * cells + nrm[0] * out / m.scale;
     const double y = p0[1] + a[1] * along * cells + nrm[1] * out / m.scale;
-    if (!pix) return m.At(x, y);
+    if (!pix) {
+      const double xa = p0[0] + a[0] * along * cells + nrm[0] * out / cell_across;
+      const double ya = p0[1] + a[1] * along * cells + nrm[1] * out / cell_across;
+      return m.At(xa, ya);
+    }
     double total = 0;
     for (int pj = 0; pj < phase_avg; ++pj)
       for (int pi = 0; pi < phase_avg; ++pi) {
@@ -238,7 +282,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
   const bool cross = Env("CROSS", 0) > 0;
   for (int iter = 0; iter < (cross ? 12 : 1); ++iter) {
     if (cross) {  // CrossingLine about the current line, model passes' sampling
-      const double h = std::clamp(0.5 * cell, 0.75, 3.0), ds = h / 5;
+      const double h = std::clamp(0.5 * cell_across, 0.75, 3.0), ds = h / 5;
       std::vector<double> ins, outs, ts, xs;
       std::vector<std::vector<double>> profs;
       std::vector<char> clean;
@@ -285,7 +329,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
       if (std::getenv("DUMP"))
         std::printf("crossings: %d rays (clean %d), line %+.4f tilt %+.4f\n", k, use_clean, line, tilt);
     }
-    s.Reset(u0, du, bins, cell);
+    s.Reset(u0, du, bins, cell_across);
     s.fit_gamma = Env("FITGAMMA", 1) > 0;
     s.polarity = 1;
     s.paper = Env("PAPER", 0);
@@ -302,7 +346,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
       std::array<double, SideProfiles::kRows> depths, other;
       for (int r = 1; r <= SideProfiles::kRows; ++r) {
         pattern[r - 1] = static_cast<uint8_t>(InnerCell(m, side, col, r));
-        depths[r - 1] = r * cell;
+        depths[r - 1] = r * cell_across;
         double o = 0;
         for (int k = std::max(0, col - 3); k <= std::min(cells - 1, col + 3); ++k)
           if (InnerCell(m, side, k, r))
@@ -316,7 +360,7 @@ int Run(const cv::Ptr<cv::aruco::Dictionary>& dict, int id, int side, double blu
     }
     if (iter > 0) fit.e = 0.0;
     if (iter == 0 && Env("TRUTHSTART", 0) > 0) {  // warm start at the print's own parameters
-      fit.params = {0.0, blur, m.ink, m.paper, m.paper, m.surface, m.margin * cell, 1.0};
+      fit.params = {0.0, blur, m.ink, m.paper, m.paper, m.surface, m.margin * cell_across, 1.0};
       fit.e = 0.0, fit.sigma = blur, fit.warm = true;
     }
     if (!FitSideProfiles(s, &fit)) {
