@@ -16,6 +16,9 @@
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <climits>
@@ -24,6 +27,8 @@
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <vector>
+
+#include "detector/side_model.h"  // SideModelUsesAvx2: the one run-time choice of the AVX2 code
 
 namespace mcmt {
 namespace {
@@ -177,6 +182,100 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
   }
 }
 
+// The helpers above on AVX2 lanes (16 x 16 bits, 32 x 8 bits), for the CPUs that have it: GCC on x86-64,
+// compiled for AVX2 by #pragma GCC target and run only where the side model's dispatch runs its AVX2 code
+// (SideModelUsesAvx2: the CPU has it, MCMT_NO_AVX2 unset; one switch for both). The same integer operations
+// modulo 2^16 lane by lane, hence the same sums and the same binary image bit for bit
+// (test_detector_unit, CandidateSearch.Avx2ThresholdIsSse2); each hands its last pixels to the SSE2 code.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MCMT_SEARCH_HAS_AVX2 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+__m256i Load(const void* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
+void Store(void* at, __m256i v) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), v); }
+__m256i Widen(__m128i v) { return _mm256_cvtepu8_epi16(v); }  // 16 bytes to 16 x 16 bits
+
+void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+  int x = 0;
+  auto slide = [&](__m256i add, __m256i sub, uint16_t* at) {
+    Store(at, _mm256_sub_epi16(_mm256_add_epi16(Load(at), add), sub));
+  };
+  for (; x + 32 <= w; x += 32) {  // 32 pixels of each row per load
+    const __m256i add = Load(in + x), sub = Load(out + x);
+    slide(Widen(_mm256_castsi256_si128(add)), Widen(_mm256_castsi256_si128(sub)), column + x);
+    slide(Widen(_mm256_extracti128_si256(add, 1)), Widen(_mm256_extracti128_si256(sub, 1)), column + x + 16);
+  }
+  for (; x + 16 <= w; x += 16)
+    slide(Widen(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in + x))),
+          Widen(_mm_loadu_si128(reinterpret_cast<const __m128i*>(out + x))), column + x);
+  mcmt::SlideColumnSums(in + x, out + x, w - x, column + x);
+}
+
+template <int R>
+void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+  int x = 0;
+  for (; x + 16 <= w; x += 16) {
+    __m256i sum = Load(column + x - R);
+    for (int i = 1 - R; i <= R; ++i) sum = _mm256_add_epi16(sum, Load(column + x + i));
+    Store(sums + x, sum);
+  }
+  mcmt::WindowSums<R>(column + x, w - x, sums + x);
+}
+
+void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
+  prefix[0] = 0;
+  int i = 0;
+  __m256i carry = _mm256_setzero_si256();  // every lane prefix[i]
+  for (; i + 16 <= n; i += 16) {
+    __m256i v = Load(column + i);  // the prefixes within each half of 8 lanes, then the low half's last
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 2));  // added to the high half
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 4));
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 8));
+    const __m256i last = _mm256_shufflehi_epi16(v, _MM_SHUFFLE(3, 3, 3, 3));  // lanes 4-7 of each: 7
+    v = _mm256_add_epi16(v, _mm256_permute2x128_si256(_mm256_unpackhi_epi64(last, last), last, 0x08));
+    v = _mm256_add_epi16(v, carry);
+    Store(prefix + i + 1, v);
+    carry = _mm256_permute4x64_epi64(_mm256_shufflehi_epi16(v, _MM_SHUFFLE(3, 3, 3, 3)), 0xff);
+  }
+  for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
+}
+
+template <bool kPrefix>
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                           uint8_t below, uint8_t above, uint8_t* d) {
+  int x = 0;
+  const __m256i zero = _mm256_setzero_si256(), at16 = _mm256_set1_epi16(static_cast<int16_t>(at));
+  const __m256i area16 = _mm256_set1_epi16(static_cast<int16_t>(area)), limit = _mm256_set1_epi16(256);
+  const __m256i offset16 = _mm256_set1_epi16(static_cast<int16_t>(offset));
+  const __m256i below8 = _mm256_set1_epi8(static_cast<char>(below)),
+                above8 = _mm256_set1_epi8(static_cast<char>(above));
+  // Lanes set where x + at's window sum >= its threshold (pixels p, 16 bits).
+  auto is_below = [&](__m256i p, int at_x) {
+    const __m256i v = _mm256_min_epi16(_mm256_max_epi16(_mm256_sub_epi16(p, at16), zero), limit);
+    const __m256i t = _mm256_subs_epu16(_mm256_mullo_epi16(v, area16), offset16);
+    __m256i sum = Load(sums + at_x + (kPrefix ? k : 0));
+    if (kPrefix) sum = _mm256_sub_epi16(sum, Load(sums + at_x));
+    return _mm256_cmpeq_epi16(_mm256_subs_epu16(t, sum), zero);  // sum >= t
+  };
+  for (; x + 32 <= w; x += 32) {  // 32 pixels: one load, pack (lanes back in order) and store
+    const __m256i p = Load(s + x);
+    const __m256i mask =
+        _mm256_permute4x64_epi64(_mm256_packs_epi16(is_below(Widen(_mm256_castsi256_si128(p)), x),
+                                                    is_below(Widen(_mm256_extracti128_si256(p, 1)), x + 16)),
+                                 _MM_SHUFFLE(3, 1, 2, 0));
+    Store(d + x, _mm256_blendv_epi8(above8, below8, mask));
+  }
+  mcmt::CompareWithWindowSums<kPrefix>(s + x, sums + x, k, w - x, at, area, offset, below, above, d + x);
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#else
+#define MCMT_SEARCH_HAS_AVX2 0
+#endif
+
 // dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
 // rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
 // replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
@@ -204,20 +303,44 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
   };
   const int real = x_end - x_begin;
   for (int y = -r; y <= r; ++y) AddRowToColumnSums(row(y), real, column + x_begin);
+  // The SSE2 helpers or, where the side model runs its AVX2 code, the AVX2 ones (the same values).
+  using Slide = void (*)(const uint8_t*, const uint8_t*, int, uint16_t*);
   using Sums = void (*)(const uint16_t*, int, uint16_t*);
-  static constexpr Sums kSumsOf[4] = {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>};
+  using Compare =
+      void (*)(const uint8_t*, const uint16_t*, int, int, int, int, int, uint8_t, uint8_t, uint8_t*);
+  struct Helpers {
+    Slide slide;
+    Sums sums_of[4], prefix;
+    Compare compare, compare_prefix;
+  };
+  static constexpr Helpers kSse2{SlideColumnSums,
+                                 {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>},
+                                 PrefixSums,
+                                 CompareWithWindowSums<false>,
+                                 CompareWithWindowSums<true>};
+#if MCMT_SEARCH_HAS_AVX2
+  static constexpr Helpers kAvx2{
+      avx2::SlideColumnSums,
+      {avx2::WindowSums<0>, avx2::WindowSums<1>, avx2::WindowSums<2>, avx2::WindowSums<3>},
+      avx2::PrefixSums,
+      avx2::CompareWithWindowSums<false>,
+      avx2::CompareWithWindowSums<true>};
+  const Helpers& use = SideModelUsesAvx2() ? kAvx2 : kSse2;
+#else
+  const Helpers& use = kSse2;
+#endif
   for (int y = 0; y < h; ++y) {
-    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), real, column + x_begin);
+    if (y > 0) use.slide(row(y + r), row(y - r - 1), real, column + x_begin);
     for (int x = -r; x < x_begin; ++x) column[x] = column[x_begin];
     for (int x = x_end; x < w + r; ++x) column[x] = column[x_end - 1];
     const uint8_t* s = src.ptr<uint8_t>(y);
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
-      kSumsOf[r](column, w, sums.data());
-      CompareWithWindowSums<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      use.sums_of[r](column, w, sums.data());
+      use.compare(s, sums.data(), k, w, at, area, offset, below, above, d);
     } else {  // sums[i]: the sum of column[-r .. i - r), x's window column[x - r .. x + r]: i = x + k, x
-      PrefixSums(padded.data(), w + 2 * r, sums.data());
-      CompareWithWindowSums<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      use.prefix(padded.data(), w + 2 * r, sums.data());
+      use.compare_prefix(s, sums.data(), k, w, at, area, offset, below, above, d);
     }
   }
 }
