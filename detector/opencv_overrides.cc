@@ -466,6 +466,26 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   }
 }
 
+// The scalar part of WarpSegmentNearest (OpenCV's scalar code): pixels i .. bw - 1 of the segment whose
+// first pixel's map is X0, Y0, W0.
+void WarpSegmentNearestTail(const cv::Mat& src, double X0, double Y0, double W0, const double* M, int i,
+                            int bw, uint8_t border, uint8_t* d) {
+  const unsigned cols = static_cast<unsigned>(src.cols), rows = static_cast<unsigned>(src.rows);
+  for (; i < bw; ++i) {
+    double w = W0 + M[6] * i;
+    w = w != 0 ? 1. / w : 0;
+    const double fx =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
+    const double fy =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
+    const int sx = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx)),
+              sy = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
+    d[i] = static_cast<unsigned>(sx) < cols && static_cast<unsigned>(sy) < rows
+               ? src.data[sy * src.step[0] + sx]
+               : border;
+  }
+}
+
 // One row segment of OpenCV 4.6's warpPerspective with INTER_NEAREST (its WarpPerspectiveInvoker: column
 // blocks of `bw` pixels from `x`): d[i] = the pixel of `src` nearest to M (x + i, y), `border` outside.
 // Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) times 1 / (W0 + M6 i)
@@ -512,18 +532,72 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
     sample(i, 16);
   }
 #endif
-  for (; i < bw; ++i) {
-    double w = W0 + M[6] * i;
-    w = w != 0 ? 1. / w : 0;
-    const double fx =
-        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
-    const double fy =
-        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
-    xy[0] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx));
-    xy[1] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
-    sample(i, 1);
-  }
+  WarpSegmentNearestTail(src, X0, Y0, W0, M, i, bw, border, d);
 }
+
+#if MCMT_SEARCH_HAS_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+// WarpSegmentNearest on AVX2 lanes: each 16-pixel block's positions 4 at a time by the same double
+// operations lane by lane (the same operands in the same order: the same values, NaN and infinity
+// included), saturated to 16 bits as there; each pixel's address and whether it lies inside `src` 8 at a
+// time (32-bit products: `src` below 2^31 bytes, else the SSE2 code), then the pixels read one by one and
+// the border put in where outside. The rest of the segment: the SSE2 code's scalar part.
+void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int bw, uint8_t border,
+                        uint8_t* d) {
+  const double X0 = M[0] * x + M[1] * y + M[2], Y0 = M[3] * x + M[4] * y + M[5],
+               W0 = M[6] * x + M[7] * y + M[8];
+  const __m256d m0 = _mm256_set1_pd(M[0]), m3 = _mm256_set1_pd(M[3]), m6 = _mm256_set1_pd(M[6]);
+  const __m256d int_max = _mm256_set1_pd(static_cast<double>(INT_MAX)),
+                int_min = _mm256_set1_pd(static_cast<double>(INT_MIN));
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1), x0 = _mm256_set1_pd(X0),
+                y0 = _mm256_set1_pd(Y0), w0 = _mm256_set1_pd(W0), four = _mm256_set1_pd(4);
+  const __m256i cols = _mm256_set1_epi32(src.cols), rows = _mm256_set1_epi32(src.rows),
+                minus_one = _mm256_set1_epi32(-1), step = _mm256_set1_epi32(static_cast<int>(src.step[0]));
+  const __m128i border8 = _mm_set1_epi8(static_cast<char>(border));
+  const uint8_t* data = src.data;
+  alignas(32) int32_t at_pixel[16];
+  alignas(16) uint8_t pixels[16];
+  int i = 0;
+  for (; i <= bw - 16; i += 16) {
+    __m256d at = _mm256_set_pd(i + 3, i + 2, i + 1, i);
+    __m256i inside[2];
+    for (int h = 0; h < 2; ++h) {  // 8 pixels: x and y of 4 and 4, saturated to 16 bits, widened again
+      __m128i xs[2], ys[2];
+      for (int q = 0; q < 2; ++q, at = _mm256_add_pd(at, four)) {
+        __m256d w = _mm256_add_pd(_mm256_mul_pd(m6, at), w0);
+        w = _mm256_andnot_pd(_mm256_cmp_pd(w, zero, _CMP_EQ_OQ), _mm256_div_pd(one, w));
+        const __m256d fx = _mm256_max_pd(
+            int_min, _mm256_min_pd(int_max, _mm256_mul_pd(_mm256_add_pd(x0, _mm256_mul_pd(m0, at)), w)));
+        const __m256d fy = _mm256_max_pd(
+            int_min, _mm256_min_pd(int_max, _mm256_mul_pd(_mm256_add_pd(y0, _mm256_mul_pd(m3, at)), w)));
+        xs[q] = _mm256_cvtpd_epi32(fx);
+        ys[q] = _mm256_cvtpd_epi32(fy);
+      }
+      const __m256i sx = _mm256_cvtepi16_epi32(_mm_packs_epi32(xs[0], xs[1]));
+      const __m256i sy = _mm256_cvtepi16_epi32(_mm_packs_epi32(ys[0], ys[1]));
+      inside[h] =
+          _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(sx, minus_one), _mm256_cmpgt_epi32(cols, sx)),
+                           _mm256_and_si256(_mm256_cmpgt_epi32(sy, minus_one), _mm256_cmpgt_epi32(rows, sy)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(at_pixel + 8 * h),
+                         _mm256_and_si256(inside[h], _mm256_add_epi32(_mm256_mullo_epi32(sy, step), sx)));
+    }
+    for (int k = 0; k < 16; ++k) pixels[k] = data[at_pixel[k]];  // (outside: pixel 0, replaced below)
+    const __m256i inside16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(inside[0], inside[1]), 0xd8);
+    const __m128i inside8 =
+        _mm_packs_epi16(_mm256_castsi256_si128(inside16), _mm256_extracti128_si256(inside16, 1));
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i*>(d + i),
+        _mm_blendv_epi8(border8, _mm_load_si128(reinterpret_cast<const __m128i*>(pixels)), inside8));
+  }
+  if (i < bw) mcmt::WarpSegmentNearestTail(src, X0, Y0, W0, M, i, bw, border, d);
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#endif
 
 // The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
 // the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
@@ -705,10 +779,15 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
   const uint8_t border = saturate_cast<uint8_t>(border_value[0]);
   // OpenCV's column blocks (a block's map starts from its first column); its row blocks do not matter.
   const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
+  auto segment = mcmt::WarpSegmentNearest;  // or its AVX2 code, where the side model's runs (the same pixels)
+#if MCMT_SEARCH_HAS_AVX2
+  if (mcmt::SideModelUsesAvx2() &&
+      src.step[0] * static_cast<size_t>(src.rows) <= static_cast<size_t>(INT_MAX))
+    segment = mcmt::avx2::WarpSegmentNearest;
+#endif
   for (int y = 0; y < dst.rows; ++y)
     for (int x = 0; x < dst.cols; x += block_width)
-      mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
-                               dst.ptr<uint8_t>(y) + x);
+      segment(src, m, x, y, std::min(block_width, dst.cols - x), border, dst.ptr<uint8_t>(y) + x);
 }
 
 // OpenCV's cv::countNonZero, which cv::aruco::detectMarkers calls for every cell of every candidate (64
