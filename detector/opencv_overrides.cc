@@ -59,8 +59,10 @@ int BoxMeanThresholdOffset(int area) {
   return offset;
 }
 
-// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves.
-void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves. (Inlined: also the
+// AVX2 code's last pixels.)
+[[gnu::always_inline]] inline void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w,
+                                                   uint16_t* column) {
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128();
@@ -83,7 +85,7 @@ void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* col
 
 // sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R).
 template <int R>
-void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+[[gnu::always_inline]] inline void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
   int x = 0;
 #ifdef __SSE2__
   for (; x + 8 <= w; x += 8) {
@@ -144,8 +146,9 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
 // p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum: sums[x]
 // (WindowSums), or with kPrefix sums[x + k] - sums[x] modulo 2^16 (sums: PrefixSums).
 template <bool kPrefix>
-void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                           uint8_t below, uint8_t above, uint8_t* d) {
+[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
+                                                         int at, int area, int offset, uint8_t below,
+                                                         uint8_t above, uint8_t* d) {
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
@@ -276,13 +279,41 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
 #define MCMT_SEARCH_HAS_AVX2 0
 #endif
 
-// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
-// rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
-// replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
-// the view and that image's edges replicated (cv::blur's default): 16-bit column sums slid down the
-// image, their window sums compared with a threshold linear in the pixel. dst must not be src.
-void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
-                             bool isolated, cv::Mat& dst) {
+// The helpers of ThresholdAgainstBoxMean: the SSE2 ones or the AVX2 ones (the same values), called directly
+// (the SSE2 ones inlined, as before there were AVX2 ones).
+struct Sse2BoxMean {
+  static void Slide(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+    SlideColumnSums(in, out, w, column);
+  }
+  static constexpr void (*kSumsOf[4])(const uint16_t*, int, uint16_t*) = {WindowSums<0>, WindowSums<1>,
+                                                                          WindowSums<2>, WindowSums<3>};
+  static void Prefix(const uint16_t* column, int n, uint16_t* prefix) { PrefixSums(column, n, prefix); }
+  template <bool kPrefix>
+  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                      uint8_t below, uint8_t above, uint8_t* d) {
+    CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  }
+};
+#if MCMT_SEARCH_HAS_AVX2
+struct Avx2BoxMean {
+  static void Slide(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+    avx2::SlideColumnSums(in, out, w, column);
+  }
+  static constexpr void (*kSumsOf[4])(const uint16_t*, int, uint16_t*) = {
+      avx2::WindowSums<0>, avx2::WindowSums<1>, avx2::WindowSums<2>, avx2::WindowSums<3>};
+  static void Prefix(const uint16_t* column, int n, uint16_t* prefix) { avx2::PrefixSums(column, n, prefix); }
+  template <bool kPrefix>
+  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                      uint8_t below, uint8_t above, uint8_t* d) {
+    avx2::CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  }
+};
+#endif
+
+// ThresholdAgainstBoxMean with the helpers of `Lanes` (Sse2BoxMean or Avx2BoxMean).
+template <typename Lanes>
+void ThresholdAgainstBoxMeanWith(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                                 bool isolated, cv::Mat& dst) {
   const int r = k / 2, w = src.cols, h = src.rows, area = k * k;
   if (w == 0 || h == 0) return;
   cv::Size whole(w, h);
@@ -303,46 +334,34 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
   };
   const int real = x_end - x_begin;
   for (int y = -r; y <= r; ++y) AddRowToColumnSums(row(y), real, column + x_begin);
-  // The SSE2 helpers or, where the side model runs its AVX2 code, the AVX2 ones (the same values).
-  using Slide = void (*)(const uint8_t*, const uint8_t*, int, uint16_t*);
-  using Sums = void (*)(const uint16_t*, int, uint16_t*);
-  using Compare =
-      void (*)(const uint8_t*, const uint16_t*, int, int, int, int, int, uint8_t, uint8_t, uint8_t*);
-  struct Helpers {
-    Slide slide;
-    Sums sums_of[4], prefix;
-    Compare compare, compare_prefix;
-  };
-  static constexpr Helpers kSse2{SlideColumnSums,
-                                 {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>},
-                                 PrefixSums,
-                                 CompareWithWindowSums<false>,
-                                 CompareWithWindowSums<true>};
-#if MCMT_SEARCH_HAS_AVX2
-  static constexpr Helpers kAvx2{
-      avx2::SlideColumnSums,
-      {avx2::WindowSums<0>, avx2::WindowSums<1>, avx2::WindowSums<2>, avx2::WindowSums<3>},
-      avx2::PrefixSums,
-      avx2::CompareWithWindowSums<false>,
-      avx2::CompareWithWindowSums<true>};
-  const Helpers& use = SideModelUsesAvx2() ? kAvx2 : kSse2;
-#else
-  const Helpers& use = kSse2;
-#endif
   for (int y = 0; y < h; ++y) {
-    if (y > 0) use.slide(row(y + r), row(y - r - 1), real, column + x_begin);
+    if (y > 0) Lanes::Slide(row(y + r), row(y - r - 1), real, column + x_begin);
     for (int x = -r; x < x_begin; ++x) column[x] = column[x_begin];
     for (int x = x_end; x < w + r; ++x) column[x] = column[x_end - 1];
     const uint8_t* s = src.ptr<uint8_t>(y);
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
-      use.sums_of[r](column, w, sums.data());
-      use.compare(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::kSumsOf[r](column, w, sums.data());
+      Lanes::template Compare<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
     } else {  // sums[i]: the sum of column[-r .. i - r), x's window column[x - r .. x + r]: i = x + k, x
-      use.prefix(padded.data(), w + 2 * r, sums.data());
-      use.compare_prefix(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::Prefix(padded.data(), w + 2 * r, sums.data());
+      Lanes::template Compare<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
     }
   }
+}
+
+// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
+// rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
+// replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
+// the view and that image's edges replicated (cv::blur's default): 16-bit column sums slid down the
+// image, their window sums compared with a threshold linear in the pixel. dst must not be src.
+void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                             bool isolated, cv::Mat& dst) {
+#if MCMT_SEARCH_HAS_AVX2
+  if (SideModelUsesAvx2())  // where the side model runs its AVX2 code
+    return ThresholdAgainstBoxMeanWith<Avx2BoxMean>(src, k, at, offset, below, above, isolated, dst);
+#endif
+  ThresholdAgainstBoxMeanWith<Sse2BoxMean>(src, k, at, offset, below, above, isolated, dst);
 }
 
 // OpenCV's contour follower's marks in its 0/1 image (Suzuki and Abe's NBD 2 for every border in its list
@@ -468,8 +487,9 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
 
 // The scalar part of WarpSegmentNearest (OpenCV's scalar code): pixels i .. bw - 1 of the segment whose
 // first pixel's map is X0, Y0, W0.
-void WarpSegmentNearestTail(const cv::Mat& src, double X0, double Y0, double W0, const double* M, int i,
-                            int bw, uint8_t border, uint8_t* d) {
+[[gnu::always_inline]] inline void WarpSegmentNearestTail(const cv::Mat& src, double X0, double Y0, double W0,
+                                                          const double* M, int i, int bw, uint8_t border,
+                                                          uint8_t* d) {
   const unsigned cols = static_cast<unsigned>(src.cols), rows = static_cast<unsigned>(src.rows);
   for (; i < bw; ++i) {
     double w = W0 + M[6] * i;
@@ -779,15 +799,21 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
   const uint8_t border = saturate_cast<uint8_t>(border_value[0]);
   // OpenCV's column blocks (a block's map starts from its first column); its row blocks do not matter.
   const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
-  auto segment = mcmt::WarpSegmentNearest;  // or its AVX2 code, where the side model's runs (the same pixels)
+  // The AVX2 code where the side model runs its AVX2 code (the same pixels), else the SSE2 code.
 #if MCMT_SEARCH_HAS_AVX2
   if (mcmt::SideModelUsesAvx2() &&
-      src.step[0] * static_cast<size_t>(src.rows) <= static_cast<size_t>(INT_MAX))
-    segment = mcmt::avx2::WarpSegmentNearest;
+      src.step[0] * static_cast<size_t>(src.rows) <= static_cast<size_t>(INT_MAX)) {
+    for (int y = 0; y < dst.rows; ++y)
+      for (int x = 0; x < dst.cols; x += block_width)
+        mcmt::avx2::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
+                                       dst.ptr<uint8_t>(y) + x);
+    return;
+  }
 #endif
   for (int y = 0; y < dst.rows; ++y)
     for (int x = 0; x < dst.cols; x += block_width)
-      segment(src, m, x, y, std::min(block_width, dst.cols - x), border, dst.ptr<uint8_t>(y) + x);
+      mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
+                               dst.ptr<uint8_t>(y) + x);
 }
 
 // OpenCV's cv::countNonZero, which cv::aruco::detectMarkers calls for every cell of every candidate (64
