@@ -16,6 +16,9 @@
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <climits>
@@ -24,6 +27,8 @@
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <vector>
+
+#include "detector/side_model.h"  // SideModelUsesAvx2: the one run-time choice of the AVX2 code
 
 namespace mcmt {
 namespace {
@@ -54,8 +59,10 @@ int BoxMeanThresholdOffset(int area) {
   return offset;
 }
 
-// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves.
-void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+// The next row's column sums of a window (16 bits): row `in` enters, row `out` leaves. (Inlined: also the
+// AVX2 code's last pixels.)
+[[gnu::always_inline]] inline void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w,
+                                                   uint16_t* column) {
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128();
@@ -78,7 +85,7 @@ void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* col
 
 // sums[x] = column[x - R] + ... + column[x + R], x < w (column valid from -R to w + R).
 template <int R>
-void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+[[gnu::always_inline]] inline void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
   int x = 0;
 #ifdef __SSE2__
   for (; x + 8 <= w; x += 8) {
@@ -139,8 +146,9 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
 // p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum: sums[x]
 // (WindowSums), or with kPrefix sums[x + k] - sums[x] modulo 2^16 (sums: PrefixSums).
 template <bool kPrefix>
-void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                           uint8_t below, uint8_t above, uint8_t* d) {
+[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
+                                                         int at, int area, int offset, uint8_t below,
+                                                         uint8_t above, uint8_t* d) {
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
@@ -177,13 +185,135 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
   }
 }
 
-// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
-// rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
-// replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
-// the view and that image's edges replicated (cv::blur's default): 16-bit column sums slid down the
-// image, their window sums compared with a threshold linear in the pixel. dst must not be src.
-void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
-                             bool isolated, cv::Mat& dst) {
+// The helpers above on AVX2 lanes (16 x 16 bits, 32 x 8 bits), for the CPUs that have it: GCC on x86-64,
+// compiled for AVX2 by #pragma GCC target and run only where the side model's dispatch runs its AVX2 code
+// (SideModelUsesAvx2: the CPU has it, MCMT_NO_AVX2 unset; one switch for both). The same integer operations
+// modulo 2^16 lane by lane, hence the same sums and the same binary image bit for bit
+// (test_detector_unit, CandidateSearch.Avx2ThresholdIsSse2); each hands its last pixels to the SSE2 code.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MCMT_SEARCH_HAS_AVX2 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+__m256i Load(const void* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
+void Store(void* at, __m256i v) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), v); }
+__m256i Widen(__m128i v) { return _mm256_cvtepu8_epi16(v); }  // 16 bytes to 16 x 16 bits
+
+void SlideColumnSums(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+  int x = 0;
+  auto slide = [&](__m256i add, __m256i sub, uint16_t* at) {
+    Store(at, _mm256_sub_epi16(_mm256_add_epi16(Load(at), add), sub));
+  };
+  for (; x + 32 <= w; x += 32) {  // 32 pixels of each row per load
+    const __m256i add = Load(in + x), sub = Load(out + x);
+    slide(Widen(_mm256_castsi256_si128(add)), Widen(_mm256_castsi256_si128(sub)), column + x);
+    slide(Widen(_mm256_extracti128_si256(add, 1)), Widen(_mm256_extracti128_si256(sub, 1)), column + x + 16);
+  }
+  for (; x + 16 <= w; x += 16)
+    slide(Widen(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in + x))),
+          Widen(_mm_loadu_si128(reinterpret_cast<const __m128i*>(out + x))), column + x);
+  mcmt::SlideColumnSums(in + x, out + x, w - x, column + x);
+}
+
+template <int R>
+void WindowSums(const uint16_t* column, int w, uint16_t* sums) {
+  int x = 0;
+  for (; x + 16 <= w; x += 16) {
+    __m256i sum = Load(column + x - R);
+    for (int i = 1 - R; i <= R; ++i) sum = _mm256_add_epi16(sum, Load(column + x + i));
+    Store(sums + x, sum);
+  }
+  mcmt::WindowSums<R>(column + x, w - x, sums + x);
+}
+
+void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
+  prefix[0] = 0;
+  int i = 0;
+  __m256i carry = _mm256_setzero_si256();  // every lane prefix[i]
+  for (; i + 16 <= n; i += 16) {
+    __m256i v = Load(column + i);  // the prefixes within each half of 8 lanes, then the low half's last
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 2));  // added to the high half
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 4));
+    v = _mm256_add_epi16(v, _mm256_slli_si256(v, 8));
+    const __m256i last = _mm256_shufflehi_epi16(v, _MM_SHUFFLE(3, 3, 3, 3));  // lanes 4-7 of each: 7
+    v = _mm256_add_epi16(v, _mm256_permute2x128_si256(_mm256_unpackhi_epi64(last, last), last, 0x08));
+    v = _mm256_add_epi16(v, carry);
+    Store(prefix + i + 1, v);
+    carry = _mm256_permute4x64_epi64(_mm256_shufflehi_epi16(v, _MM_SHUFFLE(3, 3, 3, 3)), 0xff);
+  }
+  for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
+}
+
+template <bool kPrefix>
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                           uint8_t below, uint8_t above, uint8_t* d) {
+  int x = 0;
+  const __m256i zero = _mm256_setzero_si256(), at16 = _mm256_set1_epi16(static_cast<int16_t>(at));
+  const __m256i area16 = _mm256_set1_epi16(static_cast<int16_t>(area)), limit = _mm256_set1_epi16(256);
+  const __m256i offset16 = _mm256_set1_epi16(static_cast<int16_t>(offset));
+  const __m256i below8 = _mm256_set1_epi8(static_cast<char>(below)),
+                above8 = _mm256_set1_epi8(static_cast<char>(above));
+  // Lanes set where x + at's window sum >= its threshold (pixels p, 16 bits).
+  auto is_below = [&](__m256i p, int at_x) {
+    const __m256i v = _mm256_min_epi16(_mm256_max_epi16(_mm256_sub_epi16(p, at16), zero), limit);
+    const __m256i t = _mm256_subs_epu16(_mm256_mullo_epi16(v, area16), offset16);
+    __m256i sum = Load(sums + at_x + (kPrefix ? k : 0));
+    if (kPrefix) sum = _mm256_sub_epi16(sum, Load(sums + at_x));
+    return _mm256_cmpeq_epi16(_mm256_subs_epu16(t, sum), zero);  // sum >= t
+  };
+  for (; x + 32 <= w; x += 32) {  // 32 pixels: one load, pack (lanes back in order) and store
+    const __m256i p = Load(s + x);
+    const __m256i mask =
+        _mm256_permute4x64_epi64(_mm256_packs_epi16(is_below(Widen(_mm256_castsi256_si128(p)), x),
+                                                    is_below(Widen(_mm256_extracti128_si256(p, 1)), x + 16)),
+                                 _MM_SHUFFLE(3, 1, 2, 0));
+    Store(d + x, _mm256_blendv_epi8(above8, below8, mask));
+  }
+  mcmt::CompareWithWindowSums<kPrefix>(s + x, sums + x, k, w - x, at, area, offset, below, above, d + x);
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#else
+#define MCMT_SEARCH_HAS_AVX2 0
+#endif
+
+// The helpers of ThresholdAgainstBoxMean: the SSE2 ones or the AVX2 ones (the same values), called directly
+// (the SSE2 ones inlined, as before there were AVX2 ones).
+struct Sse2BoxMean {
+  static void Slide(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+    SlideColumnSums(in, out, w, column);
+  }
+  static constexpr void (*kSumsOf[4])(const uint16_t*, int, uint16_t*) = {WindowSums<0>, WindowSums<1>,
+                                                                          WindowSums<2>, WindowSums<3>};
+  static void Prefix(const uint16_t* column, int n, uint16_t* prefix) { PrefixSums(column, n, prefix); }
+  template <bool kPrefix>
+  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                      uint8_t below, uint8_t above, uint8_t* d) {
+    CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  }
+};
+#if MCMT_SEARCH_HAS_AVX2
+struct Avx2BoxMean {
+  static void Slide(const uint8_t* in, const uint8_t* out, int w, uint16_t* column) {
+    avx2::SlideColumnSums(in, out, w, column);
+  }
+  static constexpr void (*kSumsOf[4])(const uint16_t*, int, uint16_t*) = {
+      avx2::WindowSums<0>, avx2::WindowSums<1>, avx2::WindowSums<2>, avx2::WindowSums<3>};
+  static void Prefix(const uint16_t* column, int n, uint16_t* prefix) { avx2::PrefixSums(column, n, prefix); }
+  template <bool kPrefix>
+  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
+                      uint8_t below, uint8_t above, uint8_t* d) {
+    avx2::CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  }
+};
+#endif
+
+// ThresholdAgainstBoxMean with the helpers of `Lanes` (Sse2BoxMean or Avx2BoxMean).
+template <typename Lanes>
+void ThresholdAgainstBoxMeanWith(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                                 bool isolated, cv::Mat& dst) {
   const int r = k / 2, w = src.cols, h = src.rows, area = k * k;
   if (w == 0 || h == 0) return;
   cv::Size whole(w, h);
@@ -204,22 +334,34 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
   };
   const int real = x_end - x_begin;
   for (int y = -r; y <= r; ++y) AddRowToColumnSums(row(y), real, column + x_begin);
-  using Sums = void (*)(const uint16_t*, int, uint16_t*);
-  static constexpr Sums kSumsOf[4] = {WindowSums<0>, WindowSums<1>, WindowSums<2>, WindowSums<3>};
   for (int y = 0; y < h; ++y) {
-    if (y > 0) SlideColumnSums(row(y + r), row(y - r - 1), real, column + x_begin);
+    if (y > 0) Lanes::Slide(row(y + r), row(y - r - 1), real, column + x_begin);
     for (int x = -r; x < x_begin; ++x) column[x] = column[x_begin];
     for (int x = x_end; x < w + r; ++x) column[x] = column[x_end - 1];
     const uint8_t* s = src.ptr<uint8_t>(y);
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
-      kSumsOf[r](column, w, sums.data());
-      CompareWithWindowSums<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::kSumsOf[r](column, w, sums.data());
+      Lanes::template Compare<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
     } else {  // sums[i]: the sum of column[-r .. i - r), x's window column[x - r .. x + r]: i = x + k, x
-      PrefixSums(padded.data(), w + 2 * r, sums.data());
-      CompareWithWindowSums<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::Prefix(padded.data(), w + 2 * r, sums.data());
+      Lanes::template Compare<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
     }
   }
+}
+
+// dst = `below` where src - mean <= at, else `above`, the mean that of the k x k window (k odd, 3 to 15)
+// rounded as cv::boxFilter rounds it (`offset`: BoxMeanThresholdOffset), with BORDER_REPLICATE: edges
+// replicated within src (`isolated`, BORDER_ISOLATED) or, for a view, its whole image's pixels beyond
+// the view and that image's edges replicated (cv::blur's default): 16-bit column sums slid down the
+// image, their window sums compared with a threshold linear in the pixel. dst must not be src.
+void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
+                             bool isolated, cv::Mat& dst) {
+#if MCMT_SEARCH_HAS_AVX2
+  if (SideModelUsesAvx2())  // where the side model runs its AVX2 code
+    return ThresholdAgainstBoxMeanWith<Avx2BoxMean>(src, k, at, offset, below, above, isolated, dst);
+#endif
+  ThresholdAgainstBoxMeanWith<Sse2BoxMean>(src, k, at, offset, below, above, isolated, dst);
 }
 
 // OpenCV's contour follower's marks in its 0/1 image (Suzuki and Abe's NBD 2 for every border in its list
@@ -343,6 +485,27 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   }
 }
 
+// The scalar part of WarpSegmentNearest (OpenCV's scalar code): pixels i .. bw - 1 of the segment whose
+// first pixel's map is X0, Y0, W0.
+[[gnu::always_inline]] inline void WarpSegmentNearestTail(const cv::Mat& src, double X0, double Y0, double W0,
+                                                          const double* M, int i, int bw, uint8_t border,
+                                                          uint8_t* d) {
+  const unsigned cols = static_cast<unsigned>(src.cols), rows = static_cast<unsigned>(src.rows);
+  for (; i < bw; ++i) {
+    double w = W0 + M[6] * i;
+    w = w != 0 ? 1. / w : 0;
+    const double fx =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
+    const double fy =
+        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
+    const int sx = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx)),
+              sy = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
+    d[i] = static_cast<unsigned>(sx) < cols && static_cast<unsigned>(sy) < rows
+               ? src.data[sy * src.step[0] + sx]
+               : border;
+  }
+}
+
 // One row segment of OpenCV 4.6's warpPerspective with INTER_NEAREST (its WarpPerspectiveInvoker: column
 // blocks of `bw` pixels from `x`): d[i] = the pixel of `src` nearest to M (x + i, y), `border` outside.
 // Each map position is computed as OpenCV computes it, bit for bit: (X0 + M0 i) times 1 / (W0 + M6 i)
@@ -389,18 +552,72 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
     sample(i, 16);
   }
 #endif
-  for (; i < bw; ++i) {
-    double w = W0 + M[6] * i;
-    w = w != 0 ? 1. / w : 0;
-    const double fx =
-        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (X0 + M[0] * i) * w));
-    const double fy =
-        std::max(static_cast<double>(INT_MIN), std::min(static_cast<double>(INT_MAX), (Y0 + M[3] * i) * w));
-    xy[0] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fx));
-    xy[1] = cv::saturate_cast<int16_t>(cv::saturate_cast<int>(fy));
-    sample(i, 1);
-  }
+  WarpSegmentNearestTail(src, X0, Y0, W0, M, i, bw, border, d);
 }
+
+#if MCMT_SEARCH_HAS_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+// WarpSegmentNearest on AVX2 lanes: each 16-pixel block's positions 4 at a time by the same double
+// operations lane by lane (the same operands in the same order: the same values, NaN and infinity
+// included), saturated to 16 bits as there; each pixel's address and whether it lies inside `src` 8 at a
+// time (32-bit products: `src` below 2^31 bytes, else the SSE2 code), then the pixels read one by one and
+// the border put in where outside. The rest of the segment: the SSE2 code's scalar part.
+void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int bw, uint8_t border,
+                        uint8_t* d) {
+  const double X0 = M[0] * x + M[1] * y + M[2], Y0 = M[3] * x + M[4] * y + M[5],
+               W0 = M[6] * x + M[7] * y + M[8];
+  const __m256d m0 = _mm256_set1_pd(M[0]), m3 = _mm256_set1_pd(M[3]), m6 = _mm256_set1_pd(M[6]);
+  const __m256d int_max = _mm256_set1_pd(static_cast<double>(INT_MAX)),
+                int_min = _mm256_set1_pd(static_cast<double>(INT_MIN));
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1), x0 = _mm256_set1_pd(X0),
+                y0 = _mm256_set1_pd(Y0), w0 = _mm256_set1_pd(W0), four = _mm256_set1_pd(4);
+  const __m256i cols = _mm256_set1_epi32(src.cols), rows = _mm256_set1_epi32(src.rows),
+                minus_one = _mm256_set1_epi32(-1), step = _mm256_set1_epi32(static_cast<int>(src.step[0]));
+  const __m128i border8 = _mm_set1_epi8(static_cast<char>(border));
+  const uint8_t* data = src.data;
+  alignas(32) int32_t at_pixel[16];
+  alignas(16) uint8_t pixels[16];
+  int i = 0;
+  for (; i <= bw - 16; i += 16) {
+    __m256d at = _mm256_set_pd(i + 3, i + 2, i + 1, i);
+    __m256i inside[2];
+    for (int h = 0; h < 2; ++h) {  // 8 pixels: x and y of 4 and 4, saturated to 16 bits, widened again
+      __m128i xs[2], ys[2];
+      for (int q = 0; q < 2; ++q, at = _mm256_add_pd(at, four)) {
+        __m256d w = _mm256_add_pd(_mm256_mul_pd(m6, at), w0);
+        w = _mm256_andnot_pd(_mm256_cmp_pd(w, zero, _CMP_EQ_OQ), _mm256_div_pd(one, w));
+        const __m256d fx = _mm256_max_pd(
+            int_min, _mm256_min_pd(int_max, _mm256_mul_pd(_mm256_add_pd(x0, _mm256_mul_pd(m0, at)), w)));
+        const __m256d fy = _mm256_max_pd(
+            int_min, _mm256_min_pd(int_max, _mm256_mul_pd(_mm256_add_pd(y0, _mm256_mul_pd(m3, at)), w)));
+        xs[q] = _mm256_cvtpd_epi32(fx);
+        ys[q] = _mm256_cvtpd_epi32(fy);
+      }
+      const __m256i sx = _mm256_cvtepi16_epi32(_mm_packs_epi32(xs[0], xs[1]));
+      const __m256i sy = _mm256_cvtepi16_epi32(_mm_packs_epi32(ys[0], ys[1]));
+      inside[h] =
+          _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(sx, minus_one), _mm256_cmpgt_epi32(cols, sx)),
+                           _mm256_and_si256(_mm256_cmpgt_epi32(sy, minus_one), _mm256_cmpgt_epi32(rows, sy)));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(at_pixel + 8 * h),
+                         _mm256_and_si256(inside[h], _mm256_add_epi32(_mm256_mullo_epi32(sy, step), sx)));
+    }
+    for (int k = 0; k < 16; ++k) pixels[k] = data[at_pixel[k]];  // (outside: pixel 0, replaced below)
+    const __m256i inside16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(inside[0], inside[1]), 0xd8);
+    const __m128i inside8 =
+        _mm_packs_epi16(_mm256_castsi256_si128(inside16), _mm256_extracti128_si256(inside16, 1));
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i*>(d + i),
+        _mm_blendv_epi8(border8, _mm_load_si128(reinterpret_cast<const __m128i*>(pixels)), inside8));
+  }
+  if (i < bw) mcmt::WarpSegmentNearestTail(src, X0, Y0, W0, M, i, bw, border, d);
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#endif
 
 // The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
 // the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
@@ -582,6 +799,17 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
   const uint8_t border = saturate_cast<uint8_t>(border_value[0]);
   // OpenCV's column blocks (a block's map starts from its first column); its row blocks do not matter.
   const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
+  // The AVX2 code where the side model runs its AVX2 code (the same pixels), else the SSE2 code.
+#if MCMT_SEARCH_HAS_AVX2
+  if (mcmt::SideModelUsesAvx2() &&
+      src.step[0] * static_cast<size_t>(src.rows) <= static_cast<size_t>(INT_MAX)) {
+    for (int y = 0; y < dst.rows; ++y)
+      for (int x = 0; x < dst.cols; x += block_width)
+        mcmt::avx2::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
+                                       dst.ptr<uint8_t>(y) + x);
+    return;
+  }
+#endif
   for (int y = 0; y < dst.rows; ++y)
     for (int x = 0; x < dst.cols; x += block_width)
       mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,

@@ -484,6 +484,123 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
+// The candidate search's threshold against the box mean (cv::adaptiveThreshold's override, isolated, and
+// ThresholdBelowBlur, views) gives the same binary image through its AVX2 code (32 pixels at a time, chosen
+// with the side model's: SideModelUsesAvx2) as through its SSE2 code: random images of widths around the
+// vector widths, noise, blurred noise and saturated blocks (the sums' largest values, wrapped prefixes),
+// every window from 3 to 15, random thresholds, isolated and as views of a larger image (at its edges and
+// inside). Skipped where the CPU (or the build: GCC on x86-64) has no AVX2.
+TEST(CandidateSearch, Avx2ThresholdIsSse2) {
+  if (!SideModelAvx2Available())
+    GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
+  const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
+  using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  const bool was = UseSideModelAvx2(true);
+  std::mt19937 rng(31);
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  int views = 0, differing_pixels = 0;
+  for (int trial = 0; trial < 160; ++trial) {
+    const int width = trial < 80 ? uniform(1, 80) : uniform(81, 700), height = uniform(1, 60);
+    cv::Mat image(height + 40, width + 60, CV_8U);
+    cv::randu(image, 0, 256);
+    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+    if (trial % 3 == 2)  // saturated blocks: window sums up to 255 k^2
+      for (int b = 0; b < 6; ++b)
+        cv::rectangle(
+            image,
+            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
+            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Rect rect(trial % 4 == 0 ? 0 : uniform(0, 60), trial % 4 == 1 ? 40 : uniform(0, 40), width,
+                        height);
+    const cv::Mat view = image(rect);
+    for (int k = 3; k <= 15; k += 2) {
+      const int at = uniform(0, 9) == 0 ? (uniform(0, 1) ? 256 : -256) : uniform(-30, 30);
+      SCOPED_TRACE(::testing::Message()
+                   << "trial " << trial << " " << rect << " window " << k << " at " << at);
+      cv::Mat with_avx2[2], with_sse2[2];
+      for (bool avx2 : {true, false}) {
+        UseSideModelAvx2(avx2);
+        cv::Mat* out = avx2 ? with_avx2 : with_sse2;
+        out[0].create(view.size(), CV_8U);
+        out[0].setTo(77);
+        ASSERT_TRUE(ThresholdBelowBlur(view, k, at, 200, 9, &out[0]));
+        program(view, out[1], 255, cv::ADAPTIVE_THRESH_MEAN_C,
+                at > 0 ? cv::THRESH_BINARY : cv::THRESH_BINARY_INV, k, at);
+      }
+      for (int i = 0; i < 2; ++i) {
+        differing_pixels += cv::countNonZero(with_avx2[i] != with_sse2[i]);
+        ASSERT_EQ(cv::norm(with_avx2[i], with_sse2[i], cv::NORM_INF), 0.0) << (i ? "isolated" : "view");
+      }
+      ++views;
+    }
+  }
+  UseSideModelAvx2(was);
+  EXPECT_EQ(views, 160 * 7);
+  EXPECT_EQ(differing_pixels, 0);
+}
+
+// The detector's cv::warpPerspective (INTER_NEAREST, constant border) gives the same pixels through its
+// AVX2 code (positions 4 at a time, addresses 8 at a time) as through its SSE2 code, and both OpenCV's:
+// random quads inside, across and beyond the image's edges, nearly degenerate and folded ones, widths
+// around 16 (the scalar part), a map whose denominator passes through 0. Skipped where the CPU (or the
+// build) has no AVX2.
+TEST(CandidateSearch, Avx2WarpIsSse2) {
+  if (!SideModelAvx2Available())
+    GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
+  const char* name =
+      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
+  using Function =
+      void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  const bool was = UseSideModelAvx2(true);
+  cv::Mat image(97, 131, CV_8U);
+  cv::randu(image, 0, 256);
+  const cv::Mat view = image(cv::Rect(5, 3, 120, 90));
+  cv::RNG rng(5);
+  int trials = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const cv::Size size(std::vector<int>{48, 16, 15, 17, 33, 64, 1, 200}[trial % 8], rng.uniform(1, 60));
+    std::vector<cv::Point2f> quad,
+        square = {
+            {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
+    const float cx = rng.uniform(-60.f, 190.f), cy = rng.uniform(-60.f, 160.f), r = rng.uniform(0.5f, 120.f);
+    for (int k = 0; k < 4; ++k) {
+      const float a = static_cast<float>(k * CV_PI / 2 + rng.uniform(-1.2, 1.2)),
+                  s = r * rng.uniform(0.1f, 2.f);
+      quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
+    }
+    cv::Mat m = cv::getPerspectiveTransform(quad, square);
+    if (trial % 5 == 2) m.convertTo(m, CV_32F);
+    const int flags = trial % 3 == 1 ? cv::INTER_NEAREST | cv::WARP_INVERSE_MAP : cv::INTER_NEAREST;
+    const cv::Scalar border = trial % 2 ? cv::Scalar(201.3) : cv::Scalar();
+    const cv::Mat& src = trial % 4 == 3 ? view : image;
+    SCOPED_TRACE(::testing::Message() << "trial " << trial << " size " << size << " matrix " << m);
+    cv::Mat with_avx2, with_sse2, theirs;
+    UseSideModelAvx2(true);
+    program(src, with_avx2, m, size, flags, cv::BORDER_CONSTANT, border);
+    UseSideModelAvx2(false);
+    program(src, with_sse2, m, size, flags, cv::BORDER_CONSTANT, border);
+    opencv(src, theirs, m, size, flags, cv::BORDER_CONSTANT, border);
+    ASSERT_EQ(cv::norm(with_avx2, with_sse2, cv::NORM_INF), 0.0);
+    ASSERT_EQ(cv::norm(with_avx2, theirs, cv::NORM_INF), 0.0);
+    ++trials;
+  }
+  const cv::Matx33d through_zero(1, 0.5, 3, 0.2, 1, 2, 0.05, 0, -1);  // denominator 0 at column 20
+  cv::Mat with_avx2, with_sse2;
+  UseSideModelAvx2(true);
+  program(image, with_avx2, through_zero, cv::Size(64, 20), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+          cv::BORDER_CONSTANT, cv::Scalar(9));
+  UseSideModelAvx2(false);
+  program(image, with_sse2, through_zero, cv::Size(64, 20), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+          cv::BORDER_CONSTANT, cv::Scalar(9));
+  UseSideModelAvx2(was);
+  EXPECT_EQ(cv::norm(with_avx2, with_sse2, cv::NORM_INF), 0.0);
+  EXPECT_EQ(trials, 400);
+}
+
 // The detector's cv::findContours without a hierarchy (detector/opencv_overrides.cc) is the one the program
 // calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
 // returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
