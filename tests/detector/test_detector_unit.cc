@@ -541,6 +541,24 @@ TEST(CandidateSearch, Avx2ThresholdIsSse2) {
   EXPECT_EQ(differing_pixels, 0);
 }
 
+// A warp test's random map (as the aruco module reads a candidate): a quad about a centre drawn in x x y
+// (px), each corner k at k 90 deg plus an angle drawn in +-jitter (rad) and at the radius drawn in `radius`
+// times a factor drawn in `factor`, onto the corners of a `size` square. The draws in this order.
+cv::Mat RandomWarpMap(cv::RNG* rng, cv::Size size, cv::Vec2f x, cv::Vec2f y, cv::Vec2f radius, double jitter,
+                      cv::Vec2f factor) {
+  const std::vector<cv::Point2f> square = {
+      {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
+  const float cx = rng->uniform(x[0], x[1]), cy = rng->uniform(y[0], y[1]),
+              r = rng->uniform(radius[0], radius[1]);
+  std::vector<cv::Point2f> quad;
+  for (int k = 0; k < 4; ++k) {
+    const float a = static_cast<float>(k * CV_PI / 2 + rng->uniform(-jitter, jitter)),
+                s = r * rng->uniform(factor[0], factor[1]);
+    quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
+  }
+  return cv::getPerspectiveTransform(quad, square);
+}
+
 // The detector's cv::warpPerspective (INTER_NEAREST, constant border) gives the same pixels through its
 // AVX2 code (positions 4 at a time, addresses 8 at a time) as through its SSE2 code, and both OpenCV's:
 // random quads inside, across and beyond the image's edges, nearly degenerate and folded ones, widths
@@ -563,16 +581,7 @@ TEST(CandidateSearch, Avx2WarpIsSse2) {
   int trials = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const cv::Size size(std::vector<int>{48, 16, 15, 17, 33, 64, 1, 200}[trial % 8], rng.uniform(1, 60));
-    std::vector<cv::Point2f> quad,
-        square = {
-            {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
-    const float cx = rng.uniform(-60.f, 190.f), cy = rng.uniform(-60.f, 160.f), r = rng.uniform(0.5f, 120.f);
-    for (int k = 0; k < 4; ++k) {
-      const float a = static_cast<float>(k * CV_PI / 2 + rng.uniform(-1.2, 1.2)),
-                  s = r * rng.uniform(0.1f, 2.f);
-      quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
-    }
-    cv::Mat m = cv::getPerspectiveTransform(quad, square);
+    cv::Mat m = RandomWarpMap(&rng, size, {-60.f, 190.f}, {-60.f, 160.f}, {0.5f, 120.f}, 1.2, {0.1f, 2.f});
     if (trial % 5 == 2) m.convertTo(m, CV_32F);
     const int flags = trial % 3 == 1 ? cv::INTER_NEAREST | cv::WARP_INVERSE_MAP : cv::INTER_NEAREST;
     const cv::Scalar border = trial % 2 ? cv::Scalar(201.3) : cv::Scalar();
@@ -775,16 +784,7 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
   cv::RNG rng(3);
   for (int trial = 0; trial < 60; ++trial) {
     const cv::Size size = std::vector<cv::Size>{{48, 48}, {24, 24}, {17, 5}, {300, 40}, {70, 33}}[trial % 5];
-    std::vector<cv::Point2f> quad,
-        square = {
-            {0, 0}, {size.width - 1.f, 0}, {size.width - 1.f, size.height - 1.f}, {0, size.height - 1.f}};
-    const float cx = rng.uniform(-10.f, 170.f), cy = rng.uniform(-10.f, 130.f), r = rng.uniform(5.f, 60.f);
-    for (int k = 0; k < 4; ++k) {
-      const float a = static_cast<float>(k * CV_PI / 2 + rng.uniform(-0.4, 0.4)),
-                  s = r * rng.uniform(0.6f, 1.4f);
-      quad.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
-    }
-    cv::Mat m = cv::getPerspectiveTransform(quad, square);
+    cv::Mat m = RandomWarpMap(&rng, size, {-10.f, 170.f}, {-10.f, 130.f}, {5.f, 60.f}, 0.4, {0.6f, 1.4f});
     if (trial % 7 == 3) m.convertTo(m, CV_32F);
     const int flags = trial % 4 == 1 ? cv::INTER_NEAREST | cv::WARP_INVERSE_MAP : cv::INTER_NEAREST;
     if (flags & cv::WARP_INVERSE_MAP) m = m.inv();
