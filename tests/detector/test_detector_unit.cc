@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -1032,7 +1033,17 @@ TEST_F(SourceTest, MissingSourceNamesCameraAndPath) {
 // 2.5e-16 (exp: measured 1.8e-16, 1.15 ulp) and 4e-16 (log: measured 3.3e-16, 2 ulp) over their ranges and
 // the side model's (the Gaussians' -z^2 / 2 and z h - h^2 / 2 within [-60, 1]; the gamma encoding's log of
 // f / 255 within [0.5 / 255, 1]). (std::exp itself: 0.51 ulp.)
+// The long double references' own relative error: none that matters where long double is x87's 80 bits,
+// but valgrind (test_detector_memcheck) computes long double with 64-bit doubles, and expl / logl / powl are
+// then only about as exact as the functions they check (ExpInline measured 3.1e-16 there): 2 DBL_EPSILON
+// more in every bound.
+double LongDoubleReferenceSlack() {
+  volatile long double one = 1.0L;
+  return one + LDBL_EPSILON != one ? 0.0 : 2 * DBL_EPSILON;
+}
+
 TEST(SideModel, ExpInlineAndLogInlineAreWithinTheirBounds) {
+  const double slack = LongDoubleReferenceSlack();
   std::mt19937_64 rng(15);
   double exp_worst = 0, log_worst = 0;
   for (const auto& range : {std::pair<double, double>(-700, 700), {-60, 1}, {-1e-3, 1e-3}}) {
@@ -1052,8 +1063,8 @@ TEST(SideModel, ExpInlineAndLogInlineAreWithinTheirBounds) {
       log_worst = std::max(log_worst, static_cast<double>(fabsl(LogInline(x) - exact) / fabsl(exact)));
     }
   }
-  EXPECT_LT(exp_worst, 2.5e-16);
-  EXPECT_LT(log_worst, 4e-16);
+  EXPECT_LT(exp_worst, 2.5e-16 + slack);
+  EXPECT_LT(log_worst, 4e-16 + slack);
   // Outside their ranges: the library's values.
   for (double x : {-800.0, 710.0, -700.0, 700.0, std::numeric_limits<double>::infinity(),
                    -std::numeric_limits<double>::infinity()})
@@ -1069,6 +1080,7 @@ TEST(SideModel, ExpInlineAndLogInlineAreWithinTheirBounds) {
 // PowInline (detector/exp_log.h) against long double powl: relative error below 4.5e-16 |y log x| + 2.5e-16
 // for the gamma encodings' x within [0.5 / 255, 1] and y within [0.2, 5]; exactly x at y = 1, 1 at x = 1.
 TEST(SideModel, PowInlineIsWithinItsBound) {
+  const double slack = LongDoubleReferenceSlack();
   std::mt19937_64 rng(15);
   std::uniform_real_distribution<double> log_x_of(std::log(0.5 / 255), 0.0), y_of(0.2, 5.0);
   double worst = 0;
@@ -1076,7 +1088,7 @@ TEST(SideModel, PowInlineIsWithinItsBound) {
     const double x = std::exp(log_x_of(rng)), y = y_of(rng);
     const long double exact = powl(static_cast<long double>(x), static_cast<long double>(y));
     const double relative = static_cast<double>(fabsl(PowInline(x, y) - exact) / exact);
-    ASSERT_LT(relative, 4.5e-16 * std::abs(y * std::log(x)) + 2.5e-16) << x << " " << y;
+    ASSERT_LT(relative, 4.5e-16 * std::abs(y * std::log(x)) + 2.5e-16 + slack) << x << " " << y;
     worst = std::max(worst, relative);
     EXPECT_EQ(PowInline(x, 1.0), x);
   }
