@@ -447,15 +447,26 @@ Definitions<Function> DefinitionsOf(const char* name) {
   return {reinterpret_cast<Function>(program), reinterpret_cast<Function>(library)};
 }
 
+// The two overridden functions that several tests look up.
+using AdaptiveThresholdFunction = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
+Definitions<AdaptiveThresholdFunction> AdaptiveThresholdDefinitions() {
+  return DefinitionsOf<AdaptiveThresholdFunction>(
+      "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid");
+}
+using WarpPerspectiveFunction = void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int,
+                                         const cv::Scalar&);
+Definitions<WarpPerspectiveFunction> WarpPerspectiveDefinitions() {
+  return DefinitionsOf<WarpPerspectiveFunction>(
+      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE");
+}
+
 // The detector's cv::adaptiveThreshold (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's search included, and its binary images are OpenCV's own bit for bit: both threshold types,
 // fractional and negative offsets, the windows whose means it rounds as cv::boxFilter does (3 to 15 px)
 // and larger ones up to larger than the image, a view into a larger image and the image thresholded in
 // place; other methods go to OpenCV's.
 TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
-  const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
-  using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
-  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  const auto [program, opencv] = AdaptiveThresholdDefinitions();
   ASSERT_NE(program, nullptr);
   cv::Mat large(260, 341, CV_8U);
   cv::randu(large, 0, 256);
@@ -494,9 +505,7 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
 TEST(CandidateSearch, Avx2ThresholdIsSse2) {
   if (!SideModelAvx2Available())
     GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
-  const char* name = "_ZN2cv17adaptiveThresholdERKNS_11_InputArrayERKNS_12_OutputArrayEdiiid";
-  using Function = void (*)(cv::InputArray, cv::OutputArray, double, int, int, int, double);
-  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  const auto [program, opencv] = AdaptiveThresholdDefinitions();
   ASSERT_NE(program, nullptr);
   const bool was = UseSideModelAvx2(true);
   std::mt19937 rng(31);
@@ -568,11 +577,7 @@ cv::Mat RandomWarpMap(cv::RNG* rng, cv::Size size, cv::Vec2f x, cv::Vec2f y, cv:
 TEST(CandidateSearch, Avx2WarpIsSse2) {
   if (!SideModelAvx2Available())
     GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
-  const char* name =
-      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
-  using Function =
-      void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
-  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  const auto [program, opencv] = WarpPerspectiveDefinitions();
   ASSERT_NE(program, nullptr);
   const bool was = UseSideModelAvx2(true);
   cv::Mat image(97, 131, CV_8U);
@@ -774,11 +779,7 @@ TEST(CandidateSearch, ArucoContourFloorLeavesOutOnlyWhatArucoDrops) {
 // widths that are not multiples of 16, the inverse-map flag, a float matrix, a map through a zero
 // denominator, a fractional border value; other interpolations go to OpenCV's.
 TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
-  const char* name =
-      "_ZN2cv15warpPerspectiveERKNS_11_InputArrayERKNS_12_OutputArrayES2_NS_5Size_IiEEiiRKNS_7Scalar_IdEE";
-  using Function =
-      void (*)(cv::InputArray, cv::OutputArray, cv::InputArray, cv::Size, int, int, const cv::Scalar&);
-  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  const auto [program, opencv] = WarpPerspectiveDefinitions();
   ASSERT_NE(program, nullptr);
   cv::Mat image(120, 160, CV_8U);
   cv::randu(image, 0, 256);
