@@ -28,7 +28,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "detector/side_model.h"  // SideModelUsesAvx2: the one run-time choice of the AVX2 code
+#include "detector/cpu.h"  // DetectorUsesAvx2: the one run-time choice of the AVX2 code
 
 namespace mcmt {
 namespace {
@@ -187,7 +187,7 @@ template <bool kPrefix>
 
 // The helpers above on AVX2 lanes (16 x 16 bits, 32 x 8 bits), for the CPUs that have it: GCC on x86-64,
 // compiled for AVX2 by #pragma GCC target and run only where the side model's dispatch runs its AVX2 code
-// (SideModelUsesAvx2: the CPU has it, MCMT_NO_AVX2 unset; one switch for both). The same integer operations
+// (DetectorUsesAvx2: the CPU has it, MCMT_NO_AVX2 unset; one switch for both). The same integer operations
 // modulo 2^16 lane by lane, hence the same sums and the same binary image bit for bit
 // (test_detector_unit, CandidateSearch.Avx2ThresholdIsSse2); each hands its last pixels to the SSE2 code.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
@@ -358,7 +358,7 @@ void ThresholdAgainstBoxMeanWith(const cv::Mat& src, int k, int at, int offset, 
 void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint8_t below, uint8_t above,
                              bool isolated, cv::Mat& dst) {
 #if MCMT_SEARCH_HAS_AVX2
-  if (SideModelUsesAvx2())  // where the side model runs its AVX2 code
+  if (DetectorUsesAvx2())  // where the side model runs its AVX2 code
     return ThresholdAgainstBoxMeanWith<Avx2BoxMean>(src, k, at, offset, below, above, isolated, dst);
 #endif
   ThresholdAgainstBoxMeanWith<Sse2BoxMean>(src, k, at, offset, below, above, isolated, dst);
@@ -801,7 +801,7 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
   const int block_width = std::min(32 * 32 / std::min(16, dst.rows), dst.cols);
   // The AVX2 code where the side model runs its AVX2 code (the same pixels), else the SSE2 code.
 #if MCMT_SEARCH_HAS_AVX2
-  if (mcmt::SideModelUsesAvx2() &&
+  if (mcmt::DetectorUsesAvx2() &&
       src.step[0] * static_cast<size_t>(src.rows) <= static_cast<size_t>(INT_MAX)) {
     for (int y = 0; y < dst.rows; ++y)
       for (int x = 0; x < dst.cols; x += block_width)

@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
@@ -18,6 +17,8 @@
 #else
 #define MCMT_SIDE_HAS_AVX2 0
 #endif
+
+#include "detector/cpu.h"
 
 namespace mcmt {
 
@@ -245,7 +246,7 @@ void AddPenalty(double penalty, const double* penalty_grad, Normal* jtj, Vector*
 }
 
 // The side model's evaluation (side_model_lanes.inc) as SSE2 code, and on x86-64 with GCC also as AVX2
-// code chosen at run time (SideModelUsesAvx2): the same values to the bit.
+// code chosen at run time (DetectorUsesAvx2): the same values to the bit.
 #define MCMT_SIDE_AVX2 0
 namespace sse2 {
 #include "detector/side_model_lanes.inc"
@@ -262,40 +263,15 @@ namespace avx2 {
 #pragma GCC pop_options
 #endif
 
-// Whether the AVX2 code runs: the CPU has it and MCMT_NO_AVX2 is unset or "0" (read once), or as the test
-// hook UseSideModelAvx2 set it.
-std::atomic<bool>& Avx2Chosen() {
-  static std::atomic<bool> chosen{
-      SideModelAvx2Available() &&
-      !(std::getenv("MCMT_NO_AVX2") && std::strcmp(std::getenv("MCMT_NO_AVX2"), "0"))};
-  return chosen;
-}
-
 double Evaluate(const SideProfiles& s, const double* p, bool single, double margin_weight, Normal* jtj,
                 Vector* jtr) {
 #if MCMT_SIDE_HAS_AVX2
-  if (Avx2Chosen().load(std::memory_order_relaxed))
-    return avx2::Evaluate(s, p, single, margin_weight, jtj, jtr);
+  if (DetectorUsesAvx2()) return avx2::Evaluate(s, p, single, margin_weight, jtj, jtr);
 #endif
   return sse2::Evaluate(s, p, single, margin_weight, jtj, jtr);
 }
 
 }  // namespace
-
-bool SideModelAvx2Available() {
-#if MCMT_SIDE_HAS_AVX2
-  __builtin_cpu_init();  // (where called before the constructors that run it: static initialisers)
-  return __builtin_cpu_supports("avx2");  // (libgcc: also that the OS saves the AVX registers)
-#else
-  return false;
-#endif
-}
-
-bool SideModelUsesAvx2() { return Avx2Chosen().load(std::memory_order_relaxed); }
-
-bool UseSideModelAvx2(bool use) {
-  return Avx2Chosen().exchange(use && SideModelAvx2Available(), std::memory_order_relaxed);
-}
 
 double EvaluateSideModel(const SideProfiles& s, const std::array<double, 8>& p, bool single,
                          double margin_weight, Eigen::Matrix<double, 8, 8>* jtj,
@@ -306,7 +282,7 @@ double EvaluateSideModel(const SideProfiles& s, const std::array<double, 8>& p, 
 void FillBoundary(const SideProfiles& s, double bound, double inv_sigma, double step_ratio, double* zs,
                   double* big_phi, double* small_phi) {
 #if MCMT_SIDE_HAS_AVX2
-  if (SideModelUsesAvx2())
+  if (DetectorUsesAvx2())
     return avx2::FillBoundaryLanes(s, bound, inv_sigma, step_ratio, zs, big_phi, small_phi);
 #endif
   sse2::FillBoundaryLanes(s, bound, inv_sigma, step_ratio, zs, big_phi, small_phi);

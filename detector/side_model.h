@@ -242,15 +242,7 @@ inline void PhiAndDensityOfTwo(__m128d z, __m128d gauss, double* big, double* sm
 }
 #endif
 
-// The side model's evaluation (FitSideProfiles' model, Jacobian and normal equations) runs AVX2 code (four
-// bins at a time) where the CPU has AVX2, its SSE2 code (two) elsewhere, chosen at run time: the same
-// values to the bit, so the corners do not depend on the machine (SideModel.Avx2IsSse2). MCMT_NO_AVX2 set
-// (and not "0") when it is first used: the SSE2 code.
-bool SideModelAvx2Available();  // the CPU has AVX2 (and this build the AVX2 code: GCC on x86-64)
-bool SideModelUsesAvx2();       // the AVX2 code runs
-// Test hook: the AVX2 code (where available) or the SSE2 code from now on; returns SideModelUsesAvx2()
-// before.
-bool UseSideModelAvx2(bool use);
+// The side model's evaluation runs AVX2 code (four bins at a time) where the CPU has it: detector/cpu.h.
 
 // Phi, phi and z of the boundary at `bound` at every bin of `s` (z = (bound - u) / sigma, `inv_sigma`:
 // 1 / sigma, `step_ratio`: exp(-(du / sigma)^2)) into zs, big_phi and small_phi (s.bins each). The side

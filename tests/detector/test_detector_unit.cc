@@ -18,6 +18,7 @@
 #include "core/dictionary.h"
 #include "core/options.h"
 #include "detector/candidates.h"
+#include "detector/cpu.h"
 #include "detector/detector.h"
 #include "detector/node.h"
 #include "detector/opencv_overrides.h"
@@ -498,16 +499,16 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
 
 // The candidate search's threshold against the box mean (cv::adaptiveThreshold's override, isolated, and
 // ThresholdBelowBlur, views) gives the same binary image through its AVX2 code (32 pixels at a time, chosen
-// with the side model's: SideModelUsesAvx2) as through its SSE2 code: random images of widths around the
+// with the side model's: DetectorUsesAvx2) as through its SSE2 code: random images of widths around the
 // vector widths, noise, blurred noise and saturated blocks (the sums' largest values, wrapped prefixes),
 // every window from 3 to 15, random thresholds, isolated and as views of a larger image (at its edges and
 // inside). Skipped where the CPU (or the build: GCC on x86-64) has no AVX2.
 TEST(CandidateSearch, Avx2ThresholdIsSse2) {
-  if (!SideModelAvx2Available())
+  if (!DetectorAvx2Available())
     GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
   const auto [program, opencv] = AdaptiveThresholdDefinitions();
   ASSERT_NE(program, nullptr);
-  const bool was = UseSideModelAvx2(true);
+  const bool was = UseDetectorAvx2(true);
   std::mt19937 rng(31);
   auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
   int views = 0, differing_pixels = 0;
@@ -531,7 +532,7 @@ TEST(CandidateSearch, Avx2ThresholdIsSse2) {
                    << "trial " << trial << " " << rect << " window " << k << " at " << at);
       cv::Mat with_avx2[2], with_sse2[2];
       for (bool avx2 : {true, false}) {
-        UseSideModelAvx2(avx2);
+        UseDetectorAvx2(avx2);
         cv::Mat* out = avx2 ? with_avx2 : with_sse2;
         out[0].create(view.size(), CV_8U);
         out[0].setTo(77);
@@ -546,7 +547,7 @@ TEST(CandidateSearch, Avx2ThresholdIsSse2) {
       ++views;
     }
   }
-  UseSideModelAvx2(was);
+  UseDetectorAvx2(was);
   EXPECT_EQ(views, 160 * 7);
   EXPECT_EQ(differing_pixels, 0);
 }
@@ -575,11 +576,11 @@ cv::Mat RandomWarpMap(cv::RNG* rng, cv::Size size, cv::Vec2f x, cv::Vec2f y, cv:
 // around 16 (the scalar part), a map whose denominator passes through 0. Skipped where the CPU (or the
 // build) has no AVX2.
 TEST(CandidateSearch, Avx2WarpIsSse2) {
-  if (!SideModelAvx2Available())
+  if (!DetectorAvx2Available())
     GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
   const auto [program, opencv] = WarpPerspectiveDefinitions();
   ASSERT_NE(program, nullptr);
-  const bool was = UseSideModelAvx2(true);
+  const bool was = UseDetectorAvx2(true);
   cv::Mat image(97, 131, CV_8U);
   cv::randu(image, 0, 256);
   const cv::Mat view = image(cv::Rect(5, 3, 120, 90));
@@ -594,9 +595,9 @@ TEST(CandidateSearch, Avx2WarpIsSse2) {
     const cv::Mat& src = trial % 4 == 3 ? view : image;
     SCOPED_TRACE(::testing::Message() << "trial " << trial << " size " << size << " matrix " << m);
     cv::Mat with_avx2, with_sse2, theirs;
-    UseSideModelAvx2(true);
+    UseDetectorAvx2(true);
     program(src, with_avx2, m, size, flags, cv::BORDER_CONSTANT, border);
-    UseSideModelAvx2(false);
+    UseDetectorAvx2(false);
     program(src, with_sse2, m, size, flags, cv::BORDER_CONSTANT, border);
     opencv(src, theirs, m, size, flags, cv::BORDER_CONSTANT, border);
     ASSERT_EQ(cv::norm(with_avx2, with_sse2, cv::NORM_INF), 0.0);
@@ -605,13 +606,13 @@ TEST(CandidateSearch, Avx2WarpIsSse2) {
   }
   const cv::Matx33d through_zero(1, 0.5, 3, 0.2, 1, 2, 0.05, 0, -1);  // denominator 0 at column 20
   cv::Mat with_avx2, with_sse2;
-  UseSideModelAvx2(true);
+  UseDetectorAvx2(true);
   program(image, with_avx2, through_zero, cv::Size(64, 20), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
           cv::BORDER_CONSTANT, cv::Scalar(9));
-  UseSideModelAvx2(false);
+  UseDetectorAvx2(false);
   program(image, with_sse2, through_zero, cv::Size(64, 20), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
           cv::BORDER_CONSTANT, cv::Scalar(9));
-  UseSideModelAvx2(was);
+  UseDetectorAvx2(was);
   EXPECT_EQ(cv::norm(with_avx2, with_sse2, cv::NORM_INF), 0.0);
   EXPECT_EQ(trials, 400);
 }
@@ -1481,10 +1482,10 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
     }
   };
   // Through the SSE2 code and, where the CPU has it, the AVX2 code (four bins at a time).
-  const bool was = SideModelUsesAvx2();
+  const bool was = DetectorUsesAvx2();
   for (const bool avx2 : {false, true}) {
-    if (avx2 && !SideModelAvx2Available()) continue;
-    UseSideModelAvx2(avx2);
+    if (avx2 && !DetectorAvx2Available()) continue;
+    UseDetectorAvx2(avx2);
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     int cases = 0;
@@ -1509,7 +1510,7 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
     }
     EXPECT_EQ(cases, 2400);
   }
-  UseSideModelAvx2(was);
+  UseDetectorAvx2(was);
 #ifdef __SSE2__
   const double inf = std::numeric_limits<double>::infinity();
   const double zs[] = {0.0, -0.0, NAN, inf, -inf, 1e-300, -1e-300, 0.3, -0.3, 6.99, -6.99, 40.0, -40.0};
@@ -1535,10 +1536,10 @@ TEST(SideModel, FillBoundaryIsBinByBins) {
 // parameter compared by its bits; FillBoundary through both. Skipped where the CPU (or the build: GCC on
 // x86-64) has no AVX2.
 TEST(SideModel, Avx2IsSse2) {
-  if (!SideModelAvx2Available())
+  if (!DetectorAvx2Available())
     GTEST_SKIP() << "no AVX2 on this CPU or in this build: only the SSE2 code runs";
-  const bool was = UseSideModelAvx2(true);
-  ASSERT_TRUE(SideModelUsesAvx2());
+  const bool was = UseDetectorAvx2(true);
+  ASSERT_TRUE(DetectorUsesAvx2());
   std::mt19937_64 rng(23);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const auto phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
@@ -1588,7 +1589,7 @@ TEST(SideModel, Avx2IsSse2) {
     SideFit fits[2];
     bool ok[2];
     for (int path = 0; path < 2; ++path) {
-      UseSideModelAvx2(path == 0);
+      UseDetectorAvx2(path == 0);
       if (trial % 7 == 3)
         fits[path].warm = true,
         fits[path].params = {0.1, sigma, border, code, paper, surround, std::max(margin, 0.3 * cell), gamma};
@@ -1619,7 +1620,7 @@ TEST(SideModel, Avx2IsSse2) {
       Eigen::Matrix<double, 8, 8> jtj[2];
       Eigen::Matrix<double, 8, 1> jtr[2];
       for (int path = 0; path < 2; ++path) {
-        UseSideModelAvx2(path == 0);
+        UseDetectorAvx2(path == 0);
         costs[path][0] = EvaluateSideModel(s, p, single, weight, nullptr, nullptr);
         costs[path][1] = EvaluateSideModel(s, p, single, weight, &jtj[path], &jtr[path]);
       }
@@ -1633,7 +1634,7 @@ TEST(SideModel, Avx2IsSse2) {
     const double bound = s.u0 - 5.0 + (s.OuterU() - s.u0 + 10.0) * uniform(rng), inv_sigma = 1.0 / sigma;
     std::vector<double> out[2][3];
     for (int path = 0; path < 2; ++path) {
-      UseSideModelAvx2(path == 0);
+      UseDetectorAvx2(path == 0);
       for (auto& v : out[path]) v.assign(bins, -1.0);
       FillBoundary(s, bound, inv_sigma, std::exp(-du * du * inv_sigma * inv_sigma), out[path][0].data(),
                    out[path][1].data(), out[path][2].data());
@@ -1642,7 +1643,7 @@ TEST(SideModel, Avx2IsSse2) {
       ASSERT_EQ(std::memcmp(out[0][k].data(), out[1][k].data(), bins * sizeof(double)), 0)
           << "trial " << trial;
   }
-  UseSideModelAvx2(was);
+  UseDetectorAvx2(was);
   std::printf(
       "%d of 300 sides fitted (%d with gamma fitted), %d rays with row steps, %d finite evaluations\n",
       fitted, gamma_fits, stepped, evaluations);
