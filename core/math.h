@@ -18,13 +18,17 @@ inline Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }
 
 // The upper median (element n/2 of the sorted values; no averaging for even n), `empty` when there is
-// none.
+// none. MedianInPlace reorders *values instead of taking a copy (no allocation: hot loops keep a buffer).
+template <typename T>
+double MedianInPlace(std::vector<T>* values, double empty = 0.0) {
+  if (values->empty()) return empty;
+  const auto mid = values->begin() + values->size() / 2;
+  std::nth_element(values->begin(), mid, values->end());
+  return static_cast<double>(*mid);
+}
 template <typename T>
 double Median(std::vector<T> values, double empty = 0.0) {
-  if (values.empty()) return empty;
-  const auto mid = values.begin() + values.size() / 2;
-  std::nth_element(values.begin(), mid, values.end());
-  return static_cast<double>(*mid);
+  return MedianInPlace(&values, empty);
 }
 
 // world_from_cam of a camera at `position` looking at `target` in a world with z up, OpenCV camera axes

@@ -244,21 +244,6 @@ inline int SampleLineInto(const cv::Mat& gray, int n, const Eigen::Vector2d& ori
                     [&](int j, const float* v, int count) { std::copy(v, v + count, out + j); });
 }
 
-// sum[j] += values[j], count[j] += 1 for j < n (SSE2: two at a time, each the same addition).
-inline void AddSamples(const float* values, int n, double* sum, double* count) {
-  int j = 0;
-#ifdef __SSE2__
-  const __m128d one = _mm_set1_pd(1.0);
-  for (; j + 1 < n; j += 2) {
-    const __m128d v =
-        _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(values + j))));
-    _mm_storeu_pd(sum + j, _mm_add_pd(_mm_loadu_pd(sum + j), v));
-    _mm_storeu_pd(count + j, _mm_add_pd(_mm_loadu_pd(count + j), one));
-  }
-#endif
-  for (; j < n; ++j) sum[j] += values[j], count[j] += 1.0;
-}
-
 // sum[j] += values[j] for j < n (SSE2: two at a time, each the same addition).
 inline void AddToSums(const float* values, int n, double* sum) {
   int j = 0;
@@ -270,6 +255,12 @@ inline void AddToSums(const float* values, int n, double* sum) {
   }
 #endif
   for (; j < n; ++j) sum[j] += values[j];
+}
+
+// sum[j] += values[j], count[j] += 1 for j < n.
+inline void AddSamples(const float* values, int n, double* sum, double* count) {
+  AddToSums(values, n, sum);
+  for (int j = 0; j < n; ++j) count[j] += 1.0;
 }
 
 // Raw image pixels <-> ideal (undistorted) pixels of the same camera; identity without a camera.
@@ -290,15 +281,6 @@ PixelMap MapOf(const CameraModel* camera) {
   PixelMap map;
   if (camera && camera->model != DistortionModel::kNone && !camera->distortion.empty()) map.camera = camera;
   return map;
-}
-
-// The upper median of *values (Median's: element n/2 of the sorted values, 0 for none), reordering
-// them in place (Median takes a copy: an allocation per call).
-double UpperMedianInPlace(std::vector<float>* values) {
-  if (values->empty()) return 0.0;
-  const auto mid = values->begin() + values->size() / 2;
-  std::nth_element(values->begin(), mid, values->end());
-  return static_cast<double>(*mid);
 }
 
 // A line n . x = c with |n| = 1, fitted by total least squares with outlier rejection.
@@ -333,7 +315,7 @@ bool FitLine(const std::vector<Eigen::Vector2d>& line_points, Line* line) {
     for (size_t i = 0; i < points.size(); ++i)
       abs_res[i] = static_cast<float>(std::abs(line->n.dot(points[i]) - line->c));
     res_copy.assign(abs_res.begin(), abs_res.end());
-    const double threshold = std::max(0.25, 3.0 * 1.4826 * UpperMedianInPlace(&res_copy));
+    const double threshold = std::max(0.25, 3.0 * 1.4826 * MedianInPlace(&res_copy));
     kept.clear();
     for (size_t i = 0; i < points.size(); ++i)
       if (abs_res[i] <= threshold) kept.push_back(points[i]);
@@ -1282,7 +1264,7 @@ bool CrossingLine(const SideSamples& s, const PixelMap& map, Line* line, double*
     inside.push_back(s.profiles[static_cast<size_t>(i) * m]);
     outside.push_back(s.profiles[static_cast<size_t>(i) * m + m - 1]);
   }
-  *level_in = UpperMedianInPlace(&inside), *level_out = UpperMedianInPlace(&outside);
+  *level_in = MedianInPlace(&inside), *level_out = MedianInPlace(&outside);
   if (!(std::abs(*level_out - *level_in) >= 8.0)) return false;
   const float mid = static_cast<float>(0.5 * (*level_in + *level_out));
   const float sign = *level_out > *level_in ? 1.f : -1.f;  // (v - mid) * sign goes - to + outward
