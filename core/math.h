@@ -1,5 +1,5 @@
 // Small pieces of math used across components, each written once: the cross-product matrix, the median,
-// and a camera pose looking at a point.
+// the principal direction of a 2-D scatter, and a camera pose looking at a point.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,6 +30,14 @@ template <typename T>
 double Median(std::vector<T> values, double empty = 0.0) {
   return MedianInPlace(&values, empty);
 }
+
+// The unit direction of largest spread of a 2-D scatter [[sxx, sxy], [sxy, syy]] (its eigenvector of
+// the larger eigenvalue), with x > 0, or x = 0 and y > 0; (1, 0) where the scatter is isotropic. From
+// the closed form lambda = (sxx + syy) / 2 + sqrt(((sxx - syy) / 2)^2 + sxy^2), in whichever of its two
+// forms has no cancellation: (lambda - syy, sxy) or (sxy, lambda - sxx). Only +, -, *, / and sqrt, which
+// IEEE 754 rounds correctly, so the result has the same bits on every machine (atan2, sin and cos come
+// from the C library, whose last bits differ between CPUs and versions).
+Eigen::Vector2d PrincipalDirection2d(double sxx, double sxy, double syy);
 
 // world_from_cam of a camera at `position` looking at `target` in a world with z up, OpenCV camera axes
 // (z forward, x right, y down, so the image's x axis is horizontal). Looking straight up or down, x is the
