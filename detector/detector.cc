@@ -305,9 +305,9 @@ bool FitLine(const std::vector<Eigen::Vector2d>& line_points, Line* line) {
       const Eigen::Vector2d d = p - mean;
       sxx += d.x() * d.x(), sxy += d.x() * d.y(), syy += d.y() * d.y();
     }
-    // Direction of the largest spread: angle 0.5 * atan2(2 sxy, sxx - syy); the normal is perpendicular.
-    const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
-    line->n = Eigen::Vector2d(-std::sin(angle), std::cos(angle));
+    // The normal is perpendicular to the direction of the largest spread.
+    const Eigen::Vector2d direction = PrincipalDirection2d(sxx, sxy, syy);
+    line->n = Eigen::Vector2d(-direction.y(), direction.x());
     line->c = line->n.dot(mean);
     if (round == 2) break;
     // Residuals; drop those beyond 3 robust sigmas (at least 0.25 px).
