@@ -1,11 +1,11 @@
-// mcmt's own definitions of four OpenCV functions that cv::aruco::detectMarkers calls:
-// cv::adaptiveThreshold, cv::findContours, cv::warpPerspective and cv::countNonZero. The aruco module (a
-// shared library) calls them through the dynamic linker, which finds a program's definition before the
-// library's, so these take OpenCV's place for every caller. Each computes exactly what OpenCV's does, bit
-// for bit, for the cases the search uses (8-bit images, the modes detectMarkers passes), only cheaper;
-// every other case goes to OpenCV's own definition (LibraryDefinition: the next one, dlsym(RTLD_NEXT)).
-// They are checked against OpenCV's own at run time by test_detector_unit's CandidateSearch.*IsOpenCVs
-// tests, which also check that calls reach these definitions.
+// mcmt's own definitions of OpenCV functions that cv::aruco::detectMarkers calls:
+// cv::adaptiveThreshold, cv::findContours, cv::approxPolyDP, cv::warpPerspective and cv::countNonZero. The
+// aruco module (a shared library) calls them through the dynamic linker, which finds a program's definition
+// before the library's, so these take OpenCV's place for every caller. Each computes exactly what OpenCV's
+// does, bit for bit, for the cases the search uses (8-bit images, the modes detectMarkers passes), only
+// cheaper; every other case goes to OpenCV's own definition (LibraryDefinition: the next one,
+// dlsym(RTLD_NEXT)). They are checked against OpenCV's own at run time by test_detector_unit's
+// CandidateSearch.*IsOpenCVs tests, which also check that calls reach these definitions.
 //
 // mcmt_detector is a static archive, and the linker takes an archive member only for a symbol something
 // already references: nothing calls these by name, so MarkerDetector calls LinkOpenCvOverrides() (below)
@@ -25,6 +25,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <opencv2/aruco/dictionary.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -619,6 +621,137 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
 #pragma GCC pop_options
 #endif
 
+// The Douglas-Peucker approximation of OpenCV 4.6's cv::approxPolyDP (approx.cpp, approxPolyDP_) for int
+// points, step for step: for a closed curve (or an open one whose ends coincide) the two points found
+// farthest apart by three (one) passes from point 0 split it, then slices are split at their farthest point
+// (cross product with the chord) until within `epsilon`, last pushed first; then one pass drops the points
+// on [almost] straight lines. Every distance is exact in double (integer products below 2^53), so the
+// comparisons are OpenCV's. Writes at most n points to `out` and returns their number. `stack` is scratch.
+int ApproximatePolygon(const cv::Point* src, int n, bool closed, double epsilon,
+                       std::vector<cv::Range>* stack, cv::Point* out) {
+  if (n == 0) return 0;
+  const double eps = epsilon * epsilon;
+  stack->clear();
+  int count = n, pos = 0, written = 0, init_iters = 3;
+  bool is_closed = closed, le_eps = false;
+  cv::Range slice(0, 0), right(0, 0);
+  cv::Point start(-1000000, -1000000), end(0, 0), pt(0, 0);
+  auto read = [&](int* at) {
+    const cv::Point p = src[*at];
+    if (++*at >= count) *at = 0;
+    return p;
+  };
+  if (!is_closed) {
+    right.start = count;
+    end = src[0];
+    start = src[count - 1];
+    if (start != end) {
+      stack->push_back(cv::Range(0, count - 1));
+    } else {
+      is_closed = true;
+      init_iters = 1;
+    }
+  }
+  if (is_closed) {
+    right.start = 0;
+    for (int i = 0; i < init_iters; ++i) {  // the farthest point from the start, the start moved there
+      double max_dist = 0;
+      pos = (pos + right.start) % count;
+      start = read(&pos);
+      for (int j = 1; j < count; ++j) {
+        pt = read(&pos);
+        const double dx = pt.x - start.x, dy = pt.y - start.y, dist = dx * dx + dy * dy;
+        if (dist > max_dist) {
+          max_dist = dist;
+          right.start = j;
+        }
+      }
+      le_eps = max_dist <= eps;
+    }
+    if (!le_eps) {
+      right.end = slice.start = pos % count;
+      slice.end = right.start = (right.start + slice.start) % count;
+      stack->push_back(right);
+      stack->push_back(slice);
+    } else {
+      out[written++] = start;
+    }
+  }
+  while (!stack->empty()) {
+    slice = stack->back();
+    stack->pop_back();
+    end = src[slice.end];
+    pos = slice.start;
+    start = read(&pos);
+    if (pos != slice.end) {
+      const double dx = end.x - start.x, dy = end.y - start.y;
+      double max_dist = 0;
+      CV_Assert(dx != 0 || dy != 0);
+      while (pos != slice.end) {
+        pt = read(&pos);
+        const double dist = std::fabs((pt.y - start.y) * dx - (pt.x - start.x) * dy);
+        if (dist > max_dist) {
+          max_dist = dist;
+          right.start = (pos + count - 1) % count;
+        }
+      }
+      le_eps = max_dist * max_dist <= eps * (dx * dx + dy * dy);
+    } else {
+      le_eps = true;
+      start = src[slice.start];
+    }
+    if (le_eps) {
+      out[written++] = start;
+    } else {
+      right.end = slice.end;
+      slice.end = right.start;
+      stack->push_back(right);
+      stack->push_back(slice);
+    }
+  }
+  if (!is_closed) out[written++] = src[count - 1];
+  // The clean-up pass over the approximation, in place.
+  is_closed = closed;
+  count = written;
+  int kept = written;
+  auto read_out = [&](int* at) {
+    const cv::Point p = out[*at];
+    if (++*at >= count) *at = 0;
+    return p;
+  };
+  pos = is_closed ? count - 1 : 0;
+  start = read_out(&pos);
+  int wpos = pos;
+  pt = read_out(&pos);
+  for (int i = !is_closed; i < count - !is_closed && kept > 2; ++i) {
+    end = read_out(&pos);
+    const double dx = end.x - start.x, dy = end.y - start.y;
+    const double dist = std::fabs((pt.x - start.x) * dy - (pt.y - start.y) * dx);
+    const double inner = (pt.x - start.x) * (end.x - pt.x) + (pt.y - start.y) * (end.y - pt.y);
+    if (dist * dist <= 0.5 * eps * (dx * dx + dy * dy) && dx != 0 && dy != 0 && inner >= 0) {
+      --kept;
+      out[wpos] = start = end;
+      if (++wpos >= count) wpos = 0;
+      pt = read_out(&pos);
+      ++i;
+      continue;
+    }
+    out[wpos] = start = pt;
+    if (++wpos >= count) wpos = 0;
+    pt = end;
+  }
+  if (!is_closed) out[wpos] = pt;
+  return kept;
+}
+
+// The number of bits set in v (inline: __builtin_popcountll is a library call without -mpopcnt).
+inline int BitCount(uint64_t v) {
+  v -= (v >> 1) & 0x5555555555555555ULL;
+  v = (v & 0x3333333333333333ULL) + ((v >> 2) & 0x3333333333333333ULL);
+  v = (v + (v >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return static_cast<int>((v * 0x0101010101010101ULL) >> 56);
+}
+
 // The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
 // the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
 template <typename Function>
@@ -815,6 +948,135 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
       mcmt::WarpSegmentNearest(src, m, x, y, std::min(block_width, dst.cols - x), border,
                                dst.ptr<uint8_t>(y) + x);
 }
+
+// OpenCV's cv::approxPolyDP, which cv::aruco::detectMarkers calls for every border long enough to be a
+// marker (408 calls in bench_detector's 10 accurate frames, 19,000 instructions each, 7.7 M: most of it the
+// library's generic point reads and its copies in and out): for int points in and a vector of int points
+// out, the same approximation (ApproximatePolygon) written straight into the vector; every other case
+// goes to OpenCV's own (test_detector_unit, ApproxPolyDpIsOpenCVs).
+void approxPolyDP(InputArray curve_array, OutputArray approx_array, double epsilon, bool closed) {
+  const Mat curve = curve_array.isVector() || curve_array.isMat() ? curve_array.getMat() : Mat();
+  const int n = curve.isContinuous() ? curve.checkVector(2, CV_32S) : -1;
+  if (n <= 0 || approx_array.kind() != _InputArray::STD_VECTOR || approx_array.type() != CV_32SC2 ||
+      epsilon < 0.0 || !(epsilon < 1e30)) {
+    using Function = void (*)(InputArray, OutputArray, double, bool);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZN2cv12approxPolyDPERKNS_11_InputArrayERKNS_12_OutputArrayEdb");
+    opencv(curve_array, approx_array, epsilon, closed);
+    return;
+  }
+  thread_local std::vector<Point> points;
+  thread_local std::vector<Range> stack;
+  points.resize(n);
+  const int kept = mcmt::ApproximatePolygon(curve.ptr<Point>(), n, closed, epsilon, &stack, points.data());
+  auto& approx = *static_cast<std::vector<Point>*>(approx_array.getObj());
+  approx.assign(points.begin(), points.begin() + kept);
+}
+
+// OpenCV's cv::meanStdDev, which cv::aruco::detectMarkers calls for every candidate's cell image (its inner
+// part, 42 x 42 pixels with 6 px cells: 17,600 instructions a call through the library's plane iterator,
+// 2.2 M in bench_detector's 10 accurate frames): for an 8-bit one-channel image without a mask, the same
+// exact integer sums of the pixels and of their squares, then OpenCV's arithmetic on them (mean = sum
+// times 1 / n, deviation = sqrt(max(squares times 1 / n - mean^2, 0))), written as it writes them; every
+// other case goes to OpenCV's own (test_detector_unit, MeanStdDevIsOpenCVs).
+void meanStdDev(InputArray src_array, OutputArray mean_array, OutputArray deviation_array,
+                InputArray mask_array) {
+  auto is_mat_or_none = [](const _OutputArray& a) {
+    return a.kind() == _InputArray::NONE ||
+           (a.kind() == _InputArray::MAT && !a.fixedSize() && !a.fixedType());
+  };
+  if (src_array.kind() != _InputArray::MAT || src_array.type() != CV_8UC1 || src_array.dims() > 2 ||
+      src_array.empty() || !mask_array.empty() || src_array.cols() > 16384 || !is_mat_or_none(mean_array) ||
+      !is_mat_or_none(deviation_array)) {
+    using Function = void (*)(InputArray, OutputArray, OutputArray, InputArray);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZN2cv10meanStdDevERKNS_11_InputArrayERKNS_12_OutputArrayES5_S2_");
+    opencv(src_array, mean_array, deviation_array, mask_array);
+    return;
+  }
+  const Mat& src = *static_cast<const Mat*>(src_array.getObj());
+  int64_t sum = 0, squares = 0;
+  for (int y = 0; y < src.rows; ++y) {
+    const uint8_t* p = src.ptr<uint8_t>(y);
+    int x = 0;
+#ifdef __SSE2__
+    const __m128i zero = _mm_setzero_si128();
+    __m128i sums = zero, square_sums = zero;  // 64-bit halves; 32-bit lanes (a row: < 2^31)
+    for (; x + 16 <= src.cols; x += 16) {
+      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + x));
+      sums = _mm_add_epi64(sums, _mm_sad_epu8(v, zero));
+      const __m128i low = _mm_unpacklo_epi8(v, zero), high = _mm_unpackhi_epi8(v, zero);
+      square_sums =
+          _mm_add_epi32(square_sums, _mm_add_epi32(_mm_madd_epi16(low, low), _mm_madd_epi16(high, high)));
+    }
+    alignas(16) uint32_t lanes[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), square_sums);
+    squares += static_cast<int64_t>(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
+    sum += _mm_cvtsi128_si32(sums) + _mm_cvtsi128_si32(_mm_srli_si128(sums, 8));
+#endif
+    for (; x < src.cols; ++x) sum += p[x], squares += p[x] * p[x];
+  }
+  // OpenCV's sums are exact in double too (int blocks added up): the same values, the same arithmetic.
+  const double scale = 1. / (static_cast<double>(src.rows) * src.cols);
+  const double mean = static_cast<double>(sum) * scale;
+  const double deviation = std::sqrt(std::max(static_cast<double>(squares) * scale - mean * mean, 0.));
+  for (int j = 0; j < 2; ++j) {
+    const _OutputArray& out = j == 0 ? mean_array : deviation_array;
+    if (!out.needed()) continue;
+    out.create(1, 1, CV_64F, -1, true);
+    Mat dst = out.getMat();
+    CV_Assert(dst.type() == CV_64F && dst.isContinuous() && (dst.cols == 1 || dst.rows == 1) &&
+              dst.total() >= 1);
+    double* d = dst.ptr<double>();
+    d[0] = j == 0 ? mean : deviation;
+    for (size_t k = 1; k < dst.total(); ++k) d[k] = 0;
+  }
+}
+
+namespace aruco {
+
+// OpenCV's cv::aruco::Dictionary::identify, which cv::aruco::detectMarkers calls for every candidate whose
+// border is read as one (3.7 M instructions in bench_detector's 10 accurate frames, 80 % of them 24,000
+// calls of cv::hal::normHamming on 5 bytes): the same search, the first id (in the dictionary's order)
+// whose best rotation's Hamming distance (the smallest, the first rotation of it) is within the
+// correction, each distance an inline popcount; bit matrices it does not take (not 8-bit, or codes over 8
+// bytes) go to OpenCV's own (test_detector_unit, DictionaryIdentifyIsOpenCVs).
+bool Dictionary::identify(const Mat& only_bits, int& idx, int& rotation, double max_correction_rate) const {
+  const int nbytes = (markerSize * markerSize + 7) / 8;
+  if (only_bits.type() != CV_8UC1 || only_bits.rows != markerSize || only_bits.cols != markerSize ||
+      nbytes > 8 || bytesList.type() != CV_8UC4 || bytesList.cols != nbytes) {
+    using Function = bool (*)(const Dictionary*, const Mat&, int&, int&, double);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZNK2cv5aruco10Dictionary8identifyERKNS_3MatERiS5_d");
+    return opencv(this, only_bits, idx, rotation, max_correction_rate);
+  }
+  const int max_correction = static_cast<int>(static_cast<double>(maxCorrectionBits) * max_correction_rate);
+  const Mat candidate_bytes = getByteListFromBits(only_bits);
+  CV_Assert(candidate_bytes.cols == nbytes);
+  auto word = [nbytes](const uint8_t* bytes) {
+    uint64_t w = 0;
+    std::memcpy(&w, bytes, static_cast<size_t>(nbytes));
+    return w;
+  };
+  const uint64_t candidate = word(candidate_bytes.ptr<uint8_t>());
+  idx = -1;
+  for (int m = 0; m < bytesList.rows; ++m) {
+    const uint8_t* row = bytesList.ptr<uint8_t>(m);
+    int best = markerSize * markerSize + 1, best_rotation = -1;
+    for (int r = 0; r < 4; ++r) {
+      const int distance = mcmt::BitCount(word(row + r * nbytes) ^ candidate);
+      if (distance < best) best = distance, best_rotation = r;
+    }
+    if (best <= max_correction) {
+      idx = m;
+      rotation = best_rotation;
+      break;
+    }
+  }
+  return idx != -1;
+}
+
+}  // namespace aruco
 
 // OpenCV's cv::countNonZero, which cv::aruco::detectMarkers calls for every cell of every candidate (64
 // calls a candidate, ~840 instructions each through OpenCV's type dispatch and plane iterator on a 4 x 4
