@@ -621,6 +621,77 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
 #pragma GCC pop_options
 #endif
 
+// Whether every coordinate of points [0, n) lies in [-16384, 16383]: then differences of two fit in 16
+// bits, squared distances and cross products with such differences in 31 (FirstLargest).
+bool NarrowPoints(const cv::Point* src, int n) {
+  uint32_t bits = 0;
+  int i = 0;
+#ifdef __SSE2__
+  const __m128i shift = _mm_set1_epi32(16384);
+  __m128i lanes = _mm_setzero_si128();
+  for (; i + 2 <= n; i += 2)
+    lanes =
+        _mm_or_si128(lanes, _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)), shift));
+  alignas(16) uint32_t v[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(v), lanes);
+  bits = v[0] | v[1] | v[2] | v[3];
+#endif
+  for (; i < n; ++i)
+    bits |= (static_cast<uint32_t>(src[i].x) + 16384u) | (static_cast<uint32_t>(src[i].y) + 16384u);
+  return (bits & ~0x7fffu) == 0;
+}
+
+// Over points [from, to) of src (NarrowPoints): v(i) = |p_i - s|^2 (kSquared) or |(p_i - s) x (dx, dy)|
+// = |(y_i - s.y) dx - (x_i - s.x) dy| (|dx|, |dy| < 2^15), exact integers, as approxPolyDP's scans in
+// double; where the largest exceeds *best, it and the first i where it is (a scan in index order that
+// keeps its first maximum: ranges scanned in turn give the first maximum over their union). 4 points at a
+// time: differences packed to 16 bits, then one multiply-add.
+template <bool kSquared>
+void FirstLargest(const cv::Point* src, int from, int to, cv::Point s, int dx, int dy, int* best,
+                  int* best_at) {
+  int i = from, value = -1, at = -1;
+#ifdef __SSE2__
+  if (to - from >= 8) {
+    const __m128i start = _mm_set_epi32(s.y, s.x, s.y, s.x);
+    const __m128i k =
+        _mm_set_epi16(static_cast<int16_t>(dx), static_cast<int16_t>(-dy), static_cast<int16_t>(dx),
+                      static_cast<int16_t>(-dy), static_cast<int16_t>(dx), static_cast<int16_t>(-dy),
+                      static_cast<int16_t>(dx), static_cast<int16_t>(-dy));
+    __m128i lane_value = _mm_set1_epi32(-1), lane_at = _mm_setzero_si128();
+    __m128i index = _mm_set_epi32(i + 3, i + 2, i + 1, i);
+    const __m128i four = _mm_set1_epi32(4);
+    for (; i + 4 <= to; i += 4, index = _mm_add_epi32(index, four)) {
+      const __m128i d01 = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)), start);
+      const __m128i d23 =
+          _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i + 2)), start);
+      const __m128i d = _mm_packs_epi32(d01, d23);  // x0 y0 x1 y1 x2 y2 x3 y3
+      __m128i v;
+      if (kSquared) {
+        v = _mm_madd_epi16(d, d);
+      } else {
+        v = _mm_madd_epi16(d, k);
+        const __m128i sign = _mm_srai_epi32(v, 31);
+        v = _mm_sub_epi32(_mm_xor_si128(v, sign), sign);
+      }
+      const __m128i larger = _mm_cmpgt_epi32(v, lane_value);
+      lane_value = _mm_or_si128(_mm_and_si128(larger, v), _mm_andnot_si128(larger, lane_value));
+      lane_at = _mm_or_si128(_mm_and_si128(larger, index), _mm_andnot_si128(larger, lane_at));
+    }
+    alignas(16) int32_t values[4], ats[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(values), lane_value);
+    _mm_store_si128(reinterpret_cast<__m128i*>(ats), lane_at);
+    for (int l = 0; l < 4; ++l)
+      if (values[l] > value || (values[l] == value && ats[l] < at)) value = values[l], at = ats[l];
+  }
+#endif
+  for (; i < to; ++i) {
+    const int ex = src[i].x - s.x, ey = src[i].y - s.y;
+    const int v = kSquared ? ex * ex + ey * ey : std::abs(ey * dx - ex * dy);
+    if (v > value) value = v, at = i;
+  }
+  if (value > *best) *best = value, *best_at = at;
+}
+
 // The Douglas-Peucker approximation of OpenCV 4.6's cv::approxPolyDP (approx.cpp, approxPolyDP_) for int
 // points, step for step: for a closed curve (or an open one whose ends coincide) the two points found
 // farthest apart by three (one) passes from point 0 split it, then slices are split at their farthest point
@@ -632,6 +703,7 @@ int ApproximatePolygon(const cv::Point* src, int n, bool closed, double epsilon,
   if (n == 0) return 0;
   const double eps = epsilon * epsilon;
   stack->clear();
+  const bool narrow = NarrowPoints(src, n);
   int count = n, pos = 0, written = 0, init_iters = 3;
   bool is_closed = closed, le_eps = false;
   cv::Range slice(0, 0), right(0, 0);
@@ -658,6 +730,16 @@ int ApproximatePolygon(const cv::Point* src, int n, bool closed, double epsilon,
       double max_dist = 0;
       pos = (pos + right.start) % count;
       start = read(&pos);
+      if (narrow) {  // the same scan (j = 1 .. count - 1 from the start) on 4 points at a time
+        const int at_start = (pos + count - 1) % count;
+        int best = 0, at = -1;
+        FirstLargest<true>(src, at_start + 1, count, start, 0, 0, &best, &at);
+        FirstLargest<true>(src, 0, at_start, start, 0, 0, &best, &at);
+        if (at >= 0) right.start = (at - at_start + count) % count;
+        le_eps = best <= eps;
+        pos = at_start;  // where the scan leaves it
+        continue;
+      }
       for (int j = 1; j < count; ++j) {
         pt = read(&pos);
         const double dx = pt.x - start.x, dy = pt.y - start.y, dist = dx * dx + dy * dy;
@@ -687,6 +769,15 @@ int ApproximatePolygon(const cv::Point* src, int n, bool closed, double epsilon,
       const double dx = end.x - start.x, dy = end.y - start.y;
       double max_dist = 0;
       CV_Assert(dx != 0 || dy != 0);
+      if (narrow) {  // the same scan of pos .. slice.end - 1 (around the end) on 4 points at a time
+        int best = 0, at = -1;
+        const int sx = end.x - start.x, sy = end.y - start.y;
+        FirstLargest<false>(src, pos, pos < slice.end ? slice.end : count, start, sx, sy, &best, &at);
+        if (pos > slice.end) FirstLargest<false>(src, 0, slice.end, start, sx, sy, &best, &at);
+        if (at >= 0) right.start = at;
+        max_dist = best;
+        pos = slice.end;
+      }
       while (pos != slice.end) {
         pt = read(&pos);
         const double dist = std::fabs((pt.y - start.y) * dx - (pt.x - start.x) * dy);
@@ -996,26 +1087,46 @@ void meanStdDev(InputArray src_array, OutputArray mean_array, OutputArray deviat
   }
   const Mat& src = *static_cast<const Mat*>(src_array.getObj());
   int64_t sum = 0, squares = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128();
+  __m128i sums = zero, square_sums = zero;  // 64-bit halves; 32-bit lanes, added up every 65,536 pixels
+  int pending = 0;                          // pixels in square_sums (each lane < 2^31)
+  auto flush = [&]() {
+    alignas(16) uint32_t lanes[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), square_sums);
+    squares += static_cast<int64_t>(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
+    square_sums = zero;
+    pending = 0;
+  };
+  auto add_squares = [&](__m128i low, __m128i high) {  // 16-bit pixels
+    square_sums =
+        _mm_add_epi32(square_sums, _mm_add_epi32(_mm_madd_epi16(low, low), _mm_madd_epi16(high, high)));
+  };
+#endif
   for (int y = 0; y < src.rows; ++y) {
     const uint8_t* p = src.ptr<uint8_t>(y);
     int x = 0;
 #ifdef __SSE2__
-    const __m128i zero = _mm_setzero_si128();
-    __m128i sums = zero, square_sums = zero;  // 64-bit halves; 32-bit lanes (a row: < 2^31)
+    if (pending + src.cols > 65536) flush();
+    pending += src.cols;
     for (; x + 16 <= src.cols; x += 16) {
       const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + x));
       sums = _mm_add_epi64(sums, _mm_sad_epu8(v, zero));
-      const __m128i low = _mm_unpacklo_epi8(v, zero), high = _mm_unpackhi_epi8(v, zero);
-      square_sums =
-          _mm_add_epi32(square_sums, _mm_add_epi32(_mm_madd_epi16(low, low), _mm_madd_epi16(high, high)));
+      add_squares(_mm_unpacklo_epi8(v, zero), _mm_unpackhi_epi8(v, zero));
     }
-    alignas(16) uint32_t lanes[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), square_sums);
-    squares += static_cast<int64_t>(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
-    sum += _mm_cvtsi128_si32(sums) + _mm_cvtsi128_si32(_mm_srli_si128(sums, 8));
+    if (x + 8 <= src.cols) {
+      const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + x));
+      sums = _mm_add_epi64(sums, _mm_sad_epu8(v, zero));
+      add_squares(_mm_unpacklo_epi8(v, zero), zero);
+      x += 8;
+    }
 #endif
     for (; x < src.cols; ++x) sum += p[x], squares += p[x] * p[x];
   }
+#ifdef __SSE2__
+  flush();
+  sum += _mm_cvtsi128_si32(sums) + _mm_cvtsi128_si32(_mm_srli_si128(sums, 8));
+#endif
   // OpenCV's sums are exact in double too (int blocks added up): the same values, the same arithmetic.
   const double scale = 1. / (static_cast<double>(src.rows) * src.cols);
   const double mean = static_cast<double>(sum) * scale;
@@ -1053,18 +1164,32 @@ bool Dictionary::identify(const Mat& only_bits, int& idx, int& rotation, double 
   const int max_correction = static_cast<int>(static_cast<double>(maxCorrectionBits) * max_correction_rate);
   const Mat candidate_bytes = getByteListFromBits(only_bits);
   CV_Assert(candidate_bytes.cols == nbytes);
-  auto word = [nbytes](const uint8_t* bytes) {
+  // A code's bytes as one word (little-endian, as x86-64): where 8 bytes from its start lie within the row
+  // (4 nbytes bytes) one load masked, else the row's last 8 bytes shifted and masked (rows of 8 bytes at
+  // least).
+  const uint64_t mask = nbytes == 8 ? ~0ULL : (1ULL << (8 * nbytes)) - 1;
+  const int row_bytes = 4 * nbytes;
+  auto word = [&](const uint8_t* row, int at) {
     uint64_t w = 0;
-    std::memcpy(&w, bytes, static_cast<size_t>(nbytes));
+    if (row_bytes < 8) {
+      std::memcpy(&w, row + at, static_cast<size_t>(nbytes));
+    } else if (at + 8 <= row_bytes) {
+      std::memcpy(&w, row + at, 8);
+      w &= mask;
+    } else {
+      std::memcpy(&w, row + row_bytes - 8, 8);
+      w = (w >> (8 * (at + 8 - row_bytes))) & mask;
+    }
     return w;
   };
-  const uint64_t candidate = word(candidate_bytes.ptr<uint8_t>());
+  uint64_t candidate = 0;
+  std::memcpy(&candidate, candidate_bytes.ptr<uint8_t>(), static_cast<size_t>(nbytes));
   idx = -1;
   for (int m = 0; m < bytesList.rows; ++m) {
     const uint8_t* row = bytesList.ptr<uint8_t>(m);
     int best = markerSize * markerSize + 1, best_rotation = -1;
     for (int r = 0; r < 4; ++r) {
-      const int distance = mcmt::BitCount(word(row + r * nbytes) ^ candidate);
+      const int distance = mcmt::BitCount(word(row, r * nbytes) ^ candidate);
       if (distance < best) best = distance, best_rotation = r;
     }
     if (best <= max_correction) {

@@ -815,8 +815,9 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
 // module's search included, and with int points and a vector of int points out it returns OpenCV's own
 // approximation bit for bit: every border of textured frames' binary images and of noise (one-pixel lines
 // and specks that pass a point twice included) at tolerances from 0.5 % to 50 % of the border's length,
-// closed and open, open curves whose ends coincide, one and two points, straight and zigzag lines, a
-// Mat of points; the same exception where OpenCV throws one; float points go to OpenCV's.
+// closed and open, open curves whose ends coincide, one and two points, straight and zigzag lines,
+// coordinates beyond 16 bits, a Mat of points; the same exception where OpenCV throws one; float points go to
+// OpenCV's.
 TEST(CandidateSearch, ApproxPolyDpIsOpenCVs) {
   const char* name = "_ZN2cv12approxPolyDPERKNS_11_InputArrayERKNS_12_OutputArrayEdb";
   using Function = void (*)(cv::InputArray, cv::OutputArray, double, bool);
@@ -857,6 +858,11 @@ TEST(CandidateSearch, ApproxPolyDpIsOpenCVs) {
                           ? curve.back()
                           : cv::Point(static_cast<int>(random() % 50), static_cast<int>(random() % 50)));
     curves.push_back(curve);
+  }
+  for (size_t c = 0, n = curves.size(); c < n; c += 7) {  // beyond 16 bits (OpenCV's double arithmetic)
+    std::vector<cv::Point> far = curves[c];
+    for (cv::Point& p : far) p = p * 3 + cv::Point(c % 2 ? 100000 : -30000, c % 3 ? -20000 : 5);
+    curves.push_back(far);
   }
   int compared = 0, thrown = 0;
   for (const auto& curve : curves)
