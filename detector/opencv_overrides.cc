@@ -434,6 +434,42 @@ uint32_t BorderStarts(const int8_t* row, int x) {
 #endif
 }
 
+// The contour scan's framing and border starts on AVX2 lanes (32 pixels), run where the threshold's AVX2
+// code runs (DetectorUsesAvx2): the same bytes and the same starts (test_detector_unit,
+// FindContoursIsOpenCVs on both).
+#if MCMT_SEARCH_HAS_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+// BorderStarts for 32 pixels: bit i set where a border starts at row[x + i] (row readable from x - 1 to
+// x + 31).
+uint32_t BorderStarts(const int8_t* row, int x) {
+  const __m256i p = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
+  const __m256i prev = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x - 1));
+  if (_mm256_movemask_epi8(_mm256_cmpeq_epi8(p, prev)) == -1) return 0;  // no change
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1), two = _mm256_set1_epi8(2);
+  const __m256i outer = _mm256_and_si256(_mm256_cmpeq_epi8(p, one), _mm256_cmpeq_epi8(prev, zero));
+  const __m256i hole =
+      _mm256_and_si256(_mm256_cmpeq_epi8(p, zero),
+                       _mm256_or_si256(_mm256_cmpeq_epi8(prev, one), _mm256_cmpeq_epi8(prev, two)));
+  return static_cast<uint32_t>(_mm256_movemask_epi8(_mm256_or_si256(outer, hole)));
+}
+
+// d[x] = 1 where s[x] != 0, else 0, 32 pixels at a time while a whole 32 fit in w; returns the pixels done.
+int FrameRow(const uint8_t* s, int w, int8_t* d) {
+  const __m256i one = _mm256_set1_epi8(1);
+  int x = 0;
+  for (; x + 32 <= w; x += 32)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d + x),
+                        _mm256_min_epu8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s + x)), one));
+  return x;
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#endif
+
 // Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
 // RETR_LIST and CHAIN_APPROX_NONE finds them: its 0/1 image framed by zeros, scanned row by row; an outer
 // border starts where a 1 follows a 0, a hole's where a 0 follows a pixel of value 1 or 2, and each is
@@ -444,15 +480,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   const int w = src.cols, h = src.rows;
   const std::ptrdiff_t step = w + 2;
   thread_local std::vector<int8_t> framed;
-  // Every byte written below (no clearing pass); 16 more for the last row's 16-pixel reads.
-  framed.resize(static_cast<size_t>(step) * (h + 2) + 16);
+  // Every byte written below (no clearing pass); 32 more for the last row's 32-pixel reads.
+  framed.resize(static_cast<size_t>(step) * (h + 2) + 32);
   std::fill_n(framed.begin(), step, 0);
-  std::fill_n(framed.begin() + (h + 1) * step, step + 16, 0);
+  std::fill_n(framed.begin() + (h + 1) * step, step + 32, 0);
+#if MCMT_SEARCH_HAS_AVX2
+  const bool avx2 = DetectorUsesAvx2();
+#endif
   for (int y = 0; y < h; ++y) {
     const uint8_t* s = src.ptr<uint8_t>(y);
     int8_t* d = framed.data() + (y + 1) * step + 1;
     d[-1] = 0, d[w] = 0;
     int x = 0;
+#if MCMT_SEARCH_HAS_AVX2
+    if (avx2) x = avx2::FrameRow(s, w, d);
+#endif
 #ifdef __SSE2__
     const __m128i one = _mm_set1_epi8(1);
     for (; x + 16 <= w; x += 16)
@@ -471,10 +513,17 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   for (int y = 1; y <= h; ++y) {
     int8_t* row = framed.data() + y * step;
     for (int base = 1; base <= w;) {
-      uint32_t starts = BorderStarts(row, base);
-      if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+      int width = 16;  // pixels looked at
+      uint32_t starts;
+#if MCMT_SEARCH_HAS_AVX2
+      if (avx2)
+        starts = avx2::BorderStarts(row, base), width = 32;
+      else
+#endif
+        starts = BorderStarts(row, base);
+      if (base > w - width + 1) starts &= (2u << (w - base)) - 1;  // the row's last pixels
       if (starts == 0) {
-        base += 16;
+        base += width;
         continue;
       }
       const int x = base + __builtin_ctz(starts);

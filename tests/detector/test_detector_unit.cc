@@ -622,8 +622,9 @@ TEST(CandidateSearch, Avx2WarpIsSse2) {
 // calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
 // returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
 // adaptive-threshold images of a textured frame, holes within holes, one-pixel lines and specks, shapes
-// touching the image's edges, widths around the vector width, views, offsets, a vector that held other
-// contours; the input is left as it was, and other modes go to OpenCV's.
+// touching the image's edges, widths around the vector widths, views, offsets, a vector that held other
+// contours, on the AVX2 code (where there is AVX2) and the SSE2 code; the input is left as it was, and other
+// modes go to OpenCV's.
 TEST(CandidateSearch, FindContoursIsOpenCVs) {
   const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
   using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
@@ -664,7 +665,8 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
   images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(3)));  // one border along the image's edges
   images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(0)));
   for (cv::Size size : {cv::Size(1, 1), cv::Size(1, 9), cv::Size(9, 1), cv::Size(15, 4), cv::Size(16, 5),
-                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7)}) {
+                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7), cv::Size(63, 5),
+                        cv::Size(64, 4), cv::Size(65, 6)}) {
     for (double density : {0.5, 0.9}) {
       cv::Mat tiny(size, CV_8U), level(size, CV_8U);
       cv::randu(tiny, 1, 256);
@@ -673,16 +675,22 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
       images.push_back(tiny);
     }
   }
-  for (const cv::Mat& image : images)
-    for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
-      SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset);
-      const cv::Mat before = image.clone();
-      std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
-      program(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
-      opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
-      ASSERT_EQ(ours, theirs);
-      ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
-    }
+  const bool was = UseDetectorAvx2(true);
+  for (bool avx2 : {true, false}) {  // the AVX2 code where there is AVX2, and the SSE2 code
+    if (avx2 && !DetectorAvx2Available()) continue;
+    UseDetectorAvx2(avx2);
+    for (const cv::Mat& image : images)
+      for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
+        SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset << " avx2 " << avx2);
+        const cv::Mat before = image.clone();
+        std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
+        program(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+        opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+        ASSERT_EQ(ours, theirs);
+        ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
+      }
+  }
+  UseDetectorAvx2(was);
   for (int mode : {cv::RETR_EXTERNAL, cv::RETR_CCOMP}) {
     std::vector<std::vector<cv::Point>> ours, theirs;
     program(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
