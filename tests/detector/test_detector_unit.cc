@@ -1031,15 +1031,15 @@ TEST(CandidateSearch, DictionaryIdentifyIsOpenCVs) {
 
 // The detector's cv::countNonZero (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
-// (below, at and across the vector width, over 255 vectors a row), views, an empty matrix; other types go
-// to OpenCV's.
+// (below, at and across the vector width, over 255 vectors a row), views, 4 x 4 cells, an empty matrix; other
+// types go to OpenCV's.
 TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
   const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
   using Function = int (*)(cv::InputArray);
   const auto [program, opencv] = DefinitionsOf<Function>(name);
   ASSERT_NE(program, nullptr);
-  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
-                        cv::Size(4200, 3), cv::Size(640, 480)})
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(4, 9), cv::Size(7, 7), cv::Size(15, 3),
+                        cv::Size(16, 2), cv::Size(33, 9), cv::Size(4200, 3), cv::Size(640, 480)})
     for (double density : {0.0, 0.5, 0.97}) {
       cv::Mat image(size, CV_8U), level(size, CV_8U);
       cv::randu(image, 1, 256);
@@ -1051,6 +1051,13 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
           image(cv::Rect(size.width / 3, size.height / 4, size.width / 2 + 1, size.height / 2 + 1));
       EXPECT_EQ(program(view), opencv(view));
     }
+  cv::Mat cells(48, 48, CV_8U), level(48, 48, CV_8U);  // the aruco module's 4 x 4 cells
+  cv::randu(cells, 1, 256);
+  cv::randu(level, 0, 256);
+  cells.setTo(0, level >= 128);
+  for (int y = 1; y < 48; y += 6)
+    for (int x = 1; x < 48; x += 6)
+      EXPECT_EQ(program(cells(cv::Rect(x, y, 4, 4))), opencv(cells(cv::Rect(x, y, 4, 4))));
   EXPECT_EQ(program(cv::Mat(0, 5, CV_8U)), 0);
   cv::Mat real(13, 7, CV_32F);
   cv::randu(real, -1, 1);
