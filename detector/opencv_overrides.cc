@@ -1,11 +1,12 @@
-// mcmt's own definitions of OpenCV functions that cv::aruco::detectMarkers calls:
-// cv::adaptiveThreshold, cv::findContours, cv::approxPolyDP, cv::warpPerspective and cv::countNonZero. The
-// aruco module (a shared library) calls them through the dynamic linker, which finds a program's definition
-// before the library's, so these take OpenCV's place for every caller. Each computes exactly what OpenCV's
-// does, bit for bit, for the cases the search uses (8-bit images, the modes detectMarkers passes), only
-// cheaper; every other case goes to OpenCV's own definition (LibraryDefinition: the next one,
-// dlsym(RTLD_NEXT)). They are checked against OpenCV's own at run time by test_detector_unit's
-// CandidateSearch.*IsOpenCVs tests, which also check that calls reach these definitions.
+// mcmt's own definitions of OpenCV functions that cv::aruco::detectMarkers calls: cv::adaptiveThreshold,
+// cv::findContours, cv::approxPolyDP, cv::warpPerspective, cv::meanStdDev, cv::countNonZero and
+// cv::aruco::Dictionary::identify. The aruco module (a shared library) calls them through the dynamic
+// linker, which finds a program's definition before the library's, so these take OpenCV's place for every
+// caller. Each computes exactly what OpenCV's does, bit for bit, for the cases the search uses (8-bit
+// images, the modes detectMarkers passes), only cheaper; every other case goes to OpenCV's own definition
+// (LibraryDefinition: the next one, dlsym(RTLD_NEXT)). They are checked against OpenCV's own at run time by
+// test_detector_unit's CandidateSearch.*IsOpenCVs tests, which also check that calls reach these
+// definitions.
 //
 // mcmt_detector is a static archive, and the linker takes an archive member only for a symbol something
 // already references: nothing calls these by name, so MarkerDetector calls LinkOpenCvOverrides() (below)
