@@ -457,6 +457,18 @@ uint32_t BorderStarts(const int8_t* row, int x) {
   return static_cast<uint32_t>(_mm256_movemask_epi8(_mm256_or_si256(outer, hole)));
 }
 
+// The first x from `base` to w where a border starts in `row` as it is, else w + 1: BorderStarts 32 pixels
+// at a time, in one call (a call per 32 pixels was 3.1 M instructions in bench_detector's 10 accurate
+// frames).
+int NextBorderStart(const int8_t* row, int base, int w) {
+  for (; base <= w; base += 32) {
+    uint32_t starts = BorderStarts(row, base);
+    if (base > w - 31) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+    if (starts != 0) return base + __builtin_ctz(starts);
+  }
+  return w + 1;
+}
+
 // d[x] = 1 where s[x] != 0, else 0, 32 pixels at a time while a whole 32 fit in w; returns the pixels done.
 int FrameRow(const uint8_t* s, int w, int8_t* d) {
   const __m256i one = _mm256_set1_epi8(1);
@@ -514,20 +526,22 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   for (int y = 1; y <= h; ++y) {
     int8_t* row = framed.data() + y * step;
     for (int base = 1; base <= w;) {
-      int width = 16;  // pixels looked at
-      uint32_t starts;
+      int x;
 #if MCMT_SEARCH_HAS_AVX2
-      if (avx2)
-        starts = avx2::BorderStarts(row, base), width = 32;
-      else
+      if (avx2) {
+        x = avx2::NextBorderStart(row, base, w);
+        if (x > w) break;
+      } else
 #endif
-        starts = BorderStarts(row, base);
-      if (base > w - width + 1) starts &= (2u << (w - base)) - 1;  // the row's last pixels
-      if (starts == 0) {
-        base += width;
-        continue;
+      {
+        uint32_t starts = BorderStarts(row, base);
+        if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+        if (starts == 0) {
+          base += 16;
+          continue;
+        }
+        x = base + __builtin_ctz(starts);
       }
-      const int x = base + __builtin_ctz(starts);
       const bool hole = row[x] == 0;
       FollowBorder(row + x - (hole ? 1 : 0), delta, hole, cv::Point(x - (hole ? 2 : 1), y - 1) + offset,
                    points);
