@@ -1,11 +1,12 @@
-// mcmt's own definitions of four OpenCV functions that cv::aruco::detectMarkers calls:
-// cv::adaptiveThreshold, cv::findContours, cv::warpPerspective and cv::countNonZero. The aruco module (a
-// shared library) calls them through the dynamic linker, which finds a program's definition before the
-// library's, so these take OpenCV's place for every caller. Each computes exactly what OpenCV's does, bit
-// for bit, for the cases the search uses (8-bit images, the modes detectMarkers passes), only cheaper;
-// every other case goes to OpenCV's own definition (LibraryDefinition: the next one, dlsym(RTLD_NEXT)).
-// They are checked against OpenCV's own at run time by test_detector_unit's CandidateSearch.*IsOpenCVs
-// tests, which also check that calls reach these definitions.
+// mcmt's own definitions of OpenCV functions that cv::aruco::detectMarkers calls: cv::adaptiveThreshold,
+// cv::findContours, cv::approxPolyDP, cv::warpPerspective, cv::meanStdDev, cv::countNonZero and
+// cv::aruco::Dictionary::identify. The aruco module (a shared library) calls them through the dynamic
+// linker, which finds a program's definition before the library's, so these take OpenCV's place for every
+// caller. Each computes exactly what OpenCV's does, bit for bit, for the cases the search uses (8-bit
+// images, the modes detectMarkers passes), only cheaper; every other case goes to OpenCV's own definition
+// (LibraryDefinition: the next one, dlsym(RTLD_NEXT)). They are checked against OpenCV's own at run time by
+// test_detector_unit's CandidateSearch.*IsOpenCVs tests, which also check that calls reach these
+// definitions.
 //
 // mcmt_detector is a static archive, and the linker takes an archive member only for a symbol something
 // already references: nothing calls these by name, so MarkerDetector calls LinkOpenCvOverrides() (below)
@@ -25,6 +26,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <opencv2/aruco/dictionary.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -432,6 +435,54 @@ uint32_t BorderStarts(const int8_t* row, int x) {
 #endif
 }
 
+// The contour scan's framing and border starts on AVX2 lanes (32 pixels), run where the threshold's AVX2
+// code runs (DetectorUsesAvx2): the same bytes and the same starts (test_detector_unit,
+// FindContoursIsOpenCVs on both).
+#if MCMT_SEARCH_HAS_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+
+// BorderStarts for 32 pixels: bit i set where a border starts at row[x + i] (row readable from x - 1 to
+// x + 31).
+uint32_t BorderStarts(const int8_t* row, int x) {
+  const __m256i p = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
+  const __m256i prev = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x - 1));
+  if (_mm256_movemask_epi8(_mm256_cmpeq_epi8(p, prev)) == -1) return 0;  // no change
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1), two = _mm256_set1_epi8(2);
+  const __m256i outer = _mm256_and_si256(_mm256_cmpeq_epi8(p, one), _mm256_cmpeq_epi8(prev, zero));
+  const __m256i hole =
+      _mm256_and_si256(_mm256_cmpeq_epi8(p, zero),
+                       _mm256_or_si256(_mm256_cmpeq_epi8(prev, one), _mm256_cmpeq_epi8(prev, two)));
+  return static_cast<uint32_t>(_mm256_movemask_epi8(_mm256_or_si256(outer, hole)));
+}
+
+// The first x from `base` to w where a border starts in `row` as it is, else w + 1: BorderStarts 32 pixels
+// at a time, in one call (a call per 32 pixels was 3.1 M instructions in bench_detector's 10 accurate
+// frames).
+int NextBorderStart(const int8_t* row, int base, int w) {
+  for (; base <= w; base += 32) {
+    uint32_t starts = BorderStarts(row, base);
+    if (base > w - 31) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+    if (starts != 0) return base + __builtin_ctz(starts);
+  }
+  return w + 1;
+}
+
+// d[x] = 1 where s[x] != 0, else 0, 32 pixels at a time while a whole 32 fit in w; returns the pixels done.
+int FrameRow(const uint8_t* s, int w, int8_t* d) {
+  const __m256i one = _mm256_set1_epi8(1);
+  int x = 0;
+  for (; x + 32 <= w; x += 32)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d + x),
+                        _mm256_min_epu8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s + x)), one));
+  return x;
+}
+
+}  // namespace avx2
+#pragma GCC pop_options
+#endif
+
 // Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
 // RETR_LIST and CHAIN_APPROX_NONE finds them: its 0/1 image framed by zeros, scanned row by row; an outer
 // border starts where a 1 follows a 0, a hole's where a 0 follows a pixel of value 1 or 2, and each is
@@ -442,15 +493,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   const int w = src.cols, h = src.rows;
   const std::ptrdiff_t step = w + 2;
   thread_local std::vector<int8_t> framed;
-  // Every byte written below (no clearing pass); 16 more for the last row's 16-pixel reads.
-  framed.resize(static_cast<size_t>(step) * (h + 2) + 16);
+  // Every byte written below (no clearing pass); 32 more for the last row's 32-pixel reads.
+  framed.resize(static_cast<size_t>(step) * (h + 2) + 32);
   std::fill_n(framed.begin(), step, 0);
-  std::fill_n(framed.begin() + (h + 1) * step, step + 16, 0);
+  std::fill_n(framed.begin() + (h + 1) * step, step + 32, 0);
+#if MCMT_SEARCH_HAS_AVX2
+  const bool avx2 = DetectorUsesAvx2();
+#endif
   for (int y = 0; y < h; ++y) {
     const uint8_t* s = src.ptr<uint8_t>(y);
     int8_t* d = framed.data() + (y + 1) * step + 1;
     d[-1] = 0, d[w] = 0;
     int x = 0;
+#if MCMT_SEARCH_HAS_AVX2
+    if (avx2) x = avx2::FrameRow(s, w, d);
+#endif
 #ifdef __SSE2__
     const __m128i one = _mm_set1_epi8(1);
     for (; x + 16 <= w; x += 16)
@@ -469,13 +526,22 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   for (int y = 1; y <= h; ++y) {
     int8_t* row = framed.data() + y * step;
     for (int base = 1; base <= w;) {
-      uint32_t starts = BorderStarts(row, base);
-      if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
-      if (starts == 0) {
-        base += 16;
-        continue;
+      int x;
+#if MCMT_SEARCH_HAS_AVX2
+      if (avx2) {
+        x = avx2::NextBorderStart(row, base, w);
+        if (x > w) break;
+      } else
+#endif
+      {
+        uint32_t starts = BorderStarts(row, base);
+        if (base > w - 15) starts &= (2u << (w - base)) - 1;  // the row's last pixels
+        if (starts == 0) {
+          base += 16;
+          continue;
+        }
+        x = base + __builtin_ctz(starts);
       }
-      const int x = base + __builtin_ctz(starts);
       const bool hole = row[x] == 0;
       FollowBorder(row + x - (hole ? 1 : 0), delta, hole, cv::Point(x - (hole ? 2 : 1), y - 1) + offset,
                    points);
@@ -618,6 +684,228 @@ void WarpSegmentNearest(const cv::Mat& src, const double* M, int x, int y, int b
 }  // namespace avx2
 #pragma GCC pop_options
 #endif
+
+// Whether every coordinate of points [0, n) lies in [-16384, 16383]: then differences of two fit in 16
+// bits, squared distances and cross products with such differences in 31 (FirstLargest).
+bool NarrowPoints(const cv::Point* src, int n) {
+  uint32_t bits = 0;
+  int i = 0;
+#ifdef __SSE2__
+  const __m128i shift = _mm_set1_epi32(16384);
+  __m128i lanes = _mm_setzero_si128();
+  for (; i + 2 <= n; i += 2)
+    lanes =
+        _mm_or_si128(lanes, _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)), shift));
+  alignas(16) uint32_t v[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(v), lanes);
+  bits = v[0] | v[1] | v[2] | v[3];
+#endif
+  for (; i < n; ++i)
+    bits |= (static_cast<uint32_t>(src[i].x) + 16384u) | (static_cast<uint32_t>(src[i].y) + 16384u);
+  return (bits & ~0x7fffu) == 0;
+}
+
+// Over points [from, to) of src (NarrowPoints): v(i) = |p_i - s|^2 (kSquared) or |(p_i - s) x (dx, dy)|
+// = |(y_i - s.y) dx - (x_i - s.x) dy| (|dx|, |dy| < 2^15), exact integers, as approxPolyDP's scans in
+// double; where the largest exceeds *best, it and the first i where it is (a scan in index order that
+// keeps its first maximum: ranges scanned in turn give the first maximum over their union). 4 points at a
+// time: differences packed to 16 bits, then one multiply-add.
+template <bool kSquared>
+void FirstLargest(const cv::Point* src, int from, int to, cv::Point s, int dx, int dy, int* best,
+                  int* best_at) {
+  int i = from, value = -1, at = -1;
+#ifdef __SSE2__
+  if (to - from >= 8) {
+    const __m128i start = _mm_set_epi32(s.y, s.x, s.y, s.x);
+    const __m128i k =
+        _mm_set_epi16(static_cast<int16_t>(dx), static_cast<int16_t>(-dy), static_cast<int16_t>(dx),
+                      static_cast<int16_t>(-dy), static_cast<int16_t>(dx), static_cast<int16_t>(-dy),
+                      static_cast<int16_t>(dx), static_cast<int16_t>(-dy));
+    __m128i lane_value = _mm_set1_epi32(-1), lane_at = _mm_setzero_si128();
+    __m128i index = _mm_set_epi32(i + 3, i + 2, i + 1, i);
+    const __m128i four = _mm_set1_epi32(4);
+    for (; i + 4 <= to; i += 4, index = _mm_add_epi32(index, four)) {
+      const __m128i d01 = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i)), start);
+      const __m128i d23 =
+          _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(src + i + 2)), start);
+      const __m128i d = _mm_packs_epi32(d01, d23);  // x0 y0 x1 y1 x2 y2 x3 y3
+      __m128i v;
+      if (kSquared) {
+        v = _mm_madd_epi16(d, d);
+      } else {
+        v = _mm_madd_epi16(d, k);
+        const __m128i sign = _mm_srai_epi32(v, 31);
+        v = _mm_sub_epi32(_mm_xor_si128(v, sign), sign);
+      }
+      const __m128i larger = _mm_cmpgt_epi32(v, lane_value);
+      lane_value = _mm_or_si128(_mm_and_si128(larger, v), _mm_andnot_si128(larger, lane_value));
+      lane_at = _mm_or_si128(_mm_and_si128(larger, index), _mm_andnot_si128(larger, lane_at));
+    }
+    alignas(16) int32_t values[4], ats[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(values), lane_value);
+    _mm_store_si128(reinterpret_cast<__m128i*>(ats), lane_at);
+    for (int l = 0; l < 4; ++l)
+      if (values[l] > value || (values[l] == value && ats[l] < at)) value = values[l], at = ats[l];
+  }
+#endif
+  for (; i < to; ++i) {
+    const int ex = src[i].x - s.x, ey = src[i].y - s.y;
+    const int v = kSquared ? ex * ex + ey * ey : std::abs(ey * dx - ex * dy);
+    if (v > value) value = v, at = i;
+  }
+  if (value > *best) *best = value, *best_at = at;
+}
+
+// The Douglas-Peucker approximation of OpenCV 4.6's cv::approxPolyDP (approx.cpp, approxPolyDP_) for int
+// points, step for step: for a closed curve (or an open one whose ends coincide) the two points found
+// farthest apart by three (one) passes from point 0 split it, then slices are split at their farthest point
+// (cross product with the chord) until within `epsilon`, last pushed first; then one pass drops the points
+// on [almost] straight lines. Every distance is exact in double (integer products below 2^53), so the
+// comparisons are OpenCV's. Writes at most n points to `out` and returns their number. `stack` is scratch.
+int ApproximatePolygon(const cv::Point* src, int n, bool closed, double epsilon,
+                       std::vector<cv::Range>* stack, cv::Point* out) {
+  if (n == 0) return 0;
+  const double eps = epsilon * epsilon;
+  stack->clear();
+  const bool narrow = NarrowPoints(src, n);
+  int count = n, pos = 0, written = 0, init_iters = 3;
+  bool is_closed = closed, le_eps = false;
+  cv::Range slice(0, 0), right(0, 0);
+  cv::Point start(-1000000, -1000000), end(0, 0), pt(0, 0);
+  auto read = [&](int* at) {
+    const cv::Point p = src[*at];
+    if (++*at >= count) *at = 0;
+    return p;
+  };
+  if (!is_closed) {
+    right.start = count;
+    end = src[0];
+    start = src[count - 1];
+    if (start != end) {
+      stack->push_back(cv::Range(0, count - 1));
+    } else {
+      is_closed = true;
+      init_iters = 1;
+    }
+  }
+  if (is_closed) {
+    right.start = 0;
+    for (int i = 0; i < init_iters; ++i) {  // the farthest point from the start, the start moved there
+      double max_dist = 0;
+      pos = (pos + right.start) % count;
+      start = read(&pos);
+      if (narrow) {  // the same scan (j = 1 .. count - 1 from the start) on 4 points at a time
+        const int at_start = (pos + count - 1) % count;
+        int best = 0, at = -1;
+        FirstLargest<true>(src, at_start + 1, count, start, 0, 0, &best, &at);
+        FirstLargest<true>(src, 0, at_start, start, 0, 0, &best, &at);
+        if (at >= 0) right.start = (at - at_start + count) % count;
+        le_eps = best <= eps;
+        pos = at_start;  // where the scan leaves it
+        continue;
+      }
+      for (int j = 1; j < count; ++j) {
+        pt = read(&pos);
+        const double dx = pt.x - start.x, dy = pt.y - start.y, dist = dx * dx + dy * dy;
+        if (dist > max_dist) {
+          max_dist = dist;
+          right.start = j;
+        }
+      }
+      le_eps = max_dist <= eps;
+    }
+    if (!le_eps) {
+      right.end = slice.start = pos % count;
+      slice.end = right.start = (right.start + slice.start) % count;
+      stack->push_back(right);
+      stack->push_back(slice);
+    } else {
+      out[written++] = start;
+    }
+  }
+  while (!stack->empty()) {
+    slice = stack->back();
+    stack->pop_back();
+    end = src[slice.end];
+    pos = slice.start;
+    start = read(&pos);
+    if (pos != slice.end) {
+      const double dx = end.x - start.x, dy = end.y - start.y;
+      double max_dist = 0;
+      CV_Assert(dx != 0 || dy != 0);
+      if (narrow) {  // the same scan of pos .. slice.end - 1 (around the end) on 4 points at a time
+        int best = 0, at = -1;
+        const int sx = end.x - start.x, sy = end.y - start.y;
+        FirstLargest<false>(src, pos, pos < slice.end ? slice.end : count, start, sx, sy, &best, &at);
+        if (pos > slice.end) FirstLargest<false>(src, 0, slice.end, start, sx, sy, &best, &at);
+        if (at >= 0) right.start = at;
+        max_dist = best;
+        pos = slice.end;
+      }
+      while (pos != slice.end) {
+        pt = read(&pos);
+        const double dist = std::fabs((pt.y - start.y) * dx - (pt.x - start.x) * dy);
+        if (dist > max_dist) {
+          max_dist = dist;
+          right.start = (pos + count - 1) % count;
+        }
+      }
+      le_eps = max_dist * max_dist <= eps * (dx * dx + dy * dy);
+    } else {
+      le_eps = true;
+      start = src[slice.start];
+    }
+    if (le_eps) {
+      out[written++] = start;
+    } else {
+      right.end = slice.end;
+      slice.end = right.start;
+      stack->push_back(right);
+      stack->push_back(slice);
+    }
+  }
+  if (!is_closed) out[written++] = src[count - 1];
+  // The clean-up pass over the approximation, in place.
+  is_closed = closed;
+  count = written;
+  int kept = written;
+  auto read_out = [&](int* at) {
+    const cv::Point p = out[*at];
+    if (++*at >= count) *at = 0;
+    return p;
+  };
+  pos = is_closed ? count - 1 : 0;
+  start = read_out(&pos);
+  int wpos = pos;
+  pt = read_out(&pos);
+  for (int i = !is_closed; i < count - !is_closed && kept > 2; ++i) {
+    end = read_out(&pos);
+    const double dx = end.x - start.x, dy = end.y - start.y;
+    const double dist = std::fabs((pt.x - start.x) * dy - (pt.y - start.y) * dx);
+    const double inner = (pt.x - start.x) * (end.x - pt.x) + (pt.y - start.y) * (end.y - pt.y);
+    if (dist * dist <= 0.5 * eps * (dx * dx + dy * dy) && dx != 0 && dy != 0 && inner >= 0) {
+      --kept;
+      out[wpos] = start = end;
+      if (++wpos >= count) wpos = 0;
+      pt = read_out(&pos);
+      ++i;
+      continue;
+    }
+    out[wpos] = start = pt;
+    if (++wpos >= count) wpos = 0;
+    pt = end;
+  }
+  if (!is_closed) out[wpos] = pt;
+  return kept;
+}
+
+// The number of bits set in v (inline: __builtin_popcountll is a library call without -mpopcnt).
+inline int BitCount(uint64_t v) {
+  v -= (v >> 1) & 0x5555555555555555ULL;
+  v = (v & 0x3333333333333333ULL) + ((v >> 2) & 0x3333333333333333ULL);
+  v = (v + (v >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return static_cast<int>((v * 0x0101010101010101ULL) >> 56);
+}
 
 // The shared library's definition of `symbol` (a mangled name of an OpenCV function mcmt defines too):
 // the next one in the dynamic linker's lookup, where ours hands the cases it does not handle.
@@ -816,22 +1104,196 @@ void warpPerspective(InputArray src_array, OutputArray dst_array, InputArray m_a
                                dst.ptr<uint8_t>(y) + x);
 }
 
+// OpenCV's cv::approxPolyDP, which cv::aruco::detectMarkers calls for every border long enough to be a
+// marker (408 calls in bench_detector's 10 accurate frames, 19,000 instructions each, 7.7 M: most of it the
+// library's generic point reads and its copies in and out): for int points in and a vector of int points
+// out, the same approximation (ApproximatePolygon) written straight into the vector; every other case
+// goes to OpenCV's own (test_detector_unit, ApproxPolyDpIsOpenCVs).
+void approxPolyDP(InputArray curve_array, OutputArray approx_array, double epsilon, bool closed) {
+  const Mat curve = curve_array.isVector() || curve_array.isMat() ? curve_array.getMat() : Mat();
+  const int n = curve.isContinuous() ? curve.checkVector(2, CV_32S) : -1;
+  if (n <= 0 || approx_array.kind() != _InputArray::STD_VECTOR || approx_array.type() != CV_32SC2 ||
+      epsilon < 0.0 || !(epsilon < 1e30)) {
+    using Function = void (*)(InputArray, OutputArray, double, bool);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZN2cv12approxPolyDPERKNS_11_InputArrayERKNS_12_OutputArrayEdb");
+    opencv(curve_array, approx_array, epsilon, closed);
+    return;
+  }
+  thread_local std::vector<Point> points;
+  thread_local std::vector<Range> stack;
+  points.resize(n);
+  const int kept = mcmt::ApproximatePolygon(curve.ptr<Point>(), n, closed, epsilon, &stack, points.data());
+  auto& approx = *static_cast<std::vector<Point>*>(approx_array.getObj());
+  approx.assign(points.begin(), points.begin() + kept);
+}
+
+// OpenCV's cv::meanStdDev, which cv::aruco::detectMarkers calls for every candidate's cell image (its inner
+// part, 42 x 42 pixels with 6 px cells: 17,600 instructions a call through the library's plane iterator,
+// 2.2 M in bench_detector's 10 accurate frames): for an 8-bit one-channel image without a mask, the same
+// exact integer sums of the pixels and of their squares, then OpenCV's arithmetic on them (mean = sum
+// times 1 / n, deviation = sqrt(max(squares times 1 / n - mean^2, 0))), written as it writes them; every
+// other case goes to OpenCV's own (test_detector_unit, MeanStdDevIsOpenCVs).
+void meanStdDev(InputArray src_array, OutputArray mean_array, OutputArray deviation_array,
+                InputArray mask_array) {
+  auto is_mat_or_none = [](const _OutputArray& a) {
+    return a.kind() == _InputArray::NONE ||
+           (a.kind() == _InputArray::MAT && !a.fixedSize() && !a.fixedType());
+  };
+  if (src_array.kind() != _InputArray::MAT || src_array.type() != CV_8UC1 || src_array.dims() > 2 ||
+      src_array.empty() || !mask_array.empty() || src_array.cols() > 16384 || !is_mat_or_none(mean_array) ||
+      !is_mat_or_none(deviation_array)) {
+    using Function = void (*)(InputArray, OutputArray, OutputArray, InputArray);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZN2cv10meanStdDevERKNS_11_InputArrayERKNS_12_OutputArrayES5_S2_");
+    opencv(src_array, mean_array, deviation_array, mask_array);
+    return;
+  }
+  const Mat& src = *static_cast<const Mat*>(src_array.getObj());
+  int64_t sum = 0, squares = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128();
+  __m128i sums = zero, square_sums = zero;  // 64-bit halves; 32-bit lanes, added up every 65,536 pixels
+  int pending = 0;                          // pixels in square_sums (each lane < 2^31)
+  auto flush = [&]() {
+    alignas(16) uint32_t lanes[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), square_sums);
+    squares += static_cast<int64_t>(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
+    square_sums = zero;
+    pending = 0;
+  };
+  auto add_squares = [&](__m128i low, __m128i high) {  // 16-bit pixels
+    square_sums =
+        _mm_add_epi32(square_sums, _mm_add_epi32(_mm_madd_epi16(low, low), _mm_madd_epi16(high, high)));
+  };
+#endif
+  for (int y = 0; y < src.rows; ++y) {
+    const uint8_t* p = src.ptr<uint8_t>(y);
+    int x = 0;
+#ifdef __SSE2__
+    if (pending + src.cols > 65536) flush();
+    pending += src.cols;
+    for (; x + 16 <= src.cols; x += 16) {
+      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + x));
+      sums = _mm_add_epi64(sums, _mm_sad_epu8(v, zero));
+      add_squares(_mm_unpacklo_epi8(v, zero), _mm_unpackhi_epi8(v, zero));
+    }
+    if (x + 8 <= src.cols) {
+      const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + x));
+      sums = _mm_add_epi64(sums, _mm_sad_epu8(v, zero));
+      add_squares(_mm_unpacklo_epi8(v, zero), zero);
+      x += 8;
+    }
+#endif
+    for (; x < src.cols; ++x) sum += p[x], squares += p[x] * p[x];
+  }
+#ifdef __SSE2__
+  flush();
+  sum += _mm_cvtsi128_si32(sums) + _mm_cvtsi128_si32(_mm_srli_si128(sums, 8));
+#endif
+  // OpenCV's sums are exact in double too (int blocks added up): the same values, the same arithmetic.
+  const double scale = 1. / (static_cast<double>(src.rows) * src.cols);
+  const double mean = static_cast<double>(sum) * scale;
+  const double deviation = std::sqrt(std::max(static_cast<double>(squares) * scale - mean * mean, 0.));
+  for (int j = 0; j < 2; ++j) {
+    const _OutputArray& out = j == 0 ? mean_array : deviation_array;
+    if (!out.needed()) continue;
+    out.create(1, 1, CV_64F, -1, true);
+    Mat dst = out.getMat();
+    CV_Assert(dst.type() == CV_64F && dst.isContinuous() && (dst.cols == 1 || dst.rows == 1) &&
+              dst.total() >= 1);
+    double* d = dst.ptr<double>();
+    d[0] = j == 0 ? mean : deviation;
+    for (size_t k = 1; k < dst.total(); ++k) d[k] = 0;
+  }
+}
+
+namespace aruco {
+
+// OpenCV's cv::aruco::Dictionary::identify, which cv::aruco::detectMarkers calls for every candidate whose
+// border is read as one (3.7 M instructions in bench_detector's 10 accurate frames, 80 % of them 24,000
+// calls of cv::hal::normHamming on 5 bytes): the same search, the first id (in the dictionary's order)
+// whose best rotation's Hamming distance (the smallest, the first rotation of it) is within the
+// correction, each distance an inline popcount; bit matrices it does not take (not 8-bit, or codes over 8
+// bytes) go to OpenCV's own (test_detector_unit, DictionaryIdentifyIsOpenCVs).
+bool Dictionary::identify(const Mat& only_bits, int& idx, int& rotation, double max_correction_rate) const {
+  const int nbytes = (markerSize * markerSize + 7) / 8;
+  if (only_bits.type() != CV_8UC1 || only_bits.rows != markerSize || only_bits.cols != markerSize ||
+      nbytes > 8 || bytesList.type() != CV_8UC4 || bytesList.cols != nbytes) {
+    using Function = bool (*)(const Dictionary*, const Mat&, int&, int&, double);
+    static const Function opencv =
+        mcmt::LibraryDefinition<Function>("_ZNK2cv5aruco10Dictionary8identifyERKNS_3MatERiS5_d");
+    return opencv(this, only_bits, idx, rotation, max_correction_rate);
+  }
+  const int max_correction = static_cast<int>(static_cast<double>(maxCorrectionBits) * max_correction_rate);
+  const Mat candidate_bytes = getByteListFromBits(only_bits);
+  CV_Assert(candidate_bytes.cols == nbytes);
+  // A code's bytes as one word (little-endian, as x86-64): where 8 bytes from its start lie within the row
+  // (4 nbytes bytes) one load masked, else the row's last 8 bytes shifted and masked (rows of 8 bytes at
+  // least).
+  const uint64_t mask = nbytes == 8 ? ~0ULL : (1ULL << (8 * nbytes)) - 1;
+  const int row_bytes = 4 * nbytes;
+  auto word = [&](const uint8_t* row, int at) {
+    uint64_t w = 0;
+    if (row_bytes < 8) {
+      std::memcpy(&w, row + at, static_cast<size_t>(nbytes));
+    } else if (at + 8 <= row_bytes) {
+      std::memcpy(&w, row + at, 8);
+      w &= mask;
+    } else {
+      std::memcpy(&w, row + row_bytes - 8, 8);
+      w = (w >> (8 * (at + 8 - row_bytes))) & mask;
+    }
+    return w;
+  };
+  uint64_t candidate = 0;
+  std::memcpy(&candidate, candidate_bytes.ptr<uint8_t>(), static_cast<size_t>(nbytes));
+  idx = -1;
+  for (int m = 0; m < bytesList.rows; ++m) {
+    const uint8_t* row = bytesList.ptr<uint8_t>(m);
+    int best = markerSize * markerSize + 1, best_rotation = -1;
+    for (int r = 0; r < 4; ++r) {
+      const int distance = mcmt::BitCount(word(row, r * nbytes) ^ candidate);
+      if (distance < best) best = distance, best_rotation = r;
+    }
+    if (best <= max_correction) {
+      idx = m;
+      rotation = best_rotation;
+      break;
+    }
+  }
+  return idx != -1;
+}
+
+}  // namespace aruco
+
 // OpenCV's cv::countNonZero, which cv::aruco::detectMarkers calls for every cell of every candidate (64
 // calls a candidate, ~840 instructions each through OpenCV's type dispatch and plane iterator on a 4 x 4
 // view): for 8-bit 2-D matrices the count row by row (16 pixels at a time); every other case goes to
 // OpenCV's own (test_detector_unit, CountNonZeroIsOpenCVs).
 int countNonZero(InputArray src_array) {
-  if (src_array.kind() != _InputArray::MAT || src_array.type() != CV_8UC1 || src_array.dims() > 2) {
+  // The kind from the flags (inline; kind(), type() and dims() are library calls, a third of a 4 x 4 cell's
+  // count).
+  const Mat* mat = (src_array.getFlags() & _InputArray::KIND_MASK) == _InputArray::MAT
+                       ? static_cast<const Mat*>(src_array.getObj())
+                       : nullptr;
+  if (mat == nullptr || mat->type() != CV_8UC1 || mat->dims > 2) {
     using Function = int (*)(InputArray);
     static const Function opencv =
         mcmt::LibraryDefinition<Function>("_ZN2cv12countNonZeroERKNS_11_InputArrayE");
     return opencv(src_array);
   }
-  const Mat& src = *static_cast<const Mat*>(src_array.getObj());
+  const Mat& src = *mat;
   int64_t zeros = 0;
   for (int y = 0; y < src.rows; ++y) {
-    const uint8_t* p = src.ptr<uint8_t>(y);
+    const uint8_t* p = src.data + src.step[0] * static_cast<size_t>(y);
     int x = 0;
+    if (src.cols == 4) {  // the aruco module's cells (6 px, margins of 1): one word a row
+      uint32_t w;
+      std::memcpy(&w, p, 4);
+      zeros += ((w & 0xffu) == 0) + ((w & 0xff00u) == 0) + ((w & 0xff0000u) == 0) + ((w >> 24) == 0);
+      continue;
+    }
 #ifdef __SSE2__
     while (x + 16 <= src.cols) {  // zeros per byte lane, summed every 255 loads at most
       __m128i lanes = _mm_setzero_si128();

@@ -1,4 +1,4 @@
-// mcmt's definitions of four OpenCV functions in OpenCV's place (opencv_overrides.cc): the same results
+// mcmt's definitions of OpenCV functions in OpenCV's place (opencv_overrides.cc): the same results
 // bit for bit, cheaper, for the calls cv::aruco::detectMarkers makes.
 #pragma once
 

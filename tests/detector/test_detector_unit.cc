@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
@@ -621,8 +622,9 @@ TEST(CandidateSearch, Avx2WarpIsSse2) {
 // calls, the aruco module's search included, and with RETR_LIST and CHAIN_APPROX_NONE on 8-bit images it
 // returns OpenCV's own contours bit for bit (the same order, starts and points): noise of every density,
 // adaptive-threshold images of a textured frame, holes within holes, one-pixel lines and specks, shapes
-// touching the image's edges, widths around the vector width, views, offsets, a vector that held other
-// contours; the input is left as it was, and other modes go to OpenCV's.
+// touching the image's edges, widths around the vector widths, views, offsets, a vector that held other
+// contours, on the AVX2 code (where there is AVX2) and the SSE2 code; the input is left as it was, and other
+// modes go to OpenCV's.
 TEST(CandidateSearch, FindContoursIsOpenCVs) {
   const char* name = "_ZN2cv12findContoursERKNS_11_InputArrayERKNS_12_OutputArrayEiiNS_6Point_IiEE";
   using Function = void (*)(cv::InputArray, cv::OutputArrayOfArrays, int, int, cv::Point);
@@ -663,7 +665,8 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
   images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(3)));  // one border along the image's edges
   images.push_back(cv::Mat(9, 11, CV_8U, cv::Scalar(0)));
   for (cv::Size size : {cv::Size(1, 1), cv::Size(1, 9), cv::Size(9, 1), cv::Size(15, 4), cv::Size(16, 5),
-                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7)}) {
+                        cv::Size(17, 4), cv::Size(31, 6), cv::Size(32, 3), cv::Size(33, 7), cv::Size(63, 5),
+                        cv::Size(64, 4), cv::Size(65, 6)}) {
     for (double density : {0.5, 0.9}) {
       cv::Mat tiny(size, CV_8U), level(size, CV_8U);
       cv::randu(tiny, 1, 256);
@@ -672,16 +675,22 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
       images.push_back(tiny);
     }
   }
-  for (const cv::Mat& image : images)
-    for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
-      SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset);
-      const cv::Mat before = image.clone();
-      std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
-      program(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
-      opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
-      ASSERT_EQ(ours, theirs);
-      ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
-    }
+  const bool was = UseDetectorAvx2(true);
+  for (bool avx2 : {true, false}) {  // the AVX2 code where there is AVX2, and the SSE2 code
+    if (avx2 && !DetectorAvx2Available()) continue;
+    UseDetectorAvx2(avx2);
+    for (const cv::Mat& image : images)
+      for (cv::Point offset : {cv::Point(0, 0), cv::Point(5, -3)}) {
+        SCOPED_TRACE(::testing::Message() << image.size() << " offset " << offset << " avx2 " << avx2);
+        const cv::Mat before = image.clone();
+        std::vector<std::vector<cv::Point>> ours(3, std::vector<cv::Point>(4, cv::Point(9, 9))), theirs;
+        program(image, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+        opencv(image, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, offset);
+        ASSERT_EQ(ours, theirs);
+        ASSERT_EQ(cv::norm(image, before, cv::NORM_INF), 0.0);
+      }
+  }
+  UseDetectorAvx2(was);
   for (int mode : {cv::RETR_EXTERNAL, cv::RETR_CCOMP}) {
     std::vector<std::vector<cv::Point>> ours, theirs;
     program(images[5], ours, mode, cv::CHAIN_APPROX_SIMPLE, cv::Point());
@@ -810,17 +819,227 @@ TEST(CandidateSearch, WarpPerspectiveIsOpenCVs) {
   }
 }
 
+// The detector's cv::approxPolyDP (detector/opencv_overrides.cc) is the one the program calls, the aruco
+// module's search included, and with int points and a vector of int points out it returns OpenCV's own
+// approximation bit for bit: every border of textured frames' binary images and of noise (one-pixel lines
+// and specks that pass a point twice included) at tolerances from 0.5 % to 50 % of the border's length,
+// closed and open, open curves whose ends coincide, one and two points, straight and zigzag lines,
+// coordinates beyond 16 bits, a Mat of points; the same exception where OpenCV throws one; float points go to
+// OpenCV's.
+TEST(CandidateSearch, ApproxPolyDpIsOpenCVs) {
+  const char* name = "_ZN2cv12approxPolyDPERKNS_11_InputArrayERKNS_12_OutputArrayEdb";
+  using Function = void (*)(cv::InputArray, cv::OutputArray, double, bool);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  std::vector<std::vector<cv::Point>> curves;
+  std::mt19937 random(15);
+  for (int seed = 0; seed < 4; ++seed) {
+    cv::Mat frame(240, 320, CV_8U);
+    cv::theRNG().state = 1000 + seed;
+    cv::randu(frame, 0, 256);
+    cv::GaussianBlur(frame, frame, cv::Size(0, 0), 1.0 + seed);
+    cv::rectangle(frame, cv::Rect(60, 40, 90, 80), cv::Scalar(10), cv::FILLED);
+    cv::rectangle(frame, cv::Rect(75, 55, 60, 50), cv::Scalar(240), cv::FILLED);
+    const std::vector<cv::Point> quad = {{200, 30}, {300, 60}, {280, 150}, {190, 120}};
+    cv::fillConvexPoly(frame, quad, cv::Scalar(5));
+    for (int window : {5, 15}) {
+      cv::Mat binary;
+      cv::adaptiveThreshold(frame, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window, 7);
+      std::vector<std::vector<cv::Point>> found;
+      cv::findContours(binary, found, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+      curves.insert(curves.end(), found.begin(), found.end());
+    }
+  }
+  curves.push_back({{3, 4}});
+  curves.push_back({{3, 4}, {9, 4}});
+  curves.push_back({{3, 4}, {3, 4}, {3, 4}});
+  curves.push_back({{0, 0}, {5, 5}, {10, 10}, {15, 15}, {10, 10}, {5, 5}});
+  curves.push_back({{0, 0}, {10, 1}, {20, 0}, {30, 1}, {40, 0}, {30, 9}, {20, 10}, {10, 9}, {0, 0}});
+  std::vector<cv::Point> zigzag;
+  for (int i = 0; i < 60; ++i) zigzag.push_back({i * 3, (i % 2) * (1 + i % 5)});
+  curves.push_back(zigzag);
+  for (int i = 0; i < 40; ++i) {  // random polygons, some with repeated points
+    std::vector<cv::Point> curve;
+    const int n = 1 + static_cast<int>(random() % 30);
+    for (int k = 0; k < n; ++k)
+      curve.push_back(k > 0 && random() % 4 == 0
+                          ? curve.back()
+                          : cv::Point(static_cast<int>(random() % 50), static_cast<int>(random() % 50)));
+    curves.push_back(curve);
+  }
+  for (size_t c = 0, n = curves.size(); c < n; c += 7) {  // beyond 16 bits (OpenCV's double arithmetic)
+    std::vector<cv::Point> far = curves[c];
+    for (cv::Point& p : far) p = p * 3 + cv::Point(c % 2 ? 100000 : -30000, c % 3 ? -20000 : 5);
+    curves.push_back(far);
+  }
+  int compared = 0, thrown = 0;
+  for (const auto& curve : curves)
+    for (double rate : {0.005, 0.03, 0.05, 0.1, 0.5})
+      for (bool closed : {true, false}) {
+        const double epsilon = rate * static_cast<double>(curve.size());
+        std::vector<cv::Point> ours(2, cv::Point(7, 7)), theirs;
+        bool ours_threw = false, theirs_threw = false;
+        try {
+          program(curve, ours, epsilon, closed);
+        } catch (const cv::Exception&) {
+          ours_threw = true;
+        }
+        try {
+          opencv(curve, theirs, epsilon, closed);
+        } catch (const cv::Exception&) {
+          theirs_threw = true;
+        }
+        ASSERT_EQ(ours_threw, theirs_threw) << "curve of " << curve.size() << " points, " << rate;
+        thrown += theirs_threw;
+        if (!theirs_threw) {
+          ASSERT_EQ(ours, theirs) << "curve of " << curve.size() << " points, " << rate;
+        }
+        ++compared;
+      }
+  EXPECT_GT(compared, 10000);
+  const std::vector<cv::Point> square = {{0, 0}, {40, 1}, {41, 40}, {1, 39}, {0, 20}};
+  std::vector<cv::Point> ours, theirs;
+  program(cv::Mat(square), ours, 2.0, true);  // a Mat of points
+  opencv(cv::Mat(square), theirs, 2.0, true);
+  EXPECT_EQ(ours, theirs);
+  const std::vector<cv::Point2f> real = {{0, 0}, {40.5f, 1}, {41, 40}, {1, 39.25f}};
+  std::vector<cv::Point2f> ours_f, theirs_f;
+  program(real, ours_f, 2.0, true);
+  opencv(real, theirs_f, 2.0, true);
+  EXPECT_EQ(ours_f, theirs_f);
+  std::cout << compared << " approximations compared, " << thrown << " threw in OpenCV\n";
+}
+
+// The detector's cv::meanStdDev (detector/opencv_overrides.cc) is the one the program calls, the aruco
+// module's bit reading included, and on 8-bit one-channel images without a mask gives OpenCV's own mean
+// and deviation to the bit: noise, near-flat and flat images (a deviation of 0), sizes below, at and
+// across the vector width, views such as the aruco module's inner region, one output only, outputs that
+// held other matrices; masks and other types go to OpenCV's.
+TEST(CandidateSearch, MeanStdDevIsOpenCVs) {
+  const char* name = "_ZN2cv10meanStdDevERKNS_11_InputArrayERKNS_12_OutputArrayES5_S2_";
+  using Function = void (*)(cv::InputArray, cv::OutputArray, cv::OutputArray, cv::InputArray);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  int compared = 0;
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(3, 2), cv::Size(15, 4), cv::Size(16, 3), cv::Size(17, 5),
+                        cv::Size(48, 48), cv::Size(33, 70), cv::Size(640, 480)})
+    for (int spread : {0, 1, 6, 60, 256}) {
+      cv::Mat image(size, CV_8U);
+      cv::randu(image, 0, 1);
+      image += 200 - spread / 2;
+      if (spread > 0) {
+        cv::Mat noise(size, CV_8U);
+        cv::randu(noise, 0, spread);
+        image = spread == 256 ? noise : image + noise;
+      }
+      const cv::Mat inner = image(cv::Rect(size.width / 8, size.height / 8, size.width - size.width / 4,
+                                           size.height - size.height / 4));
+      for (const cv::Mat& m : {image, inner}) {
+        SCOPED_TRACE(::testing::Message() << m.size() << " spread " << spread);
+        cv::Mat ours_mean(3, 3, CV_32F), ours_deviation, theirs_mean, theirs_deviation;
+        program(m, ours_mean, ours_deviation, cv::noArray());
+        opencv(m, theirs_mean, theirs_deviation, cv::noArray());
+        ASSERT_EQ(ours_mean.type(), theirs_mean.type());
+        ASSERT_EQ(ours_mean.size(), theirs_mean.size());
+        ASSERT_EQ(ours_deviation.size(), theirs_deviation.size());
+        EXPECT_EQ(ours_mean.at<double>(0), theirs_mean.at<double>(0));
+        EXPECT_EQ(ours_deviation.at<double>(0), theirs_deviation.at<double>(0));
+        cv::Mat only_deviation;
+        program(m, cv::noArray(), only_deviation, cv::noArray());
+        EXPECT_EQ(only_deviation.at<double>(0), theirs_deviation.at<double>(0));
+        ++compared;
+      }
+    }
+  EXPECT_EQ(compared, 80);
+  cv::Mat image(20, 30, CV_8U), mask(20, 30, CV_8U, cv::Scalar(0));
+  cv::randu(image, 0, 256);
+  mask(cv::Rect(3, 3, 10, 10)) = 1;
+  cv::Scalar ours_mean, ours_deviation, theirs_mean, theirs_deviation;  // other cases: OpenCV's
+  program(image, ours_mean, ours_deviation, mask);
+  opencv(image, theirs_mean, theirs_deviation, mask);
+  EXPECT_EQ(ours_mean, theirs_mean);
+  EXPECT_EQ(ours_deviation, theirs_deviation);
+  program(image, ours_mean, ours_deviation, cv::noArray());  // a Scalar: a fixed-size output
+  opencv(image, theirs_mean, theirs_deviation, cv::noArray());
+  EXPECT_EQ(ours_mean, theirs_mean);
+  EXPECT_EQ(ours_deviation, theirs_deviation);
+  cv::Mat colour(9, 7, CV_8UC3), ours_m, ours_d, theirs_m, theirs_d;
+  cv::randu(colour, 0, 256);
+  program(colour, ours_m, ours_d, cv::noArray());
+  opencv(colour, theirs_m, theirs_d, cv::noArray());
+  EXPECT_EQ(cv::norm(ours_m, theirs_m, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(ours_d, theirs_d, cv::NORM_INF), 0.0);
+}
+
+// The detector's cv::aruco::Dictionary::identify (detector/opencv_overrides.cc) is the one the program
+// calls, the aruco module's included, and gives OpenCV's own answer (found or not, the id and the
+// rotation, the rotation left as it was where none is found): about 60 ids of each of the 4x4, 5x5, 6x6
+// and 7x7 dictionaries and the original ArUco one in each rotation with 0 to 4 bits flipped, random bit
+// matrices, correction rates 0 to 1, a rotation-symmetric code (ties); a 9 x 9 dictionary (11 bytes a code)
+// goes to OpenCV's.
+TEST(CandidateSearch, DictionaryIdentifyIsOpenCVs) {
+  const char* name = "_ZNK2cv5aruco10Dictionary8identifyERKNS_3MatERiS5_d";
+  using Function = bool (*)(const cv::aruco::Dictionary*, const cv::Mat&, int&, int&, double);
+  const auto [program, opencv] = DefinitionsOf<Function>(name);
+  ASSERT_NE(program, nullptr);
+  std::mt19937 random(15);
+  int compared = 0, found = 0;
+  auto compare = [&](const cv::aruco::Dictionary& dictionary, const cv::Mat& bits, double rate) {
+    int ours_id = 7, ours_rotation = 9, theirs_id = 7, theirs_rotation = 9;
+    const bool ours = program(&dictionary, bits, ours_id, ours_rotation, rate);
+    const bool theirs = opencv(&dictionary, bits, theirs_id, theirs_rotation, rate);
+    ASSERT_EQ(ours, theirs);
+    ASSERT_EQ(ours_id, theirs_id);
+    ASSERT_EQ(ours_rotation, theirs_rotation);
+    ++compared;
+    found += theirs;
+  };
+  for (auto predefined : {cv::aruco::DICT_4X4_50, cv::aruco::DICT_5X5_100, cv::aruco::DICT_6X6_250,
+                          cv::aruco::DICT_7X7_50, cv::aruco::DICT_ARUCO_ORIGINAL}) {
+    const cv::Ptr<cv::aruco::Dictionary> dictionary = cv::aruco::getPredefinedDictionary(predefined);
+    const int n = dictionary->markerSize;
+    SCOPED_TRACE(::testing::Message() << "dictionary " << predefined);
+    for (int id = 0; id < dictionary->bytesList.rows; id += 1 + dictionary->bytesList.rows / 60)
+      for (int turn = 0; turn < 4; ++turn) {
+        cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(dictionary->bytesList.row(id), n);
+        for (int k = 0; k < turn; ++k) cv::rotate(bits, bits, cv::ROTATE_90_CLOCKWISE);
+        for (int flips = 0; flips < 5; ++flips) {
+          if (flips > 0)
+            bits.at<uint8_t>(static_cast<int>(random() % n), static_cast<int>(random() % n)) ^= 1;
+          for (double rate : {0.0, 0.6, 1.0}) compare(*dictionary, bits, rate);
+        }
+      }
+    for (int i = 0; i < 300; ++i) {
+      cv::Mat bits(n, n, CV_8U);
+      for (int k = 0; k < n * n; ++k) bits.data[k] = static_cast<uint8_t>(random() % 2);
+      compare(*dictionary, bits, 1.0);
+    }
+  }
+  EXPECT_GT(compared, 15000);
+  EXPECT_GT(found, 5000);
+  cv::Mat symmetric(4, 4, CV_8U, cv::Scalar(0));  // every rotation as near: the first one wins
+  symmetric.at<uint8_t>(1, 1) = symmetric.at<uint8_t>(1, 2) = symmetric.at<uint8_t>(2, 1) =
+      symmetric.at<uint8_t>(2, 2) = 1;
+  const cv::aruco::Dictionary ties(cv::aruco::Dictionary::getByteListFromBits(symmetric), 4, 2);
+  compare(ties, symmetric, 1.0);
+  symmetric.at<uint8_t>(0, 0) = 1;
+  compare(ties, symmetric, 1.0);
+  const cv::Ptr<cv::aruco::Dictionary> large = cv::aruco::generateCustomDictionary(3, 9);
+  cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(large->bytesList.row(1), 9);
+  compare(*large, bits, 0.6);
+}
+
 // The detector's cv::countNonZero (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
-// (below, at and across the vector width, over 255 vectors a row), views, an empty matrix; other types go
-// to OpenCV's.
+// (below, at and across the vector width, over 255 vectors a row), views, 4 x 4 cells, an empty matrix; other
+// types go to OpenCV's.
 TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
   const char* name = "_ZN2cv12countNonZeroERKNS_11_InputArrayE";
   using Function = int (*)(cv::InputArray);
   const auto [program, opencv] = DefinitionsOf<Function>(name);
   ASSERT_NE(program, nullptr);
-  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(15, 3), cv::Size(16, 2), cv::Size(33, 9),
-                        cv::Size(4200, 3), cv::Size(640, 480)})
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(4, 4), cv::Size(4, 9), cv::Size(7, 7), cv::Size(15, 3),
+                        cv::Size(16, 2), cv::Size(33, 9), cv::Size(4200, 3), cv::Size(640, 480)})
     for (double density : {0.0, 0.5, 0.97}) {
       cv::Mat image(size, CV_8U), level(size, CV_8U);
       cv::randu(image, 1, 256);
@@ -832,6 +1051,13 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
           image(cv::Rect(size.width / 3, size.height / 4, size.width / 2 + 1, size.height / 2 + 1));
       EXPECT_EQ(program(view), opencv(view));
     }
+  cv::Mat cells(48, 48, CV_8U), level(48, 48, CV_8U);  // the aruco module's 4 x 4 cells
+  cv::randu(cells, 1, 256);
+  cv::randu(level, 0, 256);
+  cells.setTo(0, level >= 128);
+  for (int y = 1; y < 48; y += 6)
+    for (int x = 1; x < 48; x += 6)
+      EXPECT_EQ(program(cells(cv::Rect(x, y, 4, 4))), opencv(cells(cv::Rect(x, y, 4, 4))));
   EXPECT_EQ(program(cv::Mat(0, 5, CV_8U)), 0);
   cv::Mat real(13, 7, CV_32F);
   cv::randu(real, -1, 1);
