@@ -149,9 +149,11 @@ TEST(MapperReferenceRenders, EdgesBetweenFacesShowNoBackground) {
 // The paper's rig at 1.0 m, 150 frames, drawn by the independent reference renderer
 // (tests/mapper/reference_rig_view.h) under `imaging`, detected with the defaults and mapped once per
 // corner weighting (corner_weights: equal, sides); prints and returns each map's errors against the truth.
+// `radius_m`: the rig's radius (the cameras' distance to the object's centre), m.
 std::vector<sim::EvalResult> MapReferenceSession(const testing::Imaging& imaging,
-                                                 const std::vector<std::string>& corner_weights) {
-  const testing::RenderedMapSession s = testing::MakeRenderedMapSession(1.0, 150);
+                                                 const std::vector<std::string>& corner_weights,
+                                                 double radius_m = 1.0) {
+  const testing::RenderedMapSession s = testing::MakeRenderedMapSession(radius_m, 150);
   const cv::Ptr<cv::aruco::Dictionary> dictionary = LoadDictionary(s.markers.dictionary);
   std::vector<std::unique_ptr<Mapper>> mappers;
   for (const std::string& weights : corner_weights) {
@@ -175,10 +177,10 @@ std::vector<sim::EvalResult> MapReferenceSession(const testing::Imaging& imaging
     errors.push_back(sim::Evaluate(s.Truth(), &result.map, nullptr));
     const sim::EvalResult& e = errors.back();
     std::printf(
-        "reference renderer, %s, 1.0 m, corner weights %s: scale %+.3f %%, cameras %.2f / %.2f mm, "
+        "reference renderer, %s, %.1f m, corner weights %s: scale %+.3f %%, cameras %.2f / %.2f mm, "
         "configuration %.3f mm\n",
-        imaging.name.c_str(), corner_weights[i].c_str(), 100 * e.scale_error, e.camera_position_mm.mean,
-        e.camera_position_mm.max, e.configuration_mm.mean);
+        imaging.name.c_str(), radius_m, corner_weights[i].c_str(), 100 * e.scale_error,
+        e.camera_position_mm.mean, e.camera_position_mm.max, e.configuration_mm.mean);
   }
   return errors;
 }
@@ -226,6 +228,17 @@ TEST(MapperReferenceRenders, NoMarginIsNotShrunkByAFaintStrip) {
   const testing::Imaging no_margin = testing::ImagingCatalogue()[1];
   ASSERT_EQ(no_margin.name, "no margin, grey surface");
   ExpectWithin(MapReferenceSession(no_margin, {"equal"})[0], {0.0021, 2.2, 0.2});
+}
+
+// Issue 15: a 2-cell paper margin over a white surface (0.8 of the paper) at 1.3 m (cells 1.1-1.9 px). The
+// margin's excess over the surround is small and MarginWeight's area gate left its level free; its far step
+// lies near the side profiles' end (1.6 cells + 1 px) and its level and width traded, the edge with them:
+// -0.131 %, cameras 1.71 / 1.94 mm, configuration 0.064 mm. Wide paper margins are now tied to the paper
+// (side_model.cc kWideTieCells): measured -0.081 %, 1.06 / 1.27 mm, 0.057 mm
+// (bench/results/2026-12-07-twocell2.md). Not yet the issue's 0.05 %. Bounds: between the two figures.
+TEST(MapperReferenceRenders, TwoCellMarginAt1300mmIsTiedToThePaper) {
+  const testing::Imaging two_cell = testing::CatalogueCondition("two-cell margin, white");
+  ExpectWithin(MapReferenceSession(two_cell, {"equal"}, 1.3)[0], {0.001, 1.4, 0.1});
 }
 
 }  // namespace
