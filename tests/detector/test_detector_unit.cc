@@ -1070,7 +1070,8 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
 // and rejected candidates bit for bit: rendered scenes (sharp, blurred, noisy, inverted surfaces, dark
 // margins, small and large markers), marker quads drawn close together (grouping), textured noise images
 // (many candidates, none a marker); 4x4 and 6x6 dictionaries; mcmt's parameters and OpenCV's defaults,
-// even windows, other cell readings, grouping rates of 0 to 0.1. One thread for OpenCV (as bench_detector).
+// even windows, other cell readings, grouping rates of 0 to 1 (distinct neighbours grouped). One thread for
+// OpenCV (as bench_detector).
 TEST(CandidateSearch, DetectMarkersIsOpenCVs) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
@@ -1123,6 +1124,8 @@ TEST(CandidateSearch, DetectMarkersIsOpenCVs) {
       {"DICT_6X6_250", 5, 15, 10, 40, 0.05, 0.05, 0.05, 6, 0.3, false},
       {"DICT_6X6_250", 3, 23, 10, 20, 0.0, 0.02, 0.03, 4, 0.13, false},
       {"DICT_6X6_250", 4, 14, 5, 30, 0.1, 0.1, 0.08, 5, 0.0, false},
+      {"DICT_6X6_250", 5, 15, 10, 30, 0.4, 0.05, 0.05, 6, 0.3, false},  // neighbours grouped
+      {"DICT_6X6_250", 5, 15, 10, 30, 1.0, 0.05, 0.05, 6, 0.3, false},
       {"DICT_6X6_250", 0, 0, 0, 0, 0, 0, 0, 0, 0, true},
       {"DICT_4X4_50", 5, 15, 10, 40, 0.01, 0.05, 0.05, 6, 0.3, false},
       {"DICT_4X4_50", 0, 0, 0, 0, 0, 0, 0, 0, 0, true},
