@@ -215,34 +215,56 @@ bool DetectMarkersAsOpenCV(const cv::Mat& gray, const cv::aruco::Dictionary& dic
   // The aruco module thresholds its own continuous copy (cv::adaptiveThreshold isolates a view's border
   // anyway); a view of a larger image is copied too, so that nothing depends on that.
   const cv::Mat image = gray.isSubmatrix() ? gray.clone() : gray;
-  thread_local cv::Mat binary;
-  thread_local std::vector<std::vector<cv::Point>> contours;
-  thread_local std::vector<cv::Point> approx;
+  thread_local std::vector<std::vector<Candidate>> per_window;
   thread_local std::vector<Candidate> candidates;
-  thread_local std::vector<int> kept;
-  candidates.clear();
+  thread_local std::vector<int> kept, found_ids, rotations;
   const int windows =
       (p.adaptiveThreshWinSizeMax - p.adaptiveThreshWinSizeMin) / p.adaptiveThreshWinSizeStep + 1;
-  for (int i = 0; i < windows; ++i) {
-    int window = p.adaptiveThreshWinSizeMin + i * p.adaptiveThreshWinSizeStep;
-    if (window % 2 == 0) ++window;
-    cv::adaptiveThreshold(image, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window,
-                          p.adaptiveThreshConstant);
-    FindWindowCandidates(binary, p, &contours, &approx, &candidates);
-  }
+  per_window.resize(static_cast<size_t>(windows));
+  // The lambdas name this thread's lists through references: a thread_local's name in a lambda is the
+  // running thread's own.
+  std::vector<std::vector<Candidate>>& window_lists = per_window;
+  std::vector<Candidate>& all = candidates;
+  const std::vector<int>& kept_list = kept;
+  std::vector<int>& id_list = found_ids;
+  std::vector<int>& rotation_list = rotations;
+  // The windows and then the candidates in OpenCV's thread pool, as the aruco module runs them (one
+  // thread: in this one); each thread has its own images.
+  cv::parallel_for_(cv::Range(0, windows), [&](const cv::Range& range) {
+    thread_local cv::Mat binary;
+    thread_local std::vector<std::vector<cv::Point>> contours;
+    thread_local std::vector<cv::Point> approx;
+    for (int i = range.start; i < range.end; ++i) {
+      int window = p.adaptiveThreshWinSizeMin + i * p.adaptiveThreshWinSizeStep;
+      if (window % 2 == 0) ++window;
+      cv::adaptiveThreshold(image, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, window,
+                            p.adaptiveThreshConstant);
+      window_lists[i].clear();
+      FindWindowCandidates(binary, p, &contours, &approx, &window_lists[i]);
+    }
+  });
+  candidates.clear();
+  for (const std::vector<Candidate>& in_window : per_window)
+    candidates.insert(candidates.end(), in_window.begin(), in_window.end());
   for (Candidate& c : candidates) MakeClockwise(&c.quad);
   KeepLargestOfGroups(candidates, p.minMarkerDistanceRate, &kept);
+  found_ids.assign(kept.size(), -1);
+  rotations.assign(kept.size(), 0);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(kept.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i)
+      if (!IdentifyCandidate(image, all[kept_list[i]].quad, dictionary, p, &id_list[i], &rotation_list[i]))
+        id_list[i] = -1;
+  });
   corners->clear();
   ids->clear();
   rejected->clear();
-  for (int k : kept) {
-    int id = -1, rotation = 0;
-    const ArucoQuad& quad = candidates[k].quad;
-    if (IdentifyCandidate(image, quad, dictionary, p, &id, &rotation)) {
+  for (size_t i = 0; i < kept.size(); ++i) {
+    const ArucoQuad& quad = candidates[kept[i]].quad;
+    if (found_ids[i] >= 0) {
       ArucoQuad turned;
-      for (int c = 0; c < 4; ++c) turned[c] = quad[(c + 4 - rotation) % 4];
+      for (int c = 0; c < 4; ++c) turned[c] = quad[(c + 4 - rotations[i]) % 4];
       corners->push_back(turned);
-      ids->push_back(id);
+      ids->push_back(found_ids[i]);
     } else {
       rejected->push_back(quad);
     }

@@ -18,8 +18,8 @@ using ArucoQuad = std::array<cv::Point2f, 4>;
 // the markers' corners and ids in its order, and its rejected candidates (test_detector_unit,
 // CandidateSearch.DetectMarkersIsOpenCVs). For an 8-bit one-channel image, without ArUco3, inverted
 // markers or corner refinement (CORNER_REFINE_NONE), and parameters OpenCV accepts; false (nothing
-// written) otherwise. The windows and candidates are handled in this thread, one after the other (OpenCV's
-// parallel_for_ gives the same lists).
+// written) otherwise. The windows and then the candidates run in OpenCV's thread pool (cv::parallel_for_),
+// as in the aruco module; the lists are the same with any number of threads.
 bool DetectMarkersAsOpenCV(const cv::Mat& gray, const cv::aruco::Dictionary& dictionary,
                            const cv::aruco::DetectorParameters& params, std::vector<ArucoQuad>* corners,
                            std::vector<int>* ids, std::vector<ArucoQuad>* rejected);

@@ -1070,8 +1070,8 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
 // and rejected candidates bit for bit: rendered scenes (sharp, blurred, noisy, inverted surfaces, dark
 // margins, small and large markers), marker quads drawn close together (grouping), textured noise images
 // (many candidates, none a marker); 4x4 and 6x6 dictionaries; mcmt's parameters and OpenCV's defaults,
-// even windows, other cell readings, grouping rates of 0 to 1 (distinct neighbours grouped). One thread for
-// OpenCV (as bench_detector).
+// even windows, other cell readings, grouping rates of 0 to 1 (distinct neighbours grouped); with one
+// thread (as bench_detector) and with OpenCV's pool of at least 2 (both run their windows in it).
 TEST(CandidateSearch, DetectMarkersIsOpenCVs) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
@@ -1131,46 +1131,51 @@ TEST(CandidateSearch, DetectMarkersIsOpenCVs) {
       {"DICT_4X4_50", 0, 0, 0, 0, 0, 0, 0, 0, 0, true},
   };
   int markers = 0, rejected_total = 0;
-  for (const Case& c : cases) {
-    auto dict = LoadDictionary(c.dictionary);
-    cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
-    if (!c.defaults) {
-      p->adaptiveThreshWinSizeMin = c.window_min;
-      p->adaptiveThreshWinSizeMax = c.window_max;
-      p->adaptiveThreshWinSizeStep = c.window_step;
-      p->minMarkerDistanceRate = c.distance_rate;
-      p->minCornerDistanceRate = c.corner_rate;
-      p->polygonalApproxAccuracyRate = c.accuracy_rate;
-      p->perspectiveRemovePixelPerCell = c.cell_px;
-      p->perspectiveRemoveIgnoredMarginPerCell = c.margin;
-      p->minDistanceToBorder = 1;
-    }
-    for (size_t i = 0; i < images.size(); ++i) {
-      const cv::Mat& image = images[i];
-      SCOPED_TRACE(::testing::Message() << c.dictionary << " windows " << c.window_min << ".." << c.window_max
-                                        << " distance " << c.distance_rate << " image " << i);
-      if (!c.defaults) p->minMarkerPerimeterRate = c.min_perimeter_px / std::max(image.cols, image.rows);
-      p->maxMarkerPerimeterRate = 4.0;
-      std::vector<std::vector<cv::Point2f>> corners, rejected;
-      std::vector<int> ids, own_ids;
-      cv::aruco::detectMarkers(image, dict, corners, ids, p, rejected);
-      std::vector<ArucoQuad> own_corners, own_rejected;
-      ASSERT_TRUE(DetectMarkersAsOpenCV(image, *dict, *p, &own_corners, &own_ids, &own_rejected));
-      auto vectors = [](const std::vector<ArucoQuad>& quads) {
-        std::vector<std::vector<cv::Point2f>> out;
-        for (const ArucoQuad& q : quads) out.emplace_back(q.begin(), q.end());
-        return out;
-      };
-      ASSERT_EQ(own_ids, ids);
-      ASSERT_EQ(vectors(own_corners), corners);  // Point2f's == compares the floats exactly
-      ASSERT_EQ(vectors(own_rejected), rejected);
-      markers += static_cast<int>(ids.size());
-      rejected_total += static_cast<int>(rejected.size());
+  for (int pass = 0; pass < 2; ++pass) {  // one thread, then OpenCV's pool (both run their windows in it)
+    cv::setNumThreads(pass == 0 ? 1 : std::max(threads, 2));
+    for (const Case& c : cases) {
+      auto dict = LoadDictionary(c.dictionary);
+      cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
+      if (!c.defaults) {
+        p->adaptiveThreshWinSizeMin = c.window_min;
+        p->adaptiveThreshWinSizeMax = c.window_max;
+        p->adaptiveThreshWinSizeStep = c.window_step;
+        p->minMarkerDistanceRate = c.distance_rate;
+        p->minCornerDistanceRate = c.corner_rate;
+        p->polygonalApproxAccuracyRate = c.accuracy_rate;
+        p->perspectiveRemovePixelPerCell = c.cell_px;
+        p->perspectiveRemoveIgnoredMarginPerCell = c.margin;
+        p->minDistanceToBorder = 1;
+      }
+      for (size_t i = 0; i < images.size(); ++i) {
+        const cv::Mat& image = images[i];
+        SCOPED_TRACE(::testing::Message()
+                     << c.dictionary << " windows " << c.window_min << ".." << c.window_max << " distance "
+                     << c.distance_rate << " image " << i);
+        if (!c.defaults) p->minMarkerPerimeterRate = c.min_perimeter_px / std::max(image.cols, image.rows);
+        p->maxMarkerPerimeterRate = 4.0;
+        std::vector<std::vector<cv::Point2f>> corners, rejected;
+        std::vector<int> ids, own_ids;
+        cv::aruco::detectMarkers(image, dict, corners, ids, p, rejected);
+        std::vector<ArucoQuad> own_corners, own_rejected;
+        ASSERT_TRUE(DetectMarkersAsOpenCV(image, *dict, *p, &own_corners, &own_ids, &own_rejected));
+        auto vectors = [](const std::vector<ArucoQuad>& quads) {
+          std::vector<std::vector<cv::Point2f>> out;
+          for (const ArucoQuad& q : quads) out.emplace_back(q.begin(), q.end());
+          return out;
+        };
+        ASSERT_EQ(own_ids, ids);
+        ASSERT_EQ(vectors(own_corners), corners);  // Point2f's == compares the floats exactly
+        ASSERT_EQ(vectors(own_rejected), rejected);
+        markers += static_cast<int>(ids.size());
+        rejected_total += static_cast<int>(rejected.size());
+      }
     }
   }
+  cv::setNumThreads(1);
   std::cout << "markers " << markers << ", rejected " << rejected_total << std::endl;
-  EXPECT_GT(markers, 100);
-  EXPECT_GT(rejected_total, 100);
+  EXPECT_GT(markers, 200);
+  EXPECT_GT(rejected_total, 200);
   // Parameters it does not reproduce are refused.
   auto dict = LoadDictionary("DICT_6X6_250");
   std::vector<ArucoQuad> q, r;
