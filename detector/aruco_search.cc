@@ -1,5 +1,5 @@
-// mcmt's own cv::aruco::detectMarkers (aruco_search.h). OpenCV 4.6's steps, each written here from its
-// documented behaviour and checked against the library by CandidateSearch.DetectMarkersIsOpenCVs:
+// mcmt's own cv::aruco::detectMarkers (aruco_search.h). OpenCV 4.6's steps as read in its aruco.cpp, written
+// anew and checked against the installed library by CandidateSearch.DetectMarkersIsOpenCVs:
 // 1. per window size w (min, min + step, ... <= max; even sizes made odd): the binary image of
 //    cv::adaptiveThreshold(mean, THRESH_BINARY_INV, w, constant) and its borders (findContours, RETR_LIST,
 //    CHAIN_APPROX_NONE); a border is a candidate where its point count lies within the perimeter range,
@@ -8,10 +8,12 @@
 // 2. the corners of each made clockwise (corners 1 and 3 swapped where the cross product is negative);
 // 3. candidates whose mean squared corner distance (in any of 4 rotations) is below
 //    (min point count * minMarkerDistanceRate)^2 grouped; of each group the one of largest area (the last
-//    of equal areas) kept, groups in the order they were first formed;
+//    of equal areas) kept, groups in the order they were first formed (pairs whose centres are too far
+//    apart for any pairing of corners to be near are skipped);
 // 4. each kept candidate's cells read (getPerspectiveTransform, warpPerspective INTER_NEAREST, a flat
 //    inner area read all 0 or all 1, else Otsu's threshold and each cell's majority), its border cells
 //    counted and its code identified; markers turned to their rotation, the others rejected as they were.
+// Steps 1 and 4 run in cv::parallel_for_, as OpenCV's; the lists are joined in OpenCV's order.
 #include "detector/aruco_search.h"
 
 #include <algorithm>
