@@ -13,6 +13,7 @@
 
 #include "core/dictionary.h"
 #include "core/math.h"
+#include "detector/aruco_search.h"
 #include "detector/candidates.h"
 #include "detector/opencv_overrides.h"
 #include "detector/side_model.h"
@@ -2002,11 +2003,21 @@ std::vector<MarkerDetector::Raw> MarkerDetector::Search(const cv::Mat& gray, con
   } else {
     p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
   }
-  std::vector<std::vector<cv::Point2f>> corners, rejected;
+  std::vector<ArucoQuad> corners, rejected;
   std::vector<int> ids;
-  {
-    const ArucoContourFloor floor(p->minMarkerPerimeterRate, p->minSideLengthCanonicalImg);
-    cv::aruco::detectMarkers(view, dictionary_, corners, ids, p, rejected);
+  // mcmt's own detectMarkers where it takes these parameters (the same lists; aruco_search.h), else OpenCV's.
+  if (!DetectMarkersAsOpenCV(view, *dictionary_, *p, &corners, &ids, &rejected)) {
+    std::vector<std::vector<cv::Point2f>> found, others;
+    {
+      const ArucoContourFloor floor(p->minMarkerPerimeterRate, p->minSideLengthCanonicalImg);
+      cv::aruco::detectMarkers(view, dictionary_, found, ids, p, others);
+    }
+    auto quads = [](const std::vector<std::vector<cv::Point2f>>& in, std::vector<ArucoQuad>* out) {
+      out->resize(in.size());
+      for (size_t i = 0; i < in.size(); ++i) std::copy_n(in[i].begin(), 4, (*out)[i].begin());
+    };
+    quads(found, &corners);
+    quads(others, &rejected);
   }
   std::vector<Raw> out;
   out.reserve(ids.size());

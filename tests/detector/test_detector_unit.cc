@@ -18,6 +18,7 @@
 
 #include "core/dictionary.h"
 #include "core/options.h"
+#include "detector/aruco_search.h"
 #include "detector/candidates.h"
 #include "detector/cpu.h"
 #include "detector/detector.h"
@@ -1063,6 +1064,130 @@ TEST(CandidateSearch, CountNonZeroIsOpenCVs) {
   cv::randu(real, -1, 1);
   real.setTo(0, real > 0.3);
   EXPECT_EQ(program(real), opencv(real));
+}
+
+// mcmt's own detectMarkers (detector/aruco_search.h) returns cv::aruco::detectMarkers' markers, ids, corners
+// and rejected candidates bit for bit: rendered scenes (sharp, blurred, noisy, inverted surfaces, dark
+// margins, small and large markers), marker quads drawn close together (grouping), textured noise images
+// (many candidates, none a marker); 4x4 and 6x6 dictionaries; mcmt's parameters and OpenCV's defaults,
+// even windows, other cell readings, grouping rates of 0 to 1 (distinct neighbours grouped); with one
+// thread (as bench_detector) and with OpenCV's pool of at least 2 (both run their windows in it).
+TEST(CandidateSearch, DetectMarkersIsOpenCVs) {
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  std::mt19937_64 rng(21);
+  std::vector<cv::Mat> images;
+  for (const char* name : {"DICT_6X6_250", "DICT_4X4_50"}) {
+    auto dict = LoadDictionary(name);
+    for (int k = 0; k < 6; ++k) {
+      testing::SceneOptions o;
+      o.markers = 6;
+      o.blur_sigma = std::vector<double>{0, 0.8, 1.5, 0, 0.5, 2.5}[k];
+      o.noise_sigma = std::vector<double>{0, 2, 4, 1, 0, 3}[k];
+      o.min_side_px = k == 3 ? 8 : 15;
+      o.max_side_px = k == 4 ? 150 : 60;
+      o.background = k == 5 ? 0.1 : 0.5;
+      o.quiet_cells = k == 2 ? 0 : 1;
+      std::vector<testing::RenderedMarker> truth;
+      images.push_back(testing::RenderScene(*dict, o, rng, &truth));
+    }
+    // Quads close together: a marker, a slightly larger and smaller copy of its quad, a neighbour.
+    std::vector<std::pair<int, std::array<cv::Point2f, 4>>> quads;
+    for (int m = 0; m < 3; ++m) {
+      const float x = 80.f + 180.f * m, y = 120.f, a = 40.f + 10.f * m, skew = 6.f * m;
+      quads.push_back({m, {{{x, y}, {x + a, y + skew}, {x + a - skew, y + a}, {x - skew, y + a - skew}}}});
+    }
+    quads.push_back({3, {{{300.f, 300.f}, {330.f, 302.f}, {329.f, 331.f}, {299.f, 330.f}}}});
+    quads.push_back({4, {{{336.f, 300.f}, {366.f, 301.f}, {366.f, 331.f}, {336.f, 330.f}}}});
+    images.push_back(RenderQuads(*dict, quads, 5));
+  }
+  for (int k = 0; k < 3; ++k) {  // textured noise with dark and light boxes
+    cv::Mat frame(240 + 60 * k, 320 + 40 * k, CV_8U);
+    cv::randu(frame, 0, 256);
+    cv::GaussianBlur(frame, frame, cv::Size(0, 0), 1.0 + k);
+    for (int b = 0; b < 6; ++b)
+      cv::rectangle(frame, cv::Rect(20 + 45 * b, 30 + 20 * (b % 3), 30 + 5 * b, 28 + 4 * b),
+                    cv::Scalar(b % 2 ? 240 : 15), cv::FILLED);
+    images.push_back(frame);
+  }
+  images.push_back(images[0](cv::Rect(50, 40, 400, 300)));  // a view
+  struct Case {
+    const char* dictionary;
+    int window_min, window_max, window_step;
+    double min_perimeter_px, distance_rate, corner_rate, accuracy_rate;
+    int cell_px;
+    double margin;
+    bool defaults;
+  };
+  const std::vector<Case> cases = {
+      {"DICT_6X6_250", 5, 15, 10, 40, 0.01, 0.05, 0.05, 6, 0.3, false},
+      {"DICT_6X6_250", 5, 15, 10, 40, 0.05, 0.05, 0.05, 6, 0.3, false},
+      {"DICT_6X6_250", 3, 23, 10, 20, 0.0, 0.02, 0.03, 4, 0.13, false},
+      {"DICT_6X6_250", 4, 14, 5, 30, 0.1, 0.1, 0.08, 5, 0.0, false},
+      {"DICT_6X6_250", 5, 15, 10, 30, 0.4, 0.05, 0.05, 6, 0.3, false},  // neighbours grouped
+      {"DICT_6X6_250", 5, 15, 10, 30, 1.0, 0.05, 0.05, 6, 0.3, false},
+      {"DICT_6X6_250", 0, 0, 0, 0, 0, 0, 0, 0, 0, true},
+      {"DICT_4X4_50", 5, 15, 10, 40, 0.01, 0.05, 0.05, 6, 0.3, false},
+      {"DICT_4X4_50", 0, 0, 0, 0, 0, 0, 0, 0, 0, true},
+  };
+  int markers = 0, rejected_total = 0;
+  for (int pass = 0; pass < 2; ++pass) {  // one thread, then OpenCV's pool (both run their windows in it)
+    cv::setNumThreads(pass == 0 ? 1 : std::max(threads, 2));
+    for (const Case& c : cases) {
+      auto dict = LoadDictionary(c.dictionary);
+      cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
+      if (!c.defaults) {
+        p->adaptiveThreshWinSizeMin = c.window_min;
+        p->adaptiveThreshWinSizeMax = c.window_max;
+        p->adaptiveThreshWinSizeStep = c.window_step;
+        p->minMarkerDistanceRate = c.distance_rate;
+        p->minCornerDistanceRate = c.corner_rate;
+        p->polygonalApproxAccuracyRate = c.accuracy_rate;
+        p->perspectiveRemovePixelPerCell = c.cell_px;
+        p->perspectiveRemoveIgnoredMarginPerCell = c.margin;
+        p->minDistanceToBorder = 1;
+      }
+      for (size_t i = 0; i < images.size(); ++i) {
+        const cv::Mat& image = images[i];
+        SCOPED_TRACE(::testing::Message()
+                     << c.dictionary << " windows " << c.window_min << ".." << c.window_max << " distance "
+                     << c.distance_rate << " image " << i);
+        if (!c.defaults) p->minMarkerPerimeterRate = c.min_perimeter_px / std::max(image.cols, image.rows);
+        p->maxMarkerPerimeterRate = 4.0;
+        std::vector<std::vector<cv::Point2f>> corners, rejected;
+        std::vector<int> ids, own_ids;
+        cv::aruco::detectMarkers(image, dict, corners, ids, p, rejected);
+        std::vector<ArucoQuad> own_corners, own_rejected;
+        ASSERT_TRUE(DetectMarkersAsOpenCV(image, *dict, *p, &own_corners, &own_ids, &own_rejected));
+        auto vectors = [](const std::vector<ArucoQuad>& quads) {
+          std::vector<std::vector<cv::Point2f>> out;
+          for (const ArucoQuad& q : quads) out.emplace_back(q.begin(), q.end());
+          return out;
+        };
+        ASSERT_EQ(own_ids, ids);
+        ASSERT_EQ(vectors(own_corners), corners);  // Point2f's == compares the floats exactly
+        ASSERT_EQ(vectors(own_rejected), rejected);
+        markers += static_cast<int>(ids.size());
+        rejected_total += static_cast<int>(rejected.size());
+      }
+    }
+  }
+  cv::setNumThreads(1);
+  std::cout << "markers " << markers << ", rejected " << rejected_total << std::endl;
+  EXPECT_GT(markers, 200);
+  EXPECT_GT(rejected_total, 200);
+  // Parameters it does not reproduce are refused.
+  auto dict = LoadDictionary("DICT_6X6_250");
+  std::vector<ArucoQuad> q, r;
+  std::vector<int> ids;
+  for (int which = 0; which < 3; ++which) {
+    cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
+    if (which == 0) p->useAruco3Detection = true;
+    if (which == 1) p->detectInvertedMarker = true;
+    if (which == 2) p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+    EXPECT_FALSE(DetectMarkersAsOpenCV(images[0], *dict, *p, &q, &ids, &r));
+  }
+  cv::setNumThreads(threads);
 }
 
 TEST(DetectorOptions, ValidateNamesTheField) {
