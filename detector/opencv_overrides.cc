@@ -454,22 +454,22 @@ void FollowBorder(int8_t* start, const std::ptrdiff_t* delta, bool hole, cv::Poi
 }
 
 // Bit i set where a border starts at row[x + i] as the row is (i < 16; row readable from x - 1 to
-// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's).
+// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's; the image holds 0, 1, 2 and
+// kBorderRightExamined only, so a 1 or 2 is a value above 0).
 uint32_t BorderStarts(const int8_t* row, int x) {
 #ifdef __SSE2__
   const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
   const __m128i prev = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x - 1));
   if (_mm_movemask_epi8(_mm_cmpeq_epi8(p, prev)) == 0xffff) return 0;  // no change (most of an image)
-  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1);
   const __m128i outer = _mm_and_si128(_mm_cmpeq_epi8(p, one), _mm_cmpeq_epi8(prev, zero));
-  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero),
-                                     _mm_or_si128(_mm_cmpeq_epi8(prev, one), _mm_cmpeq_epi8(prev, two)));
+  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero), _mm_cmpgt_epi8(prev, zero));
   return static_cast<uint32_t>(_mm_movemask_epi8(_mm_or_si128(outer, hole)));
 #else
   uint32_t mask = 0;
   for (int i = 0; i < 16; ++i) {
     const int8_t p = row[x + i], prev = row[x + i - 1];
-    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev >= 1)) << i;
+    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev > 0)) << i;
   }
   return mask;
 #endif
@@ -489,11 +489,9 @@ uint32_t BorderStarts(const int8_t* row, int x) {
   const __m256i p = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
   const __m256i prev = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x - 1));
   if (_mm256_movemask_epi8(_mm256_cmpeq_epi8(p, prev)) == -1) return 0;  // no change
-  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1), two = _mm256_set1_epi8(2);
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1);
   const __m256i outer = _mm256_and_si256(_mm256_cmpeq_epi8(p, one), _mm256_cmpeq_epi8(prev, zero));
-  const __m256i hole =
-      _mm256_and_si256(_mm256_cmpeq_epi8(p, zero),
-                       _mm256_or_si256(_mm256_cmpeq_epi8(prev, one), _mm256_cmpeq_epi8(prev, two)));
+  const __m256i hole = _mm256_and_si256(_mm256_cmpeq_epi8(p, zero), _mm256_cmpgt_epi8(prev, zero));
   return static_cast<uint32_t>(_mm256_movemask_epi8(_mm256_or_si256(outer, hole)));
 }
 
