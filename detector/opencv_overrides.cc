@@ -367,6 +367,47 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
   ThresholdAgainstBoxMeanWith<Sse2BoxMean>(src, k, at, offset, below, above, isolated, dst);
 }
 
+// The 8 neighbours of a pixel of the framed 0/1 image as one byte: bit d set where the neighbour in
+// direction d (FollowBorder's order: right first, counter-clockwise on screen) is not 0. Indexed by the
+// nonzero bytes of its three rows read 4 bytes wide from the up-left neighbour: bits 0-2 up-left, up,
+// up-right; 4 left, 5 the pixel, 6 right; 8-10 down-left, down, down-right (3 and 7: the bytes after).
+struct NeighbourTable {
+  uint8_t bits[2048];
+};
+
+constexpr NeighbourTable MakeNeighbourTable() {
+  NeighbourTable table{};
+  // Direction d's bit in the index.
+  constexpr int kIndexBit[8] = {6, 2, 1, 0, 4, 8, 9, 10};
+  for (int index = 0; index < 2048; ++index) {
+    int bits = 0;
+    for (int d = 0; d < 8; ++d) bits |= ((index >> kIndexBit[d]) & 1) << d;
+    table.bits[index] = static_cast<uint8_t>(bits);
+  }
+  return table;
+}
+
+constexpr NeighbourTable kNeighbours = MakeNeighbourTable();
+
+// Bit d set where the neighbour of `p` in direction d is not 0 (`p` inside the frame; the image readable
+// to p + step + 2). The same bits on every path: SSE2 (also under AVX2) or one byte at a time.
+inline unsigned NonzeroNeighbours(const int8_t* p, std::ptrdiff_t step) {
+#ifdef __SSE2__
+  int32_t up, middle, down;
+  std::memcpy(&up, p - step - 1, 4);
+  std::memcpy(&middle, p - 1, 4);
+  std::memcpy(&down, p + step - 1, 4);
+  const __m128i rows = _mm_setr_epi32(up, middle, down, 0);
+  const unsigned zero = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(rows, _mm_setzero_si128())));
+  return kNeighbours.bits[~zero & 0x7ffu];
+#else
+  const std::ptrdiff_t delta[8] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1};
+  unsigned bits = 0;
+  for (int d = 0; d < 8; ++d) bits |= static_cast<unsigned>(p[delta[d]] != 0) << d;
+  return bits;
+#endif
+}
+
 // OpenCV's contour follower's marks in its 0/1 image (Suzuki and Abe's NBD 2 for every border in its list
 // modes): a border pixel whose right neighbour (a 0 pixel) was examined while following the border, and
 // any other border pixel.
@@ -376,31 +417,29 @@ constexpr int8_t kBorderRightExamined = -126, kBorderPixel = 2;
 // neighbours, right first and counter-clockwise on screen, twice over) as OpenCV's icvFetchContour does
 // for 8-bit images and CHAIN_APPROX_NONE: the same first direction (an outer border searches from the
 // left neighbour, a hole's from the right one), the same marks, every pixel passed appended to `points`
-// from `pt` on.
+// from `pt` on. OpenCV probes the neighbours one by one; here each pixel's 8 are read at once
+// (NonzeroNeighbours; marks never make a pixel 0 or nonzero) and the first one found by bit scans:
+// OpenCV's first search clockwise from first_end - 1 is the highest nonzero direction below
+// first_end + 8 in the byte twice over, its search counter-clockwise from end + 1 the lowest above end.
 void FollowBorder(int8_t* start, const std::ptrdiff_t* delta, bool hole, cv::Point pt,
                   std::vector<cv::Point>* points) {
   static constexpr int kDx[8] = {1, 1, 0, -1, -1, -1, 0, 1}, kDy[8] = {0, -1, -1, -1, 0, 1, 1, 1};
+  const std::ptrdiff_t step = delta[6];
   const int first_end = hole ? 0 : 4;
-  int s = first_end;
-  int8_t* second;
-  do {
-    s = (s - 1) & 7;
-    second = start + delta[s];
-  } while (*second == 0 && s != first_end);
-  if (s == first_end) {  // a single pixel
+  const unsigned around = NonzeroNeighbours(start, step);
+  if ((around & ~(1u << first_end)) == 0) {  // a single pixel
     *start = kBorderRightExamined;
     points->push_back(pt);
     return;
   }
+  unsigned twice = around * 0x101u;
+  int s = (31 - __builtin_clz(twice & ((256u << first_end) - 1))) & 7;
+  int8_t* const second = start + delta[s];
   int8_t* here = start;
   for (;;) {
     const int end = s;
-    int8_t* next = here;
-    while (s < 15) {
-      next = here + delta[++s];
-      if (*next != 0) break;
-    }
-    s &= 7;
+    s = (end + 1 + __builtin_ctz(twice >> (end + 1))) & 7;
+    int8_t* const next = here + delta[s];
     if (static_cast<unsigned>(s - 1) < static_cast<unsigned>(end))
       *here = kBorderRightExamined;
     else if (*here == 1)
@@ -410,26 +449,27 @@ void FollowBorder(int8_t* start, const std::ptrdiff_t* delta, bool hole, cv::Poi
     if (next == start && here == second) break;
     here = next;
     s = (s + 4) & 7;
+    twice = NonzeroNeighbours(here, step) * 0x101u;
   }
 }
 
 // Bit i set where a border starts at row[x + i] as the row is (i < 16; row readable from x - 1 to
-// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's).
+// x + 15): a 1 after a 0 (an outer border) or a 0 after a 1 or 2 (a hole's; the image holds 0, 1, 2 and
+// kBorderRightExamined only, so a 1 or 2 is a value above 0).
 uint32_t BorderStarts(const int8_t* row, int x) {
 #ifdef __SSE2__
   const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
   const __m128i prev = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x - 1));
   if (_mm_movemask_epi8(_mm_cmpeq_epi8(p, prev)) == 0xffff) return 0;  // no change (most of an image)
-  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+  const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1);
   const __m128i outer = _mm_and_si128(_mm_cmpeq_epi8(p, one), _mm_cmpeq_epi8(prev, zero));
-  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero),
-                                     _mm_or_si128(_mm_cmpeq_epi8(prev, one), _mm_cmpeq_epi8(prev, two)));
+  const __m128i hole = _mm_and_si128(_mm_cmpeq_epi8(p, zero), _mm_cmpgt_epi8(prev, zero));
   return static_cast<uint32_t>(_mm_movemask_epi8(_mm_or_si128(outer, hole)));
 #else
   uint32_t mask = 0;
   for (int i = 0; i < 16; ++i) {
     const int8_t p = row[x + i], prev = row[x + i - 1];
-    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev >= 1)) << i;
+    mask |= static_cast<uint32_t>((prev == 0 && p == 1) || (p == 0 && prev > 0)) << i;
   }
   return mask;
 #endif
@@ -449,11 +489,9 @@ uint32_t BorderStarts(const int8_t* row, int x) {
   const __m256i p = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
   const __m256i prev = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x - 1));
   if (_mm256_movemask_epi8(_mm256_cmpeq_epi8(p, prev)) == -1) return 0;  // no change
-  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1), two = _mm256_set1_epi8(2);
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi8(1);
   const __m256i outer = _mm256_and_si256(_mm256_cmpeq_epi8(p, one), _mm256_cmpeq_epi8(prev, zero));
-  const __m256i hole =
-      _mm256_and_si256(_mm256_cmpeq_epi8(p, zero),
-                       _mm256_or_si256(_mm256_cmpeq_epi8(prev, one), _mm256_cmpeq_epi8(prev, two)));
+  const __m256i hole = _mm256_and_si256(_mm256_cmpeq_epi8(p, zero), _mm256_cmpgt_epi8(prev, zero));
   return static_cast<uint32_t>(_mm256_movemask_epi8(_mm256_or_si256(outer, hole)));
 }
 

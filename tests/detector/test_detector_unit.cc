@@ -676,7 +676,66 @@ TEST(CandidateSearch, FindContoursIsOpenCVs) {
       images.push_back(tiny);
     }
   }
+  // Shapes that stress the border following: one-pixel lines in every direction (crossing, touching,
+  // along the edges), one-pixel holes and gaps, blobs touching at a corner only, a checkerboard (every
+  // pixel joined diagonally), specks in the corners, rings one pixel wide.
+  cv::Mat lines(40, 48, CV_8U, cv::Scalar(0));
+  cv::line(lines, cv::Point(0, 0), cv::Point(47, 0), cv::Scalar(255));   // the top edge
+  cv::line(lines, cv::Point(47, 1), cv::Point(47, 39), cv::Scalar(2));   // the right edge
+  cv::line(lines, cv::Point(0, 39), cv::Point(30, 39), cv::Scalar(1));   // the bottom edge
+  cv::line(lines, cv::Point(0, 5), cv::Point(0, 30), cv::Scalar(9));     // the left edge
+  cv::line(lines, cv::Point(3, 3), cv::Point(20, 20), cv::Scalar(255));  // diagonals, crossing
+  cv::line(lines, cv::Point(20, 3), cv::Point(3, 20), cv::Scalar(255));
+  cv::line(lines, cv::Point(25, 2), cv::Point(44, 12), cv::Scalar(255));  // shallow, steep
+  cv::line(lines, cv::Point(25, 14), cv::Point(30, 37), cv::Scalar(255));
+  cv::line(lines, cv::Point(5, 25), cv::Point(20, 25), cv::Scalar(255));  // a T
+  cv::line(lines, cv::Point(12, 25), cv::Point(12, 35), cv::Scalar(255));
+  cv::rectangle(lines, cv::Rect(34, 20, 9, 9), cv::Scalar(255), 1);  // a ring, a dot in it
+  lines.at<uint8_t>(24, 38) = 255;
+  images.push_back(lines);
+  cv::Mat blobs(24, 30, CV_8U, cv::Scalar(0));
+  cv::rectangle(blobs, cv::Rect(1, 1, 5, 5), cv::Scalar(255), cv::FILLED);  // corner to corner
+  cv::rectangle(blobs, cv::Rect(6, 6, 5, 5), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(blobs, cv::Rect(11, 1, 5, 5), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(blobs, cv::Rect(16, 6, 6, 6), cv::Scalar(255), cv::FILLED);  // holes of one pixel
+  blobs.at<uint8_t>(8, 18) = 0;
+  blobs.at<uint8_t>(9, 19) = 0;  // holes touching at a corner
+  blobs.at<uint8_t>(10, 17) = 0;
+  cv::rectangle(blobs, cv::Rect(23, 0, 7, 8), cv::Scalar(255), cv::FILLED);  // a hole open to the edge
+  cv::rectangle(blobs, cv::Rect(25, 2, 5, 3), cv::Scalar(0), cv::FILLED);
+  cv::rectangle(blobs, cv::Rect(2, 14, 12, 8), cv::Scalar(255), cv::FILLED);  // a one-pixel gap
+  cv::line(blobs, cv::Point(8, 14), cv::Point(8, 21), cv::Scalar(0));
+  cv::rectangle(blobs, cv::Rect(16, 14, 12, 10), cv::Scalar(255), cv::FILLED);  // a diagonal gap, a spur
+  cv::line(blobs, cv::Point(16, 14), cv::Point(25, 23), cv::Scalar(0));
+  cv::line(blobs, cv::Point(27, 14), cv::Point(29, 12), cv::Scalar(255));
+  images.push_back(blobs);
+  cv::Mat checker(13, 17, CV_8U);
+  for (int y = 0; y < checker.rows; ++y)
+    for (int x = 0; x < checker.cols; ++x) checker.at<uint8_t>(y, x) = (x + y) % 2 == 0 ? 255 : 0;
+  images.push_back(checker);
+  images.push_back(255 - checker);
+  cv::Mat corners(6, 7, CV_8U, cv::Scalar(0));  // a speck in each corner
+  corners.at<uint8_t>(0, 0) = corners.at<uint8_t>(0, 6) = corners.at<uint8_t>(5, 0) =
+      corners.at<uint8_t>(5, 6) = 1;
+  images.push_back(corners);
+  images.push_back(255 - corners);
   const bool was = UseDetectorAvx2(true);
+  for (bool avx2 : {true, false}) {  // every 4 x 4 and 3 x 5 image of 0 and 1 (values 1, 2, 255)
+    if (avx2 && !DetectorAvx2Available()) continue;
+    UseDetectorAvx2(avx2);
+    for (cv::Size size : {cv::Size(4, 4), cv::Size(5, 3)}) {
+      cv::Mat small(size, CV_8U);
+      for (int pattern = 0; pattern < 1 << 16; ++pattern) {
+        if (pattern >= 1 << size.area()) break;
+        for (int i = 0; i < size.area(); ++i)
+          small.data[i] = (pattern >> i & 1) != 0 ? static_cast<uint8_t>(1 + i % 3 * 127) : 0;
+        std::vector<std::vector<cv::Point>> ours, theirs;
+        program(small, ours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point(0, 0));
+        opencv(small, theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, cv::Point(0, 0));
+        ASSERT_EQ(ours, theirs) << size << " pattern " << pattern << " avx2 " << avx2;
+      }
+    }
+  }
   for (bool avx2 : {true, false}) {  // the AVX2 code where there is AVX2, and the SSE2 code
     if (avx2 && !DetectorAvx2Available()) continue;
     UseDetectorAvx2(avx2);
