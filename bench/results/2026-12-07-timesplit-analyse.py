@@ -1,3 +1,9 @@
+# timesplit: joins the timer tables with callgrind's per-function counts (2026-12-07-timesplit.md).
+# Run in a directory holding: ts1.txt.. (bench_detector 60 2 640 output of the timer build, accurate only),
+# fine1.txt.. (the same with MCMT_TIMESPLIT_FINE=1), and cgts.incl.txt / cgts.self.txt / cgts.tree.txt:
+#   callgrind_annotate --inclusive=yes|no [--tree=caller] --threshold=100
+#     --show=Ir,I1mr,D1mr,D1mw,ILmr,DLmr,DLmw,Bc,Bcm,Bi,Bim cgts.out
+# of the callgrind run on the same timer build (command in the write-up). Prints the write-up's tables.
 import re, statistics, glob
 EV = ['Ir','I1mr','D1mr','D1mw','ILmr','DLmr','DLmw','Bc','Bcm','Bi','Bim']
 NUM = r'((?:\s*[\d,]+(?:\s*\(\s*[\d\.]+%\))?|\s*\.)+)'
