@@ -19,10 +19,9 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <opencv2/imgproc.hpp>
-#include <utility>
 
+#include "detector/candidates.h"
 #include "detector/opencv_overrides.h"
 
 namespace mcmt {
@@ -71,13 +70,6 @@ void FindWindowCandidates(const cv::Mat& binary, const cv::aruco::DetectorParame
     c.points = static_cast<int>(contour.size());
     out->push_back(c);
   }
-}
-
-// Step 2.
-void MakeClockwise(ArucoQuad* q) {
-  const double dx1 = (*q)[1].x - (*q)[0].x, dy1 = (*q)[1].y - (*q)[0].y;
-  const double dx2 = (*q)[2].x - (*q)[0].x, dy2 = (*q)[2].y - (*q)[0].y;
-  if (dx1 * dy2 - dy1 * dx2 < 0.0) std::swap((*q)[1], (*q)[3]);
 }
 
 // Step 3: the kept candidates' indices, in the groups' order.
@@ -173,10 +165,8 @@ bool IdentifyCandidate(const cv::Mat& gray, const ArucoQuad& quad, const cv::aru
         size_t on = 0;
         for (int r = 0; r < width; ++r) {
           const uint8_t* p = warped.ptr<uint8_t>(y * cell + margin + r) + x * cell + margin;
-          if (width == 4) {  // 6 px cells, margins of 1 (mcmt's): a row in one word; pixels are 0 or 255
-            uint32_t w;
-            std::memcpy(&w, p, 4);
-            on += (((w >> 7) & 0x01010101u) * 0x01010101u) >> 24;  // the top bits added up
+          if (width == 4) {  // 6 px cells, margins of 1 (mcmt's): a row in one word
+            on += static_cast<size_t>(4 - ZeroBytesOf4(p));
             continue;
           }
           for (int k = 0; k < width; ++k) on += p[k] != 0;
@@ -248,7 +238,7 @@ bool DetectMarkersAsOpenCV(const cv::Mat& gray, const cv::aruco::Dictionary& dic
   candidates.clear();
   for (const std::vector<Candidate>& in_window : per_window)
     candidates.insert(candidates.end(), in_window.begin(), in_window.end());
-  for (Candidate& c : candidates) MakeClockwise(&c.quad);
+  for (Candidate& c : candidates) MakeClockwise(&c.quad);  // step 2
   KeepLargestOfGroups(candidates, p.minMarkerDistanceRate, &kept);
   found_ids.assign(kept.size(), -1);
   rotations.assign(kept.size(), 0);

@@ -178,7 +178,7 @@ bool QuadFromBoundary(const std::vector<cv::Point>& c, const QuadSearch& s, cv::
     if (cv::norm(e0) < s.min_side_rate * perimeter) return false;
     if (Cross(e0, e1) * Cross((*quad)[1] - (*quad)[0], (*quad)[2] - (*quad)[1]) <= 0) return false;
   }
-  if (Cross((*quad)[1] - (*quad)[0], (*quad)[2] - (*quad)[0]) < 0) std::swap((*quad)[1], (*quad)[3]);
+  MakeClockwise(quad);
   return true;
 }
 

@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <utility>
 #include <vector>
 
 namespace mcmt {
@@ -31,6 +32,16 @@ struct QuadSearch {
 // Each t x t tile's minimum and maximum over it and its 8 neighbours (within the image), row-major,
 // (cols + t - 1) / t tiles wide: the ranges the threshold levels lie in.
 void TileRanges(const cv::Mat& gray, int t, std::vector<uint8_t>* lo, std::vector<uint8_t>* hi);
+
+// A quad's corners in OpenCV's candidate order: corners 1 and 3 swapped where (c1 - c0) x (c2 - c0) < 0
+// in image coordinates (clockwise on screen), computed as the aruco module does (each difference in the
+// points' own type, the product in double): FindQuads' quads and mcmt's own detectMarkers.
+template <typename Point>
+void MakeClockwise(std::array<Point, 4>* q) {
+  const double dx1 = (*q)[1].x - (*q)[0].x, dy1 = (*q)[1].y - (*q)[0].y;
+  const double dx2 = (*q)[2].x - (*q)[0].x, dy2 = (*q)[2].y - (*q)[0].y;
+  if (dx1 * dy2 - dy1 * dx2 < 0.0) std::swap((*q)[1], (*q)[3]);
+}
 
 // Quads of dark-bordered shapes in `gray` (8-bit, one channel), from every level's binary image, corners
 // in image pixels (pixel centres at integer coordinates), ordered with (c1 - c0) x (c2 - c0) >= 0 in

@@ -1327,9 +1327,7 @@ int countNonZero(InputArray src_array) {
     const uint8_t* p = src.data + src.step[0] * static_cast<size_t>(y);
     int x = 0;
     if (src.cols == 4) {  // the aruco module's cells (6 px, margins of 1): one word a row
-      uint32_t w;
-      std::memcpy(&w, p, 4);
-      zeros += ((w & 0xffu) == 0) + ((w & 0xff00u) == 0) + ((w & 0xff0000u) == 0) + ((w >> 24) == 0);
+      zeros += mcmt::ZeroBytesOf4(p);
       continue;
     }
 #ifdef __SSE2__

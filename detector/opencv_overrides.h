@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <opencv2/core.hpp>
 
 namespace mcmt {
@@ -11,6 +12,17 @@ namespace mcmt {
 // opencv_overrides.cc from the mcmt_detector archive: nothing else names that file's symbols, and the
 // linker takes an archive member only for a symbol something references.
 void LinkOpenCvOverrides();
+
+// The zero bytes among the 4 at p, by one word's arithmetic (the aruco module's cells are 4 px rows: its
+// countNonZero calls and mcmt's own detectMarkers count them so). Per byte b, (b & 0x7f) + 0x7f has its top
+// bit set unless b & 0x7f is 0 (no carry leaves the byte), so with b's own top bit or-ed in, the top bit is
+// clear exactly where b is 0.
+inline int ZeroBytesOf4(const uint8_t* p) {
+  uint32_t w;
+  std::memcpy(&w, p, 4);
+  const uint32_t zero_tops = ~(((w & 0x7f7f7f7fu) + 0x7f7f7f7fu) | w | 0x7f7f7f7fu);
+  return static_cast<int>(((zero_tops >> 7) * 0x01010101u) >> 24);
+}
 
 // *dst (8-bit, src's size, not src) = `below` where src - mean <= at, else `above`, the mean exactly
 // cv::blur(src, mean, Size(k, k))'s (BORDER_REPLICATE; for a view, its whole image's pixels beyond it

@@ -1089,6 +1089,24 @@ TEST(CandidateSearch, DictionaryIdentifyIsOpenCVs) {
   compare(*large, bits, 0.6);
 }
 
+// ZeroBytesOf4 (the cells' rows in countNonZero and in mcmt's own detectMarkers) counts the zero bytes
+// of every word: each byte value in each of the 4 places, beside random bytes of every value.
+TEST(CandidateSearch, ZeroBytesOf4CountsEveryByte) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (int place = 0; place < 4; ++place)
+    for (int value = 0; value < 256; ++value)
+      for (int trial = 0; trial < 8; ++trial) {
+        uint8_t p[4];
+        for (uint8_t& b : p) b = static_cast<uint8_t>(trial < 2 ? 255 * trial : byte(rng));
+        p[place] = static_cast<uint8_t>(value);
+        int zeros = 0;
+        for (const uint8_t b : p) zeros += b == 0;
+        ASSERT_EQ(ZeroBytesOf4(p), zeros)
+            << "bytes " << int(p[0]) << " " << int(p[1]) << " " << int(p[2]) << " " << int(p[3]);
+      }
+}
+
 // The detector's cv::countNonZero (detector/opencv_overrides.cc) is the one the program calls, the aruco
 // module's bit reading included, and counts as OpenCV's own: 8-bit noise of several densities and sizes
 // (below, at and across the vector width, over 255 vectors a row), views, 4 x 4 cells, an empty matrix; other
