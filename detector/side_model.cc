@@ -140,7 +140,9 @@ static_assert(kQ == 6, "SideFit::margin_width() reads params[kQ] as params[6]");
 bool CholeskyLower(Eigen::Matrix<double, 8, 8>* a) {
   Eigen::Matrix<double, 8, 8>& m = *a;
   static_assert(!Eigen::Matrix<double, 8, 8>::IsRowMajor, "columns are contiguous");
+#ifdef __SSE2__
   double* const data = m.data();  // (i, j) at data[i + 8 j]
+#endif
 #pragma GCC unroll 8
   for (int k = 0; k < 8; ++k) {
     double x = m(k, k);
