@@ -706,10 +706,27 @@ inline cv::Vec3d UnitPoint(int side, double along, double depth) {
 
 // Where a point (ideal pixels) lies along the side `side` of the marker: the unit-square coordinate
 // UnitPoint takes as `along` (0..1 from the side's start corner).
+// Only the two rows of unit_from_ideal's product that the side uses, and one division (CollectSideRays
+// calls it three times per ray; raycache), each row by cv::Matx's product's operations: the same values.
 inline double AlongSide(const cv::Matx33d& unit_from_ideal, int side, const Eigen::Vector2d& ideal) {
-  const cv::Vec3d m = unit_from_ideal * cv::Vec3d(ideal.x(), ideal.y(), 1.0);
-  const double ux = m[0] / m[2], uy = m[1] / m[2];
-  return side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+  auto row = [&](int i) {
+    double s = 0;
+    s += unit_from_ideal(i, 0) * ideal.x();
+    s += unit_from_ideal(i, 1) * ideal.y();
+    s += unit_from_ideal(i, 2) * 1.0;
+    return s;
+  };
+  const double w = row(2);
+  switch (side) {
+    case 0:
+      return row(0) / w;
+    case 1:
+      return row(1) / w;
+    case 2:
+      return 1.0 - row(0) / w;
+    default:
+      return 1.0 - row(1) / w;
+  }
 }
 
 // A line of the marker's grid in ideal pixels, through the unit-square points a and b: a point on it (a's)
