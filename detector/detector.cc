@@ -144,15 +144,42 @@ inline __m128 SampleFourInside(const uint8_t* data, size_t step, __m128i offset_
 }
 #endif
 
+// The image the rays sample, with what SampleRayInside and Inside derive from it, once per side rather
+// than once per ray (raycache: 52,000 rays in bench_detector's 10 accurate frames).
+struct RayImage {
+  explicit RayImage(const cv::Mat& gray)
+      : gray(gray),
+        data(gray.data),
+        step(gray.step[0]),
+        max_x(gray.cols - 1.001),
+        max_y(gray.rows - 1.001),
+        small(step < 32768 && gray.cols < 32768 && gray.rows < 32768) {
+#ifdef __SSE2__
+    offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
+#endif
+  }
+  // Inside's test, with its limits computed once (the same values).
+  bool Inside(double x, double y) const { return x >= 0.0 && y >= 0.0 && x <= max_x && y <= max_y; }
+  const cv::Mat& gray;
+  const uint8_t* data;
+  size_t step;
+  double max_x, max_y;
+  bool small;  // SampleFourInside's offsets are exact
+#ifdef __SSE2__
+  __m128i offset_weights;  // SampleFourInside's
+#endif
+};
+
 // Samples at the points origin + (s0 + j ds) direction, begin <= j < end, all Inside, into out[j - begin]
 // (SampleInside's values; with SSE2 four at a time by the same operations, two at a time for fewer than four
 // samples or an image of 2^15 or more pixels or bytes across).
-__attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, const Eigen::Vector2d& origin,
+__attribute__((always_inline)) inline void SampleRayInside(const RayImage& image,
+                                                           const Eigen::Vector2d& origin,
                                                            const Eigen::Vector2d& direction, double s0,
                                                            double ds, int begin, int end, float* out) {
 #ifdef __SSE2__
-  const uint8_t* data = gray.data;
-  const size_t step = gray.step[0];
+  const uint8_t* data = image.data;
+  const size_t step = image.step;
   const __m128d first = _mm_set1_pd(s0), width = _mm_set1_pd(ds), two = _mm_set1_pd(2.0);
   const __m128d ox = _mm_set1_pd(origin.x()), oy = _mm_set1_pd(origin.y());
   const __m128d dx = _mm_set1_pd(direction.x()), dy = _mm_set1_pd(direction.y());
@@ -160,11 +187,10 @@ __attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, 
     const __m128d s = _mm_add_pd(first, _mm_mul_pd(js, width));
     return SampleTwoInside(data, step, _mm_add_pd(ox, _mm_mul_pd(s, dx)), _mm_add_pd(oy, _mm_mul_pd(s, dy)));
   };
-  const bool small = step < 32768 && gray.cols < 32768 && gray.rows < 32768;  // SampleFourInside's offsets
-  if (small && end - begin >= 4) {
+  if (image.small && end - begin >= 4) {
     // Four at a time; the last four end at `end` (overlapping the ones before where the count is not a
     // multiple of four: those samples are written again with the same values).
-    const __m128i offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
+    const __m128i offset_weights = image.offset_weights;
     auto four_at = [&](int j, __m128d js) {  // js: (j, j + 1)
       const __m128d s01 = _mm_add_pd(first, _mm_mul_pd(js, width));
       const __m128d s23 = _mm_add_pd(first, _mm_mul_pd(_mm_add_pd(js, two), width));
@@ -188,7 +214,7 @@ __attribute__((always_inline)) inline void SampleRayInside(const cv::Mat& gray, 
 #else
   for (int j = begin; j < end; ++j) {
     const double s = s0 + j * ds;
-    out[j - begin] = SampleInside(gray, origin.x() + s * direction.x(), origin.y() + s * direction.y());
+    out[j - begin] = SampleInside(image.gray, origin.x() + s * direction.x(), origin.y() + s * direction.y());
   }
 #endif
 }
@@ -210,7 +236,7 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
     float values[kChunk];
     for (int j0 = 0; j0 < n; j0 += kChunk) {
       const int count = std::min(kChunk, n - j0);
-      SampleRayInside(gray, origin, direction, s0, ds, j0, j0 + count, values);
+      SampleRayInside(RayImage(gray), origin, direction, s0, ds, j0, j0 + count, values);
       visit(j0, values, count);
     }
     return n;
@@ -226,22 +252,22 @@ int SampleLine(const cv::Mat& gray, int n, const Eigen::Vector2d& origin, const 
 
 // Whether SampleLine's n points origin + (s0 + j ds) direction are all inside the image (its first and
 // last are: the points move monotonically), by SampleLine's test.
-inline bool RayInside(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+inline bool RayInside(const RayImage& image, int n, const Eigen::Vector2d& origin,
                       const Eigen::Vector2d& direction, double s0, double ds) {
   const double s1 = s0 + (n - 1) * ds;
-  return Inside(gray, origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
-         Inside(gray, origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y());
+  return image.Inside(origin.x() + s0 * direction.x(), origin.y() + s0 * direction.y()) &&
+         image.Inside(origin.x() + s1 * direction.x(), origin.y() + s1 * direction.y());
 }
 
 // The n samples of SampleLine into out[0..n): SampleLine's values where it samples (into `out` directly
 // where both ends are inside: no copy), the others left as they were; returns how many were sampled.
-inline int SampleLineInto(const cv::Mat& gray, int n, const Eigen::Vector2d& origin,
+inline int SampleLineInto(const RayImage& image, int n, const Eigen::Vector2d& origin,
                           const Eigen::Vector2d& direction, double s0, double ds, float* out) {
-  if (RayInside(gray, n, origin, direction, s0, ds)) {
-    SampleRayInside(gray, origin, direction, s0, ds, 0, n, out);
+  if (RayInside(image, n, origin, direction, s0, ds)) {
+    SampleRayInside(image, origin, direction, s0, ds, 0, n, out);
     return n;
   }
-  return SampleLine(gray, n, origin, direction, s0, ds,
+  return SampleLine(image.gray, n, origin, direction, s0, ds,
                     [&](int j, const float* v, int count) { std::copy(v, v + count, out + j); });
 }
 
@@ -670,6 +696,15 @@ int InnerCell(const cv::Mat& bits, int cells, int side, int col, int row) {
   }
 }
 
+// static_cast<int>(std::floor(x)): the truncation, one less where it rounded up (the compiler expands
+// std::floor into about 15 instructions on plain x86-64, without SSE4.1's round). Beyond +-2^30 (and for
+// NaN) std::floor itself, so that every value is converted as before (raycache).
+inline int FloorToInt(double x) {
+  if (!(std::abs(x) < 1073741824.0)) return static_cast<int>(std::floor(x));
+  const int i = static_cast<int>(x);
+  return i - (x < i ? 1 : 0);
+}
+
 // Beyond 8.5 sigmas Phi is 1 to double precision and below 1e-17: no exponential.
 inline double Phi(double z) {
   if (std::abs(z) > 8.5) return z > 0 ? 1.0 : 0.0;
@@ -697,10 +732,27 @@ inline cv::Vec3d UnitPoint(int side, double along, double depth) {
 
 // Where a point (ideal pixels) lies along the side `side` of the marker: the unit-square coordinate
 // UnitPoint takes as `along` (0..1 from the side's start corner).
+// Only the two rows of unit_from_ideal's product that the side uses, and one division (CollectSideRays
+// calls it three times per ray; raycache), each row by cv::Matx's product's operations: the same values.
 inline double AlongSide(const cv::Matx33d& unit_from_ideal, int side, const Eigen::Vector2d& ideal) {
-  const cv::Vec3d m = unit_from_ideal * cv::Vec3d(ideal.x(), ideal.y(), 1.0);
-  const double ux = m[0] / m[2], uy = m[1] / m[2];
-  return side == 0 ? ux : side == 1 ? uy : side == 2 ? 1.0 - ux : 1.0 - uy;
+  auto row = [&](int i) {
+    double s = 0;
+    s += unit_from_ideal(i, 0) * ideal.x();
+    s += unit_from_ideal(i, 1) * ideal.y();
+    s += unit_from_ideal(i, 2) * 1.0;
+    return s;
+  };
+  const double w = row(2);
+  switch (side) {
+    case 0:
+      return row(0) / w;
+    case 1:
+      return row(1) / w;
+    case 2:
+      return 1.0 - row(0) / w;
+    default:
+      return 1.0 - row(1) / w;
+  }
 }
 
 // A line of the marker's grid in ideal pixels, through the unit-square points a and b: a point on it (a's)
@@ -763,6 +815,7 @@ struct SideRays {
     thread_local std::vector<float> values;
     thread_local std::vector<int> whole_rays;  // per group: its rays inside the image at every bin
     whole_rays.clear();
+    const RayImage image(*gray);
     for (size_t r = 0; r < rays.size(); ++r) {
       if (half >= 0 && (rays[r].along >= split) != (half == 1)) continue;
       const int group = profiles->AddRay(rays[r].pattern, rays[r].depths, rays[r].other,
@@ -776,9 +829,9 @@ struct SideRays {
       double* sum = &profiles->sum[static_cast<size_t>(group) * bins];
       double* count = &profiles->count[static_cast<size_t>(group) * bins];
       const Eigen::Vector2d origin(ox, oy), normal(nx, ny);
-      if (RayInside(*gray, bins, origin, normal, first_s, du)) {
+      if (RayInside(image, bins, origin, normal, first_s, du)) {
         values.resize(bins);
-        SampleRayInside(*gray, origin, normal, first_s, du, 0, bins, values.data());
+        SampleRayInside(image, origin, normal, first_s, du, 0, bins, values.data());
         AddToSums(values.data(), bins, sum);
         if (whole_rays.size() <= static_cast<size_t>(group)) whole_rays.resize(group + 1, 0);
         ++whole_rays[group];
@@ -837,7 +890,7 @@ bool AddRowSteps(const std::vector<uint8_t>& row_cells, int cells, int side, con
     const double t_out = std::isfinite(t[r + 1]) ? std::min(t[r + 1], t_max) : t_max;
     const double in = column_at(t[r]), out = column_at(t_out);
     if (!std::isfinite(in) || !std::isfinite(out)) return false;
-    const int c_in = static_cast<int>(std::floor(in)), c_out = static_cast<int>(std::floor(out));
+    const int c_in = FloorToInt(in), c_out = FloorToInt(out);
     const int way = c_out > c_in ? 1 : -1;
     bool stepped = false;
     for (int c = c_in; c != c_out; c += way) {
@@ -900,7 +953,7 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
     const Eigen::Vector2d& q = ideal_origins[i];
     const double along = AlongSide(unit_from_ideal, side, q);
     const double a = along * cells;
-    const int col = static_cast<int>(std::floor(a));
+    const int col = FloorToInt(a);
     const double frac = a - col;
     // Away from the corners (where the perpendicular side's outer edge is near) and the middle of a
     // column (but blur along the side is modelled: `other` below).
@@ -936,7 +989,7 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
         ok = false;
         break;
       }
-      const int c = static_cast<int>(std::floor(at));
+      const int c = FloorToInt(at);
       // Beyond the marker's outline (a ray near an acute corner drifts across the perpendicular side's
       // border into its margin) the row is not the code the model takes it for: in the skew pass
       // (TurnSkewedSides) the ray is not used. (Elsewhere too it would move the corners of passes that
@@ -948,7 +1001,10 @@ double CollectSideRays(const cv::Mat& bits, int cells, int side, const PixelMap&
       ray.pattern[r - 1] = static_cast<uint8_t>(r < cells ? cell_of(r, c) : 0);
       const cv::Vec3d c0 = ideal_from_unit * UnitPoint(side, (at - 0.5) / cells, (r + 0.5) / cells);
       const cv::Vec3d c1 = ideal_from_unit * UnitPoint(side, (at + 0.5) / cells, (r + 0.5) / cells);
-      const double column_px = std::hypot(c1[0] / c1[2] - c0[0] / c0[2], c1[1] / c1[2] - c0[1] / c0[2]);
+      // sqrt, not std::hypot (a libm call, 54 instructions; 17 % of its values differ in the last bit from
+      // sqrt's): the operands are differences of ideal pixels, far from over- or underflow (raycache).
+      const double column_dx = c1[0] / c1[2] - c0[0] / c0[2], column_dy = c1[1] / c1[2] - c0[1] / c0[2];
+      const double column_px = std::sqrt(column_dx * column_dx + column_dy * column_dy);
       const double scale = column_px / sigma_along;
       // Phi at the cells' boundaries k - at, each computed once: a cell after one of the other colour
       // takes its first boundary's from there (the same values as a memo of each boundary's, in the same
@@ -1223,6 +1279,7 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
   thread_local std::vector<uint8_t> neighbours;
   neighbours.resize(cells);
   if (!no_bits) InnerNeighbours(bits, cells, side, neighbours.data());
+  const RayImage image(gray);
   for (int i = 0; i < n; ++i) {
     const double t = margin + (1.0 - 2.0 * margin) * (i + 0.5) / n;
     const Eigen::Vector2d q = a + t * (b - a);
@@ -1238,7 +1295,7 @@ bool SampleSide(const cv::Mat& gray, const cv::Mat& bits, int cells, const Pixel
     s->ideal_origins[i] = q;
     s->normals[i] = normal;
     float* prof = &s->profiles[static_cast<size_t>(i) * m];
-    if (SampleLineInto(gray, m, p, normal, -s->h, s->ds, prof) < m) continue;
+    if (SampleLineInto(image, m, p, normal, -s->h, s->ds, prof) < m) continue;
     s->valid[i] = 1;
     ++s->num_valid;
     s->clean[i] = no_bits || CleanNeighbour(neighbours.data(), cells, t * cells) ? 1 : 0;
