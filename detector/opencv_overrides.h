@@ -30,6 +30,12 @@ inline int ZeroBytesOf4(const uint8_t* p) {
 // 8-bit with k odd, 3 to 15, and |at| <= 256.
 bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst);
 
+// *small and *large = cv::adaptiveThreshold(src, 255, ADAPTIVE_THRESH_MEAN_C, THRESH_BINARY_INV, w, delta)
+// for w = k and w = 3 k, bit for bit (test_detector_unit, CandidateSearch.AdaptiveThresholdPairIsOpenCVs), in
+// one pass: the 3k window's sums from the k window's (detectMarkers' 5 and 15 px windows). False (nothing
+// written) unless src is 8-bit with k 3 or 5. The three images must be distinct.
+bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* small, cv::Mat* large);
+
 // cv::aruco::detectMarkers (OpenCV 4.6, _findMarkerContours) drops every border cv::findContours returns
 // with fewer points than (unsigned)(minMarkerPerimeterRate * max(cols, rows)) of its binary image, or than
 // 4 minSideLengthCanonicalImg where it passes that (ArUco3), before looking at it. While one lives, mcmt's

@@ -554,6 +554,56 @@ TEST(CandidateSearch, Avx2ThresholdIsSse2) {
   EXPECT_EQ(differing_pixels, 0);
 }
 
+// AdaptiveThresholdPair (the search's 5 and 15 px windows in one pass) gives OpenCV's own
+// cv::adaptiveThreshold images for both windows, bit for bit, through the AVX2 code and the SSE2 code:
+// k 3 and 5, random images of widths around the vector widths and heights below and above the windows
+// (noise, blurred noise, saturated blocks: the largest sums), views of a larger image (thresholded as
+// cv::adaptiveThreshold does, their edges replicated), fractional and large offsets.
+TEST(CandidateSearch, AdaptiveThresholdPairIsOpenCVs) {
+  const auto [program, opencv] = AdaptiveThresholdDefinitions();
+  ASSERT_NE(opencv, nullptr);
+  const bool was = UseDetectorAvx2(true);
+  std::mt19937 rng(47);
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  int compared = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    const int width = trial < 60 ? uniform(1, 70) : uniform(71, 700), height = uniform(1, 70);
+    cv::Mat image(height + 40, width + 60, CV_8U);
+    cv::randu(image, 0, 256);
+    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+    if (trial % 3 == 2)
+      for (int b = 0; b < 6; ++b)
+        cv::rectangle(
+            image,
+            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
+            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Mat view = image(cv::Rect(uniform(0, 60), uniform(0, 40), width, height));
+    const double deltas[] = {7.0, 7.5, 0.0, -3.2, 255.0, 300.0};
+    const double delta = deltas[trial % 6];
+    for (int k : {3, 5}) {
+      cv::Mat theirs[2];
+      opencv(view, theirs[0], 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, k, delta);
+      opencv(view, theirs[1], 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV, 3 * k, delta);
+      for (bool avx2 : {true, false}) {
+        if (avx2 && !DetectorAvx2Available()) continue;
+        UseDetectorAvx2(avx2);
+        SCOPED_TRACE(::testing::Message() << "trial " << trial << " " << view.size() << " k " << k
+                                          << " delta " << delta << (avx2 ? " avx2" : " sse2"));
+        cv::Mat small, large;
+        ASSERT_TRUE(AdaptiveThresholdPair(view, k, delta, &small, &large));
+        ASSERT_EQ(cv::norm(small, theirs[0], cv::NORM_INF), 0.0) << "small";
+        ASSERT_EQ(cv::norm(large, theirs[1], cv::NORM_INF), 0.0) << "large";
+        ++compared;
+      }
+    }
+  }
+  UseDetectorAvx2(was);
+  EXPECT_GE(compared, 240);
+  cv::Mat small, large;
+  EXPECT_FALSE(AdaptiveThresholdPair(cv::Mat(20, 20, CV_8U, cv::Scalar(0)), 7, 7.0, &small, &large));
+  EXPECT_FALSE(AdaptiveThresholdPair(cv::Mat(20, 20, CV_16U, cv::Scalar(0)), 5, 7.0, &small, &large));
+}
+
 // A warp test's random map (as the aruco module reads a candidate): a quad about a centre drawn in x x y
 // (px), each corner k at k 90 deg plus an angle drawn in +-jitter (rad) and at the radius drawn in `radius`
 // times a factor drawn in `factor`, onto the corners of a `size` square. The draws in this order.
