@@ -1740,6 +1740,8 @@ double MaxCornerMove(const std::array<Point, 4>& from, const std::array<Point, 4
 // model_fit): no crossing-only passes, for corners already on the edges (RefineMarkerCorners).
 // `lines_within_profiles` (with model_fit): a crossing line beyond its profiles is no crossing
 // (LineWithinProfiles). `choices` (optional): the sides' surround choices of the last model pass.
+// `settled` (optional): the model passes ended by moving the corners less than their limit (not at
+// kMaxModelPasses, where the corners are the mean of the last two passes).
 // Passes of crossing-based line fits (`passes`; without the model until the corners move less than
 // 0.01 px, at most `passes` + 4): they find each side's direction and bring the profiles onto the edges.
 // Then passes that also fit the side model (detector/side_model.h) to each side: its offset replaces the
@@ -1753,7 +1755,8 @@ double MaxCornerMove(const std::array<Point, 4>& from, const std::array<Point, 4
 bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const CameraModel* camera, int passes,
                 std::array<cv::Point2d, 4>* corners, bool model_fit, double* blur_sigma, double first_width,
                 bool model_only, bool fit_gamma, bool* kept_lines, int polarity, bool* model_everywhere,
-                double held_gamma, bool lines_within_profiles = false, SurroundChoices* choices = nullptr) {
+                double held_gamma, bool lines_within_profiles = false, SurroundChoices* choices = nullptr,
+                bool* settled = nullptr) {
   CV_Assert(model_fit || !model_only);
   CV_Assert(model_fit || !lines_within_profiles);
   if (blur_sigma) *blur_sigma = NAN;
@@ -1799,6 +1802,7 @@ bool RefineOnce(const cv::Mat& gray, int cells, const cv::Mat& bits, const Camer
     if (model_pass) ++model_passes;
     model_converged = model_pass && model_passes >= min_model_passes && moved < settled_px;
   }
+  if (settled) *settled = model_fit && model_converged;
   if (choices)
     for (int side = 0; side < 4; ++side)
       (*choices)[side] = {r.side_fits[side].single_surround, r.side_fits[side].margin_width()};
@@ -1903,14 +1907,19 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
   // the last round is in depends on the start, the mean of the last two does not. A round whose sides
   // made the same surround choices as the refinement before it (SameChoices: its cold fits found the
   // valleys the warm ones had kept) has not jumped between states; it only converged further, and ends
-  // the rounds at kRepeatSettledPx. Measured on bench_detector (issue 15,
+  // the rounds at kRepeatSettledPx, or at kRepeatConvergedPx where its own passes also settled (within
+  // kRoundSettledPx, not at their cap): a cold start from the corners found the same valleys and the
+  // same fixed point. Measured on bench_accuracy --quick (bench/results/2026-12-07-fewerpasses.md): after
+  // such a round of 0.01-0.02 px the next moved the corners by a median 0.0003 px (4 of 102 by more than
+  // 0.005 px, none by 0.02 px); after one that ended at the passes' cap, 8 of 72 by more than 0.005 px.
+  // -0.9 % of the accurate mode's instructions. Measured before on bench_detector (issue 15,
   // bench/results/2026-12-07-passes.md): every round that moved more than kSettledPx repeated its choices; 3
   // of 4 such second rounds are saved, -2.0 % of the accurate mode's instructions; bench_accuracy --quick's
   // corners within 0.0001 px of before on average (7 of 1442 markers more than 0.005 px, the largest 0.022
   // px). Last, the sides of a skewed quad are turned by the model (TurnSkewedSides).
   auto take = [&](std::array<cv::Point2d, 4> c, double sigma, bool kept, SurroundChoices choices) {
     constexpr int kRounds = 4;
-    constexpr double kSettledPx = 0.005, kRepeatSettledPx = 0.01;
+    constexpr double kSettledPx = 0.005, kRepeatSettledPx = 0.01, kRepeatConvergedPx = 0.02;
     std::array<cv::Point2d, 4> before = c;
     int unsettled = 0;
     for (int round = 0; round < kRounds && model_fit; ++round) {
@@ -1918,15 +1927,17 @@ bool RefineMarkerCorners(const cv::Mat& gray, int cells, const cv::Mat& bits, co
       double again_sigma = NAN;
       bool again_kept = false;
       SurroundChoices again_choices;
+      bool again_settled = false;
       ++refinement_counts.rounds;
       if (!RefineOnce(gray, cells, bits, camera, passes, &again, true, &again_sigma, 1.0, true, fit_gamma,
-                      &again_kept, polarity, nullptr, held_gamma, false, &again_choices))
+                      &again_kept, polarity, nullptr, held_gamma, false, &again_choices, &again_settled))
         break;
       const double moved = MaxCornerMove(c, again);
       const bool repeated = SameChoices(choices, again_choices);
+      const double repeated_px = again_settled ? kRepeatConvergedPx : kRepeatSettledPx;
       before = c;
       c = again, sigma = again_sigma, kept = again_kept, choices = again_choices;
-      if (moved < kSettledPx || (repeated && moved < kRepeatSettledPx)) {
+      if (moved < kSettledPx || (repeated && moved < repeated_px)) {
         unsettled = 0;
         break;
       }
