@@ -498,6 +498,10 @@ TEST(DetectorAccuracy, SideOnTheCodesEdgeIsTurned) {
 // each steep view's distance and so the map's scale: MapperReferenceRenders). The model turns the sides of
 // skewed quads (SkewTurnWeight in detector.cc): +0.079 / +0.711 %. Bounds: the long diagonal within 0.25 %,
 // the short one within 0.7 % of the long one's error (the quad's shape).
+// The shape figure sits at its bound (0.00698 at 991ff95) and is not stable in the last bits: the
+// candidates moved by 1e-9 px flip some side fits (bench/results/2026-12-07-fullsettle.md) and take it to
+// 0.00742 (-1e-9 px). A change that moves it across 0.007 by such a flip is not a worse shape; show that
+// with the perturbation probe (2026-12-07-fullsettle-probe.patch) before moving the bound.
 TEST(DetectorAccuracy, SteepViewsKeepTheirDiagonals) {
   auto dict = LoadDictionary("DICT_6X6_250");
   MarkerConfig mc;
