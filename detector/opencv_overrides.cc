@@ -160,13 +160,19 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
   for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
 }
 
+// Where CompareWithWindowSums finds a pixel's window sum: sums[x] (WindowSums), sums[x + k] - sums[x]
+// (PrefixSums), or sums[x] + b[x] + c[x] (three rows of sums added in the comparison, not stored first).
+enum SumsAre { kWindowSums, kPrefixSums, kThreeRows };
+
 // d[x] = `below` where the window sum >= area * (p - at) - offset (p = s[x]; p - at <= 0: always,
-// p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum: sums[x]
-// (WindowSums), or with kPrefix sums[x + k] - sums[x] modulo 2^16 (sums: PrefixSums).
-template <bool kPrefix>
-[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
+// p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum as kSums says
+// (SumsAre), modulo 2^16 (b and c are read for kThreeRows only).
+template <int kSums>
+[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums,
+                                                         const uint16_t* b, const uint16_t* c, int k, int w,
                                                          int at, int area, int offset, uint8_t below,
                                                          uint8_t above, uint8_t* d) {
+  constexpr bool kPrefix = kSums == kPrefixSums;
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
@@ -180,6 +186,9 @@ template <bool kPrefix>
     const __m128i t = _mm_subs_epu16(_mm_mullo_epi16(v, area16), offset16);
     __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x + (kPrefix ? k : 0)));
     if (kPrefix) sum = _mm_sub_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x)));
+    if (kSums == kThreeRows)
+      sum = _mm_add_epi16(_mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + at_x))),
+                          _mm_loadu_si128(reinterpret_cast<const __m128i*>(c + at_x)));
     return _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
   };
   auto select = [&](__m128i mask) {
@@ -198,7 +207,9 @@ template <bool kPrefix>
   }
 #endif
   for (; x < w; ++x) {
-    const int sum = kPrefix ? static_cast<uint16_t>(sums[x + k] - sums[x]) : sums[x];
+    const int sum = kPrefix               ? static_cast<uint16_t>(sums[x + k] - sums[x])
+                    : kSums == kThreeRows ? static_cast<uint16_t>(sums[x] + b[x] + c[x])
+                                          : sums[x];
     d[x] = sum >= std::max(0, area * std::clamp(s[x] - at, 0, 256) - offset) ? below : above;
   }
 }
@@ -270,9 +281,11 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
   for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
 }
 
-template <bool kPrefix>
-void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                           uint8_t below, uint8_t above, uint8_t* d) {
+template <int kSums>
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c,
+                           int k, int w, int at, int area, int offset, uint8_t below, uint8_t above,
+                           uint8_t* d) {
+  constexpr bool kPrefix = kSums == kPrefixSums;
   int x = 0;
   const __m256i zero = _mm256_setzero_si256(), at16 = _mm256_set1_epi16(static_cast<int16_t>(at));
   const __m256i area16 = _mm256_set1_epi16(static_cast<int16_t>(area)), limit = _mm256_set1_epi16(256);
@@ -285,6 +298,7 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
     const __m256i t = _mm256_subs_epu16(_mm256_mullo_epi16(v, area16), offset16);
     __m256i sum = Load(sums + at_x + (kPrefix ? k : 0));
     if (kPrefix) sum = _mm256_sub_epi16(sum, Load(sums + at_x));
+    if (kSums == kThreeRows) sum = _mm256_add_epi16(_mm256_add_epi16(sum, Load(b + at_x)), Load(c + at_x));
     return _mm256_cmpeq_epi16(_mm256_subs_epu16(t, sum), zero);  // sum >= t
   };
   for (; x + 32 <= w; x += 32) {  // 32 pixels: one load, pack (lanes back in order) and store
@@ -295,7 +309,9 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
                                  _MM_SHUFFLE(3, 1, 2, 0));
     Store(d + x, _mm256_blendv_epi8(above8, below8, mask));
   }
-  mcmt::CompareWithWindowSums<kPrefix>(s + x, sums + x, k, w - x, at, area, offset, below, above, d + x);
+  const bool three = kSums == kThreeRows;
+  mcmt::CompareWithWindowSums<kSums>(s + x, sums + x, three ? b + x : b, three ? c + x : c, k, w - x, at,
+                                     area, offset, below, above, d + x);
 }
 
 }  // namespace avx2
@@ -316,10 +332,10 @@ struct Sse2BoxMean {
   static void Three(const uint16_t* a, const uint16_t* b, const uint16_t* c, int n, uint16_t* out) {
     AddThree(a, b, c, n, out);
   }
-  template <bool kPrefix>
-  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                      uint8_t below, uint8_t above, uint8_t* d) {
-    CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  template <int kSums>
+  static void Compare(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c, int k,
+                      int w, int at, int area, int offset, uint8_t below, uint8_t above, uint8_t* d) {
+    CompareWithWindowSums<kSums>(s, sums, b, c, k, w, at, area, offset, below, above, d);
   }
 };
 #if MCMT_SEARCH_HAS_AVX2
@@ -333,10 +349,10 @@ struct Avx2BoxMean {
   static void Three(const uint16_t* a, const uint16_t* b, const uint16_t* c, int n, uint16_t* out) {
     avx2::AddThree(a, b, c, n, out);
   }
-  template <bool kPrefix>
-  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                      uint8_t below, uint8_t above, uint8_t* d) {
-    avx2::CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  template <int kSums>
+  static void Compare(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c, int k,
+                      int w, int at, int area, int offset, uint8_t below, uint8_t above, uint8_t* d) {
+    avx2::CompareWithWindowSums<kSums>(s, sums, b, c, k, w, at, area, offset, below, above, d);
   }
 };
 #endif
@@ -373,10 +389,12 @@ void ThresholdAgainstBoxMeanWith(const cv::Mat& src, int k, int at, int offset, 
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
       Lanes::kSumsOf[r](column, w, sums.data());
-      Lanes::template Compare<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::template Compare<kWindowSums>(s, sums.data(), nullptr, nullptr, k, w, at, area, offset, below,
+                                           above, d);
     } else {  // sums[i]: the sum of column[-r .. i - r), x's window column[x - r .. x + r]: i = x + k, x
       Lanes::Prefix(padded.data(), w + 2 * r, sums.data());
-      Lanes::template Compare<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::template Compare<kPrefixSums>(s, sums.data(), nullptr, nullptr, k, w, at, area, offset, below,
+                                           above, d);
     }
   }
 }
@@ -401,19 +419,20 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
 // sums from -k to w + k (the small threshold's, over 2k more columns), three of them added across (k apart)
 // into a ring of 2k + 1 rows, three rows of it added down (k apart) for the large threshold k rows behind.
 // Instead of the large window's own column sums and prefix sums: 0.55 fewer instructions per pixel
-// (AVX2; bench_detector's 15 px window). Same sums modulo 2^16 (below 2^16: k <= 5), same images.
-template <typename Lanes>
+// (AVX2; bench_detector's 15 px window). Same sums modulo 2^16 (below 2^16: k <= 5), same images. The
+// three ring rows are added within the comparison (kThreeRows), not stored first. Row y of each image:
+// small_row(y), large_row(y) (w bytes each: a cv::Mat's rows, or a FramedBinary's).
+template <typename Lanes, typename SmallRow, typename LargeRow>
 void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, int offset_small, int at_large,
-                                      int offset_large, uint8_t below, uint8_t above, cv::Mat& small,
-                                      cv::Mat& large) {
+                                      int offset_large, uint8_t below, uint8_t above, SmallRow small_row,
+                                      LargeRow large_row) {
   const int r = k / 2, w = src.cols, h = src.rows, reach = k + r;  // columns -reach .. w + reach
   if (w == 0 || h == 0) return;
   const int ring_rows = 2 * k + 1;
-  thread_local std::vector<uint16_t> padded, box, ring, sums;
+  thread_local std::vector<uint16_t> padded, box, ring;
   padded.assign(static_cast<size_t>(w) + 2 * reach, 0);
   box.resize(static_cast<size_t>(w) + 2 * k);
   ring.resize(static_cast<size_t>(ring_rows) * w);
-  sums.resize(static_cast<size_t>(w));
   uint16_t* column = padded.data() + reach;  // column[-reach .. w + reach): edges replicated
   auto row = [&](int y) { return src.ptr<uint8_t>(std::clamp(y, 0, h - 1)); };
   auto ring_row = [&](int y) {
@@ -428,15 +447,14 @@ void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, i
     // box[i]: the k-window sum centred on column i - k, i < w + 2k.
     Lanes::kSumsOf[r](column - k, w + 2 * k, box.data());
     if (y >= 0 && y < h)
-      Lanes::template Compare<false>(src.ptr<uint8_t>(y), box.data() + k, k, w, at_small, k * k, offset_small,
-                                     below, above, small.ptr<uint8_t>(y));
+      Lanes::template Compare<kWindowSums>(src.ptr<uint8_t>(y), box.data() + k, nullptr, nullptr, k, w,
+                                           at_small, k * k, offset_small, below, above, small_row(y));
     Lanes::Three(box.data(), box.data() + k, box.data() + 2 * k, w, ring_row(y));
     const int y_large = y - k;
-    if (y_large >= 0) {
-      Lanes::Three(ring_row(y_large - k), ring_row(y_large), ring_row(y), w, sums.data());
-      Lanes::template Compare<false>(src.ptr<uint8_t>(y_large), sums.data(), 3 * k, w, at_large, 9 * k * k,
-                                     offset_large, below, above, large.ptr<uint8_t>(y_large));
-    }
+    if (y_large >= 0)
+      Lanes::template Compare<kThreeRows>(src.ptr<uint8_t>(y_large), ring_row(y_large - k), ring_row(y_large),
+                                          ring_row(y), 3 * k, w, at_large, 9 * k * k, offset_large, below,
+                                          above, large_row(y_large));
   }
 }
 
@@ -1067,15 +1085,17 @@ bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* sma
   small->create(src.size(), CV_8UC1);
   large->create(src.size(), CV_8UC1);
   CV_Assert(small->data != src.data && large->data != src.data && small->data != large->data);
+  auto small_row = [small](int y) { return small->ptr<uint8_t>(y); };
+  auto large_row = [large](int y) { return large->ptr<uint8_t>(y); };
 #if MCMT_SEARCH_HAS_AVX2
   if (DetectorUsesAvx2()) {
-    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, *small,
-                                                  *large);
+    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0,
+                                                  small_row, large_row);
     return true;
   }
 #endif
-  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, *small,
-                                                *large);
+  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, small_row,
+                                                large_row);
   return true;
 }
 
