@@ -612,27 +612,29 @@ int FrameRow(const uint8_t* s, int w, int8_t* d) {
 #pragma GCC pop_options
 #endif
 
-// Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
-// RETR_LIST and CHAIN_APPROX_NONE finds them: its 0/1 image framed by zeros, scanned row by row; an outer
-// border starts where a 1 follows a 0, a hole's where a 0 follows a pixel of value 1 or 2, and each is
-// followed at once (FollowBorder). Points shifted by `offset`, border k's points ending at ends[k], in the
-// order found (OpenCV returns them last found first).
-void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* points,
-                 std::vector<size_t>* ends) {
+// framed->bytes sized for a cols x rows image (FramedBinary's layout) and its frame set to 0: the rows above
+// and below (and the 32 bytes after, for the last row's 32-pixel reads), each row's left and right column.
+// The image's own pixels are left to the caller, which writes every one.
+void PrepareFrame(int cols, int rows, FramedBinary* framed) {
+  framed->cols = cols, framed->rows = rows;
+  const std::ptrdiff_t step = cols + 2;
+  framed->bytes.resize(static_cast<size_t>(step) * (rows + 2) + 32);
+  int8_t* const bytes = framed->bytes.data();
+  std::fill_n(bytes, step, 0);
+  std::fill_n(bytes + (rows + 1) * step, step + 32, 0);
+  for (int y = 1; y <= rows; ++y) bytes[y * step] = 0, bytes[y * step + cols + 1] = 0;
+}
+
+// *framed = the 0/1 image of the nonzero pixels of `src` (8-bit, one channel), framed by zeros.
+void FrameNonzero(const cv::Mat& src, FramedBinary* framed) {
   const int w = src.cols, h = src.rows;
-  const std::ptrdiff_t step = w + 2;
-  thread_local std::vector<int8_t> framed;
-  // Every byte written below (no clearing pass); 32 more for the last row's 32-pixel reads.
-  framed.resize(static_cast<size_t>(step) * (h + 2) + 32);
-  std::fill_n(framed.begin(), step, 0);
-  std::fill_n(framed.begin() + (h + 1) * step, step + 32, 0);
+  PrepareFrame(w, h, framed);
 #if MCMT_SEARCH_HAS_AVX2
   const bool avx2 = DetectorUsesAvx2();
 #endif
   for (int y = 0; y < h; ++y) {
     const uint8_t* s = src.ptr<uint8_t>(y);
-    int8_t* d = framed.data() + (y + 1) * step + 1;
-    d[-1] = 0, d[w] = 0;
+    int8_t* d = framed->Row(y);
     int x = 0;
 #if MCMT_SEARCH_HAS_AVX2
     if (avx2) x = avx2::FrameRow(s, w, d);
@@ -645,6 +647,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
 #endif
     for (; x < w; ++x) d[x] = s[x] != 0 ? 1 : 0;
   }
+}
+
+// Every border of the 1 pixels of `framed` (a 0/1 image framed by zeros) as OpenCV's findContours with
+// RETR_LIST and CHAIN_APPROX_NONE finds them in the nonzero pixels of its input (its 0/1 image framed by
+// zeros), scanned row by row; an outer border starts where a 1 follows a 0, a hole's where a 0 follows a
+// pixel of value 1 or 2, and each is followed at once (FollowBorder, which marks the image). Points
+// shifted by `offset`, border k's points ending at ends[k], in the order found (OpenCV returns them last
+// found first).
+void ListBorders(FramedBinary* framed, cv::Point offset, std::vector<cv::Point>* points,
+                 std::vector<size_t>* ends) {
+  const int w = framed->cols, h = framed->rows;
+  const std::ptrdiff_t step = w + 2;
+#if MCMT_SEARCH_HAS_AVX2
+  const bool avx2 = DetectorUsesAvx2();
+#endif
   points->clear();
   ends->clear();
   const std::ptrdiff_t delta[16] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1,
@@ -653,7 +670,7 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   // marked it): where a border starts it follows it. The starts are found 16 pixels at a time, and found
   // again after each border followed (it may have marked pixels ahead).
   for (int y = 1; y <= h; ++y) {
-    int8_t* row = framed.data() + y * step;
+    int8_t* row = framed->bytes.data() + y * step;
     for (int base = 1; base <= w;) {
       int x;
 #if MCMT_SEARCH_HAS_AVX2
@@ -677,6 +694,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
       ends->push_back(points->size());
       base = x + 1;
     }
+  }
+}
+
+// *contours = the borders ListBorders found (points, ends), last found first (OpenCV's order), less those
+// of fewer than `floor` points (0: none left out).
+void BordersToContours(const std::vector<cv::Point>& points, const std::vector<size_t>& ends, size_t floor,
+                       std::vector<std::vector<cv::Point>>* contours) {
+  auto begin_of = [&](size_t k) { return k == 0 ? 0 : ends[k - 1]; };
+  size_t kept = 0;
+  for (size_t k = 0; k < ends.size(); ++k) kept += ends[k] - begin_of(k) >= floor;
+  contours->resize(kept);
+  for (size_t k = 0; k < ends.size(); ++k) {
+    if (ends[k] - begin_of(k) < floor) continue;
+    (*contours)[--kept].assign(points.begin() + static_cast<std::ptrdiff_t>(begin_of(k)),
+                               points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
   }
 }
 
@@ -1099,6 +1131,35 @@ bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* sma
   return true;
 }
 
+bool AdaptiveThresholdPairFramed(const cv::Mat& src, int k, double delta, FramedBinary* small,
+                                 FramedBinary* large) {
+  if (src.type() != CV_8UC1 || src.dims != 2 || (k != 3 && k != 5) || small == large) return false;
+  const int offset_small = BoxMeanThresholdOffset(k * k), offset_large = BoxMeanThresholdOffset(9 * k * k);
+  if (offset_small < 0 || offset_large < 0) return false;
+  const int at = std::clamp(-cvFloor(delta), -256, 256);  // as AdaptiveThresholdPair's
+  PrepareFrame(src.cols, src.rows, small);
+  PrepareFrame(src.cols, src.rows, large);
+  auto small_row = [small](int y) { return reinterpret_cast<uint8_t*>(small->Row(y)); };
+  auto large_row = [large](int y) { return reinterpret_cast<uint8_t*>(large->Row(y)); };
+#if MCMT_SEARCH_HAS_AVX2
+  if (DetectorUsesAvx2()) {
+    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+                                                  large_row);
+    return true;
+  }
+#endif
+  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+                                                large_row);
+  return true;
+}
+
+void FramedContours(FramedBinary* image, size_t min_points, std::vector<std::vector<cv::Point>>* contours) {
+  thread_local std::vector<cv::Point> points;
+  thread_local std::vector<size_t> ends;
+  ListBorders(image, cv::Point(0, 0), &points, &ends);
+  BordersToContours(points, ends, min_points, contours);
+}
+
 bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst) {
   if (src.type() != CV_8UC1 || k % 2 != 1 || k < 3 || k > 15 || at < -256 || at > 256) return false;
   const int offset = BoxMeanThresholdOffset(k * k);
@@ -1194,20 +1255,13 @@ void findContours(InputArray image_array, OutputArrayOfArrays contours_array, in
   }
   thread_local std::vector<Point> points;
   thread_local std::vector<size_t> ends;
+  thread_local mcmt::FramedBinary framed;
   const Mat image = image_array.getMat();
-  mcmt::ListBorders(image, offset, &points, &ends);
-  auto& contours = *static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj());
+  mcmt::FrameNonzero(image, &framed);
+  mcmt::ListBorders(&framed, offset, &points, &ends);
   // Borders the aruco module would drop unseen are left out (ArucoContourFloor; 0: none).
-  const size_t floor = mcmt::ArucoContourMinimum(image.size());
-  auto begin_of = [&](size_t k) { return k == 0 ? 0 : ends[k - 1]; };
-  size_t kept = 0;
-  for (size_t k = 0; k < ends.size(); ++k) kept += ends[k] - begin_of(k) >= floor;
-  contours.resize(kept);
-  for (size_t k = 0; k < ends.size(); ++k) {
-    if (ends[k] - begin_of(k) < floor) continue;
-    contours[--kept].assign(points.begin() + static_cast<std::ptrdiff_t>(begin_of(k)),
-                            points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
-  }
+  mcmt::BordersToContours(points, ends, mcmt::ArucoContourMinimum(image.size()),
+                          static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj()));
 }
 
 // OpenCV's cv::warpPerspective, which cv::aruco::detectMarkers calls for every candidate to read its
