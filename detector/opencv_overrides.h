@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -43,8 +44,10 @@ bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* sma
 // bottom row for the scan's 32-pixel reads.
 struct FramedBinary {
   int cols = 0, rows = 0;
-  std::vector<int8_t> bytes;  // (rows + 2) x (cols + 2), then 32
-  int8_t* Row(int y) { return bytes.data() + static_cast<std::ptrdiff_t>(y + 1) * (cols + 2) + 1; }
+  // (rows + 2) x (cols + 2), then 32; capacity bytes allocated, not cleared (every byte used is written).
+  std::unique_ptr<int8_t[]> bytes;
+  size_t capacity = 0;
+  int8_t* Row(int y) { return bytes.get() + static_cast<std::ptrdiff_t>(y + 1) * (cols + 2) + 1; }
 };
 
 // AdaptiveThresholdPair with its images written as FramedBinary's: 1 where AdaptiveThresholdPair's is 255,
