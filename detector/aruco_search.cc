@@ -32,17 +32,27 @@ struct Candidate {
   int points = 0;  // its border's point count
 };
 
-// Step 1 on one binary image: its candidates appended to *out.
-void FindWindowCandidates(const cv::Mat& binary, const cv::aruco::DetectorParameters& params,
+// The fewest points of a border step 1 looks at, in a `size` binary image.
+unsigned int MinPoints(cv::Size size, const cv::aruco::DetectorParameters& params) {
+  return static_cast<unsigned int>(params.minMarkerPerimeterRate * std::max(size.width, size.height));
+}
+
+// Step 1 on one binary image: the borders of `binary` (cv::Mat, 0 and 255) or, where it is null, of
+// `framed` (FramedBinary, 0 and 1; marked by the border follower), their candidates appended to *out.
+void FindWindowCandidates(const cv::Mat* binary, FramedBinary* framed,
+                          const cv::aruco::DetectorParameters& params,
                           std::vector<std::vector<cv::Point>>* contours, std::vector<cv::Point>* approx,
                           std::vector<Candidate>* out) {
-  const int longest = std::max(binary.cols, binary.rows);
-  const auto min_points = static_cast<unsigned int>(params.minMarkerPerimeterRate * longest);
+  const cv::Size size = binary != nullptr ? binary->size() : cv::Size(framed->cols, framed->rows);
+  const int longest = std::max(size.width, size.height);
+  const auto min_points = MinPoints(size, params);
   const auto max_points = static_cast<unsigned int>(params.maxMarkerPerimeterRate * longest);
-  {
+  if (binary != nullptr) {
     // The borders shorter than min_points are dropped below anyway: findContours leaves them out.
     const ArucoContourFloor floor(params.minMarkerPerimeterRate, 0);
-    cv::findContours(binary, *contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+    cv::findContours(*binary, *contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+  } else {
+    FramedContours(framed, min_points, contours);  // the same borders, the same ones left out
   }
   const int border = params.minDistanceToBorder;
   for (const std::vector<cv::Point>& contour : *contours) {
@@ -61,8 +71,8 @@ void FindWindowCandidates(const cv::Mat& binary, const cv::aruco::DetectorParame
     if (shortest_squared < min_side * min_side) continue;
     bool near_edge = false;
     for (int j = 0; j < 4; ++j)
-      near_edge = near_edge || a[j].x < border || a[j].y < border || a[j].x > binary.cols - 1 - border ||
-                  a[j].y > binary.rows - 1 - border;
+      near_edge = near_edge || a[j].x < border || a[j].y < border || a[j].x > size.width - 1 - border ||
+                  a[j].y > size.height - 1 - border;
     if (near_edge) continue;
     Candidate c;
     for (int j = 0; j < 4; ++j)
@@ -227,12 +237,13 @@ bool DetectMarkersAsOpenCV(const cv::Mat& gray, const cv::aruco::Dictionary& dic
     return window % 2 == 0 ? window + 1 : window;
   };
   // Two windows of k and 3 k px (mcmt's 5 and 15): both binary images in one pass, the larger window's
-  // sums from the smaller one's (AdaptiveThresholdPair: the same images as cv::adaptiveThreshold's).
-  thread_local cv::Mat pair_binary[2];
+  // sums from the smaller one's, written as the border follower reads them (AdaptiveThresholdPairFramed:
+  // the same images as cv::adaptiveThreshold's, framed 0/1 images without findContours' conversion pass).
+  thread_local FramedBinary pair_binary[2];
   const bool paired = windows == 2 && window_size(1) == 3 * window_size(0) &&
-                      AdaptiveThresholdPair(image, window_size(0), p.adaptiveThreshConstant, &pair_binary[0],
-                                            &pair_binary[1]);
-  cv::Mat* const pair_images = pair_binary;
+                      AdaptiveThresholdPairFramed(image, window_size(0), p.adaptiveThreshConstant,
+                                                  &pair_binary[0], &pair_binary[1]);
+  FramedBinary* const pair_images = pair_binary;
   cv::parallel_for_(cv::Range(0, windows), [&](const cv::Range& range) {
     thread_local cv::Mat binary;
     thread_local std::vector<std::vector<cv::Point>> contours;
@@ -242,7 +253,8 @@ bool DetectMarkersAsOpenCV(const cv::Mat& gray, const cv::aruco::Dictionary& dic
         cv::adaptiveThreshold(image, binary, 255, cv::ADAPTIVE_THRESH_MEAN_C, cv::THRESH_BINARY_INV,
                               window_size(i), p.adaptiveThreshConstant);
       window_lists[i].clear();
-      FindWindowCandidates(paired ? pair_images[i] : binary, p, &contours, &approx, &window_lists[i]);
+      FindWindowCandidates(paired ? nullptr : &binary, paired ? &pair_images[i] : nullptr, p, &contours,
+                           &approx, &window_lists[i]);
     }
   });
   candidates.clear();

@@ -160,13 +160,19 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
   for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
 }
 
+// Where CompareWithWindowSums finds a pixel's window sum: sums[x] (WindowSums), sums[x + k] - sums[x]
+// (PrefixSums), or sums[x] + b[x] + c[x] (three rows of sums added in the comparison, not stored first).
+enum SumsAre { kWindowSums, kPrefixSums, kThreeRows };
+
 // d[x] = `below` where the window sum >= area * (p - at) - offset (p = s[x]; p - at <= 0: always,
-// p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum: sums[x]
-// (WindowSums), or with kPrefix sums[x + k] - sums[x] modulo 2^16 (sums: PrefixSums).
-template <bool kPrefix>
-[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
+// p - at >= 256: never, as the sum is at most 255 * area), else `above`. The window sum as kSums says
+// (SumsAre), modulo 2^16 (b and c are read for kThreeRows only).
+template <int kSums>
+[[gnu::always_inline]] inline void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums,
+                                                         const uint16_t* b, const uint16_t* c, int k, int w,
                                                          int at, int area, int offset, uint8_t below,
                                                          uint8_t above, uint8_t* d) {
+  constexpr bool kPrefix = kSums == kPrefixSums;
   int x = 0;
 #ifdef __SSE2__
   const __m128i zero = _mm_setzero_si128(), at16 = _mm_set1_epi16(static_cast<int16_t>(at));
@@ -180,6 +186,9 @@ template <bool kPrefix>
     const __m128i t = _mm_subs_epu16(_mm_mullo_epi16(v, area16), offset16);
     __m128i sum = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x + (kPrefix ? k : 0)));
     if (kPrefix) sum = _mm_sub_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(sums + at_x)));
+    if (kSums == kThreeRows)
+      sum = _mm_add_epi16(_mm_add_epi16(sum, _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + at_x))),
+                          _mm_loadu_si128(reinterpret_cast<const __m128i*>(c + at_x)));
     return _mm_cmpeq_epi16(_mm_subs_epu16(t, sum), zero);  // sum >= t
   };
   auto select = [&](__m128i mask) {
@@ -198,7 +207,9 @@ template <bool kPrefix>
   }
 #endif
   for (; x < w; ++x) {
-    const int sum = kPrefix ? static_cast<uint16_t>(sums[x + k] - sums[x]) : sums[x];
+    const int sum = kPrefix               ? static_cast<uint16_t>(sums[x + k] - sums[x])
+                    : kSums == kThreeRows ? static_cast<uint16_t>(sums[x] + b[x] + c[x])
+                                          : sums[x];
     d[x] = sum >= std::max(0, area * std::clamp(s[x] - at, 0, 256) - offset) ? below : above;
   }
 }
@@ -270,9 +281,11 @@ void PrefixSums(const uint16_t* column, int n, uint16_t* prefix) {
   for (; i < n; ++i) prefix[i + 1] = static_cast<uint16_t>(prefix[i] + column[i]);
 }
 
-template <bool kPrefix>
-void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                           uint8_t below, uint8_t above, uint8_t* d) {
+template <int kSums>
+void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c,
+                           int k, int w, int at, int area, int offset, uint8_t below, uint8_t above,
+                           uint8_t* d) {
+  constexpr bool kPrefix = kSums == kPrefixSums;
   int x = 0;
   const __m256i zero = _mm256_setzero_si256(), at16 = _mm256_set1_epi16(static_cast<int16_t>(at));
   const __m256i area16 = _mm256_set1_epi16(static_cast<int16_t>(area)), limit = _mm256_set1_epi16(256);
@@ -285,6 +298,7 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
     const __m256i t = _mm256_subs_epu16(_mm256_mullo_epi16(v, area16), offset16);
     __m256i sum = Load(sums + at_x + (kPrefix ? k : 0));
     if (kPrefix) sum = _mm256_sub_epi16(sum, Load(sums + at_x));
+    if (kSums == kThreeRows) sum = _mm256_add_epi16(_mm256_add_epi16(sum, Load(b + at_x)), Load(c + at_x));
     return _mm256_cmpeq_epi16(_mm256_subs_epu16(t, sum), zero);  // sum >= t
   };
   for (; x + 32 <= w; x += 32) {  // 32 pixels: one load, pack (lanes back in order) and store
@@ -295,7 +309,9 @@ void CompareWithWindowSums(const uint8_t* s, const uint16_t* sums, int k, int w,
                                  _MM_SHUFFLE(3, 1, 2, 0));
     Store(d + x, _mm256_blendv_epi8(above8, below8, mask));
   }
-  mcmt::CompareWithWindowSums<kPrefix>(s + x, sums + x, k, w - x, at, area, offset, below, above, d + x);
+  const bool three = kSums == kThreeRows;
+  mcmt::CompareWithWindowSums<kSums>(s + x, sums + x, three ? b + x : b, three ? c + x : c, k, w - x, at,
+                                     area, offset, below, above, d + x);
 }
 
 }  // namespace avx2
@@ -316,10 +332,10 @@ struct Sse2BoxMean {
   static void Three(const uint16_t* a, const uint16_t* b, const uint16_t* c, int n, uint16_t* out) {
     AddThree(a, b, c, n, out);
   }
-  template <bool kPrefix>
-  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                      uint8_t below, uint8_t above, uint8_t* d) {
-    CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  template <int kSums>
+  static void Compare(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c, int k,
+                      int w, int at, int area, int offset, uint8_t below, uint8_t above, uint8_t* d) {
+    CompareWithWindowSums<kSums>(s, sums, b, c, k, w, at, area, offset, below, above, d);
   }
 };
 #if MCMT_SEARCH_HAS_AVX2
@@ -333,10 +349,10 @@ struct Avx2BoxMean {
   static void Three(const uint16_t* a, const uint16_t* b, const uint16_t* c, int n, uint16_t* out) {
     avx2::AddThree(a, b, c, n, out);
   }
-  template <bool kPrefix>
-  static void Compare(const uint8_t* s, const uint16_t* sums, int k, int w, int at, int area, int offset,
-                      uint8_t below, uint8_t above, uint8_t* d) {
-    avx2::CompareWithWindowSums<kPrefix>(s, sums, k, w, at, area, offset, below, above, d);
+  template <int kSums>
+  static void Compare(const uint8_t* s, const uint16_t* sums, const uint16_t* b, const uint16_t* c, int k,
+                      int w, int at, int area, int offset, uint8_t below, uint8_t above, uint8_t* d) {
+    avx2::CompareWithWindowSums<kSums>(s, sums, b, c, k, w, at, area, offset, below, above, d);
   }
 };
 #endif
@@ -373,10 +389,12 @@ void ThresholdAgainstBoxMeanWith(const cv::Mat& src, int k, int at, int offset, 
     uint8_t* d = dst.ptr<uint8_t>(y);
     if (r < 4) {
       Lanes::kSumsOf[r](column, w, sums.data());
-      Lanes::template Compare<false>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::template Compare<kWindowSums>(s, sums.data(), nullptr, nullptr, k, w, at, area, offset, below,
+                                           above, d);
     } else {  // sums[i]: the sum of column[-r .. i - r), x's window column[x - r .. x + r]: i = x + k, x
       Lanes::Prefix(padded.data(), w + 2 * r, sums.data());
-      Lanes::template Compare<true>(s, sums.data(), k, w, at, area, offset, below, above, d);
+      Lanes::template Compare<kPrefixSums>(s, sums.data(), nullptr, nullptr, k, w, at, area, offset, below,
+                                           above, d);
     }
   }
 }
@@ -401,19 +419,20 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
 // sums from -k to w + k (the small threshold's, over 2k more columns), three of them added across (k apart)
 // into a ring of 2k + 1 rows, three rows of it added down (k apart) for the large threshold k rows behind.
 // Instead of the large window's own column sums and prefix sums: 0.55 fewer instructions per pixel
-// (AVX2; bench_detector's 15 px window). Same sums modulo 2^16 (below 2^16: k <= 5), same images.
-template <typename Lanes>
+// (AVX2; bench_detector's 15 px window). Same sums modulo 2^16 (below 2^16: k <= 5), same images. The
+// three ring rows are added within the comparison (kThreeRows), not stored first. Row y of each image:
+// small_row(y), large_row(y) (w bytes each: a cv::Mat's rows, or a FramedBinary's).
+template <typename Lanes, typename SmallRow, typename LargeRow>
 void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, int offset_small, int at_large,
-                                      int offset_large, uint8_t below, uint8_t above, cv::Mat& small,
-                                      cv::Mat& large) {
+                                      int offset_large, uint8_t below, uint8_t above, SmallRow small_row,
+                                      LargeRow large_row) {
   const int r = k / 2, w = src.cols, h = src.rows, reach = k + r;  // columns -reach .. w + reach
   if (w == 0 || h == 0) return;
   const int ring_rows = 2 * k + 1;
-  thread_local std::vector<uint16_t> padded, box, ring, sums;
+  thread_local std::vector<uint16_t> padded, box, ring;
   padded.assign(static_cast<size_t>(w) + 2 * reach, 0);
   box.resize(static_cast<size_t>(w) + 2 * k);
   ring.resize(static_cast<size_t>(ring_rows) * w);
-  sums.resize(static_cast<size_t>(w));
   uint16_t* column = padded.data() + reach;  // column[-reach .. w + reach): edges replicated
   auto row = [&](int y) { return src.ptr<uint8_t>(std::clamp(y, 0, h - 1)); };
   auto ring_row = [&](int y) {
@@ -428,15 +447,14 @@ void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, i
     // box[i]: the k-window sum centred on column i - k, i < w + 2k.
     Lanes::kSumsOf[r](column - k, w + 2 * k, box.data());
     if (y >= 0 && y < h)
-      Lanes::template Compare<false>(src.ptr<uint8_t>(y), box.data() + k, k, w, at_small, k * k, offset_small,
-                                     below, above, small.ptr<uint8_t>(y));
+      Lanes::template Compare<kWindowSums>(src.ptr<uint8_t>(y), box.data() + k, nullptr, nullptr, k, w,
+                                           at_small, k * k, offset_small, below, above, small_row(y));
     Lanes::Three(box.data(), box.data() + k, box.data() + 2 * k, w, ring_row(y));
     const int y_large = y - k;
-    if (y_large >= 0) {
-      Lanes::Three(ring_row(y_large - k), ring_row(y_large), ring_row(y), w, sums.data());
-      Lanes::template Compare<false>(src.ptr<uint8_t>(y_large), sums.data(), 3 * k, w, at_large, 9 * k * k,
-                                     offset_large, below, above, large.ptr<uint8_t>(y_large));
-    }
+    if (y_large >= 0)
+      Lanes::template Compare<kThreeRows>(src.ptr<uint8_t>(y_large), ring_row(y_large - k), ring_row(y_large),
+                                          ring_row(y), 3 * k, w, at_large, 9 * k * k, offset_large, below,
+                                          above, large_row(y_large));
   }
 }
 
@@ -594,27 +612,35 @@ int FrameRow(const uint8_t* s, int w, int8_t* d) {
 #pragma GCC pop_options
 #endif
 
-// Every border of the nonzero pixels of `src` (8-bit, one channel) as OpenCV's findContours with
-// RETR_LIST and CHAIN_APPROX_NONE finds them: its 0/1 image framed by zeros, scanned row by row; an outer
-// border starts where a 1 follows a 0, a hole's where a 0 follows a pixel of value 1 or 2, and each is
-// followed at once (FollowBorder). Points shifted by `offset`, border k's points ending at ends[k], in the
-// order found (OpenCV returns them last found first).
-void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* points,
-                 std::vector<size_t>* ends) {
+// framed->bytes sized for a cols x rows image (FramedBinary's layout) and its frame set to 0: the rows above
+// and below (and the 32 bytes after, for the last row's 32-pixel reads), each row's left and right column.
+// The image's own pixels are left to the caller, which writes every one.
+void PrepareFrame(int cols, int rows, FramedBinary* framed) {
+  framed->cols = cols, framed->rows = rows;
+  const std::ptrdiff_t step = cols + 2;
+  const size_t size = static_cast<size_t>(step) * (rows + 2) + 32;
+  // Allocated, not cleared (as a std::vector's resize would clear it): 0.3 M instructions per window on a
+  // thread's first 640 x 480 frame.
+  if (framed->capacity < size) {
+    framed->bytes.reset(new int8_t[size]);
+    framed->capacity = size;
+  }
+  int8_t* const bytes = framed->bytes.get();
+  std::fill_n(bytes, step, 0);
+  std::fill_n(bytes + (rows + 1) * step, step + 32, 0);
+  for (int y = 1; y <= rows; ++y) bytes[y * step] = 0, bytes[y * step + cols + 1] = 0;
+}
+
+// *framed = the 0/1 image of the nonzero pixels of `src` (8-bit, one channel), framed by zeros.
+void FrameNonzero(const cv::Mat& src, FramedBinary* framed) {
   const int w = src.cols, h = src.rows;
-  const std::ptrdiff_t step = w + 2;
-  thread_local std::vector<int8_t> framed;
-  // Every byte written below (no clearing pass); 32 more for the last row's 32-pixel reads.
-  framed.resize(static_cast<size_t>(step) * (h + 2) + 32);
-  std::fill_n(framed.begin(), step, 0);
-  std::fill_n(framed.begin() + (h + 1) * step, step + 32, 0);
+  PrepareFrame(w, h, framed);
 #if MCMT_SEARCH_HAS_AVX2
   const bool avx2 = DetectorUsesAvx2();
 #endif
   for (int y = 0; y < h; ++y) {
     const uint8_t* s = src.ptr<uint8_t>(y);
-    int8_t* d = framed.data() + (y + 1) * step + 1;
-    d[-1] = 0, d[w] = 0;
+    int8_t* d = framed->Row(y);
     int x = 0;
 #if MCMT_SEARCH_HAS_AVX2
     if (avx2) x = avx2::FrameRow(s, w, d);
@@ -627,6 +653,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
 #endif
     for (; x < w; ++x) d[x] = s[x] != 0 ? 1 : 0;
   }
+}
+
+// Every border of the 1 pixels of `framed` (a 0/1 image framed by zeros) as OpenCV's findContours with
+// RETR_LIST and CHAIN_APPROX_NONE finds them in the nonzero pixels of its input (its 0/1 image framed by
+// zeros), scanned row by row; an outer border starts where a 1 follows a 0, a hole's where a 0 follows a
+// pixel of value 1 or 2, and each is followed at once (FollowBorder, which marks the image). Points
+// shifted by `offset`, border k's points ending at ends[k], in the order found (OpenCV returns them last
+// found first).
+void ListBorders(FramedBinary* framed, cv::Point offset, std::vector<cv::Point>* points,
+                 std::vector<size_t>* ends) {
+  const int w = framed->cols, h = framed->rows;
+  const std::ptrdiff_t step = w + 2;
+#if MCMT_SEARCH_HAS_AVX2
+  const bool avx2 = DetectorUsesAvx2();
+#endif
   points->clear();
   ends->clear();
   const std::ptrdiff_t delta[16] = {1, 1 - step, -step, -step - 1, -1, step - 1, step, step + 1,
@@ -635,7 +676,7 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
   // marked it): where a border starts it follows it. The starts are found 16 pixels at a time, and found
   // again after each border followed (it may have marked pixels ahead).
   for (int y = 1; y <= h; ++y) {
-    int8_t* row = framed.data() + y * step;
+    int8_t* row = framed->bytes.get() + y * step;
     for (int base = 1; base <= w;) {
       int x;
 #if MCMT_SEARCH_HAS_AVX2
@@ -659,6 +700,21 @@ void ListBorders(const cv::Mat& src, cv::Point offset, std::vector<cv::Point>* p
       ends->push_back(points->size());
       base = x + 1;
     }
+  }
+}
+
+// *contours = the borders ListBorders found (points, ends), last found first (OpenCV's order), less those
+// of fewer than `floor` points (0: none left out).
+void BordersToContours(const std::vector<cv::Point>& points, const std::vector<size_t>& ends, size_t floor,
+                       std::vector<std::vector<cv::Point>>* contours) {
+  auto begin_of = [&](size_t k) { return k == 0 ? 0 : ends[k - 1]; };
+  size_t kept = 0;
+  for (size_t k = 0; k < ends.size(); ++k) kept += ends[k] - begin_of(k) >= floor;
+  contours->resize(kept);
+  for (size_t k = 0; k < ends.size(); ++k) {
+    if (ends[k] - begin_of(k) < floor) continue;
+    (*contours)[--kept].assign(points.begin() + static_cast<std::ptrdiff_t>(begin_of(k)),
+                               points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
   }
 }
 
@@ -1067,16 +1123,47 @@ bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* sma
   small->create(src.size(), CV_8UC1);
   large->create(src.size(), CV_8UC1);
   CV_Assert(small->data != src.data && large->data != src.data && small->data != large->data);
+  auto small_row = [small](int y) { return small->ptr<uint8_t>(y); };
+  auto large_row = [large](int y) { return large->ptr<uint8_t>(y); };
 #if MCMT_SEARCH_HAS_AVX2
   if (DetectorUsesAvx2()) {
-    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, *small,
-                                                  *large);
+    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0,
+                                                  small_row, large_row);
     return true;
   }
 #endif
-  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, *small,
-                                                *large);
+  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, small_row,
+                                                large_row);
   return true;
+}
+
+bool AdaptiveThresholdPairFramed(const cv::Mat& src, int k, double delta, FramedBinary* small,
+                                 FramedBinary* large) {
+  if (src.type() != CV_8UC1 || src.dims != 2 || (k != 3 && k != 5) || small == large) return false;
+  const int offset_small = BoxMeanThresholdOffset(k * k), offset_large = BoxMeanThresholdOffset(9 * k * k);
+  if (offset_small < 0 || offset_large < 0) return false;
+  const int at = std::clamp(-cvFloor(delta), -256, 256);  // as AdaptiveThresholdPair's
+  PrepareFrame(src.cols, src.rows, small);
+  PrepareFrame(src.cols, src.rows, large);
+  auto small_row = [small](int y) { return reinterpret_cast<uint8_t*>(small->Row(y)); };
+  auto large_row = [large](int y) { return reinterpret_cast<uint8_t*>(large->Row(y)); };
+#if MCMT_SEARCH_HAS_AVX2
+  if (DetectorUsesAvx2()) {
+    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+                                                  large_row);
+    return true;
+  }
+#endif
+  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+                                                large_row);
+  return true;
+}
+
+void FramedContours(FramedBinary* image, size_t min_points, std::vector<std::vector<cv::Point>>* contours) {
+  thread_local std::vector<cv::Point> points;
+  thread_local std::vector<size_t> ends;
+  ListBorders(image, cv::Point(0, 0), &points, &ends);
+  BordersToContours(points, ends, min_points, contours);
 }
 
 bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_t above, cv::Mat* dst) {
@@ -1174,20 +1261,13 @@ void findContours(InputArray image_array, OutputArrayOfArrays contours_array, in
   }
   thread_local std::vector<Point> points;
   thread_local std::vector<size_t> ends;
+  thread_local mcmt::FramedBinary framed;
   const Mat image = image_array.getMat();
-  mcmt::ListBorders(image, offset, &points, &ends);
-  auto& contours = *static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj());
+  mcmt::FrameNonzero(image, &framed);
+  mcmt::ListBorders(&framed, offset, &points, &ends);
   // Borders the aruco module would drop unseen are left out (ArucoContourFloor; 0: none).
-  const size_t floor = mcmt::ArucoContourMinimum(image.size());
-  auto begin_of = [&](size_t k) { return k == 0 ? 0 : ends[k - 1]; };
-  size_t kept = 0;
-  for (size_t k = 0; k < ends.size(); ++k) kept += ends[k] - begin_of(k) >= floor;
-  contours.resize(kept);
-  for (size_t k = 0; k < ends.size(); ++k) {
-    if (ends[k] - begin_of(k) < floor) continue;
-    contours[--kept].assign(points.begin() + static_cast<std::ptrdiff_t>(begin_of(k)),
-                            points.begin() + static_cast<std::ptrdiff_t>(ends[k]));
-  }
+  mcmt::BordersToContours(points, ends, mcmt::ArucoContourMinimum(image.size()),
+                          static_cast<std::vector<std::vector<Point>>*>(contours_array.getObj()));
 }
 
 // OpenCV's cv::warpPerspective, which cv::aruco::detectMarkers calls for every candidate to read its

@@ -2,9 +2,12 @@
 // bit for bit, cheaper, for the calls cv::aruco::detectMarkers makes.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace mcmt {
 
@@ -35,6 +38,28 @@ bool ThresholdBelowBlur(const cv::Mat& src, int k, int at, uint8_t below, uint8_
 // one pass: the 3k window's sums from the k window's (detectMarkers' 5 and 15 px windows). False (nothing
 // written) unless src is 8-bit with k 3 or 5. The three images must be distinct.
 bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* small, cv::Mat* large);
+
+// A 0/1 image framed by zeros (a row above and below, a column left and right), as mcmt's findContours
+// follows borders in it: row y (0 .. rows - 1) of the image at Row(y), cols bytes; 32 zero bytes after the
+// bottom row for the scan's 32-pixel reads.
+struct FramedBinary {
+  int cols = 0, rows = 0;
+  // (rows + 2) x (cols + 2), then 32; capacity bytes allocated, not cleared (every byte used is written).
+  std::unique_ptr<int8_t[]> bytes;
+  size_t capacity = 0;
+  int8_t* Row(int y) { return bytes.get() + static_cast<std::ptrdiff_t>(y + 1) * (cols + 2) + 1; }
+};
+
+// AdaptiveThresholdPair with its images written as FramedBinary's: 1 where AdaptiveThresholdPair's is 255,
+// 0 where it is 0, for FramedContours without a conversion pass. False (nothing written) where
+// AdaptiveThresholdPair would be false, or where small is large.
+bool AdaptiveThresholdPairFramed(const cv::Mat& src, int k, double delta, FramedBinary* small,
+                                 FramedBinary* large);
+
+// *contours = cv::findContours(the image, RETR_LIST, CHAIN_APPROX_NONE) (mcmt's, the same as OpenCV's bit
+// for bit: the same borders in the same order) less the borders of fewer than min_points points (0: none
+// left out; as under ArucoContourFloor). The image is marked as the border follower goes: read it once.
+void FramedContours(FramedBinary* image, size_t min_points, std::vector<std::vector<cv::Point>>* contours);
 
 // cv::aruco::detectMarkers (OpenCV 4.6, _findMarkerContours) drops every border cv::findContours returns
 // with fewer points than (unsigned)(minMarkerPerimeterRate * max(cols, rows)) of its binary image, or than

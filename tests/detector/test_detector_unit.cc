@@ -604,6 +604,67 @@ TEST(CandidateSearch, AdaptiveThresholdPairIsOpenCVs) {
   EXPECT_FALSE(AdaptiveThresholdPair(cv::Mat(20, 20, CV_16U, cv::Scalar(0)), 5, 7.0, &small, &large));
 }
 
+// AdaptiveThresholdPairFramed and FramedContours (the search's path without findContours' conversion pass)
+// give AdaptiveThresholdPair's images as framed 0/1 images and cv::findContours' borders of them (RETR_LIST,
+// CHAIN_APPROX_NONE; the same order and points), less those of fewer than min_points points, through the
+// AVX2 code and the SSE2 code: k 3 and 5, random images (noise, blurred noise, saturated blocks) of widths
+// around the vector widths, views, offsets, floors 0, 1, 9 and 40 points, vectors that held other contours.
+TEST(CandidateSearch, FramedContoursAreFindContours) {
+  const bool was = UseDetectorAvx2(true);
+  std::mt19937 rng(53);
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  int compared = 0;
+  std::vector<std::vector<cv::Point>> framed_contours(3, std::vector<cv::Point>(5));
+  for (int trial = 0; trial < 80; ++trial) {
+    const int width = trial < 40 ? uniform(1, 70) : uniform(71, 400), height = uniform(1, 60);
+    cv::Mat image(height + 40, width + 60, CV_8U);
+    cv::randu(image, 0, 256);
+    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+    if (trial % 3 == 2)
+      for (int b = 0; b < 6; ++b)
+        cv::rectangle(
+            image,
+            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
+            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Mat view = image(cv::Rect(uniform(0, 60), uniform(0, 40), width, height));
+    const double deltas[] = {7.0, 7.5, 0.0, -3.2, 255.0};
+    const double delta = deltas[trial % 5];
+    const size_t min_points = std::vector<size_t>{0, 1, 9, 40}[trial % 4];
+    for (int k : {3, 5}) {
+      for (bool avx2 : {true, false}) {
+        if (avx2 && !DetectorAvx2Available()) continue;
+        UseDetectorAvx2(avx2);
+        SCOPED_TRACE(::testing::Message()
+                     << "trial " << trial << " " << view.size() << " k " << k << " delta " << delta
+                     << " floor " << min_points << (avx2 ? " avx2" : " sse2"));
+        cv::Mat binary[2];
+        ASSERT_TRUE(AdaptiveThresholdPair(view, k, delta, &binary[0], &binary[1]));
+        FramedBinary framed[2];
+        ASSERT_TRUE(AdaptiveThresholdPairFramed(view, k, delta, &framed[0], &framed[1]));
+        for (int i = 0; i < 2; ++i) {
+          ASSERT_EQ(framed[i].cols, width);
+          ASSERT_EQ(framed[i].rows, height);
+          for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+              ASSERT_EQ(framed[i].Row(y)[x], binary[i].at<uint8_t>(y, x) != 0 ? 1 : 0) << x << ", " << y;
+          std::vector<std::vector<cv::Point>> theirs, kept;
+          cv::findContours(binary[i], theirs, cv::RETR_LIST, cv::CHAIN_APPROX_NONE);
+          for (const std::vector<cv::Point>& c : theirs)
+            if (c.size() >= min_points) kept.push_back(c);
+          FramedContours(&framed[i], min_points, &framed_contours);
+          ASSERT_EQ(framed_contours, kept) << "window " << i;
+          ++compared;
+        }
+      }
+    }
+  }
+  UseDetectorAvx2(was);
+  EXPECT_GE(compared, 320);
+  FramedBinary a, b;
+  EXPECT_FALSE(AdaptiveThresholdPairFramed(cv::Mat(20, 20, CV_8U, cv::Scalar(0)), 7, 7.0, &a, &b));
+  EXPECT_FALSE(AdaptiveThresholdPairFramed(cv::Mat(20, 20, CV_8U, cv::Scalar(0)), 5, 7.0, &a, &a));
+}
+
 // A warp test's random map (as the aruco module reads a candidate): a quad about a centre drawn in x x y
 // (px), each corner k at k 90 deg plus an angle drawn in +-jitter (rad) and at the radius drawn in `radius`
 // times a factor drawn in `factor`, onto the corners of a `size` square. The draws in this order.
