@@ -306,12 +306,15 @@ namespace avx2 {
 #pragma GCC pop_options
 #endif
 
+// `reject_from`: an LM trial's cost to beat (NaN: none). Once the cost reaches it, Evaluate returns that
+// partial cost (not below reject_from) without the later groups and the normal equations; jtj and jtr are
+// then left as they were. A trial's cost is otherwise the same to the bit.
 double Evaluate(const SideProfiles& s, const double* p, bool single, double margin_weight, Normal* jtj,
-                Vector* jtr) {
+                Vector* jtr, double reject_from = NAN) {
 #if MCMT_SIDE_HAS_AVX2
-  if (DetectorUsesAvx2()) return avx2::Evaluate(s, p, single, margin_weight, jtj, jtr);
+  if (DetectorUsesAvx2()) return avx2::Evaluate(s, p, single, margin_weight, jtj, jtr, reject_from);
 #endif
-  return sse2::Evaluate(s, p, single, margin_weight, jtj, jtr);
+  return sse2::Evaluate(s, p, single, margin_weight, jtj, jtr, reject_from);
 }
 
 }  // namespace
@@ -465,10 +468,11 @@ bool FitOnce(const SideProfiles& s, bool hold_gamma, bool single, bool wide_tie,
         done = true;
         break;
       }
-      // The trial's normal equations come with its cost: kept when it is accepted.
+      // The trial's normal equations come with its cost: kept when it is accepted (a trial whose cost
+      // reaches the current one stops there: rejected, no normal equations).
       Normal trial_jtj;
       Vector trial_jtr;
-      const double trial = Evaluate(s, q, single, margin_weight, &trial_jtj, &trial_jtr);
+      const double trial = Evaluate(s, q, single, margin_weight, &trial_jtj, &trial_jtr, cost);
       if (trial < cost) {
         std::copy(q, q + kParams, p);
         cost = trial;
