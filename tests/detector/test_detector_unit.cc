@@ -499,6 +499,23 @@ TEST(CandidateSearch, AdaptiveThresholdIsOpenCVs) {
   EXPECT_EQ(cv::norm(ours, theirs, cv::NORM_INF), 0.0);
 }
 
+// A test image for the threshold and contour tests: (width + 60) x (height + 40) pixels of noise
+// (trial % 3 == 0), blurred noise (1) or noise under six saturated blocks (2: window sums up to 255 k^2),
+// from which a test takes a width x height view.
+cv::Mat RandomThresholdImage(int width, int height, int trial, std::mt19937* rng) {
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(*rng); };
+  cv::Mat image(height + 40, width + 60, CV_8U);
+  cv::randu(image, 0, 256);
+  if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
+  if (trial % 3 == 2)
+    for (int b = 0; b < 6; ++b)
+      cv::rectangle(
+          image,
+          cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
+          cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+  return image;
+}
+
 // The candidate search's threshold against the box mean (cv::adaptiveThreshold's override, isolated, and
 // ThresholdBelowBlur, views) gives the same binary image through its AVX2 code (32 pixels at a time, chosen
 // with the side model's: DetectorUsesAvx2) as through its SSE2 code: random images of widths around the
@@ -516,15 +533,7 @@ TEST(CandidateSearch, Avx2ThresholdIsSse2) {
   int views = 0, differing_pixels = 0;
   for (int trial = 0; trial < 160; ++trial) {
     const int width = trial < 80 ? uniform(1, 80) : uniform(81, 700), height = uniform(1, 60);
-    cv::Mat image(height + 40, width + 60, CV_8U);
-    cv::randu(image, 0, 256);
-    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
-    if (trial % 3 == 2)  // saturated blocks: window sums up to 255 k^2
-      for (int b = 0; b < 6; ++b)
-        cv::rectangle(
-            image,
-            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
-            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Mat image = RandomThresholdImage(width, height, trial, &rng);
     const cv::Rect rect(trial % 4 == 0 ? 0 : uniform(0, 60), trial % 4 == 1 ? 40 : uniform(0, 40), width,
                         height);
     const cv::Mat view = image(rect);
@@ -568,15 +577,7 @@ TEST(CandidateSearch, AdaptiveThresholdPairIsOpenCVs) {
   int compared = 0;
   for (int trial = 0; trial < 120; ++trial) {
     const int width = trial < 60 ? uniform(1, 70) : uniform(71, 700), height = uniform(1, 70);
-    cv::Mat image(height + 40, width + 60, CV_8U);
-    cv::randu(image, 0, 256);
-    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
-    if (trial % 3 == 2)
-      for (int b = 0; b < 6; ++b)
-        cv::rectangle(
-            image,
-            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
-            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Mat image = RandomThresholdImage(width, height, trial, &rng);
     const cv::Mat view = image(cv::Rect(uniform(0, 60), uniform(0, 40), width, height));
     const double deltas[] = {7.0, 7.5, 0.0, -3.2, 255.0, 300.0};
     const double delta = deltas[trial % 6];
@@ -617,15 +618,7 @@ TEST(CandidateSearch, FramedContoursAreFindContours) {
   std::vector<std::vector<cv::Point>> framed_contours(3, std::vector<cv::Point>(5));
   for (int trial = 0; trial < 80; ++trial) {
     const int width = trial < 40 ? uniform(1, 70) : uniform(71, 400), height = uniform(1, 60);
-    cv::Mat image(height + 40, width + 60, CV_8U);
-    cv::randu(image, 0, 256);
-    if (trial % 3 == 1) cv::GaussianBlur(image, image, cv::Size(0, 0), 1.5);
-    if (trial % 3 == 2)
-      for (int b = 0; b < 6; ++b)
-        cv::rectangle(
-            image,
-            cv::Rect(uniform(0, image.cols - 1), uniform(0, image.rows - 1), uniform(5, 200), uniform(5, 40)),
-            cv::Scalar(b % 2 ? 255 : 0), cv::FILLED);
+    const cv::Mat image = RandomThresholdImage(width, height, trial, &rng);
     const cv::Mat view = image(cv::Rect(uniform(0, 60), uniform(0, 40), width, height));
     const double deltas[] = {7.0, 7.5, 0.0, -3.2, 255.0};
     const double delta = deltas[trial % 5];
