@@ -25,9 +25,17 @@
 namespace mcmt {
 namespace {
 
+// The largest coordinate Sample interpolates at across `pixels` pixels (the last pixel centre, less 0.001).
+inline double LastSampled(int pixels) { return pixels - 1.001; }
+
+// Is (x, y) within 0..max_x, 0..max_y (LastSampled's limits)?
+inline bool InsideLimits(double x, double y, double max_x, double max_y) {
+  return x >= 0.0 && y >= 0.0 && x <= max_x && y <= max_y;
+}
+
 // Is (x, y) inside the area Sample interpolates in?
 inline bool Inside(const cv::Mat& gray, double x, double y) {
-  return x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.001 && y <= gray.rows - 1.001;
+  return InsideLimits(x, y, LastSampled(gray.cols), LastSampled(gray.rows));
 }
 
 // Sample at a point known to be Inside.
@@ -151,15 +159,15 @@ struct RayImage {
       : gray(gray),
         data(gray.data),
         step(gray.step[0]),
-        max_x(gray.cols - 1.001),
-        max_y(gray.rows - 1.001),
+        max_x(LastSampled(gray.cols)),
+        max_y(LastSampled(gray.rows)),
         small(step < 32768 && gray.cols < 32768 && gray.rows < 32768) {
 #ifdef __SSE2__
     offset_weights = _mm_set1_epi32(static_cast<int>(1 | (step << 16)));
 #endif
   }
-  // Inside's test, with its limits computed once (the same values).
-  bool Inside(double x, double y) const { return x >= 0.0 && y >= 0.0 && x <= max_x && y <= max_y; }
+  // Inside's test, with its limits computed once.
+  bool Inside(double x, double y) const { return InsideLimits(x, y, max_x, max_y); }
   const cv::Mat& gray;
   const uint8_t* data;
   size_t step;
