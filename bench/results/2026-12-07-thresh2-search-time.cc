@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   }
   std::sort(t_old.begin(), t_old.end());
   std::sort(t_new.begin(), t_new.end());
-  std::printf("ms per frame, median of 12 rounds: Mat+findContours %.4f (min %.4f)  framed %.4f (min %.4f)  "
-              "contours %zu / %zu\n",
-              t_old[6], t_old[0], t_new[6], t_new[0], check_old, check_new);
+  std::printf(
+      "ms per frame, median of 12 rounds: Mat+findContours %.4f (min %.4f)  framed %.4f (min %.4f)  "
+      "contours %zu / %zu\n",
+      t_old[6], t_old[0], t_new[6], t_new[0], check_old, check_new);
 }
