@@ -32,11 +32,6 @@ struct Candidate {
   int points = 0;  // its border's point count
 };
 
-// The fewest points of a border step 1 looks at, in a `size` binary image.
-unsigned int MinPoints(cv::Size size, const cv::aruco::DetectorParameters& params) {
-  return static_cast<unsigned int>(params.minMarkerPerimeterRate * std::max(size.width, size.height));
-}
-
 // Step 1 on one binary image: the borders of `binary` (cv::Mat, 0 and 255) or, where it is null, of
 // `framed` (FramedBinary, 0 and 1; marked by the border follower), their candidates appended to *out.
 void FindWindowCandidates(const cv::Mat* binary, FramedBinary* framed,
@@ -45,7 +40,7 @@ void FindWindowCandidates(const cv::Mat* binary, FramedBinary* framed,
                           std::vector<Candidate>* out) {
   const cv::Size size = binary != nullptr ? binary->size() : cv::Size(framed->cols, framed->rows);
   const int longest = std::max(size.width, size.height);
-  const auto min_points = MinPoints(size, params);
+  const auto min_points = static_cast<unsigned int>(params.minMarkerPerimeterRate * longest);
   const auto max_points = static_cast<unsigned int>(params.maxMarkerPerimeterRate * longest);
   if (binary != nullptr) {
     // The borders shorter than min_points are dropped below anyway: findContours leaves them out.

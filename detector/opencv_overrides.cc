@@ -423,9 +423,8 @@ void ThresholdAgainstBoxMean(const cv::Mat& src, int k, int at, int offset, uint
 // three ring rows are added within the comparison (kThreeRows), not stored first. Row y of each image:
 // small_row(y), large_row(y) (w bytes each: a cv::Mat's rows, or a FramedBinary's).
 template <typename Lanes, typename SmallRow, typename LargeRow>
-void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, int offset_small, int at_large,
-                                      int offset_large, uint8_t below, uint8_t above, SmallRow small_row,
-                                      LargeRow large_row) {
+void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at, int offset_small, int offset_large,
+                                      uint8_t below, uint8_t above, SmallRow small_row, LargeRow large_row) {
   const int r = k / 2, w = src.cols, h = src.rows, reach = k + r;  // columns -reach .. w + reach
   if (w == 0 || h == 0) return;
   const int ring_rows = 2 * k + 1;
@@ -447,14 +446,14 @@ void ThresholdPairAgainstBoxMeansWith(const cv::Mat& src, int k, int at_small, i
     // box[i]: the k-window sum centred on column i - k, i < w + 2k.
     Lanes::kSumsOf[r](column - k, w + 2 * k, box.data());
     if (y >= 0 && y < h)
-      Lanes::template Compare<kWindowSums>(src.ptr<uint8_t>(y), box.data() + k, nullptr, nullptr, k, w,
-                                           at_small, k * k, offset_small, below, above, small_row(y));
+      Lanes::template Compare<kWindowSums>(src.ptr<uint8_t>(y), box.data() + k, nullptr, nullptr, k, w, at,
+                                           k * k, offset_small, below, above, small_row(y));
     Lanes::Three(box.data(), box.data() + k, box.data() + 2 * k, w, ring_row(y));
     const int y_large = y - k;
     if (y_large >= 0)
       Lanes::template Compare<kThreeRows>(src.ptr<uint8_t>(y_large), ring_row(y_large - k), ring_row(y_large),
-                                          ring_row(y), 3 * k, w, at_large, 9 * k * k, offset_large, below,
-                                          above, large_row(y_large));
+                                          ring_row(y), 3 * k, w, at, 9 * k * k, offset_large, below, above,
+                                          large_row(y_large));
   }
 }
 
@@ -1114,49 +1113,52 @@ ArucoContourFloor::~ArucoContourFloor() {
   contour_floor_side = previous_side_;
 }
 
-bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* small, cv::Mat* large) {
+namespace {
+// AdaptiveThresholdPair's checks and its pass (`set` where cv::adaptiveThreshold's image is 255, 0
+// elsewhere) into the rows small_row(y), large_row(y); `prepare` makes the images once the checks pass.
+template <typename Prepare, typename SmallRow, typename LargeRow>
+bool ThresholdPairInto(const cv::Mat& src, int k, double delta, uint8_t set, Prepare prepare,
+                       SmallRow small_row, LargeRow large_row) {
   if (src.type() != CV_8UC1 || src.dims != 2 || (k != 3 && k != 5)) return false;
   const int offset_small = BoxMeanThresholdOffset(k * k), offset_large = BoxMeanThresholdOffset(9 * k * k);
   if (offset_small < 0 || offset_large < 0) return false;
   // cv::adaptiveThreshold's (THRESH_BINARY_INV): set where src - mean <= -floor(delta).
   const int at = std::clamp(-cvFloor(delta), -256, 256);
-  small->create(src.size(), CV_8UC1);
-  large->create(src.size(), CV_8UC1);
-  CV_Assert(small->data != src.data && large->data != src.data && small->data != large->data);
-  auto small_row = [small](int y) { return small->ptr<uint8_t>(y); };
-  auto large_row = [large](int y) { return large->ptr<uint8_t>(y); };
+  prepare();
 #if MCMT_SEARCH_HAS_AVX2
   if (DetectorUsesAvx2()) {
-    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0,
-                                                  small_row, large_row);
-    return true;
-  }
-#endif
-  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 255, 0, small_row,
-                                                large_row);
-  return true;
-}
-
-bool AdaptiveThresholdPairFramed(const cv::Mat& src, int k, double delta, FramedBinary* small,
-                                 FramedBinary* large) {
-  if (src.type() != CV_8UC1 || src.dims != 2 || (k != 3 && k != 5) || small == large) return false;
-  const int offset_small = BoxMeanThresholdOffset(k * k), offset_large = BoxMeanThresholdOffset(9 * k * k);
-  if (offset_small < 0 || offset_large < 0) return false;
-  const int at = std::clamp(-cvFloor(delta), -256, 256);  // as AdaptiveThresholdPair's
-  PrepareFrame(src.cols, src.rows, small);
-  PrepareFrame(src.cols, src.rows, large);
-  auto small_row = [small](int y) { return reinterpret_cast<uint8_t*>(small->Row(y)); };
-  auto large_row = [large](int y) { return reinterpret_cast<uint8_t*>(large->Row(y)); };
-#if MCMT_SEARCH_HAS_AVX2
-  if (DetectorUsesAvx2()) {
-    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+    ThresholdPairAgainstBoxMeansWith<Avx2BoxMean>(src, k, at, offset_small, offset_large, set, 0, small_row,
                                                   large_row);
     return true;
   }
 #endif
-  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, at, offset_large, 1, 0, small_row,
+  ThresholdPairAgainstBoxMeansWith<Sse2BoxMean>(src, k, at, offset_small, offset_large, set, 0, small_row,
                                                 large_row);
   return true;
+}
+}  // namespace
+
+bool AdaptiveThresholdPair(const cv::Mat& src, int k, double delta, cv::Mat* small, cv::Mat* large) {
+  auto prepare = [&] {
+    small->create(src.size(), CV_8UC1);
+    large->create(src.size(), CV_8UC1);
+    CV_Assert(small->data != src.data && large->data != src.data && small->data != large->data);
+  };
+  return ThresholdPairInto(
+      src, k, delta, 255, prepare, [small](int y) { return small->ptr<uint8_t>(y); },
+      [large](int y) { return large->ptr<uint8_t>(y); });
+}
+
+bool AdaptiveThresholdPairFramed(const cv::Mat& src, int k, double delta, FramedBinary* small,
+                                 FramedBinary* large) {
+  if (small == large) return false;
+  auto prepare = [&] {
+    PrepareFrame(src.cols, src.rows, small);
+    PrepareFrame(src.cols, src.rows, large);
+  };
+  return ThresholdPairInto(
+      src, k, delta, 1, prepare, [small](int y) { return reinterpret_cast<uint8_t*>(small->Row(y)); },
+      [large](int y) { return reinterpret_cast<uint8_t*>(large->Row(y)); });
 }
 
 void FramedContours(FramedBinary* image, size_t min_points, std::vector<std::vector<cv::Point>>* contours) {
