@@ -7,6 +7,10 @@
 // test_mapper_realdata does, once as detected and once with every marker's corners replaced by the
 // chessboard's prediction, and prints the board's marker spacing / marker size of both maps (1.88562).
 //   diag_charuco RIG_YAML [max frames per camera (all)] [camera ("-": all)] [per-marker CSV]
+// The CSV's side{s}_clean columns (tilttruth): per side, the 24 model-pass rays (4 per cell) as 0/1, 1 where
+// the ray is next to clean code cells (SampleSide's CleanNeighbour on the marker's dictionary bits, the
+// ray's place t from the detected side's length), from the side's start corner s to corner s + 1.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -42,6 +46,30 @@ void PrintSplit(const RigConfig& rig, const std::vector<ChessboardMarker>& marke
             });
 }
 
+// Side `side`'s model-pass rays next to clean code cells (as SampleSide: 4 rays per cell, `cells` with
+// the border), for a side of `length_px`: '1' clean, '0' not, from the side's start corner.
+std::string CleanRays(const cv::Mat& bits, int cells, int side, double length_px) {
+  uint8_t flags[16];
+  for (int j = 0; j < cells; ++j) {
+    const int row = side == 0 ? 1 : side == 1 ? j : side == 2 ? cells - 2 : cells - 1 - j;
+    const int col = side == 0 ? j : side == 1 ? cells - 2 : side == 2 ? cells - 1 - j : 1;
+    flags[j] = row <= 0 || col <= 0 || row >= cells - 1 || col >= cells - 1
+                   ? 0
+                   : (bits.at<uint8_t>(row - 1, col - 1) ? 1 : 0);
+  }
+  const double margin = std::min(0.3, std::max(0.6 * length_px / cells, 1.5) / length_px);
+  const int n = 4 * cells;
+  std::string out;
+  for (int i = 0; i < n; ++i) {
+    const double u = (margin + (1.0 - 2.0 * margin) * (i + 0.5) / n) * cells;
+    bool clean = true;
+    for (double du : {-0.5, 0.0, 0.5})
+      if (flags[std::clamp(static_cast<int>(u + du), 0, cells - 1)]) clean = false;
+    out += clean ? '1' : '0';
+  }
+  return out;
+}
+
 void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& markers) {
   std::ofstream out(path);
   out << "camera,frame,id,side_px,offset_px,size_rel,size_rel_local,size_rel_raw,x_px,y_px,view_deg,white,"
@@ -49,7 +77,10 @@ void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& mark
   for (int k = 0; k < 4; ++k) out << ",gx" << k << ",gy" << k << ",wx" << k << ",wy" << k;
   for (int s = 0; s < 4; ++s) out << ",side" << s << "_px,side" << s << "_horizontal";
   for (int s = 0; s < 4; ++s) out << ",side" << s << "_stock_px";
+  for (int s = 0; s < 4; ++s) out << ",side" << s << "_clean";
   out << "\n";
+  const cv::Ptr<cv::aruco::Dictionary> dictionary =
+      cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_1000);
   for (const ChessboardMarker& m : markers) {
     out << m.camera << "," << m.frame << "," << m.id << "," << m.side_px << "," << m.offset_px << ","
         << m.size_rel << "," << m.size_rel_local << "," << m.size_rel_raw << "," << m.x_px << "," << m.y_px
@@ -60,6 +91,12 @@ void WriteCsv(const std::string& path, const std::vector<ChessboardMarker>& mark
           << m.want_ideal[k].y();
     for (int s = 0; s < 4; ++s) out << "," << m.side_offset_px[s] << "," << m.side_horizontal[s];
     for (int s = 0; s < 4; ++s) out << "," << m.side_offset_stock_px[s];
+    const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+        dictionary->bytesList.rowRange(m.id, m.id + 1), dictionary->markerSize);
+    for (int s = 0; s < 4; ++s)
+      out << ","
+          << CleanRays(bits, dictionary->markerSize + 2, s,
+                       (m.got_ideal[(s + 1) % 4] - m.got_ideal[s]).norm());
     out << "\n";
   }
 }
