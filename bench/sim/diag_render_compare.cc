@@ -9,11 +9,20 @@
 // reference's 8-bit output rounds: 0.25 mean |d| of that is its quantisation.
 //   diag_render_compare [radius (1.3)] [frames to scan (40)] [S (32)]
 // ST_WORST=1 lists the pixels where the reference differs by more than 8 levels.
+// RC_BLUR=SIGMA (px) and / or RC_DEFOCUS=R (px): both renderers' full pipelines with that optics only (no
+// noise, gamma 1, no sharpening or JPEG: 8-bit outputs) against the exact optics of the scene: the fine
+// render (S x S points per pixel) convolved with the continuous Gaussian (sigma S fine samples) or disc
+// (radius R S), then box-averaged per pixel. Prints per renderer and marker size band the mean signed and
+// mean |difference| over each marker's pixels (those the background reaches with less than 1e-4 of the
+// kernel) and the marker's apparent size error: the least-squares s of d = -s (p - c).grad I (a scale about
+// the marker's centre c), given as the outward offset per side s x half the marker's side, px (blurgap,
+// 2026-12-08).
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/aruco.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/dictionary.h"
 #include "tests/mapper/reference_rig_view.h"
@@ -79,7 +88,131 @@ struct Fine {
 };
 }  // namespace
 
+// RC_BLUR / RC_DEFOCUS (top of the file).
+int BlurCompare(double radius, int scan, int S, double sigma, double defocus) {
+  const testing::RenderedMapSession session = testing::MakeRenderedMapSession(radius, 300);
+  const cv::Ptr<cv::aruco::Dictionary> dict = LoadDictionary(session.markers.dictionary);
+  sim::RenderOptions ro;
+  ro.noise_sigma = 0, ro.textured_background = false, ro.background_level = 128, ro.lighting_gradient = 0;
+  ro.shading = 0, ro.black_level = kBlack, ro.white_level = kWhite, ro.surface_albedo = kSurface;
+  ro.blur_sigma = sigma, ro.defocus_radius = defocus;
+  sim::Renderer renderer(session.object, session.markers.dictionary, ro);
+  testing::Imaging im;
+  im.ink = kBlack / 255.0, im.paper = kWhite / 255.0, im.surface = kSurface, im.read_noise = 0;
+  im.blur_sigma = sigma, im.defocus_radius = defocus;
+  // The continuous kernel on the fine grid: the Gaussian's (sigma S) then the disc's (radius R S; each
+  // fine cell its disc area from 4 x 4 sub-samples), normalised.
+  const int reach = static_cast<int>(std::ceil(4 * sigma + defocus)) + 1;  // px
+  const double bands[4] = {0, 15, 20, 25};
+  // [band][renderer]: sums of d, |d|, pixels; scale fits' numerators and denominators per marker.
+  double sd[5][2] = {}, sa[5][2] = {}, off_sum[5][2] = {}, off_sq[5][2] = {};
+  long long np[5] = {}, nm[5] = {};
+  for (int fi = 0; fi < scan; ++fi) {
+    const sim::SimFrame& f = session.trajectory[fi * 7 % session.trajectory.size()];
+    for (size_t c = 0; c < session.cameras.size(); ++c) {
+      const sim::SimCamera& cam = session.cameras[c];
+      const cv::Mat simimg = renderer.Render(cam, static_cast<int>(c), f.seq, f.rig_from_object);
+      const cv::Mat ref =
+          testing::RenderReferenceRigView(*dict, session.object, cam, f.rig_from_object, im, 1);
+      Fine fine{&session.object, dict.get(), cam.rig_from_cam.inverse() * f.rig_from_object, cam.model, 1};
+      for (const sim::MarkerView& v : sim::ProjectMarkers(cam, session.object, f.rig_from_object)) {
+        if (!v.fully_visible || v.view_angle_deg > 75) continue;
+        double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+        for (int k = 0; k < 4; ++k)
+          x0 = std::min(x0, v.corners[k][0]), x1 = std::max(x1, v.corners[k][0]),
+          y0 = std::min(y0, v.corners[k][1]), y1 = std::max(y1, v.corners[k][1]);
+        // Pixels of the marker and one pixel around; the fine render over them and the kernel's reach.
+        const int px0 = static_cast<int>(x0) - 1, px1 = static_cast<int>(x1) + 1;
+        const int py0 = static_cast<int>(y0) - 1, py1 = static_cast<int>(y1) + 1;
+        const int fx0 = px0 - reach, fy0 = py0 - reach, fw = px1 - px0 + 1 + 2 * reach,
+                  fh = py1 - py0 + 1 + 2 * reach;
+        if (fx0 < 0 || fy0 < 0 || fx0 + fw > cam.model.width || fy0 + fh > cam.model.height) continue;
+        cv::Mat scene(fh * S, fw * S, CV_64F), off(fh * S, fw * S, CV_64F);
+        for (int a = 0; a < fh * S; ++a)
+          for (int b = 0; b < fw * S; ++b) {
+            const double val = fine.At(fx0 - 0.5 + (b + 0.5) / S, fy0 - 0.5 + (a + 0.5) / S);
+            scene.at<double>(a, b) = val < 0 ? 128.0 : val;
+            off.at<double>(a, b) = val < 0 ? 1.0 : 0.0;
+          }
+        if (sigma > 0) {
+          const int k = 2 * static_cast<int>(std::ceil(4 * sigma * S)) + 1;
+          cv::GaussianBlur(scene, scene, cv::Size(k, k), sigma * S, sigma * S, cv::BORDER_REPLICATE);
+          cv::GaussianBlur(off, off, cv::Size(k, k), sigma * S, sigma * S, cv::BORDER_REPLICATE);
+        }
+        if (defocus > 0) {
+          const int r = static_cast<int>(std::ceil(defocus * S)) + 1;
+          cv::Mat kernel(2 * r + 1, 2 * r + 1, CV_64F, cv::Scalar(0));
+          for (int y = 0; y < kernel.rows; ++y)
+            for (int x = 0; x < kernel.cols; ++x)
+              for (int a = 0; a < 4; ++a)
+                for (int b = 0; b < 4; ++b) {
+                  const double dx = x - r - 0.5 + (b + 0.5) / 4, dy = y - r - 0.5 + (a + 0.5) / 4;
+                  kernel.at<double>(y, x) += dx * dx + dy * dy <= defocus * S * defocus * S;
+                }
+          kernel /= cv::sum(kernel)[0];
+          cv::filter2D(scene, scene, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+          cv::filter2D(off, off, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+        }
+        cv::Mat exact, off_px;
+        cv::resize(scene, exact, cv::Size(fw, fh), 0, 0, cv::INTER_AREA);  // the pixels' box mean
+        cv::resize(off, off_px, cv::Size(fw, fh), 0, 0, cv::INTER_AREA);
+        const double mcx = 0.25 * (v.corners[0][0] + v.corners[1][0] + v.corners[2][0] + v.corners[3][0]);
+        const double mcy = 0.25 * (v.corners[0][1] + v.corners[1][1] + v.corners[2][1] + v.corners[3][1]);
+        int band = 0;
+        while (band < 3 && v.size_px >= bands[band + 1]) ++band;
+        double num[2] = {0, 0}, den = 0;
+        for (int y = py0; y <= py1; ++y)
+          for (int x = px0; x <= px1; ++x) {
+            const int ex = x - fx0, ey = y - fy0;
+            // Pixels the background reaches through the kernel (the renderers' backgrounds differ) are
+            // not compared: their weight of the background above 1e-4 (0.01 gray levels).
+            if (off_px.at<double>(ey, ex) > 1e-4) continue;
+            const double t = exact.at<double>(ey, ex);
+            const double gx = 0.5 * (exact.at<double>(ey, ex + 1) - exact.at<double>(ey, ex - 1));
+            const double gy = 0.5 * (exact.at<double>(ey + 1, ex) - exact.at<double>(ey - 1, ex));
+            const double g = (x - mcx) * gx + (y - mcy) * gy;
+            const double d[2] = {simimg.at<uint8_t>(y, x) - t, ref.at<uint8_t>(y, x) - t};
+            for (int r = 0; r < 2; ++r)
+              sd[band][r] += d[r], sa[band][r] += std::abs(d[r]), num[r] += d[r] * g;
+            den += g * g;
+            ++np[band];
+          }
+        if (den <= 0) continue;
+        for (int r = 0; r < 2; ++r) {
+          const double o = -num[r] / den * 0.5 * v.size_px;  // outward offset per side, px
+          off_sum[band][r] += o, off_sq[band][r] += o * o;
+        }
+        ++nm[band];
+      }
+    }
+  }
+  std::printf(
+      "radius %.1f, blur %.2f px, defocus %.2f px, fine %dx%d, fully visible markers at <= 75 deg; "
+      "size band 0: under 15 px\n",
+      radius, sigma, defocus, S, S);
+  std::printf(
+      "| size band px | markers | pixels | mcmt-sim: mean d / mean abs d (gray) | size offset per side px "
+      "(sd) "
+      "| reference: mean d / mean abs d | size offset per side px (sd) |\n|---|---|---|---|---|---|---|\n");
+  for (int b = 0; b < 4; ++b) {
+    if (nm[b] == 0) continue;
+    std::printf("| %s%.0f | %lld | %lld |", b == 3 ? ">= " : "", bands[b], nm[b], np[b]);
+    for (int r = 0; r < 2; ++r) {
+      const double m = off_sum[b][r] / nm[b];
+      std::printf(" %+.3f / %.3f | %+.5f (%.5f) |", sd[b][r] / np[b], sa[b][r] / np[b], m,
+                  std::sqrt(std::max(0.0, off_sq[b][r] / nm[b] - m * m)));
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (std::getenv("RC_BLUR") || std::getenv("RC_DEFOCUS"))
+    return BlurCompare(argc > 1 ? std::atof(argv[1]) : 1.3, argc > 2 ? std::atoi(argv[2]) : 40,
+                       argc > 3 ? std::atoi(argv[3]) : 32,
+                       std::getenv("RC_BLUR") ? std::atof(std::getenv("RC_BLUR")) : 0.0,
+                       std::getenv("RC_DEFOCUS") ? std::atof(std::getenv("RC_DEFOCUS")) : 0.0);
   const double radius = argc > 1 ? std::atof(argv[1]) : 1.3;
   const int scan = argc > 2 ? std::atoi(argv[2]) : 40;
   const int S = argc > 3 ? std::atoi(argv[3]) : 32;
