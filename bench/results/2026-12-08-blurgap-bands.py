@@ -6,23 +6,9 @@ normal, px (outward +), as 2026-12-07-seeds13-split.py.
 Prints: band, markers, mean offset (se), and with B also the paired change A - B on the markers (camera,
 seq, id) both found, and the offset of B on those markers."""
 import math, sys
-from corner_dump import marker_rows, truth_and_error
+from corner_dump import marker_rows, side_offsets, truth_and_error
 
 BANDS = ((0, 12), (12, 15), (15, 20), (20, 25), (25, 35), (35, 99))
-
-
-def side_offsets(t, e):
-    cx = sum(p[0] for p in t) / 4
-    cy = sum(p[1] for p in t) / 4
-    out = []
-    for k in range(4):
-        a, b = t[k], t[(k + 1) % 4]
-        L = math.hypot(b[0] - a[0], b[1] - a[1])
-        n = ((b[1] - a[1]) / L, -(b[0] - a[0]) / L)
-        if n[0] * ((a[0] + b[0]) / 2 - cx) + n[1] * ((a[1] + b[1]) / 2 - cy) < 0:
-            n = (-n[0], -n[1])
-        out.append(0.5 * sum(e[j][0] * n[0] + e[j][1] * n[1] for j in (k, (k + 1) % 4)))
-    return out
 
 
 def load(path):

@@ -5,26 +5,12 @@ change against the same renderer's blur 0 at the same radius (markers (radius, c
   python3 2026-12-08-blurgap-table.py RUNS_DIR   (files m300-RADIUS-RENDERER-TAG.{out,csv} of run2.sh)"""
 import math, os, sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from corner_dump import marker_rows, truth_and_error
+from corner_dump import marker_rows, side_offsets, truth_and_error
 d = sys.argv[1]
 RADII = ('1.3', '1.0', '0.7')
 TAGS = (('blur_sigma_0', 'none'), ('blur_sigma_0_6', 'blur 0.6'), ('blur_sigma_1_05', 'blur 1.05'),
         ('blur_sigma_1_4', 'blur 1.4'), ('defocus_radius_0_8', 'defocus 0.8'))
 BANDS = ((0, 15), (15, 20), (20, 25), (25, 35))
-
-
-def side_offsets(t, e):
-    cx = sum(p[0] for p in t) / 4
-    cy = sum(p[1] for p in t) / 4
-    out = []
-    for k in range(4):
-        a, b = t[k], t[(k + 1) % 4]
-        L = math.hypot(b[0] - a[0], b[1] - a[1])
-        n = ((b[1] - a[1]) / L, -(b[0] - a[0]) / L)
-        if n[0] * ((a[0] + b[0]) / 2 - cx) + n[1] * ((a[1] + b[1]) / 2 - cy) < 0:
-            n = (-n[0], -n[1])
-        out.append(0.5 * sum(e[j][0] * n[0] + e[j][1] * n[1] for j in (k, (k + 1) % 4)))
-    return out
 
 
 def load(path):
