@@ -7,7 +7,7 @@ them to the side's true offset (outward +, px; roles as 2026-12-07-seeds13-split
 With the second pair (the same scene without blur), also the paired changes on the markers both found."""
 import math, sys
 from collections import defaultdict
-from corner_dump import marker_rows, truth_and_error
+from corner_dump import marker_rows, side_roles, truth_and_error
 
 F = ('ref id pass side cell e sigma L0 L1 S1 S2 q gamma single step detr refit paper e0 q0 S1_0 S2_0 reach '
      'outer_res outer_data dip rise plateau_res').split()
@@ -34,20 +34,6 @@ def load_trace(path):
     return fits
 
 
-def sides(t, e):
-    cx = sum(p[0] for p in t) / 4; cy = sum(p[1] for p in t) / 4
-    res = []
-    for k in range(4):
-        a, b = t[k], t[(k + 1) % 4]
-        L = math.hypot(b[0] - a[0], b[1] - a[1])
-        n = ((b[1] - a[1]) / L, -(b[0] - a[0]) / L)
-        mx, my = (a[0] + b[0]) / 2, (a[1] + b[1]) / 2
-        if n[0] * (mx - cx) + n[1] * (my - cy) < 0: n = (-n[0], -n[1])
-        res.append(dict(off=0.5 * sum(e[j][0] * n[0] + e[j][1] * n[1] for j in (k, (k + 1) % 4)), L=L))
-    near = 1 if res[1]['L'] >= res[3]['L'] else 3
-    for k in range(4):
-        res[k]['role'] = {0: 'top', 2: 'bottom'}.get(k, 'near' if k == near else 'far')
-    return res
 
 
 def join(trace, csv):
@@ -55,7 +41,7 @@ def join(trace, csv):
     rows = {}
     for key, c in marker_rows(csv).items():
         if key not in fits: continue
-        s = sides(*truth_and_error(c))
+        s = side_roles(*truth_and_error(c))
         for k in range(4):
             if k in fits[key]:
                 rows[key + (k,)] = dict(fits[key][k], off=s[k]['off'], role=s[k]['role'])

@@ -6,24 +6,10 @@ kPaperMarginContrast of L1), and the two-level fit's levels there. Issue 15, hel
   python3 2026-12-08-brightsurf-why.py TRACE CSV"""
 import sys, math
 from collections import defaultdict, Counter
-sys.path.insert(0, '/work/brightsurf/bench/results')
+sys.path.insert(0, __import__('os').path.dirname(__import__('os').path.abspath(__file__)))
 F = ('ref id pass side cell e sigma L0 L1 S1 S2 q gamma single step detr refit paper e0 q0 S1_0 S2_0 reach '
      'outer_res outer_data dip rise plateau_res why se sq sreach L0t L1t S1t S2t gt').split()
-from corner_dump import marker_rows, truth_and_error
-def sides(t, e):
-    cx = sum(p[0] for p in t) / 4; cy = sum(p[1] for p in t) / 4
-    res = []
-    for k in range(4):
-        a, b = t[k], t[(k + 1) % 4]
-        L = math.hypot(b[0] - a[0], b[1] - a[1])
-        n = ((b[1] - a[1]) / L, -(b[0] - a[0]) / L)
-        mx, my = (a[0] + b[0]) / 2, (a[1] + b[1]) / 2
-        if n[0] * (mx - cx) + n[1] * (my - cy) < 0: n = (-n[0], -n[1])
-        res.append(dict(off=0.5 * sum(e[j][0] * n[0] + e[j][1] * n[1] for j in (k, (k + 1) % 4)), L=L))
-    near = 1 if res[1]['L'] >= res[3]['L'] else 3
-    for k in range(4):
-        res[k]['role'] = {0: 'top', 2: 'bottom'}.get(k, 'near' if k == near else 'far')
-    return res
+from corner_dump import marker_rows, side_roles, truth_and_error
 def load(path):
     recs = defaultdict(list); cam = seq = None; last = {}
     for line in open(path):
@@ -38,7 +24,7 @@ recs = load(sys.argv[1])
 cnt = Counter(); offs = defaultdict(list); qs = defaultdict(list)
 for key, c in marker_rows(sys.argv[2]).items():
     if key not in recs: continue
-    s = sides(*truth_and_error(c))
+    s = side_roles(*truth_and_error(c))
     for k in range(4):
         fits = [d for d in recs[key] if int(d['side']) == k]
         if not fits: continue
@@ -62,7 +48,7 @@ print('-- unseen (why=2) sides by the cause')
 b = defaultdict(list)
 for key, c in marker_rows(sys.argv[2]).items():
     if key not in recs: continue
-    s = sides(*truth_and_error(c))
+    s = side_roles(*truth_and_error(c))
     for k in range(4):
         fits = [d for d in recs[key] if int(d['side']) == k]
         if not fits or fits[-1]['single'] == 0: continue
@@ -78,7 +64,7 @@ recs = load(sys.argv[1])  # (again)
 b = defaultdict(list)
 for key, c in marker_rows(sys.argv[2]).items():
     if key not in recs: continue
-    s = sides(*truth_and_error(c))
+    s = side_roles(*truth_and_error(c))
     for k in range(4):
         fits = [d for d in recs[key] if int(d['side']) == k]
         if not fits or fits[-1]['single'] == 0: continue

@@ -1,7 +1,7 @@
 """The reader of bench_imaging_maps corner dumps (MCMT_IMAGING_DUMP: one CSV line per detected corner) that
 the split scripts beside it share (issue 15: 2026-12-06-simsize13-reachsplit.py, 2026-12-07-seeds13-split.py,
 -tail-tilt.py, -tail-acute.py, -skewmix-ends.py,
-2026-12-08-blurgap-bands.py, -blurgap-table.py). They import it from their own folder."""
+2026-12-08-blurgap-bands.py, -blurgap-table.py, -brightsurf-trace.py, -brightsurf-why.py). They import it from their own folder."""
 import csv
 import math
 from collections import defaultdict
@@ -39,3 +39,14 @@ def side_offsets(t, e):
             n = (-n[0], -n[1])
         out.append(0.5 * sum(e[j][0] * n[0] + e[j][1] * n[1] for j in (k, (k + 1) % 4)))
     return out
+
+
+def side_roles(t, e):
+    """Each side's offset (`off`, as side_offsets), true length (`L`, px) and role in the paper's rig: side 0 the
+    top, side 2 the bottom, of sides 1 and 3 the longer one `near` and the other `far`."""
+    res = [dict(off=o, L=math.hypot(t[(k + 1) % 4][0] - t[k][0], t[(k + 1) % 4][1] - t[k][1]))
+           for k, o in enumerate(side_offsets(t, e))]
+    near = 1 if res[1]['L'] >= res[3]['L'] else 3
+    for k in range(4):
+        res[k]['role'] = {0: 'top', 2: 'bottom'}.get(k, 'near' if k == near else 'far')
+    return res
