@@ -88,6 +88,29 @@ struct Fine {
 };
 }  // namespace
 
+// The exact optics on a fine render (S x S samples per pixel): the continuous Gaussian (sigma px, sigma S
+// fine samples) then the disc (radius `defocus` px; each fine cell its disc area from 4 x 4 sub-samples),
+// normalised, both with replicated borders.
+void BlurLikeTheOptics(double sigma, double defocus, int S, cv::Mat* fine) {
+  if (sigma > 0) {
+    const int k = 2 * static_cast<int>(std::ceil(4 * sigma * S)) + 1;
+    cv::GaussianBlur(*fine, *fine, cv::Size(k, k), sigma * S, sigma * S, cv::BORDER_REPLICATE);
+  }
+  if (defocus > 0) {
+    const int r = static_cast<int>(std::ceil(defocus * S)) + 1;
+    cv::Mat kernel(2 * r + 1, 2 * r + 1, CV_64F, cv::Scalar(0));
+    for (int y = 0; y < kernel.rows; ++y)
+      for (int x = 0; x < kernel.cols; ++x)
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) {
+            const double dx = x - r - 0.5 + (b + 0.5) / 4, dy = y - r - 0.5 + (a + 0.5) / 4;
+            kernel.at<double>(y, x) += dx * dx + dy * dy <= defocus * S * defocus * S;
+          }
+    kernel /= cv::sum(kernel)[0];
+    cv::filter2D(*fine, *fine, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  }
+}
+
 // RC_BLUR / RC_DEFOCUS (top of the file).
 int BlurCompare(double radius, int scan, int S, double sigma, double defocus) {
   const testing::RenderedMapSession session = testing::MakeRenderedMapSession(radius, 300);
@@ -100,8 +123,6 @@ int BlurCompare(double radius, int scan, int S, double sigma, double defocus) {
   testing::Imaging im;
   im.ink = kBlack / 255.0, im.paper = kWhite / 255.0, im.surface = kSurface, im.read_noise = 0;
   im.blur_sigma = sigma, im.defocus_radius = defocus;
-  // The continuous kernel on the fine grid: the Gaussian's (sigma S) then the disc's (radius R S; each
-  // fine cell its disc area from 4 x 4 sub-samples), normalised.
   const int reach = static_cast<int>(std::ceil(4 * sigma + defocus)) + 1;  // px
   const double bands[4] = {0, 15, 20, 25};
   // [band][renderer]: sums of d, |d|, pixels; scale fits' numerators and denominators per marker.
@@ -134,25 +155,8 @@ int BlurCompare(double radius, int scan, int S, double sigma, double defocus) {
             scene.at<double>(a, b) = val < 0 ? 128.0 : val;
             off.at<double>(a, b) = val < 0 ? 1.0 : 0.0;
           }
-        if (sigma > 0) {
-          const int k = 2 * static_cast<int>(std::ceil(4 * sigma * S)) + 1;
-          cv::GaussianBlur(scene, scene, cv::Size(k, k), sigma * S, sigma * S, cv::BORDER_REPLICATE);
-          cv::GaussianBlur(off, off, cv::Size(k, k), sigma * S, sigma * S, cv::BORDER_REPLICATE);
-        }
-        if (defocus > 0) {
-          const int r = static_cast<int>(std::ceil(defocus * S)) + 1;
-          cv::Mat kernel(2 * r + 1, 2 * r + 1, CV_64F, cv::Scalar(0));
-          for (int y = 0; y < kernel.rows; ++y)
-            for (int x = 0; x < kernel.cols; ++x)
-              for (int a = 0; a < 4; ++a)
-                for (int b = 0; b < 4; ++b) {
-                  const double dx = x - r - 0.5 + (b + 0.5) / 4, dy = y - r - 0.5 + (a + 0.5) / 4;
-                  kernel.at<double>(y, x) += dx * dx + dy * dy <= defocus * S * defocus * S;
-                }
-          kernel /= cv::sum(kernel)[0];
-          cv::filter2D(scene, scene, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-          cv::filter2D(off, off, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-        }
+        BlurLikeTheOptics(sigma, defocus, S, &scene);
+        BlurLikeTheOptics(sigma, defocus, S, &off);
         cv::Mat exact, off_px;
         cv::resize(scene, exact, cv::Size(fw, fh), 0, 0, cv::INTER_AREA);  // the pixels' box mean
         cv::resize(off, off_px, cv::Size(fw, fh), 0, 0, cv::INTER_AREA);
